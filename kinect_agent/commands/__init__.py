@@ -1,0 +1,1 @@
+"""Subcommands of `kinect-agent`, one module each (see kinect_agent.cli)."""

@@ -1,0 +1,163 @@
+"""Skeleton CSV, the interchange format (spec: ../shared/reference/README.md).
+
+One row per frame: `time` (s), then `<JOINT>_x,<JOINT>_y,<JOINT>_z` (m, y up) for the 20 joints;
+an empty cell means not tracked. Optional `<JOINT>_state` columns (0/1/2) may follow. Columns that
+are not joint columns are ignored; a joint column naming an unknown joint is an error.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from kinect_agent import skeleton
+from kinect_agent.errors import FormatError
+from kinect_agent.formats._atomic import atomic_open
+from kinect_agent.recording import Metadata, Recording
+
+NAME = "csv"
+DESCRIPTION = "Skeleton CSV interchange format (time + 20 joints x,y,z [+ state])"
+META_PREFIX = "# meta: "
+_JOINT_COLUMN = re.compile(r"^([A-Z][A-Z0-9_]*?)_(x|y|z|state)$")
+_AXES = "xyz"
+
+
+def header() -> list[str]:
+    """Returns the column names written by `write`."""
+    cols = ["time"]
+    cols += [f"{j}_{a}" for j in skeleton.JOINTS for a in _AXES]
+    cols += [f"{j}_state" for j in skeleton.JOINTS]
+    return cols
+
+
+def sniff(path: Path, head: bytes) -> bool:
+    """True when the first non-comment line is a header starting with `time` and naming joint columns."""
+    for line in head.decode("utf-8", "replace").splitlines():
+        if line.startswith("#") or not line.strip():
+            continue
+        cells = [c.strip() for c in line.split(",")]
+        return cells[0].lower() == "time" and "ROOT_x" in cells
+    return False
+
+
+def read(path: Path) -> Recording:
+    """Reads a Skeleton CSV file; raises FormatError naming the line and cell that is wrong."""
+    meta = Metadata(source=str(path))
+    with open(path, encoding="utf-8") as f:
+        lines = _numbered_lines(f, path, meta)
+        try:
+            line_no, head = next(lines)
+        except StopIteration:
+            raise FormatError(path, "empty file: expected a header line starting with 'time'") from None
+        columns = _parse_header(path, line_no, head)
+        rows = [_parse_row(path, n, cells, columns) for n, cells in lines]
+    if not rows:
+        raise FormatError(path, "no frames after the header")
+    t = np.array([r[0] for r in rows])
+    positions = np.array([r[1] for r in rows]).reshape(len(rows), skeleton.J, 3)
+    _check_times(path, t, [r[3] for r in rows])
+    finite = np.all(np.isfinite(positions), axis=-1)
+    if columns["state"]:
+        state = np.array([r[2] for r in rows], dtype=np.int8)
+        state[~finite] = skeleton.NOT_TRACKED
+        state[finite & (state == skeleton.NOT_TRACKED)] = skeleton.INFERRED
+    else:
+        state = np.where(finite, skeleton.TRACKED, skeleton.NOT_TRACKED).astype(np.int8)
+    return Recording(t, positions, state, meta)
+
+
+def write(rec: Recording, path: Path) -> None:
+    """Writes `rec` as Skeleton CSV with state columns and a `# meta:` comment line; atomic."""
+    with atomic_open(path, "w", newline="", encoding="utf-8") as f:
+        f.write(META_PREFIX + json.dumps(rec.meta.to_dict(), separators=(",", ":")) + "\n")
+        f.write(",".join(header()) + "\n")
+        times = np.char.mod("%.6f", rec.t)
+        coords = np.char.mod("%.5f", rec.positions.reshape(rec.n_frames, -1))
+        coords[~np.isfinite(rec.positions.reshape(rec.n_frames, -1))] = ""
+        states = rec.state.astype(str)
+        for i in range(rec.n_frames):
+            f.write(times[i] + "," + ",".join(coords[i]) + "," + ",".join(states[i]) + "\n")
+
+
+def _numbered_lines(f, path: Path, meta: Metadata):
+    """Yields (line number, cells) for non-empty, non-comment lines; reads `# meta:` lines into meta."""
+    for line_no, line in enumerate(f, start=1):
+        if line.startswith("#"):
+            if line.startswith(META_PREFIX):
+                try:
+                    loaded = Metadata.from_dict(json.loads(line[len(META_PREFIX) :]))
+                except (ValueError, TypeError) as exc:
+                    raise FormatError(path, f"unreadable '# meta:' line: {exc}", line_no) from None
+                loaded.source = str(path)
+                meta.__dict__.update(loaded.__dict__)
+            continue
+        if line.strip():
+            yield line_no, line.rstrip("\r\n").split(",")
+
+
+def _parse_header(path: Path, line_no: int, cells: list[str]) -> dict:
+    names = [c.strip() for c in cells]
+    if names[0].lower() != "time":
+        raise FormatError(path, f"first column must be 'time', found {names[0]!r}", line_no)
+    coord_index = np.full((skeleton.J, 3), -1)
+    state_index = np.full(skeleton.J, -1)
+    for col, name in enumerate(names[1:], start=1):
+        match = _JOINT_COLUMN.match(name)
+        if not match:
+            continue  # not a joint column: ignored, as the spec says
+        joint, axis = match.groups()
+        if joint not in skeleton.INDEX:
+            raise FormatError(path, f"column {col + 1} {name!r} names unknown joint {joint!r}", line_no)
+        j = skeleton.INDEX[joint]
+        if axis == "state":
+            state_index[j] = col
+        else:
+            coord_index[j, _AXES.index(axis)] = col
+    missing = [f"{skeleton.JOINTS[j]}_{_AXES[a]}" for j, a in np.argwhere(coord_index < 0)]
+    if missing:
+        raise FormatError(path, f"header lacks columns {', '.join(missing[:6])}{' ...' if len(missing) > 6 else ''}", line_no)
+    has_state = bool(np.all(state_index >= 0))
+    return {"n": len(names), "coords": coord_index.ravel(), "state": state_index if has_state else None}
+
+
+def _parse_row(path: Path, line_no: int, cells: list[str], columns: dict):
+    if len(cells) != columns["n"]:
+        raise FormatError(path, f"expected {columns['n']} columns as in the header, found {len(cells)}", line_no)
+    t = _number(path, line_no, 1, cells[0], "time", allow_empty=False)
+    coords = [_number(path, line_no, c + 1, cells[c], "coordinate") for c in columns["coords"]]
+    state = None
+    if columns["state"] is not None:
+        state = []
+        for c in columns["state"]:
+            cell = cells[c].strip()
+            if cell not in ("0", "1", "2", ""):
+                raise FormatError(path, f"column {c + 1}: state must be 0, 1 or 2, found {cell!r}", line_no)
+            state.append(int(cell or 0))
+    return t, coords, state, line_no
+
+
+def _number(path: Path, line_no: int, col: int, cell: str, what: str, allow_empty: bool = True) -> float:
+    cell = cell.strip()
+    if not cell:
+        if allow_empty:
+            return math.nan
+        raise FormatError(path, f"column {col}: {what} is empty", line_no)
+    try:
+        value = float(cell)
+    except ValueError:
+        raise FormatError(path, f"column {col}: expected a number for {what}, found {cell!r}", line_no) from None
+    if not math.isfinite(value):
+        raise FormatError(path, f"column {col}: {what} must be finite, found {cell!r}", line_no)
+    return value
+
+
+def _check_times(path: Path, t: np.ndarray, line_numbers: list[int]) -> None:
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        kind = "duplicate" if t[i] == t[i - 1] else "decreasing"
+        raise FormatError(path, f"{kind} time stamp {t[i]} after {t[i - 1]}: times must increase", line_numbers[i])

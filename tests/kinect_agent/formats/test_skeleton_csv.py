@@ -1,0 +1,80 @@
+"""Skeleton CSV: round trip and clear errors for bad input."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from kinect_agent import formats, skeleton
+from kinect_agent.errors import FormatError
+from kinect_agent.formats import skeleton_csv
+from kinect_agent.recording import Metadata, Recording
+
+
+def _recording(rng: np.random.Generator, frames: int = 30) -> Recording:
+    positions = rng.normal(0.0, 0.3, size=(frames, skeleton.J, 3))
+    state = np.full((frames, skeleton.J), skeleton.TRACKED, dtype=np.int8)
+    positions[3, 5] = np.nan
+    state[3, 5] = skeleton.NOT_TRACKED
+    state[4, 7] = skeleton.INFERRED
+    return Recording(np.arange(frames) / 30.0, positions, state, Metadata(device="kinect2", rate_hz=30.0, subject="s1"))
+
+
+def test_round_trip_keeps_positions_states_and_metadata(tmp_path: Path, rng: np.random.Generator) -> None:
+    rec = _recording(rng)
+    out = tmp_path / "r.csv"
+    formats.write(rec, out)
+    back = formats.read(out)
+    np.testing.assert_allclose(back.positions, rec.positions, atol=1e-5, equal_nan=True, err_msg="positions")
+    np.testing.assert_array_equal(back.state, rec.state)
+    np.testing.assert_allclose(back.t, rec.t, atol=1e-6)
+    assert back.meta.device == "kinect2" and back.meta.subject == "s1"
+
+
+def test_minimal_file_without_state_columns_marks_empty_cells_untracked(tmp_path: Path) -> None:
+    cols = skeleton_csv.header()[: 1 + 3 * skeleton.J] + ["comment"]
+    row = ["0.0"] + ["0.1"] * (3 * skeleton.J) + ["hello"]
+    row[1:4] = ["", "", ""]
+    path = tmp_path / "m.csv"
+    path.write_text(",".join(cols) + "\n" + ",".join(row) + "\n")
+    rec = formats.read(path)
+    assert rec.state[0, 0] == skeleton.NOT_TRACKED and np.isnan(rec.positions[0, 0]).all()
+    assert rec.state[0, 1] == skeleton.TRACKED
+
+
+@pytest.mark.parametrize(
+    ("mutate", "message", "line"),
+    [
+        (lambda rows: rows[:2] + [rows[2][: len(rows[2]) // 2]], "expected 61 columns", 4),
+        (lambda rows: rows[:2] + [rows[2].replace("0.1", "abc", 1)], "expected a number", 4),
+        (lambda rows: rows[:2] + [rows[1]], "duplicate time stamp", 4),
+        (lambda rows: [rows[0], rows[2], rows[1]], "decreasing time stamp", 4),
+        (lambda rows: [rows[0].replace("HEAD_x", "NOSE_x")] + rows[1:], "unknown joint 'NOSE'", 2),
+        (lambda rows: rows[:1], "no frames", None),
+    ],
+)
+def test_bad_input_names_file_line_and_problem(tmp_path: Path, mutate, message: str, line: int | None) -> None:
+    cols = ",".join(skeleton_csv.header()[: 1 + 3 * skeleton.J])
+    rows = [cols] + [",".join([f"{i / 30:.4f}"] + ["0.1"] * (3 * skeleton.J)) for i in range(2)]
+    path = tmp_path / "bad.csv"
+    path.write_text("# a comment\n" + "\n".join(mutate(rows)) + "\n")
+    with pytest.raises(FormatError) as err:
+        formats.read(path)
+    assert message in str(err.value)
+    assert str(path) in str(err.value)
+    assert err.value.line == line
+
+
+def test_failed_write_leaves_no_partial_file(tmp_path: Path, rng: np.random.Generator, monkeypatch) -> None:
+    rec = _recording(rng)
+    out = tmp_path / "out.csv"
+
+    def explode(*args, **kwargs):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(skeleton_csv.np.char, "mod", explode)
+    with pytest.raises(OSError):
+        formats.write(rec, out)
+    assert list(tmp_path.iterdir()) == []
