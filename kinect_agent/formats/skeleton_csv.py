@@ -61,7 +61,7 @@ def read(path: Path) -> Recording:
     positions = np.array([r[1] for r in rows]).reshape(len(rows), skeleton.J, 3)
     _check_times(path, t, [r[3] for r in rows])
     finite = np.all(np.isfinite(positions), axis=-1)
-    if columns["state"]:
+    if columns["state"] is not None:
         state = np.array([r[2] for r in rows], dtype=np.int8)
         state[~finite] = skeleton.NOT_TRACKED
         state[finite & (state == skeleton.NOT_TRACKED)] = skeleton.INFERRED
