@@ -1,0 +1,1 @@
+"""Signal processing on recordings: outlier removal, kinematics, UKF, joint angles."""
