@@ -1,0 +1,117 @@
+"""Quaternion and rotation helpers, vectorised over leading axes. Quaternions are scalar-first `wxyz`."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def quat_normalize(q: np.ndarray) -> np.ndarray:
+    """Returns unit quaternions. q: (..., 4) wxyz."""
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+
+
+def quat_multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Returns the Hamilton product a·b. a, b: (..., 4) wxyz, broadcastable."""
+    aw, ax, ay, az = np.moveaxis(a, -1, 0)
+    bw, bx, by, bz = np.moveaxis(b, -1, 0)
+    return np.stack(
+        (
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ),
+        axis=-1,
+    )
+
+
+def quat_conjugate(q: np.ndarray) -> np.ndarray:
+    """Returns the conjugate (inverse of a unit quaternion). q: (..., 4) wxyz."""
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Returns rotation matrices (..., 3, 3) for quaternions q (..., 4) wxyz (normalised here)."""
+    w, x, y, z = np.moveaxis(quat_normalize(q), -1, 0)
+    return np.stack(
+        (
+            np.stack((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)), axis=-1),
+            np.stack((2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)), axis=-1),
+            np.stack((2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)), axis=-1),
+        ),
+        axis=-2,
+    )
+
+
+def matrix_to_quat(R: np.ndarray) -> np.ndarray:
+    """Returns unit quaternions (..., 4) wxyz with w >= 0 for rotation matrices R (..., 3, 3)."""
+    R = np.asarray(R, dtype=np.float64)
+    m00, m11, m22 = R[..., 0, 0], R[..., 1, 1], R[..., 2, 2]
+    # Four candidate formulas; pick the numerically largest denominator per element.
+    cand = np.stack(
+        (
+            np.stack((1 + m00 + m11 + m22, R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0],
+                      R[..., 1, 0] - R[..., 0, 1]), axis=-1),
+            np.stack((R[..., 2, 1] - R[..., 1, 2], 1 + m00 - m11 - m22, R[..., 0, 1] + R[..., 1, 0],
+                      R[..., 0, 2] + R[..., 2, 0]), axis=-1),
+            np.stack((R[..., 0, 2] - R[..., 2, 0], R[..., 0, 1] + R[..., 1, 0], 1 - m00 + m11 - m22,
+                      R[..., 1, 2] + R[..., 2, 1]), axis=-1),
+            np.stack((R[..., 1, 0] - R[..., 0, 1], R[..., 0, 2] + R[..., 2, 0], R[..., 1, 2] + R[..., 2, 1],
+                      1 - m00 - m11 + m22), axis=-1),
+        ),
+        axis=-2,
+    )  # fmt: skip
+    diag = np.stack((1 + m00 + m11 + m22, 1 + m00 - m11 - m22, 1 - m00 + m11 - m22, 1 - m00 - m11 + m22), axis=-1)
+    best = np.argmax(diag, axis=-1)
+    q = np.take_along_axis(cand, best[..., None, None], axis=-2)[..., 0, :]
+    q = quat_normalize(q)
+    return q * np.where(q[..., :1] < 0, -1.0, 1.0)
+
+
+def quat_from_rotvec(v: np.ndarray) -> np.ndarray:
+    """Returns unit quaternions (..., 4) wxyz for rotation vectors v (..., 3) in radians (axis * angle)."""
+    angle = np.linalg.norm(v, axis=-1, keepdims=True)
+    half = 0.5 * angle
+    # sin(a/2)/a, with its limit 1/2 near zero.
+    scale = np.where(angle > 1e-12, np.sin(half) / np.where(angle > 1e-12, angle, 1.0), 0.5 - angle**2 / 48.0)
+    return np.concatenate((np.cos(half), v * scale), axis=-1)
+
+
+def quat_to_rotvec(q: np.ndarray) -> np.ndarray:
+    """Returns rotation vectors (..., 3), radians, for quaternions (..., 4) wxyz (shortest rotation)."""
+    q = quat_normalize(q)
+    q = q * np.where(q[..., :1] < 0, -1.0, 1.0)
+    s = np.linalg.norm(q[..., 1:], axis=-1, keepdims=True)
+    angle = 2.0 * np.arctan2(s, q[..., :1])
+    scale = np.where(s > 1e-12, angle / np.where(s > 1e-12, s, 1.0), 2.0)
+    return q[..., 1:] * scale
+
+
+def rotvec_to_matrix(v: np.ndarray) -> np.ndarray:
+    """Returns rotation matrices (..., 3, 3) for rotation vectors v (..., 3), radians (Rodrigues)."""
+    angle = np.linalg.norm(v, axis=-1)[..., None, None]
+    safe = np.where(angle > 1e-12, angle, 1.0)
+    k = v / safe[..., 0]
+    K = np.zeros(v.shape[:-1] + (3, 3))
+    K[..., 0, 1], K[..., 0, 2] = -k[..., 2], k[..., 1]
+    K[..., 1, 0], K[..., 1, 2] = k[..., 2], -k[..., 0]
+    K[..., 2, 0], K[..., 2, 1] = -k[..., 1], k[..., 0]
+    small = angle <= 1e-12
+    sin = np.where(small, 0.0, np.sin(angle))
+    cos1 = np.where(small, 0.0, 1.0 - np.cos(angle))
+    return np.eye(3) + sin * K + cos1 * (K @ K)
+
+
+def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Returns the smallest rotation matrices (..., 3, 3) turning unit vectors a onto unit vectors b (..., 3)."""
+    a = a / np.linalg.norm(a, axis=-1, keepdims=True)
+    b = b / np.linalg.norm(b, axis=-1, keepdims=True)
+    axis = np.cross(a, b)
+    s = np.linalg.norm(axis, axis=-1, keepdims=True)
+    c = np.sum(a * b, axis=-1, keepdims=True)
+    angle = np.arctan2(s, c)
+    # Opposite vectors: rotate by pi about any axis orthogonal to a.
+    ortho = np.cross(a, np.where(np.abs(a[..., :1]) < 0.9, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]))
+    axis = np.where(s > 1e-9, axis, ortho)
+    axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
+    return rotvec_to_matrix(axis * angle)
