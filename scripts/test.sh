@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# The whole test suite, on embedded SQLite and then on PostgreSQL (127.0.0.1:5432, database test).
+# Extra arguments go to pytest (e.g. -k upload). Set COACH_TEST_PG_URL for another PostgreSQL.
+set -euo pipefail
+source "$(dirname "$0")/_venv.sh" test "[test]"
+cd "$ROOT"
+PG_URL="${COACH_TEST_PG_URL:-postgresql+psycopg://postgres@127.0.0.1:5432/test}"
+
+pg_ready() { python - "$PG_URL" <<'PY'
+import sys
+import sqlalchemy as sa
+try:
+    sa.create_engine(sys.argv[1]).connect().close()
+except Exception as exc:  # noqa: BLE001 - any failure means "not ready"
+    print(f"PostgreSQL not reachable at {sys.argv[1]}: {exc}", file=sys.stderr)
+    sys.exit(1)
+PY
+}
+
+if ! pg_ready 2>/dev/null; then
+  if command -v pg_ctlcluster >/dev/null && [ -d /etc/postgresql ]; then
+    echo "Starting PostgreSQL ..." >&2
+    pg_ctlcluster --skip-systemctl-redirect "$(ls /etc/postgresql | head -n1)" main start || true
+    for _ in $(seq 30); do pg_ready 2>/dev/null && break; sleep 1; done
+  fi
+  pg_ready || { echo "error: the suite runs on PostgreSQL too, and none answers at $PG_URL" >&2; exit 1; }
+fi
+
+echo "=== tests on SQLite ===" >&2
+COACH_TEST_DATABASE_URL="" python -m pytest "$@"
+echo "=== tests on PostgreSQL ($PG_URL) ===" >&2
+COACH_TEST_DATABASE_URL="$PG_URL" python -m pytest "$@"
