@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from kinect_agent import skeleton
+from kinect_agent.processing import _fk_numba
 from kinect_agent.processing.rotations import quat_to_matrix
 
 N_BONES = skeleton.J - 1
@@ -87,3 +88,176 @@ def forward_kinematics_quat(
     returns: (..., J, 3) m, camera frame.
     """
     return forward_kinematics(root, quat_to_matrix(q_root), lengths, quat_to_matrix(q_local))
+
+
+# --- The paper's minimal parameterisation (DoF per joint), used by the filters -----------------------------------
+#
+# Every joint j with skeleton.DOF[j] > 0 carries one local rotation R_j shared by all bones that leave j, relative to
+# the bone that enters j (ROOT: R_j is the ROOT body frame -> camera frame, and the bones leaving ROOT are rigid in
+# it). Parameters theta (33 angles, radians) per joint, in joint order:
+#   3 DoF: R_j = R_ref[j] · exp([v]x), v the rotation vector (3 values) relative to a per-sequence reference R_ref.
+#   1 DoF (ELB_*, KNE_*): a hinge R_j = Rx(θ) about the x axis of the entering bone's frame.
+#   2 DoF (WRI_*, ANK_*): R_j = Rx(a) · Rw(b), w = z for wrists, y for ankles (the axes across the bone).
+# Bones that leave one joint are rigid with each other; their rest directions are personalised (ChainModel.rest).
+ROT_JOINTS: tuple[int, ...] = tuple(j for j, n in enumerate(skeleton.JOINTS) if skeleton.DOF[n] > 0)  # 15 joints
+ROT_INDEX: dict[int, int] = {j: r for r, j in enumerate(ROT_JOINTS)}
+ROT_DOF: np.ndarray = np.array([skeleton.DOF[skeleton.JOINTS[j]] for j in ROT_JOINTS])  # (15,)
+ROT_START: np.ndarray = np.concatenate(([0], np.cumsum(ROT_DOF)[:-1]))  # (15,) first theta index of each
+N_THETA = int(ROT_DOF.sum())  # 33
+_SECOND_AXIS = {"WRI_L": 2, "WRI_R": 2, "ANK_L": 1, "ANK_R": 1}
+_R3 = np.flatnonzero(ROT_DOF == 3)  # rotation indices of 3-DoF joints (7)
+_R1 = np.flatnonzero(ROT_DOF == 1)  # hinges (4)
+_R2 = np.flatnonzero(ROT_DOF == 2)  # 2-DoF (4)
+_R2_Y = np.array([r for r in _R2 if _SECOND_AXIS[skeleton.JOINTS[ROT_JOINTS[r]]] == 1])
+_R2_Z = np.array([r for r in _R2 if _SECOND_AXIS[skeleton.JOINTS[ROT_JOINTS[r]]] == 2])
+THETA_3DOF: np.ndarray = np.concatenate([ROT_START[r] + np.arange(3) for r in _R3])  # (21,) theta indices
+# BONE_GROUP[k]: rotation index (into ROT_JOINTS) of the parent joint of bone k.
+BONE_GROUP: np.ndarray = np.array([ROT_INDEX[p] for p, _ in skeleton.BONES])
+
+
+def _depth_levels(parents: np.ndarray) -> list[np.ndarray]:
+    depth = np.zeros(len(parents), dtype=int)
+    for i, p in enumerate(parents):
+        depth[i] = 0 if p < 0 else depth[p] + 1
+    return [np.flatnonzero(depth == d) for d in range(1, depth.max() + 1)]
+
+
+_ROT_PARENT = np.array([-1 if j == 0 else ROT_INDEX[int(skeleton.PARENT[j])] for j in ROT_JOINTS])
+_ROT_LEVELS = _depth_levels(_ROT_PARENT)
+_JOINT_LEVELS = _depth_levels(skeleton.PARENT)
+
+
+def _rx_rw(a: np.ndarray, b: np.ndarray, axis: int) -> np.ndarray:
+    """Returns Rx(a) · R_axis(b), (..., 3, 3), for angle arrays a, b (...) rad."""
+    ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
+    R = np.empty(np.shape(a) + (3, 3))
+    if axis == 2:  # Rx(a) @ Rz(b)
+        R[..., 0, 0], R[..., 0, 1], R[..., 0, 2] = cb, -sb, 0.0
+        R[..., 1, 0], R[..., 1, 1], R[..., 1, 2] = ca * sb, ca * cb, -sa
+        R[..., 2, 0], R[..., 2, 1], R[..., 2, 2] = sa * sb, sa * cb, ca
+    else:  # Rx(a) @ Ry(b)
+        R[..., 0, 0], R[..., 0, 1], R[..., 0, 2] = cb, 0.0, sb
+        R[..., 1, 0], R[..., 1, 1], R[..., 1, 2] = sa * sb, ca, -sa * cb
+        R[..., 2, 0], R[..., 2, 1], R[..., 2, 2] = -ca * sb, sa, ca * cb
+    return R
+
+
+def _rodrigues(v: np.ndarray) -> np.ndarray:
+    """Returns exp([v]x), (..., 3, 3), for rotation vectors v (..., 3) rad; exact series near zero."""
+    th2 = np.sum(v * v, axis=-1)
+    th = np.sqrt(th2)
+    small = th2 < 1e-12
+    safe = np.where(small, 1.0, th)
+    a = np.where(small, 1.0 - th2 / 6.0, np.sin(safe) / safe)
+    b = np.where(small, 0.5 - th2 / 24.0, (1.0 - np.cos(safe)) / np.where(small, 1.0, th2))
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
+    R = np.empty(v.shape[:-1] + (3, 3))
+    R[..., 0, 0] = 1.0 - b * (y * y + z * z)
+    R[..., 1, 1] = 1.0 - b * (x * x + z * z)
+    R[..., 2, 2] = 1.0 - b * (x * x + y * y)
+    bxy, bxz, byz = b * x * y, b * x * z, b * y * z
+    R[..., 0, 1], R[..., 1, 0] = bxy - a * z, bxy + a * z
+    R[..., 0, 2], R[..., 2, 0] = bxz + a * y, bxz - a * y
+    R[..., 1, 2], R[..., 2, 1] = byz - a * x, byz + a * x
+    return R
+
+
+_REF_INDEX = np.full(len(ROT_JOINTS), -1)
+_REF_INDEX[_R3] = np.arange(len(_R3))
+_KERNEL_TABLES = (
+    ROT_DOF.astype(np.int64),
+    ROT_START.astype(np.int64),
+    _ROT_PARENT.astype(np.int64),
+    _REF_INDEX.astype(np.int64),
+    np.array([_SECOND_AXIS.get(skeleton.JOINTS[j], 0) for j in ROT_JOINTS], dtype=np.int64),
+    np.array([p for p, _ in skeleton.BONES], dtype=np.int64),
+    BONE_GROUP.astype(np.int64),
+)
+
+
+class ChainModel:
+    """The kinematic chain F(root, lengths, theta) with personalised rest directions and 3-DoF references.
+
+    rest: (19, 3) unit rest direction of each bone in the frame of its parent joint's rotation (BONES order).
+    R_ref: (7, 3, 3) reference rotation of each 3-DoF joint (ROOT, SPINE, NECK, SHO_L, SHO_R, HIP_L, HIP_R).
+    """
+
+    def __init__(self, rest: np.ndarray | None = None, R_ref: np.ndarray | None = None, compiled: bool = True) -> None:
+        self.compiled = compiled  # use the numba kernel when numba is installed
+        self.rest = np.array(REST_DIRECTIONS if rest is None else rest, dtype=np.float64)
+        self.R_ref = np.tile(np.eye(3), (len(_R3), 1, 1)) if R_ref is None else np.array(R_ref, dtype=np.float64)
+        if self.rest.shape != (N_BONES, 3):
+            raise ValueError(f"rest must have shape (19, 3), got {self.rest.shape}")
+        if self.R_ref.shape != (len(_R3), 3, 3):
+            raise ValueError(f"R_ref must have shape ({len(_R3)}, 3, 3), got {self.R_ref.shape}")
+
+    def local_rotations(self, theta: np.ndarray) -> np.ndarray:
+        """Returns R_j for the 15 rotating joints, (..., 15, 3, 3), from theta (..., 33) rad."""
+        lead = theta.shape[:-1]
+        R = np.empty(lead + (len(ROT_JOINTS), 3, 3))
+        v = theta[..., THETA_3DOF].reshape(lead + (len(_R3), 3))
+        R[..., _R3, :, :] = self.R_ref @ _rodrigues(v)
+        h = theta[..., ROT_START[_R1]]
+        c, s = np.cos(h), np.sin(h)
+        Rh = np.zeros(h.shape + (3, 3))
+        Rh[..., 0, 0] = 1.0
+        Rh[..., 1, 1], Rh[..., 1, 2], Rh[..., 2, 1], Rh[..., 2, 2] = c, -s, s, c
+        R[..., _R1, :, :] = Rh
+        for group, axis in ((_R2_Z, 2), (_R2_Y, 1)):
+            R[..., group, :, :] = _rx_rw(theta[..., ROT_START[group]], theta[..., ROT_START[group] + 1], axis)
+        return R
+
+    def global_rotations(self, R_local: np.ndarray) -> np.ndarray:
+        """Returns G_j = world rotation of the bones leaving each rotating joint, (..., 15, 3, 3)."""
+        G = R_local.copy()
+        for level in _ROT_LEVELS:
+            G[..., level, :, :] = G[..., _ROT_PARENT[level], :, :] @ R_local[..., level, :, :]
+        return G
+
+    def positions(self, root: np.ndarray, lengths: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Returns joint positions (..., J, 3), metres, camera frame.
+
+        root: (..., 3) m. lengths: (..., 19) m, BONES order. theta: (..., 33) rad (see ROT_JOINTS).
+        """
+        if _fk_numba.AVAILABLE and self.compiled:
+            return self.positions_compiled(root, lengths, theta)
+        return self.positions_numpy(root, lengths, theta)
+
+    def positions_compiled(self, root: np.ndarray, lengths: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Same as positions_numpy, by the compiled kernel of _fk_numba (one loop per state)."""
+        lead = np.broadcast_shapes(root.shape[:-1], lengths.shape[:-1], theta.shape[:-1])
+        r = np.ascontiguousarray(np.broadcast_to(root, lead + (3,)), dtype=np.float64).reshape(-1, 3)
+        ln = np.ascontiguousarray(np.broadcast_to(lengths, lead + (N_BONES,)), dtype=np.float64).reshape(-1, N_BONES)
+        th = np.ascontiguousarray(np.broadcast_to(theta, lead + (N_THETA,)), dtype=np.float64).reshape(-1, N_THETA)
+        out = np.empty((r.shape[0], skeleton.J, 3))
+        _fk_numba.fk_many(r, ln, th, self.rest, self.R_ref, *_KERNEL_TABLES, out)
+        return out.reshape(lead + (skeleton.J, 3))
+
+    def positions_numpy(self, root: np.ndarray, lengths: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Returns joint positions (..., J, 3) m by numpy broadcasting (reference implementation)."""
+        G = self.global_rotations(self.local_rotations(theta))
+        offsets = np.einsum("...kij,kj->...ki", G[..., BONE_GROUP, :, :], self.rest) * lengths[..., None]
+        shape = np.broadcast_shapes(root.shape[:-1], offsets.shape[:-2])
+        pos = np.empty(shape + (skeleton.J, 3))
+        pos[..., 0, :] = root
+        for level in _JOINT_LEVELS:
+            pos[..., level, :] = pos[..., skeleton.PARENT[level], :] + offsets[..., level - 1, :]
+        return pos
+
+    def standard_rotations(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Returns (R_world_root (..., 3, 3), R_local (..., 19, 3, 3)) for `forward_kinematics` with REST_DIRECTIONS.
+
+        Each bone's frame is turned so that REST_DIRECTIONS[k] maps onto this model's rest[k]; with the same root
+        and lengths, forward_kinematics then gives exactly `positions`.
+        """
+        from kinect_agent.processing.rotations import rotation_between
+
+        G = self.global_rotations(self.local_rotations(theta))
+        C = rotation_between(REST_DIRECTIONS, self.rest)  # (19, 3, 3)
+        W = G[..., BONE_GROUP, :, :] @ C  # world rotation of each bone's standard frame
+        R_world_root = G[..., 0, :, :]
+        W_in = np.empty_like(W)
+        for k in range(N_BONES):
+            W_in[..., k, :, :] = R_world_root if ENTERING_BONE[k] < 0 else W[..., ENTERING_BONE[k], :, :]
+        R_local = np.swapaxes(W_in, -1, -2) @ W
+        return R_world_root, R_local

@@ -115,3 +115,44 @@ def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     axis = np.where(s > 1e-9, axis, ortho)
     axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
     return rotvec_to_matrix(axis * angle)
+
+
+def axis_rotation(axis: int, angle: np.ndarray) -> np.ndarray:
+    """Returns rotation matrices (..., 3, 3) about the body axis `axis` (0 = x, 1 = y, 2 = z) by `angle` (...) rad."""
+    c, s = np.cos(angle), np.sin(angle)
+    R = np.zeros(np.shape(angle) + (3, 3))
+    i, j = [(1, 2), (2, 0), (0, 1)][axis]
+    R[..., axis, axis] = 1.0
+    R[..., i, i] = c
+    R[..., j, j] = c
+    R[..., i, j] = -s
+    R[..., j, i] = s
+    return R
+
+
+def matrix_to_rotvec(R: np.ndarray) -> np.ndarray:
+    """Returns rotation vectors (..., 3), radians, for rotation matrices R (..., 3, 3)."""
+    return quat_to_rotvec(matrix_to_quat(R))
+
+
+def quat_mean(q: np.ndarray, axis: int = 0) -> np.ndarray:
+    """Returns the normalised sign-aligned mean of unit quaternions q (..., 4) wxyz along `axis` (chordal mean)."""
+    q = np.moveaxis(np.asarray(q, dtype=np.float64), axis, 0)
+    ref = q[0]
+    aligned = q * np.where(np.sum(q * ref, axis=-1, keepdims=True) < 0, -1.0, 1.0)
+    mean = np.nansum(aligned, axis=0)
+    norm = np.linalg.norm(mean, axis=-1, keepdims=True)
+    return np.where(norm > 1e-12, mean / np.where(norm > 1e-12, norm, 1.0), np.array([1.0, 0.0, 0.0, 0.0]))
+
+
+def frame_from_axes(y: np.ndarray, x_hint: np.ndarray) -> np.ndarray:
+    """Returns rotation matrices (..., 3, 3) whose columns are (x, y, z): y = unit(y), x = x_hint made orthogonal to y.
+
+    y, x_hint: (..., 3) any length; z = x × y. Where x_hint is parallel to y the result is NaN.
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        yu = y / np.linalg.norm(y, axis=-1, keepdims=True)
+        x = x_hint - np.sum(x_hint * yu, axis=-1, keepdims=True) * yu
+        x = x / np.linalg.norm(x, axis=-1, keepdims=True)
+    z = np.cross(x, yu)
+    return np.stack((x, yu, z), axis=-1)

@@ -1,0 +1,73 @@
+"""`kinect-agent filter`: files in, filtered CSV and parameters JSON out, atomic, clear errors."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from kinect_agent import formats, skeleton
+from kinect_agent.cli import main
+from kinect_agent.processing.params import KinematicParams
+from kinect_agent.recording import Metadata, Recording
+
+from ._data import smooth_motion
+
+
+def _write_input(tmp_path: Path, rng: np.random.Generator, frames: int = 90) -> tuple[Path, Recording]:
+    t, truth, _ = smooth_motion(frames, rng)
+    positions = truth + rng.normal(0, 0.01, truth.shape)
+    positions[30:35] = np.nan
+    rec = Recording.from_positions(t + 12.5, positions, Metadata(rate_hz=30.0, device="kinect2"))
+    path = tmp_path / "in.csv"
+    formats.write(rec, path)
+    return path, formats.read(path)
+
+
+def test_filter_writes_complete_csv_and_params(tmp_path: Path, rng: np.random.Generator, capsys) -> None:
+    src, rec = _write_input(tmp_path, rng)
+    out, params = tmp_path / "out" / "filtered.csv", tmp_path / "params.json"
+    assert main(["filter", str(src), "-o", str(out), "--params", str(params)]) == 0
+    got = formats.read(out)
+    np.testing.assert_allclose(got.t, rec.t, atol=1e-6, err_msg="frames and times are kept")
+    assert np.all(np.isfinite(got.positions)) and np.all(got.state[30:35] == skeleton.INFERRED)
+    p = KinematicParams.from_json(json.loads(params.read_text()))
+    assert p.n_frames == rec.n_frames
+    np.testing.assert_allclose(p.positions(), got.positions, atol=2e-4)
+    assert "frames" in capsys.readouterr().err
+
+
+def test_filter_online_mode(tmp_path: Path, rng: np.random.Generator) -> None:
+    src, rec = _write_input(tmp_path, rng, 60)
+    out = tmp_path / "online.csv"
+    assert main(["filter", str(src), "-o", str(out), "--online", "--no-progress"]) == 0
+    assert "online forward pass" in formats.read(out).meta.history[-1]
+
+
+def test_filter_error_leaves_no_output(tmp_path: Path, capsys) -> None:
+    src = tmp_path / "empty.csv"
+    rec = Recording.from_positions(np.arange(4.0), np.full((4, skeleton.J, 3), np.nan))
+    formats.write(rec, src)
+    out, params = tmp_path / "out.csv", tmp_path / "p.json"
+    assert main(["filter", str(src), "-o", str(out), "--params", str(params)]) == 2
+    assert "no joint is tracked" in capsys.readouterr().err
+    assert not out.exists() and not params.exists()
+    assert not list(tmp_path.glob(".*part")), "no temporary file left behind"
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["missing.csv", "-o", "x.csv"], "no such file"),
+        (["in.csv", "-o", "x.json"], "use a .csv name"),
+    ],
+)
+def test_filter_bad_arguments_say_what_is_wrong(
+    tmp_path: Path, rng: np.random.Generator, capsys, args: list[str], message: str
+) -> None:
+    _write_input(tmp_path, rng, 20)
+    args = [str(tmp_path / a) if a.endswith((".csv", ".json")) else a for a in args]
+    assert main(["filter", *args]) == 2
+    assert message in capsys.readouterr().err

@@ -1,0 +1,156 @@
+"""The pipeline: constant segment lengths, gaps filled, accuracy, real recordings, online filter, errors."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from kinect_agent import skeleton
+from kinect_agent.processing.pipeline import OnlineFilter, PipelineConfig, process
+from kinect_agent.recording import Metadata, Recording
+
+from ._data import inject_outliers, smooth_motion, utkinect
+
+
+def _noisy(rng: np.random.Generator, frames: int, noise: float = 0.015) -> tuple[Recording, np.ndarray, np.ndarray]:
+    t, truth, lengths = smooth_motion(frames, rng)
+    rec = Recording.from_positions(t, truth + rng.normal(0, noise, truth.shape), Metadata(rate_hz=30.0))
+    return rec, truth, lengths
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    frames=st.integers(12, 40),
+    noise=st.floats(0.0, 0.05),
+    missing=st.floats(0.0, 0.3),
+    smoother=st.sampled_from(["urts", "four_pass"]),
+)
+def test_segment_lengths_are_constant_after_pass_two(
+    seed: int, frames: int, noise: float, missing: float, smoother: str
+) -> None:
+    rng = np.random.default_rng(seed)
+    rec, _, _ = _noisy(rng, frames, noise)
+    positions = rec.positions.copy()
+    positions[rng.random((frames, skeleton.J)) < missing] = np.nan
+    result = process(Recording.from_positions(rec.t, positions), config=PipelineConfig(smoother=smoother))
+    lengths = skeleton.bone_lengths(result.filtered.positions)
+    np.testing.assert_allclose(lengths, np.tile(result.params.segment_lengths, (frames, 1)), atol=1e-9)
+
+
+def test_missing_joints_and_frames_are_filled(rng: np.random.Generator) -> None:
+    rec, truth, _ = _noisy(rng, 150)
+    positions, state = rec.positions.copy(), rec.state.copy()
+    positions[40:55] = np.nan  # half a second with no skeleton at all
+    positions[:, skeleton.INDEX["WRI_R"]] = np.nan  # a joint never tracked
+    positions[100:130, skeleton.INDEX["KNE_L"]] = np.nan
+    state[::5, skeleton.INDEX["HEAD"]] = skeleton.INFERRED
+    state[~np.all(np.isfinite(positions), axis=-1)] = skeleton.NOT_TRACKED
+    gappy = Recording(rec.t, positions, state, Metadata(rate_hz=30.0))
+    result = process(gappy)
+    out = result.filtered
+    assert np.all(np.isfinite(out.positions)), "every joint of every frame must be filled"
+    np.testing.assert_array_equal(out.t, rec.t)
+    assert np.all(out.state[40:55] == skeleton.INFERRED) and np.all(out.state[:, skeleton.INDEX["WRI_R"]] == 1)
+    assert out.state[0, 0] == skeleton.TRACKED
+    assert result.quality["frames_without_observation"] == 15
+    err = np.linalg.norm(out.positions[40:55] - truth[40:55], axis=-1)
+    assert err.mean() < 0.1, f"gap filled {err.mean() * 1000:.0f} mm from the truth"
+    assert out.meta.history[-1].startswith("ukf-4pass v1")
+
+
+@pytest.mark.parametrize("smoother", ["urts", "four_pass"])
+def test_filter_is_closer_to_the_truth_than_the_measurement(rng: np.random.Generator, smoother: str) -> None:
+    rec, truth, lengths = _noisy(rng, 200)
+    bad, _ = inject_outliers(rec, rng)
+    result = process(bad, config=PipelineConfig(smoother=smoother))
+    raw = np.sqrt(np.mean(np.sum((rec.positions - truth) ** 2, axis=-1)))
+    got = np.sqrt(np.mean(np.sum((result.filtered.positions - truth) ** 2, axis=-1)))
+    assert got < 0.8 * raw, f"{smoother}: filtered RMSE {got * 1000:.1f} mm vs noise {raw * 1000:.1f} mm"
+    assert np.abs(result.params.segment_lengths - lengths).mean() < 0.01
+
+
+@pytest.mark.parametrize("name", ["joints_s01_e01.txt", "joints_s04_e02.txt"])
+def test_real_kinect_recording_comes_out_complete_and_steadier(data_dir: Path, name: str) -> None:
+    rec = utkinect(data_dir, name, frames=200)
+    result = process(rec)
+    assert np.all(np.isfinite(result.filtered.positions))
+    before, after = result.quality["segment_sd_before_mm"], result.quality["segment_sd_after_mm"]
+    for seg in skeleton.SEGMENT_NAMES:
+        assert after[seg] < before[seg], f"{seg}: SD {after[seg]:.2f} mm after vs {before[seg]:.2f} mm before"
+    assert set(result.params.joint_angles) >= {"elbow_flexion_L", "knee_flexion_R"}
+    angles = result.params.joint_angles["elbow_flexion_L"]
+    assert np.all(np.isfinite(angles)) and angles.shape == (200,)
+
+
+def test_params_rebuild_the_filtered_positions(rng: np.random.Generator) -> None:
+    rec, _, _ = _noisy(rng, 60)
+    result = process(rec)
+    np.testing.assert_allclose(result.params.positions(), result.filtered.positions, atol=1e-9)
+
+
+def test_progress_reaches_the_total(rng: np.random.Generator) -> None:
+    rec, _, _ = _noisy(rng, 100)
+    calls: list[tuple[int, int]] = []
+    process(rec, progress=lambda done, total: calls.append((done, total)))
+    assert calls and calls[-1][0] == calls[-1][1] and all(d <= t for d, t in calls)
+
+
+def test_online_filter_tracks_frame_by_frame(rng: np.random.Generator) -> None:
+    rec, truth, lengths = _noisy(rng, 120)
+    filt = OnlineFilter()
+    out = np.array([filt.step(float(t), p, s) for t, p, s in zip(rec.t, rec.positions, rec.state, strict=True)])
+    assert np.all(np.isfinite(out))
+    assert filt.lengths_fixed, "lengths are fixed after the first second"
+    err = np.sqrt(np.mean(np.sum((out[60:] - truth[60:]) ** 2, axis=-1)))
+    raw = np.sqrt(np.mean(np.sum((rec.positions[60:] - truth[60:]) ** 2, axis=-1)))
+    assert err < raw, f"online RMSE {err * 1000:.1f} mm vs noise {raw * 1000:.1f} mm"
+    np.testing.assert_allclose(skeleton.bone_lengths(out[-1]), filt.chain.lengths, atol=1e-9)
+
+
+def test_online_filter_with_given_lengths_and_bad_input(rng: np.random.Generator) -> None:
+    rec, _, lengths = _noisy(rng, 10)
+    filt = OnlineFilter(lengths=lengths)
+    out = filt.step(0.0, rec.positions[0], rec.state[0])
+    np.testing.assert_allclose(skeleton.bone_lengths(out), lengths, atol=1e-9)
+    with pytest.raises(ValueError, match="t must increase"):
+        filt.step(0.0, rec.positions[1], rec.state[1])
+    with pytest.raises(ValueError, match=r"positions must have shape \(20, 3\), got \(19, 3\)"):
+        filt.step(1.0, rec.positions[1, :19], rec.state[1])
+    with pytest.raises(ValueError, match=r"lengths must have shape \(19,\)"):
+        OnlineFilter(lengths=np.ones(3))
+
+
+def test_process_online_gives_the_same_outputs(rng: np.random.Generator) -> None:
+    rec, _, _ = _noisy(rng, 60)
+    result = process(rec, online=True)
+    assert np.all(np.isfinite(result.filtered.positions)) and result.quality["online"] is True
+    np.testing.assert_allclose(result.params.positions(), result.filtered.positions, atol=1e-9)
+
+
+def test_process_refuses_a_recording_without_any_tracked_joint() -> None:
+    empty = Recording.from_positions(np.arange(3.0), np.full((3, skeleton.J, 3), np.nan))
+    with pytest.raises(ValueError, match="no joint is tracked"):
+        process(empty)
+
+
+def test_config_errors_name_the_setting(rng: np.random.Generator) -> None:
+    rec, _, _ = _noisy(rng, 10)
+    with pytest.raises(ValueError, match="PipelineConfig.smoother must be one of"):
+        process(rec, config=PipelineConfig(smoother="kalman"))
+    with pytest.raises(ValueError, match="PipelineConfig.sigma_tracked_m must be > 0"):
+        process(rec, config=PipelineConfig(sigma_tracked_m=0.0))
+
+
+def test_numpy_fallback_gives_the_same_result(rng: np.random.Generator, monkeypatch: pytest.MonkeyPatch) -> None:
+    from kinect_agent.processing import _fk_numba
+
+    rec, _, _ = _noisy(rng, 40)
+    compiled = process(rec).filtered.positions
+    monkeypatch.setattr(_fk_numba, "AVAILABLE", False)
+    plain = process(rec).filtered.positions
+    np.testing.assert_allclose(plain, compiled, atol=1e-8, err_msg="numba kernel and numpy FK disagree")
