@@ -1,0 +1,28 @@
+# Kinect Home Coach coaching server.  Build: docker build -t kinect-home-coach .
+FROM python:3.11-slim
+
+ENV PYTHONDONTWRITEBYTECODE=1 \
+    PYTHONUNBUFFERED=1 \
+    PIP_NO_CACHE_DIR=1 \
+    PIP_DISABLE_PIP_VERSION_CHECK=1 \
+    COACH_HOST=0.0.0.0 \
+    COACH_PORT=8000
+
+WORKDIR /app
+COPY pyproject.toml README.md ./
+COPY kinect_agent ./kinect_agent
+COPY backend ./backend
+COPY migrations ./migrations
+COPY frontend ./frontend
+RUN pip install . && rm -rf /app/*
+
+RUN useradd --system --create-home --uid 10001 coach && mkdir -p /data && chown coach /data
+USER coach
+WORKDIR /data
+
+EXPOSE 8000
+HEALTHCHECK --interval=30s --timeout=5s --start-period=20s --retries=3 \
+    CMD python -c "import urllib.request,sys; sys.exit(urllib.request.urlopen('http://127.0.0.1:8000/healthz').status != 200)"
+
+# Bring the schema to head, then serve (the server itself refuses a database behind head).
+CMD ["sh", "-c", "coach-server migrate && exec coach-server serve --forwarded-allow-ips \"${COACH_FORWARDED_ALLOW_IPS:-*}\""]

@@ -1,0 +1,1 @@
+"""The audit domain: models, schemas, service and router."""

@@ -1,0 +1,1 @@
+"""The auth domain: models, schemas, service and router."""

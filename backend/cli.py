@@ -1,0 +1,215 @@
+"""`coach-server`: serve, migrate, create-user, seed-demo, analyze. User errors: one line on stderr, exit 2."""
+
+from __future__ import annotations
+
+import argparse
+import getpass
+import importlib
+import sys
+
+from backend import __version__
+
+
+class CliError(Exception):
+    """A user error: printed as one line on stderr, exit status 2."""
+
+
+def _settings():
+    from pydantic import ValidationError
+
+    from backend.config import get_settings
+
+    try:
+        return get_settings()
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        where = ".".join(str(p) for p in first.get("loc", ())) or "settings"
+        raise CliError(f"bad configuration ({where}): {first.get('msg')}") from None
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    """Checks the schema is at head, then runs uvicorn."""
+    import uvicorn
+
+    from backend.database import get_engine
+    from backend.exceptions import DatabaseNotMigrated
+    from backend.main import create_app
+    from backend.migrate import check_at_head
+
+    settings = _settings()
+    try:
+        check_at_head(get_engine())
+    except DatabaseNotMigrated as exc:
+        raise CliError(str(exc)) from None
+    uvicorn.run(
+        create_app(settings),
+        host=args.host or settings.HOST,
+        port=args.port or settings.PORT,
+        proxy_headers=True,
+        forwarded_allow_ips=args.forwarded_allow_ips,
+    )
+    return 0
+
+
+def cmd_migrate(args: argparse.Namespace) -> int:
+    """Upgrades to --revision (default head) or downgrades to --down; syncs the exercise library at head."""
+    from alembic.util.exc import CommandError
+
+    from backend.database import get_engine, get_sessionmaker
+    from backend.migrate import current_revision, downgrade, head_revision, upgrade
+
+    _settings()
+    engine = get_engine()
+    try:
+        with engine.begin() as conn:
+            if args.down is not None:
+                downgrade(conn, args.down)
+            else:
+                upgrade(conn, args.revision)
+            now = current_revision(conn)
+    except CommandError as exc:
+        raise CliError(f"migration failed: {exc}") from None
+    if now == head_revision():
+        synced = _sync_exercises(get_sessionmaker())
+        print(f"database at revision {now} (head); exercise library: {synced} exercises")
+    else:
+        print(f"database at revision {now or 'base (empty)'}")
+    return 0
+
+
+def _sync_exercises(factory) -> int | str:
+    try:
+        from backend.exercises.service import sync_exercise_library
+
+        with factory() as session, session.begin():
+            return sync_exercise_library(db_session=session)
+    except ModuleNotFoundError as exc:
+        if exc.name == "backend.exercises.library":
+            print("warning: backend.exercises.library is missing; exercise table not seeded", file=sys.stderr)
+            return "not seeded"
+        raise
+
+
+def cmd_create_user(args: argparse.Namespace) -> int:
+    """Creates a user, prompting for the password when --password is not given."""
+    from backend.database import get_sessionmaker
+    from backend.exceptions import AppError
+    from backend.users.schemas import UserCreate
+    from backend.users.service import create_user
+
+    _settings()
+    password = args.password
+    if password is None:
+        password = getpass.getpass("password: ")
+        if password != getpass.getpass("repeat password: "):
+            raise CliError("the two passwords differ")
+    from pydantic import ValidationError
+
+    try:
+        body = UserCreate(email=args.email, password=password, role=args.role, full_name=args.name)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        raise CliError(f"{'.'.join(str(p) for p in first['loc'])}: {first['msg']}") from None
+    _require_migrated()
+    try:
+        with get_sessionmaker()() as session, session.begin():
+            user = create_user(
+                db_session=session, email=body.email, password=body.password, role=body.role, full_name=body.full_name
+            )
+            print(f"created {user.role} {user.email} (id {user.id})")
+    except AppError as exc:
+        raise CliError(exc.message) from None
+    return 0
+
+
+def _require_migrated() -> None:
+    from backend.database import get_engine
+    from backend.exceptions import DatabaseNotMigrated
+    from backend.migrate import check_at_head
+
+    try:
+        check_at_head(get_engine())
+    except DatabaseNotMigrated as exc:
+        raise CliError(str(exc)) from None
+
+
+def cmd_seed_demo(args: argparse.Namespace) -> int:
+    """Fills the database with demo users, patients, plans and sessions (backend.demo.seed_demo)."""
+    from backend.database import get_sessionmaker
+
+    _settings()
+    _require_migrated()
+    demo = _optional_module("backend.demo")
+    with get_sessionmaker()() as session, session.begin():
+        result = demo.seed_demo(session)
+    if result is not None:
+        print(result)
+    return 0
+
+
+def cmd_analyze(args: argparse.Namespace) -> int:
+    """Runs the offline analysis report (backend.analysis.report.main) with the remaining arguments."""
+    report = _optional_module("backend.analysis.report")
+    rest = list(args.rest)
+    if rest and rest[0] == "--":
+        rest = rest[1:]
+    return int(report.main(rest) or 0)
+
+
+def _optional_module(name: str):
+    try:
+        return importlib.import_module(name)
+    except ModuleNotFoundError as exc:
+        if exc.name == name:
+            raise CliError(f"{name} is not installed in this build") from None
+        raise
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Returns the parser of every subcommand."""
+    parser = argparse.ArgumentParser(prog="coach-server", description="Kinect Home Coach coaching server.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    p = sub.add_parser("serve", help="run the HTTP server (refuses a database behind head)")
+    p.add_argument("--host", help="bind address (default COACH_HOST)")
+    p.add_argument("--port", type=int, help="port (default COACH_PORT)")
+    p.add_argument("--forwarded-allow-ips", default="127.0.0.1", help="proxies trusted for X-Forwarded-For")
+    p.set_defaults(_run=cmd_serve)
+
+    p = sub.add_parser("migrate", help="bring the database to head (or --revision / --down)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--revision", default="head", help="upgrade target (default head)")
+    g.add_argument("--down", metavar="REV", help="downgrade to REV ('base' empties the database)")
+    p.set_defaults(_run=cmd_migrate)
+
+    p = sub.add_parser("create-user", help="create a user (prompts for the password when --password is omitted)")
+    p.add_argument("--email", required=True)
+    p.add_argument("--password", help="at least 10 characters; prompted when omitted")
+    p.add_argument("--role", choices=("admin", "therapist", "patient"), default="patient")
+    p.add_argument("--name", default="", help="full name")
+    p.set_defaults(_run=cmd_create_user)
+
+    p = sub.add_parser("seed-demo", help="fill the database with demo data")
+    p.set_defaults(_run=cmd_seed_demo)
+
+    p = sub.add_parser("analyze", help="offline analysis report of session files (see `analyze -- --help`)")
+    p.add_argument("rest", nargs=argparse.REMAINDER, help="arguments passed to the analysis report")
+    p.set_defaults(_run=cmd_analyze)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Runs coach-server; returns the exit status."""
+    args = build_parser().parse_args(argv)
+    try:
+        return args._run(args)
+    except CliError as exc:
+        print(f"coach-server: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,51 @@
+"""Server configuration: one pydantic-settings class read from COACH_* environment variables."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Literal
+
+from pydantic import model_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+DEFAULT_SECRET_KEY = "change-me-local-only"
+
+
+class Settings(BaseSettings):
+    """Holds every setting of the coaching server; secrets are refused at their defaults outside local."""
+
+    model_config = SettingsConfigDict(env_prefix="COACH_", case_sensitive=True, extra="ignore")
+
+    ENVIRONMENT: Literal["local", "staging", "production"] = "local"
+    DATABASE_URL: str = "sqlite:///./var/coach.db"
+    SECRET_KEY: str = DEFAULT_SECRET_KEY
+    HOST: str = "127.0.0.1"
+    PORT: int = 8000
+    LOGIN_SESSION_HOURS: float = 12.0
+    LOGIN_MAX_FAILURES: int = 5
+    LOGIN_WINDOW_MINUTES: float = 15.0
+    PAIRING_CODE_MINUTES: float = 15.0
+    MAX_UPLOAD_BYTES: int = 50 * 1024 * 1024
+    CHECK_MIGRATIONS: bool = True
+    COOKIE_SECURE: bool | None = None  # None: secure everywhere except ENVIRONMENT=local
+
+    @model_validator(mode="after")
+    def _refuse_default_secrets(self) -> Settings:
+        if self.ENVIRONMENT != "local" and self.SECRET_KEY == DEFAULT_SECRET_KEY:
+            raise ValueError("COACH_SECRET_KEY must be set to a random value when COACH_ENVIRONMENT is not 'local'")
+        if self.ENVIRONMENT != "local" and len(self.SECRET_KEY) < 32:
+            raise ValueError("COACH_SECRET_KEY must be at least 32 characters outside COACH_ENVIRONMENT=local")
+        return self
+
+    @property
+    def cookie_secure(self) -> bool:
+        """Returns whether the login cookie carries the Secure flag."""
+        if self.COOKIE_SECURE is not None:
+            return self.COOKIE_SECURE
+        return self.ENVIRONMENT != "local"
+
+
+@lru_cache
+def get_settings() -> Settings:
+    """Returns the process-wide settings (read once from the environment)."""
+    return Settings()

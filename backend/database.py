@@ -1,0 +1,123 @@
+"""Database plumbing: declarative Base with a naming convention, UTC timestamps, engine and session factory."""
+
+from __future__ import annotations
+
+import datetime as dt
+from collections.abc import Iterator
+from functools import lru_cache
+
+from sqlalchemy import DateTime, MetaData, create_engine, event
+from sqlalchemy.engine import Engine
+from sqlalchemy.orm import DeclarativeBase, Session, sessionmaker
+from sqlalchemy.types import TypeDecorator
+
+NAMING_CONVENTION = {
+    "ix": "ix_%(column_0_label)s",
+    "uq": "uq_%(table_name)s_%(column_0_N_name)s",
+    "ck": "ck_%(table_name)s_%(constraint_name)s",
+    "fk": "fk_%(table_name)s_%(column_0_name)s_%(referred_table_name)s",
+    "pk": "pk_%(table_name)s",
+}
+
+
+def utcnow() -> dt.datetime:
+    """Returns the current time as a timezone-aware UTC datetime."""
+    return dt.datetime.now(dt.UTC)
+
+
+class UTCDateTime(TypeDecorator):
+    """Stores timezone-aware datetimes as UTC and always returns them timezone-aware (SQLite drops the zone)."""
+
+    impl = DateTime(timezone=True)
+    cache_ok = True
+
+    def process_bind_param(self, value, dialect):
+        if value is None:
+            return None
+        if value.tzinfo is None:
+            raise ValueError("naive datetime given; use timezone-aware UTC datetimes")
+        value = value.astimezone(dt.UTC)
+        return value.replace(tzinfo=None) if dialect.name == "sqlite" else value
+
+    def process_result_value(self, value, dialect):
+        if value is None:
+            return None
+        return value.replace(tzinfo=dt.UTC) if value.tzinfo is None else value.astimezone(dt.UTC)
+
+
+class Base(DeclarativeBase):
+    """Declarative base of every table; timestamps map to UTCDateTime."""
+
+    metadata = MetaData(naming_convention=NAMING_CONVENTION)
+    type_annotation_map = {dt.datetime: UTCDateTime}
+
+
+def _sqlite_pragmas(dbapi_connection, _record) -> None:
+    cursor = dbapi_connection.cursor()
+    cursor.execute("PRAGMA foreign_keys=ON")
+    cursor.close()
+
+
+def make_engine(url: str) -> Engine:
+    """Returns an engine for a database URL (SQLite gets foreign keys on and its parent folder created)."""
+    if url.startswith("sqlite"):
+        from pathlib import Path
+
+        from sqlalchemy.engine import make_url
+
+        database = make_url(url).database
+        if database and database != ":memory:":
+            Path(database).parent.mkdir(parents=True, exist_ok=True)
+        engine = create_engine(url, connect_args={"check_same_thread": False})
+        event.listen(engine, "connect", _sqlite_pragmas)
+        return engine
+    return create_engine(url, pool_pre_ping=True)
+
+
+@lru_cache
+def get_engine(url: str | None = None) -> Engine:
+    """Returns the process-wide engine for the configured (or given) database URL."""
+    from backend.config import get_settings
+
+    return make_engine(url or get_settings().DATABASE_URL)
+
+
+@lru_cache
+def get_sessionmaker(url: str | None = None) -> sessionmaker[Session]:
+    """Returns the session factory bound to get_engine(url)."""
+    return sessionmaker(bind=get_engine(url), expire_on_commit=False)
+
+
+def request_session(session: Session) -> Iterator[Session]:
+    """Yields session for one request; commits on success, rolls back on error (unless error.keep_changes)."""
+    try:
+        yield session
+    except BaseException as exc:
+        if getattr(exc, "keep_changes", False):
+            session.commit()
+        else:
+            session.rollback()
+        raise
+    else:
+        session.commit()
+
+
+def get_db() -> Iterator[Session]:
+    """Yields one session per request; commits on success and rolls back on any error."""
+    session = get_sessionmaker()()
+    try:
+        yield from request_session(session)
+    finally:
+        session.close()
+
+
+def import_all_models() -> None:
+    """Imports every model module so Base.metadata knows every table (used by Alembic and tests)."""
+    import backend.audit.models  # noqa: F401
+    import backend.devices.models  # noqa: F401
+    import backend.exercises.models  # noqa: F401
+    import backend.patients.models  # noqa: F401
+    import backend.plans.models  # noqa: F401
+    import backend.sessions.models  # noqa: F401
+    import backend.suggestions.models  # noqa: F401
+    import backend.users.models  # noqa: F401

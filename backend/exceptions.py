@@ -1,0 +1,131 @@
+"""Application errors: AppError(message, status_code) and its subclasses, rendered as {"error", "detail"}."""
+
+from __future__ import annotations
+
+
+class AppError(Exception):
+    """Base of every error the API answers on purpose; the class name becomes the JSON "error" field."""
+
+    status_code = 400
+
+    def __init__(
+        self,
+        message: str,
+        status_code: int | None = None,
+        headers: dict[str, str] | None = None,
+        *,
+        keep_changes: bool = False,
+    ):
+        super().__init__(message)
+        self.message = message
+        self.keep_changes = keep_changes  # commit the request's changes anyway (e.g. a failed-login record)
+        if status_code is not None:
+            self.status_code = status_code
+        self.headers = headers or {}
+
+
+class NotAuthenticated(AppError):
+    status_code = 401
+
+
+class Forbidden(AppError):
+    status_code = 403
+
+
+class CsrfFailed(Forbidden):
+    pass
+
+
+class InsufficientScope(Forbidden):
+    pass
+
+
+class TooManyLoginAttempts(AppError):
+    status_code = 429
+
+
+class NotFound(AppError):
+    status_code = 404
+
+
+class UserNotFound(NotFound):
+    pass
+
+
+class PatientNotFound(NotFound):
+    pass
+
+
+class TherapistNotFound(NotFound):
+    pass
+
+
+class DeviceNotFound(NotFound):
+    pass
+
+
+class TokenNotFound(NotFound):
+    pass
+
+
+class ExerciseNotFound(NotFound):
+    pass
+
+
+class PlanNotFound(NotFound):
+    pass
+
+
+class Conflict(AppError):
+    status_code = 409
+
+
+class EmailAlreadyRegistered(Conflict):
+    pass
+
+
+class PairingCodeInvalid(AppError):
+    status_code = 400
+
+
+class InvalidInput(AppError):
+    status_code = 422
+
+
+class DatabaseNotMigrated(RuntimeError):
+    """Raised at start-up when the database revision is not Alembic head."""
+
+
+def error_responses(*errors: type[AppError]) -> dict[int | str, dict]:
+    """Returns a FastAPI `responses=` mapping documenting the given errors with examples."""
+    by_status: dict[int, list[type[AppError]]] = {}
+    for err in errors:
+        by_status.setdefault(err.status_code, []).append(err)
+    out: dict[int | str, dict] = {}
+    for status, errs in by_status.items():
+        examples = {
+            e.__name__: {"value": {"error": e.__name__, "detail": _EXAMPLE_DETAIL.get(e.__name__, e.__name__)}}
+            for e in errs
+        }
+        out[status] = {
+            "description": ", ".join(e.__name__ for e in errs),
+            "content": {
+                "application/json": {"schema": {"$ref": "#/components/schemas/ErrorOut"}, "examples": examples}
+            },
+        }
+    return out
+
+
+_EXAMPLE_DETAIL = {
+    "NotAuthenticated": "missing or invalid credentials",
+    "Forbidden": "you may not access patient 12",
+    "CsrfFailed": "missing or wrong X-CSRF-Token header",
+    "InsufficientScope": "this API token lacks the 'write' scope",
+    "TooManyLoginAttempts": "too many failed logins; retry in 900 s",
+    "PatientNotFound": "patient 12 does not exist",
+    "UserNotFound": "user 12 does not exist",
+    "PlanNotFound": "plan 3 does not exist",
+    "ExerciseNotFound": "exercise 'squat' does not exist",
+    "PairingCodeInvalid": "pairing code is unknown, used or expired",
+    "EmailAlreadyRegistered": "a user with email ana@example.org exists",
+}

@@ -1,0 +1,1 @@
+"""The exercises domain: models, schemas, service and router."""

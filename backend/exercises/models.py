@@ -1,0 +1,28 @@
+"""The built-in exercise library as a table (seeded from backend.exercises.library.EXERCISES)."""
+
+from __future__ import annotations
+
+import datetime as dt
+
+from sqlalchemy import JSON, String, Text
+from sqlalchemy.orm import Mapped, mapped_column
+
+from backend.database import Base, utcnow
+
+
+class Exercise(Base):
+    """One exercise: defining angles (names from joint_angles), plane, normal range in degrees, start pose."""
+
+    __tablename__ = "exercise"
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    slug: Mapped[str] = mapped_column(String(64), unique=True)
+    name: Mapped[str] = mapped_column(String(200))
+    instructions: Mapped[str] = mapped_column(Text, default="")
+    defining_angles: Mapped[list[str]] = mapped_column(JSON, default=list)
+    plane: Mapped[str] = mapped_column(String(32), default="")
+    normal_range_min_deg: Mapped[float] = mapped_column()
+    normal_range_max_deg: Mapped[float] = mapped_column()
+    pose: Mapped[str] = mapped_column(String(64), default="")
+    uiprmd_movement: Mapped[str | None] = mapped_column(String(16))
+    created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)

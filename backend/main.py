@@ -1,0 +1,176 @@
+"""The FastAPI application: routers, error handlers, health and version endpoints, start-up migration check."""
+
+from __future__ import annotations
+
+import importlib
+import logging
+from contextlib import asynccontextmanager
+
+from fastapi import APIRouter, FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.openapi.utils import get_openapi
+from fastapi.responses import JSONResponse
+from pydantic import BaseModel, Field
+from sqlalchemy import text
+from sqlalchemy.engine import Engine
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from backend import __version__
+from backend.config import Settings, get_settings
+from backend.deps import DbSession
+from backend.exceptions import AppError
+from backend.schemas import ErrorOut
+
+log = logging.getLogger(__name__)
+
+ROUTERS = (
+    "backend.auth.router",
+    "backend.users.router",
+    "backend.patients.router",
+    "backend.devices.router",
+    "backend.exercises.router",
+    "backend.plans.router",
+    "backend.audit.router",
+)
+# Routers other engineers own; included when their module exists.
+OPTIONAL_ROUTERS = ("backend.sessions.router", "backend.suggestions.router")
+
+
+class HealthOut(BaseModel):
+    """Liveness and database reachability."""
+
+    status: str = Field(examples=["ok"])
+    database: str = Field(examples=["ok"])
+
+
+class VersionOut(BaseModel):
+    """Server and API version."""
+
+    version: str = Field(examples=[__version__])
+    api: str = Field(examples=["v1"])
+    database_revision: str = Field(examples=["0001"])
+
+
+def _validation_detail(exc: RequestValidationError) -> str:
+    parts = []
+    for err in exc.errors():
+        where = ".".join(str(p) for p in err.get("loc", ()))
+        parts.append(f"{where}: {err.get('msg', 'invalid')}")
+    return "; ".join(parts) or "invalid request"
+
+
+def _install_error_handlers(app: FastAPI) -> None:
+    @app.exception_handler(AppError)
+    async def app_error(_request: Request, exc: AppError) -> JSONResponse:
+        return JSONResponse(
+            {"error": type(exc).__name__, "detail": exc.message}, status_code=exc.status_code, headers=exc.headers
+        )
+
+    @app.exception_handler(RequestValidationError)
+    async def validation_error(_request: Request, exc: RequestValidationError) -> JSONResponse:
+        return JSONResponse({"error": "ValidationError", "detail": _validation_detail(exc)}, status_code=422)
+
+    @app.exception_handler(StarletteHTTPException)
+    async def http_error(_request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        name = {404: "NotFound", 405: "MethodNotAllowed"}.get(exc.status_code, "HTTPError")
+        return JSONResponse(
+            {"error": name, "detail": str(exc.detail)}, status_code=exc.status_code, headers=exc.headers
+        )
+
+    @app.exception_handler(Exception)
+    async def unexpected(_request: Request, exc: Exception) -> JSONResponse:
+        log.exception("unhandled error", exc_info=exc)
+        return JSONResponse({"error": "InternalError", "detail": "internal server error"}, status_code=500)
+
+
+def _system_router() -> APIRouter:
+    router = APIRouter(tags=["system"])
+
+    @router.get("/healthz", response_model=HealthOut, responses={503: {"model": ErrorOut}})
+    def healthz(db_session: DbSession):
+        """Answers 200 when the server runs and the database answers, 503 otherwise."""
+        try:
+            db_session.execute(text("SELECT 1"))
+        except Exception as exc:  # noqa: BLE001 - any database failure means unhealthy
+            log.warning("health check failed: %s", exc)
+            return JSONResponse({"error": "DatabaseUnavailable", "detail": "database unreachable"}, status_code=503)
+        return HealthOut(status="ok", database="ok")
+
+    @router.get("/api/v1/version", response_model=VersionOut)
+    def version() -> VersionOut:
+        """Returns the server version, API version and the schema revision the code expects."""
+        from backend.migrate import head_revision
+
+        return VersionOut(version=__version__, api="v1", database_revision=head_revision())
+
+    return router
+
+
+def _openapi(app: FastAPI):
+    def build() -> dict:
+        if app.openapi_schema:
+            return app.openapi_schema
+        schema = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes)
+        components = schema.setdefault("components", {}).setdefault("schemas", {})
+        components["ErrorOut"] = ErrorOut.model_json_schema(ref_template="#/components/schemas/{model}")
+        example = {"error": "ValidationError", "detail": "body.email: Field required"}
+        for path in schema.get("paths", {}).values():
+            for op in path.values():
+                responses = op.get("responses", {})
+                if "422" in responses:
+                    responses["422"] = {
+                        "description": "ValidationError",
+                        "content": {
+                            "application/json": {
+                                "schema": {"$ref": "#/components/schemas/ErrorOut"},
+                                "example": example,
+                            }
+                        },
+                    }
+        components.pop("HTTPValidationError", None)
+        components.pop("ValidationError", None)
+        schema.setdefault("components", {})["securitySchemes"] = {
+            "bearer": {"type": "http", "scheme": "bearer", "description": "API token khc_... or device token khd_..."},
+            "cookie": {"type": "apiKey", "in": "cookie", "name": "coach_session"},
+        }
+        schema["security"] = [{"bearer": []}, {"cookie": []}]
+        app.openapi_schema = schema
+        return schema
+
+    return build
+
+
+def create_app(settings: Settings | None = None, engine: Engine | None = None) -> FastAPI:
+    """Returns the configured application; at start-up it refuses a database that is not at Alembic head."""
+    settings = settings or get_settings()
+
+    @asynccontextmanager
+    async def lifespan(_app: FastAPI):
+        if settings.CHECK_MIGRATIONS:
+            from backend.database import get_engine
+            from backend.migrate import check_at_head
+
+            check_at_head(engine or get_engine())
+        yield
+
+    app = FastAPI(
+        title="Kinect Home Coach",
+        version=__version__,
+        description="Coaching server: accounts, patients, devices, exercise plans, sessions and suggestions.",
+        lifespan=lifespan,
+    )
+    app.state.settings = settings
+    _install_error_handlers(app)
+    app.include_router(_system_router())
+    for name in ROUTERS:
+        app.include_router(importlib.import_module(name).router)
+    for name in OPTIONAL_ROUTERS:
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name != name:
+                raise
+            continue
+        app.include_router(module.router)
+    app.openapi = _openapi(app)  # type: ignore[method-assign]
+    return app

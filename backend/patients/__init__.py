@@ -1,0 +1,1 @@
+"""The patients domain: models, schemas, service and router."""

@@ -1,0 +1,61 @@
+"""Patient listing and therapist assignment."""
+
+from __future__ import annotations
+
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session
+
+from backend.database import utcnow
+from backend.exceptions import TherapistNotFound
+from backend.patients.models import TherapistPatient
+from backend.users.models import User
+
+
+def therapist_ids(*, db_session: Session, patient_id: int) -> list[int]:
+    """Returns the ids of the therapists assigned to a patient."""
+    query = select(TherapistPatient.therapist_id).where(TherapistPatient.patient_id == patient_id)
+    return sorted(db_session.scalars(query))
+
+
+def visible_patients_query(caller):
+    """Returns the select of patients the caller (deps.Caller) may see."""
+    query = select(User).where(User.role == "patient")
+    if caller.device is not None:
+        return query.where(User.id == caller.device.patient_id)
+    if caller.user.role == "patient":
+        return query.where(User.id == caller.user.id)
+    if caller.user.role == "therapist":
+        assigned = select(TherapistPatient.patient_id).where(TherapistPatient.therapist_id == caller.user.id)
+        return query.where(User.id.in_(assigned))
+    return query
+
+
+def list_patients(*, db_session: Session, caller, limit: int, offset: int) -> tuple[list[User], int]:
+    """Returns one page of the patients the caller may see, and the total."""
+    query = visible_patients_query(caller)
+    total = db_session.scalar(select(func.count()).select_from(query.subquery())) or 0
+    return list(db_session.scalars(query.order_by(User.id).limit(limit).offset(offset))), total
+
+
+def get_therapist(*, db_session: Session, therapist_id: int) -> User:
+    """Returns an active therapist or raises TherapistNotFound."""
+    user = db_session.get(User, therapist_id)
+    if user is None or user.role != "therapist":
+        raise TherapistNotFound(f"therapist {therapist_id} does not exist")
+    return user
+
+
+def assign(*, db_session: Session, patient: User, therapist: User) -> None:
+    """Assigns a therapist to a patient (idempotent)."""
+    key = {"therapist_id": therapist.id, "patient_id": patient.id}
+    if db_session.get(TherapistPatient, key) is None:
+        db_session.add(TherapistPatient(therapist_id=therapist.id, patient_id=patient.id, created_at=utcnow()))
+        db_session.flush()
+
+
+def unassign(*, db_session: Session, patient: User, therapist: User) -> None:
+    """Removes a therapist from a patient (idempotent)."""
+    row = db_session.get(TherapistPatient, {"therapist_id": therapist.id, "patient_id": patient.id})
+    if row is not None:
+        db_session.delete(row)
+        db_session.flush()

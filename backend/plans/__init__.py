@@ -1,0 +1,1 @@
+"""The plans domain: models, schemas, service and router."""

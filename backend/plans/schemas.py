@@ -1,0 +1,62 @@
+"""Plan bodies."""
+
+from __future__ import annotations
+
+import datetime as dt
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+
+class PlanItemIn(BaseModel):
+    """One prescribed exercise."""
+
+    exercise_slug: str = Field(min_length=1, max_length=64, examples=["deep_squat"])
+    sets: int = Field(ge=1, le=100, examples=[3])
+    repetitions: int = Field(ge=1, le=1000, examples=[10])
+    frequency_per_week: int = Field(ge=1, le=21, examples=[3])
+    notes: str = Field(default="", max_length=2000)
+
+
+class PlanIn(BaseModel):
+    """A plan as a therapist writes it (PUT replaces every field and item)."""
+
+    title: str = Field(min_length=1, max_length=200, examples=["Knee rehab, weeks 1-4"])
+    notes: str = Field(default="", max_length=5000)
+    start_date: dt.date = Field(examples=["2026-11-23"])
+    end_date: dt.date | None = Field(default=None, examples=["2026-12-21"])
+    items: list[PlanItemIn] = Field(default_factory=list, max_length=50)
+
+    @model_validator(mode="after")
+    def _dates_in_order(self) -> PlanIn:
+        if self.end_date is not None and self.end_date < self.start_date:
+            raise ValueError("end_date must not be before start_date")
+        return self
+
+
+class PlanItemOut(BaseModel):
+    """One prescribed exercise of a stored plan."""
+
+    model_config = ConfigDict(from_attributes=True)
+    id: int
+    exercise_id: int
+    exercise_slug: str
+    position: int
+    sets: int
+    repetitions: int
+    frequency_per_week: int
+    notes: str
+
+
+class PlanOut(BaseModel):
+    """A stored plan."""
+
+    id: int
+    patient_id: int
+    therapist_id: int | None
+    title: str
+    notes: str
+    start_date: dt.date
+    end_date: dt.date | None
+    created_at: dt.datetime
+    updated_at: dt.datetime
+    items: list[PlanItemOut]

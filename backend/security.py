@@ -1,0 +1,64 @@
+"""Secrets: argon2id password hashes, high-entropy bearer tokens (stored as sha256), pairing codes."""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import secrets
+
+from argon2 import PasswordHasher
+from argon2.exceptions import InvalidHashError, VerificationError
+
+API_TOKEN_PREFIX = "khc_"  # personal API tokens
+DEVICE_TOKEN_PREFIX = "khd_"  # home-device tokens
+SESSION_TOKEN_PREFIX = "khs_"  # browser login cookie
+PAIRING_ALPHABET = "ABCDEFGHJKLMNPQRSTUVWXYZ23456789"  # no 0/O, 1/I
+PAIRING_CODE_LENGTH = 8
+
+_hasher = PasswordHasher()  # argon2id with the library's current recommended parameters
+_DUMMY_HASH = _hasher.hash("not-a-real-password")
+
+
+def hash_password(password: str) -> str:
+    """Returns the argon2id hash of a password."""
+    return _hasher.hash(password)
+
+
+def verify_password(password_hash: str | None, password: str) -> bool:
+    """Returns whether password matches the hash (spends the same time when there is no hash)."""
+    try:
+        return _hasher.verify(password_hash or _DUMMY_HASH, password) and password_hash is not None
+    except (VerificationError, InvalidHashError):
+        return False
+
+
+def new_token(prefix: str) -> str:
+    """Returns a new bearer token: prefix + 43 url-safe characters (256 bits)."""
+    return prefix + secrets.token_urlsafe(32)
+
+
+def token_hash(token: str) -> str:
+    """Returns the sha256 hex digest under which a token or code is stored."""
+    return hashlib.sha256(token.encode()).hexdigest()
+
+
+def new_pairing_code() -> str:
+    """Returns a short human-typable pairing code such as 'K7QF-M2XA' (40 bits)."""
+    raw = "".join(secrets.choice(PAIRING_ALPHABET) for _ in range(PAIRING_CODE_LENGTH))
+    return raw[:4] + "-" + raw[4:]
+
+
+def normalize_pairing_code(code: str) -> str:
+    """Returns the canonical form of a typed pairing code (upper case, one dash, spaces removed)."""
+    raw = "".join(ch for ch in code.upper() if ch.isalnum())
+    return raw[:4] + "-" + raw[4:]
+
+
+def new_csrf_secret() -> str:
+    """Returns a new CSRF token for a login session."""
+    return secrets.token_urlsafe(32)
+
+
+def same_secret(a: str, b: str) -> bool:
+    """Returns whether two secrets are equal, in constant time."""
+    return hmac.compare_digest(a.encode(), b.encode())

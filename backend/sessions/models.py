@@ -1,0 +1,57 @@
+"""Performed exercise sets uploaded by home devices, and their metrics (router/service are E3's)."""
+
+from __future__ import annotations
+
+import datetime as dt
+import uuid
+
+from sqlalchemy import JSON, Boolean, ForeignKey, LargeBinary, String, Text, UniqueConstraint
+from sqlalchemy.orm import Mapped, deferred, mapped_column, relationship
+
+from backend.database import Base, utcnow
+
+
+class ExerciseSession(Base):
+    """One performed set: the uploaded session file (deferred), its sha256 and how it was processed."""
+
+    __tablename__ = "exercise_session"
+    __table_args__ = (UniqueConstraint("patient_id", "client_session_id"),)
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    client_session_id: Mapped[uuid.UUID] = mapped_column()
+    patient_id: Mapped[int] = mapped_column(ForeignKey("user.id", ondelete="CASCADE"), index=True)
+    device_id: Mapped[int | None] = mapped_column(ForeignKey("device.id", ondelete="SET NULL"), index=True)
+    exercise_id: Mapped[int | None] = mapped_column(ForeignKey("exercise.id", ondelete="RESTRICT"), index=True)
+    started_at: Mapped[dt.datetime] = mapped_column(index=True)
+    duration_s: Mapped[float] = mapped_column()
+    n_frames: Mapped[int] = mapped_column()
+    file_name: Mapped[str | None] = mapped_column(String(255))
+    file_format: Mapped[str | None] = mapped_column(String(32))
+    file_bytes: Mapped[bytes] = deferred(mapped_column(LargeBinary))
+    file_size: Mapped[int] = mapped_column(default=0)
+    content_hash: Mapped[str] = mapped_column(String(64), index=True)
+    processing_version: Mapped[str] = mapped_column(String(64), default="")
+    processing_params: Mapped[dict] = mapped_column(JSON, default=dict)
+    status: Mapped[str] = mapped_column(String(16), default="processed")
+    error: Mapped[str | None] = mapped_column(Text)
+    created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
+
+    metric: Mapped[SessionMetric | None] = relationship(
+        back_populates="session", cascade="all, delete-orphan", uselist=False
+    )
+
+
+class SessionMetric(Base):
+    """All metrics of one session as a JSON document, plus a few indexed scalars for queries."""
+
+    __tablename__ = "session_metric"
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    session_id: Mapped[int] = mapped_column(ForeignKey("exercise_session.id", ondelete="CASCADE"), unique=True)
+    document: Mapped[dict] = mapped_column(JSON, default=dict)
+    repetitions: Mapped[int | None] = mapped_column(index=True)
+    rom_deg: Mapped[float | None] = mapped_column()
+    quality_ok: Mapped[bool | None] = mapped_column(Boolean, index=True)
+    created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
+
+    session: Mapped[ExerciseSession] = relationship(back_populates="metric")

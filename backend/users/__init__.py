@@ -1,0 +1,1 @@
+"""The users domain: models, schemas, service and router."""

@@ -1,0 +1,96 @@
+"""Request and response bodies of the users, auth and token endpoints."""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+Role = Literal["admin", "therapist", "patient"]
+Scope = Literal["read", "write"]
+
+
+def _email(value: str) -> str:
+    value = value.strip().lower()
+    local, at, domain = value.partition("@")
+    if not at or not local or "." not in domain or " " in value or len(value) > 320:
+        raise ValueError("must be an e-mail address like ana@example.org")
+    return value
+
+
+class UserOut(BaseModel):
+    """A user as the API shows it (never the password hash)."""
+
+    model_config = ConfigDict(from_attributes=True)
+    id: int = Field(examples=[7])
+    email: str = Field(examples=["ana@example.org"])
+    full_name: str = Field(examples=["Ana Silva"])
+    role: Role
+    is_active: bool
+    created_at: dt.datetime
+
+
+class UserCreate(BaseModel):
+    """An admin creates a user."""
+
+    email: str = Field(max_length=320, examples=["ana@example.org"])
+    full_name: str = Field(default="", max_length=200, examples=["Ana Silva"])
+    role: Role = Field(examples=["patient"])
+    password: str = Field(min_length=10, max_length=256, examples=["correct horse battery"])
+
+    _check_email = field_validator("email")(lambda cls, v: _email(v))
+
+
+class UserUpdate(BaseModel):
+    """An admin changes a user's name, active flag or password."""
+
+    full_name: str | None = Field(default=None, max_length=200)
+    is_active: bool | None = None
+    password: str | None = Field(default=None, min_length=10, max_length=256)
+
+
+class LoginIn(BaseModel):
+    """Password login."""
+
+    email: str = Field(max_length=320, examples=["ana@example.org"])
+    password: str = Field(max_length=256, examples=["correct horse battery"])
+
+
+class LoginOut(BaseModel):
+    """The logged-in user and the CSRF token to send as X-CSRF-Token on unsafe requests."""
+
+    user: UserOut
+    csrf_token: str = Field(examples=["q2Yl1v...Zk"])
+    expires_at: dt.datetime
+
+
+class CsrfOut(BaseModel):
+    """The CSRF token of the current login session."""
+
+    csrf_token: str
+
+
+class TokenCreate(BaseModel):
+    """A new personal API token."""
+
+    name: str = Field(min_length=1, max_length=100, examples=["analysis notebook"])
+    scopes: list[Scope] = Field(default=["read"], min_length=1, examples=[["read"]])
+
+
+class TokenOut(BaseModel):
+    """A personal API token (without the secret)."""
+
+    model_config = ConfigDict(from_attributes=True)
+    id: int
+    name: str
+    scopes: list[str]
+    created_at: dt.datetime
+    last_used_at: dt.datetime | None
+    revoked_at: dt.datetime | None
+
+
+class TokenCreated(TokenOut):
+    """A freshly created token; `token` is shown this once only."""
+
+    token: str = Field(examples=["khc_5bYg...P0"])

@@ -1,0 +1,181 @@
+"""User, login-session, login-throttling and API-token queries."""
+
+from __future__ import annotations
+
+import datetime as dt
+
+from sqlalchemy import func, select, update
+from sqlalchemy.orm import Session
+
+from backend.config import Settings
+from backend.database import utcnow
+from backend.exceptions import (
+    EmailAlreadyRegistered,
+    NotAuthenticated,
+    TokenNotFound,
+    TooManyLoginAttempts,
+    UserNotFound,
+)
+from backend.security import (
+    API_TOKEN_PREFIX,
+    SESSION_TOKEN_PREFIX,
+    hash_password,
+    new_csrf_secret,
+    new_token,
+    token_hash,
+    verify_password,
+)
+from backend.users.models import ApiToken, LoginAttempt, LoginSession, User
+
+
+def get_user(*, db_session: Session, user_id: int) -> User:
+    """Returns one user or raises UserNotFound."""
+    user = db_session.get(User, user_id)
+    if user is None:
+        raise UserNotFound(f"user {user_id} does not exist")
+    return user
+
+
+def get_user_by_email(*, db_session: Session, email: str) -> User | None:
+    """Returns the user with this e-mail (case-insensitive) or None."""
+    return db_session.scalar(select(User).where(User.email == email.strip().lower()))
+
+
+def create_user(*, db_session: Session, email: str, password: str | None, role: str, full_name: str = "") -> User:
+    """Creates a user; raises EmailAlreadyRegistered when the e-mail is taken."""
+    email = email.strip().lower()
+    if get_user_by_email(db_session=db_session, email=email) is not None:
+        raise EmailAlreadyRegistered(f"a user with email {email} exists")
+    user = User(
+        email=email,
+        full_name=full_name,
+        role=role,
+        password_hash=hash_password(password) if password else None,
+        is_active=True,
+        created_at=utcnow(),
+    )
+    db_session.add(user)
+    db_session.flush()
+    return user
+
+
+def list_users(*, db_session: Session, limit: int, offset: int, role: str | None = None) -> tuple[list[User], int]:
+    """Returns one page of users (by id) and the total."""
+    query = select(User)
+    if role is not None:
+        query = query.where(User.role == role)
+    total = db_session.scalar(select(func.count()).select_from(query.subquery())) or 0
+    return list(db_session.scalars(query.order_by(User.id).limit(limit).offset(offset))), total
+
+
+def update_user(
+    *,
+    db_session: Session,
+    user: User,
+    full_name: str | None = None,
+    is_active: bool | None = None,
+    password: str | None = None,
+) -> User:
+    """Changes a user; deactivating revokes every login session and API token."""
+    now = utcnow()
+    if full_name is not None:
+        user.full_name = full_name
+    if password is not None:
+        user.password_hash = hash_password(password)
+    if is_active is not None and is_active != user.is_active:
+        user.is_active = is_active
+        user.deactivated_at = None if is_active else now
+        if not is_active:
+            revoke_all_credentials(db_session=db_session, user_id=user.id)
+    db_session.flush()
+    return user
+
+
+def revoke_all_credentials(*, db_session: Session, user_id: int) -> None:
+    """Revokes every login session and API token of a user."""
+    now = utcnow()
+    for model in (LoginSession, ApiToken):
+        db_session.execute(
+            update(model).where(model.user_id == user_id, model.revoked_at.is_(None)).values(revoked_at=now)
+        )
+
+
+def _failures_since(*, db_session: Session, email: str, ip: str, since: dt.datetime) -> list[dt.datetime]:
+    rows = db_session.scalars(
+        select(LoginAttempt.at).where(
+            LoginAttempt.email == email,
+            LoginAttempt.ip == ip,
+            LoginAttempt.at > since,
+            LoginAttempt.succeeded.is_(False),
+        )
+    )
+    return sorted(rows)
+
+
+def login(
+    *, db_session: Session, settings: Settings, email: str, password: str, ip: str
+) -> tuple[User, LoginSession, str]:
+    """Checks a password login (throttled per account + IP) and returns (user, login session, cookie token)."""
+    email = email.strip().lower()
+    now = utcnow()
+    window = dt.timedelta(minutes=settings.LOGIN_WINDOW_MINUTES)
+    failures = _failures_since(db_session=db_session, email=email, ip=ip, since=now - window)
+    if len(failures) >= settings.LOGIN_MAX_FAILURES:
+        retry = max(1, int((failures[-settings.LOGIN_MAX_FAILURES] + window - now).total_seconds()) + 1)
+        raise TooManyLoginAttempts(
+            f"too many failed logins for this account from this address; retry in {retry} s",
+            headers={"Retry-After": str(retry)},
+        )
+    user = get_user_by_email(db_session=db_session, email=email)
+    ok = verify_password(user.password_hash if user else None, password) and user is not None and user.is_active
+    db_session.add(LoginAttempt(email=email, ip=ip, succeeded=ok, at=now))
+    db_session.flush()
+    if not ok:
+        raise NotAuthenticated("wrong e-mail or password, or the account is deactivated", keep_changes=True)
+    token = new_token(SESSION_TOKEN_PREFIX)
+    session = LoginSession(
+        user_id=user.id,
+        token_hash=token_hash(token),
+        csrf_secret=new_csrf_secret(),
+        ip=ip,
+        created_at=now,
+        expires_at=now + dt.timedelta(hours=settings.LOGIN_SESSION_HOURS),
+    )
+    db_session.add(session)
+    db_session.flush()
+    return user, session, token
+
+
+def logout(*, db_session: Session, login_session: LoginSession) -> None:
+    """Ends a browser login session."""
+    login_session.revoked_at = utcnow()
+    db_session.flush()
+
+
+def create_api_token(*, db_session: Session, user: User, name: str, scopes: list[str]) -> tuple[ApiToken, str]:
+    """Creates a personal API token and returns (row, secret token shown once)."""
+    token = new_token(API_TOKEN_PREFIX)
+    row = ApiToken(
+        user_id=user.id, name=name, token_hash=token_hash(token), scopes=sorted(set(scopes)), created_at=utcnow()
+    )
+    db_session.add(row)
+    db_session.flush()
+    return row, token
+
+
+def list_api_tokens(*, db_session: Session, user: User, limit: int, offset: int) -> tuple[list[ApiToken], int]:
+    """Returns one page of the user's API tokens (newest first) and the total."""
+    query = select(ApiToken).where(ApiToken.user_id == user.id)
+    total = db_session.scalar(select(func.count()).select_from(query.subquery())) or 0
+    return list(db_session.scalars(query.order_by(ApiToken.id.desc()).limit(limit).offset(offset))), total
+
+
+def revoke_api_token(*, db_session: Session, user: User, token_id: int) -> ApiToken:
+    """Revokes one of the user's API tokens; raises TokenNotFound for tokens of others."""
+    row = db_session.get(ApiToken, token_id)
+    if row is None or row.user_id != user.id:
+        raise TokenNotFound(f"API token {token_id} does not exist")
+    if row.revoked_at is None:
+        row.revoked_at = utcnow()
+    db_session.flush()
+    return row

@@ -1,0 +1,228 @@
+"""Server test fixtures: one migrated database per run, one rolled-back transaction per test, factories.
+
+COACH_TEST_DATABASE_URL picks the database (default: a SQLite file in a temp dir). On PostgreSQL the run uses
+its own schema coach_test_<pid> (dropped and recreated at start, dropped at the end), so reruns and parallel
+runs start empty.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+
+import pytest
+from fastapi.testclient import TestClient
+from sqlalchemy import create_engine, event, select, text
+from sqlalchemy.engine import Connection, Engine
+from sqlalchemy.orm import Session
+
+from backend.config import Settings, get_settings
+from backend.database import get_db, import_all_models, make_engine, request_session, utcnow
+from backend.devices.models import Device
+from backend.exercises.models import Exercise
+from backend.main import create_app
+from backend.migrate import upgrade
+from backend.patients.models import TherapistPatient
+from backend.security import API_TOKEN_PREFIX, DEVICE_TOKEN_PREFIX, new_token, token_hash
+from backend.users.models import ApiToken, User
+
+import_all_models()
+
+PASSWORD = "correct horse battery"
+
+
+def _pg_engine(url: str, schema: str) -> Engine:
+    return create_engine(url, connect_args={"options": f"-csearch_path={schema}"})
+
+
+def build_engine(url: str, name: str) -> tuple[Engine, object]:
+    """Returns (engine on an empty database or schema, cleanup callable) for a test database URL."""
+    if url.startswith("postgresql"):
+        schema = f"{name}_{os.getpid()}"
+        admin = create_engine(url, isolation_level="AUTOCOMMIT")
+        with admin.connect() as conn:
+            conn.execute(text(f'DROP SCHEMA IF EXISTS "{schema}" CASCADE'))
+            conn.execute(text(f'CREATE SCHEMA "{schema}"'))
+        engine = _pg_engine(url, schema)
+
+        def cleanup() -> None:
+            engine.dispose()
+            with admin.connect() as conn:
+                conn.execute(text(f'DROP SCHEMA IF EXISTS "{schema}" CASCADE'))
+            admin.dispose()
+
+        return engine, cleanup
+    engine = make_engine(url)
+    _sqlite_real_transactions(engine)
+    return engine, engine.dispose
+
+
+def _sqlite_real_transactions(engine: Engine) -> None:
+    """Makes pysqlite emit BEGIN itself, so SAVEPOINTs nest inside the test transaction (SQLAlchemy recipe)."""
+
+    @event.listens_for(engine, "connect")
+    def _no_implicit(dbapi_connection, _record) -> None:
+        dbapi_connection.isolation_level = None
+
+    @event.listens_for(engine, "begin")
+    def _begin(conn) -> None:
+        conn.exec_driver_sql("BEGIN")
+
+
+@pytest.fixture(scope="session")
+def test_database_url(tmp_path_factory) -> str:
+    """The database URL of this run (COACH_TEST_DATABASE_URL or a fresh SQLite file)."""
+    url = os.environ.get("COACH_TEST_DATABASE_URL")
+    return url or f"sqlite:///{tmp_path_factory.mktemp('db') / 'test.db'}"
+
+
+@pytest.fixture(scope="session")
+def engine(test_database_url) -> Iterator[Engine]:
+    """An engine on a database migrated to head once per run, with the exercise library synced."""
+    eng, cleanup = build_engine(test_database_url, "coach_test")
+    with eng.begin() as conn:
+        upgrade(conn, "head")
+    try:
+        from backend.exercises.service import sync_exercise_library
+
+        with Session(eng) as session, session.begin():
+            sync_exercise_library(db_session=session)
+    except ModuleNotFoundError as exc:
+        if exc.name != "backend.exercises.library":
+            raise
+    yield eng
+    cleanup()
+
+
+@pytest.fixture
+def fresh_engine(test_database_url, tmp_path) -> Iterator[Engine]:
+    """An engine on an EMPTY extra database (SQLite file or PostgreSQL schema) for migration tests."""
+    url = test_database_url
+    if not url.startswith("postgresql"):
+        url = f"sqlite:///{tmp_path / 'fresh.db'}"
+    eng, cleanup = build_engine(url, "coach_fresh")
+    yield eng
+    cleanup()
+
+
+@pytest.fixture
+def db_connection(engine) -> Iterator[Connection]:
+    """A connection inside an outer transaction that is rolled back after the test."""
+    conn = engine.connect()
+    trans = conn.begin()
+    yield conn
+    trans.rollback()
+    conn.close()
+
+
+@pytest.fixture
+def db_session(db_connection) -> Iterator[Session]:
+    """A session joined to the test transaction; its commits only release SAVEPOINTs."""
+    session = Session(bind=db_connection, join_transaction_mode="create_savepoint", expire_on_commit=False)
+    yield session
+    session.close()
+
+
+@pytest.fixture
+def settings() -> Settings:
+    """Settings of the test app (local environment, migration check off: the test DB is migrated)."""
+    return Settings(ENVIRONMENT="local", CHECK_MIGRATIONS=False, DATABASE_URL="sqlite://")
+
+
+def make_test_app(db_session: Session, settings: Settings):
+    """Returns an app whose requests use db_session (commit on success, roll back on error, like get_db)."""
+    app = create_app(settings)
+
+    def override_db() -> Iterator[Session]:
+        yield from request_session(db_session)
+
+    app.dependency_overrides[get_db] = override_db
+    app.dependency_overrides[get_settings] = lambda: settings
+    return app
+
+
+@pytest.fixture
+def app(db_session, settings):
+    """The ASGI app bound to the test session."""
+    return make_test_app(db_session, settings)
+
+
+@pytest.fixture
+def client(app) -> Iterator[TestClient]:
+    """An httpx-based client of the ASGI app (no lifespan: the migration check is tested separately)."""
+    with TestClient(app, raise_server_exceptions=False) as c:
+        yield c
+
+
+@pytest.fixture
+def make_user(db_session):
+    """Factory: make_user(role='patient', email=None, password=None, full_name='') -> User (flushed)."""
+    counter = iter(range(1, 10**6))
+
+    def make(role: str = "patient", email: str | None = None, password: str | None = None, full_name: str = ""):
+        from backend.users.service import create_user
+
+        email = email or f"{role}{next(counter)}-{os.getpid()}@example.org"
+        return create_user(db_session=db_session, email=email, password=password, role=role, full_name=full_name)
+
+    return make
+
+
+@pytest.fixture
+def make_patient_with_therapist(db_session, make_user):
+    """Factory: returns (patient, therapist) with the therapist assigned to the patient."""
+
+    def make() -> tuple[User, User]:
+        patient, therapist = make_user("patient"), make_user("therapist")
+        db_session.add(TherapistPatient(therapist_id=therapist.id, patient_id=patient.id, created_at=utcnow()))
+        db_session.flush()
+        return patient, therapist
+
+    return make
+
+
+@pytest.fixture
+def auth_headers(db_session):
+    """Factory: auth_headers(user, scopes=('read', 'write')) -> {'Authorization': 'Bearer khc_...'}."""
+
+    def make(user: User, scopes=("read", "write")) -> dict[str, str]:
+        token = new_token(API_TOKEN_PREFIX)
+        db_session.add(ApiToken(user_id=user.id, name="test", token_hash=token_hash(token), scopes=list(scopes)))
+        db_session.flush()
+        return {"Authorization": f"Bearer {token}"}
+
+    return make
+
+
+@pytest.fixture
+def device_headers(db_session):
+    """Factory: device_headers(patient) -> (Device, {'Authorization': 'Bearer khd_...'})."""
+
+    def make(patient: User) -> tuple[Device, dict[str, str]]:
+        token = new_token(DEVICE_TOKEN_PREFIX)
+        device = Device(patient_id=patient.id, name="test device", token_hash=token_hash(token))
+        db_session.add(device)
+        db_session.flush()
+        return device, {"Authorization": f"Bearer {token}"}
+
+    return make
+
+
+@pytest.fixture
+def exercise(db_session) -> Exercise:
+    """An exercise of the library (the first by slug; a test row when the library is not installed yet)."""
+    row = db_session.scalar(select(Exercise).order_by(Exercise.slug).limit(1))
+    if row is None:
+        row = Exercise(
+            slug="test_squat",
+            name="Test squat",
+            instructions="Squat.",
+            defining_angles=["knee_flexion_left"],
+            plane="sagittal",
+            normal_range_min_deg=0.0,
+            normal_range_max_deg=120.0,
+            pose="standing",
+        )
+        db_session.add(row)
+        db_session.flush()
+    return row

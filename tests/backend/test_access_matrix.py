@@ -1,0 +1,157 @@
+"""Every API route x every kind of caller: allowed callers get 2xx, everyone else 401/403/404.
+
+ROUTES must list every route of the app (a new route without an entry fails the test), with the callers it
+allows and a request body. Each call runs in a SAVEPOINT that is rolled back, so calls do not affect each other.
+"""
+
+from __future__ import annotations
+
+import pytest
+from fastapi.routing import iter_route_contexts
+
+from backend.database import utcnow
+from backend.devices.service import create_pairing_code
+from backend.plans.models import Plan
+from tests.backend.conftest import PASSWORD
+
+CALLERS = ("anonymous", "patient_own", "patient_other", "therapist_assigned", "therapist_other", "admin", "device")
+PUBLIC = set(CALLERS)
+AUTHED = PUBLIC - {"anonymous"}
+USERS = AUTHED - {"device"}
+CARE = {"patient_own", "therapist_assigned", "admin"}  # may see and manage the own patient
+CARE_DEV = CARE | {"device"}
+PRESCRIBE = {"therapist_assigned", "admin"}
+ADMIN = {"admin"}
+
+
+def _plan_body(w):
+    return {
+        "title": "p",
+        "start_date": "2026-11-23",
+        "items": [{"exercise_slug": w["exercise_slug"], "sets": 1, "repetitions": 5, "frequency_per_week": 2}],
+    }
+
+
+# (method, path) -> (allowed callers, body factory or None)
+ROUTES = {
+    ("GET", "/healthz"): (PUBLIC, None),
+    ("GET", "/api/v1/version"): (PUBLIC, None),
+    ("POST", "/api/v1/auth/login"): (PUBLIC, lambda w: {"email": w["own_email"], "password": PASSWORD}),
+    ("POST", "/api/v1/auth/logout"): (AUTHED, None),
+    ("GET", "/api/v1/auth/csrf"): (set(), None),  # bearer callers have no CSRF token; cookie case in test_auth
+    ("POST", "/api/v1/tokens"): (USERS, lambda w: {"name": "m", "scopes": ["read"]}),
+    ("GET", "/api/v1/tokens"): (USERS, None),
+    ("DELETE", "/api/v1/tokens/{token_id}"): (ADMIN, None),  # token_id is the admin's own token
+    ("GET", "/api/v1/users/me"): (USERS, None),
+    ("GET", "/api/v1/users"): (ADMIN, None),
+    ("POST", "/api/v1/users"): (
+        ADMIN,
+        lambda w: {"email": "new-matrix@example.org", "role": "patient", "password": "0123456789"},
+    ),
+    ("GET", "/api/v1/users/{user_id}"): (ADMIN, None),
+    ("PATCH", "/api/v1/users/{user_id}"): (ADMIN, lambda w: {"full_name": "Renamed"}),
+    ("GET", "/api/v1/patients"): (AUTHED, None),
+    ("GET", "/api/v1/patients/{patient_id}"): (CARE_DEV, None),
+    ("GET", "/api/v1/patients/{patient_id}/therapists"): (CARE_DEV, None),
+    ("PUT", "/api/v1/patients/{patient_id}/therapists/{therapist_id}"): (ADMIN, None),
+    ("DELETE", "/api/v1/patients/{patient_id}/therapists/{therapist_id}"): (ADMIN, None),
+    ("POST", "/api/v1/patients/{patient_id}/pairing-codes"): (CARE, None),
+    ("POST", "/api/v1/devices/pair"): (PUBLIC, lambda w: {"code": w["pairing_code"], "name": "m"}),
+    ("GET", "/api/v1/devices/me"): ({"device"}, None),
+    ("GET", "/api/v1/patients/{patient_id}/devices"): (CARE, None),
+    ("DELETE", "/api/v1/devices/{device_id}"): (CARE, None),  # device_id is ANOTHER device of the own patient
+    ("GET", "/api/v1/exercises"): (AUTHED, None),
+    ("GET", "/api/v1/exercises/{slug}"): (AUTHED, None),
+    ("GET", "/api/v1/patients/{patient_id}/plans"): (CARE_DEV, None),
+    ("POST", "/api/v1/patients/{patient_id}/plans"): (PRESCRIBE, _plan_body),
+    ("GET", "/api/v1/plans/{plan_id}"): (CARE_DEV, None),
+    ("PUT", "/api/v1/plans/{plan_id}"): (PRESCRIBE, _plan_body),
+    ("DELETE", "/api/v1/plans/{plan_id}"): (PRESCRIBE, None),
+    ("GET", "/api/v1/audit"): (ADMIN, None),
+}
+
+
+@pytest.fixture
+def world(db_session, make_user, make_patient_with_therapist, auth_headers, device_headers, exercise):
+    """Own patient with an assigned therapist, another patient and therapist, an admin, devices, a plan, a code."""
+    own, therapist = make_patient_with_therapist()
+    own.password_hash = __import__("backend.security", fromlist=["x"]).hash_password(PASSWORD)
+    other, other_therapist, admin = make_user("patient"), make_user("therapist"), make_user("admin")
+    device, device_hdr = device_headers(own)
+    second_device, _ = device_headers(own)
+    plan = Plan(patient_id=own.id, therapist_id=therapist.id, title="p", start_date=utcnow().date())
+    db_session.add(plan)
+    db_session.flush()
+    _, code = create_pairing_code(db_session=db_session, patient_id=own.id, created_by_id=own.id, minutes=15)
+    from backend.users.service import create_api_token
+
+    admin_token, _ = create_api_token(db_session=db_session, user=admin, name="victim", scopes=["read"])
+    headers = {
+        "anonymous": {},
+        "patient_own": auth_headers(own),
+        "patient_other": auth_headers(other),
+        "therapist_assigned": auth_headers(therapist),
+        "therapist_other": auth_headers(other_therapist),
+        "admin": auth_headers(admin),
+        "device": device_hdr,
+    }
+    params = {
+        "patient_id": own.id,
+        "therapist_id": other_therapist.id,
+        "user_id": own.id,
+        "device_id": second_device.id,
+        "plan_id": plan.id,
+        "token_id": admin_token.id,
+        "slug": exercise.slug,
+    }
+    return {
+        "headers": headers,
+        "params": params,
+        "own_email": own.email,
+        "pairing_code": code,
+        "exercise_slug": exercise.slug,
+    }
+
+
+DOC_PATHS = {"/openapi.json", "/docs", "/docs/oauth2-redirect", "/redoc"}
+
+
+def _api_routes(app) -> list[tuple[str, str]]:
+    """Returns (method, path) of every route of the app, included routers flattened, docs pages left out."""
+    out = []
+    for ctx in iter_route_contexts(app.routes):
+        if ctx.path in DOC_PATHS or not ctx.methods:
+            continue
+        out += [(m, ctx.path) for m in sorted(set(ctx.methods) - {"HEAD"})]
+    return out
+
+
+def test_every_route_is_in_the_table(app):
+    missing = [r for r in _api_routes(app) if r not in ROUTES]
+    assert not missing, f"routes without an access expectation in ROUTES: {missing}"
+    stale = [r for r in ROUTES if r not in _api_routes(app)]
+    assert not stale, f"ROUTES lists routes the app does not have: {stale}"
+
+
+def test_access_matrix(app, client, world, db_connection, db_session):
+    failures = []
+    db_session.commit()  # release the session's SAVEPOINT so ours below is not nested inside it
+    for method, path in _api_routes(app):
+        allowed, body = ROUTES[(method, path)]
+        url = path.format(**{k: v for k, v in world["params"].items() if "{" + k + "}" in path})
+        for caller in CALLERS:
+            savepoint = db_connection.begin_nested()
+            kwargs = {"headers": world["headers"][caller]}
+            if body is not None:
+                kwargs["json"] = body(world)
+            response = client.request(method, url, **kwargs)
+            client.cookies.clear()
+            savepoint.rollback()
+            db_session.expire_all()
+            ok = 200 <= response.status_code < 300
+            expected_denial = (401,) if caller == "anonymous" else (403, 404)
+            if caller in allowed and not ok:
+                failures.append(f"{caller} {method} {url}: expected 2xx, got {response.status_code} {response.text}")
+            if caller not in allowed and response.status_code not in expected_denial:
+                failures.append(f"{caller} {method} {url}: expected {expected_denial}, got {response.status_code}")
+    assert not failures, "\n".join(failures)
