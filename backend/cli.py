@@ -1,4 +1,4 @@
-"""`coach-server`: serve, migrate, create-user, seed-demo, analyze. User errors: one line on stderr, exit 2."""
+"""`coach-server`: serve, migrate, create-user, seed-demo, demo, analyze. User errors: one line on stderr, exit 2."""
 
 from __future__ import annotations
 
@@ -156,6 +156,13 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     return int(report.main(rest) or 0)
 
 
+def cmd_demo(args: argparse.Namespace) -> int:
+    """Runs the demo clinic on a fresh embedded SQLite database (backend.demo.main)."""
+    from backend.demo import main as demo_main
+
+    return demo_main([])
+
+
 def _optional_module(name: str):
     try:
         return importlib.import_module(name)
@@ -193,6 +200,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("seed-demo", help="fill the database with demo data")
     p.set_defaults(_run=cmd_seed_demo)
 
+    p = sub.add_parser("demo", help="the demo clinic on embedded SQLite: migrate, seed, serve (`demo --help`)")
+    p.set_defaults(_run=cmd_demo)
+
     p = sub.add_parser("analyze", help="offline analysis report of session files (see `analyze -- --help`)")
     p.add_argument("rest", nargs=argparse.REMAINDER, help="arguments passed to the analysis report")
     p.set_defaults(_run=cmd_analyze)
@@ -201,6 +211,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Runs coach-server; returns the exit status."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["demo"]:  # its own parser: argparse's REMAINDER cannot start with an option
+        from backend.demo import main as demo_main
+
+        return demo_main(argv[1:])
     args = build_parser().parse_args(argv)
     try:
         return args._run(args)
