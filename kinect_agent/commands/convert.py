@@ -25,6 +25,8 @@ def run(args: argparse.Namespace) -> int:
     """Reads the input and writes the output atomically."""
     rec = formats.read(args.input, args.format)
     formats.write(rec, args.output, args.output_format)
-    print(f"{args.input} -> {args.output}: {rec.n_frames} frames, {rec.duration:.2f} s, device {rec.meta.device}",
-          file=sys.stderr)
+    print(
+        f"{args.input} -> {args.output}: {rec.n_frames} frames, {rec.duration:.2f} s, device {rec.meta.device}",
+        file=sys.stderr,
+    )
     return 0

@@ -119,7 +119,9 @@ def _parse_header(path: Path, line_no: int, cells: list[str]) -> dict:
             coord_index[j, _AXES.index(axis)] = col
     missing = [f"{skeleton.JOINTS[j]}_{_AXES[a]}" for j, a in np.argwhere(coord_index < 0)]
     if missing:
-        raise FormatError(path, f"header lacks columns {', '.join(missing[:6])}{' ...' if len(missing) > 6 else ''}", line_no)
+        raise FormatError(
+            path, f"header lacks columns {', '.join(missing[:6])}{' ...' if len(missing) > 6 else ''}", line_no
+        )
     has_state = bool(np.all(state_index >= 0))
     return {"n": len(names), "coords": coord_index.ravel(), "state": state_index if has_state else None}
 

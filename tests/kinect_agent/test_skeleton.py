@@ -16,8 +16,22 @@ def test_twenty_joints_with_parents_before_children() -> None:
 
 
 def test_degrees_of_freedom_follow_the_paper() -> None:
-    expected = {"SPINE": 3, "NECK": 3, "SHO_L": 3, "SHO_R": 3, "HIP_L": 3, "HIP_R": 3,
-                "ELB_L": 1, "ELB_R": 1, "KNE_L": 1, "KNE_R": 1, "WRI_L": 2, "WRI_R": 2, "ANK_L": 2, "ANK_R": 2}  # fmt: skip
+    expected = {
+        "SPINE": 3,
+        "NECK": 3,
+        "SHO_L": 3,
+        "SHO_R": 3,
+        "HIP_L": 3,
+        "HIP_R": 3,
+        "ELB_L": 1,
+        "ELB_R": 1,
+        "KNE_L": 1,
+        "KNE_R": 1,
+        "WRI_L": 2,
+        "WRI_R": 2,
+        "ANK_L": 2,
+        "ANK_R": 2,
+    }
     for joint, dof in expected.items():
         assert skeleton.DOF[joint] == dof, joint
     leaves = {j for j in skeleton.JOINTS if j not in skeleton.PARENT_NAME.values()}
