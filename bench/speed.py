@@ -1,0 +1,134 @@
+"""Speed of the signal pipeline: UKF step vs filterpy, whole pipeline on 10 minutes, online step p99.
+
+Single-threaded BLAS (set below, before numpy loads). Prints the median of several repeats.
+    python bench/speed.py [--quick] [--json out.json]
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import statistics  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+from filterpy.kalman import MerweScaledSigmaPoints as FMerwe  # noqa: E402
+from filterpy.kalman import UnscentedKalmanFilter as FUKF  # noqa: E402
+
+from kinect_agent.processing import ik, pipeline  # noqa: E402
+from kinect_agent.recording import Recording  # noqa: E402
+from kinect_agent.sources.simulator import simulate  # noqa: E402
+
+
+def _session(minutes: float, seed: int = 1) -> Recording:
+    """Returns a simulated Kinect 2 recording of about `minutes` minutes at 30 Hz (squats, back to back)."""
+    parts, total = [], 0.0
+    while total < minutes * 60.0:
+        measured, _, _ = simulate("squat", 10, device="kinect2", view_deg=30, pose="standing", seed=seed + len(parts))
+        parts.append(measured)
+        total += measured.duration
+    rec = Recording.concatenate(parts)
+    keep = int(np.searchsorted(rec.t, minutes * 60.0))
+    return rec.slice(0, max(keep, 2))
+
+
+def _time_steps(step, z: np.ndarray, repeats: int) -> float:
+    """Returns the median seconds per step of step(z_t) over all frames of z, over `repeats` runs."""
+    for frame in z[:5]:  # warm up (compiled kernels, caches)
+        step(frame)
+    runs = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        for frame in z:
+            step(frame)
+        runs.append((time.perf_counter() - start) / len(z))
+    return statistics.median(runs)
+
+
+def ukf_step_comparison(rec: Recording, frames: int, repeats: int) -> dict:
+    """Times one predict+update of this UKF and of filterpy's UKF with the same chain model and data."""
+    fit = ik.inverse_kinematics(rec.positions)
+    chain = pipeline._Chain(fit.model, fit.lengths)  # segment lengths fixed: the state of passes 3-4
+    x0 = np.concatenate([fit.root[0], fit.theta[0]])
+    n = x0.size
+    z = np.nan_to_num(rec.positions[:frames].reshape(frames, -1), nan=0.0)
+    Q, R = np.eye(n) * 1e-4, np.eye(60) * 0.015**2
+
+    # This pipeline's step, as pipeline.process runs it: random walk (diagonal Q) then the gated update.
+    ours = pipeline._make_filter(chain, pipeline.PipelineConfig())
+    ours.x, ours.P = x0.copy(), np.eye(n) * 0.01
+    diag, q, observed, R_diag = np.arange(n), Q.diagonal(), np.ones(60, dtype=bool), R.diagonal()
+
+    def our_step(frame: np.ndarray) -> None:
+        pipeline._add_process_noise(ours.P, diag, q, ours.P0_ceiling)
+        pipeline._update(ours, frame, observed, R_diag, None)
+
+    points = FMerwe(n, alpha=0.5, beta=2.0, kappa=0.0)
+    theirs = FUKF(dim_x=n, dim_z=60, dt=1 / 30, hx=lambda x: chain.hx(x[None, :])[0].copy(), fx=lambda x, dt: x,
+                  points=points)  # fmt: skip
+    theirs.x, theirs.P, theirs.Q, theirs.R = x0.copy(), np.eye(n) * 0.01, Q, R
+
+    def their_step(frame: np.ndarray) -> None:
+        theirs.predict()
+        theirs.update(frame)
+
+    t_ours = _time_steps(our_step, z, repeats)
+    t_theirs = _time_steps(their_step, z, repeats)
+    return {"state_dim": n, "ours_ms": t_ours * 1e3, "filterpy_ms": t_theirs * 1e3, "speedup": t_theirs / t_ours}
+
+
+def whole_pipeline(rec: Recording, repeats: int) -> dict:
+    """Times pipeline.process on the whole recording (offline, default smoother)."""
+    runs = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        pipeline.process(rec)
+        runs.append(time.perf_counter() - start)
+    return {"frames": rec.n_frames, "minutes": rec.duration / 60.0, "median_s": statistics.median(runs), "runs_s": runs}
+
+
+def online_latency(rec: Recording) -> dict:
+    """Times every OnlineFilter.step after the first second; returns median and p99 in ms."""
+    live = pipeline.OnlineFilter()
+    times = []
+    for i in range(rec.n_frames):
+        start = time.perf_counter()
+        live.step(float(rec.t[i]), rec.positions[i], rec.state[i])
+        times.append(time.perf_counter() - start)
+    steady = np.array(times[int(rec.rate_hz * 2) :]) * 1e3
+    return {"median_ms": float(np.median(steady)), "p99_ms": float(np.percentile(steady, 99))}
+
+
+def main() -> None:
+    """Runs the three measurements and prints them against the targets."""
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--quick", action="store_true", help="short smoke run (not for reporting)")
+    parser.add_argument("--json", help="also write the numbers to this file")
+    args = parser.parse_args()
+    minutes, repeats, frames = (0.5, 1, 60) if args.quick else (10.0, 3, 600)
+    pipeline.process(_session(0.1))  # compile the numba kernels before timing
+    rec = _session(minutes)
+    results = {
+        "ukf_step": ukf_step_comparison(rec, frames, repeats),
+        "pipeline": whole_pipeline(rec, repeats),
+        "online": online_latency(rec),
+    }
+    u, p, o = results["ukf_step"], results["pipeline"], results["online"]
+    print(f"UKF step (n={u['state_dim']}): ours {u['ours_ms']:.3f} ms, filterpy {u['filterpy_ms']:.3f} ms, "
+          f"speed-up {u['speedup']:.1f}x (target >= 20x: {'PASS' if u['speedup'] >= 20 else 'FAIL'})")  # fmt: skip
+    print(f"whole pipeline, {p['frames']} frames ({p['minutes']:.1f} min): median {p['median_s']:.2f} s "
+          f"(target <= 15 s for 10 min: {'PASS' if p['median_s'] <= 15 else 'FAIL'})")  # fmt: skip
+    print(f"online step: median {o['median_ms']:.3f} ms, p99 {o['p99_ms']:.3f} ms "
+          f"(target p99 <= 2 ms: {'PASS' if o['p99_ms'] <= 2 else 'FAIL'})")  # fmt: skip
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(results, f, indent=2)
+
+
+if __name__ == "__main__":
+    main()
