@@ -1,0 +1,355 @@
+"""Session file (.khs): the compact, checksummed binary file used for storage and upload.
+
+Byte layout (all integers little-endian; full description in docs/session-file.md):
+    fixed header (24 bytes): MAGIC (8) | version u16 | flags u16 | header_len u32 | total_len u64
+    JSON header (header_len bytes, UTF-8): session id, creation time, params, per-recording metadata
+    blocks: for the raw recording, then the filtered one if present: t, state, positions;
+            each block is a u32 length followed by that many bytes of zlib data
+    trailer (32 bytes): SHA-256 of every byte before it
+
+Positions are rounded to a 2**-13 m grid (about 0.12 mm) and stored as float32 time deltas,
+byte-shuffled; times are float64 deltas, byte-shuffled; states are int8. No pickle anywhere.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import struct
+import uuid
+import zlib
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from kinect_agent import skeleton
+from kinect_agent.errors import FormatError
+from kinect_agent.formats._atomic import atomic_open
+from kinect_agent.recording import Metadata, Recording
+
+NAME = "session"
+DESCRIPTION = "Kinect Home Coach session file (.khs): raw + filtered recording, compressed, SHA-256 checked"
+MAGIC = b"\x89KHS\r\n\x1a\n"
+VERSION = 1
+GRID_M = 2.0**-13  # position quantum, metres
+MAX_ABS_M = 1000.0  # positions beyond this cannot stay exact on the grid in float32
+_FIXED = struct.Struct("<8sHHIQ")  # magic, version, flags, header_len, total_len
+_BLOCK_LEN = struct.Struct("<I")
+_DIGEST = 32
+_ZLIB_LEVEL = 6
+ERROR_CODES = frozenset(
+    {
+        "bad_magic",
+        "unsupported_version",
+        "checksum_mismatch",
+        "truncated",
+        "wrong_joint_count",
+        "non_finite",
+        "non_monotonic_time",
+        "no_frames",
+        "too_long",
+        "too_large",
+        "bad_header",
+    }
+)
+
+
+def _now_utc() -> str:
+    return datetime.now(UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
+
+
+@dataclass
+class SessionPayload:
+    """One exercise session as uploaded: the raw recording, optionally the filtered one, and filter params.
+
+    raw, filtered: Recording on the 20-joint model (t (T,) s, positions (T, J, 3) m camera frame, state (T, J)).
+    params: JSON-ready dict (e.g. filter settings). created_at: ISO 8601 UTC.
+    """
+
+    session_id: str
+    raw: Recording
+    filtered: Recording | None = None
+    params: dict = field(default_factory=dict)
+    created_at: str = field(default_factory=_now_utc)
+
+
+class SessionFileError(FormatError):
+    """A session file is invalid; `code` names the reason (one of ERROR_CODES)."""
+
+    def __init__(self, code: str, message: str, path: str | Path | None = None) -> None:
+        if code not in ERROR_CODES:
+            raise ValueError(f"unknown session file error code {code!r}")
+        self.code = code
+        self.detail = message
+        super().__init__(path, f"{code}: {message}")
+
+
+def sniff(path: Path, head: bytes) -> bool:
+    """True when the file starts with the session-file magic bytes."""
+    return head.startswith(MAGIC)
+
+
+def content_hash(data: bytes) -> str:
+    """Returns the SHA-256 of `data` as 64 lowercase hex digits."""
+    return hashlib.sha256(data).hexdigest()
+
+
+# ---------------------------------------------------------------------------------------------- encode
+
+
+def encode(payload: SessionPayload) -> bytes:
+    """Returns the session file bytes for `payload`; raises ValueError for unstorable data."""
+    recordings = {"raw": payload.raw, "filtered": payload.filtered}
+    blocks: list[bytes] = []
+    described: dict[str, Any] = {}
+    for name, rec in recordings.items():
+        if rec is None:
+            described[name] = None
+            continue
+        described[name] = {"n_frames": rec.n_frames, "n_joints": skeleton.J, "meta": rec.meta.to_dict()}
+        blocks += [_compress(b) for b in _recording_blocks(rec)]
+    header = {
+        "format": "kinect-home-session",
+        "session_id": payload.session_id,
+        "created_at": payload.created_at,
+        "params": payload.params,
+        "joints": list(skeleton.JOINTS),
+        "grid_m": GRID_M,
+        "codec": "zlib",
+        "recordings": described,
+    }
+    header_bytes = json.dumps(header, separators=(",", ":"), allow_nan=False).encode("utf-8")
+    body = b"".join(_BLOCK_LEN.pack(len(b)) + b for b in blocks)
+    total = _FIXED.size + len(header_bytes) + len(body) + _DIGEST
+    data = _FIXED.pack(MAGIC, VERSION, 0, len(header_bytes), total) + header_bytes + body
+    return data + hashlib.sha256(data).digest()
+
+
+def _recording_blocks(rec: Recording) -> tuple[bytes, bytes, bytes]:
+    """Returns the uncompressed (t, state, positions) blocks of one recording."""
+    t = rec.t.astype("<f8")
+    dt = np.concatenate([t[:1], np.diff(t)]).astype("<f8")
+    state = rec.state.astype(np.int8)
+    return _shuffle(dt), state.tobytes(), _shuffle(_position_deltas(rec.positions, state))
+
+
+def _position_deltas(positions: np.ndarray, state: np.ndarray) -> np.ndarray:
+    """Returns (J, 3, T) float32 time deltas of positions on the grid; untracked positions count as 0.
+
+    positions: (T, J, 3) float, metres, camera frame, NaN = untracked. state: (T, J) int8.
+    """
+    p = np.where((state != skeleton.NOT_TRACKED)[..., None], positions, 0.0)
+    if not np.all(np.isfinite(p)):
+        raise ValueError("positions must be finite wherever state is not 0")
+    if np.any(np.abs(p) > MAX_ABS_M):
+        raise ValueError(f"positions must lie within +-{MAX_ABS_M} m to be stored on the {GRID_M} m grid")
+    q = np.round(p / GRID_M) * GRID_M  # exact in float32 within MAX_ABS_M
+    series = np.ascontiguousarray(q.transpose(1, 2, 0))  # (J, 3, T)
+    deltas = np.diff(series, axis=-1, prepend=0.0)  # exact: multiples of the grid below 2**12 m
+    return deltas.astype("<f4")
+
+
+def _shuffle(a: np.ndarray) -> bytes:
+    """Returns the bytes of `a` regrouped into planes: every element's byte 0, then byte 1, ..."""
+    width = a.dtype.itemsize
+    return np.ascontiguousarray(a).view(np.uint8).reshape(-1, width).T.tobytes()
+
+
+def _unshuffle(raw: bytes, dtype: str) -> np.ndarray:
+    width = np.dtype(dtype).itemsize
+    planes = np.frombuffer(raw, dtype=np.uint8).reshape(width, -1)
+    return np.ascontiguousarray(planes.T).view(dtype).ravel()
+
+
+def _compress(raw: bytes) -> bytes:
+    return zlib.compress(raw, _ZLIB_LEVEL)
+
+
+# ---------------------------------------------------------------------------------------------- decode
+
+
+def decode(data: bytes, *, max_frames: int = 30 * 60 * 60, max_decoded_bytes: int = 64 * 2**20) -> SessionPayload:
+    """Checks and decodes session file bytes; raises SessionFileError with a `code` on any defect.
+
+    Everything is validated before arrays are built; decompression never produces more than
+    `max_decoded_bytes` in total, nor more than a block's declared size (compression bombs).
+    """
+    data = bytes(data)
+    header_len = _check_envelope(data)
+    header = _parse_header(data[_FIXED.size : _FIXED.size + header_len])
+    specs = _recording_specs(header, max_frames, max_decoded_bytes)
+    blocks = _split_blocks(data, _FIXED.size + header_len, 3 * len(specs))
+    budget = [max_decoded_bytes]
+    recordings: dict[str, Recording] = {}
+    for k, (name, n_frames, meta) in enumerate(specs):
+        raw = [_decompress(blocks[3 * k + i], size, budget) for i, size in enumerate(_block_sizes(n_frames))]
+        recordings[name] = _build_recording(name, n_frames, raw, meta)
+    return SessionPayload(
+        session_id=header["session_id"],
+        raw=recordings["raw"],
+        filtered=recordings.get("filtered"),
+        params=header["params"],
+        created_at=header["created_at"],
+    )
+
+
+def _check_envelope(data: bytes) -> int:
+    """Checks magic, version, length and checksum; returns the JSON header length in bytes."""
+    if len(data) < len(MAGIC):
+        if MAGIC.startswith(data) and data:
+            raise SessionFileError("truncated", f"file is {len(data)} bytes, shorter than the magic")
+        raise SessionFileError("bad_magic", f"expected magic {MAGIC!r}, found {data[:8]!r}")
+    if not data.startswith(MAGIC):
+        raise SessionFileError("bad_magic", f"expected magic {MAGIC!r}, found {data[:8]!r}")
+    if len(data) < _FIXED.size + _DIGEST:
+        raise SessionFileError("truncated", f"file is {len(data)} bytes, less than the {_FIXED.size + _DIGEST} minimum")
+    _, version, _, header_len, total = _FIXED.unpack_from(data)
+    if version != VERSION:
+        raise SessionFileError("unsupported_version", f"file version {version}, this reader knows version {VERSION}")
+    if len(data) < total:
+        raise SessionFileError("truncated", f"file is {len(data)} bytes, its header declares {total}")
+    if len(data) > total:
+        raise SessionFileError("bad_header", f"file is {len(data)} bytes, its header declares only {total}")
+    if hashlib.sha256(data[:-_DIGEST]).digest() != data[-_DIGEST:]:
+        raise SessionFileError("checksum_mismatch", "SHA-256 trailer does not match the content")
+    if _FIXED.size + header_len > total - _DIGEST:
+        raise SessionFileError("bad_header", f"JSON header length {header_len} runs past the end of the file")
+    return header_len
+
+
+def _parse_header(raw: bytes) -> dict[str, Any]:
+    try:
+        header = json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise SessionFileError("bad_header", f"JSON header is unreadable: {exc}") from None
+    expected = {"session_id": str, "created_at": str, "params": dict, "recordings": dict, "joints": list}
+    for key, kind in expected.items():
+        if not isinstance(header, dict) or not isinstance(header.get(key), kind):
+            raise SessionFileError("bad_header", f"JSON header needs {key!r} of type {kind.__name__}")
+    if header.get("format") != "kinect-home-session" or header.get("codec") != "zlib" or header.get("grid_m") != GRID_M:
+        raise SessionFileError("bad_header", f"expected format 'kinect-home-session', codec 'zlib', grid_m {GRID_M}")
+    if not isinstance(header["recordings"].get("raw"), dict):
+        raise SessionFileError("bad_header", "JSON header lacks the 'raw' recording")
+    return header
+
+
+def _recording_specs(header: dict, max_frames: int, max_decoded_bytes: int) -> list[tuple[str, int, Metadata]]:
+    """Returns (name, n_frames, metadata) of each stored recording after checking their sizes."""
+    if len(header["joints"]) != skeleton.J or tuple(header["joints"]) != skeleton.JOINTS:
+        raise SessionFileError("wrong_joint_count", f"joint list has {len(header['joints'])} joints, expected the 20")
+    specs, total = [], 0
+    for name in ("raw", "filtered"):
+        desc = header["recordings"].get(name)
+        if desc is None:
+            continue
+        if not isinstance(desc, dict) or type(desc.get("n_frames")) is not int:
+            raise SessionFileError("bad_header", f"recording {name!r} needs an integer 'n_frames'")
+        if desc.get("n_joints") != skeleton.J:
+            raise SessionFileError("wrong_joint_count", f"recording {name!r} has {desc.get('n_joints')} joints, not 20")
+        n = desc["n_frames"]
+        if n <= 0:
+            raise SessionFileError("no_frames", f"recording {name!r} has {n} frames")
+        if n > max_frames:
+            raise SessionFileError("too_long", f"recording {name!r} has {n} frames, the limit is {max_frames}")
+        total += sum(_block_sizes(n))
+        try:
+            meta = Metadata.from_dict(desc.get("meta") or {})
+        except TypeError as exc:
+            raise SessionFileError("bad_header", f"recording {name!r} metadata: {exc}") from None
+        specs.append((name, n, meta))
+    if total > max_decoded_bytes:
+        raise SessionFileError("too_large", f"recordings decode to {total} bytes, the limit is {max_decoded_bytes}")
+    return specs
+
+
+def _block_sizes(n_frames: int) -> tuple[int, int, int]:
+    """Decoded bytes of the t, state and positions blocks."""
+    return 8 * n_frames, skeleton.J * n_frames, 4 * 3 * skeleton.J * n_frames
+
+
+def _split_blocks(data: bytes, start: int, count: int) -> list[bytes]:
+    """Returns the `count` length-prefixed blocks between the JSON header and the trailer."""
+    end, pos, blocks = len(data) - _DIGEST, start, []
+    for i in range(count):
+        if pos + _BLOCK_LEN.size > end:
+            raise SessionFileError("bad_header", f"block {i} length lies past the end of the data")
+        (n,) = _BLOCK_LEN.unpack_from(data, pos)
+        pos += _BLOCK_LEN.size
+        if pos + n > end:
+            raise SessionFileError("bad_header", f"block {i} of {n} bytes runs past the end of the data")
+        blocks.append(data[pos : pos + n])
+        pos += n
+    if pos != end:
+        raise SessionFileError("bad_header", f"{end - pos} unexpected bytes after the last block")
+    return blocks
+
+
+def _decompress(block: bytes, size: int, budget: list[int]) -> bytes:
+    """Inflates one block to exactly `size` bytes, never producing more than size+1 or the budget."""
+    cap = min(size, budget[0])
+    d = zlib.decompressobj()
+    try:
+        out = d.decompress(block, cap + 1)
+    except zlib.error as exc:
+        raise SessionFileError("bad_header", f"corrupt zlib block: {exc}") from None
+    if len(out) > cap:
+        limit = "its declared size" if cap == size else "the remaining max_decoded_bytes budget"
+        raise SessionFileError("too_large", f"a block decodes to more than {cap} bytes ({limit})")
+    if len(out) != size or not d.eof or d.unconsumed_tail:
+        raise SessionFileError("bad_header", f"a block decodes to {len(out)} bytes, expected {size}")
+    budget[0] -= len(out)
+    return out
+
+
+def _build_recording(name: str, n_frames: int, raw: list[bytes], meta: Metadata) -> Recording:
+    """Turns decoded t, state and position blocks into a Recording after checking them."""
+    t = np.cumsum(_unshuffle(raw[0], "<f8"))
+    state = np.frombuffer(raw[1], dtype=np.int8).reshape(n_frames, skeleton.J).copy()
+    deltas = _unshuffle(raw[2], "<f4").reshape(skeleton.J, 3, n_frames).astype(np.float64)
+    positions = np.cumsum(deltas, axis=-1).transpose(2, 0, 1).copy()  # (T, J, 3)
+    if not np.all(np.isfinite(t)):
+        raise SessionFileError("non_finite", f"recording {name!r}: time stamps are not finite")
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise SessionFileError("non_monotonic_time", f"recording {name!r}: frame {i} t={t[i]} after t={t[i - 1]}")
+    if np.any((state < 0) | (state > 2)):
+        raise SessionFileError("bad_header", f"recording {name!r}: state values must be 0, 1 or 2")
+    tracked = state != skeleton.NOT_TRACKED
+    if not np.all(np.isfinite(positions[tracked])):
+        f, j = np.argwhere(tracked & ~np.all(np.isfinite(positions), axis=-1))[0]
+        raise SessionFileError("non_finite", f"recording {name!r}: frame {f} joint {skeleton.JOINTS[j]} not finite")
+    positions[~tracked] = np.nan
+    return Recording(t, positions, state, meta)
+
+
+# ---------------------------------------------------------------------------------------------- files
+
+
+def read_payload(path: str | Path) -> SessionPayload:
+    """Reads and checks a session file; errors name the file."""
+    path = Path(path)
+    try:
+        return decode(path.read_bytes())
+    except SessionFileError as exc:
+        raise SessionFileError(exc.code, exc.detail, path) from None
+
+
+def write_payload(payload: SessionPayload, path: str | Path) -> None:
+    """Writes `payload` to `path` atomically."""
+    data = encode(payload)
+    with atomic_open(path, "wb") as f:
+        f.write(data)
+
+
+def read(path: Path) -> Recording:
+    """Returns the raw recording of a session file."""
+    return read_payload(path).raw
+
+
+def write(rec: Recording, path: Path) -> None:
+    """Writes `rec` as the raw recording of a new session (random uuid4 session id)."""
+    write_payload(SessionPayload(session_id=str(uuid.uuid4()), raw=rec), path)
