@@ -1,0 +1,101 @@
+"""UTKinect-Action3D joint files (Xia et al., CVPR-W 2012), Kinect v1.
+
+`joints_sXX_eYY.txt`: one frame per line, the frame id then 20 joints x y z (metres, Kinect v1 camera
+space, y up) in SDK v1 order, whitespace separated. Frame ids have gaps (kept as time gaps, t = id / 30 s)
+and repeated ids: exact duplicate lines are dropped, and a repeated id with different data keeps its first
+line (the count goes to meta.extra["dropped_duplicate_frames"]). `actionLabel.txt` beside the file gives
+action intervals in frame ids, put into meta.extra["actions"].
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from kinect_agent.errors import FormatError
+from kinect_agent.formats import kinect_joints
+from kinect_agent.recording import Metadata, Recording
+
+NAME = "utkinect"
+DESCRIPTION = "UTKinect-Action3D joints_*.txt (frame id + 20 Kinect v1 joints x y z, 30 Hz)"
+RATE_HZ = 30.0
+N_FIELDS = 1 + 20 * 3
+_NAME = re.compile(r"joints_(s\d+)_(e\d+)", re.IGNORECASE)
+
+
+def sniff(path: Path, head: bytes) -> bool:
+    """True when the first line has 61 numbers and the first is an integer frame id."""
+    cells = kinect_joints.first_line_fields(head)
+    if cells is None or len(cells) != N_FIELDS:
+        return False
+    return path.name.lower().startswith("joints_") or re.fullmatch(r"\d+", cells[0]) is not None
+
+
+def read(path: Path) -> Recording:
+    """Reads a UTKinect joints file into a 30 Hz kinect1 recording; raises FormatError naming file and line."""
+    path = Path(path)
+    values, line_numbers, texts = kinect_joints.read_numeric_rows(path, N_FIELDS)
+    frame_ids = values[:, 0]
+    bad = np.flatnonzero(frame_ids != np.round(frame_ids))
+    if bad.size:
+        raise FormatError(path, f"frame id must be an integer, found {frame_ids[bad[0]]}", line_numbers[bad[0]])
+    keep, exact, conflicting = _first_of_each_frame(path, frame_ids, texts, line_numbers)
+    positions, state = kinect_joints.to_skeleton(values[keep, 1:].reshape(-1, 20, 3), "kinect1")
+    meta = Metadata(device="kinect1", rate_hz=RATE_HZ, source=str(path))
+    match = _NAME.search(path.name)
+    if match:
+        meta.subject, meta.extra["sequence"] = match.group(1).lower(), f"{match.group(1)}_{match.group(2)}".lower()
+    meta.extra["dropped_duplicate_lines"] = exact
+    meta.extra["dropped_duplicate_frames"] = conflicting
+    meta.extra["first_frame_id"] = int(frame_ids[keep[0]])
+    actions = _actions(path.parent / "actionLabel.txt", meta.extra.get("sequence"))
+    if actions is not None:
+        meta.extra["actions"] = actions
+    return Recording(frame_ids[keep] / RATE_HZ, positions, state, meta)
+
+
+def _first_of_each_frame(
+    path: Path, frame_ids: np.ndarray, texts: list[str], line_numbers: list[int]
+) -> tuple[np.ndarray, int, int]:
+    """Returns the row indices to keep (first line of each frame id), the exact-duplicate lines dropped and
+    the conflicting repeated frames dropped. Frame ids must not go backwards."""
+    keep, exact, conflicting = [], 0, 0
+    for i in range(len(frame_ids)):
+        if keep and frame_ids[i] < frame_ids[keep[-1]]:
+            message = f"frame id {int(frame_ids[i])} after {int(frame_ids[keep[-1]])}: ids must not decrease"
+            raise FormatError(path, message, line_numbers[i])
+        if keep and frame_ids[i] == frame_ids[keep[-1]]:
+            if texts[i] == texts[keep[-1]]:
+                exact += 1
+            else:
+                conflicting += 1
+            continue
+        keep.append(i)
+    return np.array(keep), exact, conflicting
+
+
+def _actions(label_path: Path, sequence: str | None) -> dict[str, list[int]] | None:
+    """Returns {action: [start id, end id]} for `sequence` from actionLabel.txt, or None when absent."""
+    if sequence is None or not label_path.is_file():
+        return None
+    actions: dict[str, list[int]] | None = None
+    with open(label_path, encoding="utf-8", errors="replace") as f:
+        for line_no, line in enumerate(f, start=1):
+            text = line.strip()
+            if not text:
+                continue
+            if ":" not in text:
+                if actions is not None:
+                    break
+                if text.lower() == sequence:
+                    actions = {}
+                continue
+            if actions is not None:
+                name, _, span = text.partition(":")
+                numbers = span.split()
+                if len(numbers) != 2 or not all(n.lstrip("-").isdigit() for n in numbers):
+                    raise FormatError(label_path, f"expected 'action: start end', found {text!r}", line_no)
+                actions[name.strip()] = [int(n) for n in numbers]
+    return actions
