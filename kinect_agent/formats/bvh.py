@@ -1,0 +1,219 @@
+"""BVH (Biovision hierarchy) optical motion capture reader, used as ground truth for benchmarks.
+
+HIERARCHY: ROOT/JOINT/End Site blocks with OFFSET (file units, parent frame) and CHANNELS (any order
+of X/Y/Zposition and X/Y/Zrotation, degrees). MOTION: `Frames: N`, `Frame Time: s`, then N rows.
+Rotations compose intrinsically in the listed order: R_parent_joint = R(c1) @ R(c2) @ R(c3).
+Forward kinematics is vectorised over frames and loops over joints only. Units: CMU conversions use
+the ASF length unit (inches / 0.45, i.e. 0.05644 m); a file whose thigh would be implausible in that
+unit is tried as cm, inches, m, mm. Output is metres in the file's world frame (y up, as BVH is; not
+rotated into a camera frame: in CMU 13_29 the subject faces +z in frame 0 with their left at +x).
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from kinect_agent import skeleton
+from kinect_agent.errors import FormatError
+from kinect_agent.formats import mocap_mapping
+from kinect_agent.recording import Metadata, Recording
+
+NAME = "bvh"
+DESCRIPTION = "BVH optical motion capture (CMU naming mapped to the 20 joints)"
+CMU_UNIT_M = 2.54 / 100 / 0.45  # metres per CMU ASF length unit
+_CHANNELS = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
+
+
+@dataclass
+class Joint:
+    """One BVH joint or End Site: offset (3,) file units in the parent frame, channels in file order."""
+
+    name: str
+    parent: int
+    offset: np.ndarray
+    channels: list[str] = field(default_factory=list)
+    first_channel: int = 0
+
+
+def sniff(path: Path, head: bytes) -> bool:
+    """True when the file starts with the HIERARCHY keyword."""
+    return head.lstrip(b"\xef\xbb\xbf \t\r\n").startswith(b"HIERARCHY")
+
+
+def read(path: Path) -> Recording:
+    """Reads a BVH file into a 20-joint Recording (metres, y up); raises FormatError naming the line."""
+    path = Path(path)
+    with open(path, encoding="utf-8", errors="replace") as f:
+        lines = [(n, line.split()) for n, line in enumerate(f, start=1)]
+    lines = [(n, tok) for n, tok in lines if tok]
+    joints, pos = parse_hierarchy(path, lines)
+    rate_hz, motion = parse_motion(path, lines, pos, sum(len(j.channels) for j in joints))
+    world = forward_kinematics(joints, motion)
+    names = [j.name for j in joints]
+    scale = unit_scale(joints, world, names)
+    positions = np.full((motion.shape[0], skeleton.J, 3), np.nan)
+    for ours, parts in mocap_mapping.resolve(names).items():
+        positions[:, skeleton.INDEX[ours]] = np.mean([world[:, names.index(p)] for p in parts], axis=0) * scale
+    meta = Metadata(device="mocap", rate_hz=rate_hz, source=str(path), subject=path.stem.split("_")[0])
+    meta.extra.update(bvh_joints=len([j for j in joints if not j.name.endswith("_End")]), unit_m=scale)
+    segments = path.with_name(f"{path.stem}_segments_from_mocap6.csv")
+    if segments.is_file():
+        with open(segments, encoding="utf-8", newline="") as f:
+            meta.extra["segments"] = [dict(row) for row in csv.DictReader(f)]
+    t = np.arange(motion.shape[0]) / rate_hz
+    return Recording.from_positions(t, positions, meta)
+
+
+def parse_hierarchy(path: Path, lines: list[tuple[int, list[str]]]) -> tuple[list[Joint], int]:
+    """Returns the joints (parents before children; End Sites named `<parent>_End`) and the index of MOTION."""
+    if not lines or lines[0][1][0] != "HIERARCHY":
+        raise FormatError(path, "expected 'HIERARCHY' on the first line", lines[0][0] if lines else 1)
+    joints: list[Joint] = []
+    stack: list[int] = []
+    n_channels = 0
+    pending: Joint | None = None
+    for pos in range(1, len(lines)):
+        line_no, tok = lines[pos]
+        key = tok[0]
+        if key in ("ROOT", "JOINT") or (key == "End" and tok[1:2] == ["Site"]):
+            if key != "ROOT" and not stack:
+                raise FormatError(path, f"{key} outside any ROOT block", line_no)
+            name = f"{joints[stack[-1]].name}_End" if key == "End" else " ".join(tok[1:]) or f"joint{len(joints)}"
+            pending = Joint(name, stack[-1] if stack else -1, np.zeros(3))
+        elif key == "{":
+            if pending is None:
+                raise FormatError(path, "'{' without a ROOT, JOINT or End Site before it", line_no)
+            joints.append(pending)
+            stack.append(len(joints) - 1)
+            pending = None
+        elif key == "}":
+            if not stack:
+                raise FormatError(path, "'}' without a matching '{'", line_no)
+            stack.pop()
+        elif key == "OFFSET":
+            _need_open(path, stack, line_no, key)
+            joints[stack[-1]].offset = _floats(path, line_no, tok[1:], 3, "OFFSET values")
+        elif key == "CHANNELS":
+            _need_open(path, stack, line_no, key)
+            joints[stack[-1]].channels = _channels(path, line_no, tok)
+            joints[stack[-1]].first_channel = n_channels
+            n_channels += len(joints[stack[-1]].channels)
+        elif key == "MOTION":
+            if stack:
+                raise FormatError(path, f"MOTION before {len(stack)} open block(s) were closed with '}}'", line_no)
+            if not joints:
+                raise FormatError(path, "no ROOT joint before MOTION", line_no)
+            return joints, pos
+        else:
+            expected = "ROOT, JOINT, End Site, {, }, OFFSET, CHANNELS or MOTION"
+            raise FormatError(path, f"unexpected {key!r} in HIERARCHY; expected {expected}", line_no)
+    last = lines[-1][0] if lines else 1
+    raise FormatError(path, "file ends without a MOTION section", last)
+
+
+def parse_motion(path: Path, lines: list[tuple[int, list[str]]], pos: int, n_channels: int) -> tuple[float, np.ndarray]:
+    """Returns (rate Hz, motion (T, C) float: channel values in file order, file units and degrees)."""
+    header = lines[pos + 1 : pos + 3]
+    frames_no = header[0][0] if header else lines[pos][0]
+    if len(header) < 1 or header[0][1][:1] != ["Frames:"] or len(header[0][1]) != 2:
+        raise FormatError(path, "expected 'Frames: <count>' after MOTION", frames_no)
+    if len(header) < 2 or header[1][1][:2] != ["Frame", "Time:"] or len(header[1][1]) != 3:
+        raise FormatError(path, "expected 'Frame Time: <seconds>' after 'Frames:'", frames_no + 1)
+    n_frames = int(_floats(path, header[0][0], header[0][1][1:], 1, "frame count")[0])
+    frame_time = float(_floats(path, header[1][0], header[1][1][2:], 1, "frame time")[0])
+    if n_frames < 1 or frame_time <= 0:
+        raise FormatError(path, f"need Frames >= 1 and Frame Time > 0, found {n_frames} and {frame_time}", frames_no)
+    rows = lines[pos + 3 :]
+    if len(rows) < n_frames:
+        last = rows[-1][0] if rows else header[1][0]
+        raise FormatError(path, f"file ends after {len(rows)} of {n_frames} frames (truncated?)", last)
+    if len(rows) > n_frames:
+        raise FormatError(path, f"more rows than 'Frames: {n_frames}' announces", rows[n_frames][0])
+    motion = np.empty((n_frames, n_channels))
+    for i, (line_no, tok) in enumerate(rows):
+        motion[i] = _floats(path, line_no, tok, n_channels, f"channel values (frame {i})")
+    return 1.0 / frame_time, motion
+
+
+def forward_kinematics(joints: list[Joint], motion: np.ndarray) -> np.ndarray:
+    """Returns world positions (T, N, 3) in file units (BVH world frame) of every joint and End Site.
+
+    motion: (T, C) channel values in file order; positions in file units, rotations in degrees.
+    """
+    n_frames = motion.shape[0]
+    world = np.zeros((n_frames, len(joints), 3))
+    R_world = np.zeros((n_frames, len(joints), 3, 3))
+    for k, joint in enumerate(joints):
+        translation = np.broadcast_to(joint.offset, (n_frames, 3)).copy()
+        R_parent_joint = np.broadcast_to(np.eye(3), (n_frames, 3, 3)).copy()
+        for c, name in enumerate(joint.channels):
+            values = motion[:, joint.first_channel + c]
+            axis = "XYZ".index(name[0])
+            if name.endswith("position"):
+                translation[:, axis] += values
+            else:
+                R_parent_joint = R_parent_joint @ _axis_rotation(axis, np.radians(values))
+        if joint.parent < 0:
+            world[:, k] = translation
+            R_world[:, k] = R_parent_joint
+        else:
+            R_p = R_world[:, joint.parent]
+            world[:, k] = world[:, joint.parent] + np.einsum("tij,tj->ti", R_p, translation)
+            R_world[:, k] = R_p @ R_parent_joint
+    return world
+
+
+def unit_scale(joints: list[Joint], world: np.ndarray, names: list[str]) -> float:
+    """Returns metres per file unit: CMU units if the first frame's thigh is 0.3-0.6 m in them, else cm."""
+    mapped = mocap_mapping.resolve(names)
+    if "HIP_L" in mapped and "KNE_L" in mapped:
+        hip = np.mean([world[0, names.index(p)] for p in mapped["HIP_L"]], axis=0)
+        knee = np.mean([world[0, names.index(p)] for p in mapped["KNE_L"]], axis=0)
+        thigh = float(np.linalg.norm(knee - hip))
+        for scale in (CMU_UNIT_M, 0.01, 0.0254, 1.0, 0.001):
+            if 0.3 <= thigh * scale <= 0.6:
+                return scale
+    return CMU_UNIT_M
+
+
+def _axis_rotation(axis: int, angle: np.ndarray) -> np.ndarray:
+    """Returns (T, 3, 3) right-handed rotations by angle (T,) radians about axis 0/1/2 (x/y/z)."""
+    c, s = np.cos(angle), np.sin(angle)
+    R = np.zeros(angle.shape + (3, 3))
+    i, j = [(1, 2), (2, 0), (0, 1)][axis]
+    R[..., axis, axis] = 1.0
+    R[..., i, i], R[..., j, j] = c, c
+    R[..., i, j], R[..., j, i] = -s, s
+    return R
+
+
+def _channels(path: Path, line_no: int, tok: list[str]) -> list[str]:
+    count = int(_floats(path, line_no, tok[1:2], 1, "channel count")[0])
+    names = tok[2:]
+    if len(names) != count:
+        raise FormatError(path, f"CHANNELS announces {count} channels but lists {len(names)}", line_no)
+    for name in names:
+        if name not in _CHANNELS:
+            raise FormatError(path, f"unknown channel {name!r}; expected one of {', '.join(_CHANNELS)}", line_no)
+    return names
+
+
+def _need_open(path: Path, stack: list[int], line_no: int, key: str) -> None:
+    if not stack:
+        raise FormatError(path, f"{key} outside any joint block", line_no)
+
+
+def _floats(path: Path, line_no: int, cells: list[str], n: int, what: str) -> np.ndarray:
+    if len(cells) != n:
+        raise FormatError(path, f"expected {n} {what}, found {len(cells)}", line_no)
+    try:
+        values = np.array([float(c) for c in cells])
+    except ValueError:
+        raise FormatError(path, f"expected numbers for {what}, found {' '.join(cells[:5])!r}", line_no) from None
+    if not np.all(np.isfinite(values)):
+        raise FormatError(path, f"{what} must be finite", line_no)
+    return values
