@@ -16,6 +16,10 @@ below `<name>` and `mid:<a>+<b>` the midpoint of two joints. Choices:
     HIP_*  LeftUpLeg / RightUpLeg origin = hip joint centre (LHipJoint has a zero offset at the root).
     KNE_*  LeftLeg / RightLeg origin = knee.  ANK_*  LeftFoot / RightFoot origin = ankle.
     FOO_*  LeftToeBase / RightToeBase origin = ball of the foot; else the LeftFoot end site.
+Acclaim ASF bone names (lowercase; a name is the bone's start, `<bone>_End` its end): ROOT root, SPINE end of
+lowerback, NECK lowerneck (top of thorax), HEAD head (top of upperneck), SHO lhumerus, ELB lradius, WRI lhand
+(ASF forearms are lradius + lwrist: lradius alone is only ~0.17 m in HDM05), HAN lfingers, HIP lfemur, KNE ltibia,
+ANK lfoot, FOO ltoes.
 """
 
 from __future__ import annotations
@@ -23,16 +27,16 @@ from __future__ import annotations
 CMU_TO_OURS: dict[str, tuple[str, ...]] = {
     "ROOT": ("Hips", "mid:LHipJoint_End+RHipJoint_End", "root"),
     "SPINE": ("Spine", "LowerBack_End", "lowerback_End"),
-    "NECK": ("Neck", "Spine1_End"),
-    "HEAD": ("Head", "Neck1_End"),
+    "NECK": ("Neck", "Spine1_End", "lowerneck"),
+    "HEAD": ("Head", "Neck1_End", "head"),
     "SHO_L": ("LeftArm", "lhumerus"),
     "ELB_L": ("LeftForeArm", "lradius"),
-    "WRI_L": ("LeftHand", "lwrist"),
-    "HAN_L": ("LeftHandIndex1", "LeftFingerBase", "LeftHand_End", "lhand"),
+    "WRI_L": ("LeftHand", "lhand"),
+    "HAN_L": ("LeftHandIndex1", "LeftFingerBase", "LeftHand_End", "lfingers"),
     "SHO_R": ("RightArm", "rhumerus"),
     "ELB_R": ("RightForeArm", "rradius"),
-    "WRI_R": ("RightHand", "rwrist"),
-    "HAN_R": ("RightHandIndex1", "RightFingerBase", "RightHand_End", "rhand"),
+    "WRI_R": ("RightHand", "rhand"),
+    "HAN_R": ("RightHandIndex1", "RightFingerBase", "RightHand_End", "rfingers"),
     "HIP_L": ("LeftUpLeg", "lfemur"),
     "KNE_L": ("LeftLeg", "ltibia"),
     "ANK_L": ("LeftFoot", "lfoot"),
