@@ -261,3 +261,19 @@ class ChainModel:
             W_in[..., k, :, :] = R_world_root if ENTERING_BONE[k] < 0 else W[..., ENTERING_BONE[k], :, :]
         R_local = np.swapaxes(W_in, -1, -2) @ W
         return R_world_root, R_local
+
+
+def _step_tables() -> np.ndarray:
+    """Returns the int64 (9, 33) table of the fused UKF kernel (_ukf_numba: rows named there), -1 padded."""
+    theta_rot = np.repeat(np.arange(len(ROT_JOINTS)), ROT_DOF)
+    last_rot = np.full(skeleton.J, -1)
+    for k, (p, c) in enumerate(skeleton.BONES):  # parents come before children
+        last_rot[c] = max(int(BONE_GROUP[k]), int(last_rot[p]))
+    rows = [*_KERNEL_TABLES, theta_rot, last_rot]
+    out = np.full((len(rows), N_THETA), -1, dtype=np.int64)
+    for i, row in enumerate(rows):
+        out[i, : len(row)] = row
+    return out
+
+
+STEP_TABLES: np.ndarray = _step_tables()

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from kinect_agent import skeleton
+from kinect_agent.processing import _ukf_numba
 from kinect_agent.processing import kinematics as km
 from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.ik import IKResult, bone_length_estimate, inverse_kinematics
@@ -138,6 +139,9 @@ class _Chain:
         self.model, self.lengths = model, lengths
         self._buf: np.ndarray | None = None
         self._len: np.ndarray | None = None
+        # For the fused kernel (_ukf_numba.chain_step): the fixed lengths, or zeros while lengths are in the state.
+        self.n_len = 0 if lengths is not None else N_LEN
+        self.fixed_lengths = np.zeros(N_LEN) if lengths is None else np.ascontiguousarray(lengths, dtype=np.float64)
 
     @property
     def dim(self) -> int:
@@ -183,35 +187,38 @@ def _make_filter(chain: _Chain, config: PipelineConfig) -> UnscentedKalmanFilter
     pts = MerweScaledSigmaPoints(n, config.alpha, config.beta, config.kappa)
     kf = UnscentedKalmanFilter(n, 3 * skeleton.J, chain.hx, fx=None, points=pts)
     kf.P0_ceiling = chain.p0_diag(config)  # variance ceiling of the random walk (see _add_process_noise)
+    kf.kernel_weights = np.array([pts.scale, pts.Wm[0], pts.Wm[1], pts.Wc[0], pts.Wc[1]])  # for _ukf_numba
     return kf
 
 
 def _update(
     kf: UnscentedKalmanFilter, z: np.ndarray, observed: np.ndarray, R_diag: np.ndarray, gate_chi2: float | None
 ) -> np.ndarray:
-    """One gated UKF update of the chain (ukf.gated_update); compiled when numba is installed.
+    """One gated UKF update of the chain (ukf.gated_update); one fused compiled kernel when numba is installed.
 
     z (60,) m, NaN allowed where not observed; observed (60,) bool; R_diag (60,) m². Returns (20,) bool used joints.
     """
     chain: _Chain = kf.hx.__self__
     gate = np.inf if gate_chi2 is None else float(gate_chi2)
-    groups = (np.asarray(observed, dtype=bool) & np.isfinite(z)).reshape(-1, 3).all(axis=1)
-    if km._fk_numba.AVAILABLE and chain.model.compiled:
-        pts = kf.points
-        used = np.zeros(skeleton.J, dtype=bool)
-        n_len = 0 if chain.lengths is not None else N_LEN
-        fixed = chain.lengths if chain.lengths is not None else np.zeros(N_LEN)
-        x, P = kf.x.copy(), kf.P.copy()
-        try:
-            km._fk_numba.chain_update(
-                x, P, pts.scale, pts.Wm[0], pts.Wm[1], pts.Wc[0], pts.Wc[1], np.where(np.isfinite(z), z, 0.0),
-                groups, R_diag, gate, fixed, n_len, chain.model.rest, chain.model.R_ref, *km._KERNEL_TABLES, used,
-            )  # fmt: skip
-        except np.linalg.LinAlgError:
-            pass  # P or S not positive definite: the numpy path below adds jitter
-        else:
-            kf.x, kf.P = x, P
+    if _ukf_numba.AVAILABLE and km._fk_numba.AVAILABLE and chain.model.compiled:
+        x, P = kf.x, kf.P
+        if not (x.dtype == np.float64 and x.flags.c_contiguous and x.flags.writeable):
+            kf.x = x = np.array(x, dtype=np.float64)
+        if not (P.dtype == np.float64 and P.flags.c_contiguous and P.flags.writeable):
+            kf.P = P = np.array(P, dtype=np.float64)
+        w = getattr(kf, "kernel_weights", None)
+        if w is None:
+            pts = kf.points
+            kf.kernel_weights = w = np.array([pts.scale, pts.Wm[0], pts.Wm[1], pts.Wc[0], pts.Wc[1]])
+        used = np.empty(skeleton.J, dtype=bool)
+        status = _ukf_numba.chain_step(
+            x, P, z, observed, R_diag, w, gate, chain.fixed_lengths, chain.n_len,
+            chain.model.rest, chain.model.R_ref, km.STEP_TABLES, used,
+        )  # fmt: skip
+        if status == _ukf_numba.OK:
             return used
+        # P or S not positive definite (x, P untouched): the numpy path below adds jitter.
+    groups = (np.asarray(observed, dtype=bool) & np.isfinite(z)).reshape(-1, 3).all(axis=1)
     return gated_update(kf, np.where(np.isfinite(z), z, 0.0), np.repeat(groups, 3), R_diag, gate)
 
 
@@ -222,6 +229,9 @@ def _add_process_noise(P: np.ndarray, diag: np.ndarray, q: np.ndarray, ceiling: 
     otherwise grow without bound, spreading the sigma points over several radians where F is far from linear;
     observed directions have variances far below the ceiling, so for them this is the plain random walk.
     """
+    if _ukf_numba.AVAILABLE and P.dtype == np.float64 and diag.dtype == np.int64:
+        _ukf_numba.add_capped(P, diag, np.asarray(q, dtype=np.float64), np.asarray(ceiling, dtype=np.float64))
+        return
     P[diag, diag] += np.minimum(q, np.maximum(ceiling - P[diag, diag], 0.0))
 
 

@@ -1,0 +1,105 @@
+"""The fused compiled UKF step (_ukf_numba) against the numpy reference (ukf.gated_update with numpy FK)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from kinect_agent import skeleton
+from kinect_agent.processing import _blas_numba, _ukf_numba, pipeline
+from kinect_agent.processing import kinematics as km
+from kinect_agent.processing.ik import inverse_kinematics
+from kinect_agent.recording import Metadata, Recording
+
+from ._data import inject_outliers, smooth_motion
+
+pytestmark = pytest.mark.skipif(not _ukf_numba.AVAILABLE, reason="numba not installed")
+
+
+def _recording(rng: np.random.Generator, frames: int = 60) -> Recording:
+    """Noisy smooth motion with missing joints, inferred joints and tracking-loss outliers (so the gate acts)."""
+    t, truth, _ = smooth_motion(frames, rng)
+    positions = truth + rng.normal(0.0, 0.015, truth.shape)
+    positions[rng.random((frames, skeleton.J)) < 0.1] = np.nan
+    rec = Recording.from_positions(t, positions, Metadata(rate_hz=30.0))
+    state = rec.state.copy()
+    state[(rng.random(state.shape) < 0.1) & (state == skeleton.TRACKED)] = skeleton.INFERRED
+    rec = rec.replace(step="test: inferred joints", state=state)
+    return inject_outliers(rec, rng, rate=0.02)[0]
+
+
+def _filters(rec: Recording, fixed: bool) -> tuple:
+    """Returns (fast, reference) filters with the same chain and start; the reference uses numpy throughout."""
+    fit = inverse_kinematics(rec.positions)
+    lengths = fit.lengths if fixed else None
+    config = pipeline.PipelineConfig()
+    fast = pipeline._make_filter(pipeline._Chain(fit.model, lengths), config)
+    plain_model = km.ChainModel(fit.model.rest, fit.model.R_ref, compiled=False)
+    ref = pipeline._make_filter(pipeline._Chain(plain_model, lengths), config)
+    x0 = np.concatenate([fit.root[0]] + ([] if fixed else [fit.lengths]) + [fit.theta[0]])
+    for kf in (fast, ref):
+        kf.x, kf.P = x0.copy(), np.diag(kf.hx.__self__.p0_diag(config))
+        kf.Q = np.diag(kf.hx.__self__.q_diag(config))
+    return fast, ref, config
+
+
+@pytest.mark.parametrize("fixed", [True, False], ids=["lengths fixed (n=36)", "lengths in the state (n=55)"])
+def test_fast_step_equals_the_reference_step(rng: np.random.Generator, fixed: bool) -> None:
+    rec = _recording(rng)
+    fast, ref, config = _filters(rec, fixed)
+    z, observed, R_diag = pipeline._observations(rec, config)
+    n = fast.dim_x
+    gated = 0
+    for k in range(rec.n_frames):
+        for kf in (fast, ref):
+            pipeline._add_process_noise(kf.P, np.arange(n), kf.Q.diagonal().copy(), kf.P0_ceiling)
+        used_fast = pipeline._update(fast, z[k], observed[k], R_diag[k], config.gate_chi2)
+        used_ref = pipeline._update(ref, z[k], observed[k], R_diag[k], config.gate_chi2)
+        np.testing.assert_array_equal(used_fast, used_ref, err_msg=f"joints used at frame {k}")
+        np.testing.assert_allclose(fast.x, ref.x, rtol=0, atol=1e-9, err_msg=f"state at frame {k}")
+        np.testing.assert_allclose(fast.P, ref.P, rtol=0, atol=1e-9, err_msg=f"covariance at frame {k}")
+        gated += int(observed[k].reshape(-1, 3).all(axis=1).sum() - used_ref.sum())
+    assert gated > 0, "the test data should make the gate drop some joints"
+
+
+def test_fast_step_refuses_a_covariance_that_is_not_positive_definite(rng: np.random.Generator) -> None:
+    fast, _, config = _filters(_recording(rng, 10), fixed=True)
+    fast.P[0, 0] = -1.0
+    x, P = fast.x.copy(), fast.P.copy()
+    z, observed, R_diag = pipeline._observations(_recording(rng, 10), config)
+    used = np.empty(skeleton.J, dtype=bool)
+    chain = fast.hx.__self__
+    status = _ukf_numba.chain_step(
+        fast.x, fast.P, z[0], observed[0], R_diag[0], fast.kernel_weights, 30.0, chain.fixed_lengths, chain.n_len,
+        chain.model.rest, chain.model.R_ref, km.STEP_TABLES, used,
+    )  # fmt: skip
+    assert status == _ukf_numba.P_NOT_POSITIVE
+    np.testing.assert_array_equal(fast.x, x, err_msg="x changed although the step was refused")
+    np.testing.assert_array_equal(fast.P, P, err_msg="P changed although the step was refused")
+
+
+def test_sincos_is_libm_to_one_ulp() -> None:
+    x = np.concatenate([np.linspace(-40.0, 40.0, 100_001), np.linspace(-1e-9, 1e-9, 101), [0.0, np.pi, -np.pi / 2]])
+    got = np.array([_ukf_numba._sincos_c(v) for v in x[::50]])
+    np.testing.assert_allclose(got[:, 0], np.sin(x[::50]), rtol=0, atol=2.3e-16)
+    np.testing.assert_allclose(got[:, 1], np.cos(x[::50]), rtol=0, atol=2.3e-16)
+
+
+def test_lapack_wrappers_match_numpy(rng: np.random.Generator) -> None:
+    A = rng.normal(size=(12, 7))
+    S = A.T @ A + np.eye(7)
+    L = S.copy()
+    assert _blas_numba.cholesky_lower(L, 7) == 0
+    np.testing.assert_allclose(np.tril(L), np.linalg.cholesky(S), atol=1e-12)
+    B = rng.normal(size=(7, 4))
+    X = B.copy()
+    _blas_numba.solve_lower(L, 7, X, 7, 4)
+    np.testing.assert_allclose(X, np.linalg.solve(np.tril(L), B), atol=1e-12)
+    C = np.zeros((7, 7))
+    _blas_numba.gram_lower(A, 12, 7, 2.0, 0.0, C)
+    np.testing.assert_allclose(np.tril(C), np.tril(2.0 * A.T @ A), atol=1e-12)
+    G = np.zeros((12, 12))
+    _blas_numba.gram_rows_lower(A.reshape(-1)[1:], 12, 6, 7, 0.5, G)  # A[:, 1:] · A[:, 1:]ᵀ
+    np.testing.assert_allclose(np.tril(G), np.tril(0.5 * A[:, 1:] @ A[:, 1:].T), atol=1e-12)
+    bad = -np.eye(3)
+    assert _blas_numba.cholesky_lower(bad, 3) > 0
