@@ -1,0 +1,560 @@
+"""Accuracy of the signal pipeline against mocap/simulator ground truth with calibrated Kinect errors.
+
+Ground truth (20 joints, 30 Hz, camera frame: subject facing the camera 2.4 m away, turned by the view angle):
+    CMU 13_29 (jumping jacks, twists, arm circles, toe touches, knee raises, squats; 120 Hz BVH mapped by
+    kinect_agent.formats.bvh, linearly resampled to 30 Hz), HDM05 AMC clips when kinect_agent.formats.amc is
+    present (3 clips per subject and motion class: squat, kick, elbow-to-knee, arm circles; 1-2.5 s each), and
+    the simulator's exact motion (kinect_agent.sources.simulator) for several exercises (standing, and one sitting
+    exercise for the sitting tables).
+Measured: kinect_agent.sources.kinect_noise.add_kinect_noise (the paper's tables: biased offsets with AR(1)
+    jitter, inferred/lost joints, uniform tracking-loss bursts) for Kinect 2 and Kinect 1 at 0°, 30°, 60°.
+Methods: raw (gaps held at the last value, as a display does), Butterworth 6 Hz zero-lag, Kinect SDK Holt
+    smoothing, One Euro, constant-velocity Kalman + RTS (bench/baselines/), this pipeline offline
+    (kinect_agent.processing.pipeline.process) and online (process(online=True), the live forward pass).
+    Causal baselines give nothing on untracked frames; those are held at the last output.
+Metrics, pooled over the recordings of a setting (summary: over all settings):
+    rmse_mm           sqrt(mean |p̂ − p|²) over every joint-frame (Euclidean 3-D error, mm)
+    rmse_loss_mm      the same over joint-frames with tracking loss (uniform outlier or not tracked)
+    rmse_debiased_mm  the same after removing each joint's mean error per recording (what filtering can reach:
+                      Kinect's offsets to mocap are largely a bias no temporal filter sees)
+    segment_sd_mm     SD over time of each of the 14 table segments' lengths, mean over segments (frame-weighted
+                      over recordings); the truth's is 0
+    angle_rmse_deg    elbow and knee flexion (kinect_agent.processing.angles), pooled over the four angles
+    precision/recall  of the joint-frames flagged as outliers against the simulated tracking-loss mask (the
+                      pipeline offline only; the online filter's gate is not reported per joint-frame)
+    gain              the paper's outlier-removal gain: per joint, 100·(1 − after/before) of the mean and of the
+                      SD of the raw offset distance |raw − truth| over present joint-frames, before and after
+                      dropping the flagged ones; averaged over joints; per pose, next to the paper's table and
+                      the oracle (dropping exactly the simulated outliers).
+Targets (PASS/FAIL per setting and for the summary): offline RMSE below every baseline and ≤ ½ raw; segment-
+length SD ≤ 2 mm; elbow/knee angle RMSE ≤ 0.8 × the best baseline's; outlier recall ≥ 0.95 at precision ≥ 0.9;
+outlier-removal gain (mean and SD) at least the paper's.
+
+    python bench/accuracy.py [--quick] [--json OUT] [--set NAME=VALUE ...] [--tune-one-euro]
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from dataclasses import dataclass, field  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+ROOT_DIR = Path(__file__).resolve().parents[1]
+if str(ROOT_DIR) not in sys.path:  # `python bench/accuracy.py` puts bench/ first, not the repository
+    sys.path.insert(0, str(ROOT_DIR))
+
+from bench.baselines import butterworth, cv_kalman_rts, holt_kinect, one_euro  # noqa: E402
+from bench.baselines._common import hold_last  # noqa: E402
+from kinect_agent import skeleton  # noqa: E402
+from kinect_agent.processing.angles import joint_angles  # noqa: E402
+from kinect_agent.processing.pipeline import PipelineConfig, process  # noqa: E402
+from kinect_agent.processing.rotations import axis_rotation  # noqa: E402
+from kinect_agent.recording import Recording  # noqa: E402
+from kinect_agent.skeleton import NOT_TRACKED  # noqa: E402
+from kinect_agent.sources.kinect_noise import add_kinect_noise, load_tables  # noqa: E402
+from kinect_agent.sources.simulator import simulate  # noqa: E402
+
+DATA_DIR = ROOT_DIR.parent / "shared" / "data"
+CMU_FILE = DATA_DIR / "cmu-mocap" / "13_29.bvh"
+HDM05_DIR = DATA_DIR / "hdm05"
+HDM05_CLIPS = 3  # clips per subject and motion class
+RATE_HZ = 30.0
+CAMERA_HEIGHT_M, SUBJECT_DISTANCE_M = 0.80, 2.4  # as kinect_agent.sources.motions places simulated subjects
+SETTINGS = tuple((d, v) for d in ("kinect2", "kinect1") for v in (0, 30, 60))
+SIM_EXERCISES = (  # (exercise, pose, repetitions)
+    ("squat", "standing", 6),
+    ("shoulder_abduction", "standing", 6),
+    ("elbow_flexion", "standing", 6),
+    ("standing_leg_raise", "standing", 6),
+    ("seated_knee_extension", "sitting", 6),
+)
+ANGLES = ("elbow_flexion_L", "elbow_flexion_R", "knee_flexion_L", "knee_flexion_R")
+BASELINES = ("raw", "butterworth", "holt", "one_euro", "cv_kalman_rts")
+METHODS = (*BASELINES, "pipeline_offline", "pipeline_online")
+SOURCES = ("mocap", "simulator")
+
+
+@dataclass
+class Case:
+    """One benchmark recording: measured (Kinect errors), truth (T, J, 3) m, outlier mask (T, J) bool, pose."""
+
+    name: str
+    pose: str
+    measured: Recording
+    truth: np.ndarray
+    mask: np.ndarray
+
+
+# ----------------------------------------------------------------------------------------------- ground truth
+
+
+def place_mocap(positions: np.ndarray, view_deg: float, facing_deg: float = 0.0) -> np.ndarray:
+    """Returns mocap positions (T, J, 3) m moved into the camera frame.
+
+    positions: (T, J, 3) m, mocap world frame with y up, the subject heading facing_deg about +y from +z in the
+    first frame (CMU 13_29: 0; HDM05: about 180, kinect_agent.formats.amc.facing_deg).
+    The subject is turned to face the camera (−z) and by view_deg more, feet on the floor 0.8 m below the camera,
+    the mean pelvis SUBJECT_DISTANCE_M in front of it.
+    """
+    R = axis_rotation(1, np.radians(180.0 + view_deg - facing_deg))
+    p = positions @ R.T
+    feet = [skeleton.INDEX[n] for n in ("FOO_L", "FOO_R", "ANK_L", "ANK_R")]
+    floor = np.nanpercentile(p[:, feet, 1], 1)
+    centre = np.nanmean(p[:, 0], axis=0)
+    return p + np.array([-centre[0], -CAMERA_HEIGHT_M - floor, SUBJECT_DISTANCE_M - centre[2]])
+
+
+def resample(rec: Recording, rate_hz: float = RATE_HZ) -> tuple[np.ndarray, np.ndarray]:
+    """Returns (t (N,) s, positions (N, J, 3) m): rec linearly interpolated onto a rate_hz grid from its start."""
+    t = np.arange(0.0, rec.duration + 1e-9, 1.0 / rate_hz) + rec.t[0]
+    flat = rec.positions.reshape(rec.n_frames, -1)
+    out = np.stack([np.interp(t, rec.t, flat[:, c]) for c in range(flat.shape[1])], axis=1)
+    return t - t[0], out.reshape(len(t), skeleton.J, 3)
+
+
+def mocap_truths(quick: bool) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
+    """Returns [(name, t (T,) s, positions (T, J, 3) m in the mocap frame, facing_deg)] at 30 Hz: CMU 13_29 and
+    HDM05 clips."""
+    from kinect_agent.formats import bvh
+
+    out = []
+    if CMU_FILE.is_file():
+        t, p = resample(bvh.read(CMU_FILE))
+        if quick:
+            t, p = t[: int(12 * RATE_HZ)], p[: int(12 * RATE_HZ)]
+        out.append(("cmu_13_29", t, p, 0.0))
+    if not quick:
+        out.extend(_hdm05_truths())
+    return out
+
+
+def _hdm05_truths(per_subject: int = HDM05_CLIPS) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
+    """Returns the first `per_subject` HDM05 clips of each subject (bd, bk) per motion class when
+    kinect_agent.formats.amc is there (each clip is one repetition, 1-2.5 s at 30 Hz); else nothing."""
+    try:
+        from kinect_agent.formats import amc  # written concurrently; optional here
+    except ImportError:
+        return []
+    out = []
+    for folder in sorted(p for p in HDM05_DIR.glob("*") if p.is_dir() and p.name != "asf"):
+        for subject in ("bd", "bk"):
+            for clip in sorted(folder.glob(f"HDM_{subject}_*.amc"))[:per_subject]:
+                try:
+                    rec = amc.read(clip)
+                except Exception as exc:  # noqa: BLE001 - report and go on: the benchmark must not die on a reader
+                    print(f"HDM05 {clip.name} skipped: {type(exc).__name__}: {exc}", file=sys.stderr)
+                    continue
+                if not np.all(np.isfinite(rec.positions)):
+                    print(f"HDM05 {clip.name} skipped: joints missing", file=sys.stderr)
+                    continue
+                t, p = resample(rec)
+                out.append((f"hdm05_{clip.stem.removesuffix('_120')}", t, p, float(rec.meta.extra["facing_deg"])))
+    return out
+
+
+def build_cases(device: str, view: int, mocap: list, quick: bool, seed: int = 0) -> list[Case]:
+    """Returns the recordings of one setting: the mocap truths with Kinect errors, then the simulated exercises."""
+    cases = []
+    for k, (name, t, p, facing) in enumerate(mocap):
+        truth = Recording.from_positions(t, place_mocap(p, view, facing))
+        truth.meta.rate_hz = RATE_HZ
+        rng = np.random.default_rng([seed, k, 1 if device == "kinect1" else 2, view])
+        measured, mask = add_kinect_noise(truth, device=device, view_deg=view, pose="standing", rng=rng)
+        cases.append(Case(name, "standing", measured, truth.positions, mask))
+    exercises = SIM_EXERCISES[:1] if quick else SIM_EXERCISES
+    for k, (exercise, pose, reps) in enumerate(exercises):
+        measured, truth, mask = simulate(
+            exercise, 3 if quick else reps, device=device, view_deg=view, pose=pose, seed=100 * seed + 10 + k
+        )
+        cases.append(Case(f"sim_{exercise}", pose, measured, truth.positions, mask))
+    return cases
+
+
+def source_of(case: Case) -> str:
+    """Returns "simulator" for the simulator's recordings, "mocap" for CMU/HDM05."""
+    return "simulator" if case.name.startswith("sim_") else "mocap"
+
+
+# ----------------------------------------------------------------------------------------------- methods
+
+
+def run_method(name: str, rec: Recording, config: PipelineConfig) -> tuple[np.ndarray, np.ndarray | None]:
+    """Returns (estimate (T, J, 3) m, every frame filled; outlier flags (T, J) bool or None) of one method."""
+    t, p = rec.t, rec.positions
+    if name == "raw":
+        return hold_last(p), None
+    if name == "butterworth":
+        return hold_last(butterworth(t, p)), None
+    if name == "holt":
+        return hold_last(holt_kinect(t, p, rec.state)), None
+    if name == "one_euro":
+        return hold_last(one_euro(t, p)), None
+    if name == "cv_kalman_rts":
+        return hold_last(cv_kalman_rts(t, p)), None
+    if name in ("pipeline_offline", "pipeline_online"):
+        online = name == "pipeline_online"
+        res = process(rec, online=online, config=config)
+        flags = None if online else (res.params.outlier_prob > config.outlier_threshold) & (rec.state != NOT_TRACKED)
+        return res.filtered.positions, flags
+    raise ValueError(f"unknown method {name!r}; known: {', '.join(METHODS)}")
+
+
+# ----------------------------------------------------------------------------------------------- metrics
+
+
+@dataclass
+class Sums:
+    """Running sums of one method over recordings (pooled metrics)."""
+
+    sq: float = 0.0
+    n: int = 0
+    sq_loss: float = 0.0
+    n_loss: int = 0
+    sq_debiased: float = 0.0
+    seg_sd_weighted: float = 0.0
+    seg_frames: int = 0
+    sq_angle: float = 0.0
+    n_angle: int = 0
+    tp: int = 0
+    fp: int = 0
+    fn: int = 0
+    fp_gross: int = 0
+    flagged: bool = False
+    seconds: float = 0.0
+
+    def add(self, other: Sums) -> None:
+        for name in self.__dataclass_fields__:
+            if name == "flagged":
+                self.flagged = self.flagged or other.flagged
+            else:
+                setattr(self, name, getattr(self, name) + getattr(other, name))
+
+    def metrics(self) -> dict[str, float | None]:
+        def ratio(a: float, b: float) -> float | None:
+            return a / b if b else None
+
+        rmse = ratio(self.sq, self.n)
+        loss = ratio(self.sq_loss, self.n_loss)
+        deb = ratio(self.sq_debiased, self.n)
+        ang = ratio(self.sq_angle, self.n_angle)
+        return {
+            "rmse_mm": None if rmse is None else 1e3 * np.sqrt(rmse),
+            "bias_mm": None if rmse is None else 1e3 * np.sqrt(max(rmse - (deb or 0.0), 0.0)),
+            "rmse_loss_mm": None if loss is None else 1e3 * np.sqrt(loss),
+            "rmse_debiased_mm": None if deb is None else 1e3 * np.sqrt(deb),
+            "segment_sd_mm": None if not self.seg_frames else 1e3 * self.seg_sd_weighted / self.seg_frames,
+            "angle_rmse_deg": None if ang is None else float(np.sqrt(ang)),
+            "precision": ratio(self.tp, self.tp + self.fp) if self.flagged else None,
+            "recall": ratio(self.tp, self.tp + self.fn) if self.flagged else None,
+            "precision_incl_gross": ratio(self.tp + self.fp_gross, self.tp + self.fp) if self.flagged else None,
+            "seconds": self.seconds,
+        }
+
+
+def case_sums(case: Case, est: np.ndarray, flags: np.ndarray | None, seconds: float) -> Sums:
+    """Returns the sums of one method on one recording. est: (T, J, 3) m, finite; flags: (T, J) bool or None."""
+    err = est - case.truth
+    d2 = np.sum(err**2, axis=-1)  # (T, J)
+    loss = case.mask | (case.measured.state == NOT_TRACKED)
+    bias = np.mean(err, axis=0, keepdims=True)
+    seg_sd = np.std(skeleton.segment_lengths(est), axis=0)  # (14,)
+    a_est, a_true = joint_angles(est), joint_angles(case.truth)
+    da = np.concatenate([a_est[n] - a_true[n] for n in ANGLES])
+    da = da[np.isfinite(da)]
+    s = Sums(
+        sq=float(d2.sum()), n=d2.size, sq_loss=float(d2[loss].sum()), n_loss=int(loss.sum()),
+        sq_debiased=float(np.sum((err - bias) ** 2)), seg_sd_weighted=float(seg_sd.mean() * len(est)),
+        seg_frames=len(est), sq_angle=float(np.sum(da**2)), n_angle=int(da.size), seconds=seconds,
+    )  # fmt: skip
+    if flags is not None:
+        s.flagged = True
+        s.tp = int(np.sum(flags & case.mask))
+        s.fp = int(np.sum(flags & ~case.mask))
+        s.fn = int(np.sum(~flags & case.mask))
+        s.fp_gross = int(np.sum(flags & ~case.mask & gross_jumps(case)))
+    return s
+
+
+def gross_jumps(case: Case, window: int = 11, threshold_m: float = 0.1) -> np.ndarray:
+    """Returns (T, J) bool: non-outlier joint-frames whose Kinect offset (measured − truth) differs by more than
+    threshold_m from its running median over `window` frames — gross errors of the Gaussian component itself.
+
+    kinect_noise's offset direction can flip for one or a few frames (the perpendicular part of a child's offset
+    follows the parent's), giving jumps of up to twice the offset (≈ 0.2-0.3 m) in about 1 % of the "clean"
+    joint-frames; flagging those is not a false alarm in any practical sense, so precision is also reported with
+    them counted as hits (precision_incl_gross).
+    """
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    off = np.where(case.mask[..., None], np.nan, case.measured.positions - case.truth)
+    half = window // 2
+    pad = np.pad(off, ((half, half), (0, 0), (0, 0)), constant_values=np.nan)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN windows (long losses)
+        med = np.nanmedian(sliding_window_view(pad, window, axis=0), axis=-1)
+    dev = np.linalg.norm(off - med, axis=-1)
+    return np.nan_to_num(dev, nan=0.0) > threshold_m
+
+
+@dataclass
+class GainSums:
+    """Raw offset distances (per joint lists) before and after outlier removal, for the paper's gain."""
+
+    before: list[list[np.ndarray]] = field(default_factory=lambda: [[] for _ in range(skeleton.J)])
+    after: list[list[np.ndarray]] = field(default_factory=lambda: [[] for _ in range(skeleton.J)])
+    oracle: list[list[np.ndarray]] = field(default_factory=lambda: [[] for _ in range(skeleton.J)])
+
+    def add(self, case: Case, flags: np.ndarray) -> None:
+        d = np.linalg.norm(case.measured.positions - case.truth, axis=-1)
+        present = case.measured.state != NOT_TRACKED
+        for j in range(skeleton.J):
+            self.before[j].append(d[present[:, j], j])
+            self.after[j].append(d[present[:, j] & ~flags[:, j], j])
+            self.oracle[j].append(d[present[:, j] & ~case.mask[:, j], j])
+
+    def gains(self) -> dict[str, float]:
+        """Returns {"mean_pct", "sd_pct", "oracle_mean_pct", "oracle_sd_pct"}: per-joint gains averaged."""
+        out = {}
+        for key, lists in (("", self.after), ("oracle_", self.oracle)):
+            gm, gs = [], []
+            for j in range(skeleton.J):
+                b, a = np.concatenate(self.before[j]), np.concatenate(lists[j])
+                if b.size < 2 or a.size < 2:
+                    continue
+                gm.append(100.0 * (1.0 - a.mean() / b.mean()))
+                gs.append(100.0 * (1.0 - a.std() / b.std()))
+            out[f"{key}mean_pct"], out[f"{key}sd_pct"] = float(np.mean(gm)), float(np.mean(gs))
+        return out
+
+
+# ----------------------------------------------------------------------------------------------- targets
+
+
+def judge(m: dict[str, dict], gains: dict[str, dict]) -> dict[str, dict]:
+    """Returns {target: {"pass": bool, "detail": str}} for one table of method metrics and its gains."""
+    off = m["pipeline_offline"]
+    base = {k: m[k] for k in BASELINES if k != "raw"}
+    best = min(base, key=lambda k: base[k]["rmse_mm"])
+    rmse_ok = all(off["rmse_mm"] < b["rmse_mm"] for b in base.values()) and off["rmse_mm"] <= 0.5 * m["raw"]["rmse_mm"]
+    best_ang = min(base, key=lambda k: base[k]["angle_rmse_deg"])
+    ang_limit = 0.8 * base[best_ang]["angle_rmse_deg"]
+    prec, rec = off["precision"] or 0.0, off["recall"] or 0.0
+    gain_ok = all(g["mean_pct"] >= g["paper_mean_pct"] and g["sd_pct"] >= g["paper_sd_pct"] for g in gains.values())
+    gain_txt = "; ".join(
+        f"{pose}: mean {g['mean_pct']:.1f} vs {g['paper_mean_pct']:.1f} %, "
+        f"SD {g['sd_pct']:.1f} vs {g['paper_sd_pct']:.1f} %"
+        for pose, g in gains.items()
+    )
+    return {
+        "rmse": {"pass": bool(rmse_ok), "detail": (
+            f"offline {off['rmse_mm']:.1f} mm; best baseline {best} {base[best]['rmse_mm']:.1f} mm; "
+            f"half of raw {0.5 * m['raw']['rmse_mm']:.1f} mm")},
+        "segment_sd": {"pass": bool(off["segment_sd_mm"] <= 2.0),
+                       "detail": f"offline {off['segment_sd_mm']:.2f} mm (target <= 2 mm)"},
+        "angles": {"pass": bool(off["angle_rmse_deg"] <= ang_limit), "detail": (
+            f"offline {off['angle_rmse_deg']:.2f} deg; 0.8 x best baseline ({best_ang}) = {ang_limit:.2f} deg")},
+        "outliers": {"pass": bool(rec >= 0.95 and prec >= 0.9),
+                     "detail": f"recall {rec:.3f} (>= 0.95), precision {prec:.3f} (>= 0.9)"},
+        "gain": {"pass": bool(gain_ok), "detail": gain_txt},
+    }  # fmt: skip
+
+
+# ----------------------------------------------------------------------------------------------- running
+
+
+def run_setting(device: str, view: int, mocap: list, quick: bool, config: PipelineConfig) -> dict:
+    """Runs every method on every recording of one setting; returns its metrics, gains and targets."""
+    cases = build_cases(device, view, mocap, quick)
+    sums = {name: Sums() for name in METHODS}
+    by_source = {src: {name: Sums() for name in METHODS} for src in SOURCES}
+    gains_by_pose: dict[str, GainSums] = {}
+    for case in cases:
+        for name in METHODS:
+            start = time.perf_counter()
+            est, flags = run_method(name, case.measured, config)
+            one = case_sums(case, est, flags, time.perf_counter() - start)
+            sums[name].add(one)
+            by_source[source_of(case)][name].add(one)
+            if name == "pipeline_offline":
+                gains_by_pose.setdefault(case.pose, GainSums()).add(case, flags)
+    tables = load_tables()
+    gains = {}
+    for pose, g in gains_by_pose.items():
+        paper_mean, paper_sd = tables.gain_pct[device, pose, view]
+        gains[pose] = {"paper_mean_pct": paper_mean, "paper_sd_pct": paper_sd, **g.gains()}
+    metrics = {name: s.metrics() for name, s in sums.items()}
+    return {
+        "device": device, "view_deg": view, "cases": [c.name for c in cases],
+        "frames": int(sum(len(c.truth) for c in cases)), "methods": metrics, "gain": gains,
+        "targets": judge(metrics, gains), "_sums": sums, "_by_source": by_source,
+    }  # fmt: skip
+
+
+def summarise(settings: list[dict]) -> dict:
+    """Returns the pooled metrics over all settings and the targets on them (gain: every cell must pass)."""
+    pooled = {name: Sums() for name in METHODS}
+    for s in settings:
+        for name in METHODS:
+            pooled[name].add(s["_sums"][name])
+    metrics = {name: p.metrics() for name, p in pooled.items()}
+    cells = {f"{s['device']}@{s['view_deg']}/{pose}": g for s in settings for pose, g in s["gain"].items()}
+    targets = judge(metrics, cells)
+    n_ok = sum(s["targets"]["gain"]["pass"] for s in settings)
+    targets["gain"]["detail"] = (
+        f"{n_ok}/{len(settings)} settings at or above the paper (mean and SD); " + targets["gain"]["detail"]
+    )
+    sources = {}
+    for src in SOURCES:
+        pooled_src = {name: Sums() for name in METHODS}
+        for s in settings:
+            for name in METHODS:
+                pooled_src[name].add(s["_by_source"][src][name])
+        if pooled_src["raw"].n:
+            sources[src] = {name: p.metrics() for name, p in pooled_src.items()}
+    return {"methods": metrics, "targets": targets, "by_source": sources}
+
+
+def _fmt(v: float | None, digits: int = 1) -> str:
+    return "—" if v is None else f"{v:.{digits}f}"
+
+
+def print_table(title: str, metrics: dict[str, dict]) -> None:
+    """Prints one markdown table of the methods' metrics."""
+    print(f"\n### {title}\n")
+    print("| method | RMSE mm | RMSE loss mm | RMSE debiased mm | bias mm | seg SD mm | elbow/knee RMSE deg "
+          "| precision (incl. gross) | recall | s |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name, m in metrics.items():
+        prec = _fmt(m["precision"], 3)
+        if m["precision_incl_gross"] is not None:
+            prec += f" ({m['precision_incl_gross']:.3f})"
+        print(f"| {name} | {_fmt(m['rmse_mm'])} | {_fmt(m['rmse_loss_mm'])} | {_fmt(m['rmse_debiased_mm'])} | "
+              f"{_fmt(m['bias_mm'])} | {_fmt(m['segment_sd_mm'], 2)} | {_fmt(m['angle_rmse_deg'], 2)} | {prec} | "
+              f"{_fmt(m['recall'], 3)} | {_fmt(m['seconds'], 2)} |")  # fmt: skip
+
+
+def print_targets(targets: dict[str, dict]) -> None:
+    for name, t in targets.items():
+        print(f"- {name}: {'PASS' if t['pass'] else 'FAIL'} — {t['detail']}")
+
+
+def run(quick: bool = False, config: PipelineConfig | None = None) -> dict:
+    """Runs the benchmark; returns the JSON-ready results (settings, summary, what was run)."""
+    config = config or PipelineConfig()
+    process(simulate("squat", 1, seed=999)[0], config=config)  # compile the numba kernels outside the timing
+    mocap = mocap_truths(quick)
+    settings_run = (("kinect2", 30),) if quick else SETTINGS
+    settings = [run_setting(d, v, mocap, quick, config) for d, v in settings_run]
+    summary = summarise(settings)
+    for s in settings:
+        del s["_sums"], s["_by_source"]
+    return {
+        "quick": quick,
+        "rate_hz": RATE_HZ,
+        "mocap": [m[0] for m in mocap],
+        "settings": settings,
+        "summary": summary,
+    }
+
+
+def tune_one_euro() -> None:
+    """Grid search of the One Euro parameters on simulated Kinect 2 sessions with seeds the benchmark does not use."""
+    grid_min, grid_beta = (0.5, 1.0, 1.5, 2.0, 3.0, 4.0), (0.0, 0.1, 0.3, 1.0, 3.0, 10.0)
+    recs = [simulate(ex, 4, device="kinect2", view_deg=v, seed=900 + k)[:2]
+            for k, (ex, v) in enumerate((("squat", 0), ("shoulder_abduction", 30), ("elbow_flexion", 0)))]  # fmt: skip
+    print("| min_cutoff Hz \\ beta s/m | " + " | ".join(map(str, grid_beta)) + " |")
+    print("|---" * (len(grid_beta) + 1) + "|")
+    for mc in grid_min:
+        row = []
+        for b in grid_beta:
+            sq = n = 0.0
+            for measured, truth in recs:
+                est = hold_last(one_euro(measured.t, measured.positions, min_cutoff=mc, beta=b))
+                sq += float(np.sum((est - truth.positions) ** 2))
+                n += est.shape[0] * est.shape[1]
+            row.append(f"{1e3 * np.sqrt(sq / n):.1f}")
+        print(f"| {mc} | " + " | ".join(row) + " |")
+
+
+def pipeline_config(overrides: list[str]) -> PipelineConfig:
+    """Returns the default PipelineConfig with NAME=VALUE overrides (floats, ints, bools, None); checked."""
+    config = PipelineConfig()
+    for item in overrides:
+        name, sep, text = item.partition("=")
+        if not sep or name not in PipelineConfig.__dataclass_fields__ or name == "extra":
+            raise ValueError(f"--set {item!r}: expected NAME=VALUE with NAME a PipelineConfig setting")
+        current = getattr(config, name)
+        if text == "None":
+            value = None
+        elif isinstance(current, bool):
+            value = text.lower() in ("1", "true", "yes")
+        elif isinstance(current, str):
+            value = text
+        else:
+            try:
+                value = int(text) if isinstance(current, int) else float(text)
+            except ValueError:
+                raise ValueError(f"--set {item!r}: {text!r} is not a number") from None
+        setattr(config, name, value)
+    config.check()
+    return config
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Runs the benchmark and prints the tables and PASS/FAIL per target."""
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true", help="short smoke run: Kinect 2 at 30°, two recordings")
+    parser.add_argument("--json", help="also write the results to this file")
+    parser.add_argument("--tune-one-euro", action="store_true", help="print the One Euro parameter grid and exit")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override a PipelineConfig setting, e.g. --set outlier_window_s=0.5 (repeatable)",
+    )
+    args = parser.parse_args(argv)
+    try:
+        config = pipeline_config(args.set)
+    except ValueError as exc:
+        parser.error(str(exc))
+    if args.tune_one_euro:
+        tune_one_euro()
+        return 0
+    started = time.perf_counter()
+    results = run(quick=args.quick, config=config)
+    results["config_overrides"] = args.set
+    for s in results["settings"]:
+        print_table(f"{s['device']}, view {s['view_deg']}° ({s['frames']} frames: {', '.join(s['cases'])})",
+                    s["methods"])  # fmt: skip
+        for pose, g in s["gain"].items():
+            print(f"\noutlier-removal gain, {pose}: ours mean {g['mean_pct']:.1f} % / SD {g['sd_pct']:.1f} % "
+                  f"(oracle {g['oracle_mean_pct']:.1f} / {g['oracle_sd_pct']:.1f} %); "
+                  f"paper {g['paper_mean_pct']:.0f} / {g['paper_sd_pct']:.0f} %")  # fmt: skip
+        print()
+        print_targets(s["targets"])
+    for src, table in results["summary"]["by_source"].items():
+        print_table(f"{src} recordings only, all settings pooled", table)
+    print_table("summary (all settings pooled)", results["summary"]["methods"])
+    print()
+    print_targets(results["summary"]["targets"])
+    print(f"\n({time.perf_counter() - started:.0f} s)")
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as f:
+            json.dump(results, f, indent=2)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
