@@ -1,0 +1,153 @@
+"""The four indicators of the paper (flexibility, endurance, strength, balance) from one analysis document.
+
+Each indicator is {"score": 0..100 or None, "value": the measured number or None, "basis": how it was scored,
+"quality_ok": the document's quality ok and the value present, "previous": median value of the history or None}.
+history = earlier documents of the same patient and exercise, oldest first (their own values are re-read, so a
+change of definition applies to the whole history).
+    flexibility  value = rom_deg (median repetition amplitude of the defining angle, degrees);
+                 score = 100 · value / span of the exercise's normal range (ExerciseSpec.normal_range_deg), ≤ 100.
+    endurance    value = repetitions; score = 100 · value / target_reps (the plan's prescription), ≤ 100; without a
+                 target, 100 · value / median of the history's repetitions, ≤ 100; None without either.
+    strength     sit-to-stand exercise: value = sit_to_stand.mean_s (20-80 % rise time, s);
+                 score = 100 · clip((SLOW_RISE_S − value) / (SLOW_RISE_S − FAST_RISE_S), 0, 1), i.e. 100 at ≤ 0.5 s,
+                 0 at ≥ 2 s. Other exercises: value = median over repetitions of amplitude / duration (deg/s, how fast
+                 the patient moves through the range); score = 100 · value / the best of the history, ≤ 100, None
+                 without history.
+    balance      value = balance.sway_velocity_m_s (body-centre sway while standing still, m/s);
+                 score = 100 · clip((POOR_SWAY − value) / (POOR_SWAY − GOOD_SWAY), 0, 1): 100 at ≤ 1 cm/s (quiet
+                 standing of healthy adults), 0 at ≥ 6 cm/s; None when the patient did not stand still ≥ 2 s.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from backend.exercises.library import ExerciseSpec
+
+FAST_RISE_S, SLOW_RISE_S = 0.5, 2.0
+GOOD_SWAY, POOR_SWAY = 0.01, 0.06
+
+
+def _clip100(x: float) -> float:
+    return round(float(np.clip(x, 0.0, 100.0)), 1)
+
+
+def _quality_ok(doc: dict) -> bool:
+    return bool((doc.get("quality") or {}).get("ok"))
+
+
+def _values(history: list[dict], read) -> list[float]:
+    out = []
+    for doc in history:
+        v = read(doc)
+        if v is not None and np.isfinite(v):
+            out.append(float(v))
+    return out
+
+
+def _indicator(score: float | None, value: float | None, basis: str, doc: dict, previous: list[float]) -> dict:
+    return {
+        "score": score,
+        "value": value,
+        "basis": basis,
+        "quality_ok": _quality_ok(doc) and value is not None,
+        "previous": round(float(np.median(previous)), 3) if previous else None,
+    }
+
+
+def _rom(doc: dict) -> float | None:
+    return doc.get("rom_deg")
+
+
+def _reps(doc: dict) -> float | None:
+    return doc.get("repetitions")
+
+
+def _rise(doc: dict) -> float | None:
+    return (doc.get("sit_to_stand") or {}).get("mean_s")
+
+
+def _speed(doc: dict) -> float | None:
+    rates = [r["amplitude_deg"] / r["duration_s"] for r in doc.get("repetition_list") or [] if r["duration_s"] > 0]
+    return round(float(np.median(rates)), 2) if rates else None
+
+
+def _sway(doc: dict) -> float | None:
+    return (doc.get("balance") or {}).get("sway_velocity_m_s")
+
+
+def flexibility(doc: dict, exercise: ExerciseSpec, history: list[dict]) -> dict:
+    """Returns the flexibility indicator (module doc)."""
+    lo, hi = exercise.normal_range_deg
+    value = _rom(doc)
+    score = _clip100(100.0 * value / (hi - lo)) if value is not None and hi > lo else None
+    basis = f"median amplitude of {doc.get('defining_angle')} against the normal range {lo:g}..{hi:g} deg"
+    return _indicator(score, value, basis, doc, _values(history, _rom))
+
+
+def endurance(doc: dict, target_reps: int | None, history: list[dict]) -> dict:
+    """Returns the endurance indicator (module doc)."""
+    value = _reps(doc)
+    previous = _values(history, _reps)
+    if target_reps:
+        score, basis = _clip100(100.0 * value / target_reps), f"repetitions against the target of {target_reps}"
+    elif previous and np.median(previous) > 0:
+        ref = float(np.median(previous))
+        score, basis = _clip100(100.0 * value / ref), f"repetitions against the usual {ref:g} of earlier sessions"
+    else:
+        score, basis = None, "repetitions; no target and no earlier session to compare with"
+    return _indicator(score, value, basis, doc, previous)
+
+
+def strength(doc: dict, exercise: ExerciseSpec, history: list[dict]) -> dict:
+    """Returns the strength indicator (module doc)."""
+    if exercise.slug == "sit_to_stand":
+        value = _rise(doc)
+        score = None
+        if value is not None:
+            score = _clip100(100.0 * (SLOW_RISE_S - value) / (SLOW_RISE_S - FAST_RISE_S))
+        basis = f"sit-to-stand rise time (20-80 %), {FAST_RISE_S:g} s scores 100, {SLOW_RISE_S:g} s scores 0"
+        return _indicator(score, value, basis, doc, _values(history, _rise))
+    value = _speed(doc)
+    previous = _values(history, _speed)
+    if value is not None and previous and max(previous) > 0:
+        score, basis = (
+            _clip100(100.0 * value / max(previous)),
+            "movement speed (deg/s) against the best earlier session",
+        )
+    else:
+        score, basis = None, "movement speed (deg/s); no earlier session to compare with"
+    return _indicator(score, value, basis, doc, previous)
+
+
+def balance(doc: dict, history: list[dict]) -> dict:
+    """Returns the balance indicator (module doc)."""
+    value = _sway(doc)
+    score = None
+    if value is not None:
+        score = _clip100(100.0 * (POOR_SWAY - value) / (POOR_SWAY - GOOD_SWAY))
+    basis = f"body-centre sway while standing still, {GOOD_SWAY * 100:g} cm/s scores 100, {POOR_SWAY * 100:g} cm/s 0"
+    return _indicator(score, value, basis, doc, _values(history, _sway))
+
+
+def indicators(doc: dict, *, exercise: ExerciseSpec, target_reps: int | None, history: list[dict]) -> dict[str, Any]:
+    """Returns {"flexibility", "endurance", "strength", "balance"} indicators of an analysis document.
+
+    doc: report.analyze_recording output; history: earlier documents of the same patient and exercise, oldest
+    first. Raises ValueError when doc is not an analysis document of `exercise`.
+    """
+    if not isinstance(doc, dict) or "repetitions" not in doc or "quality" not in doc:
+        raise ValueError("doc must be an analysis document (report.analyze_recording output)")
+    if doc.get("exercise") not in (None, exercise.slug):
+        raise ValueError(f"doc is an analysis of {doc.get('exercise')!r}, not of {exercise.slug!r}")
+    if target_reps is not None and (isinstance(target_reps, bool) or not isinstance(target_reps, int)):
+        raise ValueError(f"target_reps must be a whole number or None, got {target_reps!r}")
+    history = [h for h in history if isinstance(h, dict)]
+    return {
+        "flexibility": flexibility(doc, exercise, history),
+        "endurance": endurance(doc, target_reps, history),
+        "strength": strength(doc, exercise, history),
+        "balance": balance(doc, history),
+    }

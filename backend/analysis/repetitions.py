@@ -1,0 +1,251 @@
+"""Repetition counting from an exercise's defining joint angle(s).
+
+Definition. A repetition is one excursion of a defining angle away from its rest level and back. Per angle:
+    1. the series is conditioned (series.smooth: gaps filled, unwrapped, median then Gaussian smoothed);
+    2. its range R = p98 − p2 of the smoothed values; an angle with R < min_range_deg, or below side_ratio × the
+       largest R among the exercise's angles, does not move and yields no repetitions;
+    3. the rest level is the end (low p2 or high p98) nearer to the first and the last smoothed value; when
+       those two disagree (a recording cut mid-movement), the end the signal spends more time near.
+       The excursion e(t) = |angle − rest level|, clipped to [0, R];
+    4. hysteresis: an excursion begins when e rises above enter_frac·R and ends when it falls below exit_frac·R
+       (noise smaller than (enter_frac − exit_frac)·R cannot split or add repetitions);
+    5. each excursion is widened to its onset and return: in the stretch between the neighbouring excursions,
+       the repetition starts at the last frame (ends at the first frame) whose e is within onset_frac·R of that
+       stretch's minimum; excursions shorter than min_duration_s are dropped.
+   Amplitude = e at the peak minus the mean rest e just before and just after (degrees); peak = the smoothed
+   angle at the peak (degrees). Side = "left"/"right" from the angle's _L/_R suffix, "center" otherwise.
+Several angles (both sides): repetitions of different angles that overlap in time by more than merge_overlap of
+the shorter one are one repetition (side "both", amplitude and peak averaged). A repetition of one side alone
+counts when that side is the dominant one (largest R), or when that side alternates with the dominant one: at
+most alternate_shared of its excursions coincide with the dominant side's. A side that sometimes moves together
+with the dominant one and sometimes alone is the other limb drifting or mistracked (UI-PRMD one-arm movements
+show the idle arm wandering by 40-50°), and its lone excursions are not repetitions. When at least half of the
+repetitions are "both" (a bilateral exercise), a one-sided excursion counts only if its amplitude reaches
+lone_ratio × the median amplitude of the "both" repetitions (one limb's filtered angle can bump by a third of
+the range at rest). So a bilateral exercise counts once per movement, an alternating one counts each side's
+movement, a one-sided one the moving side. Last, an excursion smaller than min_ratio (0.4) × the median amplitude
+of the counted ones is a bump, not a repetition (filtered Kinect knees can bump by 35° at rest; UI-PRMD's
+smallest genuine repetitions are half the median).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from backend.analysis import series
+
+
+@dataclass(frozen=True)
+class RepetitionParams:
+    """Thresholds of the repetition detector; fractions are of the angle's own range R."""
+
+    enter_frac: float = 0.35
+    exit_frac: float = 0.2
+    onset_frac: float = 0.1
+    min_range_deg: float = 10.0
+    side_ratio: float = 0.35
+    alternate_shared: float = 0.2
+    lone_ratio: float = 0.6
+    min_ratio: float = 0.4
+    min_duration_s: float = 0.4
+    merge_overlap: float = 0.5
+
+
+@dataclass(frozen=True)
+class Repetition:
+    """One repetition: times in seconds from the recording's first frame, angles in degrees."""
+
+    index: int
+    start_s: float
+    end_s: float
+    duration_s: float
+    amplitude_deg: float
+    peak_deg: float
+    side: str
+
+    def to_dict(self) -> dict:
+        """Returns the JSON-ready form (floats rounded to 1 ms and 0.1°)."""
+        d = asdict(self)
+        for key in ("start_s", "end_s", "duration_s"):
+            d[key] = round(d[key], 3)
+        for key in ("amplitude_deg", "peak_deg"):
+            d[key] = round(d[key], 1)
+        return d
+
+
+@dataclass(frozen=True)
+class _Event:
+    start: int  # frame of onset
+    peak: int
+    end: int  # frame of return
+    amplitude: float
+    peak_deg: float
+    side: str
+    angles: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class RepetitionResult:
+    """Repetitions of one recording; ranges_deg: R per defining angle; moving: the angles that moved."""
+
+    repetitions: list[Repetition]
+    defining_angle: str | None
+    ranges_deg: dict[str, float]
+    moving: tuple[str, ...]
+
+
+def side_of(angle: str) -> str:
+    """Returns "left", "right" or "center" from an angle name's _L/_R suffix."""
+    return {"_L": "left", "_R": "right"}.get(angle[-2:], "center")
+
+
+def angle_range(x: np.ndarray) -> float:
+    """Returns R = p98 − p2 of a smoothed series x: (T,) degrees (0 when nothing is finite)."""
+    finite = x[np.isfinite(x)]
+    if finite.size == 0:
+        return 0.0
+    lo, hi = np.percentile(finite, [2.0, 98.0])
+    return float(hi - lo)
+
+
+def _hysteresis(e: np.ndarray, enter: float, leave: float) -> np.ndarray:
+    """Returns (T,) bool: True inside an excursion (entered above `enter`, left below `leave`)."""
+    mark = np.where(e > enter, 1, np.where(e < leave, 0, -1))
+    idx = np.where(mark >= 0, np.arange(e.shape[0]), 0)
+    np.maximum.accumulate(idx, out=idx)
+    return mark[idx] == 1  # frames before the first decision read mark[0] = -1: at rest
+
+
+def _rest_is_low(y: np.ndarray, lo: float, hi: float) -> bool:
+    """True when the rest level is the low end: where the recording starts and ends, else where it stays longer."""
+    mid = 0.5 * (lo + hi)
+    start_low, end_low = y[0] < mid, y[-1] < mid
+    if start_low == end_low:
+        return bool(start_low)
+    return bool(np.mean(y < mid) >= 0.5)
+
+
+def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) -> list[_Event]:
+    """Returns the excursions of one smoothed angle y: (T,) degrees at t: (T,) s (steps 3-5 of the module doc)."""
+    lo, hi = np.percentile(y, [2.0, 98.0])
+    R = float(hi - lo)
+    if R <= 0:
+        return []
+    rest_low = _rest_is_low(y, lo, hi)
+    e = np.clip(y - lo if rest_low else hi - y, 0.0, R)
+    inside = _hysteresis(e, params.enter_frac * R, params.exit_frac * R)
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], inside.astype(np.int8), [0]))))
+    runs = edges.reshape(-1, 2)  # [first, stop) of each excursion core
+    events: list[_Event] = []
+    T = y.shape[0]
+    for k, (a, b) in enumerate(runs):
+        prev_stop = runs[k - 1][1] if k else 0
+        next_first = runs[k + 1][0] if k + 1 < len(runs) else T
+        pre, post = e[prev_stop : a + 1], e[b - 1 : next_first]
+        base0, base1 = float(pre.min()), float(post.min())
+        start = prev_stop + int(np.flatnonzero(pre <= base0 + params.onset_frac * R)[-1])
+        end = b - 1 + int(np.flatnonzero(post <= base1 + params.onset_frac * R)[0])
+        peak = a + int(np.argmax(e[a:b]))
+        if t[end] - t[start] < params.min_duration_s:
+            continue
+        amplitude = float(e[peak] - 0.5 * (base0 + base1))
+        events.append(_Event(start, peak, end, amplitude, float(y[peak]), side_of(name), (name,)))
+    return events
+
+
+def _merge(events: list[_Event], overlap: float) -> list[_Event]:
+    """Joins events of different angles that overlap by more than `overlap` of the shorter one."""
+    merged: list[list[_Event]] = []
+    for ev in sorted(events, key=lambda ev: ev.start):
+        if merged:
+            group = merged[-1]
+            g_start, g_end = min(x.start for x in group), max(x.end for x in group)
+            shared = min(g_end, ev.end) - max(g_start, ev.start)
+            shorter = max(1, min(g_end - g_start, ev.end - ev.start))
+            if shared > overlap * shorter and all(x.side != ev.side for x in group):
+                group.append(ev)
+                continue
+        merged.append([ev])
+    out = []
+    for group in merged:
+        if len(group) == 1:
+            out.append(group[0])
+            continue
+        out.append(
+            _Event(
+                start=min(x.start for x in group),
+                peak=max(group, key=lambda x: x.amplitude).peak,
+                end=max(x.end for x in group),
+                amplitude=float(np.mean([x.amplitude for x in group])),
+                peak_deg=float(np.mean([x.peak_deg for x in group])),
+                side="both",
+                angles=tuple(a for x in group for a in x.angles),
+            )
+        )
+    return out
+
+
+def _keep_counted(merged: list[_Event], counted: set[str]) -> list[_Event]:
+    return [ev for ev in merged if counted & set(ev.angles)]
+
+
+def _drop_weak_lone(merged: list[_Event], lone_ratio: float) -> list[_Event]:
+    """In a bilateral session (at least half the events "both"), drops one-sided events below lone_ratio × median."""
+    both = [ev.amplitude for ev in merged if ev.side == "both"]
+    if not merged or 2 * len(both) < len(merged):
+        return merged
+    floor = lone_ratio * float(np.median(both))
+    return [ev for ev in merged if ev.side == "both" or ev.amplitude >= floor]
+
+
+def _alternates(name: str, dominant: str, events: list[_Event], merged: list[_Event], params: RepetitionParams) -> bool:
+    """True when at most alternate_shared of the excursions of angle `name` coincide with the dominant angle's."""
+    own = sum(1 for ev in events if ev.angles == (name,))
+    shared = sum(1 for ev in merged if name in ev.angles and dominant in ev.angles)
+    return own > 0 and shared <= params.alternate_shared * own
+
+
+def count_repetitions(
+    t: np.ndarray, angles: dict[str, np.ndarray], names: tuple[str, ...], params: RepetitionParams | None = None
+) -> RepetitionResult:
+    """Counts the repetitions of the defining angles `names` in angles {name: (T,) degrees} at times t: (T,) s.
+
+    Raises ValueError naming an angle that is missing or whose shape differs from t.
+    """
+    params = params or RepetitionParams()
+    t = np.asarray(t, dtype=np.float64)
+    smoothed: dict[str, np.ndarray] = {}
+    for name in names:
+        if name not in angles:
+            raise ValueError(f"angle {name!r} is missing; have {sorted(angles)}")
+        smoothed[name] = series.smooth(t, np.asarray(angles[name], dtype=np.float64))
+    ranges = {n: angle_range(y) if np.all(np.isfinite(y)) else 0.0 for n, y in smoothed.items()}
+    top = max(ranges.values(), default=0.0)
+    moving = tuple(n for n in names if ranges[n] >= max(params.min_range_deg, params.side_ratio * top))
+    events: list[_Event] = []
+    for name in moving:
+        events += detect(t, smoothed[name], name, params)
+    dominant = max(moving, key=lambda n: ranges[n]) if moving else None
+    merged = _merge(events, params.merge_overlap)
+    counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, merged, params)}
+    merged = _drop_weak_lone(_keep_counted(merged, counted), params.lone_ratio)
+    if merged:
+        floor = params.min_ratio * float(np.median([ev.amplitude for ev in merged]))
+        merged = [ev for ev in merged if ev.amplitude >= floor]
+    t0 = float(t[0]) if t.shape[0] else 0.0
+    reps = [
+        Repetition(
+            index=i,
+            start_s=float(t[ev.start] - t0),
+            end_s=float(t[ev.end] - t0),
+            duration_s=float(t[ev.end] - t[ev.start]),
+            amplitude_deg=ev.amplitude,
+            peak_deg=ev.peak_deg,
+            side=ev.side,
+        )
+        for i, ev in enumerate(merged)
+    ]
+    defining = dominant or (names[0] if names else None)
+    return RepetitionResult(reps, defining, ranges, moving)

@@ -1,0 +1,192 @@
+"""The analysis document of one session, and `coach-server analyze FILE --exercise NAME [--json]`.
+
+analyze_recording measures a recording that has already been through the agent's pipeline (or is clean, like
+simulated truth); analyze_file reads any format kinect_agent.formats knows, takes the filtered recording of a
+.khs session file when it has one and otherwise runs kinect_agent.processing.pipeline.process on the raw input,
+then measures. The document's keys are listed in .notes/CONTRACTS.md; every key is present, None when it does
+not apply.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from backend.analysis import activity, quality, series
+from backend.analysis.angles import counting_angles
+from backend.analysis.balance import sway
+from backend.analysis.errors import AnalysisError, UnknownExercise, UnreadableRecording
+from backend.analysis.most_moving import most_moving_joints
+from backend.analysis.range_of_motion import range_of_motion
+from backend.analysis.reachable import reachable_range
+from backend.analysis.repetitions import RepetitionParams, count_repetitions
+from backend.analysis.sit_to_stand import sit_to_stand
+from backend.exercises.library import EXERCISES, ExerciseSpec
+from kinect_agent.errors import FormatError
+from kinect_agent.processing.angles import body_frame, joint_angles
+from kinect_agent.processing.params import KinematicParams
+from kinect_agent.recording import Recording
+
+
+def get_exercise(slug: str) -> ExerciseSpec:
+    """Returns the library exercise `slug`; raises UnknownExercise listing the known slugs."""
+    if slug not in EXERCISES:
+        raise UnknownExercise(f"unknown exercise {slug!r}; known exercises: {', '.join(sorted(EXERCISES))}")
+    return EXERCISES[slug]
+
+
+def _measured_positions(
+    recording: Recording, params: KinematicParams | None, filtered: Recording | None
+) -> tuple[np.ndarray, str]:
+    """Returns the positions (T, J, 3) m the metrics use and where they come from."""
+    if filtered is not None:
+        if filtered.n_frames != recording.n_frames:
+            raise AnalysisError(f"filtered has {filtered.n_frames} frames, the recording {recording.n_frames}")
+        return filtered.positions, "filtered"
+    if params is not None:
+        if params.n_frames != recording.n_frames:
+            raise AnalysisError(f"params have {params.n_frames} frames, the recording {recording.n_frames}")
+        return params.positions(), "params"
+    return recording.positions, "raw"
+
+
+def _median(values: list[float]) -> float | None:
+    return round(float(np.median(values)), 1) if values else None
+
+
+def analyze_recording(
+    recording: Recording,
+    exercise: ExerciseSpec,
+    *,
+    params: KinematicParams | None = None,
+    filtered: Recording | None = None,
+    repetition_params: RepetitionParams | None = None,
+) -> dict[str, Any]:
+    """Returns the JSON-ready analysis document of one session (keys: .notes/CONTRACTS.md).
+
+    recording: the raw recording (its tracking states feed the quality check). filtered: the pipeline's output
+    for the same frames, measured when given; else the positions rebuilt from params; else the recording itself.
+    """
+    if recording.n_frames < 2:
+        raise AnalysisError(f"the recording has {recording.n_frames} frame(s); at least 2 are needed")
+    positions, source = _measured_positions(recording, params, filtered)
+    t = recording.t
+    names = tuple(exercise.defining_angles)
+    smoothed = series.smooth_positions(t, positions)
+    clinical = joint_angles(smoothed)
+    frame = body_frame(smoothed)
+    reps = count_repetitions(t, counting_angles(smoothed, names, clinical, frame[0]), names, repetition_params)
+    rep_list = [r.to_dict() for r in reps.repetitions]
+    moving_s, rest_s = activity.moving_time(t, smoothed)
+    return {
+        "exercise": exercise.slug,
+        "duration_s": round(recording.duration, 3),
+        "n_frames": recording.n_frames,
+        "rate_hz": round(recording.rate_hz, 3),
+        "measured_on": source,
+        "repetitions": len(rep_list),
+        "repetition_list": rep_list,
+        "defining_angle": reps.defining_angle,
+        "range_of_motion": range_of_motion(t, clinical, presmoothed=True),
+        "rom_deg": _median([r.amplitude_deg for r in reps.repetitions]),
+        "most_moving_joints": most_moving_joints(smoothed),
+        "reachable_range": reachable_range(smoothed, frame),
+        "moving_time_s": moving_s,
+        "rest_time_s": rest_s,
+        "tempo_s_per_rep": activity.tempo(reps.repetitions),
+        "fatigue": activity.fatigue(reps.repetitions),
+        "balance": sway(t, smoothed, clinical),
+        "sit_to_stand": sit_to_stand(t, positions) if exercise.slug == "sit_to_stand" else None,
+        "quality": quality.assess(recording, None if source == "raw" else positions, names),
+    }
+
+
+def load(path: str | Path) -> tuple[Recording, Recording]:
+    """Returns (raw, filtered) of a recording file of any supported format.
+
+    A .khs session file's own filtered recording is used when present; otherwise the agent's pipeline runs on
+    the raw input. Raises UnreadableRecording naming the file and the reason.
+    """
+    from kinect_agent import formats
+    from kinect_agent.formats import session_file
+    from kinect_agent.processing.pipeline import process
+
+    path = Path(path)
+    try:
+        module = formats.detect(path)
+        if module is session_file:
+            payload = session_file.read_payload(path)
+            raw, filtered = payload.raw, payload.filtered
+        else:
+            raw, filtered = formats.read(path), None
+    except FormatError as exc:
+        raise UnreadableRecording(str(exc)) from None
+    except OSError as exc:
+        raise UnreadableRecording(f"{path}: {exc.strerror or exc}") from None
+    if raw.n_frames < 2:
+        raise UnreadableRecording(f"{path}: {raw.n_frames} frame(s); at least 2 are needed")
+    if filtered is None:
+        try:
+            filtered = process(raw).filtered
+        except ValueError as exc:
+            raise UnreadableRecording(f"{path}: the pipeline cannot filter this recording: {exc}") from None
+    return raw, filtered
+
+
+def analyze_file(path: str | Path, exercise_slug: str) -> dict[str, Any]:
+    """Returns the analysis document of the recording file at `path` as exercise `exercise_slug`."""
+    exercise = get_exercise(exercise_slug)
+    raw, filtered = load(path)
+    doc = analyze_recording(raw, exercise, filtered=filtered)
+    doc["source"] = str(path)
+    return doc
+
+
+def _summary(doc: dict[str, Any]) -> str:
+    q = doc["quality"]
+    lines = [
+        f"{doc['exercise']}: {doc['repetitions']} repetitions in {doc['duration_s']:.1f} s "
+        f"({doc['n_frames']} frames at {doc['rate_hz']:.1f} Hz)",
+        f"defining angle {doc['defining_angle']}, median amplitude {doc['rom_deg']} deg",
+        f"quality: {'ok' if q['ok'] else 'NOT ok'} (tracked {q['tracked_fraction']:.0%}, "
+        f"outliers {q['outlier_fraction']:.1%}){''.join('; ' + r for r in q['reasons'])}",
+    ]
+    lines += [
+        f"  #{r['index'] + 1}: {r['start_s']:.2f}-{r['end_s']:.2f} s, amplitude {r['amplitude_deg']} deg, "
+        f"peak {r['peak_deg']} deg, {r['side']}"
+        for r in doc["repetition_list"]
+    ]
+    return "\n".join(lines)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Returns the parser of `coach-server analyze`."""
+    parser = argparse.ArgumentParser(prog="coach-server analyze", description="Analyse one recording file.")
+    parser.add_argument("file", help="a recording in any format the agent reads (.khs, .csv, UI-PRMD, ...)")
+    parser.add_argument("--exercise", required=True, help=f"exercise slug ({', '.join(sorted(EXERCISES))})")
+    parser.add_argument("--json", action="store_true", help="print the full JSON document instead of a summary")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Runs `coach-server analyze`; prints the report; returns 0, or 2 after a one-line error on stderr."""
+    try:
+        args = build_parser().parse_args(sys.argv[1:] if argv is None else list(argv))
+    except SystemExit as exc:  # --help (0) or a usage error (2, already printed by argparse)
+        return int(exc.code or 0)
+    try:
+        doc = analyze_file(args.file, args.exercise)
+    except AnalysisError as exc:
+        print(f"coach-server analyze: error: {exc}", file=sys.stderr)
+        return 2
+    print(json.dumps(doc, indent=2, allow_nan=False) if args.json else _summary(doc))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,180 @@
+"""The analysis document, analyze_file on every kind of input, and `coach-server analyze`."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from backend import cli
+from backend.analysis.errors import UnknownExercise, UnreadableRecording
+from backend.analysis.report import analyze_file, analyze_recording
+from backend.exercises.library import EXERCISES
+from kinect_agent import formats
+from kinect_agent.formats.session_file import SessionPayload, write_payload
+from kinect_agent.processing.pipeline import process
+from kinect_agent.recording import Recording
+from kinect_agent.sources.simulator import simulate_truth
+
+from ._data import UI_PRMD_KINECT, noisy, uiprmd
+
+CONTRACT_KEYS = {
+    "exercise", "duration_s", "n_frames", "rate_hz", "repetitions", "repetition_list", "defining_angle",
+    "range_of_motion", "rom_deg", "most_moving_joints", "reachable_range", "moving_time_s", "rest_time_s",
+    "tempo_s_per_rep", "fatigue", "balance", "sit_to_stand", "quality",
+}  # fmt: skip
+REP_KEYS = {"index", "start_s", "end_s", "duration_s", "amplitude_deg", "peak_deg", "side"}
+
+
+def test_document_has_every_contract_key_and_is_json() -> None:
+    truth = simulate_truth("elbow_flexion", 4, seed=1)
+    doc = analyze_recording(truth, EXERCISES["elbow_flexion"])
+    assert CONTRACT_KEYS <= set(doc)
+    assert doc["repetitions"] == 4 == len(doc["repetition_list"])
+    assert all(set(r) == REP_KEYS for r in doc["repetition_list"])
+    assert doc["defining_angle"] in EXERCISES["elbow_flexion"].defining_angles
+    assert doc["quality"]["ok"] is True and doc["quality"]["reasons"] == []
+    json.dumps(doc, allow_nan=False)
+
+
+def test_standing_session_fills_every_metric() -> None:
+    doc = analyze_recording(simulate_truth("shoulder_abduction", 5, seed=2), EXERCISES["shoulder_abduction"])
+    assert all(doc[k] is not None for k in CONTRACT_KEYS - {"sit_to_stand"}), [k for k in doc if doc[k] is None]
+    assert doc["most_moving_joints"][0]["joint"] in ("HAN_L", "HAN_R")
+    assert doc["moving_time_s"] + doc["rest_time_s"] == pytest.approx(doc["duration_s"], abs=0.02)
+    assert set(doc["reachable_range"]) == {"left", "right"} and doc["reachable_range"]["left"]["area_ratio"] > 0
+    assert set(doc["fatigue"]) == {"amplitude_slope_pct_per_rep", "duration_slope_pct_per_rep"}
+    assert doc["fatigue"]["amplitude_slope_pct_per_rep"] < 0  # the simulator's amplitude shrinks with fatigue
+    assert doc["balance"]["standing_s"] > 0.8 * doc["duration_s"]
+
+
+def test_sit_to_stand_session_reports_its_transitions() -> None:
+    doc = analyze_recording(simulate_truth("sit_to_stand", 4, seed=2), EXERCISES["sit_to_stand"])
+    assert doc["repetitions"] == 4 and doc["sit_to_stand"]["count"] == 4
+
+
+def test_rom_is_the_median_amplitude_and_range_of_motion_covers_it() -> None:
+    truth = simulate_truth("shoulder_flexion", 5, seed=3)
+    doc = analyze_recording(truth, EXERCISES["shoulder_flexion"])
+    assert doc["rom_deg"] == pytest.approx(np.median([r["amplitude_deg"] for r in doc["repetition_list"]]), abs=0.1)
+    rom = doc["range_of_motion"][doc["defining_angle"]]
+    assert rom["range_deg"] == pytest.approx(doc["rom_deg"], rel=0.1)
+    assert rom["min_deg"] < 10 and rom["max_deg"] > 130
+
+
+def test_filtered_recording_is_measured_and_quality_counts_outliers() -> None:
+    measured, _ = noisy("squat", 7, 11)
+    filtered = process(measured).filtered
+    doc = analyze_recording(measured, EXERCISES["squat"], filtered=filtered)
+    assert doc["measured_on"] == "filtered" and doc["repetitions"] == 7
+    assert 0.0 < doc["quality"]["outlier_fraction"] < 0.05
+    assert doc["quality"]["tracked_fraction"] > 0.95
+
+
+def test_poorly_tracked_recording_is_flagged() -> None:
+    truth = simulate_truth("squat", 3, seed=1)
+    positions = truth.positions.copy()
+    positions[np.arange(truth.n_frames) % 3 != 0, :16] = np.nan  # two frames in three lose all but the right leg
+    rec = Recording.from_positions(truth.t, positions, truth.meta)
+    q = analyze_recording(rec, EXERCISES["squat"])["quality"]
+    assert q["ok"] is False and q["tracked_fraction"] < 0.8
+    assert any("tracked" in r for r in q["reasons"])
+
+
+def test_ten_minutes_at_30_hz_analyse_fast() -> None:
+    truth = simulate_truth("squat", 122, seed=5)  # 10 minutes
+    assert 590 < truth.duration < 660
+    analyze_recording(truth, EXERCISES["squat"])  # warm-up (imports, caches)
+    started = time.process_time()  # CPU time: the test machine is shared; measured 0.12 s
+    doc = analyze_recording(truth, EXERCISES["squat"], filtered=truth)
+    elapsed = time.process_time() - started
+    assert doc["repetitions"] == 122
+    assert elapsed < 0.4, f"analyze_recording took {elapsed:.3f} s CPU on {truth.n_frames} frames"
+
+
+def test_analyze_file_reads_csv_and_runs_the_pipeline(tmp_path: Path) -> None:
+    measured, _ = noisy("shoulder_abduction", 5, 3)
+    path = tmp_path / "session.csv"
+    formats.write(measured, path)
+    doc = analyze_file(path, "shoulder_abduction")
+    assert doc["repetitions"] == 5 and doc["measured_on"] == "filtered"
+
+
+def test_analyze_file_uses_the_filtered_recording_of_a_session_file(tmp_path: Path) -> None:
+    truth = simulate_truth("elbow_flexion", 3, seed=2)
+    raw = truth.replace(positions=truth.positions + 0.3)  # the raw part alone would read as all outliers
+    path = tmp_path / "s.khs"
+    write_payload(SessionPayload(session_id="abc", raw=raw, filtered=truth), path)
+    doc = analyze_file(path, "elbow_flexion")
+    assert doc["repetitions"] == 3
+    assert doc["quality"]["outlier_fraction"] == pytest.approx(1.0, abs=0.01)
+
+
+@pytest.mark.shared_data
+def test_analyze_file_reads_a_uiprmd_episode(data_dir: Path) -> None:
+    path = data_dir / UI_PRMD_KINECT / "Positions" / "m07_s02_e01_positions.txt.gz"
+    doc = analyze_file(path, "standing_shoulder_abduction")
+    assert doc["repetitions"] == 1 and doc["repetition_list"][0]["side"] == "right"
+
+
+def test_unknown_exercise_is_a_typed_error(tmp_path: Path) -> None:
+    with pytest.raises(UnknownExercise, match="no_such_exercise"):
+        analyze_file(tmp_path / "x.csv", "no_such_exercise")
+
+
+def test_missing_file_is_a_typed_error(tmp_path: Path) -> None:
+    with pytest.raises(UnreadableRecording, match="missing.csv"):
+        analyze_file(tmp_path / "missing.csv", "squat")
+
+
+def test_cli_prints_json_with_the_repetition_count(tmp_path: Path, capsys) -> None:
+    measured, _ = noisy("shoulder_abduction", 5, 3)
+    path = tmp_path / "session.csv"
+    formats.write(measured, path)
+    assert cli.main(["analyze", str(path), "--exercise", "shoulder_abduction", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["repetitions"] == 5 and doc["exercise"] == "shoulder_abduction"
+
+
+def test_cli_summary_names_the_count(tmp_path: Path, capsys) -> None:
+    path = tmp_path / "s.khs"
+    truth = simulate_truth("squat", 2, seed=1)
+    write_payload(SessionPayload(session_id="abc", raw=truth, filtered=truth), path)
+    assert cli.main(["analyze", str(path), "--exercise", "squat"]) == 0
+    assert "squat: 2 repetitions" in capsys.readouterr().out
+
+
+def test_cli_unknown_exercise_exits_2_with_one_line(tmp_path: Path, capsys) -> None:
+    path = tmp_path / "s.csv"
+    formats.write(simulate_truth("squat", 1, seed=1), path)
+    assert cli.main(["analyze", str(path), "--exercise", "no_such_exercise", "--json"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    err = captured.err.strip()
+    assert "unknown exercise 'no_such_exercise'" in err and "\n" not in err
+
+
+def test_cli_unreadable_file_exits_2(tmp_path: Path, capsys) -> None:
+    path = tmp_path / "garbage.csv"
+    path.write_text("this is not a recording\n1,2,3\n")
+    assert cli.main(["analyze", str(path), "--exercise", "squat", "--json"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert str(path) in err and "\n" not in err
+
+
+def test_cli_missing_exercise_option_exits_2(tmp_path: Path, capsys) -> None:
+    assert cli.main(["analyze", str(tmp_path / "x.csv")]) == 2
+    assert "--exercise" in capsys.readouterr().err
+
+
+@pytest.mark.shared_data
+@pytest.mark.parametrize("movement", [f"m{i:02d}" for i in range(1, 11)])
+@pytest.mark.parametrize("subject", ["s02", "s04"])
+def test_uiprmd_document_counts_ten_repetitions(data_dir: Path, movement: str, subject: str) -> None:
+    exercise = next(s for s in EXERCISES.values() if s.uiprmd_movement == movement)
+    doc = analyze_recording(uiprmd(data_dir, movement, subject), exercise)
+    assert doc["repetitions"] == 10, f"{movement} {subject}: {[r['start_s'] for r in doc['repetition_list']]}"
+    assert doc["quality"]["ok"], doc["quality"]["reasons"]
