@@ -25,7 +25,10 @@ class Settings(BaseSettings):
     LOGIN_MAX_FAILURES: int = 5
     LOGIN_WINDOW_MINUTES: float = 15.0
     PAIRING_CODE_MINUTES: float = 15.0
-    MAX_UPLOAD_BYTES: int = 50 * 1024 * 1024
+    # session uploads: ~116 B/frame (raw + filtered) measured on simulated sets, so 16 MiB holds an hour at 30 Hz
+    MAX_UPLOAD_BYTES: int = 16 * 1024 * 1024
+    SESSION_MAX_FRAMES: int = 30 * 60 * 60  # per recording: one hour at 30 Hz
+    SESSION_MAX_DECODED_BYTES: int = 64 * 1024 * 1024  # all recordings of one file, after decompression
     CHECK_MIGRATIONS: bool = True
     COOKIE_SECURE: bool | None = None  # None: secure everywhere except ENVIRONMENT=local
 

@@ -76,11 +76,35 @@ class PlanNotFound(NotFound):
     pass
 
 
+class SuggestionNotFound(NotFound):
+    pass
+
+
+class SessionNotFound(NotFound):
+    pass
+
+
 class Conflict(AppError):
     status_code = 409
 
 
+class SessionConflict(Conflict):
+    pass
+
+
+class InvalidSessionFile(AppError):
+    status_code = 400
+
+
+class SessionTooLarge(AppError):
+    status_code = 413
+
+
 class EmailAlreadyRegistered(Conflict):
+    pass
+
+
+class SuggestionNotPending(Conflict):
     pass
 
 
@@ -125,7 +149,13 @@ _EXAMPLE_DETAIL = {
     "PatientNotFound": "patient 12 does not exist",
     "UserNotFound": "user 12 does not exist",
     "PlanNotFound": "plan 3 does not exist",
+    "SuggestionNotFound": "suggestion 7 does not exist",
+    "SuggestionNotPending": "suggestion 7 is approved; only pending system suggestions can be approved or dismissed",
     "ExerciseNotFound": "exercise 'squat' does not exist",
     "PairingCodeInvalid": "pairing code is unknown, used or expired",
     "EmailAlreadyRegistered": "a user with email ana@example.org exists",
+    "SessionNotFound": "session 31 does not exist",
+    "SessionConflict": "session 8c1e... of patient 12 was already uploaded with different content",
+    "InvalidSessionFile": "checksum_mismatch: SHA-256 trailer does not match the content",
+    "SessionTooLarge": "the upload exceeds 16777216 bytes",
 }

@@ -31,9 +31,9 @@ ROUTERS = (
     "backend.exercises.router",
     "backend.plans.router",
     "backend.audit.router",
+    "backend.sessions.router",
+    "backend.suggestions.router",
 )
-# Routers other engineers own; included when their module exists.
-OPTIONAL_ROUTERS = ("backend.sessions.router", "backend.suggestions.router")
 
 
 class HealthOut(BaseModel):
@@ -164,13 +164,5 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     app.include_router(_system_router())
     for name in ROUTERS:
         app.include_router(importlib.import_module(name).router)
-    for name in OPTIONAL_ROUTERS:
-        try:
-            module = importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name != name:
-                raise
-            continue
-        app.include_router(module.router)
     app.openapi = _openapi(app)  # type: ignore[method-assign]
     return app

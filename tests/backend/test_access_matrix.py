@@ -6,13 +6,19 @@ allows and a request body. Each call runs in a SAVEPOINT that is rolled back, so
 
 from __future__ import annotations
 
+import uuid
+from dataclasses import dataclass
+
 import pytest
 from fastapi.routing import iter_route_contexts
 
 from backend.database import utcnow
 from backend.devices.service import create_pairing_code
 from backend.plans.models import Plan
+from backend.sessions.models import ExerciseSession
+from backend.suggestions.models import Suggestion
 from tests.backend.conftest import PASSWORD
+from tests.backend.khs_files import make_khs
 
 CALLERS = ("anonymous", "patient_own", "patient_other", "therapist_assigned", "therapist_other", "admin", "device")
 PUBLIC = set(CALLERS)
@@ -32,7 +38,15 @@ def _plan_body(w):
     }
 
 
-# (method, path) -> (allowed callers, body factory or None)
+@dataclass
+class Raw:
+    """A non-JSON request body (e.g. a session file) and its query parameters."""
+
+    content: bytes
+    params: dict
+
+
+# (method, path) -> (allowed callers, body factory or None); a factory returns JSON data or a Raw
 ROUTES = {
     ("GET", "/healthz"): (PUBLIC, None),
     ("GET", "/api/v1/version"): (PUBLIC, None),
@@ -67,7 +81,17 @@ ROUTES = {
     ("GET", "/api/v1/plans/{plan_id}"): (CARE_DEV, None),
     ("PUT", "/api/v1/plans/{plan_id}"): (PRESCRIBE, _plan_body),
     ("DELETE", "/api/v1/plans/{plan_id}"): (PRESCRIBE, None),
+    ("GET", "/api/v1/patients/{patient_id}/suggestions"): (CARE_DEV, None),
+    ("POST", "/api/v1/patients/{patient_id}/suggestions"): (PRESCRIBE, lambda w: {"text": "Keep going."}),
+    ("POST", "/api/v1/suggestions/{suggestion_id}/approve"): (PRESCRIBE, None),  # a pending system suggestion
+    ("POST", "/api/v1/suggestions/{suggestion_id}/dismiss"): (PRESCRIBE, None),
     ("GET", "/api/v1/audit"): (ADMIN, None),
+    ("POST", "/api/v1/sessions"): (CARE_DEV, lambda w: Raw(w["khs"], {"patient_id": w["params"]["patient_id"]})),
+    ("GET", "/api/v1/sessions"): (AUTHED, None),  # lists only what the caller may see
+    ("GET", "/api/v1/sessions/{session_id}"): (CARE_DEV, None),
+    ("GET", "/api/v1/sessions/{session_id}/file"): (CARE_DEV, None),
+    ("GET", "/api/v1/patients/{patient_id}/progress"): (CARE_DEV, None),
+    ("GET", "/api/v1/patients/{patient_id}/summary"): (CARE_DEV, None),
 }
 
 
@@ -81,6 +105,19 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
     second_device, _ = device_headers(own)
     plan = Plan(patient_id=own.id, therapist_id=therapist.id, title="p", start_date=utcnow().date())
     db_session.add(plan)
+    suggestion = Suggestion(patient_id=own.id, source="system", rule="too_fast", text="Slow down.", status="pending")
+    db_session.add(suggestion)
+    session = ExerciseSession(
+        client_session_id=uuid.uuid4(),
+        patient_id=own.id,
+        exercise_id=exercise.id,
+        started_at=utcnow(),
+        duration_s=1.0,
+        n_frames=30,
+        file_bytes=b"khs",
+        content_hash="0" * 64,
+    )
+    db_session.add(session)
     db_session.flush()
     _, code = create_pairing_code(db_session=db_session, patient_id=own.id, created_by_id=own.id, minutes=15)
     from backend.users.service import create_api_token
@@ -101,8 +138,10 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
         "user_id": own.id,
         "device_id": second_device.id,
         "plan_id": plan.id,
+        "suggestion_id": suggestion.id,
         "token_id": admin_token.id,
         "slug": exercise.slug,
+        "session_id": session.id,
     }
     return {
         "headers": headers,
@@ -110,6 +149,7 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
         "own_email": own.email,
         "pairing_code": code,
         "exercise_slug": exercise.slug,
+        "khs": make_khs("squat", 2, seed=11),
     }
 
 
@@ -143,7 +183,10 @@ def test_access_matrix(app, client, world, db_connection, db_session):
             savepoint = db_connection.begin_nested()
             kwargs = {"headers": world["headers"][caller]}
             if body is not None:
-                kwargs["json"] = body(world)
+                made = body(world)
+                kwargs.update(
+                    {"content": made.content, "params": made.params} if isinstance(made, Raw) else {"json": made}
+                )
             response = client.request(method, url, **kwargs)
             client.cookies.clear()
             savepoint.rollback()

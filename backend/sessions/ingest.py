@@ -1,0 +1,84 @@
+"""Turning an uploaded .khs body into a checked upload: size-limited reading, decoding, identity and analysis."""
+
+from __future__ import annotations
+
+import datetime as dt
+import uuid
+from collections.abc import AsyncIterator
+from dataclasses import dataclass
+
+from backend.exceptions import InvalidSessionFile, SessionTooLarge
+from kinect_agent.formats import session_file
+from kinect_agent.formats.session_file import SessionFileError, SessionPayload
+
+
+@dataclass(frozen=True)
+class Upload:
+    """A decoded, checked session file: its bytes, SHA-256, payload and the identity fields taken from it."""
+
+    data: bytes
+    content_hash: str
+    payload: SessionPayload
+    client_session_id: uuid.UUID
+    started_at: dt.datetime
+
+    @property
+    def exercise_slug(self) -> str | None:
+        """Returns the exercise the recording names in its metadata (None when it names none)."""
+        return self.payload.raw.meta.exercise or None
+
+
+def check_declared_length(content_length: str | None, limit: int) -> None:
+    """Raises SessionTooLarge when a Content-Length header already announces more than limit bytes."""
+    if content_length is None:
+        return
+    try:
+        declared = int(content_length)
+    except ValueError:
+        raise InvalidSessionFile(f"Content-Length header {content_length[:40]!r} is not a number") from None
+    if declared > limit:
+        raise SessionTooLarge(f"the upload declares {declared} bytes, the limit is {limit}")
+
+
+async def read_limited(chunks: AsyncIterator[bytes], limit: int) -> bytes:
+    """Returns the streamed body; raises SessionTooLarge as soon as more than limit bytes arrived."""
+    parts: list[bytes] = []
+    size = 0
+    async for chunk in chunks:
+        size += len(chunk)
+        if size > limit:
+            raise SessionTooLarge(f"the upload exceeds {limit} bytes")
+        parts.append(chunk)
+    return b"".join(parts)
+
+
+def decode_upload(data: bytes, *, max_frames: int, max_decoded_bytes: int) -> Upload:
+    """Decodes and checks session file bytes; raises InvalidSessionFile '<code>: <message>' on any defect."""
+    try:
+        payload = session_file.decode(data, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
+    except SessionFileError as exc:
+        raise InvalidSessionFile(f"{exc.code}: {exc.detail}") from None
+    return Upload(
+        data=data,
+        content_hash=session_file.content_hash(data),
+        payload=payload,
+        client_session_id=_session_uuid(payload.session_id),
+        started_at=_started_at(payload.created_at),
+    )
+
+
+def _session_uuid(value: str) -> uuid.UUID:
+    try:
+        return uuid.UUID(value)
+    except ValueError:
+        raise InvalidSessionFile(f"bad_header: session_id {value[:80]!r} is not a UUID") from None
+
+
+def _started_at(value: str) -> dt.datetime:
+    try:
+        when = dt.datetime.fromisoformat(value.replace("Z", "+00:00"))
+    except ValueError:
+        raise InvalidSessionFile(f"bad_header: created_at {value[:80]!r} is not an ISO 8601 time") from None
+    if when.tzinfo is None:
+        raise InvalidSessionFile(f"bad_header: created_at {value[:80]!r} has no time zone (expected UTC, '...Z')")
+    return when.astimezone(dt.UTC)

@@ -1,0 +1,50 @@
+"""The metrics document of an uploaded session: the analysis report plus the four indicators."""
+
+from __future__ import annotations
+
+import math
+
+from backend.exercises.library import ExerciseSpec
+from kinect_agent.formats.session_file import SessionPayload
+
+
+def metrics_document(
+    payload: SessionPayload, spec: ExerciseSpec, *, target_reps: int | None, history: list[dict]
+) -> dict:
+    """Returns analyze_recording's document of the payload with an added "indicators" key.
+
+    history: metrics documents of the patient's earlier sessions of the same exercise, oldest first.
+    Raises backend.analysis.errors.AnalysisError when the recording cannot be analysed.
+    """
+    from backend.analysis.indicators import indicators
+    from backend.analysis.report import analyze_recording
+
+    doc = analyze_recording(payload.raw, spec, filtered=payload.filtered)
+    doc = json_ready(doc)
+    doc["indicators"] = json_ready(indicators(doc, exercise=spec, target_reps=target_reps, history=history))
+    return doc
+
+
+def scalar_columns(doc: dict) -> dict:
+    """Returns the indexed scalars of SessionMetric (repetitions, rom_deg, quality_ok) read from a document."""
+    reps = doc.get("repetitions")
+    rom = doc.get("rom_deg")
+    quality = doc.get("quality")
+    return {
+        "repetitions": reps if isinstance(reps, int) and not isinstance(reps, bool) else None,
+        "rom_deg": float(rom) if isinstance(rom, int | float) and not isinstance(rom, bool) else None,
+        "quality_ok": quality.get("ok") if isinstance(quality, dict) and isinstance(quality.get("ok"), bool) else None,
+    }
+
+
+def json_ready(value):
+    """Returns value with numpy scalars and arrays turned into Python numbers and lists, NaN and inf into None."""
+    if isinstance(value, dict):
+        return {str(k): json_ready(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_ready(v) for v in value]
+    if hasattr(value, "tolist") and not isinstance(value, str | bytes):
+        return json_ready(value.tolist())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value

@@ -1,0 +1,281 @@
+"""Sessions: devices and care givers upload .khs files; patients, therapists and admins read sessions and progress."""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Annotated
+
+from fastapi import APIRouter, Depends, Query, Request, Response, status
+from sqlalchemy.orm import Session
+from starlette.concurrency import run_in_threadpool
+
+from backend.audit.service import record
+from backend.database import utcnow
+from backend.deps import Caller, CurrentCaller, DbSession, PatientForRead, require_patient_access
+from backend.exceptions import (
+    CsrfFailed,
+    ExerciseNotFound,
+    Forbidden,
+    InsufficientScope,
+    InvalidInput,
+    InvalidSessionFile,
+    NotAuthenticated,
+    PatientNotFound,
+    SessionConflict,
+    SessionNotFound,
+    SessionTooLarge,
+    error_responses,
+)
+from backend.exercises.service import get_exercise
+from backend.schemas import IdPath, IdQuery, Page, PageParams, page_params
+from backend.sessions import dashboard, service
+from backend.sessions.ingest import check_declared_length, decode_upload, read_limited
+from backend.sessions.schemas import ProgressOut, ProgressPoint, SessionItemOut, SessionOut, SummaryOut
+from backend.suggestions.schemas import SuggestionOut
+
+router = APIRouter(prefix="/api/v1", tags=["sessions"])
+AUTH_ERRORS = (NotAuthenticated, Forbidden, CsrfFailed, InsufficientScope)
+SlugQuery = Annotated[
+    str | None, Query(min_length=1, max_length=64, description="exercise slug, e.g. 'squat'", examples=["squat"])
+]
+_UPLOAD_BODY = {
+    "requestBody": {
+        "required": True,
+        "description": "the session file (.khs) bytes",
+        "content": {"application/octet-stream": {"schema": {"type": "string", "format": "binary"}}},
+    }
+}
+
+
+def _audit(db_session: Session, caller: Caller, action: str, session_id, patient_id: int, detail=None) -> None:
+    record(
+        db_session=db_session,
+        caller=caller,
+        action=action,
+        object_type="exercise_session",
+        object_id=session_id,
+        patient_id=patient_id,
+        detail=detail,
+    )
+
+
+def _aware(when: dt.datetime | None) -> dt.datetime | None:
+    """Returns when with UTC assumed if it carries no time zone."""
+    return when.replace(tzinfo=dt.UTC) if when is not None and when.tzinfo is None else when
+
+
+def _patient_view(caller: Caller) -> bool:
+    """Returns whether the caller sees sessions as the patient does (patients and devices: no pending advice)."""
+    return caller.role in ("patient", "device")
+
+
+def _upload_patient(caller: Caller, patient_id: int | None, db_session: Session) -> int:
+    """Returns the patient an upload is for after checking the caller may write their data."""
+    if patient_id is None:
+        if caller.device is not None:
+            patient_id = caller.device.patient_id
+        elif caller.user is not None and caller.user.role == "patient":
+            patient_id = caller.user.id
+        else:
+            raise InvalidInput("query.patient_id: required when a therapist or admin uploads")
+    require_patient_access(patient_id, caller=caller, db_session=db_session, write=True, allow_device=True)
+    return patient_id
+
+
+def _session_out(db_session: Session, caller: Caller, session_id: int) -> SessionOut:
+    session, slug, reps, rom, quality, document = service.get_session_row(db_session=db_session, session_id=session_id)
+    suggestions = service.session_suggestions(
+        db_session=db_session, session_id=session_id, patient_view=_patient_view(caller)
+    )
+    return SessionOut(
+        **_item_fields(session, slug, reps, rom, quality),
+        metrics=document,
+        suggestions=[SuggestionOut.model_validate(s) for s in suggestions],
+    )
+
+
+def _item_fields(session, slug, reps, rom, quality) -> dict:
+    return {
+        "id": session.id,
+        "client_session_id": session.client_session_id,
+        "patient_id": session.patient_id,
+        "device_id": session.device_id,
+        "exercise_slug": slug,
+        "started_at": session.started_at,
+        "duration_s": session.duration_s,
+        "n_frames": session.n_frames,
+        "file_size": session.file_size,
+        "content_hash": session.content_hash,
+        "status": session.status,
+        "error": session.error,
+        "repetitions": reps,
+        "rom_deg": rom,
+        "quality_ok": quality,
+        "created_at": session.created_at,
+    }
+
+
+def _ingest(
+    data: bytes, *, caller: Caller, db_session: Session, patient_id: int, slug: str | None, settings
+) -> tuple[SessionOut, bool]:
+    upload = decode_upload(
+        data, max_frames=settings.SESSION_MAX_FRAMES, max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES
+    )
+    slug = slug or upload.exercise_slug
+    if not slug:
+        raise InvalidInput("query.exercise: required because the recording's meta.exercise is empty")
+    with db_session.no_autoflush:
+        exercise = get_exercise(db_session=db_session, slug=slug)
+    device_id = caller.device.id if caller.device is not None else None
+    row, created = service.store_upload(
+        db_session=db_session, upload=upload, patient_id=patient_id, exercise=exercise, device_id=device_id
+    )
+    action = "session.create" if created else "session.upload_repeat"
+    _audit(db_session, caller, action, row.id, patient_id, {"content_hash": upload.content_hash})
+    return _session_out(db_session, caller, row.id), created
+
+
+@router.post(
+    "/sessions",
+    response_model=SessionOut,
+    status_code=status.HTTP_201_CREATED,
+    openapi_extra=_UPLOAD_BODY,
+    responses={
+        200: {"model": SessionOut, "description": "the same file was stored before; the stored session"},
+        **error_responses(
+            *AUTH_ERRORS,
+            InvalidSessionFile,
+            PatientNotFound,
+            ExerciseNotFound,
+            SessionConflict,
+            SessionTooLarge,
+            InvalidInput,
+        ),
+    },
+)
+async def upload_session(
+    request: Request,
+    response: Response,
+    caller: CurrentCaller,
+    db_session: DbSession,
+    exercise: SlugQuery = None,
+    patient_id: Annotated[IdQuery, Query(description="required unless a device or the patient uploads")] = None,
+):
+    """Stores an uploaded session file with its metrics and suggestions: 201 when new, 200 when sent before."""
+    settings = request.app.state.settings
+    limit = settings.MAX_UPLOAD_BYTES
+    check_declared_length(request.headers.get("content-length"), limit)
+    # no_autoflush: the caller's pending last_seen_at update is not written (no write lock on SQLite) while the
+    # body streams in; it is flushed with the session row
+    with db_session.no_autoflush:
+        target = await run_in_threadpool(_upload_patient, caller, patient_id, db_session)
+    data = await read_limited(request.stream(), limit)
+    out, created = await run_in_threadpool(
+        _ingest, data, caller=caller, db_session=db_session, patient_id=target, slug=exercise, settings=settings
+    )
+    response.status_code = status.HTTP_201_CREATED if created else status.HTTP_200_OK
+    return out
+
+
+@router.get(
+    "/sessions",
+    response_model=Page[SessionItemOut],
+    responses=error_responses(*AUTH_ERRORS, PatientNotFound, ExerciseNotFound),
+)
+def list_sessions(
+    caller: CurrentCaller,
+    db_session: DbSession,
+    page: Annotated[PageParams, Depends(page_params)],
+    patient_id: Annotated[IdQuery, Query(description="only this patient's sessions")] = None,
+    exercise: SlugQuery = None,
+    since: Annotated[dt.datetime | None, Query(description="only sessions started at or after this time")] = None,
+):
+    """Lists the sessions the caller may see, newest first (patients: own; therapists: assigned patients')."""
+    if patient_id is not None:
+        require_patient_access(patient_id, caller=caller, db_session=db_session)
+    exercise_id = service.find_exercise_id(db_session=db_session, slug=exercise) if exercise else None
+    visible = service.visible_patients_filter(
+        role=caller.role,
+        user_id=caller.user.id if caller.user is not None else None,
+        device_patient_id=caller.device.patient_id if caller.device is not None else None,
+    )
+    rows, total = service.list_sessions(
+        db_session=db_session,
+        visible=visible,
+        patient_id=patient_id,
+        exercise_id=exercise_id,
+        since=_aware(since),
+        limit=page.limit,
+        offset=page.offset,
+    )
+    for pid in sorted({r[0].patient_id for r in rows}):
+        _audit(db_session, caller, "session.list", None, pid)
+    items = [SessionItemOut(**_item_fields(*r)) for r in rows]
+    return Page[SessionItemOut](items=items, total=total, limit=page.limit, offset=page.offset)
+
+
+@router.get(
+    "/sessions/{session_id}",
+    response_model=SessionOut,
+    responses=error_responses(*AUTH_ERRORS, SessionNotFound),
+)
+def read_session(session_id: IdPath, caller: CurrentCaller, db_session: DbSession):
+    """Returns one session with its metrics document and the suggestions the caller may see."""
+    patient_id = service.session_patient(db_session=db_session, session_id=session_id)
+    require_patient_access(patient_id, caller=caller, db_session=db_session)
+    _audit(db_session, caller, "session.read", session_id, patient_id)
+    return _session_out(db_session, caller, session_id)
+
+
+@router.get(
+    "/sessions/{session_id}/file",
+    response_class=Response,
+    responses={
+        200: {"content": {"application/octet-stream": {}}, "description": "the stored .khs file"},
+        **error_responses(*AUTH_ERRORS, SessionNotFound),
+    },
+)
+def read_session_file(session_id: IdPath, caller: CurrentCaller, db_session: DbSession):
+    """Returns the stored session file exactly as it was uploaded."""
+    patient_id = service.session_patient(db_session=db_session, session_id=session_id)
+    require_patient_access(patient_id, caller=caller, db_session=db_session)
+    data = service.session_file(db_session=db_session, session_id=session_id)
+    _audit(db_session, caller, "session.file.read", session_id, patient_id)
+    return Response(
+        content=data,
+        media_type="application/octet-stream",
+        headers={"Content-Disposition": f'attachment; filename="session-{session_id}.khs"'},
+    )
+
+
+@router.get(
+    "/patients/{patient_id}/progress",
+    response_model=ProgressOut,
+    responses=error_responses(*AUTH_ERRORS, PatientNotFound, ExerciseNotFound),
+)
+def read_progress(
+    patient: PatientForRead,
+    caller: CurrentCaller,
+    db_session: DbSession,
+    exercise: SlugQuery = None,
+    since: Annotated[dt.datetime | None, Query(description="only sessions started at or after this time")] = None,
+):
+    """Returns the patient's sessions as a time series (repetitions, range of motion, indicators), oldest first."""
+    exercise_id = service.find_exercise_id(db_session=db_session, slug=exercise) if exercise else None
+    points = dashboard.progress(
+        db_session=db_session, patient_id=patient.id, exercise_id=exercise_id, since=_aware(since)
+    )
+    _audit(db_session, caller, "session.progress.read", None, patient.id, {"exercise": exercise})
+    return ProgressOut(patient_id=patient.id, exercise_slug=exercise, points=[ProgressPoint(**p) for p in points])
+
+
+@router.get(
+    "/patients/{patient_id}/summary",
+    response_model=SummaryOut,
+    responses=error_responses(*AUTH_ERRORS, PatientNotFound),
+)
+def read_summary(patient: PatientForRead, caller: CurrentCaller, db_session: DbSession):
+    """Returns the dashboard summary of one patient: last session, this week against the plan, indicators, advice."""
+    summary = dashboard.summaries(db_session=db_session, patient_ids=[patient.id], now=utcnow())[patient.id]
+    _audit(db_session, caller, "session.summary.read", None, patient.id)
+    return SummaryOut(**summary)

@@ -1,0 +1,82 @@
+"""Session bodies: a stored session with its metrics, list items, progress series and the dashboard summary."""
+
+from __future__ import annotations
+
+import datetime as dt
+import uuid
+
+from pydantic import BaseModel, Field
+
+from backend.suggestions.schemas import SuggestionOut
+
+
+class SessionItemOut(BaseModel):
+    """A stored session without its metrics document (list items)."""
+
+    id: int = Field(examples=[31])
+    client_session_id: uuid.UUID = Field(description="the session id written in the file by the home agent")
+    patient_id: int = Field(examples=[12])
+    device_id: int | None = Field(description="the device that uploaded it; null for uploads by a user")
+    exercise_slug: str | None = Field(examples=["squat"])
+    started_at: dt.datetime = Field(description="when the recording was made (the file's created_at), UTC")
+    duration_s: float = Field(description="first to last frame of the raw recording, seconds", examples=[51.6])
+    n_frames: int = Field(examples=[1551])
+    file_size: int = Field(description="bytes of the stored .khs file", examples=[179324])
+    content_hash: str = Field(description="SHA-256 of the file, 64 hex digits")
+    status: str = Field(description="'processed', or 'failed' when the analysis could not use the recording")
+    error: str | None = Field(description="why the analysis failed (status 'failed')")
+    repetitions: int | None = Field(examples=[10])
+    rom_deg: float | None = Field(description="range of motion of the defining angle, degrees", examples=[92.5])
+    quality_ok: bool | None = None
+    created_at: dt.datetime = Field(description="when the server stored it, UTC")
+
+
+class SessionOut(SessionItemOut):
+    """A stored session with its metrics document and the suggestions it produced that the caller may see."""
+
+    metrics: dict | None = Field(description="the analysis document (backend.analysis.report) with 'indicators'")
+    suggestions: list[SuggestionOut]
+
+
+class ProgressPoint(BaseModel):
+    """One session of a progress series."""
+
+    session_id: int
+    exercise_slug: str | None
+    started_at: dt.datetime
+    repetitions: int | None
+    rom_deg: float | None = Field(description="degrees")
+    quality_ok: bool | None
+    indicators: dict | None = Field(description="flexibility, endurance, strength, balance: {score 0..100, ...}")
+
+
+class ProgressOut(BaseModel):
+    """A patient's sessions as a time series, oldest first."""
+
+    patient_id: int
+    exercise_slug: str | None = Field(description="the exercise filtered on; null = every exercise")
+    points: list[ProgressPoint]
+
+
+class LastSessionOut(BaseModel):
+    """The newest session of a patient, in brief."""
+
+    id: int
+    exercise_slug: str | None
+    started_at: dt.datetime
+    repetitions: int | None
+    rom_deg: float | None
+    quality_ok: bool | None
+
+
+class SummaryOut(BaseModel):
+    """What a therapist's dashboard shows about one patient."""
+
+    patient_id: int
+    last_session: LastSessionOut | None
+    sessions_this_week: int = Field(description="sessions started since Monday 00:00 UTC of the current week")
+    planned_this_week: int | None = Field(
+        description="sessions per week the running plans prescribe (sum over their items); null without a plan"
+    )
+    latest_indicators: dict | None = Field(description="indicators of the newest processed session")
+    pending_suggestions: int = Field(description="system suggestions waiting for a therapist's decision")

@@ -1,0 +1,218 @@
+"""Session queries and changes: store an upload idempotently with its metrics and suggestions, list and read them."""
+
+from __future__ import annotations
+
+import datetime as dt
+import uuid
+
+from sqlalchemy import Select, func, select
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from backend import __version__
+from backend.analysis.errors import AnalysisError
+from backend.database import utcnow
+from backend.exceptions import ExerciseNotFound, SessionConflict, SessionNotFound
+from backend.exercises.models import Exercise
+from backend.patients.models import TherapistPatient
+from backend.sessions.ingest import Upload
+from backend.sessions.metrics import json_ready, metrics_document, scalar_columns
+from backend.sessions.models import ExerciseSession, SessionMetric
+from backend.suggestions.context import plan_targets, session_history
+from backend.suggestions.models import Suggestion
+from backend.suggestions.service import suggest_for_session, visible_to_patient
+
+FILE_FORMAT = "khs"
+
+
+# ---------------------------------------------------------------------------------------------- upload
+
+
+def find_session(*, db_session: Session, patient_id: int, client_session_id: uuid.UUID) -> ExerciseSession | None:
+    """Returns the patient's session with this client session id, or None."""
+    return db_session.scalar(
+        select(ExerciseSession).where(
+            ExerciseSession.patient_id == patient_id, ExerciseSession.client_session_id == client_session_id
+        )
+    )
+
+
+def _same_or_conflict(stored: ExerciseSession, upload: Upload) -> ExerciseSession:
+    """Returns the stored session when the upload repeats it byte for byte; raises SessionConflict otherwise."""
+    if stored.content_hash != upload.content_hash:
+        raise SessionConflict(
+            f"session {upload.client_session_id} of patient {stored.patient_id} was already uploaded with different "
+            f"content (stored sha256 {stored.content_hash[:16]}..., this upload {upload.content_hash[:16]}...)"
+        )
+    return stored
+
+
+def _analyse(
+    *, db_session: Session, upload: Upload, patient_id: int, exercise: Exercise
+) -> tuple[dict | None, str | None]:
+    """Returns (metrics document, None), or (None, reason) when the analysis cannot use the recording."""
+    from backend.exercises.library import EXERCISES
+
+    spec = EXERCISES.get(exercise.slug)
+    if spec is None:
+        raise ExerciseNotFound(f"exercise '{exercise.slug}' is not in the exercise library; it cannot be analysed")
+    on = upload.started_at.date()
+    target_reps, _ = plan_targets(db_session=db_session, patient_id=patient_id, exercise_id=exercise.id, on=on)
+    probe = ExerciseSession(patient_id=patient_id, exercise_id=exercise.id, started_at=upload.started_at)
+    history = [doc for _, doc in session_history(db_session=db_session, session=probe)]
+    try:
+        return metrics_document(upload.payload, spec, target_reps=target_reps, history=history), None
+    except AnalysisError as exc:
+        return None, f"{type(exc).__name__}: {exc}"
+
+
+def store_upload(
+    *, db_session: Session, upload: Upload, patient_id: int, exercise: Exercise, device_id: int | None
+) -> tuple[ExerciseSession, bool]:
+    """Stores an upload with its metrics and system suggestions; returns (session, created).
+
+    The same (patient, client session id) with the same content returns the stored session (created=False), also
+    when a concurrent request stored it first; with different content raises SessionConflict. Flushes, never
+    commits: the request's transaction keeps the session, metrics and suggestions together.
+    """
+    with db_session.no_autoflush:  # reads and analysis first; pending writes wait, so no write lock meanwhile
+        stored = find_session(db_session=db_session, patient_id=patient_id, client_session_id=upload.client_session_id)
+        if stored is not None:
+            return _same_or_conflict(stored, upload), False
+        doc, error = _analyse(db_session=db_session, upload=upload, patient_id=patient_id, exercise=exercise)
+    raw = upload.payload.raw
+    row = ExerciseSession(
+        client_session_id=upload.client_session_id,
+        patient_id=patient_id,
+        device_id=device_id,
+        exercise_id=exercise.id,
+        started_at=upload.started_at,
+        duration_s=raw.duration,
+        n_frames=raw.n_frames,
+        file_format=FILE_FORMAT,
+        file_bytes=upload.data,
+        file_size=len(upload.data),
+        content_hash=upload.content_hash,
+        processing_version=__version__,
+        processing_params=json_ready(upload.payload.params),
+        status="processed" if doc is not None else "failed",
+        error=error,
+        created_at=utcnow(),
+    )
+    try:
+        with db_session.begin_nested():
+            db_session.add(row)
+    except IntegrityError:
+        stored = find_session(db_session=db_session, patient_id=patient_id, client_session_id=upload.client_session_id)
+        if stored is None:
+            raise
+        return _same_or_conflict(stored, upload), False
+    if doc is not None:
+        db_session.add(SessionMetric(session_id=row.id, document=doc, created_at=utcnow(), **scalar_columns(doc)))
+        db_session.flush()
+        suggest_for_session(db_session=db_session, session=row, doc=doc)
+    return row, True
+
+
+# ---------------------------------------------------------------------------------------------- reads
+
+_ITEM_COLUMNS = (
+    ExerciseSession,
+    Exercise.slug,
+    SessionMetric.repetitions,
+    SessionMetric.rom_deg,
+    SessionMetric.quality_ok,
+)
+
+
+def _with_metrics(*columns) -> Select:
+    return (
+        select(*columns)
+        .select_from(ExerciseSession)
+        .outerjoin(Exercise, Exercise.id == ExerciseSession.exercise_id)
+        .outerjoin(SessionMetric, SessionMetric.session_id == ExerciseSession.id)
+    )
+
+
+def visible_patients_filter(*, role: str, user_id: int | None, device_patient_id: int | None):
+    """Returns the WHERE clause of the sessions a caller may list: own, own patient's, assigned patients' or all."""
+    if role == "device":
+        return ExerciseSession.patient_id == device_patient_id
+    if role == "patient":
+        return ExerciseSession.patient_id == user_id
+    if role == "therapist":
+        assigned = select(TherapistPatient.patient_id).where(TherapistPatient.therapist_id == user_id)
+        return ExerciseSession.patient_id.in_(assigned)
+    return None  # admin: everyone
+
+
+def list_sessions(
+    *,
+    db_session: Session,
+    visible,
+    patient_id: int | None,
+    exercise_id: int | None,
+    since: dt.datetime | None,
+    limit: int,
+    offset: int,
+) -> tuple[list[tuple], int]:
+    """Returns one page of (session, exercise slug, repetitions, rom_deg, quality_ok), newest first, and the total.
+
+    visible: the caller's visible_patients_filter (None = every patient). The file bytes are never loaded.
+    """
+    query = _with_metrics(*_ITEM_COLUMNS)
+    conditions = [c for c in (visible,) if c is not None]
+    if patient_id is not None:
+        conditions.append(ExerciseSession.patient_id == patient_id)
+    if exercise_id is not None:
+        conditions.append(ExerciseSession.exercise_id == exercise_id)
+    if since is not None:
+        conditions.append(ExerciseSession.started_at >= since)
+    query = query.where(*conditions)
+    total = db_session.scalar(select(func.count()).select_from(ExerciseSession).where(*conditions)) or 0
+    rows = db_session.execute(
+        query.order_by(ExerciseSession.started_at.desc(), ExerciseSession.id.desc()).limit(limit).offset(offset)
+    ).all()
+    return [tuple(r) for r in rows], total
+
+
+def get_session_row(*, db_session: Session, session_id: int) -> tuple:
+    """Returns (session, exercise slug, repetitions, rom_deg, quality_ok, document) or raises SessionNotFound."""
+    row = db_session.execute(
+        _with_metrics(*_ITEM_COLUMNS, SessionMetric.document).where(ExerciseSession.id == session_id)
+    ).first()
+    if row is None:
+        raise SessionNotFound(f"session {session_id} does not exist")
+    return tuple(row)
+
+
+def session_patient(*, db_session: Session, session_id: int) -> int:
+    """Returns the patient id of a session or raises SessionNotFound."""
+    patient_id = db_session.scalar(select(ExerciseSession.patient_id).where(ExerciseSession.id == session_id))
+    if patient_id is None:
+        raise SessionNotFound(f"session {session_id} does not exist")
+    return patient_id
+
+
+def session_file(*, db_session: Session, session_id: int) -> bytes:
+    """Returns the stored .khs bytes of a session or raises SessionNotFound."""
+    data = db_session.scalar(select(ExerciseSession.file_bytes).where(ExerciseSession.id == session_id))
+    if data is None:
+        raise SessionNotFound(f"session {session_id} does not exist")
+    return data
+
+
+def session_suggestions(*, db_session: Session, session_id: int, patient_view: bool) -> list[Suggestion]:
+    """Returns the suggestions about one session, oldest first; patient_view keeps only what patients may see."""
+    query = select(Suggestion).where(Suggestion.session_id == session_id)
+    if patient_view:
+        query = query.where(visible_to_patient())
+    return list(db_session.scalars(query.order_by(Suggestion.created_at, Suggestion.id)))
+
+
+def find_exercise_id(*, db_session: Session, slug: str) -> int:
+    """Returns the id of the exercise with this slug or raises ExerciseNotFound."""
+    exercise_id = db_session.scalar(select(Exercise.id).where(Exercise.slug == slug))
+    if exercise_id is None:
+        raise ExerciseNotFound(f"exercise '{slug}' does not exist")
+    return exercise_id

@@ -1,0 +1,132 @@
+"""Suggestions: patients read approved advice; assigned therapists and admins review rule output and write their own."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Depends, Query, status
+from sqlalchemy import select
+
+from backend.audit.service import record
+from backend.deps import Caller, CurrentCaller, DbSession, TherapistOrAdminCaller, require_patient_access
+from backend.exceptions import (
+    CsrfFailed,
+    Forbidden,
+    InsufficientScope,
+    InvalidInput,
+    NotAuthenticated,
+    PatientNotFound,
+    SuggestionNotFound,
+    SuggestionNotPending,
+    error_responses,
+)
+from backend.schemas import MAX_ID, IdPath, Page, PageParams, page_params
+from backend.sessions.models import ExerciseSession
+from backend.suggestions import service
+from backend.suggestions.schemas import Status, SuggestionIn, SuggestionOut
+
+router = APIRouter(prefix="/api/v1", tags=["suggestions"])
+AUTH_ERRORS = (NotAuthenticated, Forbidden, CsrfFailed, InsufficientScope)
+
+
+def _audit(db_session, caller: Caller, action: str, suggestion_id, patient_id: int, detail=None) -> None:
+    record(
+        db_session=db_session,
+        caller=caller,
+        action=action,
+        object_type="suggestion",
+        object_id=suggestion_id,
+        patient_id=patient_id,
+        detail=detail,
+    )
+
+
+def _sees_everything(caller: Caller) -> bool:
+    return caller.user is not None and caller.user.role in ("therapist", "admin")
+
+
+@router.get(
+    "/patients/{patient_id}/suggestions",
+    response_model=Page[SuggestionOut],
+    responses=error_responses(*AUTH_ERRORS, PatientNotFound),
+)
+def list_suggestions(
+    patient_id: IdPath,
+    caller: CurrentCaller,
+    db_session: DbSession,
+    page: Annotated[PageParams, Depends(page_params)],
+    status_filter: Annotated[
+        Status | None, Query(alias="status", description="only this status (patients only ever see 'approved')")
+    ] = None,
+    session_id: Annotated[int | None, Query(ge=1, le=MAX_ID, description="only suggestions about this session")] = None,
+):
+    """Lists a patient's suggestions, newest first: patients and devices see approved ones, therapists all."""
+    require_patient_access(patient_id, caller=caller, db_session=db_session)
+    rows, total = service.list_suggestions(
+        db_session=db_session,
+        patient_id=patient_id,
+        patient_view=not _sees_everything(caller),
+        status=status_filter,
+        session_id=session_id,
+        limit=page.limit,
+        offset=page.offset,
+    )
+    _audit(db_session, caller, "suggestion.list", None, patient_id)
+    return Page[SuggestionOut](
+        items=[SuggestionOut.model_validate(r) for r in rows], total=total, limit=page.limit, offset=page.offset
+    )
+
+
+@router.post(
+    "/patients/{patient_id}/suggestions",
+    response_model=SuggestionOut,
+    status_code=status.HTTP_201_CREATED,
+    responses=error_responses(*AUTH_ERRORS, PatientNotFound, InvalidInput),
+)
+def create_suggestion(
+    patient_id: IdPath, body: SuggestionIn, caller: TherapistOrAdminCaller, db_session: DbSession
+) -> SuggestionOut:
+    """Writes a suggestion to a patient (an assigned therapist or an admin); the patient sees it at once."""
+    require_patient_access(patient_id, caller=caller, db_session=db_session, write=True)
+    if body.session_id is not None:
+        owner = db_session.scalar(select(ExerciseSession.patient_id).where(ExerciseSession.id == body.session_id))
+        if owner != patient_id:
+            raise InvalidInput(f"body.session_id: session {body.session_id} is not a session of patient {patient_id}")
+    row = service.add_therapist_suggestion(
+        db_session=db_session,
+        patient_id=patient_id,
+        author_id=caller.user.id,  # type: ignore[union-attr]
+        text=body.text,
+        session_id=body.session_id,
+    )
+    _audit(db_session, caller, "suggestion.create", row.id, patient_id)
+    return SuggestionOut.model_validate(row)
+
+
+def _decide(suggestion_id: int, new_status: str, caller: Caller, db_session) -> SuggestionOut:
+    row = service.get_suggestion(db_session=db_session, suggestion_id=suggestion_id)
+    require_patient_access(row.patient_id, caller=caller, db_session=db_session, write=True)
+    service.decide(
+        db_session=db_session,
+        suggestion=row,
+        status=new_status,
+        decided_by_id=caller.user.id,  # type: ignore[union-attr]
+    )
+    action = "suggestion.approve" if new_status == "approved" else "suggestion.dismiss"
+    _audit(db_session, caller, action, row.id, row.patient_id, {"rule": row.rule})
+    return SuggestionOut.model_validate(row)
+
+
+DECIDE_ERRORS = error_responses(*AUTH_ERRORS, SuggestionNotFound, SuggestionNotPending)
+
+
+@router.post("/suggestions/{suggestion_id}/approve", response_model=SuggestionOut, responses=DECIDE_ERRORS)
+def approve_suggestion(suggestion_id: IdPath, caller: TherapistOrAdminCaller, db_session: DbSession) -> SuggestionOut:
+    """Approves a pending system suggestion so the patient sees it (an assigned therapist or an admin)."""
+    return _decide(suggestion_id, "approved", caller, db_session)
+
+
+@router.post("/suggestions/{suggestion_id}/dismiss", response_model=SuggestionOut, responses=DECIDE_ERRORS)
+def dismiss_suggestion(suggestion_id: IdPath, caller: TherapistOrAdminCaller, db_session: DbSession) -> SuggestionOut:
+    """Dismisses a pending system suggestion; the patient never sees it (an assigned therapist or an admin)."""
+    return _decide(suggestion_id, "dismissed", caller, db_session)

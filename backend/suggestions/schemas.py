@@ -1,0 +1,78 @@
+"""Suggestion bodies: what a therapist writes, and a stored suggestion as the API shows it."""
+
+from __future__ import annotations
+
+import datetime as dt
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+from backend.schemas import MAX_ID
+
+Status = Literal["pending", "approved", "dismissed"]
+Source = Literal["system", "therapist"]
+
+
+class SuggestionIn(BaseModel):
+    """A suggestion a therapist writes to a patient, optionally about one session."""
+
+    model_config = ConfigDict(extra="forbid")
+    text: str = Field(
+        min_length=1,
+        max_length=2000,
+        examples=["Well done this week! Tomorrow, try to hold the top of each squat for two seconds."],
+    )
+    session_id: int | None = Field(default=None, ge=1, le=MAX_ID, examples=[None])
+
+    @field_validator("text")
+    @classmethod
+    def _not_blank(cls, value: str) -> str:
+        value = value.strip()
+        if not value:
+            raise ValueError("text must not be blank")
+        if "\x00" in value:
+            raise ValueError("text must not contain NUL characters")
+        return value
+
+
+class SuggestionOut(BaseModel):
+    """A stored suggestion. System ones name the rule and the check `metric comparison threshold` that fired."""
+
+    model_config = ConfigDict(
+        from_attributes=True,
+        json_schema_extra={
+            "examples": [
+                {
+                    "id": 7,
+                    "patient_id": 12,
+                    "session_id": 31,
+                    "source": "system",
+                    "author_id": None,
+                    "rule": "fewer_reps",
+                    "metric": "repetitions",
+                    "comparison": "<",
+                    "threshold": 10.0,
+                    "text": "Today you did 6 of the 10 repetitions in your plan. Next time, try to do all 10. "
+                    "Rest for a moment between them if you need to.",
+                    "status": "pending",
+                    "created_at": "2026-11-23T10:00:00Z",
+                    "decided_at": None,
+                    "decided_by_id": None,
+                }
+            ]
+        },
+    )
+    id: int
+    patient_id: int
+    session_id: int | None
+    source: Source
+    author_id: int | None = Field(description="the therapist or admin who wrote it (therapist suggestions)")
+    rule: str = Field(description="the rule that fired (system), 'therapist' otherwise")
+    metric: str = Field(description="the metric the rule checked, e.g. 'rom_deg'; empty for therapist ones")
+    comparison: str = Field(description="how the metric compared to the threshold: '<', '>' or '=='")
+    threshold: float | None
+    text: str = Field(description="the advice, in words the patient understands")
+    status: Status
+    created_at: dt.datetime
+    decided_at: dt.datetime | None = Field(description="when it was approved or dismissed")
+    decided_by_id: int | None

@@ -1,0 +1,196 @@
+"""Suggestion queries and changes: store rule drafts, list what a caller may see, write, approve and dismiss."""
+
+from __future__ import annotations
+
+import datetime as dt
+from collections.abc import Iterable
+
+from sqlalchemy import and_, func, or_, select, update
+from sqlalchemy.orm import Session
+
+from backend.database import utcnow
+from backend.exceptions import SuggestionNotFound, SuggestionNotPending
+from backend.sessions.models import ExerciseSession
+from backend.suggestions.context import plan_targets, session_history
+from backend.suggestions.models import Suggestion
+from backend.suggestions.rules import ACTIVE_DAYS_WINDOW, MISSED_DAYS, RULES, SuggestionDraft, evaluate
+
+THERAPIST_RULE = "therapist"  # the rule field of suggestions written by a person
+
+
+def add_system_suggestions(
+    drafts: Iterable[SuggestionDraft], *, patient_id: int, session_id: int | None, db_session: Session
+) -> list[Suggestion]:
+    """Stores drafts as pending system suggestions of a patient's session and returns them (flushed, not committed).
+
+    A draft whose rule already has a suggestion for the same session is skipped, so re-processing a session does
+    not repeat advice.
+    """
+    existing: set[str] = set()
+    if session_id is not None:
+        existing = set(
+            db_session.scalars(
+                select(Suggestion.rule).where(Suggestion.session_id == session_id, Suggestion.source == "system")
+            )
+        )
+    now = utcnow()
+    rows = []
+    for i, draft in enumerate(drafts):
+        if not isinstance(draft, SuggestionDraft) or draft.rule not in RULES:
+            raise ValueError(f"drafts[{i}] must be a SuggestionDraft of a known rule {RULES}, got {draft!r:.120}")
+        if draft.rule in existing:
+            continue
+        existing.add(draft.rule)
+        rows.append(
+            Suggestion(
+                patient_id=patient_id,
+                session_id=session_id,
+                source="system",
+                rule=draft.rule,
+                metric=draft.metric,
+                comparison=draft.comparison,
+                threshold=float(draft.threshold),
+                text=draft.text,
+                status="pending",
+                created_at=now,
+            )
+        )
+    db_session.add_all(rows)
+    db_session.flush()
+    return rows
+
+
+def add_therapist_suggestion(
+    *, db_session: Session, patient_id: int, author_id: int, text: str, session_id: int | None
+) -> Suggestion:
+    """Stores a suggestion written by a therapist or admin; it needs no approval."""
+    now = utcnow()
+    row = Suggestion(
+        patient_id=patient_id,
+        session_id=session_id,
+        author_id=author_id,
+        source="therapist",
+        rule=THERAPIST_RULE,
+        metric="",
+        comparison="",
+        threshold=None,
+        text=text,
+        status="approved",
+        created_at=now,
+        decided_at=now,
+        decided_by_id=author_id,
+    )
+    db_session.add(row)
+    db_session.flush()
+    return row
+
+
+def visible_to_patient():
+    """Returns the filter of what a patient (or their device) sees: therapist-written and approved system ones."""
+    return or_(Suggestion.source == "therapist", and_(Suggestion.source == "system", Suggestion.status == "approved"))
+
+
+def is_visible_to_patient(suggestion: Suggestion) -> bool:
+    """Returns whether a patient (or their device) may see the suggestion; same rule as visible_to_patient()."""
+    return suggestion.source == "therapist" or suggestion.status == "approved"
+
+
+def list_suggestions(
+    *,
+    db_session: Session,
+    patient_id: int,
+    patient_view: bool,
+    status: str | None,
+    session_id: int | None,
+    limit: int,
+    offset: int,
+) -> tuple[list[Suggestion], int]:
+    """Returns one page of a patient's suggestions (newest first) and the total; patient_view hides undecided ones."""
+    query = select(Suggestion).where(Suggestion.patient_id == patient_id)
+    if patient_view:
+        query = query.where(visible_to_patient())
+    if status is not None:
+        query = query.where(Suggestion.status == status)
+    if session_id is not None:
+        query = query.where(Suggestion.session_id == session_id)
+    total = db_session.scalar(select(func.count()).select_from(query.subquery())) or 0
+    rows = db_session.scalars(
+        query.order_by(Suggestion.created_at.desc(), Suggestion.id.desc()).limit(limit).offset(offset)
+    )
+    return list(rows), total
+
+
+def get_suggestion(*, db_session: Session, suggestion_id: int) -> Suggestion:
+    """Returns one suggestion or raises SuggestionNotFound."""
+    row = db_session.get(Suggestion, suggestion_id)
+    if row is None:
+        raise SuggestionNotFound(f"suggestion {suggestion_id} does not exist")
+    return row
+
+
+def decide(*, db_session: Session, suggestion: Suggestion, status: str, decided_by_id: int) -> Suggestion:
+    """Approves or dismisses a pending system suggestion; raises SuggestionNotPending for any other."""
+    if status not in ("approved", "dismissed"):
+        raise ValueError(f"status must be 'approved' or 'dismissed', got {status!r}")
+    if suggestion.source != "system":
+        raise SuggestionNotPending(
+            f"suggestion {suggestion.id} was written by a therapist; only pending system suggestions can be decided"
+        )
+    if suggestion.status != "pending":
+        raise SuggestionNotPending(
+            f"suggestion {suggestion.id} is already {suggestion.status}; only pending suggestions can be decided"
+        )
+    # conditional UPDATE: of two concurrent decisions exactly one wins, the other gets SuggestionNotPending
+    result = db_session.execute(
+        update(Suggestion)
+        .where(Suggestion.id == suggestion.id, Suggestion.status == "pending")
+        .values(status=status, decided_at=utcnow(), decided_by_id=decided_by_id)
+        .execution_options(synchronize_session=False)
+    )
+    db_session.refresh(suggestion)
+    if result.rowcount != 1:
+        raise SuggestionNotPending(
+            f"suggestion {suggestion.id} is already {suggestion.status}; only pending suggestions can be decided"
+        )
+    return suggestion
+
+
+def _recently_suggested(*, db_session: Session, session: ExerciseSession, rule: str, days: int) -> bool:
+    """Returns whether a system suggestion of this rule exists for a session of the same exercise in the last days."""
+    since = session.started_at - dt.timedelta(days=days)
+    found = db_session.scalar(
+        select(Suggestion.id)
+        .join(ExerciseSession, ExerciseSession.id == Suggestion.session_id)
+        .where(
+            Suggestion.patient_id == session.patient_id,
+            Suggestion.source == "system",
+            Suggestion.rule == rule,
+            ExerciseSession.exercise_id == session.exercise_id,
+            ExerciseSession.id != session.id,
+            ExerciseSession.started_at > since,
+            ExerciseSession.started_at <= session.started_at,
+        )
+        .limit(1)
+    )
+    return found is not None
+
+
+def suggest_for_session(*, db_session: Session, session: ExerciseSession, doc: dict) -> list[Suggestion]:
+    """Runs the rules on a stored session's metrics document and stores what fires as pending suggestions.
+
+    Reads the plan's targets and the patient's earlier sessions; judges missed days at most once a week per
+    exercise. Returns the new suggestions (flushed, not committed). Raises ValueError for a malformed document.
+    """
+    reps, per_week = plan_targets(
+        db_session=db_session,
+        patient_id=session.patient_id,
+        exercise_id=session.exercise_id,
+        on=session.started_at.astimezone(dt.UTC).date(),
+    )
+    history = session_history(db_session=db_session, session=session)
+    drafts = evaluate(doc, prescribed_reps=reps, history=history, expected_per_week=per_week, now=session.started_at)
+    if any(d.rule == MISSED_DAYS for d in drafts) and _recently_suggested(
+        db_session=db_session, session=session, rule=MISSED_DAYS, days=ACTIVE_DAYS_WINDOW
+    ):
+        drafts = [d for d in drafts if d.rule != MISSED_DAYS]
+    return add_system_suggestions(drafts, patient_id=session.patient_id, session_id=session.id, db_session=db_session)

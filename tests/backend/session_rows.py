@@ -1,0 +1,37 @@
+"""Stored sessions for server tests, written straight to the database (no upload, no analysis)."""
+
+from __future__ import annotations
+
+import uuid
+
+from backend.sessions.models import ExerciseSession, SessionMetric
+
+
+def store_session(
+    db_session, patient, exercise, started_at, *, reps=10, rom=90.0, data=b"khs-bytes", doc=None, metrics=True
+) -> ExerciseSession:
+    """Stores one session (and, with metrics=True, its metrics document) and returns it (flushed)."""
+    row = ExerciseSession(
+        client_session_id=uuid.uuid4(),
+        patient_id=patient.id,
+        exercise_id=exercise.id,
+        started_at=started_at,
+        duration_s=30.0,
+        n_frames=900,
+        file_bytes=data,
+        file_size=len(data),
+        content_hash="0" * 64,
+        file_format="khs",
+    )
+    db_session.add(row)
+    db_session.flush()
+    if metrics:
+        doc = doc or {
+            "repetitions": reps,
+            "rom_deg": rom,
+            "quality": {"ok": True},
+            "indicators": {"flexibility": {"score": rom / 2, "value": rom, "basis": "test", "quality_ok": True}},
+        }
+        db_session.add(SessionMetric(session_id=row.id, document=doc, repetitions=reps, rom_deg=rom, quality_ok=True))
+        db_session.flush()
+    return row

@@ -1,0 +1,81 @@
+"""Two first uploads of the same session at the same time, on real separate transactions (PostgreSQL only).
+
+Both requests look the session up before either has stored it; the unique (patient, client session id)
+constraint lets one insert win, and the other must answer with the winner's session, never a duplicate.
+SQLite serialises writers with a database lock instead, so this only runs on PostgreSQL.
+"""
+
+from __future__ import annotations
+
+import threading
+
+import pytest
+from sqlalchemy import delete, func, select
+from sqlalchemy.orm import Session
+
+from backend.exercises.models import Exercise
+from backend.sessions import service
+from backend.sessions.ingest import decode_upload
+from backend.sessions.models import ExerciseSession
+from backend.users.models import User
+from tests.backend.khs_files import make_khs
+
+
+@pytest.fixture
+def committed_patient(engine):
+    """A patient committed for real (other transactions see it); deleted with their sessions afterwards."""
+    if engine.dialect.name != "postgresql":
+        pytest.skip("concurrent writers need PostgreSQL; SQLite locks the whole database")
+    with Session(engine) as s, s.begin():
+        patient = User(email="race-patient@example.org", role="patient", full_name="Race")
+        s.add(patient)
+        s.flush()
+        patient_id = patient.id
+    yield patient_id
+    with Session(engine) as s, s.begin():
+        s.execute(delete(User).where(User.id == patient_id))
+
+
+def test_simultaneous_first_uploads_store_one_session(engine, committed_patient, monkeypatch):
+    upload = decode_upload(make_khs("squat", 2, seed=21), max_frames=10**6, max_decoded_bytes=2**30)
+    both_looked = threading.Barrier(2, timeout=30)
+    real_find = service.find_session
+
+    waited: set[str] = set()
+
+    def find_together(**kwargs):
+        found = real_find(**kwargs)
+        name = threading.current_thread().name
+        if name.startswith("upload-") and name not in waited:
+            waited.add(name)
+            both_looked.wait()  # neither request has stored the session yet
+        return found
+
+    monkeypatch.setattr(service, "find_session", find_together)
+    results: dict[str, object] = {}
+
+    def run(name: str) -> None:
+        try:
+            with Session(engine, expire_on_commit=False) as s, s.begin():
+                exercise = s.scalar(select(Exercise).where(Exercise.slug == "squat"))
+                row, created = service.store_upload(
+                    db_session=s, upload=upload, patient_id=committed_patient, exercise=exercise, device_id=None
+                )
+                results[name] = (row.id, created)
+        except Exception as exc:  # noqa: BLE001 - reported by the assertion below
+            results[name] = exc
+
+    threads = [threading.Thread(target=run, args=(f"upload-{i}",), name=f"upload-{i}") for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(60)
+    outcomes = sorted(results.values(), key=lambda r: str(r))
+    assert all(isinstance(r, tuple) for r in outcomes), outcomes
+    assert outcomes[0][0] == outcomes[1][0], outcomes  # the same stored session
+    assert sorted(created for _, created in outcomes) == [False, True]
+    with Session(engine) as s:
+        count = s.scalar(
+            select(func.count()).select_from(ExerciseSession).where(ExerciseSession.patient_id == committed_patient)
+        )
+    assert count == 1

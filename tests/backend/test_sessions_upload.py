@@ -1,0 +1,404 @@
+"""POST /api/v1/sessions: streamed size limit, every file defect, access, idempotency and all-or-nothing storage."""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import uuid
+
+import numpy as np
+import pytest
+from sqlalchemy import func, select
+
+from backend.audit.models import AuditEvent
+from backend.config import Settings
+from backend.exercises.models import Exercise
+from backend.plans.models import Plan, PlanItem
+from backend.sessions import service
+from backend.sessions.models import ExerciseSession, SessionMetric
+from backend.suggestions.models import Suggestion
+from kinect_agent import skeleton
+from kinect_agent.formats import session_file as sf
+from kinect_agent.sources.simulator import simulate
+from tests.backend import khs_files
+from tests.backend.khs_files import make_khs
+
+URL = "/api/v1/sessions"
+OCTET = {"Content-Type": "application/octet-stream"}
+MAX_FRAMES = 3000
+MAX_BYTES = 600_000
+
+
+@pytest.fixture
+def settings() -> Settings:
+    """Test settings with small upload limits, so the limits can be hit with small files."""
+    return Settings(
+        ENVIRONMENT="local",
+        CHECK_MIGRATIONS=False,
+        DATABASE_URL="sqlite://",
+        MAX_UPLOAD_BYTES=MAX_BYTES,
+        SESSION_MAX_FRAMES=MAX_FRAMES,
+    )
+
+
+@pytest.fixture(scope="module")
+def khs() -> bytes:
+    """One valid file: 3 simulated squats."""
+    return make_khs("squat", 3, seed=1)
+
+
+@pytest.fixture
+def patient_device(make_user, device_headers):
+    """(patient, device headers)."""
+    patient = make_user("patient")
+    _, headers = device_headers(patient)
+    return patient, headers
+
+
+@pytest.fixture
+def post(client, db_session):
+    """Returns post(data, headers, **query) -> response; commits the test's setup first so that a request that
+    fails (and rolls back) cannot take the setup with it."""
+
+    def send(data, headers, **params):
+        db_session.commit()
+        return client.post(URL, content=data, headers={**OCTET, **headers}, params=params)
+
+    return send
+
+
+def _stored(db_session, patient_id: int) -> tuple[int, int, int]:
+    """Returns (sessions, metrics, suggestions) stored for the patient."""
+    db_session.expire_all()
+    sessions = db_session.scalar(
+        select(func.count()).select_from(ExerciseSession).where(ExerciseSession.patient_id == patient_id)
+    )
+    metrics = db_session.scalar(
+        select(func.count())
+        .select_from(SessionMetric)
+        .join(ExerciseSession, ExerciseSession.id == SessionMetric.session_id)
+        .where(ExerciseSession.patient_id == patient_id)
+    )
+    suggestions = db_session.scalar(
+        select(func.count()).select_from(Suggestion).where(Suggestion.patient_id == patient_id)
+    )
+    return sessions, metrics, suggestions
+
+
+def test_device_upload_is_created_with_metrics(post, db_session, patient_device, khs):
+    patient, headers = patient_device
+    response = post(khs, headers)
+    assert response.status_code == 201, response.text
+    body = response.json()
+    assert body["patient_id"] == patient.id
+    assert body["exercise_slug"] == "squat"
+    assert body["n_frames"] == khs_files.n_frames(khs)
+    assert body["content_hash"] == hashlib.sha256(khs).hexdigest()
+    assert body["started_at"].startswith("2026-11-20T10:00:00")
+    assert body["status"] == "processed", body["error"]
+    assert isinstance(body["metrics"]["repetitions"], int)
+    assert "indicators" in body["metrics"]
+    assert body["suggestions"] == []  # pending system advice is not shown to patients' devices
+    assert _stored(db_session, patient.id)[:2] == (1, 1)
+
+
+def test_same_file_again_answers_200_with_the_stored_session(post, db_session, patient_device, khs):
+    patient, headers = patient_device
+    first = post(khs, headers)
+    again = post(khs, headers)
+    assert (first.status_code, again.status_code) == (201, 200), again.text
+    assert again.json()["id"] == first.json()["id"]
+    assert _stored(db_session, patient.id)[0] == 1
+
+
+def test_same_session_id_with_other_content_is_409(post, db_session, patient_device):
+    patient, headers = patient_device
+    sid = str(uuid.uuid4())
+    assert post(make_khs(session_id=sid, seed=2), headers).status_code == 201
+    response = post(make_khs(session_id=sid, seed=3), headers)
+    assert response.status_code == 409, response.text
+    assert response.json()["error"] == "SessionConflict"
+    assert sid in response.json()["detail"]
+    assert _stored(db_session, patient.id)[0] == 1
+
+
+def test_same_session_id_for_two_patients_is_two_sessions(post, make_user, auth_headers, khs):
+    admin = make_user("admin")
+    a, b = make_user("patient"), make_user("patient")
+    assert post(khs, auth_headers(admin), patient_id=a.id).status_code == 201
+    assert post(khs, auth_headers(admin), patient_id=b.id).status_code == 201
+
+
+def _miss_first_lookup(monkeypatch) -> list:
+    """Makes the first find_session answer None, as if a concurrent request stored the session just after it."""
+    real_find = service.find_session
+    calls: list = []
+
+    def find_late(**kwargs):
+        calls.append(kwargs)
+        return None if len(calls) == 1 else real_find(**kwargs)
+
+    monkeypatch.setattr(service, "find_session", find_late)
+    return calls
+
+
+def test_concurrent_first_upload_returns_the_winner(post, db_session, patient_device, khs, monkeypatch):
+    """A request that checked before a concurrent one stored the session hits the unique constraint and re-reads."""
+    patient, headers = patient_device
+    first = post(khs, headers).json()
+    calls = _miss_first_lookup(monkeypatch)
+    response = post(khs, headers)
+    assert response.status_code == 200, response.text
+    assert response.json()["id"] == first["id"]
+    assert len(calls) == 2
+    assert _stored(db_session, patient.id)[0] == 1
+
+
+def test_concurrent_first_upload_with_other_content_is_409(post, db_session, patient_device, monkeypatch):
+    patient, headers = patient_device
+    sid = str(uuid.uuid4())
+    assert post(make_khs(session_id=sid, seed=4), headers).status_code == 201
+    _miss_first_lookup(monkeypatch)
+    response = post(make_khs(session_id=sid, seed=5), headers)
+    assert response.status_code == 409, response.text
+    assert _stored(db_session, patient.id)[0] == 1
+
+
+def test_user_upload_with_patient_id_and_exercise_query(post, make_patient_with_therapist, auth_headers):
+    patient, therapist = make_patient_with_therapist()
+    data = make_khs("sit_to_stand", 2, seed=6)
+    response = post(data, auth_headers(therapist), patient_id=patient.id, exercise="sit_to_stand")
+    assert response.status_code == 201, response.text
+    assert response.json()["device_id"] is None
+    assert response.json()["exercise_slug"] == "sit_to_stand"
+
+
+def test_patient_uploads_for_themselves_without_patient_id(post, make_user, auth_headers, khs):
+    patient = make_user("patient")
+    response = post(khs, auth_headers(patient))
+    assert response.status_code == 201, response.text
+    assert response.json()["patient_id"] == patient.id
+
+
+def test_upload_is_audited(post, db_session, patient_device, khs):
+    patient, headers = patient_device
+    session_id = post(khs, headers).json()["id"]
+    post(khs, headers)
+    actions = db_session.scalars(
+        select(AuditEvent.action).where(AuditEvent.patient_id == patient.id, AuditEvent.object_id == str(session_id))
+    ).all()
+    assert sorted(actions) == ["session.create", "session.upload_repeat"]
+
+
+# ---------------------------------------------------------------------------------------------- bad files
+
+
+def _bad_version(data):
+    return data[:8] + (2).to_bytes(2, "little") + data[10:]
+
+
+def _flip(data):
+    i = len(data) // 2
+    return data[:i] + bytes([data[i] ^ 0xFF]) + data[i + 1 :]
+
+
+def _joints(data):
+    return khs_files.with_header(data, lambda h: h.__setitem__("joints", h["joints"][:19]))
+
+
+def _non_finite(data):
+    n = khs_files.n_frames(data)
+    deltas = np.zeros(skeleton.J * 3 * n, dtype="<f4")
+    deltas[7] = np.inf
+    return khs_files.with_block(data, 2, khs_files.sf._shuffle(deltas))
+
+
+def _non_monotonic(data):
+    n = khs_files.n_frames(data)
+    t = np.arange(n) / 30.0
+    t[10] = t[8]
+    return khs_files.with_time(data, t)
+
+
+def _no_frames(data):
+    return khs_files.with_header(data, lambda h: h["recordings"]["raw"].__setitem__("n_frames", 0))
+
+
+def _zlib_bomb(data):
+    return khs_files.with_block(data, 2, bytes(40 * 2**20))
+
+
+def _not_uuid(data):
+    return khs_files.with_header(data, lambda h: h.__setitem__("session_id", "abc"))
+
+
+BAD_FILES = {
+    "bad_magic": (lambda d: b"NOT A KHS FILE" + d[14:], "bad_magic: "),
+    "unsupported_version": (_bad_version, "unsupported_version: file version 2"),
+    "checksum_mismatch": (_flip, "checksum_mismatch: "),
+    "truncated": (lambda d: d[:-100], "truncated: "),
+    "wrong_joint_count": (_joints, "wrong_joint_count: joint list has 19 joints"),
+    "non_finite": (_non_finite, "non_finite: recording 'raw'"),
+    "non_monotonic_time": (_non_monotonic, "non_monotonic_time: recording 'raw': frame 10"),
+    "no_frames": (_no_frames, "no_frames: recording 'raw' has 0 frames"),
+    "zlib_bomb": (_zlib_bomb, "too_large: a block decodes to more than"),
+    "empty_body": (lambda d: b"", "bad_magic: "),
+    "session_id_not_uuid": (_not_uuid, "bad_header: session_id 'abc' is not a UUID"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_FILES))
+def test_bad_file_is_400_and_stores_nothing(post, case, client, db_session, patient_device, khs):
+    patient, headers = patient_device
+    corrupt, detail = BAD_FILES[case]
+    response = post(corrupt(khs), headers)
+    assert response.status_code == 400, response.text
+    assert response.json()["error"] == "InvalidSessionFile"
+    assert response.json()["detail"].startswith(detail), response.json()["detail"]
+    assert _stored(db_session, patient.id) == (0, 0, 0)
+
+
+def test_too_long_recording_is_400(post, db_session, patient_device, khs):
+    patient, headers = patient_device
+    data = khs_files.with_header(khs, lambda h: h["recordings"]["raw"].__setitem__("n_frames", MAX_FRAMES + 1))
+    response = post(data, headers)
+    assert response.status_code == 400, response.text
+    assert (
+        response.json()["detail"] == f"too_long: recording 'raw' has {MAX_FRAMES + 1} frames, the limit is {MAX_FRAMES}"
+    )
+    assert _stored(db_session, patient.id) == (0, 0, 0)
+
+
+def test_streamed_body_over_the_limit_is_413(client, db_session, patient_device, khs):
+    patient, headers = patient_device
+    sent = []
+
+    def chunks():
+        for _ in range(100):
+            sent.append(1)
+            yield khs[:65536] or b"x" * 65536
+
+    db_session.commit()
+    response = client.post(URL, content=chunks(), headers={**OCTET, **headers})
+    assert response.status_code == 413, response.text
+    assert response.json() == {"error": "SessionTooLarge", "detail": f"the upload exceeds {MAX_BYTES} bytes"}
+    assert _stored(db_session, patient.id) == (0, 0, 0)
+
+
+def test_declared_length_over_the_limit_is_413_before_reading(post, patient_device):
+    _, headers = patient_device
+    response = post(b"x" * (MAX_BYTES + 1), headers)
+    assert response.status_code == 413, response.text
+    assert response.json()["detail"] == f"the upload declares {MAX_BYTES + 1} bytes, the limit is {MAX_BYTES}"
+
+
+# ---------------------------------------------------------------------------------------------- callers
+
+
+def test_device_uploading_for_another_patient_is_403(post, db_session, make_user, patient_device, khs):
+    _, headers = patient_device
+    other = make_user("patient")
+    response = post(khs, headers, patient_id=other.id)
+    assert response.status_code == 403, response.text
+    assert response.json()["detail"] == f"this device may not access patient {other.id}"
+    assert _stored(db_session, other.id) == (0, 0, 0)
+
+
+def test_unassigned_therapist_is_403(post, db_session, make_user, auth_headers, khs):
+    patient, therapist = make_user("patient"), make_user("therapist")
+    response = post(khs, auth_headers(therapist), patient_id=patient.id)
+    assert response.status_code == 403, response.text
+    assert _stored(db_session, patient.id) == (0, 0, 0)
+
+
+def test_read_only_token_is_403(post, db_session, make_user, auth_headers, khs):
+    patient = make_user("patient")
+    response = post(khs, auth_headers(patient, scopes=("read",)))
+    assert response.status_code == 403, response.text
+    assert response.json()["error"] == "InsufficientScope"
+    assert _stored(db_session, patient.id) == (0, 0, 0)
+
+
+def test_anonymous_is_401(post, khs):
+    assert post(khs, {}).status_code == 401
+
+
+def test_therapist_without_patient_id_is_422(post, make_patient_with_therapist, auth_headers, khs):
+    _, therapist = make_patient_with_therapist()
+    response = post(khs, auth_headers(therapist))
+    assert response.status_code == 422, response.text
+    assert response.json()["detail"] == "query.patient_id: required when a therapist or admin uploads"
+
+
+def test_unknown_exercise_is_404(post, db_session, patient_device, khs):
+    patient, headers = patient_device
+    response = post(khs, headers, exercise="juggling")
+    assert response.status_code == 404, response.text
+    assert response.json() == {"error": "ExerciseNotFound", "detail": "exercise 'juggling' does not exist"}
+    assert _stored(db_session, patient.id) == (0, 0, 0)
+
+
+def test_unknown_patient_is_404(post, make_user, auth_headers, khs):
+    admin = make_user("admin")
+    response = post(khs, auth_headers(admin), patient_id=999_999)
+    assert response.status_code == 404, response.text
+    assert response.json()["error"] == "PatientNotFound"
+
+
+# ---------------------------------------------------------------------------------------------- metrics and advice
+
+
+def test_plan_target_missed_gives_a_pending_suggestion_in_the_same_upload(
+    post, db_session, make_patient_with_therapist, auth_headers, khs
+):
+    """3 repetitions against a plan of 10: fewer_reps fires (or poor_data_quality when the data is not trusted)."""
+    patient, therapist = make_patient_with_therapist()
+    squat = db_session.scalar(select(Exercise).where(Exercise.slug == "squat"))
+    plan = Plan(patient_id=patient.id, therapist_id=therapist.id, title="p", start_date=dt.date(2026, 11, 1))
+    plan.items = [PlanItem(exercise_id=squat.id, sets=1, repetitions=10, frequency_per_week=3)]
+    db_session.add(plan)
+    response = post(khs, auth_headers(therapist), patient_id=patient.id)
+    assert response.status_code == 201, response.text
+    body = response.json()
+    expected = "fewer_reps" if body["metrics"]["quality"]["ok"] else "poor_data_quality"
+    assert [s["rule"] for s in body["suggestions"]] == [expected]
+    assert body["suggestions"][0]["status"] == "pending"
+    assert _stored(db_session, patient.id) == (1, 1, 1)
+    as_patient = post(khs, auth_headers(patient))
+    assert (as_patient.status_code, as_patient.json()["suggestions"]) == (200, [])
+
+
+def test_a_failure_after_the_session_row_stores_nothing(post, db_session, patient_device, khs, monkeypatch):
+    patient, headers = patient_device
+
+    def broken(**_kwargs):
+        raise RuntimeError("suggestion store failed")
+
+    monkeypatch.setattr(service, "suggest_for_session", broken)
+    response = post(khs, headers)
+    assert response.status_code == 500, response.text
+    assert _stored(db_session, patient.id) == (0, 0, 0)
+
+
+def test_a_recording_the_analysis_cannot_use_is_stored_as_failed(post, db_session, patient_device):
+    patient, headers = patient_device
+    measured, _, _ = simulate("squat", 1, seed=8)
+    data = sf.encode(sf.SessionPayload(str(uuid.uuid4()), measured.slice(0, 1), created_at="2026-11-20T10:00:00Z"))
+    response = post(data, headers)
+    assert response.status_code == 201, response.text
+    body = response.json()
+    assert (body["status"], body["metrics"], body["n_frames"]) == ("failed", None, 1)
+    assert body["error"].startswith("AnalysisError: the recording has 1 frame(s)")
+    assert _stored(db_session, patient.id) == (1, 0, 0)
+
+
+def test_recording_without_exercise_needs_the_query(post, db_session, patient_device, khs):
+    patient, headers = patient_device
+    data = khs_files.with_header(khs, lambda h: h["recordings"]["raw"]["meta"].__setitem__("exercise", None))
+    response = post(data, headers)
+    assert response.status_code == 422, response.text
+    assert response.json()["detail"] == "query.exercise: required because the recording's meta.exercise is empty"
+    assert _stored(db_session, patient.id) == (0, 0, 0)
+    response = post(data, headers, exercise="squat")
+    assert response.status_code == 201, response.text
+    assert response.json()["exercise_slug"] == "squat"

@@ -1,0 +1,235 @@
+"""Suggestion rules: each fires just past its threshold and stays silent at it."""
+
+from __future__ import annotations
+
+import datetime as dt
+import re
+
+import pytest
+
+from backend.suggestions import rules
+from backend.suggestions.rules import SuggestionDraft, evaluate
+
+NOW = dt.datetime(2026, 11, 23, 10, 0, tzinfo=dt.UTC)
+
+
+def _doc(**overrides) -> dict:
+    """A good session: 10 repetitions, 90 degrees, 3 s per repetition, quality ok."""
+    doc = {
+        "exercise": "squat",
+        "repetitions": 10,
+        "rom_deg": 90.0,
+        "tempo_s_per_rep": 3.0,
+        "quality": {"ok": True, "tracked_fraction": 0.99, "outlier_fraction": 0.01, "reasons": []},
+    }
+    doc.update(overrides)
+    return doc
+
+
+def _past(days_ago: float, **overrides) -> tuple[dt.datetime, dict]:
+    return NOW - dt.timedelta(days=days_ago), _doc(**overrides)
+
+
+def _eval(doc, *, prescribed_reps=None, history=(), expected_per_week=None, now=NOW) -> dict[str, SuggestionDraft]:
+    drafts = evaluate(
+        doc, prescribed_reps=prescribed_reps, history=list(history), expected_per_week=expected_per_week, now=now
+    )
+    by_rule = {d.rule: d for d in drafts}
+    assert len(by_rule) == len(drafts), f"a rule fired twice: {drafts}"
+    return by_rule
+
+
+def test_good_session_fires_nothing():
+    history = [_past(d) for d in (1, 3, 5, 8, 10, 12, 15, 17, 20)]
+    assert _eval(_doc(), prescribed_reps=10, history=history, expected_per_week=3) == {}
+
+
+# --- fewer repetitions than prescribed ---
+
+
+def test_fewer_reps_fires_one_below_prescribed():
+    draft = _eval(_doc(repetitions=9), prescribed_reps=10)[rules.FEWER_REPS]
+    assert (draft.metric, draft.comparison, draft.threshold, draft.value) == ("repetitions", "<", 10.0, 9.0)
+    assert "9 of the 10 repetitions" in draft.text
+    assert draft.explanation == "repetitions 9 < 10"
+
+
+def test_fewer_reps_silent_at_prescribed():
+    assert rules.FEWER_REPS not in _eval(_doc(repetitions=10), prescribed_reps=10)
+
+
+def test_fewer_reps_silent_without_plan():
+    assert rules.FEWER_REPS not in _eval(_doc(repetitions=1), prescribed_reps=None)
+
+
+def test_fewer_reps_zero_says_none_counted():
+    draft = _eval(_doc(repetitions=0), prescribed_reps=8)[rules.FEWER_REPS]
+    assert draft.value == 0.0
+    assert "did not count any repetitions" in draft.text
+
+
+# --- range of motion against the last weeks ---
+
+
+def _rom_history(median: float = 80.0) -> list:
+    return [_past(20, rom_deg=median - 10), _past(15, rom_deg=median), _past(6, rom_deg=median + 10)]
+
+
+def test_rom_drop_fires_below_85_percent_of_median():
+    draft = _eval(_doc(rom_deg=67.9), history=_rom_history(80.0))[rules.ROM_DROP]
+    assert (draft.metric, draft.comparison, draft.value) == ("rom_deg", "<", 67.9)
+    assert draft.threshold == pytest.approx(0.85 * 80.0)
+    assert "68 degrees" in draft.text and "about 80 degrees" in draft.text
+
+
+def test_rom_drop_silent_at_85_percent_of_median():
+    assert rules.ROM_DROP not in _eval(_doc(rom_deg=68.0), history=_rom_history(80.0))
+
+
+def test_rom_drop_needs_two_weeks_of_baseline():
+    history = [_past(13.9, rom_deg=80.0), _past(10, rom_deg=80.0), _past(5, rom_deg=80.0)]
+    assert rules.ROM_DROP not in _eval(_doc(rom_deg=10.0), history=history)
+
+
+def test_rom_drop_needs_three_baseline_sessions():
+    assert rules.ROM_DROP not in _eval(_doc(rom_deg=10.0), history=_rom_history()[:2])
+
+
+def test_rom_drop_ignores_sessions_older_than_four_weeks_and_poor_quality():
+    bad = {"ok": False, "tracked_fraction": 0.5, "outlier_fraction": 0.0, "reasons": ["x"]}
+    history = [_past(40, rom_deg=200.0), _past(20, rom_deg=200.0, quality=bad), *_rom_history(80.0)]
+    assert rules.ROM_DROP in _eval(_doc(rom_deg=67.9), history=history)
+    assert rules.ROM_DROP not in _eval(_doc(rom_deg=68.0), history=history)
+
+
+def test_rom_drop_ignores_other_exercises():
+    history = [_past(d, rom_deg=80.0, exercise="shoulder_flexion") for d in (20, 15, 6)]
+    assert rules.ROM_DROP not in _eval(_doc(rom_deg=10.0), history=history)
+
+
+# --- too fast ---
+
+
+def test_too_fast_fires_below_threshold():
+    draft = _eval(_doc(tempo_s_per_rep=1.49))[rules.TOO_FAST]
+    assert (draft.metric, draft.comparison, draft.threshold, draft.value) == (
+        "tempo_s_per_rep",
+        "<",
+        rules.MIN_TEMPO_S_PER_REP,
+        1.49,
+    )
+    assert "slow down" in draft.text
+
+
+def test_too_fast_silent_at_threshold():
+    assert rules.TOO_FAST not in _eval(_doc(tempo_s_per_rep=rules.MIN_TEMPO_S_PER_REP))
+
+
+def test_too_fast_silent_without_tempo():
+    assert rules.TOO_FAST not in _eval(_doc(tempo_s_per_rep=None, repetitions=0))
+
+
+# --- data quality ---
+
+
+def _quality(ok=False, tracked=0.99, outliers=0.0):
+    return {"ok": ok, "tracked_fraction": tracked, "outlier_fraction": outliers, "reasons": ["analysis reason"]}
+
+
+def test_poor_quality_low_tracking_asks_to_step_into_view():
+    draft = _eval(_doc(quality=_quality(tracked=0.899)))[rules.POOR_DATA_QUALITY]
+    assert (draft.metric, draft.comparison, draft.threshold, draft.value) == (
+        "quality.tracked_fraction",
+        "<",
+        0.9,
+        0.899,
+    )
+    assert "step into view" in draft.text
+
+
+def test_poor_quality_outliers_asks_to_fix_the_room():
+    draft = _eval(_doc(quality=_quality(tracked=0.9, outliers=0.051)))[rules.POOR_DATA_QUALITY]
+    assert (draft.metric, draft.comparison, draft.value) == ("quality.outlier_fraction", ">", 0.051)
+    assert "camera" in draft.text
+
+
+def test_poor_quality_other_reason_asks_to_move_camera():
+    draft = _eval(_doc(quality=_quality(tracked=0.9, outliers=0.05)))[rules.POOR_DATA_QUALITY]
+    assert (draft.metric, draft.comparison, draft.threshold, draft.value) == ("quality.ok", "==", 0.0, 0.0)
+    assert "move the camera" in draft.text
+
+
+def test_good_quality_silent_even_with_low_fractions():
+    assert rules.POOR_DATA_QUALITY not in _eval(_doc(quality=_quality(ok=True, tracked=0.1, outliers=0.9)))
+
+
+def test_poor_quality_suppresses_measurement_rules():
+    doc = _doc(quality=_quality(tracked=0.5), repetitions=1, tempo_s_per_rep=0.5, rom_deg=1.0)
+    assert set(_eval(doc, prescribed_reps=10, history=_rom_history())) == {rules.POOR_DATA_QUALITY}
+
+
+# --- missed days ---
+
+
+def _sessions_on(days_ago: list[int]) -> list:
+    return [_past(d) for d in days_ago]
+
+
+def test_missed_days_fires_below_expected():
+    history = _sessions_on([9, 3])  # with today: 2 active days in the last 7
+    draft = _eval(_doc(), history=history, expected_per_week=3)[rules.MISSED_DAYS]
+    assert (draft.metric, draft.comparison, draft.threshold, draft.value) == ("active_days_last_7d", "<", 3.0, 2.0)
+    assert "on 2 days" in draft.text and "3 days" in draft.text
+
+
+def test_missed_days_silent_at_expected():
+    assert rules.MISSED_DAYS not in _eval(_doc(), history=_sessions_on([9, 3, 6]), expected_per_week=3)
+
+
+def test_missed_days_counts_days_not_sets():
+    history = [_past(9), _past(0.1), _past(0.2)]  # three sets today
+    assert rules.MISSED_DAYS in _eval(_doc(), history=history, expected_per_week=2)
+
+
+def test_missed_days_window_is_seven_days_including_today():
+    assert rules.MISSED_DAYS not in _eval(_doc(), history=_sessions_on([9, 6]), expected_per_week=2)
+    assert rules.MISSED_DAYS in _eval(_doc(), history=_sessions_on([9, 7]), expected_per_week=2)
+
+
+def test_missed_days_silent_in_the_first_week():
+    assert rules.MISSED_DAYS not in _eval(_doc(), history=_sessions_on([6]), expected_per_week=5)
+    assert rules.MISSED_DAYS not in _eval(_doc(), history=[], expected_per_week=5)
+
+
+def test_missed_days_caps_expectation_at_seven():
+    history = _sessions_on(list(range(0, 10)))
+    assert rules.MISSED_DAYS not in _eval(_doc(), history=history, expected_per_week=14)
+
+
+# --- bad input ---
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"doc": [1]}, "doc must be a dict"),
+        ({"doc": _doc(rom_deg="wide")}, "doc['rom_deg'] must be a number"),
+        ({"doc": _doc(repetitions=True)}, "doc['repetitions'] must be a number"),
+        ({"doc": _doc(quality="fine")}, "doc['quality'] must be an object"),
+        ({"doc": _doc(quality={"ok": "yes"})}, "doc['quality']['ok'] must be true, false or null"),
+        ({"now": dt.datetime(2026, 11, 23)}, "now must be a timezone-aware datetime"),
+        ({"prescribed_reps": 0}, "prescribed_reps must be a positive integer"),
+        ({"expected_per_week": 2.5}, "expected_per_week must be a positive integer"),
+        ({"history": [(NOW, "doc")]}, "history[0] must be a (datetime, dict) pair"),
+        ({"history": [(dt.datetime(2026, 11, 1), {})]}, "history[0][0] must be a timezone-aware"),
+        ({"history": [_past(20, rom_deg=[1])]}, "history[0][1]['rom_deg'] must be a number"),
+    ],
+)
+def test_bad_input_names_what_and_where(kwargs, message):
+    args = {"doc": _doc(), "prescribed_reps": 10, "history": [], "expected_per_week": 3, "now": NOW} | kwargs
+    with pytest.raises(ValueError, match=re.escape(message)):
+        evaluate(args.pop("doc"), **args)
+
+
+def test_nan_metric_counts_as_missing():
+    assert _eval(_doc(rom_deg=float("nan"), tempo_s_per_rep=float("nan")), history=_rom_history()) == {}
