@@ -1,10 +1,15 @@
-"""The demo clinic: seeded users, patients, plans and paired home devices, served on embedded SQLite."""
+"""The demo clinic: seeded users, patients, plans and paired home devices, served on embedded SQLite, with
+simulated home agents (backend.demo_agents) uploading sessions through the HTTP API while it runs."""
 
 from __future__ import annotations
 
 import argparse
 import datetime as dt
 import os
+import shutil
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 from sqlalchemy import select
@@ -71,11 +76,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--port", type=int, default=8000)
     parser.add_argument("--db", type=Path, default=Path("var/demo.db"), help="SQLite file (default var/demo.db)")
     parser.add_argument("--keep", action="store_true", help="keep an existing demo database instead of a fresh one")
+    parser.add_argument("--no-agents", action="store_true", help="do not start the simulated home agents")
+    parser.add_argument("--history-weeks", type=int, default=3, help="weeks of backdated sessions (default 3)")
+    parser.add_argument("--agent-interval", type=float, nargs=2, default=(30.0, 60.0), metavar=("MIN", "MAX"),
+                        help="seconds between live sessions of the simulated agents (default 30 60)")  # fmt: skip
     args = parser.parse_args(argv)
 
     args.db.parent.mkdir(parents=True, exist_ok=True)
+    agents_home = args.db.parent / f"{args.db.stem}-agents"
     if not args.keep:
         args.db.unlink(missing_ok=True)
+        shutil.rmtree(agents_home, ignore_errors=True)  # their device tokens belong to the old database
     os.environ["COACH_DATABASE_URL"] = f"sqlite:///{args.db.resolve()}"
     os.environ.setdefault("COACH_ENVIRONMENT", "local")
 
@@ -90,5 +101,46 @@ def main(argv: list[str] | None = None) -> int:
           f"  API documentation (OpenAPI): {base}/docs\n"
           f"  health check:                {base}/healthz\n"
           f"  demo database:               {args.db.resolve()}\n"
+          f"{_agents_line(args, agents_home)}"
           "Press Ctrl-C to stop.\n", flush=True)  # fmt: skip
-    return cli.main(["serve", "--host", args.host, "--port", str(args.port)])
+    agents = None if args.no_agents else start_agents(base, agents_home, args)
+    # uvicorn re-raises a SIGTERM after its graceful shutdown: make it an exception so `finally` stops the agents.
+    signal.signal(signal.SIGTERM, _exit_on_sigterm)
+    try:
+        return cli.main(["serve", "--host", args.host, "--port", str(args.port)])
+    finally:
+        stop_agents(agents)
+
+
+def _exit_on_sigterm(*_: object) -> None:
+    raise SystemExit(0)
+
+
+def _agents_line(args: argparse.Namespace, agents_home: Path) -> str:
+    if args.no_agents:
+        return ""
+    low, high = args.agent_interval
+    return (f"  simulated home agents:       {len(PATIENTS)} (one per patient; {args.history_weeks} weeks of history, "
+            f"then a session every {low:.0f}-{high:.0f} s; queues in {agents_home.resolve()})\n")  # fmt: skip
+
+
+def start_agents(base: str, home: Path, args: argparse.Namespace) -> subprocess.Popen:
+    """Starts backend.demo_agents as a child process that pairs and uploads through the HTTP API."""
+    host = base.replace("://0.0.0.0:", "://127.0.0.1:")
+    low, high = args.agent_interval
+    command = [sys.executable, "-m", "backend.demo_agents", "--server", host, "--home", str(home.resolve()),
+               "--history-weeks", str(args.history_weeks), "--min-interval", str(low), "--max-interval", str(high),
+               "--parent-pid", str(os.getpid())]  # fmt: skip
+    return subprocess.Popen(command)
+
+
+def stop_agents(agents: subprocess.Popen | None) -> None:
+    """Stops the agents (SIGTERM, then SIGKILL after 10 s); their queues keep whatever was not sent."""
+    if agents is None or agents.poll() is not None:
+        return
+    agents.terminate()
+    try:
+        agents.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        agents.kill()
+        agents.wait()

@@ -15,7 +15,9 @@ COMMANDS = (
     "kinect_agent.commands.simulate",
     "kinect_agent.commands.filter",
     "kinect_agent.commands.capture",
+    "kinect_agent.commands.pair",
     "kinect_agent.commands.upload",
+    "kinect_agent.commands.run",
 )
 
 

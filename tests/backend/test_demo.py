@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import datetime as dt
 import socket
 import subprocess
 import sys
@@ -21,10 +22,17 @@ def _free_port() -> int:
 
 
 @pytest.fixture
-def demo_server(tmp_path: Path):
+def demo_args() -> list[str]:
+    """Extra arguments of `coach-server demo` (overridden by tests that need other ones)."""
+    return []
+
+
+@pytest.fixture
+def demo_server(tmp_path: Path, demo_args: list[str]):
     port = _free_port()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "backend.cli", "demo", "--port", str(port), "--db", str(tmp_path / "demo.db")],
+        [sys.executable, "-m", "backend.cli", "demo", "--port", str(port), "--db", str(tmp_path / "demo.db"),
+         *demo_args],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=tmp_path,
     )  # fmt: skip
     base = f"http://127.0.0.1:{port}"
@@ -43,7 +51,7 @@ def demo_server(tmp_path: Path):
         yield base, proc
     finally:
         proc.terminate()
-        proc.wait(timeout=10)
+        proc.wait(timeout=20)
 
 
 def test_demo_serves_the_seeded_clinic_and_prints_urls(demo_server) -> None:
@@ -59,8 +67,49 @@ def test_demo_serves_the_seeded_clinic_and_prints_urls(demo_server) -> None:
         exercises = client.get("/api/v1/exercises", params={"limit": 100})
         assert exercises.json()["total"] >= 17
     proc.terminate()
-    out = proc.communicate(timeout=10)[0]
+    out = proc.communicate(timeout=20)[0]
     assert f"{base}/docs" in out and "therapist@demo.clinic" in out
+    assert "simulated home agents:" in out
+
+
+def _demo_processes(marker: str) -> list[int]:
+    """Returns the pids whose command line mentions `marker` (the test's own folder)."""
+    pids = []
+    for entry in Path("/proc").iterdir():
+        try:
+            if entry.name.isdigit() and marker in (entry / "cmdline").read_bytes().decode(errors="replace"):
+                pids.append(int(entry.name))
+        except OSError:
+            continue
+    return pids
+
+
+@pytest.mark.parametrize("demo_args", [["--history-weeks", "1", "--agent-interval", "1", "2"]])
+def test_demo_agents_upload_backdated_and_live_sessions(demo_server, tmp_path: Path) -> None:
+    """The simulated agents pair through the API and upload: history first (backdated), the queue drains."""
+    base, proc = demo_server
+    with httpx.Client(base_url=base, timeout=30) as client:
+        login = client.post("/api/v1/auth/login", json={"email": "admin@demo.clinic", "password": demo.DEMO_PASSWORD})
+        assert login.status_code == 200, login.text
+        deadline = time.monotonic() + 240
+        sessions: list[dict] = []
+        while time.monotonic() < deadline and len(sessions) < 2:
+            r = client.get("/api/v1/sessions", params={"limit": 100})
+            assert r.status_code == 200, r.text
+            sessions = r.json()["items"]
+            assert proc.poll() is None, proc.stdout.read()
+            time.sleep(2)
+        assert len(sessions) >= 2, "the demo agents uploaded fewer than 2 sessions within 240 s"
+        today = dt.datetime.now(dt.UTC).date().isoformat()
+        assert any(s["started_at"][:10] < today for s in sessions), "backdated history comes first"
+        devices = client.get(f"/api/v1/patients/{sessions[0]['patient_id']}/devices").json()["items"]
+        assert any("home agent (simulated)" in d["name"] and d["last_seen_at"] for d in devices)
+    receipts = list((tmp_path / "demo-agents").glob("*/queue/sent/*.json"))
+    assert receipts, "the agents keep a receipt of every confirmed upload"
+    assert not list((tmp_path / "demo-agents").glob("*/queue/rejected/*.khs"))
+    proc.terminate()
+    proc.communicate(timeout=30)
+    assert _demo_processes(str(tmp_path)) == [], "the agents stop with the demo"
 
 
 def test_seed_demo_twice_changes_nothing(db_session) -> None:
@@ -72,3 +121,19 @@ def test_seed_demo_twice_changes_nothing(db_session) -> None:
     count = db_session.scalar(select(func.count()).select_from(User))
     demo.seed_demo(db_session)
     assert db_session.scalar(select(func.count()).select_from(User)) == count
+
+
+def test_backfill_plan_is_patient_by_patient_oldest_first_and_repeatable(tmp_path: Path) -> None:
+    from backend.demo_agents import SESSIONS_PER_WEEK, Agent, backfill_plan
+
+    agents = [Agent(email=e, name=n, exercises=ex, index=i, home=tmp_path / str(i))
+              for i, (e, n, ex) in enumerate(demo.PATIENTS)]  # fmt: skip
+    today = dt.date(2026, 11, 23)
+    plan = backfill_plan(agents, 3, today, seed=7)
+    assert len(plan) == len(agents) * 2 * 3 * SESSIONS_PER_WEEK
+    assert [a.index for _, a, _ in plan] == sorted(a.index for _, a, _ in plan)
+    for agent in agents:
+        times = [w for w, a, _ in plan if a is agent]
+        assert times == sorted(times) and times[0].date() >= today - dt.timedelta(days=21)
+        assert times[-1].date() < today
+    assert [(w, a.email, x) for w, a, x in plan] == [(w, a.email, x) for w, a, x in backfill_plan(agents, 3, today, 7)]
