@@ -116,6 +116,15 @@ class InvalidInput(AppError):
     status_code = 422
 
 
+class DatabaseBusy(AppError):
+    """The database refused a write because another request held its lock (SQLite) or a serialisation failure."""
+
+    status_code = 503
+
+    def __init__(self, message: str):
+        super().__init__(message, headers={"Retry-After": "1"})
+
+
 class DatabaseNotMigrated(RuntimeError):
     """Raised at start-up when the database revision is not Alembic head."""
 

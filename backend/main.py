@@ -13,12 +13,13 @@ from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 from sqlalchemy import text
 from sqlalchemy.engine import Engine
+from sqlalchemy.exc import DBAPIError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from backend import __version__
 from backend.config import Settings, get_settings
 from backend.deps import DbSession
-from backend.exceptions import AppError
+from backend.exceptions import AppError, DatabaseBusy
 from backend.schemas import ErrorOut
 
 log = logging.getLogger(__name__)
@@ -59,6 +60,12 @@ def _validation_detail(exc: RequestValidationError) -> str:
     return "; ".join(parts) or "invalid request"
 
 
+def _is_busy(exc: DBAPIError) -> bool:
+    """True for lock contention a retry resolves: SQLite "database is locked", PostgreSQL serialisation/deadlock."""
+    pgcode = getattr(exc.orig, "sqlstate", None) or getattr(exc.orig, "pgcode", None)
+    return pgcode in {"40001", "40P01"} or "database is locked" in str(exc.orig)
+
+
 def _install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(AppError)
     async def app_error(_request: Request, exc: AppError) -> JSONResponse:
@@ -76,6 +83,13 @@ def _install_error_handlers(app: FastAPI) -> None:
         return JSONResponse(
             {"error": name, "detail": str(exc.detail)}, status_code=exc.status_code, headers=exc.headers
         )
+
+    @app.exception_handler(DBAPIError)
+    async def database_error(request: Request, exc: DBAPIError) -> JSONResponse:
+        if _is_busy(exc):
+            busy = DatabaseBusy("the database is busy with another write; retry in a second")
+            return await app_error(request, busy)
+        return await unexpected(request, exc)
 
     @app.exception_handler(Exception)
     async def unexpected(_request: Request, exc: Exception) -> JSONResponse:
