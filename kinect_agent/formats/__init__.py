@@ -24,6 +24,7 @@ _MODULES = (
     "kinect_v2_tsv",
     "utkinect",
     "keraal",
+    "keraal_vicon",
     "ui_prmd_vicon",
     "ui_prmd",
     "bvh",

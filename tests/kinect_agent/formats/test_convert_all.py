@@ -19,16 +19,12 @@ DATASET_FILES = [
     ("utkinect/joints_s01_e01.txt", "utkinect"),
     ("keraal/kinect_vicon_pairs/G3-Kinect-CTK-P1T1-Unknown-C-0.txt", "keraal"),
     ("keraal/kinect_gmm_examples/Assis1Maxime/SkeletonSequence1.txt", "keraal"),
+    ("keraal/kinect_vicon_pairs/G3-Vicon-CTK-P1T1-Unknown-C-0.txt", "keraal_vicon"),
     ("cmu-mocap/13_29.bvh", "bvh"),
     ("hdm05/squat1Reps/HDM_bd_squat1Reps_001_120.amc", "amc"),
     ("hdm05/kickLFront1Reps/HDM_bk_kickLFront1Reps_007_120.amc", "amc"),
     ("hdm05/elbowToKnee1RepsLelbowStart/HDM_bd_elbowToKnee1RepsLelbowStart_001_120.amc", "amc"),
     ("hdm05/rotateArmsBothBackward1Reps/HDM_bk_rotateArmsBothBackward1Reps_005_120.amc", "amc"),
-]
-# Files no reader covers yet: the KERAAL Vicon files hold 17 rigid-body targets on the segments (mm, z up), not
-# joint centres. Convert must say so and write nothing.
-UNREAD_FILES = [
-    "keraal/kinect_vicon_pairs/G3-Vicon-CTK-P1T1-Unknown-C-0.txt",
 ]
 
 
@@ -52,9 +48,10 @@ def test_convert_to_csv_and_session(data_dir: Path, tmp_path: Path, relative: st
     assert np.nanmean(head_up) > 0.9, f"{relative}: y is not up"
 
 
-@pytest.mark.parametrize("relative", UNREAD_FILES)
-def test_unread_files_fail_clearly_without_output(data_dir: Path, tmp_path: Path, relative: str, capsys) -> None:
+def test_unrecognised_file_fails_clearly_without_output(tmp_path: Path, capsys) -> None:
+    path = tmp_path / "notes.txt"
+    path.write_text("not a recording\n")
     out = tmp_path / "out.csv"
-    assert cli.main(["convert", str(data_dir / relative), "-o", str(out)]) == 2
-    assert Path(relative).name in capsys.readouterr().err
-    assert not out.exists() and list(tmp_path.iterdir()) == []
+    assert cli.main(["convert", str(path), "-o", str(out)]) == 2
+    assert path.name in capsys.readouterr().err
+    assert not out.exists() and sorted(tmp_path.iterdir()) == [path]
