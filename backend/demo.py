@@ -98,6 +98,9 @@ def main(argv: list[str] | None = None) -> int:
             return status
     base = f"http://{args.host}:{args.port}"
     print(f"\nKinect Home Coach demo is starting on {base}\n"
+          f"  sign in (every role):        {base}/\n"
+          f"  patient feedback screen:     {base}/patient\n"
+          f"  therapist dashboard:         {base}/therapist\n"
           f"  API documentation (OpenAPI): {base}/docs\n"
           f"  health check:                {base}/healthz\n"
           f"  demo database:               {args.db.resolve()}\n"

@@ -178,5 +178,6 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     app.include_router(_system_router())
     for name in ROUTERS:
         app.include_router(importlib.import_module(name).router)
+    app.include_router(importlib.import_module("frontend.pages").router)  # HTML pages, not in the OpenAPI schema
     app.openapi = _openapi(app)  # type: ignore[method-assign]
     return app

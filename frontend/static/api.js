@@ -1,0 +1,134 @@
+/* Shared page code: API calls with the login cookie and CSRF header, kind error messages, small DOM helpers. */
+"use strict";
+const Coach = (() => {
+  let csrf = null;
+
+  class ApiError extends Error {
+    constructor(status, error, detail) { super(detail || error); this.status = status; this.error = error; this.detail = detail; }
+  }
+
+  function toLogin() {
+    const next = location.pathname + location.search;
+    location.assign("/?next=" + encodeURIComponent(next));
+  }
+
+  async function csrfToken() {
+    if (!csrf) csrf = sessionStorage.getItem("coach_csrf");
+    if (!csrf) { csrf = (await api("/auth/csrf")).csrf_token; sessionStorage.setItem("coach_csrf", csrf); }
+    return csrf;
+  }
+
+  /** Calls /api/v1 + path; returns the JSON body; throws ApiError with the API's {error, detail}. */
+  async function api(path, { method = "GET", body, redirect401 = true, retried = false, withCsrf = true } = {}) {
+    const headers = { Accept: "application/json" };
+    if (method !== "GET" && withCsrf) headers["X-CSRF-Token"] = await csrfToken();
+    if (body !== undefined) headers["Content-Type"] = "application/json";
+    let resp;
+    try {
+      resp = await fetch("/api/v1" + path, { method, headers, credentials: "same-origin",
+        body: body === undefined ? undefined : JSON.stringify(body) });
+    } catch (e) {
+      throw new ApiError(0, "NetworkError", "The server could not be reached.");
+    }
+    if (resp.status === 401 && redirect401) { sessionStorage.removeItem("coach_csrf"); toLogin(); throw new ApiError(401, "NotAuthenticated", "Please sign in again."); }
+    if (resp.status === 403 && method !== "GET" && !retried) {
+      const err = await resp.clone().json().catch(() => ({}));
+      if (err.error === "CsrfFailed") { csrf = null; sessionStorage.removeItem("coach_csrf"); return api(path, { method, body, redirect401, retried: true }); }
+    }
+    if (resp.status === 204) return null;
+    const data = await resp.json().catch(() => null);
+    if (!resp.ok) throw new ApiError(resp.status, (data && data.error) || "HTTPError", (data && data.detail) || resp.statusText);
+    return data;
+  }
+
+  /** Returns a sentence for people: what went wrong and what to do, plus the server's own words. */
+  function kindMessage(err) {
+    const s = err && err.status;
+    let head;
+    if (s === 0) head = "We cannot reach the server right now. Please check the internet connection and try again.";
+    else if (s === 401) head = "Please sign in again.";
+    else if (s === 403) head = "Sorry, your account may not see or change this.";
+    else if (s === 404) head = "Sorry, we could not find this.";
+    else if (s === 409) head = "This was changed in the meantime. Please reload the page.";
+    else if (s === 422) head = "Some of the information is not right. Please check it and try again.";
+    else if (s === 429) head = "Too many tries. Please wait a few minutes and try again.";
+    else if (s >= 500) head = "Something went wrong on our side. Please try again in a moment.";
+    else head = "Something went wrong.";
+    const detail = err && err.detail && s !== 0 ? ` (${err.detail})` : "";
+    return head + detail;
+  }
+
+  function showError(err, where) {
+    if (err && err.status === 401) return;
+    console.error(err);
+    const box = where || document.getElementById("error");
+    if (!box) return;
+    box.textContent = kindMessage(err);
+    box.hidden = false;
+  }
+
+  /** el("p", {class: "x"}, "text", child) -> element (strings become text nodes, never HTML). */
+  function el(tag, attrs, ...children) {
+    const node = document.createElement(tag);
+    for (const [k, v] of Object.entries(attrs || {})) {
+      if (v === null || v === undefined || v === false) continue;
+      if (k.startsWith("on")) node.addEventListener(k.slice(2), v); else node.setAttribute(k, v === true ? "" : v);
+    }
+    for (const c of children.flat()) if (c !== null && c !== undefined && c !== false) node.append(c instanceof Node ? c : String(c));
+    return node;
+  }
+
+  const DAY = 86400000;
+  function startOfDay(d) { const x = new Date(d); x.setHours(0, 0, 0, 0); return x; }
+  function startOfWeekUTC(now = new Date()) {  // Monday 00:00 UTC, as the API counts weeks
+    const d = new Date(Date.UTC(now.getUTCFullYear(), now.getUTCMonth(), now.getUTCDate()));
+    d.setUTCDate(d.getUTCDate() - ((d.getUTCDay() + 6) % 7));
+    return d;
+  }
+  function fmtDate(iso, opts) {
+    return new Date(iso).toLocaleDateString("en-GB", opts || { weekday: "short", day: "numeric", month: "short", year: "numeric" });
+  }
+  function fmtDateTime(iso) {
+    return new Date(iso).toLocaleString("en-GB", { day: "numeric", month: "short", year: "numeric", hour: "2-digit", minute: "2-digit" });
+  }
+  function daysAgo(iso) { return Math.round((startOfDay(new Date()) - startOfDay(new Date(iso))) / DAY); }
+  function plainDay(iso) {
+    const n = daysAgo(iso);
+    if (n === 0) return "today";
+    if (n === 1) return "yesterday";
+    return "on " + fmtDate(iso, { weekday: "long", day: "numeric", month: "long" });
+  }
+  function median(xs) {
+    const s = xs.filter((x) => x !== null && x !== undefined && isFinite(x)).sort((a, b) => a - b);
+    if (!s.length) return null;
+    const m = s.length >> 1;
+    return s.length % 2 ? s[m] : (s[m - 1] + s[m]) / 2;
+  }
+
+  let exercisesPromise = null;
+  /** Returns {slug: exercise} of the exercise library (cached). */
+  function exercises() {
+    exercisesPromise = exercisesPromise || api("/exercises?limit=200").then((p) => Object.fromEntries(p.items.map((e) => [e.slug, e])));
+    return exercisesPromise;
+  }
+  function exerciseName(lib, slug) { return (lib[slug] && lib[slug].name) || (slug || "exercise").replace(/_/g, " "); }
+
+  /** Returns the plan running today (start <= today <= end), newest first. */
+  function runningPlan(plans) {
+    const today = new Date().toISOString().slice(0, 10);
+    return plans.find((p) => p.start_date <= today && (!p.end_date || p.end_date >= today)) || null;
+  }
+
+  async function logout() {
+    try { await api("/auth/logout", { method: "POST", redirect401: false }); } catch (e) { /* already signed out */ }
+    sessionStorage.removeItem("coach_csrf");
+    location.assign("/");
+  }
+  document.addEventListener("DOMContentLoaded", () => {
+    const b = document.getElementById("logout");
+    if (b) b.addEventListener("click", logout);
+  });
+
+  return { api, ApiError, kindMessage, showError, el, fmtDate, fmtDateTime, plainDay, daysAgo, startOfWeekUTC, median,
+           exercises, exerciseName, runningPlan, toLogin, DAY };
+})();

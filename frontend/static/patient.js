@@ -1,0 +1,130 @@
+/* Patient feedback screen: greeting, this week's plan, the last session in plain words, advice, a progress chart. */
+"use strict";
+(() => {
+  const { api, el, plainDay, median, exercises, exerciseName, runningPlan, showError, startOfWeekUTC, DAY } = Coach;
+  const main = document.getElementById("main");
+  const pid = main.dataset.patientId;
+  const firstName = main.dataset.name;
+
+  function greeting() {
+    const h = new Date().getHours();
+    const part = h < 12 ? "Good morning" : h < 18 ? "Good afternoon" : "Good evening";
+    document.getElementById("greeting").textContent = firstName ? `${part}, ${firstName}!` : `${part}!`;
+  }
+
+  function plural(lib, slug) {
+    const name = exerciseName(lib, slug).toLowerCase();
+    if (name === "sit to stand") return "stand-ups from the chair";
+    return name.endsWith("s") ? name : name + "s";
+  }
+
+  function lastSessionBlock(last, item, lib, history) {
+    const box = document.getElementById("last-session");
+    box.replaceChildren();
+    if (!last) { box.append(el("p", { class: "lead" }, "No exercise recorded yet. When you do your exercises in front of the camera, you will see them here.")); return; }
+    const what = plural(lib, last.exercise_slug);
+    const when = plainDay(last.started_at);
+    let sentence;
+    if (last.status !== "processed" || last.repetitions === null) {
+      sentence = `We could not count your ${what} ${when}. Please make sure the camera can see all of you next time.`;
+    } else if (item && last.repetitions >= item.repetitions) {
+      sentence = `You did all ${item.repetitions} ${what} ${when} — well done!`;
+    } else if (item && last.repetitions >= 0.7 * item.repetitions) {
+      sentence = `You did ${last.repetitions} of ${item.repetitions} ${what} ${when} — well done!`;
+    } else if (item) {
+      sentence = `You did ${last.repetitions} of ${item.repetitions} ${what} ${when}. Good effort — next time, try for a few more.`;
+    } else {
+      sentence = `You did ${last.repetitions} ${what} ${when} — well done!`;
+    }
+    box.append(el("p", { class: "big-sentence", id: "last-sentence" }, sentence));
+    if (last.rom_deg !== null && last.rom_deg !== undefined) {
+      const rom = Math.round(last.rom_deg);
+      const since = new Date(last.started_at) - 28 * DAY;
+      const before = median(history.filter((p) => p.session_id !== last.id && new Date(p.started_at) < new Date(last.started_at)
+        && +new Date(p.started_at) >= since && p.quality_ok !== false).map((p) => p.rom_deg));
+      let words = `You moved through ${rom} degrees.`;
+      if (before !== null) {
+        const b = Math.round(before), ratio = last.rom_deg / before;
+        if (ratio >= 1.05) words += ` That is more than in the last weeks (about ${b} degrees). Very good!`;
+        else if (ratio > 0.95) words += ` That is about the same as in the last weeks (${b} degrees). Keep it up.`;
+        else words += ` In the last weeks it was about ${b} degrees. That is fine — move gently, only as far as is comfortable.`;
+      }
+      box.append(el("p", { class: "lead", id: "rom-sentence" }, words));
+    }
+    if (last.quality_ok === false) box.append(el("p", { class: "muted" }, "The camera did not see you well this time, so these numbers may be a little off."));
+  }
+
+  function planBlock(plan, lib, weekSessions) {
+    const list = document.getElementById("plan");
+    list.replaceChildren();
+    if (!plan || !plan.items.length) { list.append(el("li", {}, "You have no exercises planned right now. Your therapist will add them.")); return; }
+    const today = new Date().toDateString();
+    for (const item of plan.items) {
+      const mine = weekSessions.filter((s) => s.exercise_slug === item.exercise_slug);
+      const doneToday = mine.some((s) => new Date(s.started_at).toDateString() === today);
+      const weekDone = mine.length >= item.frequency_per_week;
+      const times = item.frequency_per_week === 1 ? "once" : item.frequency_per_week === 2 ? "twice" : `${item.frequency_per_week} times`;
+      let status = `Done ${mine.length} of ${item.frequency_per_week} times this week`;
+      if (weekDone) status = `All done this week (${mine.length} of ${item.frequency_per_week}) ✓`;
+      if (doneToday) status += " · done today";
+      list.append(el("li", {},
+        el("span", { class: "tick" + (weekDone ? " done" : ""), "aria-hidden": "true" }, weekDone ? "✓" : mine.length),
+        el("div", {},
+          el("div", { class: "what" }, exerciseName(lib, item.exercise_slug)),
+          el("div", { class: "how" }, `${item.sets} ${item.sets === 1 ? "set" : "sets"} of ${item.repetitions}, ${times} a week`),
+          el("div", {}, status),
+          item.notes ? el("div", { class: "muted" }, item.notes) : null)));
+    }
+  }
+
+  function adviceBlock(items) {
+    const list = document.getElementById("advice");
+    list.replaceChildren();
+    const shown = items.filter((s) => s.status === "approved" || s.source === "therapist");
+    if (!shown.length) { list.append(el("li", {}, "No new advice. Keep going with your exercises!")); return; }
+    for (const s of shown.slice(0, 5)) {
+      list.append(el("li", {}, el("span", { class: "from" }, (s.source === "therapist" ? "From your therapist" : "Tip, checked by your therapist")
+        + " · " + Coach.fmtDate(s.created_at, { day: "numeric", month: "long" })), s.text));
+    }
+  }
+
+  function chartBlock(plan, lib, points) {
+    const box = document.getElementById("charts");
+    box.replaceChildren();
+    const slugs = plan && plan.items.length ? plan.items.map((i) => i.exercise_slug) : [...new Set(points.map((p) => p.exercise_slug))];
+    const since = Date.now() - 42 * DAY;
+    if (!points.length) { box.append(el("p", {}, "Your progress will show here after your first exercises.")); return; }
+    for (const slug of slugs) {
+      const item = plan && plan.items.find((i) => i.exercise_slug === slug);
+      const pts = points.filter((p) => p.exercise_slug === slug && +new Date(p.started_at) >= since && p.repetitions !== null)
+        .map((p) => ({ t: p.started_at, y: p.repetitions, label: `${p.repetitions} on ${Coach.fmtDate(p.started_at, { day: "numeric", month: "long" })}` }));
+      box.append(Chart.timeChart([{ name: "what you did", points: pts }], {
+        title: `${exerciseName(lib, slug)}: how many each time`, yMin: 0, big: true, height: 240,
+        target: item ? { y: item.repetitions, label: `your goal: ${item.repetitions}` } : null,
+      }));
+    }
+  }
+
+  async function load() {
+    greeting();
+    const since = startOfWeekUTC().toISOString();
+    try {
+      const [lib, plans, latest, week, suggestions, progress] = await Promise.all([
+        exercises(),
+        api(`/patients/${pid}/plans?limit=20`),
+        api(`/sessions?patient_id=${pid}&limit=1`),
+        api(`/sessions?patient_id=${pid}&since=${encodeURIComponent(since)}&limit=200`),
+        api(`/patients/${pid}/suggestions?limit=10`),
+        api(`/patients/${pid}/progress`),
+      ]);
+      const plan = runningPlan(plans.items);
+      const last = latest.items[0] || null;
+      const item = last && plan ? plan.items.find((i) => i.exercise_slug === last.exercise_slug) : null;
+      lastSessionBlock(last, item, lib, last ? progress.points.filter((p) => p.exercise_slug === last.exercise_slug) : []);
+      adviceBlock(suggestions.items);
+      planBlock(plan, lib, week.items);
+      chartBlock(plan, lib, progress.points);
+    } catch (err) { showError(err); }
+  }
+  load();
+})();

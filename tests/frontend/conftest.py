@@ -1,0 +1,187 @@
+"""End-to-end fixtures: the real server (uvicorn subprocess) on a migrated database seeded with the demo clinic
+and sessions uploaded through the HTTP API, and one headless Chromium for the run.
+
+COACH_TEST_DATABASE_URL picks the database as in tests/backend (default: a SQLite file in a temp dir); on
+PostgreSQL the server uses its own schema coach_web_<pid>, dropped at the end.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import os
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import httpx
+import pytest
+from sqlalchemy.orm import Session
+
+from backend.database import import_all_models
+from backend.demo import DEMO_PASSWORD, seed_demo
+from backend.migrate import upgrade
+from tests.backend.conftest import build_engine
+from tests.backend.khs_files import make_khs
+
+import_all_models()
+
+ROOT = Path(__file__).resolve().parents[2]
+SHOTS = Path(os.environ.get("COACH_SHOTS_DIR", "/tmp/shots"))
+CHROMIUM = os.environ.get("COACH_CHROMIUM", "/usr/bin/chromium")
+THERAPIST = "therapist@demo.clinic"  # Tara: assigned to Rose (index 0), Maria, Ines
+PATIENT = "rose@demo.clinic"  # plan: seated_knee_extension and sit_to_stand, 2 x 10, 3 per week
+
+
+@dataclass
+class LiveServer:
+    """The running server and what the tests seeded into it."""
+
+    url: str
+    patient_id: int
+    approved_text: str  # a suggestion approved through the API before the browser tests
+    pending_ids: list[int] = field(default_factory=list)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _server_url(url: str, schema: str | None) -> str:
+    """Returns the database URL the server process uses (PostgreSQL: with search_path set to the test schema)."""
+    if schema is None:
+        return url
+    return f"{url}{'&' if '?' in url else '?'}options=-csearch_path%3D{schema}"
+
+
+def _login(client: httpx.Client, email: str) -> dict:
+    r = client.post("/api/v1/auth/login", json={"email": email, "password": DEMO_PASSWORD})
+    r.raise_for_status()
+    return r.json()
+
+
+def _iso(when: dt.datetime) -> str:
+    return when.astimezone(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def _upload_history(base: str) -> tuple[int, str, list[int]]:
+    """Uploads Rose's sessions as Rose (cookie + CSRF); approves one system suggestion as her therapist.
+
+    Returns (patient id, the approved suggestion's text, ids of the suggestions still pending).
+    """
+    now = dt.datetime.now(dt.UTC).replace(microsecond=0)
+    plan = [(21, "seated_knee_extension", 10), (17, "sit_to_stand", 10), (14, "seated_knee_extension", 10),
+            (10, "sit_to_stand", 10), (7, "seated_knee_extension", 10), (3, "sit_to_stand", 10)]  # fmt: skip
+    with httpx.Client(base_url=base, timeout=60) as rose:
+        login = _login(rose, PATIENT)
+        patient_id = login["user"]["id"]
+        headers = {"X-CSRF-Token": login["csrf_token"], "Content-Type": "application/octet-stream"}
+        uploads = [(now - dt.timedelta(days=d), slug, reps) for d, slug, reps in plan]
+        # this week: a short sit-to-stand set a little earlier, a nearly complete knee set last
+        uploads += [(now - dt.timedelta(minutes=90), "sit_to_stand", 6),
+                    (now - dt.timedelta(minutes=30), "seated_knee_extension", 9)]  # fmt: skip
+        for seed, (when, slug, reps) in enumerate(uploads):
+            data = make_khs(slug, reps, seed=seed, created_at=_iso(when))
+            r = rose.post(f"/api/v1/sessions?exercise={slug}", content=data, headers=headers)
+            assert r.status_code == 201, r.text
+    with httpx.Client(base_url=base, timeout=60) as tara:
+        login = _login(tara, THERAPIST)
+        r = tara.get(f"/api/v1/patients/{patient_id}/suggestions", params={"status": "pending", "limit": 200})
+        pending = r.json()["items"]
+        assert len(pending) >= 2, f"expected pending system suggestions, got {pending}"
+        first = pending[-1]  # the oldest
+        r = tara.post(f"/api/v1/suggestions/{first['id']}/approve", headers={"X-CSRF-Token": login["csrf_token"]})
+        r.raise_for_status()
+    return patient_id, first["text"], [s["id"] for s in pending[:-1]]
+
+
+@pytest.fixture(scope="session")
+def live_server(tmp_path_factory) -> Iterator[LiveServer]:
+    """The app served by uvicorn in a subprocess on a free port, on a migrated and seeded database."""
+    url = os.environ.get("COACH_TEST_DATABASE_URL") or f"sqlite:///{tmp_path_factory.mktemp('web') / 'web.db'}"
+    engine, cleanup = build_engine(url, "coach_web")
+    schema = f"coach_web_{os.getpid()}" if url.startswith("postgresql") else None
+    with engine.begin() as conn:
+        upgrade(conn, "head")
+    from backend.exercises.service import sync_exercise_library
+
+    with Session(engine) as session, session.begin():
+        sync_exercise_library(db_session=session)
+        seed_demo(session)
+    engine.dispose()
+
+    port = _free_port()
+    env = os.environ | {"COACH_DATABASE_URL": _server_url(url, schema), "COACH_ENVIRONMENT": "local",
+                        "PYTHONPATH": str(ROOT)}  # fmt: skip
+    log = open(tmp_path_factory.mktemp("log") / "server.log", "w+")  # noqa: SIM115 - closed at teardown
+    command = [sys.executable, "-m", "uvicorn", "backend.main:create_app", "--factory", "--host", "127.0.0.1",
+               "--port", str(port), "--log-level", "warning"]  # fmt: skip
+    proc = subprocess.Popen(command, cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT)
+    base = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + 30
+        while True:
+            try:
+                if httpx.get(f"{base}/healthz", timeout=1).status_code == 200:
+                    break
+            except httpx.TransportError:
+                pass
+            if proc.poll() is not None or time.monotonic() > deadline:
+                log.seek(0)
+                pytest.fail(f"server did not start:\n{log.read()}")
+            time.sleep(0.1)
+        patient_id, approved, pending = _upload_history(base)
+        yield LiveServer(url=base, patient_id=patient_id, approved_text=approved, pending_ids=pending)
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+        log.close()
+        cleanup()
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """One headless Chromium for the run (Debian's /usr/bin/chromium)."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+    if not Path(CHROMIUM).exists():
+        pytest.skip(f"no Chromium at {CHROMIUM}")
+    with sync_api.sync_playwright() as pw:
+        b = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=["--no-sandbox"])
+        yield b
+        b.close()
+
+
+@pytest.fixture
+def page(browser, live_server):
+    """A fresh browser context (no cookies) with a laptop-sized window."""
+    context = browser.new_context(viewport={"width": 1280, "height": 900}, base_url=live_server.url)
+    context.set_default_timeout(10_000)
+    p = context.new_page()
+    errors: list[str] = []
+    p.on("pageerror", lambda exc: errors.append(str(exc)))
+    p.js_errors = errors
+    yield p
+    context.close()
+
+
+def login(page, email: str, password: str = DEMO_PASSWORD) -> None:
+    """Signs in through the login form."""
+    page.goto("/")
+    page.fill("#email", email)
+    page.fill("#password", password)
+    page.click("#login-submit")
+
+
+def shot(page, name: str) -> None:
+    """Saves a full-page screenshot to /tmp/shots/<name>.png."""
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SHOTS / f"{name}.png"), full_page=True)

@@ -1,0 +1,102 @@
+"""The pages end to end: the real server and a real browser (headless Chromium)."""
+
+from __future__ import annotations
+
+import re
+
+import httpx
+import pytest
+from playwright.sync_api import expect
+
+from tests.frontend.conftest import PATIENT, THERAPIST, login, shot
+
+pytestmark = pytest.mark.browser
+
+
+def test_bad_password_shows_an_error_and_stays_on_login(page):
+    login(page, THERAPIST, "wrong password")
+    error = page.locator("#login-error")
+    error.wait_for(state="visible")
+    assert "not right" in error.inner_text()
+    assert page.url.endswith("/")
+    shot(page, "login_error")
+
+
+def test_therapist_sees_patients_sorted_by_attention(page, live_server):
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    rows = page.locator("#patients tbody tr[data-patient-id]")
+    rows.first.wait_for()
+    expect(rows).to_have_count(3)
+    assert "Rose Miller" in rows.first.inner_text(), "Rose has suggestions to review and should come first"
+    shot(page, "therapist_dashboard")
+    assert not page.js_errors
+
+
+def test_therapist_opens_patient_sees_chart_and_approves_a_suggestion(page, live_server):
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    page.click("text=Rose Miller")
+    page.wait_for_url(re.compile(rf"/therapist/patients/{live_server.patient_id}$"))
+    page.locator("#progress svg circle.point").first.wait_for()
+    assert page.locator("#progress svg circle.point").count() >= 8
+    expect(page.locator("#sessions tbody tr[data-session-id]")).to_have_count(8)
+    pending = page.locator("#pending li[data-suggestion-id]")
+    pending.first.wait_for()
+    first_id = int(pending.first.get_attribute("data-suggestion-id"))
+    assert first_id in live_server.pending_ids
+    assert "repetitions <" in pending.first.inner_text()
+    shot(page, "therapist_patient")
+    pending.first.get_by_role("button", name="Approve").click()
+    expect(page.locator(f'#pending li[data-suggestion-id="{first_id}"] .note')).to_contain_text("Approved")
+    cookies = {c["name"]: c["value"] for c in page.context.cookies()}
+    r = httpx.get(f"{live_server.url}/api/v1/patients/{live_server.patient_id}/suggestions",
+                  params={"status": "approved"}, cookies=cookies)  # fmt: skip
+    assert first_id in [s["id"] for s in r.json()["items"]]
+    assert not page.js_errors
+
+
+def test_patient_sees_latest_session_in_words_and_approved_advice(page, live_server):
+    login(page, PATIENT)
+    page.wait_for_url("**/patient")
+    sentence = page.locator("#last-sentence")
+    sentence.wait_for()
+    assert "You did 9 of 10 seated knee extensions" in sentence.inner_text()
+    assert "well done" in sentence.inner_text()
+    expect(page.locator("#advice")).to_contain_text(live_server.approved_text)
+    page.locator("#charts svg circle.point").first.wait_for()
+    assert page.locator("#greeting").inner_text().endswith("Rose!")
+    shot(page, "patient")
+    assert not page.js_errors
+
+
+def test_patient_opening_a_therapist_page_gets_403(page, live_server):
+    login(page, PATIENT)
+    page.wait_for_url("**/patient")
+    response = page.goto(f"/therapist/patients/{live_server.patient_id}")
+    assert response.status == 403
+    assert "for therapists" in page.locator("#forbidden").inner_text()
+    shot(page, "forbidden")
+
+
+def test_not_logged_in_goes_to_login_page(page):
+    page.goto("/therapist")
+    assert re.search(r"/\?next=%2Ftherapist$", page.url), page.url
+    page.locator("#login-form").wait_for()
+
+
+def test_therapist_replays_a_session_in_3d(page, live_server):
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    page.goto(f"/therapist/patients/{live_server.patient_id}")
+    page.locator("#sessions tbody a", has_text="3D replay").first.click()
+    page.wait_for_url(re.compile(r"/therapist/sessions/\d+/replay$"))
+    frame = page.locator("#viewer")
+    frame.wait_for(state="visible", timeout=20_000)
+    src = frame.get_attribute("src")
+    assert re.fullmatch(r"http://127\.0\.0\.1:\d+/", src), src
+    assert httpx.get(src, timeout=10).status_code == 200
+    expect(page.locator("#replay-title")).to_contain_text("Seated knee extension")
+    page.wait_for_timeout(2500)  # let the viewer connect and draw a few frames
+    shot(page, "replay")
+    assert not page.js_errors
