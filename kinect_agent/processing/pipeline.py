@@ -22,6 +22,10 @@ only observed joints enter (rows of z and R selected), tracked joints with SD si
 joints with sigma_inferred_m. Process noise is a random walk scaled with the frame interval: Q = q² · dt · rate_ref,
 with a variance ceiling (the initial variance) so that directions no joint observes cannot spread the sigma points
 over several radians. Joints whose innovation is improbable (d² > gate_chi2 for one joint) are skipped in that step.
+A joint skipped for reacquire_s without a break has lost track rather than met an outlier (the gate is relative to
+the state's own spread, so a limb that once outruns the random walk, e.g. a knee at 20-30°/frame in a deep squat,
+would stay gated for good): the angles that place it restart from inverse kinematics of that frame with the initial
+variance, and the gate admits it again.
 Passes 1-2 use the first length_pass_max_frames frames of longer recordings (they only estimate the lengths).
 """
 
@@ -41,7 +45,7 @@ from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.ik import IKResult, bone_length_estimate, inverse_kinematics
 from kinect_agent.processing.outliers import remove_outliers
 from kinect_agent.processing.params import KinematicParams
-from kinect_agent.processing.rotations import matrix_to_quat
+from kinect_agent.processing.rotations import matrix_to_quat, matrix_to_rotvec
 from kinect_agent.processing.ukf import (
     MerweScaledSigmaPoints,
     UnscentedKalmanFilter,
@@ -72,14 +76,23 @@ class PipelineConfig:
     p0_length_m: float = 0.03  # initial SD of segment lengths, m
     rate_ref_hz: float = 30.0  # the rate at which the q_* values are per frame
     remove_outliers: bool = True  # run the mixture-model outlier removal first
-    outlier_threshold: float = 0.5  # outlier when P(uniform component) exceeds this
-    outlier_window_s: float = 0.7  # window of the outlier residual's running median / local quadratic fit, s
+    outlier_threshold: float = 0.95  # outlier when P(uniform component) exceeds this; 0.95 rather than the MAP 0.5:
+    # the precision/recall operating point (tuning set, simulator + CMU: precision 0.92 vs 0.90 at 0.5, recall 0.97)
+    outlier_window_s: float = 0.5  # window of the outlier residual's running median / local quadratic fit, s;
+    # 0.5 s (15 frames at 30 Hz) outlasts twice the longest tracking-loss burst (0.2 s) yet follows fast motion:
+    # on the tuning set (simulator + CMU, Kinect 2 0°/30°, Kinect 1 60°) precision 0.90 / recall 0.98 where
+    # 0.7 s gave 0.83 / 0.99 (turning points of fast motion flagged) and 0.3 s 0.85 / 0.95; see bench/README.md
     outlier_min_sigma_m: float = 0.015  # floor of the Gaussian's SD per axis: Kinect's random error (paper §3.1,
     # joint offset SD ≈ 20 mm) — keeps still, clean stretches from making ordinary motion look like outliers
     outlier_min_range_m: float = 1.0  # floor of the uniform component's range per axis (tracking loss throws a
     # joint anywhere in view); Gaussian weights are kept >= 0.5 (outliers are the minority)
     outlier_iterations: int = 2  # local-quadratic refinements of the outlier residual after the median stage
     gate_chi2: float | None = 30.0  # drop a joint whose innovation d² exceeds this (None: never); online always
+    reacquire_s: float | None = 0.1  # a joint gated this long without a break is a lost track, not an outlier: the
+    # angles that place it restart from inverse kinematics of the frame (None: never). Without it a fast limb
+    # (UI-PRMD squat: knee 20-30°/frame) outruns the random walk once and is then gated for good.
+    online_reacquire_s: float | None = 0.3  # the same for the online filter, longer: online there is no outlier
+    # removal, and the gate alone must ride out tracking-loss bursts (none of the speed benchmark's re-acquires at 0.3)
     smoother: str = "urts"  # "urts" (unscented RTS after pass 3; measured best) or "four_pass" (paper: pass 4 backward)
     four_pass_combine: str = "last"  # four_pass output: "last" (pass 4) or "information" (passes 3+4 averaged)
     alpha: float = 0.5  # sigma-point spread (van der Merwe)
@@ -104,6 +117,9 @@ class PipelineConfig:
             raise ValueError(f"PipelineConfig.smoother must be one of {SMOOTHERS}, got {self.smoother!r}")
         if self.gate_chi2 is not None and not self.gate_chi2 > 0:
             raise ValueError(f"PipelineConfig.gate_chi2 must be > 0 or None, got {self.gate_chi2!r}")
+        for name in ("reacquire_s", "online_reacquire_s"):
+            if getattr(self, name) is not None and not getattr(self, name) > 0:
+                raise ValueError(f"PipelineConfig.{name} must be > 0 or None, got {getattr(self, name)!r}")
 
 
 @dataclass
@@ -235,6 +251,51 @@ def _add_process_noise(P: np.ndarray, diag: np.ndarray, q: np.ndarray, ceiling: 
     P[diag, diag] += np.minimum(q, np.maximum(ceiling - P[diag, diag], 0.0))
 
 
+def _placing_entries() -> tuple[np.ndarray, ...]:
+    """Returns, per joint, the state entries (offsets into root (3) + theta (33)) that place it relative to the trunk.
+
+    ROOT: the root position. Others: the angles of their rotating ancestors below ROOT (ANK_L: the KNE_L hinge and
+    the HIP_L rotation), or ROOT's rotation for the joints that hang from ROOT itself (SPINE, HIP_*).
+    """
+    out = [np.arange(N_ROOT)]
+    for j in range(1, skeleton.J):
+        rots, p = [], int(skeleton.PARENT[j])
+        while p > 0:
+            rots.append(km.ROT_INDEX[p])
+            p = int(skeleton.PARENT[p])
+        rots = rots or [km.ROT_INDEX[0]]
+        out.append(N_ROOT + np.concatenate([km.ROT_START[r] + np.arange(km.ROT_DOF[r]) for r in rots]))
+    return tuple(out)
+
+
+_PLACING = _placing_entries()
+
+
+def _reacquire(kf: UnscentedKalmanFilter, joints: np.ndarray, start: np.ndarray, p0: np.ndarray) -> None:
+    """Restarts the state entries that place `joints` from `start` (root (3) m + theta (33) rad, e.g. IK of the frame).
+
+    Their covariance becomes the initial one (p0 (n,), variances) with no correlation to the rest of the state.
+    """
+    entries = np.unique(np.concatenate([_PLACING[j] for j in joints]))
+    idx = np.where(entries < N_ROOT, entries, entries + kf.dim_x - N_ROOT - N_TH)  # skip lengths in the state
+    kf.x[idx] = start[entries]
+    kf.P[idx, :] = 0.0
+    kf.P[:, idx] = 0.0
+    kf.P[idx, idx] = p0[idx]
+
+
+def _ik_state(model: km.ChainModel, positions: np.ndarray) -> np.ndarray:
+    """Returns (36,) root (m) + theta (rad) of one frame by inverse kinematics, against `model`'s references.
+
+    positions: (J, 3) m, camera frame, NaN = untracked.
+    """
+    ik = inverse_kinematics(positions[None])
+    theta = ik.theta[0].copy()
+    R = ik.model.local_rotations(theta)[km._R3]  # (7, 3, 3) local rotations of the 3-DoF joints
+    theta[km.THETA_3DOF] = matrix_to_rotvec(np.swapaxes(model.R_ref, -1, -2) @ R).reshape(-1)
+    return np.concatenate((ik.root[0], theta))
+
+
 def _run_pass(
     kf: UnscentedKalmanFilter,
     order: np.ndarray,
@@ -243,11 +304,14 @@ def _run_pass(
     config: PipelineConfig,
     store: bool,
     tick: Callable[[int], None],
+    restart: tuple[np.ndarray, int] | None = None,
 ) -> tuple[np.ndarray | None, np.ndarray | None, int]:
     """Runs one filter pass over frames in `order`; returns (xs (T, n), Ps (T, n, n)) in frame order if stored.
 
     q_steps: (T,) scale of Q (dt · rate_ref) for the step into each frame of `order` (first frame: no predict).
-    Returns also the number of joint samples dropped by the innovation gate.
+    restart: (start (T, 36) root m + theta rad per frame, e.g. from IK; n_frames): a joint the gate dropped in
+    n_frames consecutive observed frames has lost track, and the entries that place it restart from `start` at the
+    next frame it is observed (_reacquire). Returns also the number of joint samples dropped by the innovation gate.
     """
     z, observed, R_diag = obs
     n = kf.dim_x
@@ -258,12 +322,20 @@ def _run_pass(
     ceiling = kf.P0_ceiling if hasattr(kf, "P0_ceiling") else np.full(n, np.inf)
     diag = np.arange(n)
     gated = 0
+    run = np.zeros(skeleton.J, dtype=np.int64)  # consecutive observed frames each joint was gated
     for i, k in enumerate(order):
         if i:
             _add_process_noise(kf.P, diag, qd * q_steps[i], ceiling)
         if observed[k].any():
+            present = observed[k].reshape(-1, 3).all(axis=1)
+            if restart is not None:
+                lost = present & (run >= restart[1])
+                if lost.any():
+                    _reacquire(kf, np.flatnonzero(lost), restart[0][k], ceiling)
+                    run[lost] = 0
             used = _update(kf, z[k], observed[k], R_diag[k], config.gate_chi2)
-            gated += int(observed[k].reshape(-1, 3).all(axis=1).sum() - used.sum())
+            gated += int(present.sum() - used.sum())
+            run = np.where(used, 0, run + (present & ~used))
         if store:
             xs[k] = kf.x
             Ps[k] = kf.P
@@ -304,14 +376,18 @@ def smooth(
     scale_sub = scale[sub]
     scale_sub_bwd = np.concatenate(([0.0], scale_sub[1:][::-1]))
     n_sub = len(sub)
+    restart = None
+    if config.reacquire_s is not None and config.gate_chi2 is not None:
+        dt = np.median(np.diff(clean.t)) if T > 1 else 1.0 / config.rate_ref_hz
+        restart = (np.concatenate((ik.root, ik.theta), axis=1), max(1, int(round(config.reacquire_s / dt))))
     total = 2 * n_sub + 2 * T
     full = _Chain(ik.model, None)
     kf = _make_filter(full, config)
     kf.x = np.concatenate((ik.root[0], ik.lengths, ik.theta[0]))
     kf.P = np.diag(full.p0_diag(config))
     kf.Q = np.diag(full.q_diag(config))
-    _, _, g1 = _run_pass(kf, np.arange(n_sub), obs_sub, scale_sub, config, False, tick)
-    _, _, g2 = _run_pass(kf, np.arange(n_sub - 1, -1, -1), obs_sub, scale_sub_bwd, config, False, tick)
+    _, _, g1 = _run_pass(kf, np.arange(n_sub), obs_sub, scale_sub, config, False, tick, restart)
+    _, _, g2 = _run_pass(kf, np.arange(n_sub - 1, -1, -1), obs_sub, scale_sub_bwd, config, False, tick, restart)
     lengths = kf.x[N_ROOT : N_ROOT + N_LEN].copy()
     # A bone seen too rarely can wander (even below zero); keep the measured median length there.
     implausible = ~((lengths > 0.5 * ik.lengths) & (lengths < 2.0 * ik.lengths))
@@ -324,7 +400,7 @@ def smooth(
     kf3.x = kf.x[keep].copy()
     kf3.P = kf.P[np.ix_(keep, keep)].copy()
     kf3.Q = np.diag(fixed.q_diag(config))
-    xs3, Ps3, g3 = _run_pass(kf3, fwd, obs, scale, config, True, tick)
+    xs3, Ps3, g3 = _run_pass(kf3, fwd, obs, scale, config, True, tick, restart)
     if config.smoother == "urts":
         Qs = np.einsum("t,ij->tij", np.append(scale[1:], 0.0), kf3.Q)
         xs, _ = unscented_rts(xs3, Ps3, Qs, None, kf3.points)
@@ -333,7 +409,7 @@ def smooth(
     else:
         kf4 = _make_filter(fixed, config)
         kf4.x, kf4.P, kf4.Q = kf3.x.copy(), kf3.P.copy(), kf3.Q
-        xs4, Ps4, g4 = _run_pass(kf4, bwd, obs, scale_bwd, config, True, tick)
+        xs4, Ps4, g4 = _run_pass(kf4, bwd, obs, scale_bwd, config, True, tick, restart)
         xs = xs4 if config.four_pass_combine == "last" else combine_information(xs3, Ps3, xs4, Ps4)[0]
     info = {"length_sd_m": length_sd, "gated_per_pass": [g1, g2, g3, g4], "length_pass_frames": n_len}
     return xs[:, :N_ROOT], lengths, xs[:, N_ROOT:], info
@@ -345,8 +421,10 @@ def smooth(
 class OnlineFilter:
     """The forward pass frame by frame, for live feedback (one UKF step per frame, p99 ≲ 2 ms).
 
-    Outliers are rejected by the innovation gate (config.gate_chi2, default 30 on d² of one joint). Segment
-    lengths: given (19,) m, or part of the state during the first config.online_init_s seconds and fixed after.
+    Outliers are rejected by the innovation gate (config.gate_chi2, default 30 on d² of one joint); a joint gated
+    for config.online_reacquire_s without a break is restarted from inverse kinematics of the frame (_ik_state).
+    Segment lengths: given (19,) m, or part of the state during the first config.online_init_s seconds and fixed
+    after.
     The first frame with at least the trunk observed starts the filter (IK of that frame); before that, step()
     returns the input with gaps filled by the previous output (NaN where nothing is known yet).
     """
@@ -367,6 +445,7 @@ class OnlineFilter:
         self.t_last: float | None = None
         self.last = np.full((skeleton.J, 3), np.nan)
         self.n_gated = 0
+        self.gated_since = np.full(skeleton.J, np.nan)  # s, start of each joint's current run of gated frames
 
     @property
     def lengths_fixed(self) -> bool:
@@ -448,8 +527,15 @@ class OnlineFilter:
         sd = np.where(state == INFERRED, self.config.sigma_inferred_m, self.config.sigma_tracked_m)
         R_diag = np.repeat(sd**2, 3)
         if observed.any():
+            lost = present & (t - self.gated_since >= (self.config.online_reacquire_s or np.inf))
+            if lost.any():
+                start = _ik_state(self.chain.model, np.where(present[:, None], positions, np.nan))
+                _reacquire(self.kf, np.flatnonzero(lost), start, self.kf.P0_ceiling)
+                self.gated_since[lost] = np.nan
             used = _update(self.kf, np.where(observed, z, np.nan), observed, R_diag, self.config.gate_chi2 or 30.0)
             self.n_gated += int(present.sum() - used.sum())
+            since = np.where(used, np.nan, self.gated_since)  # a joint that entered ends its run
+            self.gated_since = np.where(present & ~used, np.fmin(since, t), since)
         self._recentre()
         root, lengths, theta = self.chain.split(self.kf.x)
         out = self.chain.model.positions(root, lengths, theta)

@@ -154,3 +154,27 @@ def test_numpy_fallback_gives_the_same_result(rng: np.random.Generator, monkeypa
     monkeypatch.setattr(_fk_numba, "AVAILABLE", False)
     plain = process(rec).filtered.positions
     np.testing.assert_allclose(plain, compiled, atol=1e-8, err_msg="numba kernel and numpy FK disagree")
+
+
+def test_a_knee_that_outruns_the_random_walk_is_reacquired(rng: np.random.Generator) -> None:
+    """A knee bending 145° in 3 frames (UI-PRMD deep squat speed) is gated once, then re-acquired by IK, not lost."""
+    from kinect_agent.processing import kinematics as km
+    from kinect_agent.processing.angles import joint_angles
+    from kinect_agent.processing.ik import R_FACING
+
+    T = 150
+    t = np.arange(T) / 30.0
+    theta = np.zeros((T, km.N_THETA))
+    bend = np.interp(np.arange(T), [0, 50, 53, 100, 103, T], [0.1, 0.1, 2.6, 2.6, 0.1, 0.1])
+    for name in ("KNE_L", "KNE_R"):
+        theta[:, km.ROT_START[km.ROT_INDEX[skeleton.INDEX[name]]]] = bend
+    model = km.ChainModel()
+    model.R_ref[0] = R_FACING
+    root = np.broadcast_to([0.0, 0.9, 2.5], (T, 3))
+    truth = model.positions(root, np.broadcast_to(km.TYPICAL_LENGTHS, (T, km.N_BONES)), theta)
+    rec = Recording.from_positions(t, truth + rng.normal(0.0, 0.01, truth.shape), Metadata(rate_hz=30.0))
+    filtered = process(rec, config=PipelineConfig(remove_outliers=False)).filtered
+    want = joint_angles(truth)["knee_flexion_L"]
+    got = joint_angles(filtered.positions)["knee_flexion_L"]
+    settled = np.r_[60:100, 110:T]  # a few frames after each jump
+    np.testing.assert_allclose(got[settled], want[settled], atol=10.0, err_msg="knee flexion (deg) after the jumps")

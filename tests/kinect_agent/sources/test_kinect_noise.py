@@ -111,3 +111,28 @@ def test_bone_length_errors_are_of_the_tabled_size(long_truth, device, pose, vie
     # Typical segments match; single segments may miss (see kinect_noise: the distance law comes first).
     assert np.median(error_mm) < 25.0, f"segment mean error vs table, mm: {np.round(error_mm)}"
     assert 0.8 < np.median(ratio) < 1.6, f"segment SD / table: {np.round(ratio, 2)}"
+
+
+@pytest.mark.parametrize(("device", "pose", "view"), [("kinect2", "standing", 0), ("kinect1", "sitting", 30)])
+def test_outlier_law_reproduces_the_papers_gains_in_expectation(device, pose, view):
+    """The exact mixture moments of the solved (fraction, excess) give the tabled mean and SD gains per joint."""
+    tables, key = kinect_noise.load_tables(), (device, pose, view)
+    mean, sd = tables.offset_mean[key], tables.offset_sd[key]
+    p, e = kinect_noise.outlier_law(mean, sd, *tables.gain_pct[key])
+    h = kinect_noise.OUTLIER_HALF_WIDTH
+    mean_before = mean + p * e
+    var_before = (1 - p) * sd**2 + p * (h * e) ** 2 / 3 + p * (1 - p) * e**2
+    mean_gain = 100 * (1 - mean / mean_before)
+    sd_gain = 100 * (1 - sd / np.sqrt(var_before))
+    paper_mean, paper_sd = tables.gain_pct[key]
+    free = p < kinect_noise.OUTLIER_FRACTION_MAX  # a clipped fraction reaches the SD gain but not the mean gain
+    assert free.sum() >= 15, f"fractions {p}"
+    np.testing.assert_allclose(mean_gain[free], paper_mean, rtol=0.02, err_msg="mean gain per joint")
+    np.testing.assert_allclose(sd_gain, paper_sd, rtol=0.05, err_msg="SD gain per joint")
+    assert np.all((p > 0.001) & (p <= 0.1)) and np.all(e > 2 * sd), f"fractions {p}, excess {e} m"
+
+
+def test_exact_bursts_cover_the_asked_fraction():
+    fraction = np.array([0.0, 0.01, 0.03, 0.08])
+    hit = kinect_noise._exact_bursts(np.random.default_rng(3), 6000, fraction, 30.0)
+    np.testing.assert_allclose(hit.mean(axis=0), fraction, atol=0.004, err_msg="covered fraction per joint")
