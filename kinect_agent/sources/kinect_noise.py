@@ -391,7 +391,7 @@ def _child_hints(pos: np.ndarray, bone_mean: np.ndarray) -> dict[int, np.ndarray
         if seg is None or bone_mean[seg] == 0.0:
             continue
         e = pos[:, c] - pos[:, p]
-        e = e / np.linalg.norm(e, axis=-1, keepdims=True)
+        e = e / np.maximum(np.linalg.norm(e, axis=-1, keepdims=True), 1e-12)  # a zero-length bone gives no hint
         hints[p] = hints.get(p, 0.0) - np.sign(bone_mean[seg]) * e
     return {j: h for j, h in hints.items() if np.all(np.linalg.norm(h, axis=-1) > 1e-6)}
 
