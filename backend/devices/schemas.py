@@ -34,9 +34,9 @@ class DeviceOut(BaseModel):
     """A paired home device."""
 
     model_config = ConfigDict(from_attributes=True)
-    id: int
-    patient_id: int
-    name: str
-    created_at: dt.datetime
-    last_seen_at: dt.datetime | None
-    revoked_at: dt.datetime | None
+    id: int = Field(examples=[3])
+    patient_id: int = Field(examples=[12])
+    name: str = Field(examples=["Living-room Kinect"])
+    created_at: dt.datetime = Field(examples=["2026-11-02T09:30:00Z"])
+    last_seen_at: dt.datetime | None = Field(examples=["2026-11-23T08:15:00Z"])
+    revoked_at: dt.datetime | None = Field(examples=[None])

@@ -37,26 +37,26 @@ class PlanItemOut(BaseModel):
     """One prescribed exercise of a stored plan."""
 
     model_config = ConfigDict(from_attributes=True)
-    id: int
-    exercise_id: int
-    exercise_slug: str
-    position: int
-    sets: int
-    repetitions: int
-    frequency_per_week: int
-    notes: str
+    id: int = Field(examples=[41])
+    exercise_id: int = Field(examples=[5])
+    exercise_slug: str = Field(examples=["seated_knee_extension"])
+    position: int = Field(examples=[0])
+    sets: int = Field(examples=[2])
+    repetitions: int = Field(examples=[10])
+    frequency_per_week: int = Field(examples=[3])
+    notes: str = Field(examples=["Slowly, both legs"])
 
 
 class PlanOut(BaseModel):
     """A stored plan."""
 
-    id: int
-    patient_id: int
-    therapist_id: int | None
-    title: str
-    notes: str
-    start_date: dt.date
-    end_date: dt.date | None
-    created_at: dt.datetime
-    updated_at: dt.datetime
+    id: int = Field(examples=[17])
+    patient_id: int = Field(examples=[12])
+    therapist_id: int | None = Field(examples=[2])
+    title: str = Field(examples=["Knee rehab, weeks 1-4"])
+    notes: str = Field(examples=[""])
+    start_date: dt.date = Field(examples=["2026-11-23"])
+    end_date: dt.date | None = Field(examples=["2026-12-21"])
+    created_at: dt.datetime = Field(examples=["2026-11-23T09:00:00Z"])
+    updated_at: dt.datetime = Field(examples=["2026-11-23T09:00:00Z"])
     items: list[PlanItemOut]

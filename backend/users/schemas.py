@@ -45,9 +45,9 @@ class UserCreate(BaseModel):
 class UserUpdate(BaseModel):
     """An admin changes a user's name, active flag or password."""
 
-    full_name: str | None = Field(default=None, max_length=200)
-    is_active: bool | None = None
-    password: str | None = Field(default=None, min_length=10, max_length=256)
+    full_name: str | None = Field(default=None, max_length=200, examples=["Rose Miller"])
+    is_active: bool | None = Field(default=None, examples=[True])
+    password: str | None = Field(default=None, min_length=10, max_length=256, examples=["a new long passphrase"])
 
 
 class LoginIn(BaseModel):
@@ -68,7 +68,7 @@ class LoginOut(BaseModel):
 class CsrfOut(BaseModel):
     """The CSRF token of the current login session."""
 
-    csrf_token: str
+    csrf_token: str = Field(examples=["0f3c9a1d6b2e4f5a8c7d9e0b1a2c3d4e"])
 
 
 class TokenCreate(BaseModel):
