@@ -85,7 +85,10 @@ def smooth_positions(t: np.ndarray, positions: np.ndarray, *, smooth_s: float = 
     sigma = smooth_s / frame_interval(t)
     if sigma > 0.3 and p.shape[0] > 2:
         ok = np.isfinite(flat).all(axis=0)
-        flat[:, ok] = gaussian_filter1d(flat[:, ok], sigma, axis=0, mode="nearest", truncate=TRUNCATE)
+        if ok.all():  # the usual case (filtered positions): no column copies; columns are filtered independently
+            flat = gaussian_filter1d(flat, sigma, axis=0, mode="nearest", truncate=TRUNCATE)
+        else:
+            flat[:, ok] = gaussian_filter1d(flat[:, ok], sigma, axis=0, mode="nearest", truncate=TRUNCATE)
     return flat.reshape(p.shape)
 
 

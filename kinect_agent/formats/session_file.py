@@ -308,8 +308,9 @@ def _build_recording(name: str, n_frames: int, raw: list[bytes], meta: Metadata)
     """Turns decoded t, state and position blocks into a Recording after checking them."""
     t = np.cumsum(_unshuffle(raw[0], "<f8"))
     state = np.frombuffer(raw[1], dtype=np.int8).reshape(n_frames, skeleton.J).copy()
-    deltas = _unshuffle(raw[2], "<f4").reshape(skeleton.J, 3, n_frames).astype(np.float64)
-    positions = np.cumsum(deltas, axis=-1).transpose(2, 0, 1).copy()  # (T, J, 3)
+    deltas = _unshuffle(raw[2], "<f4").reshape(skeleton.J, 3, n_frames)  # (J, 3, T) float32 m
+    positions = deltas.transpose(2, 0, 1).astype(np.float64, order="C")  # (T, J, 3) deltas
+    np.cumsum(positions, axis=0, out=positions)  # frame-by-frame float64 sums: rows add as vectors, fast
     if not np.all(np.isfinite(t)):
         raise SessionFileError("non_finite", f"recording {name!r}: time stamps are not finite")
     bad = np.flatnonzero(np.diff(t) <= 0)
@@ -319,7 +320,7 @@ def _build_recording(name: str, n_frames: int, raw: list[bytes], meta: Metadata)
     if np.any((state < 0) | (state > 2)):
         raise SessionFileError("bad_header", f"recording {name!r}: state values must be 0, 1 or 2")
     tracked = state != skeleton.NOT_TRACKED
-    if not np.all(np.isfinite(positions[tracked])):
+    if not np.isfinite(positions).all() and not np.all(np.isfinite(positions[tracked])):  # cheap check first
         f, j = np.argwhere(tracked & ~np.all(np.isfinite(positions), axis=-1))[0]
         raise SessionFileError("non_finite", f"recording {name!r}: frame {f} joint {skeleton.JOINTS[j]} not finite")
     positions[~tracked] = np.nan

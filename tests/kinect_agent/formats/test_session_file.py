@@ -262,3 +262,44 @@ def test_encode_refuses_positions_off_the_grid_range(rng):
     raw.positions[3, 2, 0] = 5000.0
     with pytest.raises(ValueError, match="within"):
         sf.encode(sf.SessionPayload("x", raw))
+
+
+def _reference_positions(data: bytes, index: int, n_frames: int, state: np.ndarray) -> np.ndarray:
+    """The first decoder's definition: float32 deltas to float64, cumulative sum over time, NaN where untracked."""
+    raw = zlib.decompress(blocks_of(data)[3 * index + 2])
+    deltas = sf._unshuffle(raw, "<f4").reshape(skeleton.J, 3, n_frames).astype(np.float64)
+    positions = np.cumsum(deltas, axis=-1).transpose(2, 0, 1).copy()
+    positions[state == skeleton.NOT_TRACKED] = np.nan
+    return positions
+
+
+def test_decode_equals_reference_on_simulated_session():
+    from kinect_agent.sources.simulator import simulate
+
+    measured, truth, _ = simulate("squat", 3, seed=4)
+    data = sf.encode(sf.SessionPayload(str(uuid.uuid4()), measured, truth))
+    back = sf.decode(data)
+    for index, rec in enumerate((back.raw, back.filtered)):
+        expected = _reference_positions(data, index, rec.n_frames, rec.state)
+        np.testing.assert_array_equal(rec.positions, expected, err_msg=f"recording {index}")
+        assert rec.positions.flags.c_contiguous
+
+
+def test_decode_equals_reference_on_deltas_off_the_grid(rng):
+    t = np.arange(50) / 30.0
+    positions = rng.normal(0.0, 1.0, (50, skeleton.J, 3))  # float32 deltas, not multiples of the grid
+    state = np.where(rng.random((50, skeleton.J)) < 0.1, 0, 2)
+    data = _one_recording(t, positions, state)
+    back = sf.decode(data)
+    np.testing.assert_array_equal(back.raw.positions, _reference_positions(data, 0, 50, back.raw.state))
+
+
+def test_non_finite_delta_of_untracked_last_frame_decodes_as_nan():
+    t = np.arange(4) / 30.0
+    positions = np.full((4, 20, 3), 0.5)
+    positions[3, 5, 0] = np.inf
+    state = np.full((4, 20), 2)
+    state[3, 5] = 0
+    back = sf.decode(_one_recording(t, positions, state))
+    assert np.all(np.isnan(back.raw.positions[3, 5]))
+    np.testing.assert_allclose(back.raw.positions[:3], 0.5)
