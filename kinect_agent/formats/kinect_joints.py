@@ -13,6 +13,7 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
+from kinect_agent.formats._rows import is_number
 
 KINECT_V1_JOINTS: tuple[str, ...] = (
     "HipCenter", "Spine", "ShoulderCenter", "Head",
@@ -102,7 +103,7 @@ def read_numeric_rows(path: Path, n_fields: int) -> tuple[np.ndarray, list[int],
             try:
                 values = [float(c) for c in cells]
             except ValueError:
-                bad = next(i for i, c in enumerate(cells) if not _is_number(c))
+                bad = next(i for i, c in enumerate(cells) if not is_number(c))
                 raise FormatError(path, f"field {bad + 1}: expected a number, found {cells[bad]!r}", line_no) from None
             rows.append(values)
             line_numbers.append(line_no)
@@ -119,13 +120,5 @@ def first_line_fields(head: bytes) -> list[str] | None:
     for line in head.decode("utf-8", "replace").splitlines():
         cells = line.split()
         if cells:
-            return cells if all(_is_number(c) for c in cells) else None
+            return cells if all(is_number(c) for c in cells) else None
     return None
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True

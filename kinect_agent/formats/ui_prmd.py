@@ -26,6 +26,7 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
+from kinect_agent.formats._rows import parse_csv_row
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "ui_prmd"
@@ -188,34 +189,12 @@ def _read_table(path: Path) -> np.ndarray:
         with opener(path, "rt", encoding="ascii") as f:
             for line_no, line in enumerate(f, start=1):
                 if line.strip():
-                    rows.append(_parse_row(path, line_no, line))
+                    rows.append(parse_csv_row(path, line_no, line, N_COLUMNS, "22 joints x 3"))
     except (OSError, EOFError, UnicodeDecodeError) as exc:
         raise FormatError(path, f"unreadable file: {exc}") from None
     if not rows:
         raise FormatError(path, f"no frames: expected rows of {N_COLUMNS} comma-separated numbers")
     return np.array(rows).reshape(len(rows), N_SOURCE_JOINTS, 3)
-
-
-def _parse_row(path: Path, line_no: int, line: str) -> list[float]:
-    cells = line.strip().split(",")
-    if len(cells) != N_COLUMNS:
-        raise FormatError(path, f"expected {N_COLUMNS} columns (22 joints x 3), found {len(cells)}", line_no)
-    try:
-        values = [float(c) for c in cells]
-    except ValueError:
-        bad = next(i for i, c in enumerate(cells) if not _is_number(c))
-        raise FormatError(path, f"column {bad + 1}: expected a number, found {cells[bad]!r}", line_no) from None
-    if not all(np.isfinite(values)):
-        raise FormatError(path, "expected finite numbers, found nan/inf", line_no)
-    return values
-
-
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell)
-    except ValueError:
-        return False
-    return True
 
 
 def _angles_path(positions_path: Path) -> Path:

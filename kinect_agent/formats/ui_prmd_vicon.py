@@ -26,6 +26,7 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
+from kinect_agent.formats._rows import parse_csv_row
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "ui_prmd_vicon"
@@ -93,7 +94,7 @@ def read_markers(path: Path) -> np.ndarray:
         with opener(path, "rt", encoding="ascii") as f:
             for line_no, line in enumerate(f, start=1):
                 if line.strip():
-                    rows.append(_row(path, line_no, line))
+                    rows.append(parse_csv_row(path, line_no, line, N_COLUMNS, "39 markers x 3"))
     except (OSError, EOFError, UnicodeDecodeError) as exc:
         raise FormatError(path, f"unreadable file: {exc}") from None
     if not rows:
@@ -127,25 +128,3 @@ def hip_centres(markers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     up = np.cross(lateral, back)
     base = origin + width * (0.19 * back - 0.30 * up)
     return base + 0.36 * width * lateral, base - 0.36 * width * lateral
-
-
-def _row(path: Path, line_no: int, line: str) -> list[float]:
-    cells = line.strip().split(",")
-    if len(cells) != N_COLUMNS:
-        raise FormatError(path, f"expected {N_COLUMNS} columns (39 markers x 3), found {len(cells)}", line_no)
-    try:
-        values = [float(c) for c in cells]
-    except ValueError:
-        bad = next(i for i, c in enumerate(cells) if not _is_number(c))
-        raise FormatError(path, f"column {bad + 1}: expected a number, found {cells[bad]!r}", line_no) from None
-    if not all(np.isfinite(values)):
-        raise FormatError(path, "expected finite numbers, found nan/inf", line_no)
-    return values
-
-
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell)
-    except ValueError:
-        return False
-    return True
