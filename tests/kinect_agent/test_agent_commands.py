@@ -1,6 +1,5 @@
 """Agent configuration and the pair / upload / run commands, against the real server where one is needed."""
 
-# ruff: noqa: F811  (pytest fixtures are imported by name and then requested as arguments)
 from __future__ import annotations
 
 import json
@@ -13,20 +12,7 @@ import pytest
 from kinect_agent import cli
 from kinect_agent.config import AgentConfig, ConfigError, config_path, load_config, save_config
 from kinect_agent.queue import SessionQueue
-from tests.kinect_agent._backend import (  # noqa: F401  (fixtures)
-    app,
-    auth_headers,
-    db_connection,
-    db_session,
-    engine,
-    free_port,
-    live_server,
-    make_patient_with_therapist,
-    make_user,
-    pairing_code,
-    settings,
-    test_database_url,
-)
+from tests.kinect_agent._backend import free_port
 
 
 @pytest.fixture
@@ -184,7 +170,6 @@ def test_the_same_session_is_rebuilt_byte_for_byte() -> None:
 
 
 def test_pair_then_run_uploads_the_session(home, live_server, pairing_code, capsys) -> None:
-    pytest.importorskip("backend.sessions.router")
     patient, code = pairing_code()
     assert cli.main(["pair", "--server", live_server.url, "--code", code]) == 0
     assert cli.main(["run", "--source", "simulator", "--exercise", "elbow_flexion", "--reps", "2"]) == 0

@@ -1,6 +1,5 @@
 """Uploading the queue to the real coaching server: idempotent, retried, never losing or doubling a session."""
 
-# ruff: noqa: F811  (pytest fixtures are imported by name and then requested as arguments)
 from __future__ import annotations
 
 import random
@@ -15,23 +14,7 @@ from kinect_agent.config import AgentConfig, save_config
 from kinect_agent.queue import SessionQueue
 from kinect_agent.sources.simulator import simulate
 from kinect_agent.upload import RetryPolicy, Uploader, drain
-from tests.kinect_agent._backend import (  # noqa: F401  (fixtures)
-    LiveServer,
-    app,
-    auth_headers,
-    db_connection,
-    db_session,
-    engine,
-    free_port,
-    live_server,
-    make_patient_with_therapist,
-    make_user,
-    pairing_code,
-    settings,
-    test_database_url,
-)
-
-pytest.importorskip("backend.sessions.router", reason="POST /api/v1/sessions (backend/sessions/router.py) not built")
+from tests.kinect_agent._backend import LiveServer, free_port
 
 FAST = RetryPolicy(max_attempts=3, base_delay_s=0.0)
 
