@@ -46,6 +46,7 @@ from kinect_agent.processing.ik import IKResult, bone_length_estimate, inverse_k
 from kinect_agent.processing.outliers import remove_outliers
 from kinect_agent.processing.params import KinematicParams
 from kinect_agent.processing.rotations import matrix_to_quat, matrix_to_rotvec
+from kinect_agent.processing.segment_outliers import remove_outliers_combined
 from kinect_agent.processing.ukf import (
     MerweScaledSigmaPoints,
     UnscentedKalmanFilter,
@@ -87,12 +88,23 @@ class PipelineConfig:
     outlier_min_range_m: float = 1.0  # floor of the uniform component's range per axis (tracking loss throws a
     # joint anywhere in view); Gaussian weights are kept >= 0.5 (outliers are the minority)
     outlier_iterations: int = 2  # local-quadratic refinements of the outlier residual after the median stage
+    outlier_segment: str | None = None  # "max"/"or": also a segment-length-deviation residual (segment_outliers.py)
+    # combined with the temporal one; None (default): temporal only — real pairs gain, simulated precision drops
     gate_chi2: float | None = 30.0  # drop a joint whose innovation d² exceeds this (None: never); online always
     reacquire_s: float | None = 0.1  # a joint gated this long without a break is a lost track, not an outlier: the
     # angles that place it restart from inverse kinematics of the frame (None: never). Without it a fast limb
     # (UI-PRMD squat: knee 20-30°/frame) outruns the random walk once and is then gated for good.
-    online_reacquire_s: float | None = 0.3  # the same for the online filter, longer: online there is no outlier
-    # removal, and the gate alone must ride out tracking-loss bursts (none of the speed benchmark's re-acquires at 0.3)
+    online_reacquire_s: float | None = 0.3  # the same for the online filter when online_gate_chi2 is set
+    online_sigma_tracked_m: float = 0.07  # online: measurement SD per axis of a tracked joint, m. Larger than
+    # offline's: with no backward pass the forward filter alone must average Kinect's slow jitter (AR(1), τ 0.2 s,
+    # SDs up to 0.1 m) and ride out tracking-loss bursts. Tuning set (simulator + CMU), pooled online RMSE:
+    # 0.015 m 128.3 mm, 0.03 m 123.4, 0.05 m 120.9, 0.07 m 119.3, 0.1 m 119.0 (worse on CMU); raw 140.6.
+    online_gate_chi2: float | None = None  # online: the UKF's innovation gate on one joint's d² (None: no gate).
+    # Measured worse than none (tuning set: 30 → 135.0 mm, 100 → 127.4, none 128.3 at the old 0.015 m; at 0.05 m
+    # 60 → 121.3, none 120.9): the gate is relative to the state's spread and drops fast limbs (CMU arms: a tenth of
+    # the joint-frames gated at 30), which then lag for online_reacquire_s; a causal Gaussian + uniform test
+    # against the predicted joints (hidden Markov burst prior) was tried too and did not beat none (121.3 vs
+    # 120.9 at its best operating point). With a loose R the bursts pull the state by a fraction of their offset.
     smoother: str = "urts"  # "urts" (unscented RTS after pass 3; measured best) or "four_pass" (paper: pass 4 backward)
     four_pass_combine: str = "last"  # four_pass output: "last" (pass 4) or "information" (passes 3+4 averaged)
     alpha: float = 0.5  # sigma-point spread (van der Merwe)
@@ -117,6 +129,10 @@ class PipelineConfig:
             raise ValueError(f"PipelineConfig.smoother must be one of {SMOOTHERS}, got {self.smoother!r}")
         if self.gate_chi2 is not None and not self.gate_chi2 > 0:
             raise ValueError(f"PipelineConfig.gate_chi2 must be > 0 or None, got {self.gate_chi2!r}")
+        if not self.online_sigma_tracked_m > 0:
+            raise ValueError(f"PipelineConfig.online_sigma_tracked_m must be > 0, got {self.online_sigma_tracked_m!r}")
+        if self.online_gate_chi2 is not None and not self.online_gate_chi2 > 0:
+            raise ValueError(f"PipelineConfig.online_gate_chi2 must be > 0 or None, got {self.online_gate_chi2!r}")
         for name in ("reacquire_s", "online_reacquire_s"):
             if getattr(self, name) is not None and not getattr(self, name) > 0:
                 raise ValueError(f"PipelineConfig.{name} must be > 0 or None, got {getattr(self, name)!r}")
@@ -421,8 +437,10 @@ def smooth(
 class OnlineFilter:
     """The forward pass frame by frame, for live feedback (one UKF step per frame, p99 ≲ 2 ms).
 
-    Outliers are rejected by the innovation gate (config.gate_chi2, default 30 on d² of one joint); a joint gated
-    for config.online_reacquire_s without a break is restarted from inverse kinematics of the frame (_ik_state).
+    Tracked joints enter with SD config.online_sigma_tracked_m (0.07 m per axis, looser than offline) and, by
+    default, no innovation gate (config.online_gate_chi2): both measured best on the tuning set under 2-6 %
+    tracking loss (bench/README.md). With a gate, a joint gated for config.online_reacquire_s without a break is
+    restarted from inverse kinematics of the frame (_ik_state).
     Segment lengths: given (19,) m, or part of the state during the first config.online_init_s seconds and fixed
     after.
     The first frame with at least the trunk observed starts the filter (IK of that frame); before that, step()
@@ -524,7 +542,7 @@ class OnlineFilter:
         self.t_last = t
         z = positions.reshape(-1)
         observed = np.repeat(present, 3)
-        sd = np.where(state == INFERRED, self.config.sigma_inferred_m, self.config.sigma_tracked_m)
+        sd = np.where(state == INFERRED, self.config.sigma_inferred_m, self.config.online_sigma_tracked_m)
         R_diag = np.repeat(sd**2, 3)
         if observed.any():
             lost = present & (t - self.gated_since >= (self.config.online_reacquire_s or np.inf))
@@ -532,7 +550,7 @@ class OnlineFilter:
                 start = _ik_state(self.chain.model, np.where(present[:, None], positions, np.nan))
                 _reacquire(self.kf, np.flatnonzero(lost), start, self.kf.P0_ceiling)
                 self.gated_since[lost] = np.nan
-            used = _update(self.kf, np.where(observed, z, np.nan), observed, R_diag, self.config.gate_chi2 or 30.0)
+            used = _update(self.kf, np.where(observed, z, np.nan), observed, R_diag, self.config.online_gate_chi2)
             self.n_gated += int(present.sum() - used.sum())
             since = np.where(used, np.nan, self.gated_since)  # a joint that entered ends its run
             self.gated_since = np.where(present & ~used, np.fmin(since, t), since)
@@ -581,7 +599,8 @@ def process(
     _check_input(rec)
     T = rec.n_frames
     if config.remove_outliers and not online:
-        clean, prob = remove_outliers(rec, config)
+        remover = remove_outliers if config.outlier_segment is None else remove_outliers_combined
+        clean, prob = remover(rec, config)
         outlier = (prob > config.outlier_threshold) & (rec.state != NOT_TRACKED)
     else:
         clean, prob, outlier = rec, np.where(rec.state == NOT_TRACKED, 1.0, 0.0), np.zeros((T, skeleton.J), bool)
