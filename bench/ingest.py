@@ -2,9 +2,9 @@
 
 The session file is made the way a home agent makes it: simulated Kinect 2 squats (kinect_agent.sources.simulator,
 back to back up to 10 minutes at 30 Hz), filtered by the agent's pipeline (kinect_agent.commands.run.make_payload)
-and encoded as .khs. It is cached in the temp folder (the pipeline takes ~10 s; delete the cache after pipeline
-changes). Every timed upload carries a new session id (header patched, SHA-256 trailer recomputed), so each run is a
-real insert, never the idempotent replay.
+and encoded as .khs. It is cached in the temp folder, one file per format version (the pipeline takes ~10 s;
+delete the cache after pipeline changes). Every timed upload carries a new session id (header patched, SHA-256
+trailer recomputed), so each run is a real insert, never the idempotent replay.
 
     python bench/ingest.py [--quick] [--json OUT] [--db URL] [--runs N] [--profile OUT]
 
@@ -70,11 +70,12 @@ def _recording(minutes: float, seed: int = 1):
 
 def session_file(minutes: float, cache_dir: Path) -> bytes:
     """Returns the .khs bytes (raw + agent-filtered recording) of a `minutes`-minute session; cached in cache_dir."""
-    path = cache_dir / f"khc-bench-ingest-{minutes:g}min.khs"
+    from kinect_agent.formats import session_file as sf
+
+    path = cache_dir / f"khc-bench-ingest-{minutes:g}min-v{sf.VERSION}.khs"  # a new format version makes a new file
     if path.exists():
         return path.read_bytes()
     from kinect_agent.commands.run import make_payload
-    from kinect_agent.formats import session_file as sf
 
     started = time.perf_counter()
     payload = make_payload(_recording(minutes), created_at="2026-11-20T10:00:00Z")

@@ -4,17 +4,21 @@ Byte layout (all integers little-endian; full description in docs/session-file.m
     fixed header (24 bytes): MAGIC (8) | version u16 | flags u16 | header_len u32 | total_len u64
     JSON header (header_len bytes, UTF-8): session id, creation time, params, per-recording metadata
     blocks: for the raw recording, then the filtered one if present: t, state, positions;
-            each block is a u32 length followed by that many bytes of zlib data
+            each block is a u32 length followed by that many bytes of compressed data
     trailer (32 bytes): SHA-256 of every byte before it
 
-Positions are rounded to a 2**-13 m grid (about 0.12 mm) and stored as float32 time deltas,
-byte-shuffled; times are float64 deltas, byte-shuffled; states are int8. No pickle anywhere.
+Version 2 (written): positions rounded to a 2**-10 m grid (about 0.98 mm, far below Kinect's own error) and
+stored as int32 time deltas in grid units, byte-shuffled; times are float64 deltas, byte-shuffled; states are
+int8; every block is an xz stream (LZMA2, preset 6, no xz check: the SHA-256 trailer covers the file).
+Version 1 (still read): the same layout with a 2**-13 m grid, float32 position deltas in metres and zlib blocks.
+No pickle anywhere.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import lzma
 import struct
 import uuid
 import zlib
@@ -33,13 +37,16 @@ from kinect_agent.recording import Metadata, Recording
 NAME = "session"
 DESCRIPTION = "Kinect Home Coach session file (.khs): raw + filtered recording, compressed, SHA-256 checked"
 MAGIC = b"\x89KHS\r\n\x1a\n"
-VERSION = 1
-GRID_M = 2.0**-13  # position quantum, metres
-MAX_ABS_M = 1000.0  # positions beyond this cannot stay exact on the grid in float32
+VERSION = 2  # written; versions 1 and 2 are read
+GRID_M = 2.0**-10  # position quantum of version 2, metres (about 0.98 mm)
+CODEC = "xz"
+MAX_ABS_M = 1000.0  # encoder's position range; +-2**20 grid units, so time deltas fit int32 with room to spare
+_FORMATS = {1: ("zlib", 2.0**-13), 2: (CODEC, GRID_M)}  # version -> (codec, grid_m) named in its JSON header
+_XZ_PRESET = 6  # LZMA2, 8 MiB dictionary: the decoder needs about 9 MiB
+_XZ_MEMLIMIT = 32 * 2**20  # decoder memory limit, bytes: refuses streams made with larger dictionaries
 _FIXED = struct.Struct("<8sHHIQ")  # magic, version, flags, header_len, total_len
 _BLOCK_LEN = struct.Struct("<I")
 _DIGEST = 32
-_ZLIB_LEVEL = 6
 ERROR_CODES = frozenset(
     {
         "bad_magic",
@@ -118,7 +125,7 @@ def encode(payload: SessionPayload) -> bytes:
         "params": payload.params,
         "joints": list(skeleton.JOINTS),
         "grid_m": GRID_M,
-        "codec": "zlib",
+        "codec": CODEC,
         "recordings": described,
     }
     header_bytes = json.dumps(header, separators=(",", ":"), allow_nan=False).encode("utf-8")
@@ -137,7 +144,7 @@ def _recording_blocks(rec: Recording) -> tuple[bytes, bytes, bytes]:
 
 
 def _position_deltas(positions: np.ndarray, state: np.ndarray) -> np.ndarray:
-    """Returns (J, 3, T) float32 time deltas of positions on the grid; untracked positions count as 0.
+    """Returns (J, 3, T) int32 time deltas of positions in grid units; untracked positions count as 0.
 
     positions: (T, J, 3) float, metres, camera frame, NaN = untracked. state: (T, J) int8.
     """
@@ -146,10 +153,9 @@ def _position_deltas(positions: np.ndarray, state: np.ndarray) -> np.ndarray:
         raise ValueError("positions must be finite wherever state is not 0")
     if np.any(np.abs(p) > MAX_ABS_M):
         raise ValueError(f"positions must lie within +-{MAX_ABS_M} m to be stored on the {GRID_M} m grid")
-    q = np.round(p / GRID_M) * GRID_M  # exact in float32 within MAX_ABS_M
-    series = np.ascontiguousarray(q.transpose(1, 2, 0))  # (J, 3, T)
-    deltas = np.diff(series, axis=-1, prepend=0.0)  # exact: multiples of the grid below 2**12 m
-    return deltas.astype("<f4")
+    units = np.rint(p / GRID_M).astype(np.int64)  # (T, J, 3) grid units, |units| <= 2**20
+    series = np.ascontiguousarray(units.transpose(1, 2, 0))  # (J, 3, T)
+    return np.diff(series, axis=-1, prepend=0).astype("<i4")  # |delta| <= 2**21
 
 
 def _shuffle(a: np.ndarray) -> bytes:
@@ -165,7 +171,8 @@ def _unshuffle(raw: bytes, dtype: str) -> np.ndarray:
 
 
 def _compress(raw: bytes) -> bytes:
-    return zlib.compress(raw, _ZLIB_LEVEL)
+    """Returns `raw` as one xz stream (LZMA2 at _XZ_PRESET, no integrity check: the trailer has SHA-256)."""
+    return lzma.compress(raw, format=lzma.FORMAT_XZ, check=lzma.CHECK_NONE, preset=_XZ_PRESET)
 
 
 # ---------------------------------------------------------------------------------------------- decode
@@ -178,15 +185,16 @@ def decode(data: bytes, *, max_frames: int = 30 * 60 * 60, max_decoded_bytes: in
     `max_decoded_bytes` in total, nor more than a block's declared size (compression bombs).
     """
     data = bytes(data)
-    header_len = _check_envelope(data)
-    header = _parse_header(data[_FIXED.size : _FIXED.size + header_len])
+    version, header_len = _check_envelope(data)
+    header = _parse_header(data[_FIXED.size : _FIXED.size + header_len], version)
     specs = _recording_specs(header, max_frames, max_decoded_bytes)
     blocks = _split_blocks(data, _FIXED.size + header_len, 3 * len(specs))
     budget = [max_decoded_bytes]
+    inflate = _inflate_zlib if version == 1 else _inflate_xz
     recordings: dict[str, Recording] = {}
     for k, (name, n_frames, meta) in enumerate(specs):
-        raw = [_decompress(blocks[3 * k + i], size, budget) for i, size in enumerate(_block_sizes(n_frames))]
-        recordings[name] = _build_recording(name, n_frames, raw, meta)
+        raw = [inflate(blocks[3 * k + i], size, budget) for i, size in enumerate(_block_sizes(n_frames))]
+        recordings[name] = _build_recording(name, n_frames, raw, meta, version)
     return SessionPayload(
         session_id=header["session_id"],
         raw=recordings["raw"],
@@ -196,8 +204,8 @@ def decode(data: bytes, *, max_frames: int = 30 * 60 * 60, max_decoded_bytes: in
     )
 
 
-def _check_envelope(data: bytes) -> int:
-    """Checks magic, version, length and checksum; returns the JSON header length in bytes."""
+def _check_envelope(data: bytes) -> tuple[int, int]:
+    """Checks magic, version, length and checksum; returns the version and the JSON header length in bytes."""
     if len(data) < len(MAGIC):
         if MAGIC.startswith(data) and data:
             raise SessionFileError("truncated", f"file is {len(data)} bytes, shorter than the magic")
@@ -207,8 +215,8 @@ def _check_envelope(data: bytes) -> int:
     if len(data) < _FIXED.size + _DIGEST:
         raise SessionFileError("truncated", f"file is {len(data)} bytes, less than the {_FIXED.size + _DIGEST} minimum")
     _, version, _, header_len, total = _FIXED.unpack_from(data)
-    if version != VERSION:
-        raise SessionFileError("unsupported_version", f"file version {version}, this reader knows version {VERSION}")
+    if version not in _FORMATS:
+        raise SessionFileError("unsupported_version", f"file version {version}, this reader knows versions 1 and 2")
     if len(data) < total:
         raise SessionFileError("truncated", f"file is {len(data)} bytes, its header declares {total}")
     if len(data) > total:
@@ -217,10 +225,10 @@ def _check_envelope(data: bytes) -> int:
         raise SessionFileError("checksum_mismatch", "SHA-256 trailer does not match the content")
     if _FIXED.size + header_len > total - _DIGEST:
         raise SessionFileError("bad_header", f"JSON header length {header_len} runs past the end of the file")
-    return header_len
+    return version, header_len
 
 
-def _parse_header(raw: bytes) -> dict[str, Any]:
+def _parse_header(raw: bytes, version: int) -> dict[str, Any]:
     try:
         header = json.loads(raw.decode("utf-8"))
     except (UnicodeDecodeError, ValueError) as exc:
@@ -229,8 +237,11 @@ def _parse_header(raw: bytes) -> dict[str, Any]:
     for key, kind in expected.items():
         if not isinstance(header, dict) or not isinstance(header.get(key), kind):
             raise SessionFileError("bad_header", f"JSON header needs {key!r} of type {kind.__name__}")
-    if header.get("format") != "kinect-home-session" or header.get("codec") != "zlib" or header.get("grid_m") != GRID_M:
-        raise SessionFileError("bad_header", f"expected format 'kinect-home-session', codec 'zlib', grid_m {GRID_M}")
+    codec, grid_m = _FORMATS[version]
+    if header.get("format") != "kinect-home-session" or header.get("codec") != codec or header.get("grid_m") != grid_m:
+        raise SessionFileError(
+            "bad_header", f"version {version} needs format 'kinect-home-session', codec {codec!r}, grid_m {grid_m}"
+        )
     if not isinstance(header["recordings"].get("raw"), dict):
         raise SessionFileError("bad_header", "JSON header lacks the 'raw' recording")
     return header
@@ -266,7 +277,7 @@ def _recording_specs(header: dict, max_frames: int, max_decoded_bytes: int) -> l
 
 
 def _block_sizes(n_frames: int) -> tuple[int, int, int]:
-    """Decoded bytes of the t, state and positions blocks."""
+    """Decoded bytes of the t, state and positions blocks (4-byte position deltas in both versions)."""
     return 8 * n_frames, skeleton.J * n_frames, 4 * 3 * skeleton.J * n_frames
 
 
@@ -287,30 +298,51 @@ def _split_blocks(data: bytes, start: int, count: int) -> list[bytes]:
     return blocks
 
 
-def _decompress(block: bytes, size: int, budget: list[int]) -> bytes:
-    """Inflates one block to exactly `size` bytes, never producing more than size+1 or the budget."""
+def _inflate_zlib(block: bytes, size: int, budget: list[int]) -> bytes:
+    """Inflates one version-1 zlib block to exactly `size` bytes, never producing more than size+1 or the budget."""
     cap = min(size, budget[0])
     d = zlib.decompressobj()
     try:
         out = d.decompress(block, cap + 1)
     except zlib.error as exc:
         raise SessionFileError("bad_header", f"corrupt zlib block: {exc}") from None
-    if len(out) > cap:
-        limit = "its declared size" if cap == size else "the remaining max_decoded_bytes budget"
-        raise SessionFileError("too_large", f"a block decodes to more than {cap} bytes ({limit})")
-    if len(out) != size or not d.eof or d.unconsumed_tail:
-        raise SessionFileError("bad_header", f"a block decodes to {len(out)} bytes, expected {size}")
-    budget[0] -= len(out)
+    _check_inflated(out, size, cap, d.eof and not d.unconsumed_tail and not d.unused_data, budget)
     return out
 
 
-def _build_recording(name: str, n_frames: int, raw: list[bytes], meta: Metadata) -> Recording:
+def _inflate_xz(block: bytes, size: int, budget: list[int]) -> bytes:
+    """Decompresses one version-2 xz block to exactly `size` bytes, never producing more than size+1 or the budget.
+
+    The decoder's memory is capped at _XZ_MEMLIMIT (a stream asking for a larger dictionary is refused).
+    """
+    cap = min(size, budget[0])
+    d = lzma.LZMADecompressor(format=lzma.FORMAT_XZ, memlimit=_XZ_MEMLIMIT)
+    try:
+        out = d.decompress(block, max_length=cap + 1)
+    except lzma.LZMAError as exc:
+        if "memory" in str(exc).lower():
+            raise SessionFileError("too_large", f"xz block needs more than {_XZ_MEMLIMIT} bytes of memory") from None
+        raise SessionFileError("bad_header", f"corrupt xz block: {exc}") from None
+    _check_inflated(out, size, cap, d.eof and not d.unused_data, budget)
+    return out
+
+
+def _check_inflated(out: bytes, size: int, cap: int, complete: bool, budget: list[int]) -> None:
+    """Refuses a block that inflated past `cap`, or that is not exactly `size` bytes of one complete stream."""
+    if len(out) > cap:
+        limit = "its declared size" if cap == size else "the remaining max_decoded_bytes budget"
+        raise SessionFileError("too_large", f"a block decodes to more than {cap} bytes ({limit})")
+    if len(out) != size or not complete:
+        raise SessionFileError("bad_header", f"a block decodes to {len(out)} bytes, expected {size}")
+    budget[0] -= len(out)
+
+
+def _build_recording(name: str, n_frames: int, raw: list[bytes], meta: Metadata, version: int) -> Recording:
     """Turns decoded t, state and position blocks into a Recording after checking them."""
-    t = np.cumsum(_unshuffle(raw[0], "<f8"))
+    with np.errstate(invalid="ignore", over="ignore"):  # non-finite sums are refused just below
+        t = np.cumsum(_unshuffle(raw[0], "<f8"))
     state = np.frombuffer(raw[1], dtype=np.int8).reshape(n_frames, skeleton.J).copy()
-    deltas = _unshuffle(raw[2], "<f4").reshape(skeleton.J, 3, n_frames)  # (J, 3, T) float32 m
-    positions = deltas.transpose(2, 0, 1).astype(np.float64, order="C")  # (T, J, 3) deltas
-    np.cumsum(positions, axis=0, out=positions)  # frame-by-frame float64 sums: rows add as vectors, fast
+    positions = _positions(raw[2], n_frames, version)
     if not np.all(np.isfinite(t)):
         raise SessionFileError("non_finite", f"recording {name!r}: time stamps are not finite")
     bad = np.flatnonzero(np.diff(t) <= 0)
@@ -325,6 +357,26 @@ def _build_recording(name: str, n_frames: int, raw: list[bytes], meta: Metadata)
         raise SessionFileError("non_finite", f"recording {name!r}: frame {f} joint {skeleton.JOINTS[j]} not finite")
     positions[~tracked] = np.nan
     return Recording(t, positions, state, meta)
+
+
+def _positions(raw: bytes, n_frames: int, version: int) -> np.ndarray:
+    """Returns (T, J, 3) float64 positions, metres, C-contiguous, from a decoded positions block.
+
+    Version 2: int32 grid-unit deltas, summed exactly in int64, then scaled by the grid.
+    Version 1: float32 deltas in metres, summed in float64 (the version-1 definition).
+    Sums run over frames with (J*3)-vectors as rows, which is fast; no per-frame Python loop.
+    """
+    if version == 1:
+        deltas = _unshuffle(raw, "<f4").reshape(skeleton.J, 3, n_frames)  # (J, 3, T) float32 m
+        positions = deltas.transpose(2, 0, 1).astype(np.float64, order="C")  # (T, J, 3) deltas
+        np.cumsum(positions, axis=0, out=positions)
+        return positions
+    deltas = _unshuffle(raw, "<i4").reshape(skeleton.J, 3, n_frames)  # (J, 3, T) int32 grid units
+    units = deltas.transpose(2, 0, 1).astype(np.int64, order="C")  # (T, J, 3) deltas; sums cannot overflow
+    np.cumsum(units, axis=0, out=units)
+    positions = units.astype(np.float64)
+    positions *= GRID_M  # exact: |units| < 2**53
+    return positions
 
 
 # ---------------------------------------------------------------------------------------------- files

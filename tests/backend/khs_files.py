@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import lzma
 import struct
 import uuid
 import zlib
@@ -66,18 +67,25 @@ def with_header(data: bytes, change) -> bytes:
     return join(header, blocks, version)
 
 
+def compress(raw: bytes, version: int) -> bytes:
+    """Returns `raw` compressed with the codec of that format version (1: zlib, 2: xz)."""
+    if version == 1:
+        return zlib.compress(raw, 9)
+    return lzma.compress(raw, format=lzma.FORMAT_XZ, check=lzma.CHECK_NONE, preset=1)
+
+
 def with_time(data: bytes, t: np.ndarray) -> bytes:
     """Returns the file with the raw recording's time stamps replaced by t (T,) s (checksum recomputed)."""
     version, header, blocks = split(data)
     dt = np.concatenate([t[:1], np.diff(t)]).astype("<f8")
-    blocks[0] = zlib.compress(sf._shuffle(dt))
+    blocks[0] = compress(sf._shuffle(dt), version)
     return join(header, blocks, version)
 
 
 def with_block(data: bytes, index: int, raw: bytes) -> bytes:
-    """Returns the file with compressed block index replaced by zlib(raw) (checksum recomputed)."""
+    """Returns the file with block index replaced by raw compressed with the file's codec (checksum recomputed)."""
     version, header, blocks = split(data)
-    blocks[index] = zlib.compress(raw, 9)
+    blocks[index] = compress(raw, version)
     return join(header, blocks, version)
 
 

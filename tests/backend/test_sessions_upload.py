@@ -17,7 +17,6 @@ from backend.plans.models import Plan, PlanItem
 from backend.sessions import service
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.suggestions.models import Suggestion
-from kinect_agent import skeleton
 from kinect_agent.formats import session_file as sf
 from kinect_agent.sources.simulator import simulate
 from tests.backend import khs_files
@@ -194,7 +193,7 @@ def test_upload_is_audited(post, db_session, patient_device, khs):
 
 
 def _bad_version(data):
-    return data[:8] + (2).to_bytes(2, "little") + data[10:]
+    return data[:8] + (3).to_bytes(2, "little") + data[10:]
 
 
 def _flip(data):
@@ -207,10 +206,9 @@ def _joints(data):
 
 
 def _non_finite(data):
-    n = khs_files.n_frames(data)
-    deltas = np.zeros(skeleton.J * 3 * n, dtype="<f4")
-    deltas[7] = np.inf
-    return khs_files.with_block(data, 2, khs_files.sf._shuffle(deltas))
+    t = np.arange(khs_files.n_frames(data)) / 30.0  # version-2 positions are integers: only times can be non-finite
+    t[7] = np.inf
+    return khs_files.with_time(data, t)
 
 
 def _non_monotonic(data):
@@ -234,7 +232,7 @@ def _not_uuid(data):
 
 BAD_FILES = {
     "bad_magic": (lambda d: b"NOT A KHS FILE" + d[14:], "bad_magic: "),
-    "unsupported_version": (_bad_version, "unsupported_version: file version 2"),
+    "unsupported_version": (_bad_version, "unsupported_version: file version 3"),
     "checksum_mismatch": (_flip, "checksum_mismatch: "),
     "truncated": (lambda d: d[:-100], "truncated: "),
     "wrong_joint_count": (_joints, "wrong_joint_count: joint list has 19 joints"),

@@ -1,9 +1,13 @@
-"""Tests of the session file (.khs): round trip, size budget, every error code, CLI conversion."""
+"""Tests of the session file (.khs): round trip, size budget, every error code, CLI conversion.
+
+Version-1 files (still read) are built here by a small reference writer, `v1_encode`.
+"""
 
 from __future__ import annotations
 
 import hashlib
 import json
+import lzma
 import struct
 import uuid
 import zlib
@@ -16,7 +20,9 @@ from kinect_agent import cli, formats, skeleton
 from kinect_agent.formats import session_file as sf
 from kinect_agent.recording import Metadata, Recording
 
-GRID = 2.0**-13
+GRID = sf.GRID_M  # version 2: 2**-10 m
+GRID_V1 = 2.0**-13
+XZ = {"format": lzma.FORMAT_XZ, "check": lzma.CHECK_NONE}
 
 
 def realistic(rng: np.random.Generator, n_frames: int, noise_m: float = 0.015) -> tuple[Recording, Recording]:
@@ -48,7 +54,7 @@ def header_of(data: bytes) -> dict:
     return json.loads(data[24 : 24 + n])
 
 
-def rebuild(header: dict, blocks: list[bytes], version: int = 1) -> bytes:
+def rebuild(header: dict, blocks: list[bytes], version: int = sf.VERSION) -> bytes:
     """Builds session bytes by hand from a header dict and compressed blocks, with a correct checksum."""
     head = json.dumps(header).encode()
     body = b"".join(struct.pack("<I", len(b)) + b for b in blocks)
@@ -76,6 +82,17 @@ def expect(code: str, data: bytes, **kwargs) -> None:
     with pytest.raises(sf.SessionFileError) as info:
         sf.decode(data, **kwargs)
     assert info.value.code == code, str(info.value)
+
+
+def test_round_trip_exact_to_the_grid(rng):
+    payload = small_payload(rng, 300)
+    data = sf.encode(payload)
+    assert struct.unpack_from("<H", data, 8)[0] == 2
+    assert (header_of(data)["codec"], header_of(data)["grid_m"]) == ("xz", 2.0**-10)
+    back = sf.decode(data)
+    for a, b in ((payload.raw, back.raw), (payload.filtered, back.filtered)):
+        tracked = a.state != skeleton.NOT_TRACKED
+        np.testing.assert_array_equal(b.positions[tracked] / GRID, np.rint(a.positions[tracked] / GRID))
 
 
 def test_round_trip_within_grid(rng):
@@ -109,11 +126,16 @@ def test_round_trip_real_recording(data_dir, tmp_path):
     assert out.stat().st_size < rec.positions.nbytes / 4, out.stat().st_size
 
 
-def test_ten_minutes_raw_and_filtered_under_2mb(rng):
-    raw, filtered = realistic(rng, 18000)
-    data = sf.encode(sf.SessionPayload("s", raw, filtered, params={"filter": "ukf", "q": [0.1] * 20}))
-    assert len(data) < 2 * 2**20, f"{len(data)} bytes"
-    assert sf.decode(data).raw.n_frames == 18000
+def test_two_minutes_simulated_and_filtered_within_a_fifth_of_2mb():
+    """Target: a 10-minute session (raw + agent-filtered) <= 2 000 000 bytes (bench/ingest.py measures that file:
+    1 721 297 bytes). Here 2 minutes, the same way (simulator + agent pipeline), to keep the test fast; the size
+    grows linearly with the frames (fixed overhead < 3 kB), so a fifth of the budget is the same target."""
+    from bench.ingest import _recording
+    from kinect_agent.commands.run import make_payload
+
+    data = sf.encode(make_payload(_recording(2.0), created_at="2026-11-20T10:00:00Z"))
+    assert len(data) <= 2_000_000 / 5, f"{len(data)} bytes"
+    assert sf.decode(data).filtered.n_frames >= 3600
 
 
 def test_file_round_trip_and_hash(rng, tmp_path):
@@ -151,9 +173,20 @@ def test_checksum_mismatch(rng):
     expect("checksum_mismatch", bytes(data))
 
 
-def test_unsupported_version(rng):
+@pytest.mark.parametrize("version", [0, 3, 99])
+def test_unsupported_version(rng, version):
     data = sf.encode(small_payload(rng))
-    expect("unsupported_version", rebuild(header_of(data), blocks_of(data), version=99))
+    expect("unsupported_version", rebuild(header_of(data), blocks_of(data), version=version))
+
+
+@pytest.mark.parametrize(
+    ("version", "codec", "grid"), [(2, "zlib", 2.0**-10), (2, "xz", 2.0**-13), (1, "xz", 2.0**-13)]
+)
+def test_codec_and_grid_must_match_the_version(rng, version, codec, grid):
+    data = sf.encode(small_payload(rng))
+    header = header_of(data)
+    header["codec"], header["grid_m"] = codec, grid
+    expect("bad_header", rebuild(header, blocks_of(data), version=version))
 
 
 def test_wrong_joint_count(rng):
@@ -166,30 +199,69 @@ def test_wrong_joint_count(rng):
 def test_bad_header_json(rng):
     data = sf.encode(small_payload(rng))
     body = b"{not json"
-    blob = struct.pack("<8sHHIQ", sf.MAGIC, 1, 0, len(body), 24 + len(body) + 32) + body
+    blob = struct.pack("<8sHHIQ", sf.MAGIC, 2, 0, len(body), 24 + len(body) + 32) + body
     expect("bad_header", blob + hashlib.sha256(blob).digest())
     header = header_of(data)
     del header["session_id"]
     expect("bad_header", rebuild(header, blocks_of(data)))
 
 
-def _one_recording(t: np.ndarray, positions: np.ndarray, state: np.ndarray) -> bytes:
-    """Hand-built session bytes: float64 t deltas, int8 state, float32 position deltas (shuffled)."""
-    n = len(t)
-    header = {
+def _header(n: int, version: int) -> dict:
+    codec, grid = {1: ("zlib", GRID_V1), 2: ("xz", GRID)}[version]
+    return {
         "format": "kinect-home-session",
         "session_id": "x",
         "created_at": "2026-01-01T00:00:00Z",
         "params": {},
         "joints": list(skeleton.JOINTS),
-        "grid_m": GRID,
-        "codec": "zlib",
+        "grid_m": grid,
+        "codec": codec,
         "recordings": {"raw": {"n_frames": n, "n_joints": 20, "meta": {}}, "filtered": None},
     }
-    dt = np.concatenate([t[:1], np.diff(t)]).astype("<f8")
+
+
+def _dt(t: np.ndarray) -> bytes:
+    return sf._shuffle(np.concatenate([t[:1], np.diff(t)]).astype("<f8"))
+
+
+def _one_recording(t: np.ndarray, positions: np.ndarray, state: np.ndarray) -> bytes:
+    """Hand-built version-1 bytes: float64 t deltas, int8 state, float32 position deltas (shuffled), zlib."""
     deltas = np.diff(positions.transpose(1, 2, 0), axis=-1, prepend=0.0).astype("<f4")
-    blocks = [sf._shuffle(dt), state.astype(np.int8).tobytes(), sf._shuffle(deltas)]
-    return rebuild(header, [zlib.compress(b) for b in blocks])
+    blocks = [_dt(t), state.astype(np.int8).tobytes(), sf._shuffle(deltas)]
+    return rebuild(_header(len(t), 1), [zlib.compress(b) for b in blocks], version=1)
+
+
+def _one_recording_v2(t: np.ndarray, units: np.ndarray, state: np.ndarray) -> bytes:
+    """Hand-built version-2 bytes: float64 t deltas, int8 state, int32 grid-unit position deltas (shuffled), xz."""
+    deltas = np.diff(units.transpose(1, 2, 0), axis=-1, prepend=0).astype("<i4")
+    blocks = [_dt(t), state.astype(np.int8).tobytes(), sf._shuffle(deltas)]
+    return rebuild(_header(len(t), 2), [lzma.compress(b, **XZ) for b in blocks])
+
+
+def v1_encode(payload: sf.SessionPayload) -> bytes:
+    """The version-1 writer: grid 2**-13 m, float32 position deltas in metres, zlib level 6."""
+    blocks, described = [], {}
+    for name, rec in (("raw", payload.raw), ("filtered", payload.filtered)):
+        if rec is None:
+            described[name] = None
+            continue
+        described[name] = {"n_frames": rec.n_frames, "n_joints": 20, "meta": rec.meta.to_dict()}
+        p = np.where((rec.state != 0)[..., None], rec.positions, 0.0)
+        q = np.round(p / GRID_V1) * GRID_V1
+        deltas = np.diff(q.transpose(1, 2, 0), axis=-1, prepend=0.0).astype("<f4")
+        raw_blocks = [_dt(rec.t), rec.state.astype(np.int8).tobytes(), sf._shuffle(deltas)]
+        blocks += [zlib.compress(b, 6) for b in raw_blocks]
+    header = {
+        "format": "kinect-home-session",
+        "session_id": payload.session_id,
+        "created_at": payload.created_at,
+        "params": payload.params,
+        "joints": list(skeleton.JOINTS),
+        "grid_m": GRID_V1,
+        "codec": "zlib",
+        "recordings": described,
+    }
+    return rebuild(header, blocks, version=1)
 
 
 def test_hand_built_file_decodes():
@@ -197,6 +269,28 @@ def test_hand_built_file_decodes():
     positions = np.full((4, 20, 3), 0.5)
     back = sf.decode(_one_recording(t, positions, np.full((4, 20), 2)))
     np.testing.assert_allclose(back.raw.positions, positions)
+    back = sf.decode(_one_recording_v2(t, np.full((4, 20, 3), 512), np.full((4, 20), 2)))
+    np.testing.assert_array_equal(back.raw.positions, positions)
+
+
+def test_version_1_file_still_decodes(rng):
+    payload = small_payload(rng, 300)
+    data = v1_encode(payload)
+    assert struct.unpack_from("<H", data, 8)[0] == 1
+    back = sf.decode(data)
+    assert (back.session_id, back.params, back.created_at) == ("abc", payload.params, payload.created_at)
+    for a, b in ((payload.raw, back.raw), (payload.filtered, back.filtered)):
+        np.testing.assert_allclose(b.t, a.t, rtol=0, atol=1e-9)
+        np.testing.assert_array_equal(b.state, a.state)
+        np.testing.assert_allclose(b.positions, a.positions, rtol=0, atol=GRID_V1 / 2 + 1e-12, equal_nan=True)
+        assert b.meta == a.meta
+
+
+def test_version_1_file_reencodes_as_version_2(rng):
+    """A queued version-1 session uploads as is, or is re-encoded losing only the coarser rounding."""
+    payload = small_payload(rng, 100)
+    again = sf.decode(sf.encode(sf.decode(v1_encode(payload))))
+    np.testing.assert_allclose(again.raw.positions, payload.raw.positions, atol=GRID / 2 + GRID_V1 / 2, equal_nan=True)
 
 
 def test_non_finite():
@@ -206,9 +300,21 @@ def test_non_finite():
     expect("non_finite", _one_recording(t, positions, np.full((4, 20), 2)))
 
 
+def test_non_finite_time_v2():
+    t = np.array([0.0, 0.1, np.inf, 0.3])
+    expect("non_finite", _one_recording_v2(t, np.zeros((4, 20, 3), int), np.full((4, 20), 2)))
+
+
 def test_non_monotonic_time():
     t = np.array([0.0, 0.1, 0.05, 0.2])
     expect("non_monotonic_time", _one_recording(t, np.zeros((4, 20, 3)), np.full((4, 20), 2)))
+    expect("non_monotonic_time", _one_recording_v2(t, np.zeros((4, 20, 3), int), np.full((4, 20), 2)))
+
+
+def test_bad_state_v2():
+    state = np.full((4, 20), 2)
+    state[1, 1] = 3
+    expect("bad_header", _one_recording_v2(np.arange(4) / 30.0, np.zeros((4, 20, 3), int), state))
 
 
 def test_no_frames(rng):
@@ -228,11 +334,72 @@ def test_too_large_declared(rng):
     expect("too_large", data, max_decoded_bytes=1000)
 
 
-def test_zlib_bomb_refused(rng):
-    data = sf.encode(small_payload(rng, 10))
+def test_zlib_bomb_refused_in_version_1(rng):
+    data = v1_encode(small_payload(rng, 10))
     blocks = blocks_of(data)
     blocks[2] = zlib.compress(b"\0" * (256 * 2**20), 9)  # 256 MiB of zeros where 2400 bytes are declared
+    expect("too_large", rebuild(header_of(data), blocks, version=1))
+
+
+@pytest.fixture(scope="module")
+def xz_bomb() -> bytes:
+    """64 MiB of zeros as one xz stream (about 10 kB)."""
+    return lzma.compress(bytes(64 * 2**20), **XZ, preset=1)
+
+
+def test_xz_bomb_refused(rng, xz_bomb):
+    data = sf.encode(small_payload(rng, 10))
+    blocks = blocks_of(data)
+    blocks[2] = xz_bomb  # where 2400 bytes are declared
+    with pytest.raises(sf.SessionFileError) as info:
+        sf.decode(rebuild(header_of(data), blocks))
+    assert info.value.code == "too_large" and "declared size" in str(info.value)
+
+
+def test_xz_block_one_byte_larger_than_declared(rng):
+    data = sf.encode(small_payload(rng, 10))
+    blocks = blocks_of(data)
+    blocks[1] = lzma.compress(bytes(201), **XZ)  # state block: 10 frames x 20 joints = 200 bytes declared
     expect("too_large", rebuild(header_of(data), blocks))
+
+
+def test_xz_bomb_refused_by_the_budget(rng):
+    data = sf.encode(small_payload(rng, 60))
+    # declared sizes: 60 * (8 + 20 + 240) = 16080 bytes per recording; the budget runs out in the second one
+    blocks = blocks_of(data)
+    with pytest.raises(sf.SessionFileError) as info:
+        sf.decode(rebuild(header_of(data), blocks), max_decoded_bytes=16080 + 1000)
+    assert info.value.code == "too_large"
+
+
+def test_xz_memory_limit(rng, monkeypatch):
+    data = sf.encode(small_payload(rng, 10))
+    monkeypatch.setattr(sf, "_XZ_MEMLIMIT", 2**20)  # preset 6 needs about 9 MiB
+    expect("too_large", data)
+
+
+@pytest.mark.parametrize(
+    "damage",
+    [
+        lambda b: b[:-10],  # stream cut short
+        lambda b: b + b"\0" * 4,  # bytes after the stream (xz stream padding)
+        lambda b: b + lzma.compress(b"", **XZ),  # a second stream
+        lambda b: zlib.compress(lzma.decompress(b)),  # a zlib block in a version-2 file
+        lambda b: b"\xfd7zXZ\0" + bytes(len(b) - 6),  # corrupt stream
+    ],
+)
+def test_bad_xz_block(rng, damage):
+    data = sf.encode(small_payload(rng, 10))
+    blocks = blocks_of(data)
+    blocks[2] = damage(blocks[2])
+    expect("bad_header", rebuild(header_of(data), blocks))
+
+
+def test_xz_block_of_wrong_size(rng):
+    data = sf.encode(small_payload(rng, 10))
+    blocks = blocks_of(data)
+    blocks[2] = lzma.compress(bytes(2399), **XZ)
+    expect("bad_header", rebuild(header_of(data), blocks))
 
 
 def test_cli_convert_csv_to_session_and_back(rng, tmp_path):
@@ -265,7 +432,7 @@ def test_encode_refuses_positions_off_the_grid_range(rng):
 
 
 def _reference_positions(data: bytes, index: int, n_frames: int, state: np.ndarray) -> np.ndarray:
-    """The first decoder's definition: float32 deltas to float64, cumulative sum over time, NaN where untracked."""
+    """The version-1 definition: float32 deltas to float64, cumulative sum over time, NaN where untracked."""
     raw = zlib.decompress(blocks_of(data)[3 * index + 2])
     deltas = sf._unshuffle(raw, "<f4").reshape(skeleton.J, 3, n_frames).astype(np.float64)
     positions = np.cumsum(deltas, axis=-1).transpose(2, 0, 1).copy()
@@ -273,14 +440,26 @@ def _reference_positions(data: bytes, index: int, n_frames: int, state: np.ndarr
     return positions
 
 
-def test_decode_equals_reference_on_simulated_session():
+def _reference_positions_v2(data: bytes, index: int, n_frames: int, state: np.ndarray) -> np.ndarray:
+    """The version-2 definition: int32 grid-unit deltas, per-joint cumulative sum, times the grid, NaN untracked."""
+    raw = lzma.decompress(blocks_of(data)[3 * index + 2])
+    deltas = sf._unshuffle(raw, "<i4").reshape(skeleton.J, 3, n_frames).astype(np.int64)
+    positions = (np.cumsum(deltas, axis=-1) * GRID).transpose(2, 0, 1).copy()
+    positions[state == skeleton.NOT_TRACKED] = np.nan
+    return positions
+
+
+@pytest.mark.parametrize("version", [1, 2])
+def test_decode_equals_reference_on_simulated_session(version):
     from kinect_agent.sources.simulator import simulate
 
     measured, truth, _ = simulate("squat", 3, seed=4)
-    data = sf.encode(sf.SessionPayload(str(uuid.uuid4()), measured, truth))
+    payload = sf.SessionPayload(str(uuid.uuid4()), measured, truth)
+    data = v1_encode(payload) if version == 1 else sf.encode(payload)
+    reference = _reference_positions if version == 1 else _reference_positions_v2
     back = sf.decode(data)
     for index, rec in enumerate((back.raw, back.filtered)):
-        expected = _reference_positions(data, index, rec.n_frames, rec.state)
+        expected = reference(data, index, rec.n_frames, rec.state)
         np.testing.assert_array_equal(rec.positions, expected, err_msg=f"recording {index}")
         assert rec.positions.flags.c_contiguous
 
