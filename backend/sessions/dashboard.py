@@ -1,6 +1,6 @@
 """Per-patient views over stored sessions: progress series and the therapist dashboard summary.
 
-Summaries of many patients cost a fixed number of queries (no query per patient), read the indexed scalar columns
+Summaries of many patients cost two queries (no query per patient), read the indexed scalar columns
 of session_metric and only the "indicators" part of a document, and never load the stored files.
 """
 
@@ -10,12 +10,13 @@ import datetime as dt
 from collections.abc import Sequence
 
 from sqlalchemy import func, or_, select
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import Session, aliased
 
 from backend.exercises.models import Exercise
 from backend.plans.models import Plan, PlanItem
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.suggestions.models import Suggestion
+from backend.users.models import User
 
 
 def week_start(now: dt.datetime) -> dt.datetime:
@@ -54,68 +55,80 @@ def progress(*, db_session: Session, patient_id: int, exercise_id: int | None, s
     return [dict(zip(keys, row, strict=True)) for row in rows]
 
 
-def _last_sessions(db_session: Session, patient_ids: Sequence[int]) -> dict[int, dict]:
-    """Returns the newest session of each patient that has one (brief fields)."""
-    ranked = (
+def _newest_session(*, with_metrics: bool):
+    """Returns a scalar subquery correlated to User: the patient's newest session id (with metrics, if asked).
+
+    ORDER BY started_at DESC, id DESC LIMIT 1 walks the (patient_id, started_at, id) index backwards from the newest
+    row, so the cost does not grow with the patient's number of sessions.
+    """
+    newest = select(ExerciseSession.id).where(ExerciseSession.patient_id == User.id)
+    if with_metrics:
+        newest = newest.join(SessionMetric, SessionMetric.session_id == ExerciseSession.id)
+    return (
+        newest.order_by(ExerciseSession.started_at.desc(), ExerciseSession.id.desc())
+        .limit(1)
+        .correlate(User)
+        .scalar_subquery()
+    )
+
+
+def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.datetime) -> dict[int, dict]:
+    """Returns per patient (one query): last session (brief), latest indicators, sessions this week, pending advice."""
+    this_week = (
+        select(func.count())
+        .select_from(ExerciseSession)
+        .where(ExerciseSession.patient_id == User.id, ExerciseSession.started_at >= week_start(now))
+        .correlate(User)
+        .scalar_subquery()
+    )
+    pending = (
+        select(func.count())
+        .select_from(Suggestion)
+        .where(Suggestion.patient_id == User.id, Suggestion.source == "system", Suggestion.status == "pending")
+        .correlate(User)
+        .scalar_subquery()
+    )
+    per = (
         select(
-            ExerciseSession.id,
-            ExerciseSession.patient_id,
-            func.row_number()
-            .over(
-                partition_by=ExerciseSession.patient_id,
-                order_by=(ExerciseSession.started_at.desc(), ExerciseSession.id.desc()),
-            )
-            .label("rank"),
+            User.id.label("pid"),
+            _newest_session(with_metrics=False).label("sid"),
+            _newest_session(with_metrics=True).label("mid"),
+            this_week.label("this_week"),
+            pending.label("pending"),
         )
-        .where(ExerciseSession.patient_id.in_(patient_ids))
+        .where(User.id.in_(patient_ids))
         .subquery()
     )
+    last_metric, indicator_metric = aliased(SessionMetric), aliased(SessionMetric)
     rows = db_session.execute(
         select(
-            ExerciseSession.patient_id,
+            per.c.pid,
+            per.c.this_week,
+            per.c.pending,
             ExerciseSession.id,
             Exercise.slug,
             ExerciseSession.started_at,
-            SessionMetric.repetitions,
-            SessionMetric.rom_deg,
-            SessionMetric.quality_ok,
+            last_metric.repetitions,
+            last_metric.rom_deg,
+            last_metric.quality_ok,
+            indicator_metric.document["indicators"],
         )
-        .join(ranked, (ranked.c.id == ExerciseSession.id) & (ranked.c.rank == 1))
+        .select_from(per)
+        .outerjoin(ExerciseSession, ExerciseSession.id == per.c.sid)
         .outerjoin(Exercise, Exercise.id == ExerciseSession.exercise_id)
-        .outerjoin(SessionMetric, SessionMetric.session_id == ExerciseSession.id)
+        .outerjoin(last_metric, last_metric.session_id == per.c.sid)
+        .outerjoin(indicator_metric, indicator_metric.session_id == per.c.mid)
     ).all()
     keys = ("id", "exercise_slug", "started_at", "repetitions", "rom_deg", "quality_ok")
-    return {row[0]: dict(zip(keys, row[1:], strict=True)) for row in rows}
-
-
-def _latest_indicators(db_session: Session, patient_ids: Sequence[int]) -> dict[int, dict]:
-    """Returns the indicators of each patient's newest session that has metrics."""
-    ranked = (
-        select(
-            SessionMetric.id,
-            ExerciseSession.patient_id,
-            func.row_number()
-            .over(
-                partition_by=ExerciseSession.patient_id,
-                order_by=(ExerciseSession.started_at.desc(), ExerciseSession.id.desc()),
-            )
-            .label("rank"),
-        )
-        .join(ExerciseSession, ExerciseSession.id == SessionMetric.session_id)
-        .where(ExerciseSession.patient_id.in_(patient_ids))
-        .subquery()
-    )
-    rows = db_session.execute(
-        select(ranked.c.patient_id, SessionMetric.document["indicators"])
-        .join(ranked, ranked.c.id == SessionMetric.id)
-        .where(ranked.c.rank == 1)
-    ).all()
-    return {pid: indicators for pid, indicators in rows if isinstance(indicators, dict)}
-
-
-def _count_by_patient(db_session: Session, column, *conditions) -> dict[int, int]:
-    rows = db_session.execute(select(column, func.count()).where(*conditions).group_by(column)).all()
-    return {pid: n for pid, n in rows}
+    return {
+        pid: {
+            "last_session": dict(zip(keys, last, strict=True)) if last[0] is not None else None,
+            "sessions_this_week": this_week or 0,
+            "pending_suggestions": pending or 0,
+            "latest_indicators": indicators if isinstance(indicators, dict) else None,
+        }
+        for pid, this_week, pending, *last, indicators in rows
+    }
 
 
 def _planned_per_week(db_session: Session, patient_ids: Sequence[int], on: dt.date) -> dict[int, int]:
@@ -140,34 +153,11 @@ def _planned_per_week(db_session: Session, patient_ids: Sequence[int], on: dt.da
 
 
 def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.datetime) -> dict[int, dict]:
-    """Returns the dashboard summary of each patient (SummaryOut fields) in six queries, whatever their number."""
+    """Returns the dashboard summary of each patient (SummaryOut fields) in two queries, whatever their number."""
     ids = sorted(set(patient_ids))
     if not ids:
         return {}
-    last = _last_sessions(db_session, ids)
-    indicators = _latest_indicators(db_session, ids)
-    this_week = _count_by_patient(
-        db_session,
-        ExerciseSession.patient_id,
-        ExerciseSession.patient_id.in_(ids),
-        ExerciseSession.started_at >= week_start(now),
-    )
-    pending = _count_by_patient(
-        db_session,
-        Suggestion.patient_id,
-        Suggestion.patient_id.in_(ids),
-        Suggestion.source == "system",
-        Suggestion.status == "pending",
-    )
+    per = _per_patient(db_session, ids, now)
     planned = _planned_per_week(db_session, ids, now.astimezone(dt.UTC).date())
-    return {
-        pid: {
-            "patient_id": pid,
-            "last_session": last.get(pid),
-            "sessions_this_week": this_week.get(pid, 0),
-            "planned_this_week": planned.get(pid),
-            "latest_indicators": indicators.get(pid),
-            "pending_suggestions": pending.get(pid, 0),
-        }
-        for pid in ids
-    }
+    empty = {"last_session": None, "sessions_this_week": 0, "pending_suggestions": 0, "latest_indicators": None}
+    return {pid: {"patient_id": pid, **empty, **per.get(pid, {}), "planned_this_week": planned.get(pid)} for pid in ids}

@@ -5,7 +5,7 @@ from __future__ import annotations
 import datetime as dt
 import uuid
 
-from sqlalchemy import JSON, Boolean, ForeignKey, LargeBinary, String, Text, UniqueConstraint
+from sqlalchemy import JSON, Boolean, ForeignKey, Index, LargeBinary, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, deferred, mapped_column, relationship
 
 from backend.database import Base, utcnow
@@ -15,7 +15,11 @@ class ExerciseSession(Base):
     """One performed set: the uploaded session file (deferred), its sha256 and how it was processed."""
 
     __tablename__ = "exercise_session"
-    __table_args__ = (UniqueConstraint("patient_id", "client_session_id"),)
+    __table_args__ = (
+        UniqueConstraint("patient_id", "client_session_id"),
+        # newest-first reads per patient (dashboard, session lists); migration 0002
+        Index("ix_exercise_session_patient_id_started_at", "patient_id", "started_at", "id"),
+    )
 
     id: Mapped[int] = mapped_column(primary_key=True)
     client_session_id: Mapped[uuid.UUID] = mapped_column()

@@ -9,9 +9,17 @@ from fastapi import APIRouter, Depends, Query, Request, Response, status
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
+from backend.audit.models import AuditEvent
 from backend.audit.service import record
 from backend.database import utcnow
-from backend.deps import Caller, CurrentCaller, DbSession, PatientForRead, require_patient_access
+from backend.deps import (
+    Caller,
+    CurrentCaller,
+    DbSession,
+    PatientForRead,
+    TherapistOrAdminCaller,
+    require_patient_access,
+)
 from backend.exceptions import (
     CsrfFailed,
     ExerciseNotFound,
@@ -30,7 +38,14 @@ from backend.exercises.service import get_exercise
 from backend.schemas import IdPath, IdQuery, Page, PageParams, page_params
 from backend.sessions import dashboard, service
 from backend.sessions.ingest import check_declared_length, decode_upload, read_limited
-from backend.sessions.schemas import ProgressOut, ProgressPoint, SessionItemOut, SessionOut, SummaryOut
+from backend.sessions.schemas import (
+    DashboardRowOut,
+    ProgressOut,
+    ProgressPoint,
+    SessionItemOut,
+    SessionOut,
+    SummaryOut,
+)
 from backend.suggestions.schemas import SuggestionOut
 
 router = APIRouter(prefix="/api/v1", tags=["sessions"])
@@ -59,6 +74,23 @@ def _audit(db_session: Session, caller: Caller, action: str, session_id, patient
     )
 
 
+def _audit_patients(db_session: Session, caller: Caller, action: str, patient_ids, detail=None) -> None:
+    """Adds what _audit adds once per patient, in one flush (a page of patients costs one INSERT, not one each)."""
+    db_session.add_all(
+        AuditEvent(
+            actor_user_id=caller.user.id if caller.user is not None else None,
+            actor_device_id=caller.device.id if caller.device is not None else None,
+            action=action,
+            object_type="exercise_session",
+            patient_id=pid,
+            ip=caller.ip,
+            detail=detail,
+        )
+        for pid in patient_ids
+    )
+    db_session.flush()
+
+
 def _aware(when: dt.datetime | None) -> dt.datetime | None:
     """Returns when with UTC assumed if it carries no time zone."""
     return when.replace(tzinfo=dt.UTC) if when is not None and when.tzinfo is None else when
@@ -82,8 +114,10 @@ def _upload_patient(caller: Caller, patient_id: int | None, db_session: Session)
     return patient_id
 
 
-def _session_out(db_session: Session, caller: Caller, session_id: int) -> SessionOut:
-    session, slug, reps, rom, quality, document = service.get_session_row(db_session=db_session, session_id=session_id)
+def _session_out(db_session: Session, caller: Caller, session_id: int, row: tuple | None = None) -> SessionOut:
+    """Returns the session body; row: get_session_row's answer when the caller already read it."""
+    row = row or service.get_session_row(db_session=db_session, session_id=session_id)
+    session, slug, reps, rom, quality, document = row
     suggestions = service.session_suggestions(
         db_session=db_session, session_id=session_id, patient_view=_patient_view(caller)
     )
@@ -208,8 +242,7 @@ def list_sessions(
         limit=page.limit,
         offset=page.offset,
     )
-    for pid in sorted({r[0].patient_id for r in rows}):
-        _audit(db_session, caller, "session.list", None, pid)
+    _audit_patients(db_session, caller, "session.list", sorted({r[0].patient_id for r in rows}))
     items = [SessionItemOut(**_item_fields(*r)) for r in rows]
     return Page[SessionItemOut](items=items, total=total, limit=page.limit, offset=page.offset)
 
@@ -221,10 +254,11 @@ def list_sessions(
 )
 def read_session(session_id: IdPath, caller: CurrentCaller, db_session: DbSession):
     """Returns one session with its metrics document and the suggestions the caller may see."""
-    patient_id = service.session_patient(db_session=db_session, session_id=session_id)
+    row = service.get_session_row(db_session=db_session, session_id=session_id)  # one query, file never loaded
+    patient_id = row[0].patient_id
     require_patient_access(patient_id, caller=caller, db_session=db_session)
     _audit(db_session, caller, "session.read", session_id, patient_id)
-    return _session_out(db_session, caller, session_id)
+    return _session_out(db_session, caller, session_id, row)
 
 
 @router.get(
@@ -279,3 +313,21 @@ def read_summary(patient: PatientForRead, caller: CurrentCaller, db_session: DbS
     summary = dashboard.summaries(db_session=db_session, patient_ids=[patient.id], now=utcnow())[patient.id]
     _audit(db_session, caller, "session.summary.read", None, patient.id)
     return SummaryOut(**summary)
+
+
+@router.get(
+    "/dashboard",
+    response_model=Page[DashboardRowOut],
+    responses=error_responses(*AUTH_ERRORS),
+)
+def read_dashboard(
+    caller: TherapistOrAdminCaller, db_session: DbSession, page: Annotated[PageParams, Depends(page_params)]
+):
+    """Returns one page of the caller's patients (therapists: assigned; admins: all) with each one's summary."""
+    patients, total = service.dashboard_patients(
+        db_session=db_session, caller=caller, limit=page.limit, offset=page.offset
+    )
+    summaries = dashboard.summaries(db_session=db_session, patient_ids=[p.id for p in patients], now=utcnow())
+    _audit_patients(db_session, caller, "session.summary.read", [p.id for p in patients], {"via": "dashboard"})
+    items = [DashboardRowOut(**summaries[p.id], full_name=p.full_name, email=p.email) for p in patients]
+    return Page[DashboardRowOut](items=items, total=total, limit=page.limit, offset=page.offset)

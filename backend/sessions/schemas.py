@@ -1,4 +1,4 @@
-"""Session bodies: a stored session with its metrics, list items, progress series and the dashboard summary."""
+"""Session bodies: a stored session with its metrics, list items, progress series, the dashboard summary and rows."""
 
 from __future__ import annotations
 
@@ -80,3 +80,10 @@ class SummaryOut(BaseModel):
     )
     latest_indicators: dict | None = Field(description="indicators of the newest processed session")
     pending_suggestions: int = Field(description="system suggestions waiting for a therapist's decision")
+
+
+class DashboardRowOut(SummaryOut):
+    """One patient of the therapist dashboard: who they are and their summary."""
+
+    full_name: str = Field(examples=["Pat Jones"])
+    email: str = Field(examples=["pat@example.org"])

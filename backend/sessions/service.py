@@ -15,12 +15,14 @@ from backend.database import utcnow
 from backend.exceptions import ExerciseNotFound, SessionConflict, SessionNotFound
 from backend.exercises.models import Exercise
 from backend.patients.models import TherapistPatient
+from backend.patients.service import visible_patients_query
 from backend.sessions.ingest import Upload
 from backend.sessions.metrics import json_ready, metrics_document, scalar_columns
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.suggestions.context import plan_targets, session_history
 from backend.suggestions.models import Suggestion
 from backend.suggestions.service import suggest_for_session, visible_to_patient
+from backend.users.models import User
 
 FILE_FORMAT = "khs"
 
@@ -174,6 +176,18 @@ def list_sessions(
         query.order_by(ExerciseSession.started_at.desc(), ExerciseSession.id.desc()).limit(limit).offset(offset)
     ).all()
     return [tuple(r) for r in rows], total
+
+
+def dashboard_patients(*, db_session: Session, caller, limit: int, offset: int) -> tuple[list[User], int]:
+    """Returns one page of the patients the caller (deps.Caller) may see, by id, and their total.
+
+    The total is counted only when the page does not tell it (a full page, or an empty page past the start).
+    """
+    query = visible_patients_query(caller)
+    patients = list(db_session.scalars(query.order_by(User.id).limit(limit).offset(offset)))
+    if len(patients) < limit and (patients or offset == 0):
+        return patients, offset + len(patients)
+    return patients, db_session.scalar(select(func.count()).select_from(query.subquery())) or 0
 
 
 def get_session_row(*, db_session: Session, session_id: int) -> tuple:

@@ -27,6 +27,7 @@ USERS = AUTHED - {"device"}
 CARE = {"patient_own", "therapist_assigned", "admin"}  # may see and manage the own patient
 CARE_DEV = CARE | {"device"}
 PRESCRIBE = {"therapist_assigned", "admin"}
+STAFF = {"therapist_assigned", "therapist_other", "admin"}  # sees only the patients they may see
 ADMIN = {"admin"}
 
 
@@ -92,6 +93,7 @@ ROUTES = {
     ("GET", "/api/v1/sessions/{session_id}/file"): (CARE_DEV, None),
     ("GET", "/api/v1/patients/{patient_id}/progress"): (CARE_DEV, None),
     ("GET", "/api/v1/patients/{patient_id}/summary"): (CARE_DEV, None),
+    ("GET", "/api/v1/dashboard"): (STAFF, None),  # therapists: assigned patients only
 }
 
 
@@ -157,10 +159,10 @@ DOC_PATHS = {"/openapi.json", "/docs", "/docs/oauth2-redirect", "/redoc"}
 
 
 def _api_routes(app) -> list[tuple[str, str]]:
-    """Returns (method, path) of every route of the app, included routers flattened, docs pages left out."""
+    """Returns (method, path) of every route of the app, included routers flattened, docs and HTML pages left out."""
     out = []
     for ctx in iter_route_contexts(app.routes):
-        if ctx.path in DOC_PATHS or not ctx.methods:
+        if ctx.path in DOC_PATHS or not ctx.methods or not getattr(ctx.route, "include_in_schema", True):
             continue
         out += [(m, ctx.path) for m in sorted(set(ctx.methods) - {"HEAD"})]
     return out

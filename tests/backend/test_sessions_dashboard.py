@@ -111,7 +111,7 @@ def test_summary_of_a_patient_without_sessions(client, make_user, auth_headers):
     }
 
 
-def test_summaries_of_many_patients_take_a_fixed_number_of_queries(db_session, make_user, exercise, store):
+def test_summaries_of_many_patients_take_two_queries(db_session, make_user, exercise, store):
     patients = [make_user("patient") for _ in range(20)]
     t0 = utcnow() - dt.timedelta(days=20)
     for i, patient in enumerate(patients):
@@ -125,6 +125,76 @@ def test_summaries_of_many_patients_take_a_fixed_number_of_queries(db_session, m
         result = dashboard.summaries(db_session=db_session, patient_ids=[p.id for p in patients], now=utcnow())
     finally:
         event.remove(connection, "before_cursor_execute", listener)
-    assert len(statements) <= 6, statements
+    assert len(statements) <= 2, statements
     assert all("file_bytes" not in s for s in statements)
     assert {r["latest_indicators"]["flexibility"]["value"] for r in result.values()} == {54.0}
+
+
+def test_dashboard_lists_only_the_therapists_patients_with_their_summaries(
+    client, make_user, make_patient_with_therapist, auth_headers, exercise, store
+):
+    patient, therapist = make_patient_with_therapist()
+    make_patient_with_therapist()  # another therapist's patient
+    newest = store(patient, exercise, utcnow() - dt.timedelta(minutes=5), reps=7, rom=64.0)
+    response = client.get("/api/v1/dashboard", headers=auth_headers(therapist))
+    assert response.status_code == 200, response.text
+    body = response.json()
+    assert (body["total"], [row["patient_id"] for row in body["items"]]) == (1, [patient.id])
+    row = body["items"][0]
+    assert (row["email"], row["last_session"]["id"], row["last_session"]["repetitions"]) == (
+        patient.email,
+        newest.id,
+        7,
+    )
+    assert row["sessions_this_week"] >= 0 and row["pending_suggestions"] == 0
+    assert row["latest_indicators"]["flexibility"]["value"] == pytest.approx(64.0)
+
+
+def test_dashboard_pages_through_every_patient_for_an_admin(client, make_user, auth_headers):
+    patients = [make_user("patient") for _ in range(3)]
+    headers = auth_headers(make_user("admin"))
+    total = client.get("/api/v1/dashboard", headers=headers, params={"limit": 1}).json()["total"]
+    seen = []
+    for offset in range(total):
+        page = client.get("/api/v1/dashboard", headers=headers, params={"limit": 1, "offset": offset}).json()
+        seen += [row["patient_id"] for row in page["items"]]
+    assert set(p.id for p in patients) <= set(seen) and len(seen) == total == len(set(seen))
+
+
+def test_dashboard_is_403_for_a_patient(client, make_user, auth_headers):
+    response = client.get("/api/v1/dashboard", headers=auth_headers(make_user("patient")))
+    assert response.status_code == 403
+    assert response.json()["error"] == "Forbidden"
+
+
+def test_dashboard_takes_a_fixed_number_of_queries(
+    client, db_session, make_user, make_patient_with_therapist, auth_headers, exercise, store
+):
+    patient, therapist = make_patient_with_therapist()
+    from backend.patients.models import TherapistPatient
+
+    for _ in range(9):
+        other = make_user("patient")
+        db_session.add(TherapistPatient(therapist_id=therapist.id, patient_id=other.id, created_at=utcnow()))
+        store(other, exercise, utcnow() - dt.timedelta(days=1))
+    store(patient, exercise, utcnow() - dt.timedelta(days=1))
+    db_session.flush()
+    headers = auth_headers(therapist)
+    statements = []
+    listener = lambda *args: statements.append(args[2])  # noqa: E731 - (conn, cursor, statement, ...)
+    connection = db_session.connection()
+    event.listen(connection, "before_cursor_execute", listener)
+    try:
+        response = client.get("/api/v1/dashboard", headers=headers)
+    finally:
+        event.remove(connection, "before_cursor_execute", listener)
+    assert response.status_code == 200 and response.json()["total"] == 10
+    selects = [s for s in statements if s.lstrip().upper().startswith(("SELECT", "WITH"))]
+    assert len(selects) <= 12, selects
+    assert all("file_bytes" not in s for s in statements)
+
+
+def test_dashboard_past_the_last_page_is_empty_with_the_total(client, make_patient_with_therapist, auth_headers):
+    _, therapist = make_patient_with_therapist()
+    body = client.get("/api/v1/dashboard", headers=auth_headers(therapist), params={"offset": 5}).json()
+    assert (body["items"], body["total"], body["offset"]) == ([], 1, 5)
