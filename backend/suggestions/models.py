@@ -31,6 +31,7 @@ class Suggestion(Base):
     metric: Mapped[str] = mapped_column(String(64), default="")
     comparison: Mapped[str] = mapped_column(String(8), default="")
     threshold: Mapped[float | None] = mapped_column()
+    value: Mapped[float | None] = mapped_column()  # the measured value compared with threshold (system ones)
     text: Mapped[str] = mapped_column(Text)
     status: Mapped[str] = mapped_column(String(16), default="pending", index=True)
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)

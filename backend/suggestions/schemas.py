@@ -36,7 +36,7 @@ class SuggestionIn(BaseModel):
 
 
 class SuggestionOut(BaseModel):
-    """A stored suggestion. System ones name the rule and the check `metric comparison threshold` that fired."""
+    """A stored suggestion. System ones name the rule and the check `metric value comparison threshold` that fired."""
 
     model_config = ConfigDict(
         from_attributes=True,
@@ -52,6 +52,7 @@ class SuggestionOut(BaseModel):
                     "metric": "repetitions",
                     "comparison": "<",
                     "threshold": 10.0,
+                    "value": 6.0,
                     "text": "Today you did 6 of the 10 repetitions in your plan. Next time, try to do all 10. "
                     "Rest for a moment between them if you need to.",
                     "status": "pending",
@@ -71,6 +72,7 @@ class SuggestionOut(BaseModel):
     metric: str = Field(description="the metric the rule checked, e.g. 'rom_deg'; empty for therapist ones")
     comparison: str = Field(description="how the metric compared to the threshold: '<', '>' or '=='")
     threshold: float | None
+    value: float | None = Field(description="the measured value of the metric that fired: value comparison threshold")
     text: str = Field(description="the advice, in words the patient understands")
     status: Status
     created_at: dt.datetime

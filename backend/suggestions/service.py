@@ -50,6 +50,7 @@ def add_system_suggestions(
                 metric=draft.metric,
                 comparison=draft.comparison,
                 threshold=float(draft.threshold),
+                value=float(draft.value),
                 text=draft.text,
                 status="pending",
                 created_at=now,

@@ -10,7 +10,8 @@
   function ruleText(s) {
     if (s.source !== "system") return null;
     const thr = s.threshold === null ? "" : ` ${+s.threshold.toFixed(2)}`;
-    return el("span", { class: "rule", title: "the rule that fired: metric comparison threshold" }, `${s.rule}: ${s.metric} ${s.comparison}${thr}`);
+    const val = s.value === null || s.value === undefined ? "" : ` ${+s.value.toFixed(2)}`;
+    return el("span", { class: "rule", title: "the rule that fired: metric value comparison threshold" }, `${s.rule}: ${s.metric}${val} ${s.comparison}${thr}`);
   }
 
   function meta(s) {

@@ -134,12 +134,12 @@ def test_suggest_for_session_fires_every_measured_rule(db_session, make_user, ex
     doc = _doc(exercise.slug, repetitions=6, rom_deg=60.0, tempo_s_per_rep=1.0)
     current = store(patient, exercise, 0, doc=doc)
     rows = suggest_for_session(db_session=db_session, session=current, doc=doc)
-    got = {r.rule: (r.metric, r.comparison, r.threshold, r.status, r.session_id) for r in rows}
+    got = {r.rule: (r.metric, r.value, r.comparison, r.threshold, r.status, r.session_id) for r in rows}
     assert got == {
-        "fewer_reps": ("repetitions", "<", 10.0, "pending", current.id),
-        "rom_drop": ("rom_deg", "<", pytest.approx(68.0), "pending", current.id),
-        "too_fast": ("tempo_s_per_rep", "<", 1.5, "pending", current.id),
-        "missed_days": ("active_days_last_7d", "<", 3.0, "pending", current.id),
+        "fewer_reps": ("repetitions", 6.0, "<", 10.0, "pending", current.id),
+        "rom_drop": ("rom_deg", 60.0, "<", pytest.approx(68.0), "pending", current.id),
+        "too_fast": ("tempo_s_per_rep", 1.0, "<", 1.5, "pending", current.id),
+        "missed_days": ("active_days_last_7d", 2.0, "<", 3.0, "pending", current.id),
     }
 
 

@@ -43,6 +43,7 @@ def make_suggestion(db_session):
             metric="tempo_s_per_rep" if source == "system" else "",
             comparison="<" if source == "system" else "",
             threshold=1.5 if source == "system" else None,
+            value=1.1 if source == "system" else None,
             text=f"{source} {status}",
             status=status,
             created_at=utcnow() - dt.timedelta(minutes=minutes_ago),
@@ -116,6 +117,7 @@ def test_therapist_filters_by_status(client, care, make_suggestion):
         "metric": "tempo_s_per_rep",
         "comparison": "<",
         "threshold": 1.5,
+        "value": 1.1,
         "text": "system pending",
         "status": "pending",
         "created_at": None,
@@ -299,7 +301,8 @@ def test_rule_drafts_are_stored_pending_and_reviewable(client, db_session, care)
     assert all(r.id is not None for r in rows), "add_system_suggestions must flush"
     body = client.get(_url(care["patient"]), params={"status": "pending"}, headers=care["therapist_hdr"]).json()
     by_rule = {s["rule"]: s for s in body["items"]}
-    assert (by_rule["fewer_reps"]["metric"], by_rule["fewer_reps"]["threshold"]) == ("repetitions", 10.0)
+    fewer = by_rule["fewer_reps"]
+    assert (fewer["metric"], fewer["value"], fewer["comparison"], fewer["threshold"]) == ("repetitions", 6.0, "<", 10.0)
     assert by_rule["fewer_reps"]["session_id"] == session.id
     assert client.get(_url(care["patient"]), headers=care["patient_hdr"]).json()["total"] == 0
 
