@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import getpass
-import importlib
 import sys
 
 from backend import __version__
@@ -139,7 +138,8 @@ def cmd_seed_demo(args: argparse.Namespace) -> int:
 
     _settings()
     _require_migrated()
-    demo = _optional_module("backend.demo")
+    from backend import demo
+
     with get_sessionmaker()() as session, session.begin():
         result = demo.seed_demo(session)
     if result is not None:
@@ -148,12 +148,10 @@ def cmd_seed_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_analyze(args: argparse.Namespace) -> int:
-    """Runs the offline analysis report (backend.analysis.report.main) with the remaining arguments."""
-    report = _optional_module("backend.analysis.report")
-    rest = list(args.rest)
-    if rest and rest[0] == "--":
-        rest = rest[1:]
-    return int(report.main(rest) or 0)
+    """Prints the analysis report of one recording file (backend.analysis.report)."""
+    from backend.analysis import report
+
+    return report.run(args)
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
@@ -161,15 +159,6 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from backend.demo import main as demo_main
 
     return demo_main([])
-
-
-def _optional_module(name: str):
-    try:
-        return importlib.import_module(name)
-    except ModuleNotFoundError as exc:
-        if exc.name == name:
-            raise CliError(f"{name} is not installed in this build") from None
-        raise
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -203,8 +192,12 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("demo", help="the demo clinic on embedded SQLite: migrate, seed, serve (`demo --help`)")
     p.set_defaults(_run=cmd_demo)
 
-    p = sub.add_parser("analyze", help="offline analysis report of session files (see `analyze -- --help`)")
-    p.add_argument("rest", nargs=argparse.REMAINDER, help="arguments passed to the analysis report")
+    from backend.analysis.report import add_arguments as analyze_arguments
+
+    p = sub.add_parser(
+        "analyze", help="the server's metrics of one recording file (any format the agent reads), as text or JSON"
+    )
+    analyze_arguments(p)
     p.set_defaults(_run=cmd_analyze)
     return parser
 

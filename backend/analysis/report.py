@@ -167,10 +167,15 @@ def _summary(doc: dict[str, Any]) -> str:
 def build_parser() -> argparse.ArgumentParser:
     """Returns the parser of `coach-server analyze`."""
     parser = argparse.ArgumentParser(prog="coach-server analyze", description="Analyse one recording file.")
+    add_arguments(parser)
+    return parser
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Declares FILE, --exercise and --json on parser."""
     parser.add_argument("file", help="a recording in any format the agent reads (.khs, .csv, UI-PRMD, ...)")
     parser.add_argument("--exercise", required=True, help=f"exercise slug ({', '.join(sorted(EXERCISES))})")
     parser.add_argument("--json", action="store_true", help="print the full JSON document instead of a summary")
-    return parser
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -179,6 +184,11 @@ def main(argv: list[str] | None = None) -> int:
         args = build_parser().parse_args(sys.argv[1:] if argv is None else list(argv))
     except SystemExit as exc:  # --help (0) or a usage error (2, already printed by argparse)
         return int(exc.code or 0)
+    return run(args)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Analyses args.file as args.exercise; prints the report; returns 0, or 2 after a one-line error."""
     try:
         doc = analyze_file(args.file, args.exercise)
     except AnalysisError as exc:
