@@ -209,7 +209,10 @@ def main(argv: list[str] | None = None) -> int:
         from backend.demo import main as demo_main
 
         return demo_main(argv[1:])
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as exc:  # --help (0) or a usage error (2, already printed by argparse)
+        return int(exc.code or 0)
     try:
         return args._run(args)
     except CliError as exc:
