@@ -6,7 +6,7 @@ from typing import Annotated
 
 from fastapi import APIRouter, Depends, status
 
-from backend.audit.service import record
+from backend.audit.service import record, record_patients
 from backend.deps import AdminCaller, CurrentCaller, DbSession, require_patient_access
 from backend.exceptions import (
     CsrfFailed,
@@ -27,14 +27,16 @@ router = APIRouter(prefix="/api/v1/patients", tags=["patients"])
 AUTH_ERRORS = (NotAuthenticated, Forbidden, CsrfFailed, InsufficientScope)
 
 
-def _out(db_session, patient: User) -> PatientOut:
+def _out(db_session, patient: User, therapist_ids: list[int] | None = None) -> PatientOut:
+    if therapist_ids is None:
+        therapist_ids = service.therapist_ids(db_session=db_session, patient_id=patient.id)
     return PatientOut(
         id=patient.id,
         email=patient.email,
         full_name=patient.full_name,
         is_active=patient.is_active,
         created_at=patient.created_at,
-        therapist_ids=service.therapist_ids(db_session=db_session, patient_id=patient.id),
+        therapist_ids=therapist_ids,
     )
 
 
@@ -42,10 +44,11 @@ def _out(db_session, patient: User) -> PatientOut:
 def list_patients(caller: CurrentCaller, db_session: DbSession, page: Annotated[PageParams, Depends(page_params)]):
     """Lists the patients the caller may see: admins all, therapists assigned ones, patients themselves."""
     rows, total = service.list_patients(db_session=db_session, caller=caller, limit=page.limit, offset=page.offset)
-    for p in rows:
-        record(db_session=db_session, caller=caller, action="patient.list", object_type="patient", patient_id=p.id)
+    ids = [p.id for p in rows]
+    record_patients(db_session=db_session, caller=caller, action="patient.list", object_type="patient", patient_ids=ids)
+    therapists = service.therapist_ids_by_patient(db_session=db_session, patient_ids=ids)
     return Page[PatientOut](
-        items=[_out(db_session, p) for p in rows], total=total, limit=page.limit, offset=page.offset
+        items=[_out(db_session, p, therapists[p.id]) for p in rows], total=total, limit=page.limit, offset=page.offset
     )
 
 

@@ -11,6 +11,19 @@ from backend.patients.models import TherapistPatient
 from backend.users.models import User
 
 
+def therapist_ids_by_patient(*, db_session: Session, patient_ids: list[int]) -> dict[int, list[int]]:
+    """Returns {patient id: ids of the therapists assigned to them} for many patients in one query."""
+    out: dict[int, list[int]] = {pid: [] for pid in patient_ids}
+    query = (
+        select(TherapistPatient.patient_id, TherapistPatient.therapist_id)
+        .where(TherapistPatient.patient_id.in_(patient_ids))
+        .order_by(TherapistPatient.therapist_id)
+    )
+    for patient_id, therapist_id in db_session.execute(query):
+        out[patient_id].append(therapist_id)
+    return out
+
+
 def therapist_ids(*, db_session: Session, patient_id: int) -> list[int]:
     """Returns the ids of the therapists assigned to a patient."""
     query = select(TherapistPatient.therapist_id).where(TherapistPatient.patient_id == patient_id)

@@ -9,8 +9,7 @@ from fastapi import APIRouter, Depends, Query, Request, Response, status
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
-from backend.audit.models import AuditEvent
-from backend.audit.service import record
+from backend.audit.service import record, record_patients
 from backend.database import utcnow
 from backend.deps import (
     Caller,
@@ -75,20 +74,15 @@ def _audit(db_session: Session, caller: Caller, action: str, session_id, patient
 
 
 def _audit_patients(db_session: Session, caller: Caller, action: str, patient_ids, detail=None) -> None:
-    """Adds what _audit adds once per patient, in one flush (a page of patients costs one INSERT, not one each)."""
-    db_session.add_all(
-        AuditEvent(
-            actor_user_id=caller.user.id if caller.user is not None else None,
-            actor_device_id=caller.device.id if caller.device is not None else None,
-            action=action,
-            object_type="exercise_session",
-            patient_id=pid,
-            ip=caller.ip,
-            detail=detail,
-        )
-        for pid in patient_ids
+    """Adds what _audit adds once per patient, in one flush."""
+    record_patients(
+        db_session=db_session,
+        caller=caller,
+        action=action,
+        object_type="exercise_session",
+        patient_ids=patient_ids,
+        detail=detail,
     )
-    db_session.flush()
 
 
 def _aware(when: dt.datetime | None) -> dt.datetime | None:
