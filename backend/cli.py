@@ -46,6 +46,9 @@ def cmd_serve(args: argparse.Namespace) -> int:
         port=args.port or settings.PORT,
         proxy_headers=True,
         forwarded_allow_ips=args.forwarded_allow_ips,
+        # longer than a therapist's pause between clicks and than load balancers' idle timeouts (60 s), so a
+        # client never reuses a connection the server is closing
+        timeout_keep_alive=75,
     )
     return 0
 
