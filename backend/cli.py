@@ -40,8 +40,12 @@ def cmd_serve(args: argparse.Namespace) -> int:
         check_at_head(get_engine())
     except DatabaseNotMigrated as exc:
         raise CliError(str(exc)) from None
+    workers = args.workers or settings.WORKERS
     uvicorn.run(
-        create_app(settings),
+        # one process: this app; several: each worker builds its own from the same environment
+        create_app(settings) if workers == 1 else "backend.main:create_app",
+        factory=workers > 1,
+        workers=workers,
         host=args.host or settings.HOST,
         port=args.port or settings.PORT,
         proxy_headers=True,
@@ -174,6 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--host", help="bind address (default COACH_HOST)")
     p.add_argument("--port", type=int, help="port (default COACH_PORT)")
     p.add_argument("--forwarded-allow-ips", default="127.0.0.1", help="proxies trusted for X-Forwarded-For")
+    p.add_argument("--workers", type=int, help="worker processes, about one per core (default COACH_WORKERS)")
     p.set_defaults(_run=cmd_serve)
 
     p = sub.add_parser("migrate", help="bring the database to head (or --revision / --down)")

@@ -5,7 +5,7 @@ from __future__ import annotations
 from functools import lru_cache
 from typing import Literal
 
-from pydantic import model_validator
+from pydantic import Field, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 DEFAULT_SECRET_KEY = "change-me-local-only"
@@ -21,6 +21,7 @@ class Settings(BaseSettings):
     SECRET_KEY: str = DEFAULT_SECRET_KEY
     HOST: str = "127.0.0.1"
     PORT: int = 8000
+    WORKERS: int = Field(default=1, ge=1, le=64)  # uvicorn worker processes of `coach-server serve`
     LOGIN_SESSION_HOURS: float = 12.0
     LOGIN_MAX_FAILURES: int = 5
     LOGIN_WINDOW_MINUTES: float = 15.0
