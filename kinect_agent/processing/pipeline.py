@@ -19,7 +19,8 @@ State per frame (ChainModel of kinematics.py): root position (3, m), segment len
 33 joint angles (rad): rotation vectors relative to per-sequence reference rotations for the 3-DoF joints, hinge
 angles for elbows/knees, two angles for wrists/ankles. Observation: the 20 joint positions (60 values); per frame
 only observed joints enter (rows of z and R selected), tracked joints with SD sigma_tracked_m per axis, inferred
-joints with sigma_inferred_m. Process noise is a random walk scaled with the frame interval: Q = q² · dt · rate_ref,
+joints with sigma_inferred_m. Process noise is a random walk scaled with the frame interval: Q = q² · dt · rate_ref
+(offline: offline_q_rot_rad / offline_q_root_m in place of q_rot_rad / q_root_m),
 with a variance ceiling (the initial variance) so that directions no joint observes cannot spread the sigma points
 over several radians. Joints whose innovation is improbable (d² > gate_chi2 for one joint) are skipped in that step.
 A joint skipped for reacquire_s without a break has lost track rather than met an outlier (the gate is relative to
@@ -33,7 +34,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -67,10 +68,22 @@ Progress = Callable[[int, int], None]
 class PipelineConfig:
     """Settings of the pipeline; defaults measured on simulated Kinect noise and real recordings (see the report)."""
 
-    sigma_tracked_m: float = 0.015  # measurement SD per axis of a tracked joint, m
+    sigma_tracked_m: float = 0.0325  # measurement SD per axis of a tracked joint, m (offline; online has its own).
+    # Kinect's error is slow jitter (AR(1), τ 0.2 s) plus bias, so trusting single frames (0.015 m before 2026-11-24)
+    # passes the jitter through. Chosen with offline_q_rot_rad / offline_q_root_m below (bench/README.md).
     sigma_inferred_m: float = 0.05  # measurement SD per axis of an inferred joint (state 1), m
     q_root_m: float = 0.01  # random-walk SD of the root position per frame at rate_ref_hz, m
     q_rot_rad: float = 0.08  # random-walk SD of every joint angle per frame at rate_ref_hz, rad
+    offline_q_rot_rad: float | None = 0.13  # offline (smooth): q_rot_rad of the four passes (None: q_rot_rad)
+    offline_q_root_m: float | None = 0.012  # offline (smooth): q_root_m of the four passes (None: q_root_m).
+    # Raising R and Q together keeps fast real limbs followed while root and joints average more jitter (relative to
+    # the inferred joints' SD and the variance ceilings). Tuning set (simulator + CMU), pooled offline RMSE / elbow-
+    # knee angle RMSE: old (0.015 m, 0.08 rad, 0.01 m) 122.7 mm / 24.3°; now (0.0325, 0.13, 0.012) 118.2 mm / 24.1°.
+    # Bounded by real data: 0.07 m (q unchanged) gave 117.1 mm / 23.1° but lagged UI-PRMD knees (median |filtered -
+    # raw| up to 16°, bound 5°); 0.035-0.04 m with q_rot 0.14-0.16 gave 117.3-117.8 mm but the UI-PRMD m09 elbow
+    # lost its correlation with raw (0.942-0.948, bound 0.95) and q_rot 0.16 fills a 0.5 s gap 115 mm off (bound
+    # 100; now 90); 0.03 m, 0.12 rad: 118.8 mm, behind One Euro at Kinect 1 30°/60°. Innovation gate none / 30 /
+    # 100, sigma_inferred_m and four_pass changed little or lost (q_* / sigma_inferred_m are shared with online).
     q_length_m: float = 0.001  # random-walk SD of segment lengths per frame (passes 1-2), m
     p0_root_m: float = 0.05  # initial SD of the root position, m
     p0_rot_rad: float = 0.3  # initial SD of the joint angles, rad
@@ -95,10 +108,10 @@ class PipelineConfig:
     # angles that place it restart from inverse kinematics of the frame (None: never). Without it a fast limb
     # (UI-PRMD squat: knee 20-30°/frame) outruns the random walk once and is then gated for good.
     online_reacquire_s: float | None = 0.3  # the same for the online filter when online_gate_chi2 is set
-    online_sigma_tracked_m: float = 0.07  # online: measurement SD per axis of a tracked joint, m. Larger than
-    # offline's: with no backward pass the forward filter alone must average Kinect's slow jitter (AR(1), τ 0.2 s,
-    # SDs up to 0.1 m) and ride out tracking-loss bursts. Tuning set (simulator + CMU), pooled online RMSE:
-    # 0.015 m 128.3 mm, 0.03 m 123.4, 0.05 m 120.9, 0.07 m 119.3, 0.1 m 119.0 (worse on CMU); raw 140.6.
+    online_sigma_tracked_m: float = 0.07  # online: measurement SD per axis of a tracked joint, m. Tuned before
+    # offline's (then 0.015 m): with no backward pass the forward filter alone must average Kinect's slow jitter
+    # (AR(1), τ 0.2 s, SDs up to 0.1 m) and ride out tracking-loss bursts. Tuning set (simulator + CMU), pooled
+    # online RMSE: 0.015 m 128.3 mm, 0.03 m 123.4, 0.05 m 120.9, 0.07 m 119.3, 0.1 m 119.0 (worse on CMU); raw 140.6.
     online_gate_chi2: float | None = None  # online: the UKF's innovation gate on one joint's d² (None: no gate).
     # Measured worse than none (tuning set: 30 → 135.0 mm, 100 → 127.4, none 128.3 at the old 0.015 m; at 0.05 m
     # 60 → 121.3, none 120.9): the gate is relative to the state's spread and drops fast limbs (CMU arms: a tenth of
@@ -133,6 +146,9 @@ class PipelineConfig:
             raise ValueError(f"PipelineConfig.online_sigma_tracked_m must be > 0, got {self.online_sigma_tracked_m!r}")
         if self.online_gate_chi2 is not None and not self.online_gate_chi2 > 0:
             raise ValueError(f"PipelineConfig.online_gate_chi2 must be > 0 or None, got {self.online_gate_chi2!r}")
+        for name in ("offline_q_rot_rad", "offline_q_root_m"):
+            if getattr(self, name) is not None and not getattr(self, name) > 0:
+                raise ValueError(f"PipelineConfig.{name} must be > 0 or None, got {getattr(self, name)!r}")
         for name in ("reacquire_s", "online_reacquire_s"):
             if getattr(self, name) is not None and not getattr(self, name) > 0:
                 raise ValueError(f"PipelineConfig.{name} must be > 0 or None, got {getattr(self, name)!r}")
@@ -371,6 +387,11 @@ def smooth(
     clean: Recording, ik: IKResult, config: PipelineConfig, progress: Progress | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
     """Runs the four passes on an outlier-free recording; returns (root (T, 3), lengths (19,), theta (T, 33), info)."""
+    config = replace(
+        config,
+        q_rot_rad=config.q_rot_rad if config.offline_q_rot_rad is None else config.offline_q_rot_rad,
+        q_root_m=config.q_root_m if config.offline_q_root_m is None else config.offline_q_root_m,
+    )
     T = clean.n_frames
     total = 4 * T
     done = [0]
@@ -437,7 +458,7 @@ def smooth(
 class OnlineFilter:
     """The forward pass frame by frame, for live feedback (one UKF step per frame, p99 ≲ 2 ms).
 
-    Tracked joints enter with SD config.online_sigma_tracked_m (0.07 m per axis, looser than offline) and, by
+    Tracked joints enter with SD config.online_sigma_tracked_m (0.07 m per axis, as offline's default) and, by
     default, no innovation gate (config.online_gate_chi2): both measured best on the tuning set under 2-6 %
     tracking loss (bench/README.md). With a gate, a joint gated for config.online_reacquire_s without a break is
     restarted from inverse kinematics of the frame (_ik_state).

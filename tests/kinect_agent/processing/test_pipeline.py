@@ -65,9 +65,11 @@ def test_missing_joints_and_frames_are_filled(rng: np.random.Generator) -> None:
 
 @pytest.mark.parametrize("smoother", ["urts", "four_pass"])
 def test_filter_is_closer_to_the_truth_than_the_measurement(rng: np.random.Generator, smoother: str) -> None:
+    # White noise of 15 mm per axis: the filter is told that noise model (the defaults are for Kinect's slow jitter).
     rec, truth, lengths = _noisy(rng, 200)
     bad, _ = inject_outliers(rec, rng)
-    result = process(bad, config=PipelineConfig(smoother=smoother))
+    white = PipelineConfig(smoother=smoother, sigma_tracked_m=0.015, offline_q_rot_rad=None, offline_q_root_m=None)
+    result = process(bad, config=white)
     raw = np.sqrt(np.mean(np.sum((rec.positions - truth) ** 2, axis=-1)))
     got = np.sqrt(np.mean(np.sum((result.filtered.positions - truth) ** 2, axis=-1)))
     assert got < 0.8 * raw, f"{smoother}: filtered RMSE {got * 1000:.1f} mm vs noise {raw * 1000:.1f} mm"
@@ -144,6 +146,18 @@ def test_config_errors_name_the_setting(rng: np.random.Generator) -> None:
         process(rec, config=PipelineConfig(smoother="kalman"))
     with pytest.raises(ValueError, match="PipelineConfig.sigma_tracked_m must be > 0"):
         process(rec, config=PipelineConfig(sigma_tracked_m=0.0))
+    with pytest.raises(ValueError, match="PipelineConfig.offline_q_rot_rad must be > 0 or None"):
+        process(rec, config=PipelineConfig(offline_q_rot_rad=0.0))
+
+
+def test_offline_process_noise_overrides_the_shared_one(rng: np.random.Generator) -> None:
+    rec, _, _ = _noisy(rng, 40)
+    base = dict(sigma_tracked_m=0.03, q_rot_rad=0.1, q_root_m=0.02)
+    got = process(rec, config=PipelineConfig(**base, offline_q_rot_rad=0.05, offline_q_root_m=0.005))
+    same = process(rec, config=PipelineConfig(**base | dict(q_rot_rad=0.05, q_root_m=0.005), offline_q_rot_rad=None,
+                                              offline_q_root_m=None))  # fmt: skip
+    np.testing.assert_allclose(got.filtered.positions, same.filtered.positions, atol=1e-12,
+                               err_msg="offline_q_* must act as q_* in the offline passes")  # fmt: skip
 
 
 def test_numpy_fallback_gives_the_same_result(rng: np.random.Generator, monkeypatch: pytest.MonkeyPatch) -> None:
