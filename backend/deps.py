@@ -77,11 +77,15 @@ def _from_bearer(token: str, db_session: Session, ip: str) -> Caller:
 
 
 def _from_cookie(cookie: str, db_session: Session, ip: str) -> Caller | None:
-    login = db_session.scalar(select(LoginSession).where(LoginSession.token_hash == token_hash(cookie)))
-    if login is None or login.revoked_at is not None or login.expires_at <= utcnow():
+    found = db_session.execute(  # one round trip for the login session and its user
+        select(LoginSession, User)
+        .join(User, User.id == LoginSession.user_id)
+        .where(LoginSession.token_hash == token_hash(cookie))
+    ).first()
+    if found is None:
         return None
-    user = db_session.get(User, login.user_id)
-    if user is None or not user.is_active:
+    login, user = found
+    if login.revoked_at is not None or login.expires_at <= utcnow() or not user.is_active:
         return None
     return Caller(via="cookie", user=user, login_session=login, ip=ip)
 
