@@ -5,7 +5,7 @@ from __future__ import annotations
 import datetime as dt
 import uuid
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
 from backend.suggestions.schemas import SuggestionOut
 
@@ -38,6 +38,25 @@ class SessionOut(SessionItemOut):
     suggestions: list[SuggestionOut]
 
 
+_INDICATORS_EXAMPLE = {
+    "flexibility": {
+        "score": 60.7,
+        "value": 82.0,
+        "basis": "median amplitude of knee_flexion_R against the normal range 0..135 deg",
+        "quality_ok": True,
+        "previous": 58.1,
+    },
+    "endurance": {"score": 80.0, "value": 8, "basis": "repetitions against the target of 10", "quality_ok": True},
+    "strength": {
+        "score": 64.0,
+        "value": 26.5,
+        "basis": "movement speed (deg/s) against the last weeks",
+        "quality_ok": True,
+    },
+    "balance": {"score": None, "value": None, "basis": "body-centre sway while standing still", "quality_ok": False},
+}
+
+
 class ProgressPoint(BaseModel):
     """One session of a progress series."""
 
@@ -53,6 +72,27 @@ class ProgressPoint(BaseModel):
 class ProgressOut(BaseModel):
     """A patient's sessions as a time series, oldest first."""
 
+    model_config = ConfigDict(
+        json_schema_extra={
+            "examples": [
+                {
+                    "patient_id": 12,
+                    "exercise_slug": "seated_knee_extension",
+                    "points": [
+                        {
+                            "session_id": 301,
+                            "exercise_slug": "seated_knee_extension",
+                            "started_at": "2026-11-16T10:55:00Z",
+                            "repetitions": 10,
+                            "rom_deg": 76.6,
+                            "quality_ok": True,
+                            "indicators": _INDICATORS_EXAMPLE,
+                        }
+                    ],
+                }
+            ]
+        }
+    )
     patient_id: int
     exercise_slug: str | None = Field(description="the exercise filtered on; null = every exercise")
     points: list[ProgressPoint]
@@ -72,6 +112,27 @@ class LastSessionOut(BaseModel):
 class SummaryOut(BaseModel):
     """What a therapist's dashboard shows about one patient."""
 
+    model_config = ConfigDict(
+        json_schema_extra={
+            "examples": [
+                {
+                    "patient_id": 12,
+                    "last_session": {
+                        "id": 318,
+                        "exercise_slug": "seated_knee_extension",
+                        "started_at": "2026-11-23T10:55:00Z",
+                        "repetitions": 9,
+                        "rom_deg": 67.5,
+                        "quality_ok": True,
+                    },
+                    "sessions_this_week": 2,
+                    "planned_this_week": 6,
+                    "latest_indicators": _INDICATORS_EXAMPLE,
+                    "pending_suggestions": 2,
+                }
+            ]
+        }
+    )
     patient_id: int
     last_session: LastSessionOut | None
     sessions_this_week: int = Field(description="sessions started since Monday 00:00 UTC of the current week")
