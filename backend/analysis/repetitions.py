@@ -155,8 +155,18 @@ def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) ->
     return events
 
 
+def _shared(a: _Event, b: _Event) -> int:
+    """Frames two events share (0 when they do not overlap)."""
+    return max(0, min(a.end, b.end) - max(a.start, b.start))
+
+
 def _merge(events: list[_Event], overlap: float) -> list[_Event]:
-    """Joins events of different angles that overlap by more than `overlap` of the shorter one."""
+    """Joins events of different angles that overlap by more than `overlap` of the shorter one.
+
+    When an event of a side already in the group overlaps the group's other members more than that side's member
+    does (a bump just before the real excursion of one knee paired first with the other knee's excursion), the
+    event takes the member's place and the member stands alone.
+    """
     merged: list[list[_Event]] = []
     for ev in sorted(events, key=lambda ev: ev.start):
         if merged:
@@ -164,9 +174,18 @@ def _merge(events: list[_Event], overlap: float) -> list[_Event]:
             g_start, g_end = min(x.start for x in group), max(x.end for x in group)
             shared = min(g_end, ev.end) - max(g_start, ev.start)
             shorter = max(1, min(g_end - g_start, ev.end - ev.start))
-            if shared > overlap * shorter and all(x.side != ev.side for x in group):
-                group.append(ev)
-                continue
+            if shared > overlap * shorter:
+                same = [x for x in group if x.side == ev.side]
+                if not same:
+                    group.append(ev)
+                    continue
+                others = [x for x in group if x.side != ev.side]
+                rival = same[0]
+                if others and sum(_shared(ev, o) for o in others) > sum(_shared(rival, o) for o in others):
+                    group.remove(rival)
+                    group.append(ev)
+                    merged.insert(len(merged) - 1, [rival])
+                    continue
         merged.append([ev])
     out = []
     for group in merged:
@@ -184,7 +203,7 @@ def _merge(events: list[_Event], overlap: float) -> list[_Event]:
                 angles=tuple(a for x in group for a in x.angles),
             )
         )
-    return out
+    return sorted(out, key=lambda ev: ev.start)
 
 
 def _keep_counted(merged: list[_Event], counted: set[str]) -> list[_Event]:

@@ -147,3 +147,17 @@ def test_uiprmd_shoulder_abduction_amplitude_is_that_of_the_episodes(data_dir) -
     per_episode = [x[a:b].max() - x[a:b].min() for a, b in zip(starts[:-1], starts[1:], strict=True)]
     np.testing.assert_allclose([r.amplitude_deg for r in reps], per_episode, rtol=0.1, err_msg="amplitude (deg)")
     assert {r.side for r in reps} == {"right"}
+
+
+def test_a_bump_before_one_knees_excursion_does_not_split_the_repetition() -> None:
+    """Right knee bends over frames 86-119; the left knee bumps (87-95) before its own bend (99-133). The right
+    excursion pairs with the left bend it overlaps most; the bump stands alone and is dropped as a weak lone event.
+    Found on a simulated squat after the pipeline (7 squats counted as 8)."""
+    from backend.analysis.repetitions import _Event, _merge
+
+    def ev(start, end, amplitude, side):
+        return _Event(start=start, peak=(start + end) // 2, end=end, amplitude=amplitude, peak_deg=amplitude,
+                      side=side, angles=(f"knee_flexion_{side[0].upper()}",))  # fmt: skip
+
+    merged = _merge([ev(86, 119, 92.5, "right"), ev(87, 95, 31.2, "left"), ev(99, 133, 90.3, "left")], 0.5)
+    assert [(m.side, m.start, m.end) for m in merged] == [("both", 86, 133), ("left", 87, 95)]
