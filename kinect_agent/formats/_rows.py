@@ -1,7 +1,8 @@
-"""Parsing one comma-separated row of numbers, with errors that name the file, the line and the column."""
+"""Parsing rows of numbers, with errors that name the file, the line and the column."""
 
 from __future__ import annotations
 
+import gzip
 from pathlib import Path
 
 import numpy as np
@@ -34,3 +35,35 @@ def is_number(text: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+def read_csv_table(path: Path, n_columns: int, layout: str) -> np.ndarray:
+    """Returns the rows (T, n_columns) of a headerless comma-separated file of numbers, plain or .gz.
+
+    Blank lines are skipped; any bad row raises FormatError naming its line. layout: what the columns are.
+    """
+    opener = gzip.open if path.name.endswith(".gz") else open
+    rows = []
+    try:
+        with opener(path, "rt", encoding="ascii") as f:
+            for line_no, line in enumerate(f, start=1):
+                if line.strip():
+                    rows.append(parse_csv_row(path, line_no, line, n_columns, layout))
+    except (OSError, EOFError, UnicodeDecodeError) as exc:
+        raise FormatError(path, f"unreadable file: {exc}") from None
+    if not rows:
+        raise FormatError(path, f"no frames: expected rows of {n_columns} comma-separated numbers")
+    return np.array(rows)
+
+
+def parse_floats(path: Path, line_no: int, cells: list[str], n: int, what: str) -> np.ndarray:
+    """Returns n finite numbers (n,) read from cells; raises FormatError naming the line and `what` otherwise."""
+    if len(cells) != n:
+        raise FormatError(path, f"expected {n} {what}, found {len(cells)}", line_no)
+    try:
+        values = np.array([float(c) for c in cells])
+    except ValueError:
+        raise FormatError(path, f"expected numbers for {what}, found {' '.join(cells[:5])!r}", line_no) from None
+    if not np.all(np.isfinite(values)):
+        raise FormatError(path, f"{what} must be finite", line_no)
+    return values

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from kinect_agent.errors import FormatError
+from kinect_agent.formats._rows import parse_floats
 
 INCH_M = 0.0254
 _AXES = "XYZ"
@@ -104,7 +105,7 @@ def read(path: str | Path) -> Skeleton:
 
 def _units(skel: Skeleton, path: Path, line_no: int, tok: list[str]) -> None:
     if tok[0] == "length":
-        skel.length_unit = _floats(path, line_no, tok[1:], 1, "length unit")[0]
+        skel.length_unit = parse_floats(path, line_no, tok[1:], 1, "length unit")[0]
         if skel.length_unit <= 0:
             raise FormatError(path, f"length unit must be positive, found {skel.length_unit}", line_no)
     elif tok[0] == "angle":
@@ -124,9 +125,9 @@ def _root(skel: Skeleton, path: Path, line_no: int, tok: list[str]) -> None:
     elif key == "axis":
         skel.root_axis_order = _order_token(path, line_no, tok[1:2])
     elif key == "position":
-        skel.root_position = _floats(path, line_no, tok[1:], 3, "root position values")
+        skel.root_position = parse_floats(path, line_no, tok[1:], 3, "root position values")
     elif key == "orientation":
-        skel.root_orientation = _floats(path, line_no, tok[1:], 3, "root orientation values")
+        skel.root_orientation = parse_floats(path, line_no, tok[1:], 3, "root orientation values")
 
 
 def _bone_field(bone: Bone, path: Path, line_no: int, tok: list[str]) -> None:
@@ -134,13 +135,13 @@ def _bone_field(bone: Bone, path: Path, line_no: int, tok: list[str]) -> None:
     if key == "name":
         bone.name = tok[1] if len(tok) > 1 else ""
     elif key == "direction":
-        bone.direction = _floats(path, line_no, tok[1:], 3, "direction values")
+        bone.direction = parse_floats(path, line_no, tok[1:], 3, "direction values")
         norm = float(np.linalg.norm(bone.direction))
         bone.direction = bone.direction / norm if norm > 0 else bone.direction
     elif key == "length":
-        bone.length = _floats(path, line_no, tok[1:], 1, "bone length")[0]
+        bone.length = parse_floats(path, line_no, tok[1:], 1, "bone length")[0]
     elif key == "axis":
-        bone.axis_deg = _floats(path, line_no, tok[1:4], 3, "axis angles")
+        bone.axis_deg = parse_floats(path, line_no, tok[1:4], 3, "axis angles")
         bone.axis_order = _order_token(path, line_no, tok[4:5])
     elif key == "dof":
         dof = [t.lower() for t in tok[1:]]
@@ -249,15 +250,3 @@ def _motion_rotation(bone: Bone, values: np.ndarray | None, T: int, to_rad: floa
         return np.broadcast_to(np.eye(3), (T, 3, 3))
     angles = np.stack([values[:, k] for k, _ in rotational], axis=-1) * to_rad
     return euler(angles, "".join(d[1] for _, d in rotational))
-
-
-def _floats(path: Path, line_no: int, cells: list[str], n: int, what: str) -> np.ndarray:
-    if len(cells) != n:
-        raise FormatError(path, f"expected {n} {what}, found {len(cells)}", line_no)
-    try:
-        values = np.array([float(c) for c in cells])
-    except ValueError:
-        raise FormatError(path, f"expected numbers for {what}, found {' '.join(cells)!r}", line_no) from None
-    if not np.all(np.isfinite(values)):
-        raise FormatError(path, f"{what} must be finite", line_no)
-    return values

@@ -20,6 +20,7 @@ import numpy as np
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import mocap_mapping
+from kinect_agent.formats._rows import parse_floats
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "bvh"
@@ -96,7 +97,7 @@ def parse_hierarchy(path: Path, lines: list[tuple[int, list[str]]]) -> tuple[lis
             stack.pop()
         elif key == "OFFSET":
             _need_open(path, stack, line_no, key)
-            joints[stack[-1]].offset = _floats(path, line_no, tok[1:], 3, "OFFSET values")
+            joints[stack[-1]].offset = parse_floats(path, line_no, tok[1:], 3, "OFFSET values")
         elif key == "CHANNELS":
             _need_open(path, stack, line_no, key)
             joints[stack[-1]].channels = _channels(path, line_no, tok)
@@ -123,8 +124,8 @@ def parse_motion(path: Path, lines: list[tuple[int, list[str]]], pos: int, n_cha
         raise FormatError(path, "expected 'Frames: <count>' after MOTION", frames_no)
     if len(header) < 2 or header[1][1][:2] != ["Frame", "Time:"] or len(header[1][1]) != 3:
         raise FormatError(path, "expected 'Frame Time: <seconds>' after 'Frames:'", frames_no + 1)
-    n_frames = int(_floats(path, header[0][0], header[0][1][1:], 1, "frame count")[0])
-    frame_time = float(_floats(path, header[1][0], header[1][1][2:], 1, "frame time")[0])
+    n_frames = int(parse_floats(path, header[0][0], header[0][1][1:], 1, "frame count")[0])
+    frame_time = float(parse_floats(path, header[1][0], header[1][1][2:], 1, "frame time")[0])
     if n_frames < 1 or frame_time <= 0:
         raise FormatError(path, f"need Frames >= 1 and Frame Time > 0, found {n_frames} and {frame_time}", frames_no)
     rows = lines[pos + 3 :]
@@ -135,7 +136,7 @@ def parse_motion(path: Path, lines: list[tuple[int, list[str]]], pos: int, n_cha
         raise FormatError(path, f"more rows than 'Frames: {n_frames}' announces", rows[n_frames][0])
     motion = np.empty((n_frames, n_channels))
     for i, (line_no, tok) in enumerate(rows):
-        motion[i] = _floats(path, line_no, tok, n_channels, f"channel values (frame {i})")
+        motion[i] = parse_floats(path, line_no, tok, n_channels, f"channel values (frame {i})")
     return 1.0 / frame_time, motion
 
 
@@ -192,7 +193,7 @@ def _axis_rotation(axis: int, angle: np.ndarray) -> np.ndarray:
 
 
 def _channels(path: Path, line_no: int, tok: list[str]) -> list[str]:
-    count = int(_floats(path, line_no, tok[1:2], 1, "channel count")[0])
+    count = int(parse_floats(path, line_no, tok[1:2], 1, "channel count")[0])
     names = tok[2:]
     if len(names) != count:
         raise FormatError(path, f"CHANNELS announces {count} channels but lists {len(names)}", line_no)
@@ -205,15 +206,3 @@ def _channels(path: Path, line_no: int, tok: list[str]) -> list[str]:
 def _need_open(path: Path, stack: list[int], line_no: int, key: str) -> None:
     if not stack:
         raise FormatError(path, f"{key} outside any joint block", line_no)
-
-
-def _floats(path: Path, line_no: int, cells: list[str], n: int, what: str) -> np.ndarray:
-    if len(cells) != n:
-        raise FormatError(path, f"expected {n} {what}, found {len(cells)}", line_no)
-    try:
-        values = np.array([float(c) for c in cells])
-    except ValueError:
-        raise FormatError(path, f"expected numbers for {what}, found {' '.join(cells[:5])!r}", line_no) from None
-    if not np.all(np.isfinite(values)):
-        raise FormatError(path, f"{what} must be finite", line_no)
-    return values

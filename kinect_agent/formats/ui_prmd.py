@@ -18,7 +18,6 @@ The Vicon files (117 columns = 39 joints) have another layout and are not read h
 
 from __future__ import annotations
 
-import gzip
 import re
 from pathlib import Path
 
@@ -26,7 +25,7 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
-from kinect_agent.formats._rows import parse_csv_row
+from kinect_agent.formats._rows import read_csv_table
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "ui_prmd"
@@ -183,18 +182,8 @@ def _read_table(path: Path) -> np.ndarray:
     """Reads a headerless 66-column CSV (gz or plain); returns (T, 22, 3) float."""
     if not path.is_file():
         raise FormatError(path, "missing file: expected it beside the positions file's folder")
-    opener = gzip.open if path.name.endswith(".gz") else open
-    rows = []
-    try:
-        with opener(path, "rt", encoding="ascii") as f:
-            for line_no, line in enumerate(f, start=1):
-                if line.strip():
-                    rows.append(parse_csv_row(path, line_no, line, N_COLUMNS, "22 joints x 3"))
-    except (OSError, EOFError, UnicodeDecodeError) as exc:
-        raise FormatError(path, f"unreadable file: {exc}") from None
-    if not rows:
-        raise FormatError(path, f"no frames: expected rows of {N_COLUMNS} comma-separated numbers")
-    return np.array(rows).reshape(len(rows), N_SOURCE_JOINTS, 3)
+    rows = read_csv_table(path, N_COLUMNS, "22 joints x 3")
+    return rows.reshape(len(rows), N_SOURCE_JOINTS, 3)
 
 
 def _angles_path(positions_path: Path) -> Path:

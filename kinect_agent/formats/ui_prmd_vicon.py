@@ -26,7 +26,7 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
-from kinect_agent.formats._rows import parse_csv_row
+from kinect_agent.formats._rows import read_csv_table
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "ui_prmd_vicon"
@@ -88,18 +88,8 @@ def read(path: Path) -> Recording:
 
 def read_markers(path: Path) -> np.ndarray:
     """Returns the markers (T, 39, 3), millimetres, lab frame (z up); FormatError on a bad row."""
-    opener = gzip.open if path.name.endswith(".gz") else open
-    rows = []
-    try:
-        with opener(path, "rt", encoding="ascii") as f:
-            for line_no, line in enumerate(f, start=1):
-                if line.strip():
-                    rows.append(parse_csv_row(path, line_no, line, N_COLUMNS, "39 markers x 3"))
-    except (OSError, EOFError, UnicodeDecodeError) as exc:
-        raise FormatError(path, f"unreadable file: {exc}") from None
-    if not rows:
-        raise FormatError(path, f"no frames: expected rows of {N_COLUMNS} comma-separated numbers")
-    return np.array(rows).reshape(len(rows), len(MARKERS), 3)
+    rows = read_csv_table(path, N_COLUMNS, "39 markers x 3")
+    return rows.reshape(len(rows), len(MARKERS), 3)
 
 
 def joints_from_markers(markers: np.ndarray) -> np.ndarray:
