@@ -226,3 +226,17 @@ def exercise(db_session) -> Exercise:
         db_session.add(row)
         db_session.flush()
     return row
+
+
+@pytest.fixture
+def other_exercise(db_session, exercise) -> Exercise:
+    """A second exercise of the library."""
+    return db_session.scalar(select(Exercise).where(Exercise.id != exercise.id).order_by(Exercise.slug).limit(1))
+
+
+@pytest.fixture
+def store(db_session):
+    """Factory: store(patient, exercise, started_at, **kw) -> ExerciseSession (see session_rows.store_session)."""
+    from tests.backend.session_rows import store_session
+
+    return lambda *args, **kw: store_session(db_session, *args, **kw)

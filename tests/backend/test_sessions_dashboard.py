@@ -5,26 +5,12 @@ from __future__ import annotations
 import datetime as dt
 
 import pytest
-from sqlalchemy import event, select
+from sqlalchemy import event
 
 from backend.database import utcnow
-from backend.exercises.models import Exercise
 from backend.plans.models import Plan, PlanItem
 from backend.sessions import dashboard
 from backend.suggestions.models import Suggestion
-from tests.backend.session_rows import store_session
-
-
-@pytest.fixture
-def store(db_session):
-    """Factory: store(patient, exercise, started_at, **kw) -> ExerciseSession."""
-    return lambda *args, **kw: store_session(db_session, *args, **kw)
-
-
-@pytest.fixture
-def other_exercise(db_session, exercise) -> Exercise:
-    """A second exercise of the library."""
-    return db_session.scalar(select(Exercise).where(Exercise.id != exercise.id).order_by(Exercise.slug).limit(1))
 
 
 def test_week_start_is_monday_midnight_utc():

@@ -4,27 +4,12 @@ from __future__ import annotations
 
 import datetime as dt
 
-import pytest
 from sqlalchemy import select
 
 from backend.audit.models import AuditEvent
-from backend.exercises.models import Exercise
 from backend.suggestions.models import Suggestion
-from tests.backend.session_rows import store_session
 
 T0 = dt.datetime(2026, 11, 2, 9, 0, tzinfo=dt.UTC)  # a Monday
-
-
-@pytest.fixture
-def store(db_session):
-    """Factory: store(patient, exercise, started_at, **kw) -> ExerciseSession (see session_rows.store_session)."""
-    return lambda *args, **kw: store_session(db_session, *args, **kw)
-
-
-@pytest.fixture
-def other_exercise(db_session, exercise) -> Exercise:
-    """A second exercise of the library."""
-    return db_session.scalar(select(Exercise).where(Exercise.id != exercise.id).order_by(Exercise.slug).limit(1))
 
 
 def test_list_is_newest_first_with_metric_scalars(client, make_user, auth_headers, exercise, store):
