@@ -19,7 +19,7 @@ class Suggestion(Base):
     __tablename__ = "suggestion"
     __table_args__ = (
         CheckConstraint("source IN ('system', 'therapist')", name="source"),
-        CheckConstraint("status IN ('pending', 'approved', 'dismissed')", name="status"),
+        CheckConstraint("status IN ('pending', 'approved', 'dismissed', 'superseded')", name="status"),
     )
 
     id: Mapped[int] = mapped_column(primary_key=True)

@@ -9,7 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from backend.schemas import MAX_ID
 
-Status = Literal["pending", "approved", "dismissed"]
+Status = Literal["pending", "approved", "dismissed", "superseded"]  # superseded: newer advice of the same rule
 Source = Literal["system", "therapist"]
 
 

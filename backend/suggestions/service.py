@@ -146,7 +146,7 @@ def decide(*, db_session: Session, suggestion: Suggestion, status: str, decided_
         update(Suggestion)
         .where(Suggestion.id == suggestion.id, Suggestion.status == "pending")
         .values(status=status, decided_at=utcnow(), decided_by_id=decided_by_id)
-        .execution_options(synchronize_session=False)
+        .execution_options(synchronize_session="fetch")
     )
     db_session.refresh(suggestion)
     if result.rowcount != 1:
@@ -194,4 +194,31 @@ def suggest_for_session(*, db_session: Session, session: ExerciseSession, doc: d
         db_session=db_session, session=session, rule=MISSED_DAYS, days=ACTIVE_DAYS_WINDOW
     ):
         drafts = [d for d in drafts if d.rule != MISSED_DAYS]
-    return add_system_suggestions(drafts, patient_id=session.patient_id, session_id=session.id, db_session=db_session)
+    rows = add_system_suggestions(drafts, patient_id=session.patient_id, session_id=session.id, db_session=db_session)
+    supersede_older(db_session=db_session, session=session, rules={r.rule for r in rows})
+    return rows
+
+
+def supersede_older(*, db_session: Session, session: ExerciseSession, rules: set[str]) -> int:
+    """Marks 'superseded' the patient's pending system suggestions of these rules from earlier sessions of the same
+    exercise (a session uploaded late never replaces newer advice); returns how many changed."""
+    if not rules:
+        return 0
+    earlier = select(ExerciseSession.id).where(
+        ExerciseSession.patient_id == session.patient_id,
+        ExerciseSession.exercise_id == session.exercise_id,
+        ExerciseSession.started_at < session.started_at,
+    )
+    result = db_session.execute(
+        update(Suggestion)
+        .where(
+            Suggestion.patient_id == session.patient_id,
+            Suggestion.source == "system",
+            Suggestion.status == "pending",
+            Suggestion.rule.in_(sorted(rules)),
+            Suggestion.session_id.in_(earlier),
+        )
+        .values(status="superseded", decided_at=utcnow())
+        .execution_options(synchronize_session="fetch")
+    )
+    return result.rowcount

@@ -55,7 +55,7 @@
     const page = await api(`/patients/${pid}/suggestions?limit=30`);
     const done = page.items.filter((s) => s.status !== "pending").slice(0, 8);
     list.replaceChildren(...done.map((s) => el("li", {},
-      el("strong", {}, s.source === "therapist" ? "You wrote" : s.status === "approved" ? "Approved" : "Dismissed"), ": ", s.text, meta(s))));
+      el("strong", {}, s.source === "therapist" ? "You wrote" : { approved: "Approved", dismissed: "Dismissed", superseded: "Replaced by newer advice" }[s.status]), ": ", s.text, meta(s))));
     if (!done.length) list.append(el("li", { class: "muted" }, "None yet."));
   }
 

@@ -166,3 +166,25 @@ def test_suggest_for_session_rejects_a_malformed_document(db_session, make_user,
     patient = make_user("patient")
     with pytest.raises(ValueError, match=r"doc\['rom_deg'\] must be a number"):
         suggest_for_session(db_session=db_session, session=store(patient, exercise, 0), doc=_doc("x", rom_deg="x"))
+
+
+def test_newer_advice_supersedes_pending_advice_of_the_same_rule_and_exercise(
+    db_session, make_user, exercise, other_exercise, store
+):
+    patient = make_user("patient")
+    fired = {}
+    for days, ex in ((10, exercise), (6, other_exercise), (3, exercise)):
+        session = store(patient, ex, days, tempo_s_per_rep=1.0)  # too fast every time
+        rows = suggest_for_session(db_session=db_session, session=session, doc=session.metric.document)
+        fired[days] = {r.rule: r for r in rows}
+    db_session.refresh(fired[10]["too_fast"])
+    assert fired[10]["too_fast"].status == "superseded"  # replaced by the session 3 days ago: same exercise, rule
+    assert fired[10]["too_fast"].decided_at is not None and fired[10]["too_fast"].decided_by_id is None
+    assert fired[6]["too_fast"].status == "pending"  # another exercise's advice stays
+    assert fired[3]["too_fast"].status == "pending"
+
+    late = store(patient, exercise, 20, tempo_s_per_rep=1.0)  # an older session uploaded late
+    rows = suggest_for_session(db_session=db_session, session=late, doc=late.metric.document)
+    db_session.refresh(fired[3]["too_fast"])
+    assert fired[3]["too_fast"].status == "pending"  # never replaces newer advice
+    assert [r.status for r in rows if r.rule == "too_fast"] == ["pending"]
