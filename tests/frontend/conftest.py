@@ -151,9 +151,12 @@ def live_server(tmp_path_factory) -> Iterator[LiveServer]:
 @pytest.fixture(scope="session")
 def browser():
     """One headless Chromium for the run (Debian's /usr/bin/chromium)."""
-    sync_api = pytest.importorskip("playwright.sync_api")
+    from playwright import sync_api
+
     if not Path(CHROMIUM).exists():
-        pytest.skip(f"no Chromium at {CHROMIUM}")
+        if os.environ.get("CI"):
+            pytest.fail(f"no Chromium at {CHROMIUM}; CI must install Debian's chromium (.ci/run does)")
+        pytest.skip(f"no Chromium at {CHROMIUM} (apt-get install chromium, or set COACH_CHROMIUM)")
     with sync_api.sync_playwright() as pw:
         b = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=["--no-sandbox"])
         yield b
