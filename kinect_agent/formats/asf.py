@@ -21,6 +21,7 @@ import numpy as np
 
 from kinect_agent.errors import FormatError
 from kinect_agent.formats._rows import parse_floats
+from kinect_agent.processing.rotations import euler
 
 INCH_M = 0.0254
 _AXES = "XYZ"
@@ -181,30 +182,6 @@ def _order(path: Path, bones: dict[str, Bone], children: list[tuple[int, str, li
     if missing:
         raise FormatError(path, f"bones not reachable from root in :hierarchy: {', '.join(missing)}")
     return ordered
-
-
-def axis_rotation(axis: int, angle: np.ndarray) -> np.ndarray:
-    """Returns (..., 3, 3) right-handed rotations by angle (...,) radians about axis 0/1/2 (x/y/z)."""
-    angle = np.asarray(angle, dtype=np.float64)
-    c, s = np.cos(angle), np.sin(angle)
-    R = np.zeros(angle.shape + (3, 3))
-    i, j = [(1, 2), (2, 0), (0, 1)][axis]
-    R[..., axis, axis] = 1.0
-    R[..., i, i], R[..., j, j] = c, c
-    R[..., i, j], R[..., j, i] = -s, s
-    return R
-
-
-def euler(angles_rad: np.ndarray, order: str) -> np.ndarray:
-    """Returns (..., 3, 3): rotations about fixed axes applied in `order` (first letter first).
-
-    angles_rad: (..., len(order)) radians, one per letter of order (e.g. "XYZ" -> Rz @ Ry @ Rx).
-    """
-    angles_rad = np.asarray(angles_rad, dtype=np.float64)
-    R = np.broadcast_to(np.eye(3), angles_rad.shape[:-1] + (3, 3)).copy()
-    for k, letter in enumerate(order):
-        R = axis_rotation(_AXES.index(letter.upper()), angles_rad[..., k]) @ R
-    return R
 
 
 def forward_kinematics(skel: Skeleton, root: np.ndarray, dof_values: dict[str, np.ndarray]) -> dict[str, np.ndarray]:

@@ -21,6 +21,7 @@ from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import mocap_mapping
 from kinect_agent.formats._rows import parse_floats
+from kinect_agent.processing.rotations import axis_rotation
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "bvh"
@@ -157,7 +158,7 @@ def forward_kinematics(joints: list[Joint], motion: np.ndarray) -> np.ndarray:
             if name.endswith("position"):
                 translation[:, axis] += values
             else:
-                R_parent_joint = R_parent_joint @ _axis_rotation(axis, np.radians(values))
+                R_parent_joint = R_parent_joint @ axis_rotation(axis, np.radians(values))
         if joint.parent < 0:
             world[:, k] = translation
             R_world[:, k] = R_parent_joint
@@ -179,17 +180,6 @@ def unit_scale(joints: list[Joint], world: np.ndarray, names: list[str]) -> floa
             if 0.3 <= thigh * scale <= 0.6:
                 return scale
     return CMU_UNIT_M
-
-
-def _axis_rotation(axis: int, angle: np.ndarray) -> np.ndarray:
-    """Returns (T, 3, 3) right-handed rotations by angle (T,) radians about axis 0/1/2 (x/y/z)."""
-    c, s = np.cos(angle), np.sin(angle)
-    R = np.zeros(angle.shape + (3, 3))
-    i, j = [(1, 2), (2, 0), (0, 1)][axis]
-    R[..., axis, axis] = 1.0
-    R[..., i, i], R[..., j, j] = c, c
-    R[..., i, j], R[..., j, i] = -s, s
-    return R
 
 
 def _channels(path: Path, line_no: int, tok: list[str]) -> list[str]:

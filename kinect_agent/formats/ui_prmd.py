@@ -26,6 +26,7 @@ import numpy as np
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats._rows import read_csv_table
+from kinect_agent.processing.rotations import euler
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "ui_prmd"
@@ -145,7 +146,7 @@ def forward_kinematics(offsets_cm: np.ndarray, angles_deg: np.ndarray) -> np.nda
     angles_deg: (T, 22, 3) float, degrees, per joint (x, y, z) angles; R = Rz Ry Rx.
     returns: (T, 22, 3) float, cm, dataset frame, absolute positions.
     """
-    local = euler_to_matrix(np.deg2rad(angles_deg))  # (T, 22, 3, 3)
+    local = euler(np.deg2rad(angles_deg), "XYZ")  # (T, 22, 3, 3) = Rz @ Ry @ Rx
     n = offsets_cm.shape[0]
     rotation = np.empty_like(local)  # rotation applied to each joint's offset
     absolute = np.empty_like(offsets_cm)
@@ -156,26 +157,6 @@ def forward_kinematics(offsets_cm: np.ndarray, angles_deg: np.ndarray) -> np.nda
         rotation[:, j] = base_rotation @ local[:, parent]
         absolute[:, j] = absolute[:, parent] + np.einsum("tij,tj->ti", rotation[:, j], offsets_cm[:, j])
     return absolute
-
-
-def euler_to_matrix(angles_rad: np.ndarray) -> np.ndarray:
-    """Returns Rz(a[..., 2]) @ Ry(a[..., 1]) @ Rx(a[..., 0]).
-
-    angles_rad: (..., 3) float, radians. returns: (..., 3, 3) rotation matrices.
-    """
-    cx, cy, cz = np.cos(angles_rad[..., 0]), np.cos(angles_rad[..., 1]), np.cos(angles_rad[..., 2])
-    sx, sy, sz = np.sin(angles_rad[..., 0]), np.sin(angles_rad[..., 1]), np.sin(angles_rad[..., 2])
-    r = np.empty(angles_rad.shape[:-1] + (3, 3))
-    r[..., 0, 0] = cz * cy
-    r[..., 0, 1] = cz * sy * sx - sz * cx
-    r[..., 0, 2] = cz * sy * cx + sz * sx
-    r[..., 1, 0] = sz * cy
-    r[..., 1, 1] = sz * sy * sx + cz * cx
-    r[..., 1, 2] = sz * sy * cx - cz * sx
-    r[..., 2, 0] = -sy
-    r[..., 2, 1] = cy * sx
-    r[..., 2, 2] = cy * cx
-    return r
 
 
 def _read_table(path: Path) -> np.ndarray:

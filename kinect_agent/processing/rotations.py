@@ -130,6 +130,18 @@ def axis_rotation(axis: int, angle: np.ndarray) -> np.ndarray:
     return R
 
 
+def euler(angles_rad: np.ndarray, order: str) -> np.ndarray:
+    """Returns (..., 3, 3): rotations about fixed axes applied in `order` (first letter first).
+
+    angles_rad: (..., len(order)) radians, one per letter of order (e.g. "XYZ" -> Rz @ Ry @ Rx).
+    """
+    angles_rad = np.asarray(angles_rad, dtype=np.float64)
+    R = np.broadcast_to(np.eye(3), angles_rad.shape[:-1] + (3, 3)).copy()
+    for k, letter in enumerate(order):
+        R = axis_rotation("XYZ".index(letter.upper()), angles_rad[..., k]) @ R
+    return R
+
+
 def matrix_to_rotvec(R: np.ndarray) -> np.ndarray:
     """Returns rotation vectors (..., 3), radians, for rotation matrices R (..., 3, 3)."""
     return quat_to_rotvec(matrix_to_quat(R))
