@@ -59,10 +59,10 @@ from bench.baselines._common import hold_last  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
 from kinect_agent.processing.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.pipeline import PipelineConfig, process  # noqa: E402
-from kinect_agent.processing.rotations import axis_rotation  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.skeleton import NOT_TRACKED  # noqa: E402
 from kinect_agent.sources.kinect_noise import add_kinect_noise, load_tables  # noqa: E402
+from kinect_agent.sources.mocap_truth import place_in_camera, resample  # noqa: E402
 from kinect_agent.sources.simulator import simulate  # noqa: E402
 
 DATA_DIR = ROOT_DIR.parent / "shared" / "data"
@@ -70,7 +70,6 @@ CMU_FILE = DATA_DIR / "cmu-mocap" / "13_29.bvh"
 HDM05_DIR = DATA_DIR / "hdm05"
 HDM05_CLIPS = 3  # clips per subject and motion class
 RATE_HZ = 30.0
-CAMERA_HEIGHT_M, SUBJECT_DISTANCE_M = 0.80, 2.4  # as kinect_agent.sources.motions places simulated subjects
 SETTINGS = tuple((d, v) for d in ("kinect2", "kinect1") for v in (0, 30, 60))
 SIM_EXERCISES = (  # (exercise, pose, repetitions)
     ("squat", "standing", 6),
@@ -99,30 +98,6 @@ class Case:
 # ----------------------------------------------------------------------------------------------- ground truth
 
 
-def place_mocap(positions: np.ndarray, view_deg: float, facing_deg: float = 0.0) -> np.ndarray:
-    """Returns mocap positions (T, J, 3) m moved into the camera frame.
-
-    positions: (T, J, 3) m, mocap world frame with y up, the subject heading facing_deg about +y from +z in the
-    first frame (CMU 13_29: 0; HDM05: about 180, kinect_agent.formats.amc.facing_deg).
-    The subject is turned to face the camera (−z) and by view_deg more, feet on the floor 0.8 m below the camera,
-    the mean pelvis SUBJECT_DISTANCE_M in front of it.
-    """
-    R = axis_rotation(1, np.radians(180.0 + view_deg - facing_deg))
-    p = positions @ R.T
-    feet = [skeleton.INDEX[n] for n in ("FOO_L", "FOO_R", "ANK_L", "ANK_R")]
-    floor = np.nanpercentile(p[:, feet, 1], 1)
-    centre = np.nanmean(p[:, 0], axis=0)
-    return p + np.array([-centre[0], -CAMERA_HEIGHT_M - floor, SUBJECT_DISTANCE_M - centre[2]])
-
-
-def resample(rec: Recording, rate_hz: float = RATE_HZ) -> tuple[np.ndarray, np.ndarray]:
-    """Returns (t (N,) s, positions (N, J, 3) m): rec linearly interpolated onto a rate_hz grid from its start."""
-    t = np.arange(0.0, rec.duration + 1e-9, 1.0 / rate_hz) + rec.t[0]
-    flat = rec.positions.reshape(rec.n_frames, -1)
-    out = np.stack([np.interp(t, rec.t, flat[:, c]) for c in range(flat.shape[1])], axis=1)
-    return t - t[0], out.reshape(len(t), skeleton.J, 3)
-
-
 def mocap_truths(quick: bool) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
     """Returns [(name, t (T,) s, positions (T, J, 3) m in the mocap frame, facing_deg)] at 30 Hz: CMU 13_29 and
     HDM05 clips."""
@@ -130,7 +105,7 @@ def mocap_truths(quick: bool) -> list[tuple[str, np.ndarray, np.ndarray, float]]
 
     out = []
     if CMU_FILE.is_file():
-        t, p = resample(bvh.read(CMU_FILE))
+        t, p = resample(bvh.read(CMU_FILE), RATE_HZ)
         if quick:
             t, p = t[: int(12 * RATE_HZ)], p[: int(12 * RATE_HZ)]
         out.append(("cmu_13_29", t, p, 0.0))
@@ -158,7 +133,7 @@ def _hdm05_truths(per_subject: int = HDM05_CLIPS) -> list[tuple[str, np.ndarray,
                 if not np.all(np.isfinite(rec.positions)):
                     print(f"HDM05 {clip.name} skipped: joints missing", file=sys.stderr)
                     continue
-                t, p = resample(rec)
+                t, p = resample(rec, RATE_HZ)
                 out.append((f"hdm05_{clip.stem.removesuffix('_120')}", t, p, float(rec.meta.extra["facing_deg"])))
     return out
 
@@ -167,7 +142,7 @@ def build_cases(device: str, view: int, mocap: list, quick: bool, seed: int = 0)
     """Returns the recordings of one setting: the mocap truths with Kinect errors, then the simulated exercises."""
     cases = []
     for k, (name, t, p, facing) in enumerate(mocap):
-        truth = Recording.from_positions(t, place_mocap(p, view, facing))
+        truth = Recording.from_positions(t, place_in_camera(p, view, facing))
         truth.meta.rate_hz = RATE_HZ
         rng = np.random.default_rng([seed, k, 1 if device == "kinect1" else 2, view])
         measured, mask = add_kinect_noise(truth, device=device, view_deg=view, pose="standing", rng=rng)
