@@ -129,6 +129,10 @@ class DatabaseNotMigrated(RuntimeError):
     """Raised at start-up when the database revision is not Alembic head."""
 
 
+# What any authenticated route can answer: no or bad credentials, no access, bad CSRF token, token scope too small.
+AUTH_ERRORS = (NotAuthenticated, Forbidden, CsrfFailed, InsufficientScope)
+
+
 def error_responses(*errors: type[AppError]) -> dict[int | str, dict]:
     """Returns a FastAPI `responses=` mapping documenting the given errors with examples."""
     by_status: dict[int, list[type[AppError]]] = {}

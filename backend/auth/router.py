@@ -10,7 +10,7 @@ from backend.audit.service import record
 from backend.config import Settings, get_settings
 from backend.deps import SESSION_COOKIE, Caller, CurrentUser, DbSession, UserCaller, client_ip, current_caller
 from backend.exceptions import (
-    CsrfFailed,
+    AUTH_ERRORS,
     Forbidden,
     InsufficientScope,
     NotAuthenticated,
@@ -23,7 +23,6 @@ from backend.users import service
 from backend.users.schemas import CsrfOut, LoginIn, LoginOut, TokenCreate, TokenCreated, TokenOut, UserOut
 
 router = APIRouter(prefix="/api/v1", tags=["auth"])
-AUTH_ERRORS = (NotAuthenticated, Forbidden, CsrfFailed, InsufficientScope)
 
 
 @router.post(

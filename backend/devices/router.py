@@ -12,11 +12,9 @@ from backend.deps import Caller, CurrentCaller, CurrentDevice, DbSession, UserCa
 from backend.devices import service
 from backend.devices.schemas import DeviceOut, PairIn, PairingCodeOut, PairOut
 from backend.exceptions import (
-    CsrfFailed,
+    AUTH_ERRORS,
     DeviceNotFound,
     Forbidden,
-    InsufficientScope,
-    NotAuthenticated,
     PairingCodeInvalid,
     PatientNotFound,
     error_responses,
@@ -24,7 +22,6 @@ from backend.exceptions import (
 from backend.schemas import IdPath, Page, PageParams, page_params
 
 router = APIRouter(prefix="/api/v1", tags=["devices"])
-AUTH_ERRORS = (NotAuthenticated, Forbidden, CsrfFailed, InsufficientScope)
 
 
 @router.post(

@@ -9,10 +9,7 @@ from fastapi import APIRouter, Depends, status
 from backend.audit.service import record, record_patients
 from backend.deps import AdminCaller, CurrentCaller, DbSession, require_patient_access
 from backend.exceptions import (
-    CsrfFailed,
-    Forbidden,
-    InsufficientScope,
-    NotAuthenticated,
+    AUTH_ERRORS,
     PatientNotFound,
     TherapistNotFound,
     error_responses,
@@ -24,7 +21,6 @@ from backend.users.models import User
 from backend.users.schemas import UserOut
 
 router = APIRouter(prefix="/api/v1/patients", tags=["patients"])
-AUTH_ERRORS = (NotAuthenticated, Forbidden, CsrfFailed, InsufficientScope)
 
 
 def _out(db_session, patient: User, therapist_ids: list[int] | None = None) -> PatientOut:

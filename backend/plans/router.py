@@ -9,11 +9,8 @@ from fastapi import APIRouter, Depends, status
 from backend.audit.service import record
 from backend.deps import Caller, CurrentCaller, DbSession, TherapistOrAdminCaller, require_patient_access
 from backend.exceptions import (
-    CsrfFailed,
+    AUTH_ERRORS,
     ExerciseNotFound,
-    Forbidden,
-    InsufficientScope,
-    NotAuthenticated,
     PatientNotFound,
     PlanNotFound,
     error_responses,
@@ -23,7 +20,6 @@ from backend.plans.schemas import PlanIn, PlanOut
 from backend.schemas import IdPath, Page, PageParams, page_params
 
 router = APIRouter(prefix="/api/v1", tags=["plans"])
-AUTH_ERRORS = (NotAuthenticated, Forbidden, CsrfFailed, InsufficientScope)
 
 
 def _audit(db_session, caller: Caller, action: str, plan_id, patient_id: int) -> None:

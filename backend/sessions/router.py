@@ -20,13 +20,10 @@ from backend.deps import (
     require_patient_access,
 )
 from backend.exceptions import (
-    CsrfFailed,
+    AUTH_ERRORS,
     ExerciseNotFound,
-    Forbidden,
-    InsufficientScope,
     InvalidInput,
     InvalidSessionFile,
-    NotAuthenticated,
     PatientNotFound,
     SessionConflict,
     SessionNotFound,
@@ -48,7 +45,6 @@ from backend.sessions.schemas import (
 from backend.suggestions.schemas import SuggestionOut
 
 router = APIRouter(prefix="/api/v1", tags=["sessions"])
-AUTH_ERRORS = (NotAuthenticated, Forbidden, CsrfFailed, InsufficientScope)
 SlugQuery = Annotated[
     str | None, Query(min_length=1, max_length=64, description="exercise slug, e.g. 'squat'", examples=["squat"])
 ]

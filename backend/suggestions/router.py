@@ -10,11 +10,8 @@ from sqlalchemy import select
 from backend.audit.service import record
 from backend.deps import Caller, CurrentCaller, DbSession, TherapistOrAdminCaller, require_patient_access
 from backend.exceptions import (
-    CsrfFailed,
-    Forbidden,
-    InsufficientScope,
+    AUTH_ERRORS,
     InvalidInput,
-    NotAuthenticated,
     PatientNotFound,
     SuggestionNotFound,
     SuggestionNotPending,
@@ -26,7 +23,6 @@ from backend.suggestions import service
 from backend.suggestions.schemas import Status, SuggestionIn, SuggestionOut
 
 router = APIRouter(prefix="/api/v1", tags=["suggestions"])
-AUTH_ERRORS = (NotAuthenticated, Forbidden, CsrfFailed, InsufficientScope)
 
 
 def _audit(db_session, caller: Caller, action: str, suggestion_id, patient_id: int, detail=None) -> None:

@@ -9,11 +9,9 @@ from fastapi import APIRouter, Depends, Query, status
 from backend.audit.service import record
 from backend.deps import AdminCaller, CurrentUser, DbSession
 from backend.exceptions import (
-    CsrfFailed,
+    AUTH_ERRORS,
     EmailAlreadyRegistered,
     Forbidden,
-    InsufficientScope,
-    NotAuthenticated,
     UserNotFound,
     error_responses,
 )
@@ -22,7 +20,6 @@ from backend.users import service
 from backend.users.schemas import Role, UserCreate, UserOut, UserUpdate
 
 router = APIRouter(prefix="/api/v1/users", tags=["users"])
-AUTH_ERRORS = (NotAuthenticated, Forbidden, CsrfFailed, InsufficientScope)
 
 
 @router.get("/me", response_model=UserOut, responses=error_responses(*AUTH_ERRORS))
