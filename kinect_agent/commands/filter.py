@@ -2,8 +2,9 @@
 
 Reads any supported recording (format detected or named), writes the filtered recording as Skeleton CSV with the
 input's frames and times and every joint of every frame filled (state 2 = observed, 1 = filled by the model), and
-optionally the kinematic parameters as JSON. Both outputs are written atomically and only after filtering
-succeeded, so an error leaves neither behind.
+optionally the kinematic parameters as JSON with the data-quality summary under "quality" (outlier fraction per
+joint, segment-length SD before and after, in mm). Both outputs are written atomically and only after filtering
+succeeded, so an error leaves neither behind. The same summary, short, goes to stderr.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--params", type=Path, help="also write the kinematic parameters as JSON here")
     parser.add_argument("--online", action="store_true", help="forward pass only, as the live feedback sees it")
     parser.add_argument("--format", help=f"input format instead of detecting it: {known}")
-    parser.add_argument("--smoother", choices=SMOOTHERS, help="how the last passes combine (default: four_pass)")
+    parser.add_argument("--smoother", choices=SMOOTHERS, help="how the last passes combine: urts = unscented RTS smoother (default, measured better), four_pass = the paper's backward pass")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -68,7 +69,9 @@ def run(args: argparse.Namespace) -> int:
         if bar is not None:
             bar.close()
     # Serialise both outputs before writing either, so a failure leaves nothing behind.
-    params_text = json.dumps(result.params.to_json(), separators=(",", ":")) if args.params else None
+    params_text = None
+    if args.params:
+        params_text = json.dumps({**result.params.to_json(), "quality": result.quality}, separators=(",", ":"))
     formats.write(result.filtered, args.output, "csv")
     if params_text is not None:
         try:
@@ -83,4 +86,19 @@ def run(args: argparse.Namespace) -> int:
         f"{q['frames_without_observation']} frames without observation, {q['seconds']:.1f} s",
         file=sys.stderr,
     )
+    print(quality_summary(q), file=sys.stderr)
     return 0
+
+
+def _mean_mm(sd: dict[str, float | None]) -> float | None:
+    values = [v for v in sd.values() if v is not None]
+    return sum(values) / len(values) if values else None
+
+
+def quality_summary(quality: dict, top: int = 3) -> str:
+    """Returns one line: mean segment-length SD before -> after (mm) and the joints that lost most samples."""
+    before, after = _mean_mm(quality["segment_sd_before_mm"]), _mean_mm(quality["segment_sd_after_mm"])
+    sd = "segment-length SD n/a" if before is None else f"segment-length SD {before:.1f} mm -> {after or 0.0:.1f} mm"
+    worst = sorted(quality["outlier_fraction"].items(), key=lambda kv: -kv[1])[:top]
+    worst = [f"{joint} {100 * frac:.1f} %" for joint, frac in worst if frac > 0]
+    return f"quality: {sd}; outliers: {', '.join(worst) if worst else 'none'}"

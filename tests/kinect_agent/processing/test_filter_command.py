@@ -33,10 +33,17 @@ def test_filter_writes_complete_csv_and_params(tmp_path: Path, rng: np.random.Ge
     got = formats.read(out)
     np.testing.assert_allclose(got.t, rec.t, atol=1e-6, err_msg="frames and times are kept")
     assert np.all(np.isfinite(got.positions)) and np.all(got.state[30:35] == skeleton.INFERRED)
-    p = KinematicParams.from_json(json.loads(params.read_text()))
+    doc = json.loads(params.read_text())
+    p = KinematicParams.from_json(doc)
     assert p.n_frames == rec.n_frames
     np.testing.assert_allclose(p.positions(), got.positions, atol=2e-4)
-    assert "frames" in capsys.readouterr().err
+    quality = doc["quality"]
+    assert set(quality["outlier_fraction"]) == set(skeleton.JOINTS)
+    before = np.mean(list(quality["segment_sd_before_mm"].values()))
+    after = np.mean(list(quality["segment_sd_after_mm"].values()))
+    assert before > 5.0 and after < 0.01, "the summary reports the noisy lengths going in and constant ones out"
+    err = capsys.readouterr().err
+    assert "frames" in err and f"segment-length SD {before:.1f} mm -> {after:.1f} mm" in err
 
 
 def test_filter_online_mode(tmp_path: Path, rng: np.random.Generator) -> None:
