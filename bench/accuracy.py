@@ -485,7 +485,9 @@ def pipeline_config(overrides: list[str]) -> PipelineConfig:
             try:
                 value = int(text) if isinstance(current, int) else float(text)
             except ValueError:
-                raise ValueError(f"--set {item!r}: {text!r} is not a number") from None
+                if current is not None:
+                    raise ValueError(f"--set {item!r}: {text!r} is not a number") from None
+                value = text  # an optional setting given a name, e.g. outlier_segment=max
         setattr(config, name, value)
     config.check()
     return config

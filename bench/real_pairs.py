@@ -31,7 +31,7 @@ Metrics (per joint; pooled over the well-estimated joint-frames of all pairs), m
                        rho >= 0.5),
                        posterior(uniform) > 0.5 removed.
 
-    .venv/bin/python bench/real_pairs.py [--json OUT]
+    .venv/bin/python bench/real_pairs.py [--json OUT] [--set NAME=VALUE ...]
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:
     sys.path.insert(0, str(ROOT_DIR))
 
-from bench.accuracy import METHODS, run_method  # noqa: E402
+from bench.accuracy import METHODS, pipeline_config, run_method  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
 from kinect_agent.processing.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.outliers import fit_mixture  # noqa: E402
@@ -436,9 +436,11 @@ def print_report(res: dict) -> None:
           f"SD {_f(g['pooled']['oracle_after']['sd_mm'])} mm")  # fmt: skip
 
 
-def run(paths: list[Path] | None = None, methods: tuple[str, ...] = METHODS) -> dict:
-    """Runs the benchmark on the KERAAL pairs; returns JSON-ready results."""
-    config = PipelineConfig()
+def run(paths: list[Path] | None = None, methods: tuple[str, ...] = METHODS,
+        config: PipelineConfig | None = None) -> dict:  # fmt: skip
+    """Runs the benchmark on the KERAAL pairs (pipeline settings `config`, default PipelineConfig()); returns
+    JSON-ready results."""
+    config = config or PipelineConfig()
     paths = pair_paths() if paths is None else paths
     if not paths:
         raise FileNotFoundError(f"no KERAAL Kinect/Vicon pairs in {PAIRS_DIR}")
@@ -451,9 +453,15 @@ def run(paths: list[Path] | None = None, methods: tuple[str, ...] = METHODS) -> 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--json", help="also write the results to this file")
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                        help="pipeline setting (PipelineConfig), e.g. outlier_excursions=true; repeatable")  # fmt: skip
     args = parser.parse_args(argv)
+    try:
+        config = pipeline_config(args.set)
+    except ValueError as exc:
+        parser.error(str(exc))
     started = time.perf_counter()
-    res = run()
+    res = run(config=config)
     print_report(res)
     print(f"\n({time.perf_counter() - started:.0f} s)")
     if args.json:

@@ -32,7 +32,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--params", type=Path, help="also write the kinematic parameters as JSON here")
     parser.add_argument("--online", action="store_true", help="forward pass only, as the live feedback sees it")
     parser.add_argument("--format", help=f"input format instead of detecting it: {known}")
-    parser.add_argument("--smoother", choices=SMOOTHERS, help="how the last passes combine: urts = unscented RTS smoother (default, measured better), four_pass = the paper's backward pass")
+    parser.add_argument(
+        "--smoother",
+        choices=SMOOTHERS,
+        help="how the last passes combine: urts = unscented RTS smoother (default, measured better), "
+        "four_pass = the paper's backward pass",
+    )
+    parser.add_argument(
+        "--excursions", action="store_true",
+        help="also remove sustained tracking loss (a joint that jumps away faster than a body moves and back): "
+        "helps on real Kinect recordings of slow exercises, but flags fast true motion (off by default)",
+    )  # fmt: skip
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -62,6 +72,7 @@ def run(args: argparse.Namespace) -> int:
     config = PipelineConfig()
     if args.smoother:
         config.smoother = args.smoother
+    config.outlier_excursions = args.excursions
     bar, progress = _progress_bar(rec.n_frames, not args.no_progress)
     try:
         result = process(rec, online=args.online, config=config, progress=progress)

@@ -265,16 +265,21 @@ def outlier_probabilities(rec: Recording, config: PipelineConfig | None = None) 
     return np.clip(prob, 0.0, 1.0)
 
 
+def drop_outliers(rec: Recording, prob: np.ndarray, threshold: float, method: str) -> Recording:
+    """Returns a copy of rec whose joint-frames with prob (T, J) > threshold are NaN with state 0, its history
+    naming `method` and the count."""
+    out = (prob > threshold) & (rec.state != NOT_TRACKED)
+    positions = rec.positions.copy()
+    positions[out] = np.nan
+    state = np.where(out, NOT_TRACKED, rec.state)
+    step = f"outliers {method}: {int(out.sum())} joint-frames removed (threshold {threshold})"
+    return rec.replace(step=step, positions=positions, state=state)
+
+
 def remove_outliers(rec: Recording, config: PipelineConfig | None = None) -> tuple[Recording, np.ndarray]:
     """Returns (recording with outliers set to NaN and state 0, prob (T, J)); the input is not changed."""
     from kinect_agent.processing.pipeline import PipelineConfig
 
     config = config or PipelineConfig()
     prob = outlier_probabilities(rec, config)
-    out = (prob > config.outlier_threshold) & (rec.state != NOT_TRACKED)
-    positions = rec.positions.copy()
-    positions[out] = np.nan
-    state = np.where(out, NOT_TRACKED, rec.state)
-    n = int(out.sum())
-    step = f"outliers mixture-model v1: {n} joint-frames removed (threshold {config.outlier_threshold})"
-    return rec.replace(step=step, positions=positions, state=state), prob
+    return drop_outliers(rec, prob, config.outlier_threshold, "mixture-model v1"), prob

@@ -43,11 +43,11 @@ from kinect_agent import skeleton
 from kinect_agent.processing import _ukf_numba
 from kinect_agent.processing import kinematics as km
 from kinect_agent.processing.angles import joint_angles
+from kinect_agent.processing.combined_outliers import remove_outliers_combined
 from kinect_agent.processing.ik import IKResult, bone_length_estimate, inverse_kinematics
 from kinect_agent.processing.outliers import remove_outliers
 from kinect_agent.processing.params import KinematicParams
 from kinect_agent.processing.rotations import matrix_to_quat, matrix_to_rotvec
-from kinect_agent.processing.segment_outliers import remove_outliers_combined
 from kinect_agent.processing.ukf import (
     MerweScaledSigmaPoints,
     UnscentedKalmanFilter,
@@ -103,6 +103,11 @@ class PipelineConfig:
     outlier_iterations: int = 2  # local-quadratic refinements of the outlier residual after the median stage
     outlier_segment: str | None = None  # "max"/"or": also a segment-length-deviation residual (segment_outliers.py)
     # combined with the temporal one; None (default): temporal only — real pairs gain, simulated precision drops
+    outlier_excursions: bool = False  # also flag sustained excursions (excursions.py): a joint jumping away faster
+    # than a body moves and back within excursion_max_len_s; real pairs gain a lot, fast motion is flagged (off)
+    excursion_min_dev_m: float = 0.2  # an excursion's jump away and its median distance from the bridge, at least
+    excursion_min_len_s: float = 0.3  # shorter ones are left to the temporal residual (its 0.5 s window)
+    excursion_max_len_s: float = 3.0  # longest excursion searched for
     gate_chi2: float | None = 30.0  # drop a joint whose innovation d² exceeds this (None: never); online always
     reacquire_s: float | None = 0.1  # a joint gated this long without a break is a lost track, not an outlier: the
     # angles that place it restart from inverse kinematics of the frame (None: never). Without it a fast limb
@@ -131,13 +136,21 @@ class PipelineConfig:
     def check(self) -> None:
         """Raises ValueError naming the first setting out of range."""
         for name in ("sigma_tracked_m", "sigma_inferred_m", "q_root_m", "q_rot_rad", "p0_root_m", "p0_rot_rad",
-                     "p0_length_m", "rate_ref_hz", "outlier_window_s", "alpha"):  # fmt: skip
+                     "p0_length_m", "rate_ref_hz", "outlier_window_s", "alpha", "excursion_min_dev_m",
+                     "excursion_min_len_s"):  # fmt: skip
             if not getattr(self, name) > 0:
                 raise ValueError(f"PipelineConfig.{name} must be > 0, got {getattr(self, name)!r}")
         if self.q_length_m < 0:
             raise ValueError(f"PipelineConfig.q_length_m must be >= 0, got {self.q_length_m!r}")
         if not 0.0 < self.outlier_threshold < 1.0:
             raise ValueError(f"PipelineConfig.outlier_threshold must be in (0, 1), got {self.outlier_threshold!r}")
+        if not self.excursion_max_len_s > self.excursion_min_len_s:
+            raise ValueError(f"PipelineConfig.excursion_max_len_s must exceed excursion_min_len_s, "
+                             f"got {self.excursion_max_len_s!r}")  # fmt: skip
+        if self.outlier_segment not in (None, "max", "or"):
+            raise ValueError(
+                f"PipelineConfig.outlier_segment must be None, 'max' or 'or', got {self.outlier_segment!r}"
+            )
         if self.smoother not in SMOOTHERS:
             raise ValueError(f"PipelineConfig.smoother must be one of {SMOOTHERS}, got {self.smoother!r}")
         if self.gate_chi2 is not None and not self.gate_chi2 > 0:
@@ -620,7 +633,8 @@ def process(
     _check_input(rec)
     T = rec.n_frames
     if config.remove_outliers and not online:
-        remover = remove_outliers if config.outlier_segment is None else remove_outliers_combined
+        extra = config.outlier_segment is not None or config.outlier_excursions
+        remover = remove_outliers_combined if extra else remove_outliers
         clean, prob = remover(rec, config)
         outlier = (prob > config.outlier_threshold) & (rec.state != NOT_TRACKED)
     else:

@@ -25,7 +25,7 @@ Gaussian + uniform mixture as the temporal residual (outliers.fit_mixture, per j
 classes) gives P(uniform | e). A limb moved rigidly (e.g. wrist and hand together) keeps the hand's bone length, so
 the hand is not found here; the temporal residual and the UKF's gate remain for it.
 
-Combination with the temporal probability (remove_outliers_combined, PipelineConfig.outlier_segment): "max" and
+Combination with the temporal probability (combined_outliers.py, PipelineConfig.outlier_segment): "max" and
 "or" flag the same joint-frames at threshold 0.95 on the KERAAL pairs; "max" is the stricter. Measured (2026-11-23):
 real pairs (bench/real_pairs.py) flags 50 -> 92 of 3 477 joint-frames, outlier gain SD 3.2 -> 12.3 % (pooled SD 110 ->
 69 mm), offline RMSE 129.2 -> 123.5 mm, but elbow angle RMSE 32.2 -> 35.1 deg; simulated loss (bench/accuracy.py
@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from kinect_agent import skeleton
-from kinect_agent.processing.outliers import fit_mixture, outlier_probabilities
+from kinect_agent.processing.outliers import fit_mixture
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INFERRED, NOT_TRACKED
 
@@ -122,30 +122,3 @@ def segment_outlier_probabilities(rec: Recording, config: PipelineConfig | None 
     prob = np.nan_to_num(mix.posterior_uniform(e, cls), nan=0.0)
     prob = np.where(rec.state == NOT_TRACKED, 1.0, prob)
     return np.clip(prob, 0.0, 1.0)
-
-
-def combine(p_temporal: np.ndarray, p_segment: np.ndarray, how: str = "or") -> np.ndarray:
-    """Returns (T, J): the two outlier probabilities combined, "or" = 1 − (1 − p_t)(1 − p_s) (independent
-    evidence) or "max"."""
-    if how == "or":
-        return 1.0 - (1.0 - p_temporal) * (1.0 - p_segment)
-    if how == "max":
-        return np.maximum(p_temporal, p_segment)
-    raise ValueError(f"how must be 'or' or 'max', got {how!r}")
-
-
-def remove_outliers_combined(rec: Recording, config: PipelineConfig | None = None) -> tuple[Recording, np.ndarray]:
-    """Returns (recording with outliers set to NaN and state 0, prob (T, J)): outliers.remove_outliers with the
-    temporal probability combined (config.outlier_segment, "max" or "or") with segment_outlier_probabilities()."""
-    from kinect_agent.processing.pipeline import PipelineConfig
-
-    config = config or PipelineConfig()
-    p_t = outlier_probabilities(rec, config)
-    prob = combine(p_t, segment_outlier_probabilities(rec, config), config.outlier_segment or "max")
-    out = (prob > config.outlier_threshold) & (rec.state != NOT_TRACKED)
-    positions = rec.positions.copy()
-    positions[out] = np.nan
-    state = np.where(out, NOT_TRACKED, rec.state)
-    step = (f"outliers mixture-model v1 + segment length ({config.outlier_segment}): {int(out.sum())} joint-frames "
-            f"removed (threshold {config.outlier_threshold})")  # fmt: skip
-    return rec.replace(step=step, positions=positions, state=state), prob

@@ -1,0 +1,121 @@
+"""Sustained excursions: a joint that jumps away faster than a body moves, stays, and jumps back."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from kinect_agent import formats, skeleton
+from kinect_agent.cli import main
+from kinect_agent.formats import ui_prmd
+from kinect_agent.processing.excursions import excursion_probabilities, find_excursions
+from kinect_agent.processing.outliers import outlier_probabilities
+from kinect_agent.processing.pipeline import PipelineConfig, process
+from kinect_agent.recording import Recording
+
+REPO = Path(__file__).resolve().parents[3]
+KINECT = Path("ui-prmd") / "Segmented Movements" / "Kinect"
+WRI_R, HAN_R = skeleton.INDEX["WRI_R"], skeleton.INDEX["HAN_R"]
+
+
+def _with_plateau(rec: Recording, start: int, frames: int = 36, off=(0.25, 0.45, -0.1)) -> tuple[Recording, slice]:
+    """Returns (copy of rec whose WRI_R and HAN_R are held `off` (m) away from frame `start` for `frames` frames,
+    jumping there and back in one frame as real Kinect failures do, span)."""
+    span = slice(start, start + frames)
+    positions = rec.positions.copy()
+    positions[span, [WRI_R, HAN_R]] = positions[start - 1, [WRI_R, HAN_R]] + np.asarray(off)
+    return rec.replace(step="test: sustained wrist loss", positions=positions), span
+
+
+def _uiprmd(data_dir: Path, movement: str, subject: str) -> Recording:
+    return ui_prmd.read_episodes(data_dir / KINECT, movement=movement, subject=subject)
+
+
+@pytest.mark.shared_data
+def test_plateau_injected_into_real_recording_is_found_and_nothing_else(data_dir: Path) -> None:
+    rec, span = _with_plateau(_uiprmd(data_dir, "m07", "s01"), start=300)  # shoulder abduction: arms move fast
+    config = PipelineConfig(outlier_excursions=True)
+    flags = excursion_probabilities(rec, config) > config.outlier_threshold
+    expected = np.zeros_like(flags)
+    expected[span, [WRI_R, HAN_R]] = True
+    np.testing.assert_array_equal(flags, expected, err_msg="exactly the held frames of the wrist and hand")
+    temporal = outlier_probabilities(rec, config)[span, WRI_R] > config.outlier_threshold
+    assert temporal.mean() < 0.5, "the temporal residual alone would keep most of the plateau (why this exists)"
+
+
+@pytest.mark.shared_data
+def test_deep_squat_feet_jumping_and_back_are_flagged_arms_never(data_dir: Path) -> None:
+    """In a deep squat the feet stay planted; the Kinect's ankles and feet (its worst joints, paper §3.1) leave them
+    by 0.13-0.31 m and come back in every repetition of UI-PRMD m01 s03. Nothing above the knees moves like that."""
+    rec = _uiprmd(data_dir, "m01", "s03")
+    flags = excursion_probabilities(rec, PipelineConfig()) > 0.95
+    names = [skeleton.JOINTS[j] for j in np.flatnonzero(flags.any(axis=0))]
+    assert {"ANK_R", "FOO_R", "FOO_L"} <= set(names) <= {"KNE_L", "KNE_R", "ANK_L", "ANK_R", "FOO_L", "FOO_R"}
+    spans = find_excursions(rec.t, rec.positions[:, skeleton.INDEX["ANK_R"]], 4.0)
+    assert len(spans) >= 8, f"one per repetition (10 episodes), found {len(spans)}"
+
+
+@pytest.mark.shared_data
+def test_flags_on_real_pair_sit_far_from_vicon(data_dir: Path) -> None:
+    sys.path.insert(0, str(REPO / "bench"))
+    try:
+        import real_pairs as rp
+    finally:
+        sys.path.remove(str(REPO / "bench"))
+    kinect_path = next(p for p in rp.pair_paths() if "-ELK-" in p.name)
+    kinect, vicon = rp.read_pair(kinect_path)
+    good = rp.well_estimated(vicon.meta.extra.get("fallback_joints", []))
+    truth = rp.registered_truth(kinect, vicon, rp.align(kinect, vicon, good))
+    offset = np.linalg.norm(kinect.positions - truth, axis=-1)[:, good]  # (T, G) m
+    flags = (excursion_probabilities(kinect) > 0.95)[:, good]
+    ok = np.isfinite(offset)
+    assert (flags & ok).sum() >= 30, "the ELK right-wrist plateau (1.4 s, 0.9 m off) was not found"
+    assert np.median(offset[flags & ok]) > 0.3 > 0.05 > np.median(offset[~flags & ok])
+
+
+def test_continuous_fast_motion_and_one_way_jumps_are_not_excursions() -> None:
+    t = np.arange(90) / 30.0
+    swing = np.stack([0.6 * np.sin(2 * np.pi * t), np.zeros_like(t), np.full_like(t, 2.5)], axis=-1)  # 3.8 m/s peak
+    assert find_excursions(t, swing, 4.0) == []
+    step = np.where((t < 1.0)[:, None], [0.0, 1.0, 2.5], [0.4, 1.0, 2.5])  # jumps away, never back
+    assert find_excursions(t, step, 2.0) == []
+    brief = np.tile([0.0, 1.0, 2.5], (len(t), 1))
+    brief[30:35, 0] += 0.4  # 0.17 s away: shorter than min_len_s, left to the temporal residual
+    assert find_excursions(t, brief, 2.0) == []
+
+
+@pytest.mark.shared_data
+def test_pipeline_option_fills_the_plateau_from_the_model(data_dir: Path) -> None:
+    original = _uiprmd(data_dir, "m07", "s01")
+    rec, span = _with_plateau(original, start=300)
+    err = {}
+    for on in (False, True):
+        out = process(rec, config=PipelineConfig(outlier_excursions=on)).filtered.positions
+        err[on] = float(np.median(np.linalg.norm(out[span, WRI_R] - original.positions[span, WRI_R], axis=-1)))
+    assert err[False] > 0.2 and err[True] < 0.1, f"median distance to the recorded wrist, m: {err}"
+
+
+def test_bad_settings_are_refused() -> None:
+    with pytest.raises(ValueError, match="excursion_max_len_s"):
+        PipelineConfig(excursion_min_len_s=2.0, excursion_max_len_s=1.0).check()
+    with pytest.raises(ValueError, match="outlier_segment"):
+        PipelineConfig(outlier_segment="sometimes").check()
+
+
+def test_filter_command_excursions_flag(tmp_path: Path, rng: np.random.Generator) -> None:
+    from ._data import smooth_motion
+
+    t, truth, _ = smooth_motion(150, rng)
+    still = np.broadcast_to(truth[0], truth.shape) + rng.normal(0.0, 0.005, truth.shape)  # a patient standing still
+    rec, span = _with_plateau(Recording.from_positions(t, still), start=60)
+    src = tmp_path / "in.csv"
+    formats.write(rec, src)
+    for flag, expected_off in (([], 0.2), (["--excursions"], 0.05)):
+        out = tmp_path / f"out{len(flag)}.csv"
+        assert main(["filter", str(src), "-o", str(out), "--no-progress", *flag]) == 0
+        wrist = formats.read(out).positions[span, WRI_R]
+        off = float(np.median(np.linalg.norm(wrist - still[span, WRI_R], axis=-1)))
+        assert (off > expected_off) if not flag else (off < expected_off), f"{flag}: wrist {off:.3f} m off"
