@@ -39,9 +39,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "four_pass = the paper's backward pass",
     )
     parser.add_argument(
-        "--excursions", action="store_true",
-        help="also remove sustained tracking loss (a joint that jumps away faster than a body moves and back): "
-        "helps on real Kinect recordings of slow exercises, but flags fast true motion (off by default)",
+        "--no-excursions", action="store_true",
+        help="do not remove sustained tracking loss (a joint that jumps away faster than a body moves, sits there "
+        "and jumps back); only the temporal mixture model",
     )  # fmt: skip
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
     config = PipelineConfig()
     if args.smoother:
         config.smoother = args.smoother
-    config.outlier_excursions = args.excursions
+    config.outlier_excursions = not args.no_excursions
     bar, progress = _progress_bar(rec.n_frames, not args.no_progress)
     try:
         result = process(rec, online=args.online, config=config, progress=progress)

@@ -1,6 +1,7 @@
 """Outlier removal from several kinds of evidence: the temporal mixture (outliers.py, always), the segment-length
 mixture (segment_outliers.py, PipelineConfig.outlier_segment) and sustained excursions (excursions.py,
-PipelineConfig.outlier_excursions). Both extras are off by default; each module's docstring gives its measurements.
+PipelineConfig.outlier_excursions). Excursions are on by default, the segment residual is off; each module's docstring
+gives its measurements.
 """
 
 from __future__ import annotations

@@ -42,3 +42,19 @@ def test_pipeline_beats_raw(results: dict) -> None:
     for name in ("pipeline_offline", "pipeline_online"):
         assert m["raw"]["rmse_mm"] > m[name]["rmse_mm"], f"raw {m['raw']['rmse_mm']:.1f} mm vs {name}"
         assert m["raw"]["rmse_loss_mm"] > 2 * m[name]["rmse_loss_mm"], "tracking-loss frames must be repaired"
+
+
+@pytest.mark.shared_data
+def test_readme_tables_from_the_results_file(results: dict, tmp_path, capsys) -> None:
+    from bench import accuracy_tables
+
+    path = tmp_path / "quick.json"
+    path.write_text(json.dumps(results))
+    assert accuracy_tables.main([str(path)]) == 0
+    out = capsys.readouterr().out
+    rmse = results["settings"][0]["methods"]["pipeline_offline"]["rmse_mm"]
+    assert "| kinect2 30° | " in out and f"| {rmse:.1f} |" in out
+    assert out.count("| **pooled** |") == 6, "five metric tables and the outlier table"
+    path.write_text("{}")
+    assert accuracy_tables.main([str(path)]) == 2
+    assert "not a bench/accuracy.py results file" in capsys.readouterr().err

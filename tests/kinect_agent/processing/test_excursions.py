@@ -37,7 +37,7 @@ def _uiprmd(data_dir: Path, movement: str, subject: str) -> Recording:
 @pytest.mark.shared_data
 def test_plateau_injected_into_real_recording_is_found_and_nothing_else(data_dir: Path) -> None:
     rec, span = _with_plateau(_uiprmd(data_dir, "m07", "s01"), start=300)  # shoulder abduction: arms move fast
-    config = PipelineConfig(outlier_excursions=True)
+    config = PipelineConfig()
     flags = excursion_probabilities(rec, config) > config.outlier_threshold
     expected = np.zeros_like(flags)
     expected[span, [WRI_R, HAN_R]] = True
@@ -47,15 +47,20 @@ def test_plateau_injected_into_real_recording_is_found_and_nothing_else(data_dir
 
 
 @pytest.mark.shared_data
-def test_deep_squat_feet_jumping_and_back_are_flagged_arms_never(data_dir: Path) -> None:
-    """In a deep squat the feet stay planted; the Kinect's ankles and feet (its worst joints, paper §3.1) leave them
-    by 0.13-0.31 m and come back in every repetition of UI-PRMD m01 s03. Nothing above the knees moves like that."""
-    rec = _uiprmd(data_dir, "m01", "s03")
-    flags = excursion_probabilities(rec, PipelineConfig()) > 0.95
-    names = [skeleton.JOINTS[j] for j in np.flatnonzero(flags.any(axis=0))]
-    assert {"ANK_R", "FOO_R", "FOO_L"} <= set(names) <= {"KNE_L", "KNE_R", "ANK_L", "ANK_R", "FOO_L", "FOO_R"}
-    spans = find_excursions(rec.t, rec.positions[:, skeleton.INDEX["ANK_R"]], 4.0)
-    assert len(spans) >= 8, f"one per repetition (10 episodes), found {len(spans)}"
+@pytest.mark.parametrize("movement", ["m07", "m09", "m10"])
+def test_real_arm_exercises_are_not_flagged(data_dir: Path, movement: str) -> None:
+    """UI-PRMD shoulder abduction, rotation and scaption: fast arms, clean tracking; nothing is an excursion."""
+    for subject in ("s01", "s03", "s05"):
+        assert not excursion_probabilities(_uiprmd(data_dir, movement, subject)).any(), (movement, subject)
+
+
+@pytest.mark.shared_data
+def test_real_leg_raise_travelling_away_is_not_an_excursion(data_dir: Path) -> None:
+    """UI-PRMD m06 s01: the raised leg glitches at the top of each raise; the standing phase between two glitches
+    looks like jump away, sit, jump back, but the leg travelled there (calm steps), so it is kept (before the travel
+    rule: 4.2 % of all joint-frames flagged)."""
+    rec = _uiprmd(data_dir, "m06", "s01")
+    assert excursion_probabilities(rec).mean() < 0.01
 
 
 @pytest.mark.shared_data
@@ -105,7 +110,7 @@ def test_bad_settings_are_refused() -> None:
         PipelineConfig(outlier_segment="sometimes").check()
 
 
-def test_filter_command_excursions_flag(tmp_path: Path, rng: np.random.Generator) -> None:
+def test_filter_command_removes_excursions_unless_told_not_to(tmp_path: Path, rng: np.random.Generator) -> None:
     from ._data import smooth_motion
 
     t, truth, _ = smooth_motion(150, rng)
@@ -113,9 +118,9 @@ def test_filter_command_excursions_flag(tmp_path: Path, rng: np.random.Generator
     rec, span = _with_plateau(Recording.from_positions(t, still), start=60)
     src = tmp_path / "in.csv"
     formats.write(rec, src)
-    for flag, expected_off in (([], 0.2), (["--excursions"], 0.05)):
+    for flag in ([], ["--no-excursions"]):
         out = tmp_path / f"out{len(flag)}.csv"
         assert main(["filter", str(src), "-o", str(out), "--no-progress", *flag]) == 0
         wrist = formats.read(out).positions[span, WRI_R]
         off = float(np.median(np.linalg.norm(wrist - still[span, WRI_R], axis=-1)))
-        assert (off > expected_off) if not flag else (off < expected_off), f"{flag}: wrist {off:.3f} m off"
+        assert (off < 0.05) if not flag else (off > 0.2), f"{flag}: wrist {off:.3f} m off"
