@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
     config = PipelineConfig()
     if args.smoother:
         config.smoother = args.smoother
-    config.outlier_excursions = not args.no_excursions
+    config.outlier_excursions = config.online_excursions = not args.no_excursions
     bar, progress = _progress_bar(rec.n_frames, not args.no_progress)
     try:
         result = process(rec, online=args.online, config=config, progress=progress)

@@ -45,6 +45,7 @@ from kinect_agent.processing import _ukf_numba
 from kinect_agent.processing import kinematics as km
 from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
+from kinect_agent.processing.excursions import LiveExcursions
 from kinect_agent.processing.ik import IKResult, bone_length_estimate, inverse_kinematics
 from kinect_agent.processing.outliers import remove_outliers
 from kinect_agent.processing.params import KinematicParams
@@ -107,6 +108,9 @@ class PipelineConfig:
     outlier_excursions: bool = True  # also flag sustained excursions (excursions.py): a joint that jumps away faster
     # than a body moves, sits there and jumps back; real KERAAL pairs RMSE 128.6 -> 76.3 mm, simulated precision
     # 0.916 -> 0.913 (bench/README.md)
+    online_excursions: bool = True  # the online filter holds out a joint from an abrupt jump away until it jumps
+    # back, travels or excursion_max_len_s passes (excursions.LiveExcursions): real KERAAL pairs online RMSE 134.9 ->
+    # 92.7 mm, elbow 36.2 -> 18.0 deg; simulated 121.9 -> 123.6 mm (still below every causal baseline per setting)
     excursion_min_dev_m: float = 0.2  # an excursion's jump away and its median distance from the bridge, at least
     excursion_min_len_s: float = 0.3  # shorter ones are left to the temporal residual (its 0.5 s window)
     excursion_max_len_s: float = 3.0  # longest excursion searched for
@@ -475,8 +479,9 @@ class OnlineFilter:
 
     Tracked joints enter with SD config.online_sigma_tracked_m (0.07 m per axis, as offline's default) and, by
     default, no innovation gate (config.online_gate_chi2): both measured best on the tuning set under 2-6 %
-    tracking loss (bench/README.md). With a gate, a joint gated for config.online_reacquire_s without a break is
-    restarted from inverse kinematics of the frame (_ik_state).
+    tracking loss (bench/README.md). Joints in a sustained excursion (excursions.LiveExcursions, causal;
+    config.online_excursions) are treated as missing. With a gate, a joint gated for config.online_reacquire_s
+    without a break is restarted from inverse kinematics of the frame (_ik_state).
     Segment lengths: given (19,) m, or part of the state during the first config.online_init_s seconds and fixed
     after.
     The first frame with at least the trunk observed starts the filter (IK of that frame); before that, step()
@@ -500,6 +505,12 @@ class OnlineFilter:
         self.last = np.full((skeleton.J, 3), np.nan)
         self.n_gated = 0
         self.gated_since = np.full(skeleton.J, np.nan)  # s, start of each joint's current run of gated frames
+        c = self.config
+        self.excursions = (
+            LiveExcursions(c.excursion_min_dev_m, c.excursion_min_len_s, c.excursion_max_len_s)
+            if c.online_excursions else None
+        )  # fmt: skip
+        self.n_held = 0
 
     @property
     def lengths_fixed(self) -> bool:
@@ -562,6 +573,10 @@ class OnlineFilter:
         if self.t_last is not None and t <= self.t_last:
             raise ValueError(f"t must increase: got {t} after {self.t_last}")
         present = (state != NOT_TRACKED) & np.all(np.isfinite(positions), axis=1)
+        if self.excursions is not None:
+            held = self.excursions.step(t, positions, present)
+            self.n_held += int(held.sum())
+            present &= ~held
         if self.kf is None:
             trunk = [skeleton.INDEX[n] for n in ("ROOT", "SPINE", "HIP_L", "HIP_R")]
             if not present[trunk].all():
@@ -716,7 +731,7 @@ def _online_run(
     # Re-centring changes the references over time: express every frame against the final references.
     model = filt.chain.model
     thetas = _rebase(thetas, np.array(refs), model)
-    return roots, lengths, thetas, model, {"n_gated": filt.n_gated}
+    return roots, lengths, thetas, model, {"n_gated": filt.n_gated, "n_held": filt.n_held}
 
 
 def _rebase(theta: np.ndarray, refs: np.ndarray, model: km.ChainModel) -> np.ndarray:

@@ -11,7 +11,7 @@ import pytest
 from kinect_agent import formats, skeleton
 from kinect_agent.cli import main
 from kinect_agent.formats import ui_prmd
-from kinect_agent.processing.excursions import excursion_probabilities, find_excursions
+from kinect_agent.processing.excursions import LiveExcursions, excursion_probabilities, find_excursions
 from kinect_agent.processing.outliers import outlier_probabilities
 from kinect_agent.processing.pipeline import PipelineConfig, process
 from kinect_agent.recording import Recording
@@ -124,3 +124,42 @@ def test_filter_command_removes_excursions_unless_told_not_to(tmp_path: Path, rn
         wrist = formats.read(out).positions[span, WRI_R]
         off = float(np.median(np.linalg.norm(wrist - still[span, WRI_R], axis=-1)))
         assert (off < 0.05) if not flag else (off > 0.2), f"{flag}: wrist {off:.3f} m off"
+
+
+def _held(rec: Recording, **kw) -> np.ndarray:
+    live = LiveExcursions(**kw)
+    present = np.all(np.isfinite(rec.positions), axis=-1)
+    return np.array([live.step(float(t), p, ok) for t, p, ok in zip(rec.t, rec.positions, present, strict=True)])
+
+
+@pytest.mark.shared_data
+def test_live_filter_holds_the_injected_plateau_out(data_dir: Path) -> None:
+    original = _uiprmd(data_dir, "m07", "s01")
+    rec, span = _with_plateau(original, start=300)
+    held = _held(rec)
+    assert held[span, WRI_R].mean() > 0.9 and held[span, HAN_R].mean() > 0.9
+    assert held.sum() <= held[span].sum() + 2, "held only around the plateau"
+    err = {}
+    for on in (False, True):
+        out = process(rec, online=True, config=PipelineConfig(online_excursions=on)).filtered.positions
+        err[on] = float(np.median(np.linalg.norm(out[span, WRI_R] - original.positions[span, WRI_R], axis=-1)))
+    # causal: while held, the wrist follows the random walk of the arm's angles, not the moving arm (0.15 m here)
+    assert err[False] > 0.5 and err[True] < 0.2, f"median distance to the recorded wrist, m: {err}"
+
+
+@pytest.mark.shared_data
+@pytest.mark.parametrize("movement", ["m07", "m09", "m10"])
+def test_live_filter_holds_nothing_in_clean_real_arm_exercises(data_dir: Path, movement: str) -> None:
+    for subject in ("s01", "s03", "s05"):
+        assert not _held(_uiprmd(data_dir, movement, subject)).any(), (movement, subject)
+
+
+def test_live_hold_ends_when_the_joint_never_comes_back() -> None:
+    t = np.arange(180) / 30.0
+    positions = np.tile(np.zeros(3), (180, skeleton.J, 1)) + np.arange(skeleton.J)[None, :, None] * 0.1
+    positions[60:, WRI_R] += [0.5, 0.0, 0.0]  # jumps away at 2 s and stays there
+    held = _held(Recording.from_positions(t, positions), max_len_s=1.0)[:, WRI_R]
+    assert held[60:90].all() and not held[92:].any(), "held for max_len_s (1 s), then observed again"
+    swing = np.stack([0.6 * np.sin(2 * np.pi * t), np.zeros_like(t), np.full_like(t, 2.5)], axis=-1)
+    positions[:, WRI_R] = swing  # continuous, up to 3.8 m/s
+    assert not _held(Recording.from_positions(t, positions))[:, WRI_R].any()
