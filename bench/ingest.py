@@ -33,7 +33,11 @@ from collections.abc import Callable, Iterator  # noqa: E402
 from contextlib import contextmanager  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-import numpy as np  # noqa: E402
+ROOT_DIR = Path(__file__).resolve().parents[1]
+if str(ROOT_DIR) not in sys.path:  # `python bench/ingest.py` puts bench/ first, not the repository
+    sys.path.insert(0, str(ROOT_DIR))
+
+from bench.sessions import squat_session  # noqa: E402
 
 TARGET_S = 0.5  # ingest of a 10-minute session, s
 TARGET_BYTES = 2_000_000  # session file size, bytes
@@ -52,22 +56,6 @@ _STAGE_LABELS = (
 # ---------------------------------------------------------------------------------------------- session file
 
 
-def _recording(minutes: float, seed: int = 1):
-    """Returns a simulated Kinect 2 recording of `minutes` minutes at 30 Hz (squats back to back, meta.exercise set)."""
-    from kinect_agent.recording import Recording
-    from kinect_agent.sources.simulator import simulate
-
-    parts, total = [], 0.0
-    while total < minutes * 60.0:
-        measured, _, _ = simulate("squat", 10, device="kinect2", view_deg=30, pose="standing", seed=seed + len(parts))
-        parts.append(measured)
-        total += measured.duration
-    rec = Recording.concatenate(parts)
-    rec = rec.slice(0, max(int(np.searchsorted(rec.t, minutes * 60.0)), 2))
-    rec.meta.exercise = "squat"
-    return rec
-
-
 def session_file(minutes: float, cache_dir: Path) -> bytes:
     """Returns the .khs bytes (raw + agent-filtered recording) of a `minutes`-minute session; cached in cache_dir."""
     from kinect_agent.formats import session_file as sf
@@ -78,7 +66,7 @@ def session_file(minutes: float, cache_dir: Path) -> bytes:
     from kinect_agent.commands.run import make_payload
 
     started = time.perf_counter()
-    payload = make_payload(_recording(minutes), created_at="2026-11-20T10:00:00Z")
+    payload = make_payload(squat_session(minutes), created_at="2026-11-20T10:00:00Z")
     data = sf.encode(payload)
     path.write_bytes(data)
     print(f"made {path} ({len(data)} bytes) in {time.perf_counter() - started:.1f} s", file=sys.stderr)

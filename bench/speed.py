@@ -14,27 +14,21 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse  # noqa: E402
 import json  # noqa: E402
 import statistics  # noqa: E402
+import sys  # noqa: E402
 import time  # noqa: E402
+from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 from filterpy.kalman import MerweScaledSigmaPoints as FMerwe  # noqa: E402
 from filterpy.kalman import UnscentedKalmanFilter as FUKF  # noqa: E402
 
+ROOT_DIR = Path(__file__).resolve().parents[1]
+if str(ROOT_DIR) not in sys.path:  # `python bench/speed.py` puts bench/ first, not the repository
+    sys.path.insert(0, str(ROOT_DIR))
+
+from bench.sessions import squat_session  # noqa: E402
 from kinect_agent.processing import ik, pipeline  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
-from kinect_agent.sources.simulator import simulate  # noqa: E402
-
-
-def _session(minutes: float, seed: int = 1) -> Recording:
-    """Returns a simulated Kinect 2 recording of about `minutes` minutes at 30 Hz (squats, back to back)."""
-    parts, total = [], 0.0
-    while total < minutes * 60.0:
-        measured, _, _ = simulate("squat", 10, device="kinect2", view_deg=30, pose="standing", seed=seed + len(parts))
-        parts.append(measured)
-        total += measured.duration
-    rec = Recording.concatenate(parts)
-    keep = int(np.searchsorted(rec.t, minutes * 60.0))
-    return rec.slice(0, max(keep, 2))
 
 
 def _time_steps(step, z: np.ndarray, repeats: int) -> float:
@@ -111,8 +105,8 @@ def main() -> None:
     parser.add_argument("--json", help="also write the numbers to this file")
     args = parser.parse_args()
     minutes, repeats, frames = (0.5, 1, 60) if args.quick else (10.0, 3, 600)
-    pipeline.process(_session(0.1))  # compile the numba kernels before timing
-    rec = _session(minutes)
+    pipeline.process(squat_session(0.1))  # compile the numba kernels before timing
+    rec = squat_session(minutes)
     results = {
         "ukf_step": ukf_step_comparison(rec, frames, repeats),
         "pipeline": whole_pipeline(rec, repeats),
