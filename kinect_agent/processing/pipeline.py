@@ -47,7 +47,6 @@ from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
 from kinect_agent.processing.excursions import LiveExcursions
 from kinect_agent.processing.ik import IKResult, bone_length_estimate, inverse_kinematics
-from kinect_agent.processing.outliers import remove_outliers
 from kinect_agent.processing.params import KinematicParams
 from kinect_agent.processing.rotations import matrix_to_quat, matrix_to_rotvec
 from kinect_agent.processing.ukf import (
@@ -650,9 +649,7 @@ def process(
     _check_input(rec)
     T = rec.n_frames
     if config.remove_outliers and not online:
-        extra = config.outlier_segment is not None or config.outlier_excursions
-        remover = remove_outliers_combined if extra else remove_outliers
-        clean, prob = remover(rec, config)
+        clean, prob = remove_outliers_combined(rec, config)
         outlier = (prob > config.outlier_threshold) & (rec.state != NOT_TRACKED)
     else:
         clean, prob, outlier = rec, np.where(rec.state == NOT_TRACKED, 1.0, 0.0), np.zeros((T, skeleton.J), bool)
