@@ -54,6 +54,7 @@ ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/accuracy.py` puts bench/ first, not the repository
     sys.path.insert(0, str(ROOT_DIR))
 
+from bench.accuracy_tables import cell  # noqa: E402
 from bench.baselines import butterworth, cv_kalman_rts, holt_kinect, one_euro  # noqa: E402
 from bench.baselines._common import hold_last  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
@@ -405,10 +406,6 @@ def summarise(settings: list[dict]) -> dict:
     return {"methods": metrics, "targets": targets, "by_source": sources}
 
 
-def _fmt(v: float | None, digits: int = 1) -> str:
-    return "—" if v is None else f"{v:.{digits}f}"
-
-
 def print_table(title: str, metrics: dict[str, dict]) -> None:
     """Prints one markdown table of the methods' metrics."""
     print(f"\n### {title}\n")
@@ -416,12 +413,12 @@ def print_table(title: str, metrics: dict[str, dict]) -> None:
           "| precision (incl. gross) | recall | s |")  # fmt: skip
     print("|---|---|---|---|---|---|---|---|---|---|")
     for name, m in metrics.items():
-        prec = _fmt(m["precision"], 3)
+        prec = cell(m["precision"], 3)
         if m["precision_incl_gross"] is not None:
             prec += f" ({m['precision_incl_gross']:.3f})"
-        print(f"| {name} | {_fmt(m['rmse_mm'])} | {_fmt(m['rmse_loss_mm'])} | {_fmt(m['rmse_debiased_mm'])} | "
-              f"{_fmt(m['bias_mm'])} | {_fmt(m['segment_sd_mm'], 2)} | {_fmt(m['angle_rmse_deg'], 2)} | {prec} | "
-              f"{_fmt(m['recall'], 3)} | {_fmt(m['seconds'], 2)} |")  # fmt: skip
+        print(f"| {name} | {cell(m['rmse_mm'])} | {cell(m['rmse_loss_mm'])} | {cell(m['rmse_debiased_mm'])} | "
+              f"{cell(m['bias_mm'])} | {cell(m['segment_sd_mm'], 2)} | {cell(m['angle_rmse_deg'], 2)} | {prec} | "
+              f"{cell(m['recall'], 3)} | {cell(m['seconds'], 2)} |")  # fmt: skip
 
 
 def print_targets(targets: dict[str, dict]) -> None:

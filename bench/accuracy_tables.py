@@ -22,7 +22,8 @@ METRICS = (  # (results key, title, digits)
 SOURCE_ROLE = {"cmu": "tuning", "hdm05": "held out", "simulator": "tuning"}
 
 
-def _cell(v: float | None, digits: int) -> str:
+def cell(v: float | None, digits: int = 1) -> str:
+    """Returns a table cell: v with `digits` decimals, or "—" when there is no value."""
     return "—" if v is None else f"{v:.{digits}f}"
 
 
@@ -41,7 +42,7 @@ def metric_table(results: dict, key: str, digits: int) -> list[str]:
     methods = list(table_rows[0][1])
     lines = ["| setting | " + " | ".join(methods) + " |", "|---" * (len(methods) + 1) + "|"]
     for label, metrics in table_rows:
-        lines.append(f"| {label} | " + " | ".join(_cell(metrics[m][key], digits) for m in methods) + " |")
+        lines.append(f"| {label} | " + " | ".join(cell(metrics[m][key], digits) for m in methods) + " |")
     return lines
 
 

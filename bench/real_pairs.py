@@ -55,6 +55,7 @@ if str(ROOT_DIR) not in sys.path:
     sys.path.insert(0, str(ROOT_DIR))
 
 from bench.accuracy import METHODS, pipeline_config, run_method  # noqa: E402
+from bench.accuracy_tables import cell  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
 from kinect_agent.processing.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.outliers import fit_mixture  # noqa: E402
@@ -386,10 +387,6 @@ def summarise(pairs: list[dict], methods: tuple[str, ...], config: PipelineConfi
 # ----------------------------------------------------------------------------------------------- report
 
 
-def _f(v: float | None, digits: int = 1) -> str:
-    return "—" if v is None else f"{v:.{digits}f}"
-
-
 def print_report(res: dict) -> None:
     print("\n### Pairs and alignment (Kinect 30 Hz, Vicon 60 Hz assumed; lag: Vicon time = Kinect time + lag)\n")
     print(
@@ -401,8 +398,8 @@ def print_report(res: dict) -> None:
         print(f"| {p['name']} | {p['kinect_frames']} / {p['vicon_frames']} | {p['lag_s']:+.3f} ({p['xcorr']:.2f}) | "
               f"{p['lag_halves_s'][0]:+.3f} / {p['lag_halves_s'][1]:+.3f} | {p['rotation_deg']:.1f} | "
               f"{p['registration_rms_mm']:.1f} | {', '.join(p['well_estimated'])} | "
-              f"{_f(p['median_mm']['raw'])} → {_f(p['median_mm'].get('pipeline_offline'))} / "
-              f"{_f(p['rmse_mm']['raw'])} → {_f(p['rmse_mm'].get('pipeline_offline'))} |")  # fmt: skip
+              f"{cell(p['median_mm']['raw'])} → {cell(p['median_mm'].get('pipeline_offline'))} / "
+              f"{cell(p['rmse_mm']['raw'])} → {cell(p['rmse_mm'].get('pipeline_offline'))} |")  # fmt: skip
     print("\n### Methods against Vicon, pooled over the well-estimated joint-frames\n")
     print(
         "| method | offset mean mm | offset SD mm | median mm | RMSE mm | arm RMSE mm | seg SD mm (arm) | elbow RMSE ° "
@@ -410,10 +407,10 @@ def print_report(res: dict) -> None:
     )
     print("|---|---|---|---|---|---|---|---|---|")
     for name, m in res["methods"].items():
-        print(f"| {name} | {_f(m['mean_mm'])} | {_f(m['sd_mm'])} | {_f(m['median_mm'])} | {_f(m['rmse_mm'])} | "
-              f"{_f(m['arm']['rmse_mm'])} | "
-              f"{_f(m['segment_sd_mm'])} ({_f(m['arm_segment_sd_mm'])}) | {_f(m['elbow_rmse_deg'], 2)} | "
-              f"{_f(m['seconds'], 2)} |")  # fmt: skip
+        print(f"| {name} | {cell(m['mean_mm'])} | {cell(m['sd_mm'])} | {cell(m['median_mm'])} | {cell(m['rmse_mm'])} | "
+              f"{cell(m['arm']['rmse_mm'])} | "
+              f"{cell(m['segment_sd_mm'])} ({cell(m['arm_segment_sd_mm'])}) | {cell(m['elbow_rmse_deg'], 2)} | "
+              f"{cell(m['seconds'], 2)} |")  # fmt: skip
     print("\n### Per joint: offset mean / SD mm (raw, pipeline offline, pipeline online); * = rough Vicon estimate\n")
     shown = [n for n in ("raw", "butterworth", "pipeline_offline", "pipeline_online") if n in res["per_joint"]]
     print("| joint | " + " | ".join(shown) + " | RMSE raw → offline |")
@@ -421,19 +418,19 @@ def print_report(res: dict) -> None:
     for jn in skeleton.JOINTS:
         cells = [res["per_joint"][n][jn] for n in shown]
         mark = "" if cells[0]["well"] else "*"
-        row = " | ".join(f"{_f(c['mean_mm'])} / {_f(c['sd_mm'])}" for c in cells)
+        row = " | ".join(f"{cell(c['mean_mm'])} / {cell(c['sd_mm'])}" for c in cells)
         off = res["per_joint"].get("pipeline_offline", res["per_joint"]["raw"])[jn]
-        print(f"| {jn}{mark} | {row} | {_f(cells[0]['rmse_mm'])} → {_f(off['rmse_mm'])} |")
+        print(f"| {jn}{mark} | {row} | {cell(cells[0]['rmse_mm'])} → {cell(off['rmse_mm'])} |")
     g = res["gain_summary"]
     print("\n### Outlier-removal gain (raw offsets, well-estimated joints; paper: mean −2…−8 %, SD −23…−49 %)\n")
-    print(f"pipeline flags {g['flagged']} of {g['joint_frames']} joint-frames: gain mean {_f(g['mean_pct'])} %, "
-          f"SD {_f(g['sd_pct'])} % (averaged over joints); pooled: mean {_f(g['pooled']['before']['mean_mm'])} → "
-          f"{_f(g['pooled']['after']['mean_mm'])} mm, SD {_f(g['pooled']['before']['sd_mm'])} → "
-          f"{_f(g['pooled']['after']['sd_mm'])} mm")  # fmt: skip
+    print(f"pipeline flags {g['flagged']} of {g['joint_frames']} joint-frames: gain mean {cell(g['mean_pct'])} %, "
+          f"SD {cell(g['sd_pct'])} % (averaged over joints); pooled: mean {cell(g['pooled']['before']['mean_mm'])} → "
+          f"{cell(g['pooled']['after']['mean_mm'])} mm, SD {cell(g['pooled']['before']['sd_mm'])} → "
+          f"{cell(g['pooled']['after']['sd_mm'])} mm")  # fmt: skip
     print(f"oracle (mixture fitted to the offsets against Vicon, the paper's setting) flags {g['oracle_flagged']}: "
-          f"gain mean {_f(g['oracle_mean_pct'])} %, SD {_f(g['oracle_sd_pct'])} %; pooled: mean "
-          f"{_f(g['pooled']['oracle_after']['mean_mm'])} mm, "
-          f"SD {_f(g['pooled']['oracle_after']['sd_mm'])} mm")  # fmt: skip
+          f"gain mean {cell(g['oracle_mean_pct'])} %, SD {cell(g['oracle_sd_pct'])} %; pooled: mean "
+          f"{cell(g['pooled']['oracle_after']['mean_mm'])} mm, "
+          f"SD {cell(g['pooled']['oracle_after']['sd_mm'])} mm")  # fmt: skip
 
 
 def run(paths: list[Path] | None = None, methods: tuple[str, ...] = METHODS,
