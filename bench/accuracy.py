@@ -475,6 +475,8 @@ def pipeline_config(overrides: list[str]) -> PipelineConfig:
         if text == "None":
             value = None
         elif isinstance(current, bool):
+            if text.lower() not in ("1", "true", "yes", "0", "false", "no"):
+                raise ValueError(f"--set {item!r}: {text!r} is not true/false (or 1/0, yes/no)")
             value = text.lower() in ("1", "true", "yes")
         elif isinstance(current, str):
             value = text
