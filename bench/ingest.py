@@ -58,12 +58,18 @@ _STAGE_LABELS = (
 
 def session_file(minutes: float, cache_dir: Path) -> bytes:
     """Returns the .khs bytes (raw + agent-filtered recording) of a `minutes`-minute session; cached in cache_dir."""
-    from kinect_agent.formats import session_file as sf
+    from dataclasses import asdict
 
-    path = cache_dir / f"khc-bench-ingest-{minutes:g}min-v{sf.VERSION}.khs"  # a new format version makes a new file
+    from kinect_agent.commands.run import make_payload
+    from kinect_agent.formats import session_file as sf
+    from kinect_agent.processing.pipeline import VERSION, PipelineConfig
+
+    # A new format version or different pipeline defaults (the filtered recording in the file) make a new file.
+    pipeline = json.dumps([VERSION, asdict(PipelineConfig())], sort_keys=True, default=str).encode()
+    key = hashlib.sha256(pipeline).hexdigest()[:12]
+    path = cache_dir / f"khc-bench-ingest-{minutes:g}min-v{sf.VERSION}-{key}.khs"
     if path.exists():
         return path.read_bytes()
-    from kinect_agent.commands.run import make_payload
 
     started = time.perf_counter()
     payload = make_payload(squat_session(minutes), created_at="2026-11-20T10:00:00Z")
