@@ -128,12 +128,12 @@ def test_round_trip_real_recording(data_dir, tmp_path):
 
 def test_two_minutes_simulated_and_filtered_within_a_fifth_of_2mb():
     """Target: a 10-minute session (raw + agent-filtered) <= 2 000 000 bytes (bench/ingest.py measures that file:
-    1 721 297 bytes). Here 2 minutes, the same way (simulator + agent pipeline), to keep the test fast; the size
+    1 703 927 bytes). Here 2 minutes, the same way (simulator + agent pipeline), to keep the test fast; the size
     grows linearly with the frames (fixed overhead < 3 kB), so a fifth of the budget is the same target."""
-    from bench.ingest import _recording
+    from bench.sessions import squat_session
     from kinect_agent.commands.run import make_payload
 
-    data = sf.encode(make_payload(_recording(2.0), created_at="2026-11-20T10:00:00Z"))
+    data = sf.encode(make_payload(squat_session(2.0), created_at="2026-11-20T10:00:00Z"))
     assert len(data) <= 2_000_000 / 5, f"{len(data)} bytes"
     assert sf.decode(data).filtered.n_frames >= 3600
 
