@@ -26,7 +26,9 @@ if ! pg_ready 2>/dev/null; then
   pg_ready || { echo "error: the suite runs on PostgreSQL too, and none answers at $PG_URL" >&2; exit 1; }
 fi
 
-echo "=== tests on SQLite ===" >&2
-COACH_TEST_DATABASE_URL="" python -m pytest "$@"
+# The browser tests (marker "browser") are slow and exercise the pages, not the database: they run once, on
+# PostgreSQL, the production database.
+echo "=== tests on SQLite (browser tests run on PostgreSQL only) ===" >&2
+COACH_TEST_DATABASE_URL="" python -m pytest -m "not browser" "$@"
 echo "=== tests on PostgreSQL ($PG_URL) ===" >&2
 COACH_TEST_DATABASE_URL="$PG_URL" python -m pytest "$@"
