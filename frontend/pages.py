@@ -7,6 +7,7 @@ page scripts.
 
 from __future__ import annotations
 
+import importlib.util
 from pathlib import Path
 from typing import Annotated
 from urllib.parse import quote
@@ -22,6 +23,7 @@ from kinect_agent.formats.session_file import SessionFileError
 
 HERE = Path(__file__).resolve().parent
 STATIC = HERE / "static"
+PLOTLY_JS = Path(importlib.util.find_spec("plotly").submodule_search_locations[0]) / "package_data" / "plotly.min.js"
 templates = Jinja2Templates(directory=str(HERE / "templates"))
 router = APIRouter(include_in_schema=False)
 
@@ -108,6 +110,12 @@ def replay_viewer(session_id: IdPath, request: Request, caller: OptionalCaller, 
     host = request.url.hostname or "127.0.0.1"
     return JSONResponse({"url": f"{request.url.scheme}://{host}:{viewer.port}/", "frames": viewer.n_frames},
                         headers=_NO_STORE)  # fmt: skip
+
+
+@router.get("/static/vendor/plotly.min.js")
+def plotly_js() -> Response:
+    """Returns plotly.js as shipped inside the pinned `plotly` wheel (the charting library of the pages)."""
+    return FileResponse(PLOTLY_JS, media_type=_MEDIA[".js"], headers={"Cache-Control": "public, max-age=86400"})
 
 
 @router.get("/static/{name}")
