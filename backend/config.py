@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from functools import lru_cache
 from typing import Literal
+from urllib.parse import urlsplit
 
 from pydantic import Field, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
@@ -32,6 +33,9 @@ class Settings(BaseSettings):
     SESSION_MAX_DECODED_BYTES: int = 64 * 1024 * 1024  # all recordings of one file, after decompression
     CHECK_MIGRATIONS: bool = True
     COOKIE_SECURE: bool | None = None  # None: secure everywhere except ENVIRONMENT=local
+    # where people reach the app, e.g. https://coach.example.org/clinic behind a reverse proxy; its path is the
+    # prefix of every URL the pages build (never taken from a request's Host header); empty: served at /
+    PUBLIC_URL: str = ""
 
     @model_validator(mode="after")
     def _refuse_default_secrets(self) -> Settings:
@@ -40,6 +44,22 @@ class Settings(BaseSettings):
         if self.ENVIRONMENT != "local" and len(self.SECRET_KEY) < 32:
             raise ValueError("COACH_SECRET_KEY must be at least 32 characters outside COACH_ENVIRONMENT=local")
         return self
+
+    @model_validator(mode="after")
+    def _check_public_url(self) -> Settings:
+        if self.PUBLIC_URL:
+            url = urlsplit(self.PUBLIC_URL)
+            if url.scheme not in ("http", "https") or not url.netloc or url.query or url.fragment:
+                raise ValueError(
+                    f"COACH_PUBLIC_URL must be an http(s) URL such as https://coach.example.org/clinic, "
+                    f"without query or fragment; got {self.PUBLIC_URL!r}"
+                )
+        return self
+
+    @property
+    def root_path(self) -> str:
+        """Returns the path prefix of the app's URLs ('' or e.g. '/clinic'), from PUBLIC_URL."""
+        return urlsplit(self.PUBLIC_URL).path.rstrip("/") if self.PUBLIC_URL else ""
 
     @property
     def cookie_secure(self) -> bool:

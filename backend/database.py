@@ -121,6 +121,7 @@ def import_all_models() -> None:
     import backend.exercises.models  # noqa: F401
     import backend.patients.models  # noqa: F401
     import backend.plans.models  # noqa: F401
+    import backend.replay.models  # noqa: F401
     import backend.sessions.models  # noqa: F401
     import backend.suggestions.models  # noqa: F401
     import backend.users.models  # noqa: F401

@@ -9,12 +9,13 @@ from contextlib import asynccontextmanager
 from fastapi import APIRouter, FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.openapi.utils import get_openapi
-from fastapi.responses import JSONResponse
+from fastapi.responses import JSONResponse, Response
 from pydantic import BaseModel, Field
 from sqlalchemy import text
 from sqlalchemy.engine import Engine
 from sqlalchemy.exc import DBAPIError
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.middleware.gzip import GZipMiddleware
 
 from backend import __version__
 from backend.config import Settings, get_settings
@@ -34,6 +35,7 @@ ROUTERS = (
     "backend.audit.router",
     "backend.sessions.router",
     "backend.suggestions.router",
+    "backend.replay.router",
 )
 
 
@@ -74,11 +76,21 @@ def _install_error_handlers(app: FastAPI) -> None:
         )
 
     @app.exception_handler(RequestValidationError)
-    async def validation_error(_request: Request, exc: RequestValidationError) -> JSONResponse:
+    async def validation_error(request: Request, exc: RequestValidationError) -> Response:
+        from frontend.pages import error_page, wants_html
+
+        if wants_html(request) and request.method == "GET":  # a page address with a malformed id: no such page
+            return error_page(request, 404)
         return JSONResponse({"error": "ValidationError", "detail": _validation_detail(exc)}, status_code=422)
 
     @app.exception_handler(StarletteHTTPException)
-    async def http_error(_request: Request, exc: StarletteHTTPException) -> JSONResponse:
+    async def http_error(request: Request, exc: StarletteHTTPException) -> Response:
+        from frontend.pages import error_page, wants_html
+
+        if wants_html(request):
+            page = error_page(request, exc.status_code)
+            page.headers.update(exc.headers or {})
+            return page
         name = {404: "NotFound", 405: "MethodNotAllowed"}.get(exc.status_code, "HTTPError")
         return JSONResponse(
             {"error": name, "detail": str(exc.detail)}, status_code=exc.status_code, headers=exc.headers
@@ -175,6 +187,8 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     )
     app.state.settings = settings
     _install_error_handlers(app)
+    # plotly.js (4.8 MB), viser's client and JSON compress 3-5x; the replay recording is already zstd (identity)
+    app.add_middleware(GZipMiddleware, minimum_size=1024)
     app.include_router(_system_router())
     for name in ROUTERS:
         app.include_router(importlib.import_module(name).router)

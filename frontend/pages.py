@@ -13,16 +13,16 @@ from typing import Annotated
 from urllib.parse import quote
 
 from fastapi import APIRouter, Depends, Request
-from fastapi.responses import FileResponse, HTMLResponse, JSONResponse, RedirectResponse, Response
+from fastapi.responses import FileResponse, HTMLResponse, RedirectResponse, Response
 from fastapi.templating import Jinja2Templates
 
 from backend.deps import Caller, DbSession, optional_caller, require_patient_access
-from backend.exceptions import Forbidden, InvalidSessionFile, NotAuthenticated
+from backend.exceptions import Forbidden, NotFound
 from backend.schemas import IdPath
-from kinect_agent.formats.session_file import SessionFileError
 
 HERE = Path(__file__).resolve().parent
 STATIC = HERE / "static"
+VISER_CLIENT = Path(importlib.util.find_spec("viser").submodule_search_locations[0]) / "client" / "build" / "index.html"
 PLOTLY_JS = Path(importlib.util.find_spec("plotly").submodule_search_locations[0]) / "package_data" / "plotly.min.js"
 templates = Jinja2Templates(directory=str(HERE / "templates"))
 router = APIRouter(include_in_schema=False)
@@ -38,17 +38,44 @@ def home_for(role: str) -> str:
     return "/patient" if role == "patient" else "/therapist"
 
 
+def _root(request: Request) -> str:
+    """Returns the configured path prefix of the app's URLs (from COACH_PUBLIC_URL, never from the request)."""
+    return request.app.state.settings.root_path
+
+
 def _page(request: Request, name: str, caller: Caller | None, status_code: int = 200, **context) -> HTMLResponse:
     user = caller.user if caller is not None else None
-    context |= {"user": user, "home": home_for(user.role) if user is not None else "/"}
+    root = _root(request)
+    context = {"user": user, "home": root + (home_for(user.role) if user is not None else "/"), "root": root} | context
     return templates.TemplateResponse(request, name, context, status_code=status_code, headers=_NO_STORE)
+
+
+_ERROR_PAGES = {
+    404: ("Page not found", "There is no page at this address. It may have moved, or the link has a typo."),
+    405: ("Not possible here", "This address cannot be opened this way."),
+}
+
+
+def wants_html(request: Request) -> bool:
+    """Returns whether an error should be answered with a page: a browser (Accept text/html) outside /api/."""
+    path = request.url.path
+    if path == "/api" or path.startswith("/api/"):
+        return False
+    return "text/html" in request.headers.get("accept", "")
+
+
+def error_page(request: Request, status_code: int) -> HTMLResponse:
+    """Returns the HTML page of an HTTP error (unknown URL and the like) with a link to the start page."""
+    title, message = _ERROR_PAGES.get(status_code, ("Something went wrong", "This page cannot be shown."))
+    return _page(request, "error.html", None, status_code=status_code, title=title, message=message,
+                 page_id=f"error-{status_code}", link_text="Go to the start page")  # fmt: skip
 
 
 def _gate(request: Request, caller: Caller | None, roles: tuple[str, ...]) -> Response | None:
     """Returns a redirect to the login page (not logged in) or a 403 page (wrong role); None lets the page show."""
     if caller is None or caller.user is None:
-        target = request.url.path + (f"?{request.url.query}" if request.url.query else "")
-        return RedirectResponse(f"/?next={quote(target, safe='')}", status_code=303)
+        target = _root(request) + request.url.path + (f"?{request.url.query}" if request.url.query else "")
+        return RedirectResponse(f"{_root(request)}/?next={quote(target, safe='')}", status_code=303)
     if caller.user.role not in roles:
         return _page(request, "error.html", caller, status_code=403, title="Not for this account",
                      message="This page is for therapists. Your own page is one click away.")  # fmt: skip
@@ -59,7 +86,7 @@ def _gate(request: Request, caller: Caller | None, roles: tuple[str, ...]) -> Re
 def login_page(request: Request, caller: OptionalCaller) -> Response:
     """Shows the login form (a logged-in user is sent to their start page unless ?next= asks otherwise)."""
     if caller is not None and caller.user is not None and "next" not in request.query_params:
-        return RedirectResponse(home_for(caller.user.role), status_code=303)
+        return RedirectResponse(_root(request) + home_for(caller.user.role), status_code=303)
     return _page(request, "login.html", None)
 
 
@@ -67,7 +94,7 @@ def login_page(request: Request, caller: OptionalCaller) -> Response:
 def patient_page(request: Request, caller: OptionalCaller) -> Response:
     """Shows the patient's feedback screen (therapists are sent to their dashboard)."""
     if caller is not None and caller.user is not None and caller.user.role in THERAPIST_ROLES:
-        return RedirectResponse("/therapist", status_code=303)
+        return RedirectResponse(f"{_root(request)}/therapist", status_code=303)
     return _gate(request, caller, ("patient",)) or _page(request, "patient.html", caller)
 
 
@@ -85,31 +112,50 @@ def patient_detail_page(patient_id: IdPath, request: Request, caller: OptionalCa
     )
 
 
+@router.get("/therapist/sessions/{session_id}", response_class=HTMLResponse)
+def session_page(session_id: IdPath, request: Request, caller: OptionalCaller) -> Response:
+    """Shows one session for a therapist: angle curves, repetitions, reach, data quality, processing."""
+    return _gate(request, caller, THERAPIST_ROLES) or _page(request, "session.html", caller, session_id=session_id)
+
+
 @router.get("/therapist/sessions/{session_id}/replay", response_class=HTMLResponse)
-def replay_page(session_id: IdPath, request: Request, caller: OptionalCaller) -> Response:
-    """Shows the 3D replay page of one session (the viewer itself is started by the replay API call)."""
-    return _gate(request, caller, THERAPIST_ROLES) or _page(request, "replay.html", caller, session_id=session_id)
+def replay_page(session_id: IdPath, request: Request, caller: OptionalCaller, db_session: DbSession) -> Response:
+    """Shows the 3D replay of one session (viser's client on this origin playing the session's recording).
 
-
-@router.get("/therapist/sessions/{session_id}/replay/viewer")
-def replay_viewer(session_id: IdPath, request: Request, caller: OptionalCaller, db_session: DbSession) -> JSONResponse:
-    """Starts (or reuses) the 3D viewer of a session and returns its address: {"url", "frames"}."""
-    from backend.sessions import service
-    from frontend.replay import replays
-
+    Open to whoever may see the session: the patient's therapists, the patient, admins. No login: 401 page.
+    """
     if caller is None or caller.user is None:
-        raise NotAuthenticated("not logged in")
-    if caller.user.role not in THERAPIST_ROLES:
-        raise Forbidden("the 3D replay is for therapists")
-    patient_id = service.session_patient(db_session=db_session, session_id=session_id)
-    require_patient_access(patient_id, caller=caller, db_session=db_session)
+        return _sign_in_first(request)
+    from backend.sessions.service import session_patient
+
     try:
-        viewer = replays.open(session_id, lambda: service.session_file(db_session=db_session, session_id=session_id))
-    except SessionFileError as exc:
-        raise InvalidSessionFile(f"the stored file of session {session_id} cannot be replayed: {exc}") from None
-    host = request.url.hostname or "127.0.0.1"
-    return JSONResponse({"url": f"{request.url.scheme}://{host}:{viewer.port}/", "frames": viewer.n_frames},
-                        headers=_NO_STORE)  # fmt: skip
+        patient_id = session_patient(db_session=db_session, session_id=session_id)
+        require_patient_access(patient_id, caller=caller, db_session=db_session)
+    except NotFound:
+        return _page(request, "error.html", caller, status_code=404, title="Session not found",
+                     message=f"There is no session {session_id}, or it was deleted.")  # fmt: skip
+    except Forbidden:
+        return _page(request, "error.html", caller, status_code=403, title="Not your session",
+                     message="This replay belongs to another person. Your own page is one click away.")  # fmt: skip
+    return _page(request, "replay.html", caller, session_id=session_id, patient_id=patient_id)
+
+
+@router.get("/replay/viewer/", response_class=HTMLResponse)
+def replay_viewer(request: Request, caller: OptionalCaller) -> Response:
+    """Returns viser's own web client (bundled in the pinned viser wheel), for signed-in users; the replay page
+    opens it with ?playbackPath= pointing to the session's recording in the API."""
+    if caller is None or caller.user is None:
+        return _sign_in_first(request)
+    return FileResponse(VISER_CLIENT, media_type="text/html; charset=utf-8", headers={"Cache-Control": "no-cache"})
+
+
+def _sign_in_first(request: Request) -> HTMLResponse:
+    """Returns the 401 page of a page that needs a login, with a link to sign in and come back."""
+    root = _root(request)
+    target = root + request.url.path + (f"?{request.url.query}" if request.url.query else "")
+    return _page(request, "error.html", None, status_code=401, title="Please sign in",
+                 message="This page shows personal health data. Please sign in to see it.",
+                 home=f"{root}/?next={quote(target, safe='')}", link_text="Sign in")  # fmt: skip
 
 
 @router.get("/static/vendor/plotly.min.js")

@@ -55,10 +55,12 @@ def _quadrants(reached: np.ndarray) -> dict[str, float]:
 Frame = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
-def side_workspace(positions: np.ndarray, side: str, frame: Frame | None = None) -> dict | None:
-    """Returns the workspace metrics of one side ("L" or "R") for positions (T, J, 3) m, camera frame.
+def hand_path(positions: np.ndarray, side: str, frame: Frame | None = None) -> tuple[np.ndarray, float] | None:
+    """Returns (h (T, 3), L m): the hand HAN − SHO of one side ("L" or "R") in the trunk frame (outward, up,
+    forward), in arm lengths L (step 1 of the module doc), NaN where untracked; None when L is unknown.
 
-    frame: (up, left, forward), each (T, 3), of angles.body_frame(positions) when already computed.
+    positions: (T, J, 3) m, camera frame. frame: (up, left, forward), each (T, 3), of angles.body_frame(positions)
+    when already computed.
     """
     p = np.asarray(positions, dtype=np.float64)
     L = _arm_length(p, side)
@@ -67,7 +69,19 @@ def side_workspace(positions: np.ndarray, side: str, frame: Frame | None = None)
     up, left, forward = body_frame(p) if frame is None else frame
     outward = left if side == "L" else -left
     h = p[:, INDEX[f"HAN_{side}"]] - p[:, INDEX[f"SHO_{side}"]]
-    x, y, z = (series.dot3(h, axis) / L for axis in (outward, up, forward))
+    return np.stack([series.dot3(h, axis) / L for axis in (outward, up, forward)], axis=-1), L
+
+
+def side_workspace(positions: np.ndarray, side: str, frame: Frame | None = None) -> dict | None:
+    """Returns the workspace metrics of one side ("L" or "R") for positions (T, J, 3) m, camera frame.
+
+    frame: (up, left, forward), each (T, 3), of angles.body_frame(positions) when already computed.
+    """
+    path = hand_path(positions, side, frame)
+    if path is None:
+        return None
+    h, L = path
+    x, y, z = h[:, 0], h[:, 1], h[:, 2]
     r = np.sqrt(x**2 + y**2 + z**2)
     use = np.isfinite(r) & (r >= MIN_REACH) & (z >= 0)
     el = np.arcsin(np.clip(y[use] / r[use], -1.0, 1.0))

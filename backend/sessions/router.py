@@ -32,12 +32,13 @@ from backend.exceptions import (
 )
 from backend.exercises.service import get_exercise
 from backend.schemas import IdPath, IdQuery, Page, PageParams, page_params
-from backend.sessions import dashboard, service
+from backend.sessions import dashboard, detail, service
 from backend.sessions.ingest import check_declared_length, decode_upload, read_limited
 from backend.sessions.schemas import (
     DashboardRowOut,
     ProgressOut,
     ProgressPoint,
+    SessionDetailOut,
     SessionItemOut,
     SessionOut,
     SummaryOut,
@@ -249,6 +250,27 @@ def read_session(session_id: IdPath, caller: CurrentCaller, db_session: DbSessio
     require_patient_access(patient_id, caller=caller, db_session=db_session)
     _audit(db_session, caller, "session.read", session_id, patient_id)
     return _session_out(db_session, caller, session_id, row)
+
+
+@router.get(
+    "/sessions/{session_id}/detail",
+    response_model=SessionDetailOut,
+    responses=error_responses(*AUTH_ERRORS, SessionNotFound, InvalidSessionFile),
+)
+def read_session_detail(session_id: IdPath, request: Request, caller: CurrentCaller, db_session: DbSession):
+    """Returns the evidence behind a session's numbers: angle curves, repetitions, workspace, data quality."""
+    row = service.get_session_row(db_session=db_session, session_id=session_id)
+    patient_id = row[0].patient_id
+    require_patient_access(patient_id, caller=caller, db_session=db_session, allow_device=False)
+    settings = request.app.state.settings
+    body = detail.session_detail(
+        db_session=db_session,
+        row=row,
+        max_frames=settings.SESSION_MAX_FRAMES,
+        max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES,
+    )
+    _audit(db_session, caller, "session.detail.read", session_id, patient_id)
+    return body
 
 
 @router.get(

@@ -148,3 +148,222 @@ class DashboardRowOut(SummaryOut):
 
     full_name: str = Field(examples=["Pat Jones"])
     email: str = Field(examples=["pat@example.org"])
+
+
+class CurveOut(BaseModel):
+    """One joint-angle curve of a session, thinned by min/max decimation (backend.analysis.session_detail)."""
+
+    angle: str = Field(description="clinical angle name (kinect_agent.processing.angles)", examples=["knee_flexion_R"])
+    kind: str = Field(description="'raw', 'filtered', or 'smoothed' (raw smoothed: the file had no filtered one)")
+    label: str = Field(description="a legend label in words", examples=["right knee flexion, filtered"])
+    t_s: list[float] = Field(description="seconds from the session's first frame")
+    deg: list[float | None] = Field(description="degrees; null where the joints were not tracked")
+
+
+class RepetitionDetailOut(BaseModel):
+    """One repetition of the per-repetition table."""
+
+    index: int = Field(description="0-based, in time order")
+    start_s: float = Field(description="seconds from the session's first frame")
+    end_s: float
+    duration_s: float
+    rom_deg: float = Field(description="range of motion (amplitude) of the defining angle, degrees")
+    peak_deg: float = Field(description="the defining angle at the repetition's peak, degrees")
+    peak_speed_deg_s: float | None = Field(description="largest angular speed of the defining angle, deg/s")
+    side: str = Field(description="'left', 'right', 'both' or 'center'")
+
+
+class JointPathOut(BaseModel):
+    """How far one joint travelled during the session."""
+
+    joint: str
+    path_m: float = Field(description="path length, metres")
+
+
+class HandWorkspaceOut(BaseModel):
+    """The reachable workspace of one arm (backend.analysis.reachable) and the hand's path, in arm lengths."""
+
+    arm_length_m: float | None
+    area_ratio: float | None = Field(description="reached fraction of the frontal hemisphere's surface, 0..1")
+    volume_ratio: float | None = Field(description="reached fraction of the hemisphere's volume, 0..1")
+    quadrants: dict[str, float] | None = Field(description="area ratio per quarter of the hemisphere, 0..1")
+    outward: list[float | None] = Field(description="hand − shoulder along the trunk's outward axis, arm lengths")
+    up: list[float | None] = Field(description="... along the trunk's up axis, arm lengths")
+    forward: list[float | None] = Field(description="... along the trunk's forward axis, arm lengths")
+
+
+class WorkspaceOut(BaseModel):
+    """The reachable workspace of both arms (arm exercises only)."""
+
+    left: HandWorkspaceOut | None
+    right: HandWorkspaceOut | None
+
+
+class QualityPartOut(BaseModel):
+    """One part of the data-quality score (backend.analysis.data_quality)."""
+
+    name: str = Field(description="'tracked_fraction', 'outlier_fraction' or 'segment_spread_mm'")
+    label: str
+    value: float | None = Field(description="fraction 0..1, or millimetres for segment_spread_mm")
+    score: int | None = Field(description="0..100")
+    weight: float = Field(description="weight in the total score")
+
+
+class AdviceOut(BaseModel):
+    """One piece of camera advice in plain words (backend.analysis.camera_advice)."""
+
+    code: str = Field(examples=["too_close"])
+    text: str
+
+
+class OutlierStripOut(BaseModel):
+    """Per-frame outlier probability per joint of the raw recording, max-pooled into columns over time."""
+
+    joints: list[str]
+    t_s: list[float] = Field(description="centre of each column, seconds from the first frame")
+    column_s: float = Field(description="width of a column, seconds")
+    prob: list[list[float | None]] = Field(description="one row per joint, one value 0..1 per column; null = unseen")
+    threshold: float = Field(description="probability above which a sample counts as a tracking error")
+
+
+class DataQualityOut(BaseModel):
+    """The session's data quality: a 0-100 score, its parts, the outlier timeline and camera advice."""
+
+    score: int = Field(description="0..100")
+    low: bool = Field(description="score at or below the low mark (70): read the numbers with care")
+    parts: list[QualityPartOut]
+    segment_spread_mm: dict[str, float | None] = Field(description="robust spread of each segment's raw length, mm")
+    outlier_strip: OutlierStripOut
+    advice: list[AdviceOut]
+    analysis_ok: bool | None = Field(description="the analysis' own quality check (metrics document), if any")
+    analysis_reasons: list[str] = Field(description="why the analysis' check failed, in words")
+
+
+class ProcessingOut(BaseModel):
+    """How the session was processed: versions and parameters."""
+
+    version: str = Field(description="server version that processed the upload", examples=["0.4.0"])
+    params: dict = Field(description="parameters stored with the session (from the file's params)")
+    file_params: dict = Field(description="the params written in the session file by the home agent")
+    filter_history: list[str] = Field(description="processing steps of the filtered recording, oldest first")
+    analysis: str = Field(description="'stored' (the metrics document) or 'recomputed' (none was stored)")
+
+
+class SessionDetailOut(BaseModel):
+    """What the therapist's session page shows: the evidence behind the session's numbers."""
+
+    model_config = ConfigDict(
+        json_schema_extra={
+            "examples": [
+                {
+                    "session_id": 31,
+                    "patient_id": 12,
+                    "exercise_slug": "squat",
+                    "exercise_name": "Mini squat",
+                    "started_at": "2026-11-20T10:00:00Z",
+                    "status": "processed",
+                    "error": None,
+                    "duration_s": 51.6,
+                    "n_frames": 1551,
+                    "rate_hz": 30.0,
+                    "measured_on": "filtered",
+                    "repetition_count": 1,
+                    "rom_deg": 62.4,
+                    "defining_angle": "knee_flexion_R",
+                    "moving_time_s": 40.2,
+                    "rest_time_s": 11.4,
+                    "tempo_s_per_rep": 4.8,
+                    "angles": ["knee_flexion_R"],
+                    "curves": [
+                        {
+                            "angle": "knee_flexion_R",
+                            "kind": "raw",
+                            "label": "right knee flexion, raw",
+                            "t_s": [0.0, 2.1, 4.3],
+                            "deg": [4.1, 66.0, None],
+                        },
+                        {
+                            "angle": "knee_flexion_R",
+                            "kind": "filtered",
+                            "label": "right knee flexion, filtered",
+                            "t_s": [0.0, 2.1, 4.3],
+                            "deg": [3.2, 64.8, 3.9],
+                        },
+                    ],
+                    "repetitions": [
+                        {
+                            "index": 0,
+                            "start_s": 0.4,
+                            "end_s": 4.1,
+                            "duration_s": 3.7,
+                            "rom_deg": 62.4,
+                            "peak_deg": 64.8,
+                            "peak_speed_deg_s": 71.5,
+                            "side": "both",
+                        }
+                    ],
+                    "most_moving_joints": [{"joint": "KNE_R", "path_m": 3.412}],
+                    "workspace": None,
+                    "quality": {
+                        "score": 86,
+                        "low": False,
+                        "parts": [
+                            {
+                                "name": "tracked_fraction",
+                                "label": "Body seen by the camera",
+                                "value": 0.998,
+                                "score": 100,
+                                "weight": 0.4,
+                            }
+                        ],
+                        "segment_spread_mm": {"LEG_LO_R": 18.6},
+                        "outlier_strip": {
+                            "joints": ["KNE_R"],
+                            "t_s": [0.05, 0.15],
+                            "column_s": 0.1,
+                            "prob": [[0.01, 0.97]],
+                            "threshold": 0.95,
+                        },
+                        "advice": [],
+                        "analysis_ok": True,
+                        "analysis_reasons": [],
+                    },
+                    "processing": {
+                        "version": "0.4.0",
+                        "params": {"pipeline": "ukf-4pass v1"},
+                        "file_params": {"pipeline": "ukf-4pass v1"},
+                        "filter_history": ["ukf-4pass v1 (four_pass; 12 outliers removed)"],
+                        "analysis": "stored",
+                    },
+                    "uncertainty": None,
+                    "uncertainty_note": "the session file stores no per-frame uncertainty of the filtered recording",
+                }
+            ]
+        }
+    )
+    session_id: int
+    patient_id: int
+    exercise_slug: str | None
+    exercise_name: str | None
+    started_at: dt.datetime
+    status: str
+    error: str | None
+    duration_s: float = Field(description="first to last frame, seconds")
+    n_frames: int
+    rate_hz: float | None
+    measured_on: str = Field(description="what the metrics measured: 'filtered' or 'raw'")
+    repetition_count: int
+    rom_deg: float | None = Field(description="median range of motion over the repetitions, degrees")
+    defining_angle: str | None
+    moving_time_s: float | None
+    rest_time_s: float | None
+    tempo_s_per_rep: float | None
+    angles: list[str] = Field(description="the exercise's defining angles the curves show")
+    curves: list[CurveOut]
+    repetitions: list[RepetitionDetailOut]
+    most_moving_joints: list[JointPathOut]
+    workspace: WorkspaceOut | None = Field(description="arm exercises only")
+    quality: DataQualityOut
+    processing: ProcessingOut
+    uncertainty: dict | None = Field(description="uncertainty of the figures; null: the pipeline stores none")
+    uncertainty_note: str

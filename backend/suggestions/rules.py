@@ -2,7 +2,8 @@
 
 Pure functions, no database. A draft names the rule (its kind), the metric, the comparison, the threshold and the
 measured value, so a therapist can check "value <comparison> threshold" against the session's metrics; its text is
-written for the patient (short sentences, no jargon, the numbers that matter).
+written for the patient (short sentences, no jargon, the numbers that matter) and names the exercise and the day of
+the session ("On Saturday you did 6 of the 10 sit-to-stands in your plan. ...").
 """
 
 from __future__ import annotations
@@ -11,6 +12,8 @@ import datetime as dt
 import math
 import statistics
 from dataclasses import dataclass
+
+from backend.exercises.library import EXERCISES
 
 # --- rule names (the kind of a suggestion) ---------------------------------------------------------------------
 FEWER_REPS = "fewer_reps"
@@ -30,6 +33,7 @@ ADVISED_TEMPO_S_PER_REP = 2  # what the text asks for instead, seconds
 QUALITY_MIN_TRACKED_FRACTION = 0.9  # explains a failed quality check as "step into view" below this
 QUALITY_MAX_OUTLIER_FRACTION = 0.05  # explains it as "the camera lost you" above this
 ACTIVE_DAYS_WINDOW = 7  # missed days: distinct UTC days with a session among the last 7, today included
+WEEKDAY_NAME_DAYS = 7  # a session less than this many days before the advice is named by its weekday, else by date
 
 
 @dataclass(frozen=True)
@@ -47,6 +51,34 @@ class SuggestionDraft:
     def explanation(self) -> str:
         """Returns the check for a therapist, e.g. 'repetitions 6 < 10'."""
         return f"{self.metric} {self.value:g} {self.comparison} {self.threshold:g}"
+
+
+# --- words ------------------------------------------------------------------------------------------------------
+
+
+def exercise_plural(slug: object) -> str:
+    """Returns how the patient counts repetitions of an exercise: 'sit-to-stands', 'mini squats'; 'repetitions'
+    for an unknown exercise."""
+    spec = EXERCISES.get(slug) if isinstance(slug, str) else None
+    if spec is None:
+        return "repetitions"
+    name = spec.name.lower()
+    if name == "sit to stand":
+        return "sit-to-stands"
+    return name if name.endswith("s") else name + "s"
+
+
+def session_day(started_at: dt.datetime, today: dt.date) -> str:
+    """Returns the day of a session as the advice names it: 'on Saturday' within the last week (UTC days), else
+    'on 14 November' (with the year when it is not this year's)."""
+    day = started_at.astimezone(dt.UTC).date()
+    if 0 <= (today - day).days < WEEKDAY_NAME_DAYS:
+        return f"on {day:%A}"
+    return f"on {day.day} {day:%B}" + ("" if day.year == today.year else f" {day.year}")
+
+
+def _sentence(text: str) -> str:
+    return text[:1].upper() + text[1:]
 
 
 # --- input checks ----------------------------------------------------------------------------------------------
@@ -108,19 +140,20 @@ def _checked_history(history: object) -> list[tuple[dt.datetime, dict]]:
 # --- the rules -------------------------------------------------------------------------------------------------
 
 
-def fewer_reps(doc: dict, prescribed_reps: int | None) -> SuggestionDraft | None:
-    """Fires when the session counted fewer repetitions than the plan prescribes."""
+def fewer_reps(doc: dict, prescribed_reps: int | None, day: str) -> SuggestionDraft | None:
+    """Fires when the session counted fewer repetitions than the plan prescribes; day: 'on Saturday'."""
     reps = _number(doc, "repetitions")
     if prescribed_reps is None or reps is None or reps >= prescribed_reps:
         return None
+    what = exercise_plural(doc.get("exercise"))
     if reps == 0:
         text = (
-            f"The camera did not count any repetitions today. Your plan asks for {prescribed_reps}. "
+            f"{_sentence(day)} the camera did not count any {what}. Your plan asks for {prescribed_reps}. "
             "Please try again, and move the way your therapist showed you."
         )
     else:
         text = (
-            f"Today you did {reps:.0f} of the {prescribed_reps} repetitions in your plan. "
+            f"{_sentence(day)} you did {reps:.0f} of the {prescribed_reps} {what} in your plan. "
             f"Next time, try to do all {prescribed_reps}. Rest for a moment between them if you need to."
         )
     return SuggestionDraft(FEWER_REPS, "repetitions", "<", float(prescribed_reps), reps, text)
@@ -144,8 +177,8 @@ def _rom_baseline(history: list[tuple[dt.datetime, dict]], now: dt.datetime, exe
     return values
 
 
-def rom_drop(doc: dict, history: list[tuple[dt.datetime, dict]], now: dt.datetime) -> SuggestionDraft | None:
-    """Fires when rom_deg < ROM_DROP_FRACTION x the median rom_deg of the last 2-4 weeks."""
+def rom_drop(doc: dict, history: list[tuple[dt.datetime, dict]], now: dt.datetime, day: str) -> SuggestionDraft | None:
+    """Fires when rom_deg < ROM_DROP_FRACTION x the median rom_deg of the last 2-4 weeks; day: 'on Saturday'."""
     rom = _number(doc, "rom_deg")
     baseline = _rom_baseline(history, now, doc.get("exercise"))
     if rom is None or not baseline:
@@ -155,57 +188,60 @@ def rom_drop(doc: dict, history: list[tuple[dt.datetime, dict]], now: dt.datetim
     if rom >= threshold:
         return None
     text = (
-        f"Today your movement was smaller than in the last weeks: {rom:.0f} degrees, "
-        f"while it was about {median:.0f} degrees before. Move slowly and go as far as feels comfortable. "
-        "If it hurts, stop and tell your therapist."
+        f"{_sentence(day)} your {exercise_plural(doc.get('exercise'))} were smaller movements than in the last "
+        f"weeks: {rom:.0f} degrees, while it was about {median:.0f} degrees before. Move slowly and go as far as "
+        "feels comfortable. If it hurts, stop and tell your therapist."
     )
     return SuggestionDraft(ROM_DROP, "rom_deg", "<", threshold, rom, text)
 
 
-def too_fast(doc: dict) -> SuggestionDraft | None:
-    """Fires when a repetition took less than MIN_TEMPO_S_PER_REP seconds on average."""
+def too_fast(doc: dict, day: str) -> SuggestionDraft | None:
+    """Fires when a repetition took less than MIN_TEMPO_S_PER_REP seconds on average; day: 'on Saturday'."""
     tempo = _number(doc, "tempo_s_per_rep")
     if tempo is None or tempo <= 0 or tempo >= MIN_TEMPO_S_PER_REP:
         return None
     text = (
-        f"You moved quickly: about {tempo:.1f} seconds for each repetition. Please slow down and take at least "
-        f"{ADVISED_TEMPO_S_PER_REP} seconds for each one. Slow, steady movements help you more."
+        f"{_sentence(day)} you did your {exercise_plural(doc.get('exercise'))} quickly: about {tempo:.1f} seconds "
+        f"for each one. Please slow down and take at least {ADVISED_TEMPO_S_PER_REP} seconds for each one. "
+        "Slow, steady movements help you more."
     )
     return SuggestionDraft(TOO_FAST, "tempo_s_per_rep", "<", MIN_TEMPO_S_PER_REP, tempo, text)
 
 
-def poor_data_quality(doc: dict) -> SuggestionDraft | None:
+def poor_data_quality(doc: dict, day: str) -> SuggestionDraft | None:
     """Fires when the analysis found the data unreliable (quality.ok false); says what to change at the camera."""
     quality = _quality(doc)
     if quality.get("ok") is not False:
         return None
+    what = exercise_plural(doc.get("exercise"))
     tracked = _number(quality, "tracked_fraction", "doc['quality']")
     outliers = _number(quality, "outlier_fraction", "doc['quality']")
     if tracked is not None and tracked < QUALITY_MIN_TRACKED_FRACTION:
         text = (
-            f"The camera could not see all of you for part of the exercise (it saw you {tracked:.0%} of the time). "
-            "Please step into view: stand so that you see your whole body, from head to feet, on the screen."
+            f"{_sentence(day)} the camera could not see all of you during your {what} (it saw you {tracked:.0%} "
+            "of the time). Please step into view: stand so that you see your whole body, from head to feet, "
+            "on the screen."
         )
         return SuggestionDraft(
             POOR_DATA_QUALITY, "quality.tracked_fraction", "<", QUALITY_MIN_TRACKED_FRACTION, tracked, text
         )
     if outliers is not None and outliers > QUALITY_MAX_OUTLIER_FRACTION:
         text = (
-            "The camera had trouble following your movements. Please make sure the room is well lit, "
+            f"{_sentence(day)} the camera had trouble following your {what}. Please make sure the room is well lit, "
             "nothing stands between you and the camera, and the camera points straight at you."
         )
         return SuggestionDraft(
             POOR_DATA_QUALITY, "quality.outlier_fraction", ">", QUALITY_MAX_OUTLIER_FRACTION, outliers, text
         )
     text = (
-        "The camera could not measure this exercise well. Please move the camera so that it faces you "
+        f"{_sentence(day)} the camera could not measure your {what} well. Please move the camera so that it faces you "
         "and sees your whole body, then try again."
     )
     return SuggestionDraft(POOR_DATA_QUALITY, "quality.ok", "==", 0.0, 0.0, text)
 
 
 def missed_days(
-    history: list[tuple[dt.datetime, dict]], expected_per_week: int | None, now: dt.datetime
+    history: list[tuple[dt.datetime, dict]], expected_per_week: int | None, now: dt.datetime, exercise: object = None
 ) -> SuggestionDraft | None:
     """Fires when fewer of the last 7 days (today included, UTC) had a session than the plan expects per week.
 
@@ -223,9 +259,11 @@ def missed_days(
     if active >= expected:
         return None
     day_word = "day" if active == 1 else "days"
+    what = exercise_plural(exercise)
+    what = "this exercise" if what == "repetitions" else what
     text = (
-        f"In the last 7 days you did this exercise on {active} {day_word}. Your plan asks for {expected} days "
-        "a week. Try to choose a fixed time of day for your exercises."
+        f"In the 7 days up to {now:%A} {now.day} {now:%B} you did {what} on {active} {day_word}. Your plan asks "
+        f"for {expected} days a week. Try to choose a fixed time of day for your exercises."
     )
     return SuggestionDraft(MISSED_DAYS, "active_days_last_7d", "<", float(expected), float(active), text)
 
@@ -237,12 +275,15 @@ def evaluate(
     history: list[tuple[dt.datetime, dict]],
     expected_per_week: int | None,
     now: dt.datetime,
+    today: dt.date | None = None,
 ) -> list[SuggestionDraft]:
     """Returns the drafts of every rule that fires for one analysed session.
 
     doc: the analysis document of the session (backend.analysis.report). prescribed_reps: repetitions per set of
     the plan, None = no plan. history: (started_at, document) of earlier sessions of the same patient and exercise.
-    expected_per_week: sessions per week of the plan. now: when the session happened (timezone-aware).
+    expected_per_week: sessions per week of the plan. now: when the session happened (timezone-aware). today: the
+    day the advice is written (UTC), which decides whether the text names the session's weekday or its date;
+    defaults to the day of now.
     When quality.ok is false only the data-quality and missed-days rules run: the measurements are not trusted.
     Raises ValueError naming the argument or document key that is malformed.
     """
@@ -252,9 +293,12 @@ def evaluate(
     prescribed_reps = _positive_int(prescribed_reps, "prescribed_reps")
     expected_per_week = _positive_int(expected_per_week, "expected_per_week")
     past = _checked_history(history)
+    if today is not None and (not isinstance(today, dt.date) or isinstance(today, dt.datetime)):
+        raise ValueError(f"today must be a date or None, got {today!r}")
+    day = session_day(now, now.date() if today is None else today)
     if _quality_ok(doc):
-        drafts = [fewer_reps(doc, prescribed_reps), rom_drop(doc, past, now), too_fast(doc)]
+        drafts = [fewer_reps(doc, prescribed_reps, day), rom_drop(doc, past, now, day), too_fast(doc, day)]
     else:
-        drafts = [poor_data_quality(doc)]
-    drafts.append(missed_days(past, expected_per_week, now))
+        drafts = [poor_data_quality(doc, day)]
+    drafts.append(missed_days(past, expected_per_week, now, doc.get("exercise")))
     return [d for d in drafts if d is not None]

@@ -53,8 +53,8 @@ class SuggestionOut(BaseModel):
                     "comparison": "<",
                     "threshold": 10.0,
                     "value": 6.0,
-                    "text": "Today you did 6 of the 10 repetitions in your plan. Next time, try to do all 10. "
-                    "Rest for a moment between them if you need to.",
+                    "text": "On Saturday you did 6 of the 10 sit-to-stands in your plan. Next time, try to do all "
+                    "10. Rest for a moment between them if you need to.",
                     "status": "pending",
                     "created_at": "2026-11-23T10:00:00Z",
                     "decided_at": None,

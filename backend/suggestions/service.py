@@ -180,7 +180,8 @@ def suggest_for_session(*, db_session: Session, session: ExerciseSession, doc: d
     """Runs the rules on a stored session's metrics document and stores what fires as pending suggestions.
 
     Reads the plan's targets and the patient's earlier sessions; judges missed days at most once a week per
-    exercise. Returns the new suggestions (flushed, not committed). Raises ValueError for a malformed document.
+    exercise. Keeps at most one pending suggestion per rule and exercise: the newest session's. Returns the new
+    suggestions (flushed, not committed). Raises ValueError for a malformed document.
     """
     reps, per_week = plan_targets(
         db_session=db_session,
@@ -189,14 +190,47 @@ def suggest_for_session(*, db_session: Session, session: ExerciseSession, doc: d
         on=session.started_at.astimezone(dt.UTC).date(),
     )
     history = session_history(db_session=db_session, session=session)
-    drafts = evaluate(doc, prescribed_reps=reps, history=history, expected_per_week=per_week, now=session.started_at)
+    drafts = evaluate(
+        doc,
+        prescribed_reps=reps,
+        history=history,
+        expected_per_week=per_week,
+        now=session.started_at,
+        today=utcnow().date(),
+    )
     if any(d.rule == MISSED_DAYS for d in drafts) and _recently_suggested(
         db_session=db_session, session=session, rule=MISSED_DAYS, days=ACTIVE_DAYS_WINDOW
     ):
         drafts = [d for d in drafts if d.rule != MISSED_DAYS]
     rows = add_system_suggestions(drafts, patient_id=session.patient_id, session_id=session.id, db_session=db_session)
     supersede_older(db_session=db_session, session=session, rules={r.rule for r in rows})
+    newer = _pending_from_newer_sessions(db_session=db_session, session=session, rules={r.rule for r in rows})
+    for row in rows:
+        if row.rule in newer:  # a session uploaded late: its advice is born replaced by the newer one
+            row.status, row.decided_at = "superseded", row.created_at
+    db_session.flush()
     return rows
+
+
+def _pending_from_newer_sessions(*, db_session: Session, session: ExerciseSession, rules: set[str]) -> set[str]:
+    """Returns which of these rules have a pending system suggestion of a later session of the same exercise."""
+    if not rules:
+        return set()
+    later = select(ExerciseSession.id).where(
+        ExerciseSession.patient_id == session.patient_id,
+        ExerciseSession.exercise_id == session.exercise_id,
+        ExerciseSession.started_at > session.started_at,
+    )
+    found = db_session.scalars(
+        select(Suggestion.rule).where(
+            Suggestion.patient_id == session.patient_id,
+            Suggestion.source == "system",
+            Suggestion.status == "pending",
+            Suggestion.rule.in_(sorted(rules)),
+            Suggestion.session_id.in_(later),
+        )
+    )
+    return set(found)
 
 
 def supersede_older(*, db_session: Session, session: ExerciseSession, rules: set[str]) -> int:

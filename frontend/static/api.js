@@ -2,6 +2,10 @@
 "use strict";
 const Coach = (() => {
   let csrf = null;
+  // the path prefix of the app's URLs (from the server's COACH_PUBLIC_URL): "" or e.g. "/clinic"
+  const root = (document.querySelector('meta[name="coach-root"]') || { content: "" }).content;
+  /** Returns the URL of one of the app's paths ("/therapist" -> root + "/therapist"). */
+  function url(path) { return root + path; }
 
   class ApiError extends Error {
     constructor(status, error, detail) { super(detail || error); this.status = status; this.error = error; this.detail = detail; }
@@ -9,7 +13,7 @@ const Coach = (() => {
 
   function toLogin() {
     const next = location.pathname + location.search;
-    location.assign("/?next=" + encodeURIComponent(next));
+    location.assign(url("/?next=") + encodeURIComponent(next));
   }
 
   async function csrfToken() {
@@ -25,7 +29,7 @@ const Coach = (() => {
     if (body !== undefined) headers["Content-Type"] = "application/json";
     let resp;
     try {
-      resp = await fetch("/api/v1" + path, { method, headers, credentials: "same-origin",
+      resp = await fetch(url("/api/v1" + path), { method, headers, credentials: "same-origin",
         body: body === undefined ? undefined : JSON.stringify(body) });
     } catch (e) {
       throw new ApiError(0, "NetworkError", "The server could not be reached.");
@@ -122,13 +126,13 @@ const Coach = (() => {
   async function logout() {
     try { await api("/auth/logout", { method: "POST", redirect401: false }); } catch (e) { /* already signed out */ }
     sessionStorage.removeItem("coach_csrf");
-    location.assign("/");
+    location.assign(url("/"));
   }
   document.addEventListener("DOMContentLoaded", () => {
     const b = document.getElementById("logout");
     if (b) b.addEventListener("click", logout);
   });
 
-  return { api, ApiError, kindMessage, showError, el, fmtDate, fmtDateTime, plainDay, daysAgo, startOfWeekUTC, median,
+  return { root, url, api, ApiError, kindMessage, showError, el, fmtDate, fmtDateTime, plainDay, daysAgo, startOfWeekUTC, median,
            exercises, exerciseName, runningPlan, toLogin, DAY };
 })();

@@ -5,9 +5,13 @@
   const box = document.getElementById("login-error");
   const button = document.getElementById("login-submit");
 
+  /** Returns ?next= when it is a path of this app on this origin (checked after URL parsing), else null. */
   function safeNext() {
     const next = new URLSearchParams(location.search).get("next");
-    return next && next.startsWith("/") && !next.startsWith("//") ? next : null;
+    if (!next || !next.startsWith("/") || /[\\\u0000-\u0020]/.test(next)) return null;
+    const target = new URL(next, location.origin);
+    if (target.origin !== location.origin || !(target.pathname + "/").startsWith(Coach.root + "/")) return null;
+    return target.pathname + target.search;
   }
   function say(text) { box.textContent = text; box.hidden = false; }
 
@@ -20,7 +24,7 @@
     try {
       const out = await Coach.api("/auth/login", { method: "POST", body: { email, password }, redirect401: false, withCsrf: false });
       sessionStorage.setItem("coach_csrf", out.csrf_token);
-      const home = out.user.role === "patient" ? "/patient" : "/therapist";
+      const home = Coach.url(out.user.role === "patient" ? "/patient" : "/therapist");
       location.assign(safeNext() || home);
     } catch (err) {
       if (err.status === 401) say("The e-mail address or the password is not right. Please try again.");

@@ -14,7 +14,7 @@
 
   function plural(lib, slug) {
     const name = exerciseName(lib, slug).toLowerCase();
-    if (name === "sit to stand") return "stand-ups from the chair";
+    if (name === "sit to stand") return "sit-to-stands";  // the same words as the advice (backend/suggestions/rules.py)
     return name.endsWith("s") ? name : name + "s";
   }
 
@@ -96,11 +96,29 @@
     if (!points.length) { box.append(el("p", {}, "Your progress will show here after your first exercises.")); return; }
     for (const slug of slugs) {
       const item = plan && plan.items.find((i) => i.exercise_slug === slug);
-      const pts = points.filter((p) => p.exercise_slug === slug && +new Date(p.started_at) >= since && p.repetitions !== null)
-        .map((p) => ({ t: p.started_at, y: p.repetitions, label: `${p.repetitions} on ${Coach.fmtDate(p.started_at, { day: "numeric", month: "long" })}` }));
-      box.append(Chart.timeChart([{ name: "what you did", points: pts }], {
-        title: `${exerciseName(lib, slug)}: how many each time`, yMin: 0, big: true, height: 240,
-        target: item ? { y: item.repetitions, label: `your goal: ${item.repetitions}` } : null,
+      const mine = points.filter((p) => p.exercise_slug === slug && +new Date(p.started_at) >= since && p.repetitions !== null)
+        .sort((a, b) => new Date(a.started_at) - new Date(b.started_at));
+      if (!mine.length) {
+        box.append(el("h3", {}, exerciseName(lib, slug)), el("p", {}, "No exercise in the last six weeks yet."));
+        continue;
+      }
+      const day = (p) => Coach.fmtDate(p.started_at, { day: "numeric", month: "long" });
+      const color = Plots.COLORS[0];
+      const traces = [{ type: "scatter", mode: "lines+markers", name: "what you did", x: mine.map((p) => p.started_at),
+        y: mine.map((p) => p.repetitions), line: { color, width: 4 }, marker: { color, size: 14 },
+        text: mine.map((p) => `${p.repetitions} on ${day(p)}`), hovertemplate: "%{text}<extra></extra>" }];
+      const shapes = item ? [{ type: "line", xref: "paper", x0: 0, x1: 1, y0: item.repetitions, y1: item.repetitions,
+        showlegend: true, name: `your goal: ${item.repetitions}`, line: { color: "#1b7f3b", width: 4, dash: "dash" } }] : [];
+      const top = Math.max(item ? item.repetitions : 0, ...mine.map((p) => p.repetitions), 1);
+      box.append(Plots.figure({
+        title: `${exerciseName(lib, slug)}: how many each time`, traces, fontSize: 20, height: 320,
+        config: { displayModeBar: false },
+        layout: { shapes, showlegend: true, dragmode: false,
+          xaxis: { type: "date", tickformat: "%-d %b", fixedrange: true, nticks: window.innerWidth < 600 ? 3 : 5 },
+          yaxis: { fixedrange: true, range: [0, Math.ceil(top * 1.15)], nticks: 4 } },
+        table: { caption: `${exerciseName(lib, slug)}: how many you did each time`,
+          columns: ["Day", "How many", ...(item ? ["Your goal"] : [])],
+          rows: mine.map((p) => [day(p), p.repetitions, ...(item ? [item.repetitions] : [])]) },
       }));
     }
   }

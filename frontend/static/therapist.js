@@ -1,7 +1,7 @@
 /* Therapist dashboard: assigned patients with adherence, indicators and pending advice, most in need first. */
 "use strict";
 (() => {
-  const { api, el, fmtDate, daysAgo, showError } = Coach;
+  const { api, url, el, fmtDate, daysAgo, showError } = Coach;
   const INDICATORS = ["flexibility", "endurance", "strength", "balance"];
 
   /** Returns {score, level, reasons} for how much a patient needs attention now (higher = sooner). */
@@ -45,7 +45,7 @@
 
   function row(r) {
     const a = attention(r);
-    const href = `/therapist/patients/${r.patient_id}`;
+    const href = url(`/therapist/patients/${r.patient_id}`);
     const last = r.last_session;
     const week = r.planned_this_week ? `${r.sessions_this_week} of ${r.planned_this_week} (${Math.round(100 * r.sessions_this_week / r.planned_this_week)}%)`
       : `${r.sessions_this_week} (no plan)`;
@@ -54,7 +54,7 @@
       el("td", {}, el("a", { href, class: "patient-link" }, r.full_name || r.email), el("span", { class: "reasons" }, r.email)),
       el("td", {}, el("span", { class: `pill ${a.level}` }, a.level === "high" ? "Now" : a.level === "mid" ? "Soon" : "OK"),
         el("span", { class: "reasons" }, a.reasons.join("; ") || "on track")),
-      el("td", {}, last ? fmtDate(last.started_at) : "never",
+      el("td", {}, last ? el("a", { href: url(`/therapist/sessions/${last.id}`), class: "session-link" }, fmtDate(last.started_at)) : "never",
         last ? el("span", { class: "reasons" }, `${(last.exercise_slug || "").replace(/_/g, " ")}${last.repetitions !== null ? ", " + last.repetitions + " reps" : ""}`) : null),
       el("td", {}, week),
       ...INDICATORS.map((k) => indicatorCell(ind[k])),

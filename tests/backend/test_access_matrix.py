@@ -91,6 +91,8 @@ ROUTES = {
     ("GET", "/api/v1/sessions"): (AUTHED, None),  # lists only what the caller may see
     ("GET", "/api/v1/sessions/{session_id}"): (CARE_DEV, None),
     ("GET", "/api/v1/sessions/{session_id}/file"): (CARE_DEV, None),
+    ("GET", "/api/v1/sessions/{session_id}/detail"): (CARE, None),  # people only: devices do not read it
+    ("GET", "/api/v1/sessions/{session_id}/replay"): (CARE_DEV, None),
     ("GET", "/api/v1/patients/{patient_id}/progress"): (CARE_DEV, None),
     ("GET", "/api/v1/patients/{patient_id}/summary"): (CARE_DEV, None),
     ("GET", "/api/v1/dashboard"): (STAFF, None),  # therapists: assigned patients only
@@ -116,7 +118,7 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
         started_at=utcnow(),
         duration_s=1.0,
         n_frames=30,
-        file_bytes=b"khs",
+        file_bytes=make_khs("squat", 1, seed=12),  # a real file: detail and replay decode it
         content_hash="0" * 64,
     )
     db_session.add(session)

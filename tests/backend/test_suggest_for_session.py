@@ -6,10 +6,12 @@ import datetime as dt
 import uuid
 
 import pytest
+from sqlalchemy import select
 
 from backend.plans.models import Plan, PlanItem
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.suggestions.context import plan_targets, session_history
+from backend.suggestions.models import Suggestion
 from backend.suggestions.service import suggest_for_session
 
 NOW = dt.datetime(2026, 11, 23, 10, 0, tzinfo=dt.UTC)
@@ -187,4 +189,30 @@ def test_newer_advice_supersedes_pending_advice_of_the_same_rule_and_exercise(
     rows = suggest_for_session(db_session=db_session, session=late, doc=late.metric.document)
     db_session.refresh(fired[3]["too_fast"])
     assert fired[3]["too_fast"].status == "pending"  # never replaces newer advice
-    assert [r.status for r in rows if r.rule == "too_fast"] == ["pending"]
+    assert [r.status for r in rows if r.rule == "too_fast"] == ["superseded"]  # born replaced by the newer one
+
+
+@pytest.mark.parametrize("order", [(9, 5, 1, 7, 3), (1, 3, 5, 7, 9), (5, 9, 1, 3, 7)])
+def test_one_pending_suggestion_per_rule_and_exercise_whatever_the_upload_order(
+    db_session, make_user, exercise, other_exercise, store, plan, order
+):
+    patient = make_user("patient")
+    plan(patient, reps=10, per_week=1)
+    sessions = {}
+    for days in order:  # uploaded in this order; each one too short and too fast, for both exercises
+        for ex in (exercise, other_exercise):
+            session = store(patient, ex, days, repetitions=4, tempo_s_per_rep=1.0)
+            suggest_for_session(db_session=db_session, session=session, doc=session.metric.document)
+            sessions[session.id] = (ex.slug, days)
+    pending = db_session.scalars(
+        select(Suggestion).where(Suggestion.patient_id == patient.id, Suggestion.status == "pending")
+    ).all()
+    got = sorted((sessions[s.session_id][0], s.rule, sessions[s.session_id][1]) for s in pending)
+    newest = min(order)
+    assert got == sorted(
+        [
+            (exercise.slug, "fewer_reps", newest),
+            (exercise.slug, "too_fast", newest),
+            (other_exercise.slug, "too_fast", newest),
+        ]  # fmt: skip
+    ), "one pending suggestion per rule and exercise, from the newest session"

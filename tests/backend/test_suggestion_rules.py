@@ -30,9 +30,16 @@ def _past(days_ago: float, **overrides) -> tuple[dt.datetime, dict]:
     return NOW - dt.timedelta(days=days_ago), _doc(**overrides)
 
 
-def _eval(doc, *, prescribed_reps=None, history=(), expected_per_week=None, now=NOW) -> dict[str, SuggestionDraft]:
+def _eval(
+    doc, *, prescribed_reps=None, history=(), expected_per_week=None, now=NOW, today=None
+) -> dict[str, SuggestionDraft]:
     drafts = evaluate(
-        doc, prescribed_reps=prescribed_reps, history=list(history), expected_per_week=expected_per_week, now=now
+        doc,
+        prescribed_reps=prescribed_reps,
+        history=list(history),
+        expected_per_week=expected_per_week,
+        now=now,
+        today=today,
     )
     by_rule = {d.rule: d for d in drafts}
     assert len(by_rule) == len(drafts), f"a rule fired twice: {drafts}"
@@ -50,8 +57,15 @@ def test_good_session_fires_nothing():
 def test_fewer_reps_fires_one_below_prescribed():
     draft = _eval(_doc(repetitions=9), prescribed_reps=10)[rules.FEWER_REPS]
     assert (draft.metric, draft.comparison, draft.threshold, draft.value) == ("repetitions", "<", 10.0, 9.0)
-    assert "9 of the 10 repetitions" in draft.text
+    assert draft.text.startswith("On Monday you did 9 of the 10 mini squats in your plan. Next time, try to do all 10.")
     assert draft.explanation == "repetitions 9 < 10"
+
+
+def test_fewer_reps_names_the_exercise_and_the_weekday_of_the_session():
+    saturday = NOW - dt.timedelta(days=2)
+    doc = _doc(exercise="sit_to_stand", repetitions=6)
+    draft = _eval(doc, prescribed_reps=10, now=saturday, today=NOW.date())[rules.FEWER_REPS]
+    assert draft.text.startswith("On Saturday you did 6 of the 10 sit-to-stands in your plan.")
 
 
 def test_fewer_reps_silent_at_prescribed():
@@ -65,7 +79,7 @@ def test_fewer_reps_silent_without_plan():
 def test_fewer_reps_zero_says_none_counted():
     draft = _eval(_doc(repetitions=0), prescribed_reps=8)[rules.FEWER_REPS]
     assert draft.value == 0.0
-    assert "did not count any repetitions" in draft.text
+    assert draft.text.startswith("On Monday the camera did not count any mini squats. Your plan asks for 8.")
 
 
 # --- range of motion against the last weeks ---
@@ -79,7 +93,10 @@ def test_rom_drop_fires_below_85_percent_of_median():
     draft = _eval(_doc(rom_deg=67.9), history=_rom_history(80.0))[rules.ROM_DROP]
     assert (draft.metric, draft.comparison, draft.value) == ("rom_deg", "<", 67.9)
     assert draft.threshold == pytest.approx(0.85 * 80.0)
-    assert "68 degrees" in draft.text and "about 80 degrees" in draft.text
+    assert draft.text.startswith(
+        "On Monday your mini squats were smaller movements than in the last weeks: 68 degrees, "
+        "while it was about 80 degrees before."
+    )
 
 
 def test_rom_drop_silent_at_85_percent_of_median():
@@ -118,6 +135,7 @@ def test_too_fast_fires_below_threshold():
         rules.MIN_TEMPO_S_PER_REP,
         1.49,
     )
+    assert draft.text.startswith("On Monday you did your mini squats quickly: about 1.5 seconds for each one.")
     assert "slow down" in draft.text
 
 
@@ -144,18 +162,20 @@ def test_poor_quality_low_tracking_asks_to_step_into_view():
         0.9,
         0.899,
     )
+    assert draft.text.startswith("On Monday the camera could not see all of you during your mini squats")
     assert "step into view" in draft.text
 
 
 def test_poor_quality_outliers_asks_to_fix_the_room():
     draft = _eval(_doc(quality=_quality(tracked=0.9, outliers=0.051)))[rules.POOR_DATA_QUALITY]
     assert (draft.metric, draft.comparison, draft.value) == ("quality.outlier_fraction", ">", 0.051)
-    assert "camera" in draft.text
+    assert draft.text.startswith("On Monday the camera had trouble following your mini squats.")
 
 
 def test_poor_quality_other_reason_asks_to_move_camera():
     draft = _eval(_doc(quality=_quality(tracked=0.9, outliers=0.05)))[rules.POOR_DATA_QUALITY]
     assert (draft.metric, draft.comparison, draft.threshold, draft.value) == ("quality.ok", "==", 0.0, 0.0)
+    assert draft.text.startswith("On Monday the camera could not measure your mini squats well.")
     assert "move the camera" in draft.text
 
 
@@ -179,7 +199,9 @@ def test_missed_days_fires_below_expected():
     history = _sessions_on([9, 3])  # with today: 2 active days in the last 7
     draft = _eval(_doc(), history=history, expected_per_week=3)[rules.MISSED_DAYS]
     assert (draft.metric, draft.comparison, draft.threshold, draft.value) == ("active_days_last_7d", "<", 3.0, 2.0)
-    assert "on 2 days" in draft.text and "3 days" in draft.text
+    assert draft.text.startswith(
+        "In the 7 days up to Monday 23 November you did mini squats on 2 days. Your plan asks for 3 days a week."
+    )
 
 
 def test_missed_days_silent_at_expected():
@@ -206,6 +228,58 @@ def test_missed_days_caps_expectation_at_seven():
     assert rules.MISSED_DAYS not in _eval(_doc(), history=history, expected_per_week=14)
 
 
+# --- sentences, not rule codes ---
+
+
+@pytest.mark.parametrize(
+    ("days_ago", "expected"),
+    [
+        (0, "on Monday"),
+        (2, "on Saturday"),
+        (6, "on Tuesday"),
+        (7, "on 16 November"),
+        (30, "on 24 October"),
+        (330, "on 28 December 2025"),
+    ],  # fmt: skip
+)
+def test_session_day_is_the_weekday_within_a_week_else_the_date(days_ago, expected):
+    assert rules.session_day(NOW - dt.timedelta(days=days_ago), NOW.date()) == expected
+
+
+def test_an_old_session_is_named_by_its_date():
+    doc = _doc(exercise="deep_squat", repetitions=3)
+    draft = _eval(doc, prescribed_reps=10, now=NOW - dt.timedelta(days=9), today=NOW.date())[rules.FEWER_REPS]
+    assert draft.text.startswith("On 14 November you did 3 of the 10 deep squats in your plan.")
+
+
+@pytest.mark.parametrize(
+    ("slug", "plural"),
+    [
+        ("sit_to_stand", "sit-to-stands"),
+        ("squat", "mini squats"),
+        ("shoulder_abduction", "shoulder abductions"),
+        ("no_such_exercise", "repetitions"),
+        (None, "repetitions"),
+    ],  # fmt: skip
+)
+def test_exercise_plural(slug, plural):
+    assert rules.exercise_plural(slug) == plural
+
+
+def test_every_text_is_plain_sentences_without_rule_codes():
+    bad_quality = [_quality(tracked=0.5), _quality(tracked=0.95, outliers=0.2), _quality(tracked=0.95, outliers=0.0)]
+    docs = [_doc(repetitions=4, rom_deg=40.0, tempo_s_per_rep=1.0), _doc(repetitions=0)]
+    docs += [_doc(quality=q) for q in bad_quality]
+    for doc in docs:
+        fired = _eval(doc, prescribed_reps=10, history=[*_rom_history(), _past(9)], expected_per_week=5)
+        assert fired
+        for draft in fired.values():
+            assert "mini squats" in draft.text and "Monday" in draft.text, draft.text
+            for code in (draft.rule, draft.metric, "<", ">", "==", "_"):
+                assert code not in draft.text, (code, draft.text)
+            assert draft.text[0].isupper() and draft.text.endswith("."), draft.text
+
+
 # --- bad input ---
 
 
@@ -223,6 +297,7 @@ def test_missed_days_caps_expectation_at_seven():
         ({"history": [(NOW, "doc")]}, "history[0] must be a (datetime, dict) pair"),
         ({"history": [(dt.datetime(2026, 11, 1), {})]}, "history[0][0] must be a timezone-aware"),
         ({"history": [_past(20, rom_deg=[1])]}, "history[0][1]['rom_deg'] must be a number"),
+        ({"today": NOW}, "today must be a date or None"),
     ],
 )
 def test_bad_input_names_what_and_where(kwargs, message):

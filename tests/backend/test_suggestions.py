@@ -15,6 +15,8 @@ from backend.suggestions.models import Suggestion
 from backend.suggestions.rules import SuggestionDraft, evaluate
 from backend.suggestions.service import add_system_suggestions, is_visible_to_patient
 
+MONDAY = dt.date(2026, 11, 23)
+
 
 @pytest.fixture
 def care(make_patient_with_therapist, auth_headers, device_headers):
@@ -294,8 +296,15 @@ def test_unassigned_therapist_cannot_approve(client, care, make_suggestion, make
 
 def test_rule_drafts_are_stored_pending_and_reviewable(client, db_session, care):
     session = _exercise_session(db_session, care["patient"])
-    doc = {"repetitions": 6, "rom_deg": 80.0, "tempo_s_per_rep": 1.0, "quality": {"ok": True}}
-    drafts = evaluate(doc, prescribed_reps=10, history=[], expected_per_week=None, now=utcnow())
+    doc = {
+        "exercise": "sit_to_stand",
+        "repetitions": 6,
+        "rom_deg": 80.0,
+        "tempo_s_per_rep": 1.0,
+        "quality": {"ok": True},
+    }
+    saturday = dt.datetime(2026, 11, 21, 18, 30, tzinfo=dt.UTC)
+    drafts = evaluate(doc, prescribed_reps=10, history=[], expected_per_week=None, now=saturday, today=MONDAY)
     rows = add_system_suggestions(drafts, patient_id=care["patient"].id, session_id=session.id, db_session=db_session)
     assert [r.rule for r in rows] == ["fewer_reps", "too_fast"]
     assert all(r.id is not None for r in rows), "add_system_suggestions must flush"
@@ -304,6 +313,11 @@ def test_rule_drafts_are_stored_pending_and_reviewable(client, db_session, care)
     fewer = by_rule["fewer_reps"]
     assert (fewer["metric"], fewer["value"], fewer["comparison"], fewer["threshold"]) == ("repetitions", 6.0, "<", 10.0)
     assert by_rule["fewer_reps"]["session_id"] == session.id
+    assert fewer["text"] == (
+        "On Saturday you did 6 of the 10 sit-to-stands in your plan. Next time, try to do all 10. "
+        "Rest for a moment between them if you need to."
+    )
+    assert by_rule["too_fast"]["text"].startswith("On Saturday you did your sit-to-stands quickly")
     assert client.get(_url(care["patient"]), headers=care["patient_hdr"]).json()["total"] == 0
 
 

@@ -14,6 +14,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -44,6 +45,7 @@ class LiveServer:
     patient_id: int
     approved_text: str  # a suggestion approved through the API before the browser tests
     pending_ids: list[int] = field(default_factory=list)
+    database_url: str = ""  # what the server process uses (PostgreSQL: with its schema)
 
 
 def _free_port() -> int:
@@ -115,12 +117,27 @@ def live_server(tmp_path_factory) -> Iterator[LiveServer]:
         seed_demo(session)
     engine.dispose()
 
+    server_url = _server_url(url, schema)
+    try:
+        with run_server(server_url, tmp_path_factory.mktemp("log")) as base:
+            patient_id, approved, pending = _upload_history(base)
+            yield LiveServer(url=base, patient_id=patient_id, approved_text=approved, pending_ids=pending,
+                             database_url=server_url)  # fmt: skip
+    finally:
+        cleanup()  # after the server stopped
+
+
+@contextmanager
+def run_server(database_url: str, log_dir: Path, **env: str) -> Iterator[str]:
+    """Runs the app with uvicorn in a subprocess on a free port of 127.0.0.1 (extra COACH_* settings in env);
+    yields its base URL; stops it on exit."""
     port = _free_port()
-    env = os.environ | {"COACH_DATABASE_URL": _server_url(url, schema), "COACH_ENVIRONMENT": "local",
-                        "PYTHONPATH": str(ROOT)}  # fmt: skip
-    log = open(tmp_path_factory.mktemp("log") / "server.log", "w+")  # noqa: SIM115 - closed at teardown
+    env = os.environ | {"COACH_DATABASE_URL": database_url, "COACH_ENVIRONMENT": "local", "PYTHONPATH": str(ROOT),
+                        **env}  # fmt: skip
+    log = open(log_dir / f"server-{port}.log", "w+")  # noqa: SIM115 - closed below
     command = [sys.executable, "-m", "uvicorn", "backend.main:create_app", "--factory", "--host", "127.0.0.1",
-               "--port", str(port), "--log-level", "warning"]  # fmt: skip
+               "--port", str(port), "--log-level", "warning", "--proxy-headers",
+               "--forwarded-allow-ips", "127.0.0.1"]  # fmt: skip
     proc = subprocess.Popen(command, cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT)
     base = f"http://127.0.0.1:{port}"
     try:
@@ -135,8 +152,7 @@ def live_server(tmp_path_factory) -> Iterator[LiveServer]:
                 log.seek(0)
                 pytest.fail(f"server did not start:\n{log.read()}")
             time.sleep(0.1)
-        patient_id, approved, pending = _upload_history(base)
-        yield LiveServer(url=base, patient_id=patient_id, approved_text=approved, pending_ids=pending)
+        yield base
     finally:
         proc.terminate()
         try:
@@ -145,7 +161,6 @@ def live_server(tmp_path_factory) -> Iterator[LiveServer]:
             proc.kill()
             proc.wait()
         log.close()
-        cleanup()
 
 
 @pytest.fixture(scope="session")

@@ -1,45 +1,97 @@
-"""ReplayManager: one viser server per session, reused, stopped when idle."""
+"""The 3D replay end to end: viser's client served by the app plays the session's recording in Chromium, every
+request stays on the app's origin behind the login, and nobody else sees it."""
 
 from __future__ import annotations
 
-import httpx
-import numpy as np
+import re
+
 import pytest
+from playwright.sync_api import expect
 
-from frontend.replay import ReplayManager, bone_points
-from kinect_agent import skeleton
-from tests.backend.khs_files import make_khs
+from tests.frontend.conftest import THERAPIST, login, shot
 
-
-def test_bone_points_pairs_parent_and_child_joints():
-    positions = np.arange(skeleton.J * 3, dtype=float).reshape(skeleton.J, 3)
-    bones = bone_points(positions)
-    assert bones.shape == (len(skeleton.BONES), 2, 3)
-    parent, child = skeleton.BONES[0]
-    np.testing.assert_allclose(bones[0], positions[[parent, child]], err_msg="first bone = (parent, child)")
+pytestmark = pytest.mark.browser
+OTHER_PATIENT = "george@demo.clinic"  # not Rose: may not see her sessions
 
 
-def test_bone_points_refuses_a_wrong_shape():
-    with pytest.raises(ValueError, match=r"\(20, 3\)"):
-        bone_points(np.zeros((19, 3)))
+def _canvas_png(page) -> bytes:
+    return page.locator("#viewer").screenshot()
 
 
-def test_open_starts_once_reuses_and_closes_when_idle():
-    manager = ReplayManager(idle_s=0.0, check_every_s=3600)
-    data = make_khs("squat", 2, seed=3)
-    loads = []
+def test_therapist_replays_a_session_from_the_patient_page(page, live_server):
+    requests: list[str] = []
+    page.on("request", lambda r: requests.append(r.url))
+    page.on("websocket", lambda ws: requests.append(ws.url))
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    page.goto(f"/therapist/patients/{live_server.patient_id}")
+    page.locator("#sessions tbody a", has_text="3D replay").first.click()
+    page.wait_for_url(re.compile(r"/therapist/sessions/\d+/replay$"))
+    expect(page.locator("#replay-title")).to_contain_text("·")
+    viewer = page.frame_locator("#viewer")
+    viewer.locator("canvas").first.wait_for(state="visible", timeout=30_000)
+    page.wait_for_function(
+        "() => [...document.querySelector('#viewer').contentDocument.querySelectorAll('input')]"
+        ".some(i => /\\d/.test(i.value))", timeout=30_000)  # fmt: skip
+    page.wait_for_timeout(1500)
+    first = _canvas_png(page)
+    page.wait_for_timeout(1200)
+    second = _canvas_png(page)
+    assert first != second, "the picture must change while the replay plays"
+    shot(page, "replay")
+    viewer.locator("button:has(.tabler-icon-player-pause-filled)").click()  # pause: the picture holds still
+    viewer.locator("button:has(.tabler-icon-binary-tree-2)").click()  # the scene tree: each skeleton is switched
+    raw_eye = viewer.locator('[data-scene-node="/raw"] .tabler-icon-eye')
+    raw_eye.wait_for()
+    page.wait_for_timeout(500)
+    paused = _canvas_png(page)
+    assert paused == _canvas_png(page), "paused: the picture stays the same"
+    raw_eye.click()
+    viewer.locator('[data-scene-node="/raw"] .tabler-icon-eye-off').wait_for()
+    page.wait_for_timeout(500)
+    assert _canvas_png(page) != paused, "hiding the raw skeleton changes the picture"
+    shot(page, "replay-filtered-only")
+    origin = live_server.url
+    foreign = [u for u in requests if not u.startswith((origin + "/", "data:", "blob:"))]
+    assert not foreign, f"requests off the app's origin: {foreign}"
+    data_urls = sorted({u for u in requests if "/api/" in u or "/replay/viewer/" in u or "/replay" in u})
+    assert any(u.endswith("/replay") and "/api/v1/sessions/" in u for u in data_urls), data_urls
+    assert not page.js_errors, page.js_errors
 
-    def load() -> bytes:
-        loads.append(1)
-        return data
 
+def test_replay_urls_are_401_without_login(browser, live_server):
+    context = browser.new_context(base_url=live_server.url)
     try:
-        first = manager.open(7, load)
-        again = manager.open(7, load)
-        assert again is first and len(loads) == 1, "a second open must reuse the running viewer"
-        assert httpx.get(f"http://127.0.0.1:{first.port}/", timeout=10).status_code == 200
-        assert first.n_frames > 0
-        assert manager.close_idle() == [7]
-        assert manager.running() == []
+        sid = _a_session_of_rose(live_server)
+        for path in (f"/therapist/sessions/{sid}/replay", "/replay/viewer/?playbackPath=x",
+                     f"/api/v1/sessions/{sid}/replay", f"/api/v1/sessions/{sid}"):  # fmt: skip
+            response = context.request.get(path)
+            assert response.status == 401, f"{path}: {response.status}"
+        page = context.new_page()
+        page.goto(f"/therapist/sessions/{sid}/replay")
+        expect(page.get_by_role("link", name="Sign in")).to_be_visible()
     finally:
-        manager.close_all()
+        context.close()
+
+
+def test_another_patient_gets_403_for_the_replay(page, live_server):
+    sid = _a_session_of_rose(live_server)
+    login(page, OTHER_PATIENT)
+    page.wait_for_url("**/patient")
+    response = page.goto(f"/therapist/sessions/{sid}/replay")
+    assert response.status == 403
+    expect(page.locator("h1")).to_contain_text("Not your session")
+    assert page.request.get(f"/api/v1/sessions/{sid}/replay").status == 403
+    assert page.locator("#viewer").count() == 0
+
+
+def _a_session_of_rose(live_server) -> int:
+    import httpx
+
+    from backend.demo import DEMO_PASSWORD
+    from tests.frontend.conftest import PATIENT
+
+    with httpx.Client(base_url=live_server.url, timeout=30) as client:
+        client.post("/api/v1/auth/login", json={"email": PATIENT, "password": DEMO_PASSWORD}).raise_for_status()
+        items = client.get("/api/v1/sessions", params={"limit": 1}).json()["items"]
+    return items[0]["id"]

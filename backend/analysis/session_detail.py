@@ -1,0 +1,197 @@
+"""The evidence behind one session's numbers, for the therapist's session page: angle curves, repetition speeds,
+hand paths.
+
+Definitions:
+    angle curves  = the exercise's defining angles (angles.counting_angles, the same code the repetition counter
+                    uses), degrees, over time in seconds from the first frame. "raw": computed from the raw
+                    recording frame by frame (NaN where a joint is untracked); "filtered": from the positions the
+                    analysis measures (report.analyze_recording: the filtered recording, gap-filled and smoothed by
+                    series.smooth_positions). The measured curve is unwrapped (no 360° jumps where atan2
+                    passes ±180°, e.g. an arm raised overhead) and each raw sample is shifted by whole turns to lie
+                    within ±180° of it. Each curve is thinned by min/max decimation to at most
+                    MAX_CURVE_POINTS points: the samples are cut into MAX_CURVE_POINTS / 2 equal runs and each
+                    run keeps its lowest and its highest sample, in time order, so peaks and troughs stay exact;
+    peak speed    = the largest |dθ/dt| (deg/s, central differences of the conditioned series series.smooth) of
+                    the repetition's angles between its start and end: the angle of its side, both sides' angles
+                    for "both" or "center";
+    hand path     = reachable.hand_path: the hand relative to the shoulder in the trunk frame (outward, up,
+                    forward), in arm lengths, thinned by plain decimation to at most MAX_PATH_POINTS points.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from backend.analysis import series
+from backend.analysis.angles import counting_angles
+from backend.analysis.reachable import hand_path
+from kinect_agent.processing.angles import body_frame, joint_angles
+
+MAX_CURVE_POINTS = 1500
+MAX_PATH_POINTS = 600
+ARM_PREFIXES = ("shoulder_", "elbow_")
+
+
+def minmax_indices(y: np.ndarray, max_points: int = MAX_CURVE_POINTS) -> np.ndarray:
+    """Returns the sorted sample indices (K,) int, K ≤ max_points, that min/max decimation keeps of y: (T,).
+
+    NaN samples are skipped; a run with no finite sample keeps its first sample (so a gap stays a gap). Raises
+    ValueError when max_points < 2 or y is not 1-D.
+    """
+    y = np.asarray(y, dtype=np.float64)
+    if y.ndim != 1:
+        raise ValueError(f"y must have shape (T,), got {y.shape}")
+    if max_points < 2:
+        raise ValueError(f"max_points must be at least 2, got {max_points}")
+    T = y.shape[0]
+    if T <= max_points:
+        return np.arange(T)
+    n_runs = max_points // 2
+    size = -(-T // n_runs)
+    padded = np.full(n_runs * size, np.nan)
+    padded[:T] = y
+    runs = padded.reshape(n_runs, size)
+    finite = np.isfinite(runs)
+    lo = np.where(finite, runs, np.inf).argmin(axis=1)
+    hi = np.where(finite, runs, -np.inf).argmax(axis=1)
+    starts = np.arange(n_runs) * size
+    keep = np.concatenate((starts + lo, starts + hi))
+    return np.unique(keep[keep < T])
+
+
+def _rounded(values: np.ndarray, digits: int) -> list[float | None]:
+    """Returns values (K,) rounded, as a JSON-ready list with None for NaN."""
+    out = np.round(np.asarray(values, dtype=np.float64), digits)
+    return [None if not np.isfinite(v) else float(v) for v in out]
+
+
+def unwrap_finite(deg: np.ndarray) -> np.ndarray:
+    """Returns deg: (T,) degrees without 360° jumps between consecutive finite samples (NaN kept), shifted by whole
+    turns so its median lies in (−180, 180], as series.unwrap_deg does for a series without gaps."""
+    out = np.array(deg, dtype=np.float64)
+    ok = np.isfinite(out)
+    if ok.sum() < 2:
+        return out
+    u = np.unwrap(out[ok], period=360.0)
+    out[ok] = u - 360.0 * np.ceil((np.median(u) - 180.0) / 360.0)
+    return out
+
+
+def wrap_near(deg: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Returns deg: (T,) degrees shifted by whole turns to lie within ±180° of reference: (T,) degrees, frame by
+    frame (deg as is where reference is NaN); a noisy series keeps no false turn, unlike np.unwrap."""
+    deg = np.asarray(deg, dtype=np.float64)
+    reference = np.asarray(reference, dtype=np.float64)
+    near = reference + np.mod(deg - reference + 180.0, 360.0) - 180.0
+    return np.where(np.isfinite(reference), near, deg)
+
+
+def curve(t_s: np.ndarray, deg: np.ndarray, max_points: int = MAX_CURVE_POINTS) -> dict[str, list]:
+    """Returns {"t_s", "deg"}: one angle series thinned by min/max decimation (module doc).
+
+    t_s: (T,) s from the session start; deg: (T,) degrees, NaN = unknown (sent as null).
+    """
+    idx = minmax_indices(deg, max_points)
+    return {"t_s": _rounded(t_s[idx], 3), "deg": _rounded(deg[idx], 1)}
+
+
+def measured_angles(t: np.ndarray, positions: np.ndarray, names: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """Returns {name: (T,) degrees} of the angles `names` as the analysis measures them.
+
+    t: (T,) s. positions: (T, J, 3) m, camera frame, the measured (filtered) positions; they are gap-filled and
+    smoothed first (series.smooth_positions), as report.analyze_recording does.
+    """
+    smoothed = series.smooth_positions(t, positions)
+    return counting_angles(smoothed, names, joint_angles(smoothed), body_frame(smoothed)[0])
+
+
+def angle_label(name: str) -> str:
+    """Returns an angle name in words: "knee_flexion_R" -> "right knee flexion"."""
+    side = {"_L": "left ", "_R": "right "}.get(name[-2:], "")
+    base = name[:-2] if side else name
+    return side + base.replace("_", " ")
+
+
+def angle_curves(
+    t: np.ndarray,
+    raw: np.ndarray,
+    measured_deg: dict[str, np.ndarray],
+    names: tuple[str, ...],
+    measured_kind: str = "filtered",
+) -> list[dict]:
+    """Returns [{"angle", "kind", "label", "t_s", "deg"}]: per defining angle, the raw curve then the measured one.
+
+    t: (T,) s. raw: (T, J, 3) m, camera frame, NaN = untracked. measured_deg: measured_angles' output for the
+    same frames. measured_kind names the second curve ("filtered", or "smoothed" when the session has no
+    filtered recording and the raw one was measured).
+    """
+    t_s = np.asarray(t, dtype=np.float64) - float(t[0])
+    raw_angles = counting_angles(raw, names)
+    out = []
+    for name in names:
+        smooth_deg = unwrap_finite(measured_deg[name])
+        for kind, deg in (("raw", wrap_near(raw_angles[name], smooth_deg)), (measured_kind, smooth_deg)):
+            label = f"{angle_label(name)}, {kind}"
+            out.append({"angle": name, "kind": kind, "label": label, **curve(t_s, deg)})
+    return out
+
+
+def _rep_angles(side: str, names: tuple[str, ...]) -> tuple[str, ...]:
+    """Returns the angles of names a repetition of this side ("left", "right", "both", "center") moved."""
+    suffix = {"left": "_L", "right": "_R"}.get(side)
+    own = tuple(n for n in names if suffix is not None and n.endswith(suffix))
+    return own or names
+
+
+def angular_speeds(t: np.ndarray, angles: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Returns {name: (T,) deg/s}, |dθ/dt| of each conditioned angle (series.smooth); t: (T,) s."""
+    if t.shape[0] < 2:
+        return {name: np.zeros_like(t) for name in angles}
+    return {name: np.abs(np.gradient(series.smooth(t, y), t)) for name, y in angles.items()}
+
+
+def peak_speeds(t: np.ndarray, speeds: dict[str, np.ndarray], repetitions: list[dict]) -> list[float | None]:
+    """Returns the peak speed (deg/s, 0.1) of each repetition {"start_s", "end_s", "side"} (module doc).
+
+    t: (T,) s; speeds: angular_speeds' output; repetition times are seconds from t[0]. None when no angle of the
+    repetition has a finite speed inside it.
+    """
+    t_s = np.asarray(t, dtype=np.float64) - float(t[0])
+    names = tuple(speeds)
+    out: list[float | None] = []
+    for rep in repetitions:
+        inside = (t_s >= rep["start_s"] - 1e-6) & (t_s <= rep["end_s"] + 1e-6)
+        values = [speeds[n][inside] for n in _rep_angles(rep.get("side", "both"), names)]
+        values = [v[np.isfinite(v)] for v in values]
+        best = max((float(v.max()) for v in values if v.size), default=None)
+        out.append(None if best is None else round(best, 1))
+    return out
+
+
+def is_arm_exercise(names: tuple[str, ...]) -> bool:
+    """Returns whether the defining angles `names` move the arms (shoulder or elbow angles)."""
+    return any(n.startswith(ARM_PREFIXES) for n in names)
+
+
+def hand_paths(measured: np.ndarray, t: np.ndarray, max_points: int = MAX_PATH_POINTS) -> dict[str, dict | None]:
+    """Returns {"left", "right"}: {"arm_length_m", "outward", "up", "forward"} lists in arm lengths, or None.
+
+    measured: (T, J, 3) m, camera frame, the measured positions (smoothed as the analysis does); t: (T,) s.
+    Frames where the hand is unknown are left out; at most max_points frames, evenly spaced, are kept.
+    """
+    smoothed = series.smooth_positions(t, measured)
+    frame = body_frame(smoothed)
+    out: dict[str, dict | None] = {}
+    for key, side in (("left", "L"), ("right", "R")):
+        path = hand_path(smoothed, side, frame)
+        if path is None:
+            out[key] = None
+            continue
+        h, length = path
+        h = h[np.all(np.isfinite(h), axis=1)]
+        step = max(1, -(-h.shape[0] // max_points))
+        h = h[::step]
+        out[key] = {"arm_length_m": round(length, 3)} | {
+            axis: _rounded(h[:, k], 3) for k, axis in enumerate(("outward", "up", "forward"))
+        }
+    return out

@@ -1,0 +1,58 @@
+"""The replay recording of a session: read from the database, or built from the stored file and kept there.
+
+Workers and replicas share the database, so a recording built by one is served by all; two workers building
+the same recording at once both succeed and one row is kept (the unique session id decides).
+"""
+
+from __future__ import annotations
+
+from sqlalchemy import select
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from backend.exceptions import InvalidSessionFile, SessionNotFound
+from backend.exercises.models import Exercise
+from backend.replay import scene
+from backend.replay.models import SessionReplay
+from backend.sessions.models import ExerciseSession
+from kinect_agent.formats.session_file import SessionFileError, decode
+
+
+def replay_data(*, db_session: Session, session_id: int) -> bytes:
+    """Returns the `.viser` recording of a session, building and storing it when missing or of an older version."""
+    data = db_session.scalar(
+        select(SessionReplay.data).where(SessionReplay.session_id == session_id, SessionReplay.version == scene.VERSION)
+    )
+    return data if data is not None else _build_and_store(db_session=db_session, session_id=session_id)
+
+
+def _build_and_store(*, db_session: Session, session_id: int) -> bytes:
+    row = db_session.execute(
+        select(ExerciseSession.file_bytes, Exercise.plane)
+        .outerjoin(Exercise, Exercise.id == ExerciseSession.exercise_id)
+        .where(ExerciseSession.id == session_id)
+    ).first()
+    if row is None:
+        raise SessionNotFound(f"session {session_id} does not exist")
+    try:
+        replay = scene.build(decode(row.file_bytes), row.plane or "frontal")
+    except (SessionFileError, ValueError) as exc:
+        raise InvalidSessionFile(f"the stored file of session {session_id} cannot be replayed: {exc}") from None
+    _store(db_session=db_session, session_id=session_id, replay=replay)
+    return replay.data
+
+
+def _store(*, db_session: Session, session_id: int, replay: scene.Replay) -> None:
+    """Keeps the recording (replacing one of an older version); a concurrent insert of the same session wins."""
+    fields = {"version": scene.VERSION, "data": replay.data, "size": len(replay.data), "n_frames": replay.n_frames,
+              "duration_s": replay.duration_s, "view": replay.view}  # fmt: skip
+    try:
+        with db_session.begin_nested():
+            stored = db_session.scalar(select(SessionReplay).where(SessionReplay.session_id == session_id))
+            if stored is None:
+                db_session.add(SessionReplay(session_id=session_id, **fields))
+            else:
+                for name, value in fields.items():
+                    setattr(stored, name, value)
+    except IntegrityError:  # another worker stored it first: the same recording
+        pass

@@ -1,0 +1,224 @@
+"""The therapist's session page: a stored session's file decoded and measured again for the evidence behind its
+numbers (backend.analysis.session_detail, data_quality, camera_advice).
+
+The part computed from the file depends only on the file's bytes, the exercise and the repetitions, so it is
+kept in a small per-process LRU cache keyed by them (the outlier model takes seconds on a 10-minute session).
+Every worker fills its own cache; nothing in it is shared state or ever needs invalidating.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+from typing import Any
+
+import numpy as np
+from sqlalchemy.orm import Session
+
+from backend.analysis import data_quality
+from backend.analysis.camera_advice import camera_advice
+from backend.analysis.errors import AnalysisError
+from backend.analysis.session_detail import (
+    angle_curves,
+    angular_speeds,
+    hand_paths,
+    is_arm_exercise,
+    measured_angles,
+    peak_speeds,
+)
+from backend.exceptions import InvalidSessionFile
+from backend.exercises.library import EXERCISES, ExerciseSpec
+from backend.sessions import service
+from backend.sessions.metrics import json_ready
+from backend.sessions.models import ExerciseSession
+from kinect_agent.formats import session_file
+from kinect_agent.formats.session_file import SessionFileError, SessionPayload
+
+DETAIL_VERSION = 1  # part of the cache key: bump when the file-derived output changes
+CACHE_SIZE = 8
+UNCERTAINTY_NOTE = (
+    "The home agent's filter keeps its uncertainty only while it runs; the session file stores none, "
+    "so the curves and numbers are shown without a ± band."
+)
+
+
+class _Lru:
+    """A thread-safe least-recently-used map of at most `size` entries."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self._items: OrderedDict[Any, dict] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, key) -> dict | None:
+        with self._lock:
+            value = self._items.get(key)
+            if value is not None:
+                self._items.move_to_end(key)
+            return value
+
+    def put(self, key, value: dict) -> None:
+        with self._lock:
+            self._items[key] = value
+            self._items.move_to_end(key)
+            while len(self._items) > self.size:
+                self._items.popitem(last=False)
+
+
+_cache = _Lru(CACHE_SIZE)
+
+
+def decode_stored(data: bytes, *, session_id: int, max_frames: int, max_decoded_bytes: int) -> SessionPayload:
+    """Returns the payload of a stored .khs file; raises InvalidSessionFile when it cannot be shown."""
+    try:
+        payload = session_file.decode(data, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
+    except SessionFileError as exc:
+        raise InvalidSessionFile(
+            f"the stored file of session {session_id} cannot be read: {exc.code}: {exc.detail}"
+        ) from None
+    if payload.raw.n_frames < 2:
+        raise InvalidSessionFile(f"the stored file of session {session_id} has {payload.raw.n_frames} frame(s)")
+    if payload.filtered is not None and payload.filtered.n_frames != payload.raw.n_frames:
+        raise InvalidSessionFile(
+            f"the stored file of session {session_id}: the filtered recording has {payload.filtered.n_frames} frames, "
+            f"the raw one {payload.raw.n_frames}"
+        )
+    return payload
+
+
+def analysis_document(payload: SessionPayload, spec: ExerciseSpec | None, stored: dict | None) -> tuple[dict, str]:
+    """Returns (document, "stored" or "recomputed"): the stored one, else analyze_recording's ({} on failure)."""
+    from backend.analysis.report import analyze_recording
+
+    if isinstance(stored, dict) and isinstance(stored.get("repetition_list"), list):
+        return stored, "stored"
+    if spec is None:
+        return {}, "recomputed"
+    try:
+        return json_ready(analyze_recording(payload.raw, spec, filtered=payload.filtered)), "recomputed"
+    except (AnalysisError, ValueError):
+        return {}, "recomputed"
+
+
+def _repetitions(doc: dict) -> list[dict]:
+    """Returns the document's repetitions with the keys the table needs (malformed entries left out)."""
+    keys = ("index", "start_s", "end_s", "duration_s", "amplitude_deg", "peak_deg", "side")
+    reps = doc.get("repetition_list") or []
+    return [r for r in reps if isinstance(r, dict) and all(k in r for k in keys)]
+
+
+def file_evidence(payload: SessionPayload, names: tuple[str, ...], reps: list[dict]) -> dict:
+    """Returns the file-derived part of the detail: curves, repetition speeds, hand paths, quality and advice."""
+    raw, filtered = payload.raw, payload.filtered
+    measured = filtered.positions if filtered is not None else raw.positions
+    angles = measured_angles(raw.t, measured, names) if names else {}
+    kind = "filtered" if filtered is not None else "smoothed"
+    params = payload.params if isinstance(payload.params, dict) else {}
+    config = data_quality.pipeline_config(params.get("config"))
+    prob = data_quality.outlier_probabilities(raw, config)
+    quality = data_quality.assess(raw, prob, names, config.outlier_threshold)
+    strip = data_quality.outlier_strip(raw.t, prob) | {"threshold": config.outlier_threshold}
+    return {
+        "curves": angle_curves(raw.t, raw.positions, angles, names, kind) if names else [],
+        "peak_speeds": peak_speeds(raw.t, angular_speeds(raw.t, angles), reps),
+        "hand_paths": hand_paths(measured, raw.t) if is_arm_exercise(names) else None,
+        "quality": quality | {"outlier_strip": strip, "advice": camera_advice(raw)},
+    }
+
+
+def _cached_evidence(data: bytes, payload: SessionPayload, spec: ExerciseSpec | None, reps: list[dict]) -> dict:
+    names = tuple(spec.defining_angles) if spec is not None else ()
+    marks = tuple((r["start_s"], r["end_s"], r["side"]) for r in reps)
+    key = (session_file.content_hash(data), names, marks, DETAIL_VERSION)
+    evidence = _cache.get(key)
+    if evidence is None:
+        evidence = file_evidence(payload, names, reps)
+        _cache.put(key, evidence)
+    return evidence
+
+
+def _workspace(doc: dict, paths: dict | None) -> dict | None:
+    """Returns {"left", "right"}: each arm's stored workspace metrics with its hand path, or None."""
+    if paths is None:
+        return None
+    metrics = doc.get("reachable_range") if isinstance(doc.get("reachable_range"), dict) else {}
+    out = {}
+    for side in ("left", "right"):
+        path, m = paths.get(side), metrics.get(side) or {}
+        if path is None:
+            out[side] = None
+            continue
+        out[side] = path | {k: m.get(k) for k in ("area_ratio", "volume_ratio", "quadrants")}
+    return out
+
+
+def _rep_rows(reps: list[dict], speeds: list[float | None]) -> list[dict]:
+    keys = ("index", "start_s", "end_s", "duration_s", "peak_deg", "side")
+    return [
+        {k: r[k] for k in keys} | {"rom_deg": r["amplitude_deg"], "peak_speed_deg_s": s}
+        for r, s in zip(reps, speeds, strict=True)
+    ]
+
+
+def session_detail(*, db_session: Session, row: tuple, max_frames: int, max_decoded_bytes: int) -> dict:
+    """Returns the body of GET /sessions/{id}/detail for get_session_row's row (keys: SessionDetailOut).
+
+    Raises InvalidSessionFile when the stored file cannot be decoded or is too short to show.
+    """
+    session, slug, _, _, _, stored = row
+    data = service.session_file(db_session=db_session, session_id=session.id)
+    return detail_body(session, slug, stored, data, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
+
+
+def detail_body(
+    session: ExerciseSession,
+    slug: str | None,
+    stored: dict | None,
+    data: bytes,
+    *,
+    max_frames: int,
+    max_decoded_bytes: int,
+) -> dict:
+    """Returns the detail body of a session row, its exercise slug, stored metrics document and file bytes."""
+    payload = decode_stored(data, session_id=session.id, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
+    spec = EXERCISES.get(slug) if slug else None
+    doc, source = analysis_document(payload, spec, stored)
+    reps = _repetitions(doc)
+    evidence = _cached_evidence(data, payload, spec, reps)
+    quality = doc.get("quality") if isinstance(doc.get("quality"), dict) else {}
+    raw, filtered = payload.raw, payload.filtered
+    return {
+        "session_id": session.id,
+        "patient_id": session.patient_id,
+        "exercise_slug": slug,
+        "exercise_name": spec.name if spec is not None else None,
+        "started_at": session.started_at,
+        "status": session.status,
+        "error": session.error,
+        "duration_s": round(raw.duration, 3),
+        "n_frames": raw.n_frames,
+        "rate_hz": round(raw.rate_hz, 3) if np.isfinite(raw.rate_hz) else None,
+        "measured_on": doc.get("measured_on") or ("filtered" if filtered is not None else "raw"),
+        "repetition_count": len(reps),
+        "rom_deg": doc.get("rom_deg"),
+        "defining_angle": doc.get("defining_angle"),
+        "moving_time_s": doc.get("moving_time_s"),
+        "rest_time_s": doc.get("rest_time_s"),
+        "tempo_s_per_rep": doc.get("tempo_s_per_rep"),
+        "angles": list(spec.defining_angles) if spec is not None else [],
+        "curves": evidence["curves"],
+        "repetitions": _rep_rows(reps, evidence["peak_speeds"]),
+        "most_moving_joints": doc.get("most_moving_joints") or [],
+        "workspace": _workspace(doc, evidence["hand_paths"]),
+        "quality": evidence["quality"]
+        | {"analysis_ok": quality.get("ok"), "analysis_reasons": list(quality.get("reasons") or [])},
+        "processing": {
+            "version": session.processing_version or "",
+            "params": session.processing_params or {},
+            "file_params": payload.params if isinstance(payload.params, dict) else {},
+            "filter_history": list(filtered.meta.history) if filtered is not None else [],
+            "analysis": source,
+        },
+        "uncertainty": None,
+        "uncertainty_note": UNCERTAINTY_NOTE,
+    }

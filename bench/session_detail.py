@@ -1,0 +1,61 @@
+"""Cost of the therapist's session page data (GET /api/v1/sessions/{id}/detail) for a 10-minute session.
+
+The session file is bench/ingest.py's (simulated Kinect 2 squats, filtered by the agent's pipeline, cached in the
+temp folder). Times backend.sessions.detail.detail_body without the database (decode, analysis, outlier model,
+curves), first without and then with the per-process cache, and prints the JSON body's size, plain and gzipped.
+
+    python bench/session_detail.py [--minutes 10]
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import gzip
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from backend.sessions import detail
+from backend.sessions.metrics import json_ready
+from backend.sessions.models import ExerciseSession
+from backend.sessions.schemas import SessionDetailOut
+from bench.ingest import session_file
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Runs the benchmark and prints its numbers; returns 0."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--minutes", type=float, default=10.0, help="session length (default 10)")
+    args = parser.parse_args(argv)
+    data = session_file(args.minutes, Path(tempfile.gettempdir()))
+    session = ExerciseSession(id=1, patient_id=1, started_at=dt.datetime(2026, 11, 20, tzinfo=dt.UTC),
+                              status="processed", processing_version="bench", processing_params={})  # fmt: skip
+    limits = {"max_frames": 10**6, "max_decoded_bytes": 2**30}
+    payload = detail.decode_stored(data, session_id=1, **limits)
+    spec = detail.EXERCISES["squat"]
+    started = time.perf_counter()
+    stored, _ = detail.analysis_document(payload, spec, None)
+    analysis_s = time.perf_counter() - started
+    timings = []
+    for _ in range(2):
+        started = time.perf_counter()
+        body = detail.detail_body(session, "squat", stored, data, **limits)
+        timings.append(time.perf_counter() - started)
+    text = SessionDetailOut(**json_ready(body)).model_dump_json()
+    points = sum(len(c["t_s"]) for c in body["curves"])
+    print(f"session: {args.minutes:g} min, {payload.raw.n_frames} frames, file {len(data)} bytes")
+    print(f"analysis document (done once at upload): {analysis_s:.2f} s")
+    print(f"detail body, first request: {timings[0]:.2f} s; cached: {timings[1]:.2f} s")
+    print(f"JSON body: {len(text)} bytes, gzipped {len(gzip.compress(text.encode()))} bytes")
+    columns = len(body["quality"]["outlier_strip"]["t_s"])
+    print(f"curves: {len(body['curves'])} with {points} points; outlier strip: {columns} columns")
+    json.dump({"first_s": timings[0], "cached_s": timings[1], "json_bytes": len(text)}, sys.stdout)
+    print()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

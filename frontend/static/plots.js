@@ -1,0 +1,102 @@
+/* Plots: charts for every page, on plotly.js as shipped in the pinned `plotly` wheel (/static/vendor/plotly.min.js).
+
+   Load /static/vendor/plotly.min.js, /static/api.js, then this file. One call:
+
+     const fig = Plots.figure({
+       title: "Right knee flexion",          // caption above the chart (also the table's caption by default)
+       traces: [{x: [...], y: [...], name: "raw", type: "scatter", mode: "lines"}, ...],   // Plotly traces
+       layout: {xaxis: {title: {text: "time (s)"}}, shapes: [...], annotations: [...]},  // merged over the defaults
+       table: {caption: "...", columns: ["time (s)", "raw (°)"], rows: [[0, 12.5], ...]}, // the same data as a table
+       fontSize: 16,                         // axis, tick, legend and hover labels, px; at least 14 (therapist
+                                             // pages); the patient's page passes 20
+       height: 360,                          // px; the width follows the container (responsive)
+       config: {...},                        // extra Plotly config (merged; never turns the privacy defaults off)
+     });
+     container.append(fig);                  // a <figure>: caption, chart, "Show as table" toggle, hidden <table>
+
+   The chart is drawn when the figure is in the document (immediately if it already is, else on the next frame).
+   Zoom and hover are on; nothing leaves the origin: no Chart Studio link ("edit in chart studio" is off),
+   no Plotly logo, no MathJax or web fonts fetched. The toggle button carries aria-expanded and aria-controls;
+   the table is a real <table> with <caption>, <th scope="col"> and a row per data point, so screen readers read
+   the numbers. Plots.table(spec) builds the table alone. Plots.draw(figure) redraws (e.g. after a resize).
+   fig.plot is the Plotly graph div (its .data holds the traces, for tests). */
+"use strict";
+const Plots = (() => {
+  const MIN_FONT = 14;
+  let counter = 0;
+  const COLORS = ["#0b4f9c", "#c0392b", "#1b7f3b", "#8a4b00", "#6a3d9a", "#00798c", "#b8336a", "#3d3d3d"];
+  const CONFIG = {
+    responsive: true, displaylogo: false, showLink: false, showEditInChartStudio: false, showSendToCloud: false,
+    plotlyServerURL: "", linkText: "", typesetMath: false, scrollZoom: false,
+    modeBarButtonsToRemove: ["sendDataToCloud", "editInChartStudio", "lasso2d", "select2d"],
+  };
+
+  function merge(base, extra) {
+    const out = { ...base };
+    for (const [k, v] of Object.entries(extra || {})) {
+      out[k] = v && typeof v === "object" && !Array.isArray(v) && base[k] && typeof base[k] === "object" ? merge(base[k], v) : v;
+    }
+    return out;
+  }
+
+  function baseLayout(size) {
+    const font = { size, family: "system-ui, -apple-system, 'Segoe UI', Roboto, sans-serif", color: "#111" };
+    const axis = { tickfont: { size }, title: { font: { size } }, gridcolor: "#e2e2dc", zerolinecolor: "#9a9a94", automargin: true };
+    return {
+      font, autosize: true, colorway: COLORS, paper_bgcolor: "#fff", plot_bgcolor: "#fff",
+      margin: { l: 16, r: 16, t: 16, b: 16 }, hoverlabel: { font: { size } },
+      legend: { orientation: "h", x: 0, y: 1.02, yanchor: "bottom", font: { size } },
+      xaxis: { ...axis }, yaxis: { ...axis }, dragmode: "zoom",
+    };
+  }
+
+  /** Returns a <table> of spec {caption, columns: [names], rows: [[cells]]}; null cells read "—". */
+  function table(spec) {
+    const { el } = Coach;
+    const fmt = (v) => (v === null || v === undefined || (typeof v === "number" && !isFinite(v)) ? "—" : String(v));
+    return el("table", { class: "grid plot-table" },
+      spec.caption ? el("caption", {}, spec.caption) : null,
+      el("thead", {}, el("tr", {}, ...spec.columns.map((c) => el("th", { scope: "col" }, c)))),
+      el("tbody", {}, ...spec.rows.map((r) => el("tr", {}, ...r.map((v) => el("td", {}, fmt(v)))))));
+  }
+
+  /** Draws (or redraws) the chart of a figure made by Plots.figure. */
+  function draw(fig) {
+    const spec = fig._plotSpec;
+    return window.Plotly.react(fig.plot, spec.traces, spec.layout, spec.config);
+  }
+
+  /** Returns a <figure> with the chart, a "Show as table" toggle and the table (see the top of this file). */
+  function figure({ title, traces, layout, table: tableSpec, fontSize = 16, height = 360, config } = {}) {
+    const { el } = Coach;
+    const size = Math.max(MIN_FONT, fontSize);
+    const id = `plot-${++counter}`;
+    const plot = el("div", { class: "plot", id: `${id}-chart` });
+    const fig = el("figure", { class: "plot-figure", id }, title ? el("figcaption", { class: "plot-title" }, title) : null, plot);
+    fig.plot = plot;
+    fig._plotSpec = {
+      traces: traces || [],
+      layout: merge(merge(baseLayout(size), { height }), layout || {}),
+      config: { ...(config || {}), ...CONFIG },
+    };
+    if (tableSpec) {
+      const wrap = el("div", { class: "table-wrap plot-table-wrap", id: `${id}-table`, hidden: true, tabindex: 0,
+        role: "region", "aria-label": tableSpec.caption || title || "chart data" },  // scrollable: keyboard reachable
+        table({ caption: tableSpec.caption || title, columns: tableSpec.columns, rows: tableSpec.rows }));
+      const button = el("button", { type: "button", class: "btn btn-quiet plot-toggle", "aria-expanded": "false", "aria-controls": `${id}-table` }, "Show as table");
+      button.addEventListener("click", () => {
+        const open = wrap.hidden;
+        wrap.hidden = !open;
+        button.setAttribute("aria-expanded", String(open));
+        button.textContent = open ? "Hide table" : "Show as table";
+      });
+      fig.append(button, wrap);
+    }
+    const start = () => (fig.isConnected ? draw(fig) : requestAnimationFrame(start));
+    if (window.Plotly) requestAnimationFrame(start);
+    else plot.append(el("p", { class: "muted" }, "The chart could not be drawn; use “Show as table”."));
+    return fig;
+  }
+
+  return { figure, table, draw, COLORS, MIN_FONT };
+})();

@@ -1,0 +1,224 @@
+/* Therapist's view of one session: angle curves (raw and filtered) with the repetitions marked, the repetition
+   table, movement, reach of each arm, data quality with the tracking-error strip and camera advice, processing. */
+"use strict";
+(() => {
+  const { api, url, el, fmtDateTime, showError } = Coach;
+  const main = document.getElementById("main");
+  const sid = main.dataset.sessionId;
+  const RAW = "#c0392b", FILTERED = "#0b4f9c", LEFT = "#0b4f9c", RIGHT = "#b8336a";
+  const JOINT_WORDS = {
+    ROOT: "pelvis", SPINE: "spine", NECK: "neck", HEAD: "head", SHO: "shoulder", ELB: "elbow", WRI: "wrist",
+    HAN: "hand", HIP: "hip", KNE: "knee", ANK: "ankle", FOO: "foot",
+  };
+
+  function jointName(j, short) {
+    const [base, side] = j.split("_");
+    const word = JOINT_WORDS[base] || base.toLowerCase();
+    if (!side) return word;
+    return short ? `${side} ${word}` : `${side === "L" ? "left" : "right"} ${word}`;
+  }
+  const sideWord = (s) => ({ left: "left", right: "right", both: "both sides", center: "—" }[s] || s);
+  const secs = (x) => (x === null || x === undefined ? "—" : `${x.toFixed(1)} s`);
+  const deg = (x) => (x === null || x === undefined ? "—" : `${x.toFixed(1)}°`);
+  const angleSide = (name) => ({ _L: "left", _R: "right" }[name.slice(-2)] || "center");
+
+  function stat(label, value, note) {
+    return [el("div", { class: "stat" }, el("dt", {}, label), el("dd", {}, value, note ? el("span", { class: "reasons" }, note) : null))];
+  }
+
+  function keyNumbers(d) {
+    const total = (d.moving_time_s || 0) + (d.rest_time_s || 0);
+    const moving = d.moving_time_s === null ? "—" : `${Math.round(d.moving_time_s)} s`;
+    document.getElementById("numbers").replaceChildren(
+      ...stat("Repetitions", String(d.repetition_count)),
+      ...stat("Range of motion", deg(d.rom_deg), "median of the repetitions"),
+      ...stat("Duration", `${Math.round(d.duration_s)} s`, `${d.n_frames} frames`),
+      ...stat("Moving", moving, total ? `${Math.round(100 * d.moving_time_s / total)}% of the time` : null),
+      ...stat("Time per repetition", secs(d.tempo_s_per_rep)),
+      ...stat("Data quality", `${d.quality.score} / 100`, d.quality.low ? "low: read with care" : "good"));
+  }
+
+  /** Returns the repetitions an angle's chart marks: those of its side, and those of both sides. */
+  function repsOf(d, angle) {
+    const side = angleSide(angle);
+    return d.repetitions.filter((r) => r.side === side || r.side === "both" || r.side === "center" || side === "center");
+  }
+
+  function curveTable(raw, filt) {
+    const byT = new Map();
+    raw.t_s.forEach((t, i) => byT.set(t, [t, raw.deg[i], null]));
+    filt.t_s.forEach((t, i) => { const row = byT.get(t) || [t, null, null]; row[2] = filt.deg[i]; byT.set(t, row); });
+    return [...byT.values()].sort((a, b) => a[0] - b[0]);
+  }
+
+  function curveFigure(d, angle) {
+    const raw = d.curves.find((c) => c.angle === angle && c.kind === "raw");
+    const filt = d.curves.find((c) => c.angle === angle && c.kind !== "raw");
+    const reps = repsOf(d, angle);
+    const name = raw.label.replace(/, raw$/, "");
+    const shapes = reps.map((r) => ({ type: "rect", xref: "x", yref: "paper", x0: r.start_s, x1: r.end_s, y0: 0, y1: 1,
+      fillcolor: "rgba(11, 79, 156, 0.08)", line: { color: "rgba(11, 79, 156, 0.55)", width: 1, dash: "dot" }, layer: "below" }));
+    // labels on two staggered rows, so that neighbours do not overlap on a phone (zoom in to separate more)
+    const annotations = reps.map((r, i) => ({ x: (r.start_s + r.end_s) / 2, y: 1, xref: "x", yref: "paper", yanchor: "bottom",
+      yshift: i % 2 ? 18 : 0, text: `${Math.round(r.rom_deg)}°`, showarrow: false, font: { size: 14, color: "#0b3a72" } }));
+    return Plots.figure({
+      title: `${name[0].toUpperCase()}${name.slice(1)} (°)`,
+      traces: [
+        { x: raw.t_s, y: raw.deg, name: raw.label.replace(/^.*, /, ""), type: "scatter", mode: "lines", line: { color: RAW, width: 1.2 }, opacity: 0.8,
+          hovertemplate: "%{x:.1f} s: %{y:.1f}° (raw)<extra></extra>" },
+        { x: filt.t_s, y: filt.deg, name: filt.kind, type: "scatter", mode: "lines", line: { color: FILTERED, width: 2.5 },
+          hovertemplate: `%{x:.1f} s: %{y:.1f}° (${filt.kind})<extra></extra>` },
+      ],
+      layout: { shapes, annotations, margin: { t: 48 }, xaxis: { title: { text: "time (s)" } }, yaxis: { title: { text: "angle (°)" } },
+        legend: { y: -0.28, yanchor: "top" } },
+      table: { caption: `${name}: angle over time, raw and ${filt.kind}`, columns: ["time (s)", "raw (°)", `${filt.kind} (°)`], rows: curveTable(raw, filt) },
+    });
+  }
+
+  function curves(d) {
+    const box = document.getElementById("curves");
+    box.replaceChildren();
+    if (!d.curves.length) { box.append(el("p", { class: "muted" }, "This exercise has no angle to show.")); return; }
+    for (const angle of d.angles) box.append(curveFigure(d, angle));
+  }
+
+  function repTable(d) {
+    const body = document.querySelector("#reps tbody");
+    body.replaceChildren(...d.repetitions.map((r) => el("tr", {},
+      el("td", {}, String(r.index + 1)), el("td", {}, sideWord(r.side)), el("td", {}, secs(r.start_s)), el("td", {}, secs(r.end_s)),
+      el("td", {}, secs(r.duration_s)), el("td", {}, deg(r.rom_deg)), el("td", {}, deg(r.peak_deg)),
+      el("td", {}, r.peak_speed_deg_s === null ? "—" : `${Math.round(r.peak_speed_deg_s)}°/s`))));
+    if (!d.repetitions.length) body.append(el("tr", {}, el("td", { colspan: 8, class: "muted" }, "No repetition was found in this session.")));
+  }
+
+  function movement(d) {
+    const total = (d.moving_time_s || 0) + (d.rest_time_s || 0);
+    document.getElementById("moving-rest").textContent = d.moving_time_s === null ? "Moving time is not known for this session."
+      : `Moving ${Math.round(d.moving_time_s)} s (${Math.round(100 * d.moving_time_s / total)}%), resting ${Math.round(d.rest_time_s)} s.`;
+    const top = d.most_moving_joints.slice(0, 6);
+    const box = document.getElementById("most-moving");
+    if (!top.length) { box.replaceChildren(); return; }
+    box.replaceChildren(Plots.figure({
+      title: "Joints that moved most (distance travelled, m)",
+      traces: [{ type: "bar", orientation: "h", x: top.map((j) => j.path_m), y: top.map((j) => jointName(j.joint)),
+        marker: { color: FILTERED }, hovertemplate: "%{y}: %{x:.2f} m<extra></extra>" }],
+      layout: { yaxis: { autorange: "reversed" }, xaxis: { title: { text: "metres" } }, showlegend: false },
+      height: 300,
+      table: { columns: ["joint", "distance (m)"], rows: top.map((j) => [jointName(j.joint), j.path_m]) },
+    }));
+  }
+
+  function pct(x) { return x === null ? "—" : `${(100 * x).toFixed(x < 0.1 ? 1 : 0)}%`; }
+
+  function quality(d) {
+    const q = d.quality;
+    document.getElementById("quality-score").replaceChildren(el("strong", {}, `${q.score} / 100`), " — ",
+      q.low ? "low: the numbers of this session may be off." : "good enough to trust the numbers.");
+    document.getElementById("quality-parts").replaceChildren(...q.parts.map((p) => el("li", {},
+      el("span", { class: "score" }, el("span", { class: "bar", "aria-hidden": "true" }, el("i", { style: `width:${p.score || 0}%` })),
+        el("span", {}, `${p.label}: `, el("strong", {}, p.name === "segment_spread_mm" ? (p.value === null ? "—" : `${p.value.toFixed(1)} mm`) : pct(p.value)),
+          ` (${p.score === null ? "—" : p.score} / 100)`)))));
+    const box = document.getElementById("advice");
+    const items = q.advice.map((a) => el("li", { "data-code": a.code }, a.text));
+    const reasons = q.analysis_ok === false && q.analysis_reasons.length
+      ? el("p", { class: "small" }, "The analysis also noted: ", q.analysis_reasons.join("; "), ".") : null;
+    const extra = reasons ? [reasons] : [];
+    if (items.length) box.replaceChildren(el("h3", {}, "Camera advice"), el("ul", { class: "advice" }, ...items), ...extra);
+    else if (q.low) box.replaceChildren(el("p", {}, "The score is low, but the camera set-up itself looked fine: the patient was at a good distance and in view."), ...extra);
+    else box.replaceChildren(el("p", { class: "muted" }, "The camera set-up looked fine."), ...extra);
+  }
+
+  function stripFigure(d) {
+    const s = d.quality.outlier_strip;
+    const names = s.joints.map((j) => jointName(j, true));  // "L knee": short, so the strip keeps its width on a phone
+    const rows = s.joints.map((j, k) => {
+      const vals = s.prob[k].filter((v) => v !== null);
+      const flagged = s.prob[k].map((v, i) => (v !== null && v > s.threshold ? s.t_s[i] : null)).filter((t) => t !== null);
+      return [jointName(j), vals.length ? Math.max(...vals).toFixed(2) : "not seen", `${flagged.length} of ${s.t_s.length}`,
+        flagged.length ? flagged.slice(0, 8).map((t) => `${t.toFixed(1)} s`).join(", ") + (flagged.length > 8 ? ", …" : "") : "none"];
+    });
+    document.getElementById("strip").replaceChildren(Plots.figure({
+      title: "Chance that a joint's reading was a tracking error",
+      traces: [{ type: "heatmap", z: s.prob, x: s.t_s, y: names, zmin: 0, zmax: 1, hoverongaps: false,
+        colorscale: [[0, "#ffffff"], [0.5, "#f3d27a"], [0.9, "#d66e14"], [1, "#7a0d12"]],
+        colorbar: { orientation: "h", x: 0, xanchor: "left", y: 1.01, yanchor: "bottom", len: 1, thickness: 10,
+          tickvals: [0, 0.5, 1], ticktext: ["fine", "50%", "error"] },
+        hovertemplate: "%{y}, %{x:.1f} s: %{z:.0%}<extra></extra>" }],
+      layout: { yaxis: { autorange: "reversed" }, xaxis: { title: { text: "time (s)" } }, margin: { t: 70 } },
+      height: 24 * names.length + 160,
+      table: { caption: `Tracking errors per joint (a column is ${s.column_s.toFixed(2)} s; error when the chance is above ${Math.round(100 * s.threshold)}%)`,
+        columns: ["joint", "highest chance", "columns with an error", "when"], rows },
+    }));
+  }
+
+  function workspace(d) {
+    const card = document.getElementById("workspace-card");
+    if (!d.workspace) { card.hidden = true; return; }
+    card.hidden = false;
+    const arms = [["left", LEFT, 1], ["right", RIGHT, -1]].filter(([side]) => d.workspace[side]);
+    const circle = { type: "circle", xref: "x", yref: "y", x0: -1, x1: 1, y0: -1, y1: 1, line: { color: "#767676", dash: "dot" } };
+    const view = (title, xKey, xSign, xTitle) => Plots.figure({
+      title,
+      traces: arms.map(([side, color, mirror]) => ({
+        type: "scatter", mode: "markers", name: `${side} hand`, marker: { color, size: 5, opacity: 0.6 },
+        x: d.workspace[side][xKey].map((v) => (v === null ? null : v * (xSign ? mirror : 1))), y: d.workspace[side].up,
+        hovertemplate: `${side} hand: %{x:.2f}, %{y:.2f} arm lengths<extra></extra>` })),
+      layout: { shapes: [circle], xaxis: { title: { text: xTitle }, range: [-1.25, 1.25], zeroline: true, constrain: "domain" },
+        yaxis: { title: { text: "up (arm lengths)" }, range: [-1.25, 1.25], scaleanchor: "x" }, margin: { t: 40 } },
+      height: 420,
+      table: { columns: ["hand", xTitle.replace("<br>", " "), "up (arm lengths)"],
+        rows: arms.flatMap(([side, , mirror]) => d.workspace[side][xKey].map((v, i) => [side, v === null ? null : +(v * (xSign ? mirror : 1)).toFixed(2), d.workspace[side].up[i]])) },
+    });
+    const numbers = el("ul", { class: "small" }, ...arms.map(([side]) => {
+      const w = d.workspace[side];
+      return el("li", {}, `${side[0].toUpperCase()}${side.slice(1)} arm: reached ${pct(w.area_ratio)} of the area in front of the shoulder, `,
+        `${pct(w.volume_ratio)} of its volume (arm length ${w.arm_length_m.toFixed(2)} m).`);
+    }));
+    document.getElementById("workspace").replaceChildren(
+      view("Seen from the front", "outward", true, "sideways, arm lengths<br>(← patient's right · left →)"),
+      view("Seen from the side", "forward", false, "forward (arm lengths)"), numbers);
+  }
+
+  function processing(d) {
+    const p = d.processing;
+    const pre = (obj) => el("pre", { class: "params" }, JSON.stringify(obj, null, 2));
+    document.getElementById("processing-body").replaceChildren(
+      el("dl", { class: "kv" },
+        el("dt", {}, "Server version"), el("dd", {}, p.version || "—"),
+        el("dt", {}, "Numbers from"), el("dd", {}, p.analysis === "stored" ? "the analysis stored at upload" : "an analysis made now (none was stored)"),
+        el("dt", {}, "Measured on"), el("dd", {}, d.measured_on === "filtered" ? "the filtered recording" : "the raw recording"),
+        el("dt", {}, "Uncertainty"), el("dd", {}, d.uncertainty_note)),
+      el("h3", {}, "Filter steps"), el("ol", {}, ...(p.filter_history.length ? p.filter_history.map((h) => el("li", {}, h)) : [el("li", {}, "none recorded")])),
+      el("h3", {}, "Parameters stored with the session"), pre(p.params),
+      el("h3", {}, "Parameters in the session file"), pre(p.file_params));
+  }
+
+  async function load() {
+    try {
+      const d = await api(`/sessions/${sid}/detail`);
+      const name = d.exercise_name || (d.exercise_slug || "Exercise").replace(/_/g, " ");
+      document.getElementById("session-title").textContent = `${name} · ${fmtDateTime(d.started_at)}`;
+      document.title = `${name}, ${fmtDateTime(d.started_at)} · Kinect Home Coach`;
+      document.getElementById("session-sub").textContent = d.status === "processed" ? "" : `The analysis could not use this recording: ${d.error || "unknown reason"}.`;
+      keyNumbers(d);
+      curves(d);
+      repTable(d);
+      movement(d);
+      quality(d);
+      workspace(d);
+      stripFigure(d);
+      processing(d);
+      api(`/patients/${d.patient_id}`).then((patient) => {
+        const back = document.getElementById("back");
+        back.href = url(`/therapist/patients/${d.patient_id}`);
+        back.textContent = `← ${patient.full_name || patient.email}`;
+        document.getElementById("session-sub").textContent ||= `Session of ${patient.full_name || patient.email}`;
+      }).catch(() => {});
+    } catch (err) {
+      document.getElementById("session-sub").textContent = "This session cannot be shown.";
+      document.getElementById("curves").replaceChildren();
+      showError(err);
+    }
+  }
+  load();
+})();

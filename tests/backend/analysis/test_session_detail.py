@@ -1,0 +1,155 @@
+"""Session page evidence: min/max decimation, angle curves, repetition peak speeds, hand paths."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from backend.analysis.report import analyze_recording
+from backend.analysis.session_detail import (
+    MAX_CURVE_POINTS,
+    angle_curves,
+    angle_label,
+    angular_speeds,
+    curve,
+    hand_paths,
+    is_arm_exercise,
+    measured_angles,
+    minmax_indices,
+    peak_speeds,
+    unwrap_finite,
+    wrap_near,
+)
+from backend.exercises.library import EXERCISES
+from tests.backend.analysis._data import noisy, uiprmd
+
+SEEDS = (1, 2, 3)
+
+
+def test_minmax_keeps_every_sample_of_a_short_series() -> None:
+    np.testing.assert_array_equal(minmax_indices(np.arange(10.0), 20), np.arange(10))
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_minmax_keeps_the_extremes_and_at_most_max_points(seed: int) -> None:
+    y = np.random.default_rng(seed).normal(size=20_000).cumsum()
+    idx = minmax_indices(y, 1500)
+    assert idx.size <= 1500 and np.all(np.diff(idx) > 0)
+    assert y[idx].max() == y.max() and y[idx].min() == y.min(), f"seed {seed}"
+
+
+def test_minmax_keeps_a_gap_as_a_gap() -> None:
+    y = np.sin(np.linspace(0, 20, 9000))
+    y[3000:4500] = np.nan
+    idx = minmax_indices(y, 300)
+    assert np.isnan(y[idx]).any() and np.isfinite(y[idx]).sum() > 200
+
+
+def test_minmax_refuses_a_2d_series() -> None:
+    with pytest.raises(ValueError, match=r"shape \(T,\)"):
+        minmax_indices(np.zeros((3, 2)))
+
+
+def test_curve_rounds_and_sends_nan_as_none() -> None:
+    out = curve(np.array([0.0, 0.0333, 0.0667]), np.array([1.234, np.nan, 3.0]))
+    assert out == {"t_s": [0.0, 0.033, 0.067], "deg": [1.2, None, 3.0]}
+
+
+def test_unwrap_removes_turns_across_gaps_and_keeps_them() -> None:
+    x = np.array([170.0, 179.0, -178.0, np.nan, -170.0, 175.0])
+    np.testing.assert_allclose(unwrap_finite(x), [170.0, 179.0, 182.0, np.nan, 190.0, 175.0])
+
+
+def test_wrap_near_puts_a_noisy_raw_sample_next_to_the_smooth_curve() -> None:
+    reference = np.array([170.0, 185.0, 200.0, np.nan])
+    raw = np.array([-175.0, 170.0, -150.0, -150.0])  # -175 = 185, -150 = 210
+    np.testing.assert_allclose(wrap_near(raw, reference), [185.0, 170.0, 210.0, -150.0])
+
+
+def test_angle_label_is_in_words() -> None:
+    assert angle_label("knee_flexion_R") == "right knee flexion"
+    assert angle_label("trunk_flexion") == "trunk flexion"
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_filtered_curve_follows_the_truth_and_raw_one_is_noisier(seed: int) -> None:
+    measured, truth = noisy("squat", 3, seed)
+    names = EXERCISES["squat"].defining_angles
+    truth_deg = measured_angles(truth.t, truth.positions, names)
+    curves = angle_curves(measured.t, measured.positions, truth_deg, names)
+    raw, filtered = curves[0], curves[1]
+    assert (raw["kind"], filtered["kind"]) == ("raw", "filtered")
+    assert len(filtered["t_s"]) == measured.n_frames  # shorter than MAX_CURVE_POINTS: every frame
+    raw_deg = np.array(raw["deg"], dtype=float)
+    seen = np.isfinite(raw_deg)
+    corr = np.corrcoef(raw_deg[seen], truth_deg[names[0]][seen])[0, 1]
+    assert corr > 0.6, f"seed {seed}: the raw curve follows the movement (r = {corr:.2f})"
+    assert filtered["deg"] == curve(truth.t - truth.t[0], truth_deg[names[0]])["deg"]
+    assert np.nanstd(np.diff(np.array(raw["deg"], dtype=float))) > np.std(np.diff(filtered["deg"])), f"seed {seed}"
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_peak_speeds_are_those_of_a_known_sine(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    period, amplitude = rng.uniform(2.0, 4.0), rng.uniform(30.0, 80.0)
+    t = np.arange(0, 3 * period, 1 / 30)
+    angle = amplitude / 2 * (1 - np.cos(2 * np.pi * t / period))
+    reps = [{"start_s": k * period, "end_s": (k + 1) * period, "side": "left"} for k in range(3)]
+    speeds = peak_speeds(t, angular_speeds(t, {"knee_flexion_L": angle}), reps)
+    expected = np.pi * amplitude / period
+    np.testing.assert_allclose(speeds, expected, rtol=0.05, err_msg=f"seed {seed}")
+
+
+def test_peak_speed_of_a_side_reads_that_side_only() -> None:
+    t = np.arange(0, 4, 1 / 30)
+    still, moving = np.zeros_like(t), 40 * np.sin(np.pi * t / 4)
+    speeds = angular_speeds(t, {"knee_flexion_L": still, "knee_flexion_R": moving})
+    left, right, both = peak_speeds(
+        t, speeds, [{"start_s": 0, "end_s": 4, "side": s} for s in ("left", "right", "both")]
+    )
+    assert left == pytest.approx(0.0, abs=0.1) and right == both > 20
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_peak_speeds_of_simulated_repetitions_are_positive(seed: int) -> None:
+    measured, truth = noisy("squat", 3, seed)
+    spec = EXERCISES["squat"]
+    doc = analyze_recording(measured, spec, filtered=truth)
+    angles = measured_angles(truth.t, truth.positions, spec.defining_angles)
+    speeds = peak_speeds(truth.t, angular_speeds(truth.t, angles), doc["repetition_list"])
+    assert len(speeds) == 3 and all(20 < s < 400 for s in speeds), f"seed {seed}: {speeds}"
+
+
+def test_arm_exercises_are_the_shoulder_and_elbow_ones() -> None:
+    assert is_arm_exercise(EXERCISES["shoulder_abduction"].defining_angles)
+    assert is_arm_exercise(EXERCISES["elbow_flexion"].defining_angles)
+    assert not is_arm_exercise(EXERCISES["squat"].defining_angles)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_hand_path_of_abduction_rises_sideways_within_one_arm_length(seed: int) -> None:
+    _, truth = noisy("shoulder_abduction", 3, seed)
+    paths = hand_paths(truth.positions, truth.t)
+    for side in ("left", "right"):
+        out, up, fwd = (np.array(paths[side][k]) for k in ("outward", "up", "forward"))
+        assert len(out) <= 600
+        assert up.min() < -0.8 and up.max() > 0.5, f"seed {seed} {side}: the hand hangs, then rises"
+        assert np.all(np.sqrt(out**2 + up**2 + fwd**2) < 1.05), f"seed {seed} {side}"
+        assert np.median(out[up > 0.3]) > np.median(np.abs(fwd[up > 0.3])), f"seed {seed} {side}: sideways"
+
+
+@pytest.mark.shared_data
+def test_uiprmd_shoulder_abduction_curves_and_speeds(data_dir: Path) -> None:
+    rec = uiprmd(data_dir, "m07", "s02")
+    spec = EXERCISES["standing_shoulder_abduction"]
+    doc = analyze_recording(rec, spec)
+    angles = measured_angles(rec.t, rec.positions, spec.defining_angles)
+    curves = angle_curves(rec.t, rec.positions, angles, spec.defining_angles, "smoothed")
+    right = next(c for c in curves if c["angle"] == "shoulder_abduction_R" and c["kind"] == "smoothed")
+    assert len(right["t_s"]) <= MAX_CURVE_POINTS and max(right["deg"]) > 60, "the right arm is raised sideways"
+    speeds = peak_speeds(rec.t, angular_speeds(rec.t, angles), doc["repetition_list"])
+    assert len(speeds) == 10 and all(30 < s < 600 for s in speeds), speeds
+    paths = hand_paths(rec.positions, rec.t)
+    assert max(paths["right"]["up"]) > max(paths["left"]["up"]) + 0.3, "only the right hand rises"

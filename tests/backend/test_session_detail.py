@@ -1,0 +1,189 @@
+"""GET /api/v1/sessions/{id}/detail: the evidence behind a session's numbers, its access rules and its errors."""
+
+from __future__ import annotations
+
+import datetime as dt
+import uuid
+
+import numpy as np
+import pytest
+from sqlalchemy import select
+
+from backend.audit.models import AuditEvent
+from backend.exercises.models import Exercise
+from backend.sessions.models import ExerciseSession
+from kinect_agent.formats import session_file as sf
+from kinect_agent.skeleton import INDEX, JOINTS
+from kinect_agent.sources.simulator import simulate
+from tests.backend.khs_files import make_khs
+
+OCTET = {"Content-Type": "application/octet-stream"}
+T0 = dt.datetime(2026, 11, 2, 9, 0, tzinfo=dt.UTC)
+
+
+@pytest.fixture
+def upload(client, make_patient_with_therapist, auth_headers):
+    """Factory: upload(data, exercise) -> (session id, patient, therapist) after a real upload by the patient."""
+
+    def send(data: bytes, exercise: str):
+        patient, therapist = make_patient_with_therapist()
+        response = client.post(
+            "/api/v1/sessions", content=data, headers={**OCTET, **auth_headers(patient)}, params={"exercise": exercise}
+        )
+        assert response.status_code == 201, response.text
+        return response.json()["id"], patient, therapist
+
+    return send
+
+
+def _detail(client, session_id: int, headers: dict):
+    return client.get(f"/api/v1/sessions/{session_id}/detail", headers=headers)
+
+
+def _khs_with_bad_wrist(exercise: str, reps: int, seed: int) -> bytes:
+    """A session of the simulator's truth plus 1 cm sensor noise whose raw right wrist jumps 0.6 m sideways for
+    0.5 s in the middle (a tracking error); the filtered recording is the truth."""
+    _, truth, _ = simulate(exercise, reps, seed=seed)
+    rng = np.random.default_rng(seed)
+    positions = truth.positions + rng.normal(0.0, 0.01, truth.positions.shape)
+    mid = truth.n_frames // 2
+    positions[mid : mid + 15, INDEX["WRI_R"], 0] += 0.6
+    raw = truth.replace(step="test: noise, wrist corrupted", positions=positions, state=truth.state)
+    payload = sf.SessionPayload(
+        session_id=str(uuid.uuid4()), raw=raw, filtered=truth, created_at="2026-11-20T10:00:00Z"
+    )
+    return sf.encode(payload)
+
+
+def test_detail_has_raw_and_filtered_curves_of_each_defining_angle(client, upload, auth_headers):
+    session_id, _, therapist = upload(make_khs("squat", 3, seed=1), "squat")
+    response = _detail(client, session_id, auth_headers(therapist))
+    assert response.status_code == 200, response.text
+    body = response.json()
+    assert body["angles"] == ["knee_flexion_L", "knee_flexion_R"]
+    kinds = [(c["angle"], c["kind"]) for c in body["curves"]]
+    assert kinds == [(a, k) for a in body["angles"] for k in ("raw", "filtered")]
+    for c in body["curves"]:
+        assert len(c["t_s"]) == len(c["deg"]) > 100, c["label"]
+        assert c["t_s"] == sorted(c["t_s"]) and c["t_s"][0] == 0.0
+        assert c["t_s"][-1] == pytest.approx(body["duration_s"], abs=0.05)
+    filtered = np.array(body["curves"][1]["deg"], dtype=float)
+    assert 30 < np.nanmax(filtered) - np.nanmin(filtered) < 140, "a squat bends the knee"
+
+
+def test_repetition_marks_match_the_stored_metrics_document(client, upload, auth_headers):
+    session_id, patient, _ = upload(make_khs("squat", 4, seed=2), "squat")
+    headers = auth_headers(patient)
+    stored = client.get(f"/api/v1/sessions/{session_id}", headers=headers).json()["metrics"]["repetition_list"]
+    body = _detail(client, session_id, headers).json()
+    assert body["repetition_count"] == len(stored) == 4
+    for row, rep in zip(body["repetitions"], stored, strict=True):
+        assert (row["start_s"], row["end_s"], row["rom_deg"], row["side"]) == (
+            rep["start_s"],
+            rep["end_s"],
+            rep["amplitude_deg"],
+            rep["side"],
+        )
+        assert 10 < row["peak_speed_deg_s"] < 500, row
+    assert body["processing"]["analysis"] == "stored"
+
+
+def test_quality_score_is_within_0_and_100_with_its_three_parts(client, upload, auth_headers):
+    session_id, patient, _ = upload(make_khs("seated_knee_extension", 3, seed=3), "seated_knee_extension")
+    quality = _detail(client, session_id, auth_headers(patient)).json()["quality"]
+    assert 0 <= quality["score"] <= 100
+    assert [p["name"] for p in quality["parts"]] == ["tracked_fraction", "outlier_fraction", "segment_spread_mm"]
+    assert all(0 <= p["score"] <= 100 for p in quality["parts"])
+    strip = quality["outlier_strip"]
+    assert strip["joints"] == list(JOINTS) and len(strip["prob"]) == len(JOINTS)
+    assert all(len(row) == len(strip["t_s"]) <= 400 for row in strip["prob"])
+
+
+def test_outlier_strip_flags_the_joint_corrupted_on_purpose(client, upload, auth_headers):
+    session_id, patient, _ = upload(_khs_with_bad_wrist("elbow_flexion", 4, seed=4), "elbow_flexion")
+    strip = _detail(client, session_id, auth_headers(patient)).json()["quality"]["outlier_strip"]
+    prob = np.array(strip["prob"], dtype=float)
+    t = np.array(strip["t_s"])
+    flagged = prob[INDEX["WRI_R"]] > strip["threshold"]
+    assert flagged.any() and np.all(np.abs(t[flagged] - t[-1] / 2) < 1.0), t[flagged]
+    others = np.delete(prob, INDEX["WRI_R"], axis=0)
+    assert np.nanmax(others) < strip["threshold"], [JOINTS[j] for j in np.flatnonzero(np.nanmax(prob, axis=1) > 0.5)]
+
+
+def test_arm_exercise_has_a_workspace_with_hand_paths(client, upload, auth_headers):
+    session_id, patient, _ = upload(make_khs("shoulder_abduction", 3, seed=5), "shoulder_abduction")
+    workspace = _detail(client, session_id, auth_headers(patient)).json()["workspace"]
+    for side in ("left", "right"):
+        arm = workspace[side]
+        assert len(arm["outward"]) == len(arm["up"]) == len(arm["forward"]) > 50
+        assert max(arm["up"]) > 0.5, "raised sideways, the hand rises above the shoulder"
+        assert 0 < arm["area_ratio"] < 1
+
+
+def test_leg_exercise_has_no_workspace(client, upload, auth_headers):
+    session_id, patient, _ = upload(make_khs("squat", 2, seed=6), "squat")
+    assert _detail(client, session_id, auth_headers(patient)).json()["workspace"] is None
+
+
+def test_reading_the_detail_is_audited(client, db_session, upload, auth_headers):
+    session_id, _, therapist = upload(make_khs("squat", 2, seed=7), "squat")
+    assert _detail(client, session_id, auth_headers(therapist)).status_code == 200
+    actions = db_session.scalars(select(AuditEvent.action).where(AuditEvent.object_id == str(session_id))).all()
+    assert "session.detail.read" in actions
+
+
+def test_another_patient_gets_403(client, upload, make_user, auth_headers):
+    session_id, _, _ = upload(make_khs("squat", 2, seed=8), "squat")
+    response = _detail(client, session_id, auth_headers(make_user("patient")))
+    assert response.status_code == 403, response.text
+    assert response.json()["error"] == "Forbidden"
+
+
+def test_unassigned_therapist_gets_403(client, upload, make_user, auth_headers):
+    session_id, _, _ = upload(make_khs("squat", 2, seed=8), "squat")
+    assert _detail(client, session_id, auth_headers(make_user("therapist"))).status_code == 403
+
+
+def test_unknown_session_is_404(client, make_user, auth_headers):
+    response = _detail(client, 10**9, auth_headers(make_user("admin")))
+    assert response.status_code == 404
+    assert response.json() == {"error": "SessionNotFound", "detail": f"session {10**9} does not exist"}
+
+
+def test_anonymous_gets_401(client, upload):
+    session_id, _, _ = upload(make_khs("squat", 2, seed=9), "squat")
+    assert _detail(client, session_id, {}).status_code == 401
+
+
+def test_corrupt_stored_file_is_a_typed_400(client, db_session, make_patient_with_therapist, auth_headers, exercise):
+    patient, therapist = make_patient_with_therapist()
+    data = bytearray(make_khs("squat", 2, seed=10))
+    data[100] ^= 0xFF  # the SHA-256 trailer no longer matches
+    row = ExerciseSession(
+        client_session_id=uuid.uuid4(),
+        patient_id=patient.id,
+        exercise_id=exercise.id,
+        started_at=T0,
+        duration_s=1.0,
+        n_frames=30,
+        file_bytes=bytes(data),
+        file_size=len(data),
+        content_hash="0" * 64,
+    )
+    db_session.add(row)
+    db_session.flush()
+    response = _detail(client, row.id, auth_headers(therapist))
+    assert response.status_code == 400, response.text
+    assert response.json()["error"] == "InvalidSessionFile"
+    assert "checksum_mismatch" in response.json()["detail"]
+
+
+def test_session_without_metrics_is_analysed_from_its_file(
+    client, db_session, store, make_patient_with_therapist, auth_headers
+):
+    patient, therapist = make_patient_with_therapist()
+    squat = db_session.scalar(select(Exercise).where(Exercise.slug == "squat"))
+    row = store(patient, squat, T0, data=make_khs("squat", 3, seed=11), metrics=False)
+    body = _detail(client, row.id, auth_headers(therapist)).json()
+    assert body["processing"]["analysis"] == "recomputed"
+    assert body["repetition_count"] == 3

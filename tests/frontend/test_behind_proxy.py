@@ -1,0 +1,66 @@
+"""The app behind a clinic's reverse proxy: HTTPS, a path prefix (/clinic), a second origin for the browser.
+
+The proxy rewrites nothing, so every URL the pages build must come from COACH_PUBLIC_URL or be relative; the
+login, the pages, the session page and the 3D replay all work through it, and no request leaves its origin.
+"""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+from playwright.sync_api import expect
+
+from backend.demo import DEMO_PASSWORD
+from tests.frontend.conftest import THERAPIST, _free_port, run_server, shot
+from tests.frontend.proxy import ProxyServer, self_signed_certificate
+
+pytestmark = pytest.mark.browser
+PREFIX = "/clinic"
+
+
+@pytest.fixture(scope="module")
+def public_url(live_server, tmp_path_factory):
+    """The app (same database as live_server) behind an HTTPS proxy at https://127.0.0.1:PORT/clinic."""
+    folder = tmp_path_factory.mktemp("proxy")
+    port = _free_port()
+    public = f"https://127.0.0.1:{port}{PREFIX}"
+    with run_server(live_server.database_url, folder, COACH_PUBLIC_URL=public, COACH_COOKIE_SECURE="true") as app:
+        cert, key = self_signed_certificate(folder)
+        with ProxyServer(app, PREFIX, port, cert, key):
+            yield public
+
+
+def test_therapist_works_through_the_proxy_and_the_replay_plays(browser, public_url, live_server):
+    context = browser.new_context(ignore_https_errors=True, viewport={"width": 1280, "height": 900})
+    context.set_default_timeout(20_000)
+    page = context.new_page()
+    requests: list[str] = []
+    page.on("request", lambda r: requests.append(r.url))
+    page.on("websocket", lambda ws: requests.append(ws.url))
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    try:
+        page.goto(f"{public_url}/therapist")  # not signed in: to the login page, with the way back
+        page.wait_for_url(re.compile(re.escape(public_url) + r"/\?next="))
+        page.fill("#email", THERAPIST)
+        page.fill("#password", DEMO_PASSWORD)
+        page.click("#login-submit")
+        page.wait_for_url(f"{public_url}/therapist")
+        page.goto(f"{public_url}/therapist/patients/{live_server.patient_id}")
+        page.locator("#sessions tbody a", has_text="3D replay").first.click()
+        page.wait_for_url(re.compile(re.escape(public_url) + r"/therapist/sessions/\d+/replay$"))
+        page.frame_locator("#viewer").locator("canvas").first.wait_for(state="visible", timeout=30_000)
+        page.wait_for_function(
+            "() => [...document.querySelector('#viewer').contentDocument.querySelectorAll('input')]"
+            ".some(i => /\\d/.test(i.value))", timeout=30_000)  # fmt: skip
+        shot(page, "proxy-replay")
+        page.get_by_role("link", name="Back to the session").click()
+        page.wait_for_url(re.compile(re.escape(public_url) + r"/therapist/sessions/\d+$"))
+        expect(page.locator(".js-plotly-plot").first).to_be_visible()
+        shot(page, "proxy-session")
+    finally:
+        context.close()
+    foreign = [u for u in requests if not (u.startswith(public_url + "/") or u.startswith(("data:", "blob:")))]
+    assert not foreign, f"requests that left {public_url}: {foreign}"
+    assert not errors, errors

@@ -1,0 +1,154 @@
+"""The therapist's session page end to end: curves raw and filtered with the repetitions marked, the table toggle,
+the reach picture of an arm exercise, the widths, and who may open it."""
+
+from __future__ import annotations
+
+import re
+
+import httpx
+import pytest
+from playwright.sync_api import expect
+
+from backend.demo import DEMO_PASSWORD
+from tests.backend.khs_files import make_khs
+from tests.frontend.conftest import PATIENT, THERAPIST, login, shot
+
+pytestmark = pytest.mark.browser
+
+GEORGE = "george@demo.clinic"  # plan: shoulder_abduction, elbow_flexion; therapist Paul
+PAUL = "physio@demo.clinic"
+WIDTHS = (1366, 768, 390)
+
+
+@pytest.fixture(scope="module")
+def arm_session(live_server) -> int:
+    """Uploads one shoulder-abduction session as George (not one of Tara's patients); returns its id."""
+    with httpx.Client(base_url=live_server.url, timeout=60) as client:
+        r = client.post("/api/v1/auth/login", json={"email": GEORGE, "password": DEMO_PASSWORD})
+        r.raise_for_status()
+        headers = {"X-CSRF-Token": r.json()["csrf_token"], "Content-Type": "application/octet-stream"}
+        data = make_khs("shoulder_abduction", 4, seed=21, created_at="2026-11-19T09:30:00Z")
+        r = client.post("/api/v1/sessions?exercise=shoulder_abduction", content=data, headers=headers)
+        assert r.status_code == 201, r.text
+        return r.json()["id"]
+
+
+def _plots(page, selector: str) -> list[dict]:
+    """Returns [{names, shapes, annotations}] of the Plotly graph divs under selector."""
+    return page.eval_on_selector_all(
+        f"{selector} .js-plotly-plot",
+        """divs => divs.map(d => ({names: d.data.map(t => t.name), types: d.data.map(t => t.type),
+              shapes: (d.layout.shapes || []).length, annotations: (d.layout.annotations || []).map(a => a.text)}))""",
+    )
+
+
+def _no_horizontal_scroll(page) -> bool:
+    return page.evaluate("document.documentElement.scrollWidth <= document.documentElement.clientWidth + 1")
+
+
+_LABELS = ", ".join(
+    f".js-plotly-plot {part}"
+    for part in (".xtick text", ".ytick text", ".g-xtitle text", ".g-ytitle text", ".legendtext")
+)
+
+
+def _smallest_chart_font(page) -> float:
+    return page.eval_on_selector_all(
+        _LABELS, "ts => Math.min(...ts.map(t => parseFloat(getComputedStyle(t).fontSize)))"
+    )
+
+
+def _open_from_patient_page(page, live_server) -> None:
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    page.click("text=Rose Miller")
+    page.wait_for_url(re.compile(rf"/therapist/patients/{live_server.patient_id}$"))
+    link = page.locator("#sessions tbody tr[data-session-id] a.session-link").first
+    link.wait_for()
+    link.click()
+    page.wait_for_url(re.compile(r"/therapist/sessions/\d+$"))
+    page.locator("#curves .js-plotly-plot").first.wait_for()
+
+
+def test_therapist_opens_a_session_and_sees_both_curves_and_the_repetitions(page, live_server):
+    _open_from_patient_page(page, live_server)
+    reps = page.locator("#reps tbody tr")
+    expect(reps.first).not_to_contain_text("No repetition")
+    n_reps = reps.count()
+    plots = _plots(page, "#curves")
+    assert len(plots) == 2, plots  # seated knee extension: left and right knee
+    for plot in plots:
+        assert plot["names"] == ["raw", "filtered"], plot
+    assert max(p["shapes"] for p in plots) == n_reps, (plots, n_reps)  # one band per repetition of that side
+    assert all(re.fullmatch(r"\d+°", a) for p in plots for a in p["annotations"]), plots
+    expect(page.locator("#session-title")).to_contain_text("Seated knee extension")
+    expect(page.locator("#replay-link")).to_have_attribute("href", re.compile(r"/therapist/sessions/\d+/replay$"))
+    expect(page.locator("#quality-score")).to_contain_text("/ 100")
+    assert page.locator("#strip .js-plotly-plot").count() == 1
+    assert _plots(page, "#strip")[0]["types"] == ["heatmap"]
+    assert page.locator("#workspace-card").is_hidden(), "a leg exercise has no reach picture"
+    for width in WIDTHS:
+        page.set_viewport_size({"width": width, "height": 900})
+        page.wait_for_timeout(400)  # Plotly's responsive relayout
+        assert _no_horizontal_scroll(page), f"horizontal scrolling at {width} px"
+        assert _smallest_chart_font(page) >= 14, f"chart labels below 14 px at {width} px"
+        shot(page, f"session_{width}")
+    assert not page.js_errors
+
+
+def test_show_as_table_reveals_the_curve_as_a_table(page, live_server):
+    _open_from_patient_page(page, live_server)
+    figure = page.locator("#curves figure").first
+    button = figure.get_by_role("button", name="Show as table")
+    expect(button).to_have_attribute("aria-expanded", "false")
+    table_id = button.get_attribute("aria-controls")
+    expect(page.locator(f"#{table_id}")).to_be_hidden()
+    button.click()
+    expect(figure.get_by_role("button", name="Hide table")).to_have_attribute("aria-expanded", "true")
+    table = page.locator(f"#{table_id} table")
+    expect(table).to_be_visible()
+    expect(table.locator("thead th")).to_have_text(["time (s)", "raw (°)", "filtered (°)"])
+    assert table.locator("tbody tr").count() > 100
+    assert not page.js_errors
+
+
+def test_dashboard_links_the_last_session(page, live_server):
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    link = page.locator('#patients tr:has-text("Rose Miller") a.session-link')
+    link.click()
+    page.wait_for_url(re.compile(r"/therapist/sessions/\d+$"))
+    page.locator("#curves .js-plotly-plot").first.wait_for()
+    assert not page.js_errors
+
+
+def test_arm_exercise_shows_the_reach_of_each_arm(page, live_server, arm_session):
+    login(page, PAUL)
+    page.wait_for_url("**/therapist")
+    page.goto(f"/therapist/sessions/{arm_session}")
+    page.locator("#workspace .js-plotly-plot").first.wait_for()
+    plots = _plots(page, "#workspace")
+    assert [p["names"] for p in plots] == [["left hand", "right hand"]] * 2
+    assert all(p["shapes"] == 1 for p in plots), "the circle of one arm length"
+    expect(page.locator("#workspace li").first).to_contain_text("Left arm: reached")
+    for width in WIDTHS:
+        page.set_viewport_size({"width": width, "height": 900})
+        page.wait_for_timeout(400)
+        assert _no_horizontal_scroll(page), f"horizontal scrolling at {width} px"
+        shot(page, f"session_arm_{width}")
+    assert not page.js_errors
+
+
+def test_patient_gets_403_on_the_session_page(page, live_server):
+    login(page, PATIENT)
+    page.wait_for_url("**/patient")
+    response = page.goto("/therapist/sessions/1")
+    assert response.status == 403
+
+
+def test_other_therapist_sees_no_data_of_a_session_not_theirs(page, live_server, arm_session):
+    login(page, THERAPIST)  # Tara is not George's therapist
+    page.wait_for_url("**/therapist")
+    page.goto(f"/therapist/sessions/{arm_session}")
+    expect(page.locator("#error")).to_contain_text("may not see")
+    assert page.locator(".js-plotly-plot").count() == 0
