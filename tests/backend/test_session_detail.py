@@ -11,7 +11,6 @@ from sqlalchemy import select
 
 from backend.audit.models import AuditEvent
 from backend.exercises.models import Exercise
-from backend.sessions.models import ExerciseSession
 from kinect_agent.formats import session_file as sf
 from kinect_agent.skeleton import INDEX, JOINTS
 from kinect_agent.sources.simulator import simulate
@@ -155,23 +154,11 @@ def test_anonymous_gets_401(client, upload):
     assert _detail(client, session_id, {}).status_code == 401
 
 
-def test_corrupt_stored_file_is_a_typed_400(client, db_session, make_patient_with_therapist, auth_headers, exercise):
+def test_corrupt_stored_file_is_a_typed_400(client, make_patient_with_therapist, auth_headers, exercise, store):
     patient, therapist = make_patient_with_therapist()
     data = bytearray(make_khs("squat", 2, seed=10))
     data[100] ^= 0xFF  # the SHA-256 trailer no longer matches
-    row = ExerciseSession(
-        client_session_id=uuid.uuid4(),
-        patient_id=patient.id,
-        exercise_id=exercise.id,
-        started_at=T0,
-        duration_s=1.0,
-        n_frames=30,
-        file_bytes=bytes(data),
-        file_size=len(data),
-        content_hash="0" * 64,
-    )
-    db_session.add(row)
-    db_session.flush()
+    row = store(patient, exercise, T0, data=bytes(data), metrics=False)
     response = _detail(client, row.id, auth_headers(therapist))
     assert response.status_code == 400, response.text
     assert response.json()["error"] == "InvalidSessionFile"

@@ -152,3 +152,23 @@ def test_other_therapist_sees_no_data_of_a_session_not_theirs(page, live_server,
     page.goto(f"/therapist/sessions/{arm_session}")
     expect(page.locator("#error")).to_contain_text("may not see")
     assert page.locator(".js-plotly-plot").count() == 0
+
+
+def test_session_page_stays_on_the_origin_and_its_data_needs_a_login(page, browser, live_server):
+    requests: list[str] = []
+    reads: list[str] = []
+    page.on("request", lambda r: (requests.append(r.url), r.method == "GET" and reads.append(r.url)))
+    page.on("websocket", lambda ws: requests.append(ws.url))
+    _open_from_patient_page(page, live_server)
+    page.wait_for_load_state("networkidle")
+    origin = live_server.url
+    foreign = [u for u in requests if not u.startswith((origin + "/", "data:", "blob:"))]
+    assert not foreign, f"requests off the app's origin: {foreign}"
+    data = sorted({u for u in reads if u.startswith(origin + "/api/")})
+    assert any(re.search(r"/api/v1/sessions/\d+/detail$", u) for u in data), data
+    anonymous = browser.new_context()
+    try:
+        for url in data:
+            assert anonymous.request.get(url).status == 401, f"{url} answered without a login"
+    finally:
+        anonymous.close()
