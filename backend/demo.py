@@ -49,7 +49,7 @@ def seed_demo(db_session: Session) -> str:
         patient = create_user(
             db_session=db_session, email=email, password=DEMO_PASSWORD, role="patient", full_name=name
         )
-        therapist = therapists[i % len(therapists)]
+        therapist = therapists[i % len(therapists)]  # as therapist_patients() says
         assign(db_session=db_session, patient=patient, therapist=therapist)
         items = [PlanItemIn(exercise_slug=s, sets=2, repetitions=10, frequency_per_week=3) for s in exercises]
         body = PlanIn(title="Home programme", start_date=today - dt.timedelta(days=28),
@@ -63,19 +63,29 @@ def seed_demo(db_session: Session) -> str:
 
 def logins() -> str:
     """Returns the demo logins as printable lines."""
-    lines = [f"  password for every demo user: {DEMO_PASSWORD}", f"  admin:      {ADMIN[0]}"]
-    lines += [f"  therapist:  {e}" for e, _ in THERAPISTS]
-    lines += [f"  patient:    {e}" for e, _, _ in PATIENTS]
+    lines = [f"  password for every demo user: {DEMO_PASSWORD}", f"  admin:      {ADMIN[0]} (sees every patient)"]
+    for i, (email, name) in enumerate(THERAPISTS):
+        theirs = ", ".join(n for n, _ in therapist_patients(i))
+        lines.append(f"  therapist:  {email} ({name}; patients: {theirs})")
+    lines += [f"  patient:    {e} ({n}; therapist: {THERAPISTS[i % len(THERAPISTS)][1]})"
+              for i, (e, n, _) in enumerate(PATIENTS)]  # fmt: skip
     return "\n".join(lines)
 
 
+def therapist_patients(index: int) -> list[tuple[str, str]]:
+    """Returns (name, email) of the demo patients assigned to THERAPISTS[index] (patients go round the therapists)."""
+    return [(n, e) for i, (e, n, _) in enumerate(PATIENTS) if i % len(THERAPISTS) == index]
+
+
 def main(argv: list[str] | None = None) -> int:
-    """`coach-server demo`: a fresh SQLite demo database, migrated and seeded, then the server."""
+    """`coach-server demo`: the SQLite demo database (kept between runs; --fresh starts over), migrated and
+    seeded, then the server and the simulated home agents."""
     parser = argparse.ArgumentParser(prog="coach-server demo", description=__doc__)
     parser.add_argument("--host", default="127.0.0.1")
     parser.add_argument("--port", type=int, default=8000)
     parser.add_argument("--db", type=Path, default=Path("var/demo.db"), help="SQLite file (default var/demo.db)")
-    parser.add_argument("--keep", action="store_true", help="keep an existing demo database instead of a fresh one")
+    parser.add_argument("--fresh", action="store_true",
+                        help="start over: delete the demo database and the agents' queues (kept by default)")
     parser.add_argument("--no-agents", action="store_true", help="do not start the simulated home agents")
     parser.add_argument("--history-weeks", type=int, default=3, help="weeks of backdated sessions (default 3)")
     parser.add_argument("--agent-interval", type=float, nargs=2, default=(30.0, 60.0), metavar=("MIN", "MAX"),
@@ -84,7 +94,8 @@ def main(argv: list[str] | None = None) -> int:
 
     args.db.parent.mkdir(parents=True, exist_ok=True)
     agents_home = args.db.parent / f"{args.db.stem}-agents"
-    if not args.keep:
+    kept = args.db.exists() and not args.fresh
+    if args.fresh:
         args.db.unlink(missing_ok=True)
         shutil.rmtree(agents_home, ignore_errors=True)  # their device tokens belong to the old database
     os.environ["COACH_DATABASE_URL"] = f"sqlite:///{args.db.resolve()}"
@@ -103,7 +114,8 @@ def main(argv: list[str] | None = None) -> int:
           f"  therapist dashboard:         {base}/therapist\n"
           f"  API documentation (OpenAPI): {base}/docs\n"
           f"  health check:                {base}/healthz\n"
-          f"  demo database:               {args.db.resolve()}\n"
+          f"  demo database:               {args.db.resolve()} "
+          f"({'kept from the last run; --fresh starts over' if kept else 'new'})\n"
           f"{_agents_line(args, agents_home)}"
           "Press Ctrl-C to stop.\n", flush=True)  # fmt: skip
     agents = None if args.no_agents else start_agents(base, agents_home, args)

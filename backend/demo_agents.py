@@ -114,9 +114,19 @@ def connect(agent: Agent, server: str) -> None:
 
 
 def record_one(
-    agent: Agent, exercise: str, *, when: dt.datetime, seed: int, reps: int, session_id: str | None = None
+    agent: Agent,
+    exercise: str,
+    *,
+    when: dt.datetime,
+    seed: int,
+    reps: int,
+    session_id: str | None = None,
+    progress: str = "",
 ) -> None:
-    """Simulates one session of `exercise` started at `when`, queues it durably and drains the agent's queue."""
+    """Simulates one session of `exercise` started at `when`, queues it durably and drains the agent's queue.
+
+    progress: printed before the outcome line (e.g. "history 5/72: ").
+    """
     queue = SessionQueue(agent.config.queue_dir)
     started = when.astimezone(dt.UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
     t0 = time.monotonic()
@@ -134,7 +144,7 @@ def record_one(
             r.outcome, f"kept in the queue: {r.detail}"
         )
         what = f"{exercise} started {started}, {reps} reps" if r.session_id == session_id else "queued earlier"
-        _say(f"{agent.label}: {what} ({r.session_id[:8]}) -> {outcome} ({took})")
+        _say(f"{progress}{agent.label}: {what} ({r.session_id[:8]}) -> {outcome} ({took})")
 
 
 def backfill_plan(agents: list[Agent], weeks: int, today: dt.date, seed: int):
@@ -207,15 +217,16 @@ def run_agents(args: argparse.Namespace) -> int:
     plan = backfill_plan(todo, args.history_weeks, dt.date.today(), args.seed)
     if plan:
         _say(f"uploading {len(plan)} backdated sessions ({args.history_weeks} weeks of history)")
-    for when, agent, exercise in plan:
+    for done, (when, agent, exercise) in enumerate(plan, start=1):
         if stop:
             return 0
         # Deterministic id, seed and reps: after an interruption the same session is rebuilt byte for byte and the
         # server answers 200 (already stored) instead of storing it twice.
         key = f"{args.seed}/{agent.email}/{exercise}/{when.isoformat()}"
         seed = int.from_bytes(hashlib.sha256(key.encode()).digest()[:4], "little")
-        record_one(agent, exercise, when=when, seed=seed, reps=6 + seed % 5,
-                   session_id=str(uuid.uuid5(uuid.NAMESPACE_URL, key)))  # fmt: skip
+        session_id = str(uuid.uuid5(uuid.NAMESPACE_URL, key))
+        progress = f"history {done}/{len(plan)}: "
+        record_one(agent, exercise, when=when, seed=seed, reps=6 + seed % 5, session_id=session_id, progress=progress)
     for agent in todo:
         _save_state(agent, {**_state(agent), "backfilled": True})
     live = 0

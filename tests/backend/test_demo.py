@@ -108,8 +108,73 @@ def test_demo_agents_upload_backdated_and_live_sessions(demo_server, tmp_path: P
     assert receipts, "the agents keep a receipt of every confirmed upload"
     assert not list((tmp_path / "demo-agents").glob("*/queue/rejected/*.khs"))
     proc.terminate()
-    proc.communicate(timeout=30)
+    out = proc.communicate(timeout=30)[0]
     assert _demo_processes(str(tmp_path)) == [], "the agents stop with the demo"
+    assert "history 1/" in out, "the backfill prints its progress"
+
+
+def _start_demo(tmp_path: Path, *args: str) -> tuple[subprocess.Popen, str]:
+    port = _free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "backend.cli", "demo", "--port", str(port), "--no-agents",
+                             "--db", str(tmp_path / "demo.db"), *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=tmp_path)  # fmt: skip
+    base = f"http://127.0.0.1:{port}"
+    for _ in range(120):
+        try:
+            if httpx.get(f"{base}/healthz", timeout=1).status_code == 200:
+                return proc, base
+        except httpx.TransportError:
+            pass
+        if proc.poll() is not None:
+            pytest.fail(f"demo exited early:\n{proc.stdout.read()}")
+        time.sleep(0.25)
+    proc.kill()
+    pytest.fail("demo server did not answer /healthz within 30 s")
+
+
+def _stop(proc: subprocess.Popen) -> str:
+    proc.terminate()
+    return proc.communicate(timeout=20)[0]
+
+
+def _patients_named(base: str, name: str) -> int:
+    with httpx.Client(base_url=base, timeout=30) as client:
+        client.post("/api/v1/auth/login", json={"email": "admin@demo.clinic", "password": demo.DEMO_PASSWORD})
+        users = client.get("/api/v1/users", params={"limit": 200}).json()["items"]
+    return sum(u["full_name"] == name for u in users)
+
+
+def test_demo_keeps_its_database_between_runs_and_fresh_starts_over(tmp_path: Path) -> None:
+    proc, base = _start_demo(tmp_path)
+    try:
+        with httpx.Client(base_url=base, timeout=30) as client:
+            admin = {"email": "admin@demo.clinic", "password": demo.DEMO_PASSWORD}
+            login = client.post("/api/v1/auth/login", json=admin)
+            headers = {"X-CSRF-Token": login.json()["csrf_token"]}
+            r = client.post("/api/v1/users", headers=headers, json={"email": "kept@demo.clinic", "role": "patient",
+                            "password": "a-long-enough-password", "full_name": "Kept Patient"})  # fmt: skip
+            assert r.status_code == 201, r.text
+    finally:
+        first = _stop(proc)
+    assert "(new)" in first
+    proc, base = _start_demo(tmp_path)
+    try:
+        assert _patients_named(base, "Kept Patient") == 1, "a second run keeps the database"
+    finally:
+        second = _stop(proc)
+    assert "kept from the last run; --fresh starts over" in second
+    proc, base = _start_demo(tmp_path, "--fresh")
+    try:
+        assert _patients_named(base, "Kept Patient") == 0, "--fresh starts over"
+    finally:
+        _stop(proc)
+
+
+def test_logins_name_each_therapists_patients() -> None:
+    text = demo.logins()
+    assert "therapist@demo.clinic (Tara Therapist; patients: Rose Miller, Maria Rossi, Ines Garcia)" in text
+    assert "rose@demo.clinic (Rose Miller; therapist: Tara Therapist)" in text
+    assert "george@demo.clinic (George Brown; therapist: Paul Physio)" in text
 
 
 def test_seed_demo_twice_changes_nothing(db_session) -> None:
