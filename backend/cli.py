@@ -53,6 +53,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         # longer than a therapist's pause between clicks and than load balancers' idle timeouts (60 s), so a
         # client never reuses a connection the server is closing
         timeout_keep_alive=75,
+        timeout_graceful_shutdown=5,  # open event streams (/api/v1/events) must not hold a restart; browsers reconnect
     )
     return 0
 

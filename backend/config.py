@@ -36,6 +36,8 @@ class Settings(BaseSettings):
     # where people reach the app, e.g. https://coach.example.org/clinic behind a reverse proxy; its path is the
     # prefix of every URL the pages build (never taken from a request's Host header); empty: served at /
     PUBLIC_URL: str = ""
+    # an event stream (GET /api/v1/events) ends after this long and the browser reconnects, checking its login again
+    EVENTS_STREAM_MAX_S: float = Field(default=300.0, ge=0.0)
 
     @model_validator(mode="after")
     def _refuse_default_secrets(self) -> Settings:

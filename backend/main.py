@@ -20,6 +20,7 @@ from starlette.middleware.gzip import GZipMiddleware
 from backend import __version__
 from backend.config import Settings, get_settings
 from backend.deps import DbSession
+from backend.events.listener import Listener
 from backend.exceptions import AppError, DatabaseBusy
 from backend.schemas import ErrorOut
 
@@ -36,6 +37,7 @@ ROUTERS = (
     "backend.sessions.router",
     "backend.suggestions.router",
     "backend.replay.router",
+    "backend.events.router",
 )
 
 
@@ -172,12 +174,20 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
 
     @asynccontextmanager
     async def lifespan(_app: FastAPI):
+        from backend.database import get_engine
+
+        bound = engine or get_engine()
         if settings.CHECK_MIGRATIONS:
-            from backend.database import get_engine
             from backend.migrate import check_at_head
 
-            check_at_head(engine or get_engine())
-        yield
+            check_at_head(bound)
+        # PostgreSQL carries the pages' events between workers and replicas (backend/events); SQLite: in-process
+        listener = Listener(bound.url).start() if bound.dialect.name == "postgresql" else None
+        try:
+            yield
+        finally:
+            if listener is not None:
+                listener.stop()
 
     app = FastAPI(
         title="Kinect Home Coach",

@@ -19,7 +19,7 @@ class Plan(Base):
     patient_id: Mapped[int] = mapped_column(ForeignKey("user.id", ondelete="CASCADE"), index=True)
     therapist_id: Mapped[int | None] = mapped_column(ForeignKey("user.id", ondelete="SET NULL"), index=True)
     title: Mapped[str] = mapped_column(String(200))
-    notes: Mapped[str] = mapped_column(Text, default="")
+    notes: Mapped[str] = mapped_column(Text, default="")  # the note to the patient, shown on the patient's page
     start_date: Mapped[dt.date] = mapped_column()
     end_date: Mapped[dt.date | None] = mapped_column()
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
@@ -31,13 +31,17 @@ class Plan(Base):
 
 
 class PlanItem(Base):
-    """One prescribed exercise: sets x repetitions, frequency_per_week sessions per week."""
+    """One prescribed exercise: sets x repetitions, frequency_per_week sessions per week, an optional target range
+    of motion in degrees."""
 
     __tablename__ = "plan_item"
     __table_args__ = (
         CheckConstraint("sets > 0", name="sets_positive"),
         CheckConstraint("repetitions > 0", name="repetitions_positive"),
         CheckConstraint("frequency_per_week BETWEEN 1 AND 21", name="frequency_range"),
+        CheckConstraint(
+            "target_rom_deg IS NULL OR (target_rom_deg > 0 AND target_rom_deg <= 180)", name="target_rom_range"
+        ),
     )
 
     id: Mapped[int] = mapped_column(primary_key=True)
@@ -47,6 +51,7 @@ class PlanItem(Base):
     sets: Mapped[int] = mapped_column()
     repetitions: Mapped[int] = mapped_column()
     frequency_per_week: Mapped[int] = mapped_column()
+    target_rom_deg: Mapped[float | None] = mapped_column()
     notes: Mapped[str] = mapped_column(Text, default="")
 
     plan: Mapped[Plan] = relationship(back_populates="items")

@@ -8,6 +8,7 @@ from fastapi import APIRouter, Depends, status
 
 from backend.audit.service import record
 from backend.deps import Caller, CurrentCaller, DbSession, TherapistOrAdminCaller, require_patient_access
+from backend.events.hub import Event, publish
 from backend.exceptions import (
     AUTH_ERRORS,
     ExerciseNotFound,
@@ -65,6 +66,7 @@ def create_plan(patient_id: IdPath, body: PlanIn, caller: TherapistOrAdminCaller
     therapist_id = caller.user.id if caller.user.role == "therapist" else None
     plan = service.create_plan(db_session=db_session, patient_id=patient_id, therapist_id=therapist_id, body=body)
     _audit(db_session, caller, "plan.create", plan.id, patient_id)
+    publish(db_session, Event("plan.changed", patient_id, {"plan_id": plan.id}))
     return service.plan_out(db_session=db_session, plan=plan)
 
 
@@ -88,6 +90,7 @@ def replace_plan(plan_id: IdPath, body: PlanIn, caller: TherapistOrAdminCaller, 
     require_patient_access(plan.patient_id, caller=caller, db_session=db_session, write=True)
     service.replace_plan(db_session=db_session, plan=plan, body=body)
     _audit(db_session, caller, "plan.update", plan.id, plan.patient_id)
+    publish(db_session, Event("plan.changed", plan.patient_id, {"plan_id": plan.id}))
     return service.plan_out(db_session=db_session, plan=plan)
 
 
@@ -99,4 +102,5 @@ def delete_plan(plan_id: IdPath, caller: TherapistOrAdminCaller, db_session: DbS
     plan = service.get_plan(db_session=db_session, plan_id=plan_id)
     require_patient_access(plan.patient_id, caller=caller, db_session=db_session, write=True)
     _audit(db_session, caller, "plan.delete", plan.id, plan.patient_id)
+    publish(db_session, Event("plan.changed", plan.patient_id, {"plan_id": plan.id}))
     service.delete_plan(db_session=db_session, plan=plan)

@@ -14,6 +14,9 @@ class PlanItemIn(BaseModel):
     sets: int = Field(ge=1, le=100, examples=[3])
     repetitions: int = Field(ge=1, le=1000, examples=[10])
     frequency_per_week: int = Field(ge=1, le=21, examples=[3])
+    target_rom_deg: float | None = Field(
+        default=None, gt=0, le=180, description="Target range of motion, degrees (None: no target)", examples=[90]
+    )
     notes: str = Field(default="", max_length=2000)
 
 
@@ -21,7 +24,12 @@ class PlanIn(BaseModel):
     """A plan as a therapist writes it (PUT replaces every field and item)."""
 
     title: str = Field(min_length=1, max_length=200, examples=["Knee rehab, weeks 1-4"])
-    notes: str = Field(default="", max_length=5000)
+    notes: str = Field(
+        default="",
+        max_length=5000,
+        description="The note to the patient, shown on the patient's page",
+        examples=["Take a short rest between the two sets."],
+    )
     start_date: dt.date = Field(examples=["2026-11-23"])
     end_date: dt.date | None = Field(default=None, examples=["2026-12-21"])
     items: list[PlanItemIn] = Field(default_factory=list, max_length=50)
@@ -44,6 +52,7 @@ class PlanItemOut(BaseModel):
     sets: int = Field(examples=[2])
     repetitions: int = Field(examples=[10])
     frequency_per_week: int = Field(examples=[3])
+    target_rom_deg: float | None = Field(examples=[90])
     notes: str = Field(examples=["Slowly, both legs"])
 
 
@@ -53,6 +62,9 @@ class PlanOut(BaseModel):
     id: int = Field(examples=[17])
     patient_id: int = Field(examples=[12])
     therapist_id: int | None = Field(examples=[2])
+    therapist_name: str | None = Field(
+        description="Who prescribed the plan (None: an admin)", examples=["Tara Therapist"]
+    )
     title: str = Field(examples=["Knee rehab, weeks 1-4"])
     notes: str = Field(examples=[""])
     start_date: dt.date = Field(examples=["2026-11-23"])

@@ -11,6 +11,7 @@ from backend.exercises.models import Exercise
 from backend.exercises.service import get_exercise
 from backend.plans.models import Plan, PlanItem
 from backend.plans.schemas import PlanIn, PlanItemOut, PlanOut
+from backend.users.models import User
 
 
 def _items(db_session: Session, body: PlanIn) -> list[PlanItem]:
@@ -24,6 +25,7 @@ def _items(db_session: Session, body: PlanIn) -> list[PlanItem]:
                 sets=item.sets,
                 repetitions=item.repetitions,
                 frequency_per_week=item.frequency_per_week,
+                target_rom_deg=item.target_rom_deg,
                 notes=item.notes,
             )
         )
@@ -85,12 +87,14 @@ def delete_plan(*, db_session: Session, plan: Plan) -> None:
 
 
 def plan_out(*, db_session: Session, plan: Plan) -> PlanOut:
-    """Returns the API form of a plan (items with their exercise slugs)."""
+    """Returns the API form of a plan (items with their exercise slugs, the prescribing therapist's name)."""
     slugs = dict(db_session.execute(select(Exercise.id, Exercise.slug)).all())
+    therapist = db_session.get(User, plan.therapist_id) if plan.therapist_id is not None else None
     return PlanOut(
         id=plan.id,
         patient_id=plan.patient_id,
         therapist_id=plan.therapist_id,
+        therapist_name=(therapist.full_name or therapist.email) if therapist is not None else None,
         title=plan.title,
         notes=plan.notes,
         start_date=plan.start_date,
@@ -106,6 +110,7 @@ def plan_out(*, db_session: Session, plan: Plan) -> PlanOut:
                 sets=i.sets,
                 repetitions=i.repetitions,
                 frequency_per_week=i.frequency_per_week,
+                target_rom_deg=i.target_rom_deg,
                 notes=i.notes,
             )
             for i in plan.items

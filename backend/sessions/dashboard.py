@@ -1,7 +1,8 @@
 """Per-patient views over stored sessions: progress series and the therapist dashboard summary.
 
-Summaries of many patients cost two queries (no query per patient), read the indexed scalar columns
-of session_metric and only the "indicators" part of a document, and never load the stored files.
+Summaries of many patients cost three queries (no query per patient), read the indexed scalar columns
+of session_metric and only the "indicators" part of a document, and never load the stored files. The attention
+score, its reasons and the indicator trends are computed from them by backend.sessions.triage (formula there).
 """
 
 from __future__ import annotations
@@ -14,16 +15,13 @@ from sqlalchemy.orm import Session, aliased
 
 from backend.exercises.models import Exercise
 from backend.plans.models import Plan, PlanItem
+from backend.sessions import triage
 from backend.sessions.models import ExerciseSession, SessionMetric
+from backend.sessions.triage import week_start
 from backend.suggestions.models import Suggestion
 from backend.users.models import User
 
-
-def week_start(now: dt.datetime) -> dt.datetime:
-    """Returns Monday 00:00 UTC of the week that contains now (timezone-aware)."""
-    day = now.astimezone(dt.UTC).date()
-    monday = day - dt.timedelta(days=day.weekday())
-    return dt.datetime.combine(monday, dt.time(), tzinfo=dt.UTC)
+RANKED_PATIENTS_MAX = 500  # the dashboard ranks up to this many visible patients by attention, beyond it pages by id
 
 
 def progress(*, db_session: Session, patient_id: int, exercise_id: int | None, since: dt.datetime | None) -> list[dict]:
@@ -131,10 +129,10 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
     }
 
 
-def _planned_per_week(db_session: Session, patient_ids: Sequence[int], on: dt.date) -> dict[int, int]:
-    """Returns sessions per week the running plans prescribe: per exercise the newest plan's frequency, summed."""
+def _running_plans(db_session: Session, patient_ids: Sequence[int], on: dt.date) -> dict[int, triage.RunningPlan]:
+    """Returns per patient with a running plan: per exercise the newest plan's frequency, summed, and its start."""
     rows = db_session.execute(
-        select(Plan.patient_id, PlanItem.exercise_id, PlanItem.frequency_per_week)
+        select(Plan.patient_id, PlanItem.exercise_id, PlanItem.frequency_per_week, Plan.start_date)
         .join(Plan, Plan.id == PlanItem.plan_id)
         .where(
             Plan.patient_id.in_(patient_ids),
@@ -143,21 +141,83 @@ def _planned_per_week(db_session: Session, patient_ids: Sequence[int], on: dt.da
         )
         .order_by(Plan.start_date.desc(), Plan.id.desc(), PlanItem.position)
     ).all()
-    chosen: dict[tuple[int, int], int] = {}
-    for pid, exercise_id, per_week in rows:
-        chosen.setdefault((pid, exercise_id), per_week)
-    planned: dict[int, int] = {}
-    for (pid, _), per_week in chosen.items():
-        planned[pid] = planned.get(pid, 0) + per_week
-    return planned
+    chosen: dict[tuple[int, int], tuple[int, dt.date]] = {}
+    for pid, exercise_id, per_week, start in rows:
+        chosen.setdefault((pid, exercise_id), (per_week, start))
+    plans: dict[int, triage.RunningPlan] = {}
+    for (pid, _), (per_week, start) in chosen.items():
+        before = plans.get(pid)
+        plans[pid] = triage.RunningPlan(
+            per_week=per_week + (before.per_week if before else 0),
+            started_on=min(start, before.started_on) if before else start,
+        )
+    return plans
+
+
+def _recent_sessions(
+    db_session: Session, patient_ids: Sequence[int], since: dt.datetime
+) -> dict[int, list[triage.RecentSession]]:
+    """Returns per patient the analysed sessions started since `since`, oldest first (one query)."""
+    rows = db_session.execute(
+        select(
+            ExerciseSession.patient_id,
+            ExerciseSession.started_at,
+            Exercise.slug,
+            SessionMetric.repetitions,
+            SessionMetric.rom_deg,
+            SessionMetric.quality_ok,
+            SessionMetric.indicator_scores,
+        )
+        .select_from(ExerciseSession)
+        .join(SessionMetric, SessionMetric.session_id == ExerciseSession.id)
+        .outerjoin(Exercise, Exercise.id == ExerciseSession.exercise_id)
+        .where(ExerciseSession.patient_id.in_(patient_ids), ExerciseSession.started_at >= since)
+        .order_by(ExerciseSession.patient_id, ExerciseSession.started_at, ExerciseSession.id)
+    ).all()
+    out: dict[int, list[triage.RecentSession]] = {}
+    for pid, started_at, slug, reps, rom, quality_ok, indicators in rows:
+        out.setdefault(pid, []).append(
+            triage.RecentSession(
+                started_at=started_at,
+                exercise_slug=slug,
+                repetitions=reps,
+                rom_deg=rom,
+                quality_ok=quality_ok,
+                indicator_scores=indicators if isinstance(indicators, dict) else None,
+            )
+        )
+    return out
 
 
 def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.datetime) -> dict[int, dict]:
-    """Returns the dashboard summary of each patient (SummaryOut fields) in two queries, whatever their number."""
+    """Returns the dashboard summary of each patient (SummaryOut fields) in three queries, whatever their number."""
     ids = sorted(set(patient_ids))
     if not ids:
         return {}
     per = _per_patient(db_session, ids, now)
-    planned = _planned_per_week(db_session, ids, now.astimezone(dt.UTC).date())
+    plans = _running_plans(db_session, ids, now.astimezone(dt.UTC).date())
+    recent = _recent_sessions(db_session, ids, triage.window_start(now))
     empty = {"last_session": None, "sessions_this_week": 0, "pending_suggestions": 0, "latest_indicators": None}
-    return {pid: {"patient_id": pid, **empty, **per.get(pid, {}), "planned_this_week": planned.get(pid)} for pid in ids}
+    out = {}
+    for pid in ids:
+        row = {"patient_id": pid, **empty, **per.get(pid, {})}
+        plan, sessions, last = plans.get(pid), recent.get(pid, []), row["last_session"]
+        score = triage.attention(
+            now=now,
+            plan=plan,
+            sessions_this_week=row["sessions_this_week"],
+            last_session_at=last["started_at"] if last else None,
+            sessions=sessions,
+            pending_suggestions=row["pending_suggestions"],
+        )
+        analysed_slug = next((s.exercise_slug for s in reversed(sessions) if s.indicator_scores is not None), None)
+        out[pid] = {
+            **row,
+            "planned_this_week": plan.per_week if plan else None,
+            "attention_score": score.score,
+            "attention_level": score.level,
+            "attention_reasons": score.reasons,
+            "indicator_trends": triage.indicator_trends(now, sessions),
+            "balance_missing": triage.balance_missing(row["latest_indicators"], analysed_slug),
+        }
+    return out

@@ -26,15 +26,30 @@ def metrics_document(
 
 
 def scalar_columns(doc: dict) -> dict:
-    """Returns the indexed scalars of SessionMetric (repetitions, rom_deg, quality_ok) read from a document."""
+    """Returns the query columns of SessionMetric (repetitions, rom_deg, quality_ok, indicator_scores) read from a
+    document."""
     reps = doc.get("repetitions")
     rom = doc.get("rom_deg")
     quality = doc.get("quality")
     return {
         "repetitions": reps if isinstance(reps, int) and not isinstance(reps, bool) else None,
-        "rom_deg": float(rom) if isinstance(rom, int | float) and not isinstance(rom, bool) else None,
+        "rom_deg": _number(rom),
         "quality_ok": quality.get("ok") if isinstance(quality, dict) and isinstance(quality.get("ok"), bool) else None,
+        "indicator_scores": indicator_scores(doc),
     }
+
+
+def indicator_scores(doc: dict) -> dict | None:
+    """Returns {indicator: score 0-100 or None} of a document's indicators (None without indicators): the small
+    copy the dashboard's trends read instead of parsing whole documents."""
+    indicators = doc.get("indicators")
+    if not isinstance(indicators, dict):
+        return None
+    return {name: _number(v.get("score")) if isinstance(v, dict) else None for name, v in indicators.items()}
+
+
+def _number(value) -> float | None:
+    return float(value) if isinstance(value, int | float) and not isinstance(value, bool) else None
 
 
 def json_ready(value):

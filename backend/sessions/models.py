@@ -56,6 +56,8 @@ class SessionMetric(Base):
     repetitions: Mapped[int | None] = mapped_column(index=True)
     rom_deg: Mapped[float | None] = mapped_column()
     quality_ok: Mapped[bool | None] = mapped_column(Boolean, index=True)
+    # {indicator: score} copied from document["indicators"] (migration 0007): the dashboard reads weeks of these
+    indicator_scores: Mapped[dict | None] = mapped_column(JSON)
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
 
     session: Mapped[ExerciseSession] = relationship(back_populates="metric")

@@ -19,6 +19,7 @@ from backend.deps import (
     TherapistOrAdminCaller,
     require_patient_access,
 )
+from backend.events.hub import Event, publish
 from backend.exceptions import (
     AUTH_ERRORS,
     ExerciseNotFound,
@@ -157,6 +158,8 @@ def _ingest(
     )
     action = "session.create" if created else "session.upload_repeat"
     _audit(db_session, caller, action, row.id, patient_id, {"content_hash": upload.content_hash})
+    if created:
+        publish(db_session, Event("session.stored", patient_id, {"session_id": row.id}))
     return _session_out(db_session, caller, row.id), created
 
 
@@ -335,11 +338,24 @@ def read_summary(patient: PatientForRead, caller: CurrentCaller, db_session: DbS
 def read_dashboard(
     caller: TherapistOrAdminCaller, db_session: DbSession, page: Annotated[PageParams, Depends(page_params)]
 ):
-    """Returns one page of the caller's patients (therapists: assigned; admins: all) with each one's summary."""
+    """Returns one page of the caller's patients (therapists: assigned; admins: all), most in need of attention first.
+
+    Rows are sorted by attention score (highest first), then name. Beyond RANKED_PATIENTS_MAX visible patients
+    (an admin of a large clinic) the rows come by patient id instead, each still with its score.
+    """
+    now = utcnow()
     patients, total = service.dashboard_patients(
-        db_session=db_session, caller=caller, limit=page.limit, offset=page.offset
+        db_session=db_session, caller=caller, limit=dashboard.RANKED_PATIENTS_MAX + 1, offset=0
     )
-    summaries = dashboard.summaries(db_session=db_session, patient_ids=[p.id for p in patients], now=utcnow())
+    if total <= dashboard.RANKED_PATIENTS_MAX:
+        summaries = dashboard.summaries(db_session=db_session, patient_ids=[p.id for p in patients], now=now)
+        patients.sort(key=lambda p: (-summaries[p.id]["attention_score"], (p.full_name or p.email).casefold(), p.id))
+        patients = patients[page.offset : page.offset + page.limit]
+    else:
+        patients, total = service.dashboard_patients(
+            db_session=db_session, caller=caller, limit=page.limit, offset=page.offset
+        )
+        summaries = dashboard.summaries(db_session=db_session, patient_ids=[p.id for p in patients], now=now)
     _audit_patients(db_session, caller, "session.summary.read", [p.id for p in patients], {"via": "dashboard"})
     items = [DashboardRowOut(**summaries[p.id], full_name=p.full_name, email=p.email) for p in patients]
     return Page[DashboardRowOut](items=items, total=total, limit=page.limit, offset=page.offset)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import uuid
+from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -109,6 +110,46 @@ class LastSessionOut(BaseModel):
     quality_ok: bool | None
 
 
+class IndicatorTrendOut(BaseModel):
+    """One indicator's weekly medians over the last weeks (backend.sessions.triage)."""
+
+    weeks: list[dt.date] = Field(description="Monday (UTC) of each week, oldest first; the last is the current week")
+    weekly_median: list[float | None] = Field(description="median indicator score (0-100) per week; null = no data")
+    direction: Literal["up", "down", "flat"] | None = Field(
+        description="latest week with data against the earliest: ±5 points or more; null with under two weeks of data"
+    )
+    text: str = Field(description="the trend in words", examples=["Flexibility rose from 48 to 60 over 4 weeks"])
+
+
+_TREND_WEEKS_EXAMPLE = ["2026-10-19", "2026-10-26", "2026-11-02", "2026-11-09", "2026-11-16", "2026-11-23"]
+_TRENDS_EXAMPLE = {
+    "flexibility": {
+        "weeks": _TREND_WEEKS_EXAMPLE,
+        "weekly_median": [66.0, 64.5, 61.0, None, 55.2, 50.0],
+        "direction": "down",
+        "text": "Flexibility fell from 66 to 50 over 5 weeks",
+    },
+    "endurance": {
+        "weeks": _TREND_WEEKS_EXAMPLE,
+        "weekly_median": [80.0, 80.0, 90.0, None, 80.0, 80.0],
+        "direction": "flat",
+        "text": "Endurance held steady from 80 to 80 over 5 weeks",
+    },
+    "strength": {
+        "weeks": _TREND_WEEKS_EXAMPLE,
+        "weekly_median": [None, None, None, None, None, 64.0],
+        "direction": None,
+        "text": "Strength: not enough weeks with data for a trend",
+    },
+    "balance": {
+        "weeks": _TREND_WEEKS_EXAMPLE,
+        "weekly_median": [None, None, None, None, None, None],
+        "direction": None,
+        "text": "Balance: not enough weeks with data for a trend",
+    },
+}
+
+
 class SummaryOut(BaseModel):
     """What a therapist's dashboard shows about one patient."""
 
@@ -129,6 +170,17 @@ class SummaryOut(BaseModel):
                     "planned_this_week": 6,
                     "latest_indicators": _INDICATORS_EXAMPLE,
                     "pending_suggestions": 2,
+                    "attention_score": 72,
+                    "attention_level": "now",
+                    "attention_reasons": [
+                        "Behind this week's plan: 2 of the 4 sessions due by now done (6 a week planned)",
+                        "Range of motion of seated knee extension fell from 90° to 67° "
+                        "(last 7 days vs the 4 weeks before)",
+                        "1 suggestion to review",
+                    ],
+                    "indicator_trends": _TRENDS_EXAMPLE,
+                    "balance_missing": "Not measured: no still standing of 2 s or more in the last session "
+                    "(seated knee extension)",
                 }
             ]
         }
@@ -141,6 +193,15 @@ class SummaryOut(BaseModel):
     )
     latest_indicators: dict | None = Field(description="indicators of the newest processed session")
     pending_suggestions: int = Field(description="system suggestions waiting for a therapist's decision")
+    attention_score: int = Field(ge=0, le=100, description="how much the patient needs attention (triage formula)")
+    attention_level: Literal["now", "soon", "ok"] = Field(description="'now' at score ≥ 50, 'soon' at ≥ 20")
+    attention_reasons: list[str] = Field(description="what adds to the score, in words, largest first")
+    indicator_trends: dict[str, IndicatorTrendOut] = Field(
+        description="per indicator (flexibility, endurance, strength, balance), weekly medians over 6 weeks"
+    )
+    balance_missing: str | None = Field(
+        description="why the latest indicators have no balance score, in words; null when they have one"
+    )
 
 
 class DashboardRowOut(SummaryOut):

@@ -9,6 +9,7 @@ from sqlalchemy import select
 
 from backend.audit.service import record
 from backend.deps import Caller, CurrentCaller, DbSession, TherapistOrAdminCaller, require_patient_access
+from backend.events.hub import Event, publish
 from backend.exceptions import (
     AUTH_ERRORS,
     InvalidInput,
@@ -96,6 +97,7 @@ def create_suggestion(
         session_id=body.session_id,
     )
     _audit(db_session, caller, "suggestion.create", row.id, patient_id)
+    publish(db_session, Event("suggestion.changed", patient_id, {"suggestion_id": row.id}))
     return SuggestionOut.model_validate(row)
 
 
@@ -110,6 +112,7 @@ def _decide(suggestion_id: int, new_status: str, caller: Caller, db_session) -> 
     )
     action = "suggestion.approve" if new_status == "approved" else "suggestion.dismiss"
     _audit(db_session, caller, action, row.id, row.patient_id, {"rule": row.rule})
+    publish(db_session, Event("suggestion.changed", row.patient_id, {"suggestion_id": row.id}))
     return SuggestionOut.model_validate(row)
 
 

@@ -123,6 +123,23 @@ const Coach = (() => {
     return plans.find((p) => p.start_date <= today && (!p.end_date || p.end_date >= today)) || null;
   }
 
+  /**
+   * Calls reload() when the server says something changed about the patients this page shows (a new session,
+   * changed advice, a changed plan): server-sent events on this origin, behind the same login. Bursts of events
+   * give one call; the browser reconnects by itself and the page reloads its data then too.
+   * patientId: only that patient's events (null: every patient the signed-in user may see).
+   */
+  function onChange(patientId, reload) {
+    if (!window.EventSource) return null;
+    const source = new EventSource(url("/api/v1/events" + (patientId ? `?patient_id=${patientId}` : "")));
+    let timer = null, opened = false;
+    const soon = () => { clearTimeout(timer); timer = setTimeout(reload, 300); };
+    for (const kind of ["session.stored", "suggestion.changed", "plan.changed"]) source.addEventListener(kind, soon);
+    source.addEventListener("open", () => { if (opened) soon(); opened = true; });  // missed events while away
+    window.addEventListener("pagehide", () => source.close());
+    return source;
+  }
+
   async function logout() {
     try { await api("/auth/logout", { method: "POST", redirect401: false }); } catch (e) { /* already signed out */ }
     sessionStorage.removeItem("coach_csrf");
@@ -133,6 +150,6 @@ const Coach = (() => {
     if (b) b.addEventListener("click", logout);
   });
 
-  return { root, url, api, ApiError, kindMessage, showError, el, fmtDate, fmtDateTime, plainDay, daysAgo, startOfWeekUTC, median,
+  return { root, url, api, onChange, ApiError, kindMessage, showError, el, fmtDate, fmtDateTime, plainDay, daysAgo, startOfWeekUTC, median,
            exercises, exerciseName, runningPlan, toLogin, DAY };
 })();

@@ -54,25 +54,46 @@
     if (last.quality_ok === false) box.append(el("p", { class: "muted" }, "The camera did not see you well this time, so these numbers may be a little off."));
   }
 
+  /** Returns today's sets of one exercise against the plan, one line each: "set 1 of 2: 6 of 10". */
+  function todaySets(item, todaySessions) {
+    const lines = [];
+    const n = Math.max(item.sets, todaySessions.length);
+    for (let k = 0; k < n; k++) {
+      const s = todaySessions[k];
+      const done = s ? (s.repetitions === null || s.repetitions === undefined ? "not counted" : `${s.repetitions} of ${item.repetitions}`)
+        : `0 of ${item.repetitions}`;
+      const full = s && s.repetitions >= item.repetitions;
+      lines.push(k < item.sets ? `set ${k + 1} of ${item.sets}: ${done}${full ? " ✓" : ""}` : `extra set: ${s.repetitions ?? "not counted"}`);
+    }
+    return lines;
+  }
+
   function planBlock(plan, lib, weekSessions) {
     const list = document.getElementById("plan");
+    const note = document.getElementById("plan-note");
     list.replaceChildren();
+    note.hidden = !(plan && plan.notes);
+    note.replaceChildren(...(plan && plan.notes ? [el("strong", {}, "From your therapist: "), plan.notes] : []));
     if (!plan || !plan.items.length) { list.append(el("li", {}, "You have no exercises planned right now. Your therapist will add them.")); return; }
     const today = new Date().toDateString();
     for (const item of plan.items) {
       const mine = weekSessions.filter((s) => s.exercise_slug === item.exercise_slug);
-      const doneToday = mine.some((s) => new Date(s.started_at).toDateString() === today);
+      const mineToday = mine.filter((s) => new Date(s.started_at).toDateString() === today)
+        .sort((a, b) => new Date(a.started_at) - new Date(b.started_at));  // each stored session is one set
+      const doneToday = mineToday.length > 0;
       const weekDone = mine.length >= item.frequency_per_week;
       const times = item.frequency_per_week === 1 ? "once" : item.frequency_per_week === 2 ? "twice" : `${item.frequency_per_week} times`;
       let status = `Done ${mine.length} of ${item.frequency_per_week} times this week`;
       if (weekDone) status = `All done this week (${mine.length} of ${item.frequency_per_week}) ✓`;
       if (doneToday) status += " · done today";
-      list.append(el("li", {},
+      const rom = item.target_rom_deg ? `, moving through about ${Math.round(item.target_rom_deg)} degrees` : "";
+      list.append(el("li", { "data-exercise": item.exercise_slug },
         el("span", { class: "tick" + (weekDone ? " done" : ""), "aria-hidden": "true" }, weekDone ? "✓" : mine.length),
         el("div", {},
           el("div", { class: "what" }, exerciseName(lib, item.exercise_slug)),
-          el("div", { class: "how" }, `${item.sets} ${item.sets === 1 ? "set" : "sets"} of ${item.repetitions}, ${times} a week`),
+          el("div", { class: "how" }, `${item.sets} ${item.sets === 1 ? "set" : "sets"} of ${item.repetitions}, ${times} a week${rom}`),
           el("div", {}, status),
+          el("div", { class: "today" }, el("strong", {}, "Today:"), todaySets(item, mineToday).map((t) => el("span", {}, t))),
           item.notes ? el("div", { class: "muted" }, item.notes) : null)));
     }
   }
@@ -145,4 +166,5 @@
     } catch (err) { showError(err); }
   }
   load();
+  Coach.onChange(null, load);  // a new result, new advice or a new plan shows without reloading the page
 })();

@@ -1,4 +1,5 @@
-/* Therapist's view of one patient: suggestions to review, a note form, progress plots, paginated sessions. */
+/* Therapist's view of one patient: the plan (edit, new, history), suggestions to review, a note form, progress plots,
+   paginated sessions. */
 "use strict";
 (() => {
   const { api, url, el, fmtDate, fmtDateTime, exercises, exerciseName, runningPlan, showError } = Coach;
@@ -169,25 +170,242 @@
     } catch (err) { msg.textContent = Coach.kindMessage(err); msg.className = "alert"; msg.hidden = false; }
   });
 
+  // ---- Plan: the running plan, a form to edit it or write a new one, past plans ----
+  const NUMBERS = {  // field -> label, limits (client checks; the API checks the same)
+    sets: { label: "Sets", min: 1, max: 100 },
+    repetitions: { label: "Repetitions", min: 1, max: 1000 },
+    frequency_per_week: { label: "Days per week", min: 1, max: 7 },
+    target_rom_deg: { label: "Target range (°)", min: 1, max: 180, optional: true },  // of motion, optional
+  };
+  let plans = [], running = null, editing = null;  // editing: the plan being edited (null: a new plan)
+  let rowSeq = 0;
+
+  const isoDay = (d) => d.toISOString().slice(0, 10);
+  const addDays = (iso, n) => { const d = new Date(iso + "T00:00:00Z"); d.setUTCDate(d.getUTCDate() + n); return isoDay(d); };
+  const dayText = (iso) => fmtDate(iso + "T12:00:00Z", { day: "numeric", month: "short", year: "numeric" });
+  const span = (p) => `${dayText(p.start_date)} – ${p.end_date ? dayText(p.end_date) : "open end"}`;
+  const itemText = (i) => `${exerciseName(lib, i.exercise_slug)}: ${i.sets} × ${i.repetitions}, ${i.frequency_per_week} days a week`
+    + (i.target_rom_deg ? `, target ${Math.round(i.target_rom_deg)}°` : "");
+
+  function renderPlan() {
+    const box = document.getElementById("plan-current");
+    box.replaceChildren();
+    document.getElementById("plan-edit").hidden = !running;
+    if (!running) box.append(el("p", {}, "No plan is running. Write a new plan below."));
+    else {
+      box.append(el("p", { class: "lead", id: "plan-title-shown" }, el("strong", {}, running.title), ` · ${span(running)}`),
+        el("p", { class: "small muted" }, `Prescribed by ${running.therapist_name || "an administrator"}`),
+        el("ul", { class: "plan-items", id: "plan-items" }, running.items.map((i) => el("li", {}, itemText(i),
+          i.notes ? el("span", { class: "muted" }, ` — ${i.notes}`) : null))),
+        running.notes ? el("p", { id: "plan-note-shown" }, el("strong", {}, "Note to the patient: "), running.notes)
+          : el("p", { class: "muted" }, "No note to the patient."));
+      if (!running.items.length) box.querySelector("ul").append(el("li", { class: "muted" }, "No exercises."));
+    }
+    const past = plans.filter((p) => p !== running);
+    const list = document.getElementById("plan-history");
+    list.replaceChildren(...past.map((p) => el("li", { "data-plan-id": p.id },
+      el("div", {}, el("strong", {}, p.title), ` · ${span(p)}`),
+      el("div", { class: "small muted" }, `Prescribed by ${p.therapist_name || "an administrator"} · `
+        + (p.items.map(itemText).join("; ") || "no exercises")))));
+    if (!past.length) list.append(el("li", { class: "muted" }, "No earlier plans."));
+  }
+
+  /** Shows msg next to a field (or hides it when msg is empty). */
+  function fieldError(input, errBox, msg) {
+    errBox.textContent = msg || "";
+    errBox.hidden = !msg;
+    if (input) { if (msg) input.setAttribute("aria-invalid", "true"); else input.removeAttribute("aria-invalid"); }
+  }
+
+  function numberField(row, name, value) {
+    const spec = NUMBERS[name], id = `plan-row${row.dataset.row}-${name}`;
+    const input = el("input", { id, name, type: "number", inputmode: "numeric", min: spec.min, max: spec.max,
+      step: name === "target_rom_deg" ? "any" : 1, value: value ?? "", "aria-describedby": `${id}-err` });
+    return el("div", { class: "field" }, el("label", { for: id }, spec.label), input,
+      el("p", { class: "field-error", id: `${id}-err`, hidden: true }));
+  }
+
+  function renumber() {
+    document.querySelectorAll("#plan-rows .plan-row").forEach((row, n) => {
+      row.querySelector("legend").textContent = `Exercise ${n + 1}`;
+      row.querySelector(".plan-remove").setAttribute("aria-label", `Remove exercise ${n + 1}`);
+    });
+  }
+
+  function addRow(item) {
+    const row = el("fieldset", { class: "plan-row", "data-row": ++rowSeq });
+    const id = `plan-row${rowSeq}`;
+    const select = el("select", { id: `${id}-exercise`, name: "exercise_slug", "aria-describedby": `${id}-exercise-err` },
+      el("option", { value: "" }, "Choose an exercise…"),
+      Object.values(lib).sort((a, b) => a.name.localeCompare(b.name)).map((e) => el("option", { value: e.slug }, e.name)));
+    select.value = item ? item.exercise_slug : "";
+    row.append(el("legend", {}, "Exercise"),
+      el("div", { class: "field field-wide" }, el("label", { for: select.id }, "Exercise"), select,
+        el("p", { class: "field-error", id: `${id}-exercise-err`, hidden: true })),
+      numberField(row, "sets", item ? item.sets : 2),
+      numberField(row, "repetitions", item ? item.repetitions : 10),
+      numberField(row, "frequency_per_week", item ? item.frequency_per_week : 3),
+      numberField(row, "target_rom_deg", item && item.target_rom_deg ? Math.round(item.target_rom_deg * 10) / 10 : ""),
+      el("div", { class: "field field-wide" }, el("label", { for: `${id}-notes` }, "Hint for this exercise (optional)"),
+        el("input", { id: `${id}-notes`, name: "notes", maxlength: 2000, value: item ? item.notes : "" })),
+      el("button", { class: "btn btn-bad plan-remove", type: "button", onclick: () => { row.remove(); renumber(); } }, "Remove"));
+    document.getElementById("plan-rows").append(row);
+    renumber();
+    return row;
+  }
+
+  function openForm(plan) {
+    editing = plan;
+    const form = document.getElementById("plan-form");
+    const today = isoDay(new Date());
+    document.getElementById("plan-form-h").textContent = plan ? "Edit the running plan" : "New plan (replaces the running one from its first day)";
+    document.getElementById("plan-title").value = plan ? plan.title : (running ? running.title : "Home programme");
+    document.getElementById("plan-start").value = plan ? plan.start_date : today;
+    document.getElementById("plan-end").value = plan ? plan.end_date || "" : addDays(today, 27);
+    document.getElementById("plan-notes").value = plan ? plan.notes : running ? running.notes : "";
+    document.getElementById("plan-rows").replaceChildren();
+    const items = plan ? plan.items : running ? running.items : [];
+    items.forEach(addRow);
+    if (!items.length) addRow(null);
+    form.querySelectorAll(".field-error").forEach((p) => fieldError(null, p, ""));
+    form.querySelectorAll("[aria-invalid]").forEach((i) => i.removeAttribute("aria-invalid"));
+    document.getElementById("plan-msg").hidden = true;
+    document.getElementById("plan-saved").hidden = true;
+    form.hidden = false;
+    document.getElementById("plan-title").focus();
+  }
+
+  /** Returns the plan body of the form, or null after showing each problem next to its field. */
+  function readForm() {
+    let ok = true;
+    const fail = (input, msg) => { fieldError(input, document.getElementById(input.getAttribute("aria-describedby")), msg); ok = false; };
+    const clear = (input) => fieldError(input, document.getElementById(input.getAttribute("aria-describedby")), "");
+    const title = document.getElementById("plan-title"), start = document.getElementById("plan-start");
+    const end = document.getElementById("plan-end"), notes = document.getElementById("plan-notes");
+    [title, start, end, notes].forEach(clear);
+    if (!title.value.trim()) fail(title, "Please give the plan a title.");
+    if (!start.value) fail(start, "Please choose the plan's first day.");
+    if (end.value && start.value && end.value < start.value) fail(end, "The last day must not be before the first day.");
+    const items = [];
+    const rows = [...document.querySelectorAll("#plan-rows .plan-row")];
+    fieldError(null, document.getElementById("plan-rows-err"), rows.length ? "" : "Please add at least one exercise.");
+    if (!rows.length) ok = false;
+    for (const row of rows) {
+      const select = row.querySelector("select");
+      clear(select);
+      if (!select.value) fail(select, "Please choose an exercise.");
+      const item = { exercise_slug: select.value, notes: row.querySelector('input[name="notes"]').value.trim() };
+      for (const [name, spec] of Object.entries(NUMBERS)) {
+        const input = row.querySelector(`input[name="${name}"]`);
+        clear(input);
+        const raw = input.value.trim();
+        if (!raw) {
+          if (spec.optional) { item[name] = null; continue; }
+          fail(input, `Please enter the ${spec.label.toLowerCase()} (a number from ${spec.min} to ${spec.max}).`);
+          continue;
+        }
+        const x = Number(raw);
+        const whole = name !== "target_rom_deg";
+        if (!Number.isFinite(x) || (whole && !Number.isInteger(x)) || input.validity.badInput) fail(input, `Please enter a ${whole ? "whole " : ""}number.`);
+        else if (x < spec.min || x > spec.max) fail(input, `${spec.label} must be between ${spec.min} and ${spec.max}.`);
+        else item[name] = x;
+      }
+      items.push(item);
+    }
+    if (!ok) return null;
+    return { title: title.value.trim(), notes: notes.value.trim(), start_date: start.value, end_date: end.value || null, items };
+  }
+
+  /** Places each part of the API's 422 detail ("body.items.1.repetitions: Input should be ...") next to its field. */
+  function showApiErrors(err) {
+    const msg = document.getElementById("plan-msg");
+    msg.textContent = Coach.kindMessage(err);
+    msg.hidden = false;
+    if (err.status !== 422 || !err.detail) return;
+    const rows = [...document.querySelectorAll("#plan-rows .plan-row")];
+    for (const part of String(err.detail).split("; ")) {
+      const m = part.match(/^body\.(?:items\.(\d+)\.)?(\w+): (.*)$/);
+      if (!m) continue;
+      const scope = m[1] === undefined ? document.getElementById("plan-form") : rows[+m[1]];
+      const input = scope && scope.querySelector(`[name="${m[2]}"]`);
+      const label = input && scope.querySelector(`label[for="${input.id}"]`);
+      if (input) fieldError(input, document.getElementById(input.getAttribute("aria-describedby")),
+        `${label ? label.textContent : m[2]}: ${m[3]}.`);
+    }
+  }
+
+  async function savePlan(ev) {
+    ev.preventDefault();
+    document.getElementById("plan-msg").hidden = true;
+    const body = readForm();
+    if (!body) {
+      const first = document.querySelector('#plan-form [aria-invalid="true"]');
+      if (first) first.focus();
+      return;
+    }
+    const button = document.getElementById("plan-save");
+    button.disabled = true;
+    try {
+      if (editing) await api(`/plans/${editing.id}`, { method: "PUT", body });
+      else {
+        await api(`/patients/${pid}/plans`, { method: "POST", body });
+        if (running && running.start_date < body.start_date) {  // the running plan ends the day before the new one
+          const old = { title: running.title, notes: running.notes, start_date: running.start_date, end_date: addDays(body.start_date, -1),
+            items: running.items.map((i) => ({ exercise_slug: i.exercise_slug, sets: i.sets, repetitions: i.repetitions,
+              frequency_per_week: i.frequency_per_week, target_rom_deg: i.target_rom_deg, notes: i.notes })) };
+          await api(`/plans/${running.id}`, { method: "PUT", body: old });
+        }
+      }
+      document.getElementById("plan-form").hidden = true;
+      await loadPlans();
+      const saved = document.getElementById("plan-saved");
+      saved.textContent = editing ? "Plan saved — the patient sees it now." : "New plan saved — the patient sees it now.";
+      saved.hidden = false;
+      overview().catch(showError);
+    } catch (err) {
+      showApiErrors(err);
+    } finally { button.disabled = false; }
+  }
+
+  async function loadPlans() {
+    plans = (await api(`/patients/${pid}/plans?limit=50`)).items;
+    running = runningPlan(plans);
+    renderPlan();
+    return running;
+  }
+
+  document.getElementById("plan-edit").addEventListener("click", () => openForm(running));
+  document.getElementById("plan-new").addEventListener("click", () => openForm(null));
+  document.getElementById("plan-add").addEventListener("click", () => addRow(null).querySelector("select").focus());
+  document.getElementById("plan-cancel").addEventListener("click", () => { document.getElementById("plan-form").hidden = true; });
+  document.getElementById("plan-form").addEventListener("submit", savePlan);
+
+  /** Shows the patient's name, the summary line and the progress charts (against the running plan). */
+  async function overview() {
+    const [patient, summary, progress] = await Promise.all([
+      api(`/patients/${pid}`), api(`/patients/${pid}/summary`), api(`/patients/${pid}/progress`),
+    ]);
+    document.getElementById("patient-name").textContent = patient.full_name || patient.email;
+    document.title = `${patient.full_name || patient.email} · Kinect Home Coach`;
+    const plan = running;
+    const parts = [patient.email];
+    parts.push(summary.last_session ? `last session ${fmtDate(summary.last_session.started_at)}` : "no session yet");
+    parts.push(summary.planned_this_week ? `this week ${summary.sessions_this_week} of ${summary.planned_this_week} sessions` : `this week ${summary.sessions_this_week} sessions`);
+    if (plan) parts.push(`plan “${plan.title}”: ` + plan.items.map((i) => `${exerciseName(lib, i.exercise_slug)} ${i.sets}×${i.repetitions}, ${i.frequency_per_week}/week`).join("; "));
+    document.getElementById("patient-summary").textContent = parts.join(" · ");
+    progressBlock(progress.points, plan);
+  }
+
   async function load() {
     try {
       lib = await exercises();
-      const [patient, summary, plans, progress] = await Promise.all([
-        api(`/patients/${pid}`), api(`/patients/${pid}/summary`), api(`/patients/${pid}/plans?limit=20`), api(`/patients/${pid}/progress`),
-      ]);
-      document.getElementById("patient-name").textContent = patient.full_name || patient.email;
-      document.title = `${patient.full_name || patient.email} · Kinect Home Coach`;
-      const plan = runningPlan(plans.items);
-      const parts = [patient.email];
-      parts.push(summary.last_session ? `last session ${fmtDate(summary.last_session.started_at)}` : "no session yet");
-      parts.push(summary.planned_this_week ? `this week ${summary.sessions_this_week} of ${summary.planned_this_week} sessions` : `this week ${summary.sessions_this_week} sessions`);
-      if (plan) parts.push(`plan “${plan.title}”: ` + plan.items.map((i) => `${exerciseName(lib, i.exercise_slug)} ${i.sets}×${i.repetitions}, ${i.frequency_per_week}/week`).join("; "));
-      document.getElementById("patient-summary").textContent = parts.join(" · ");
-      progressBlock(progress.points, plan);
+      await loadPlans();
+      await overview();
     } catch (err) { showError(err); }
     loadPending();
     loadDecided().catch(showError);
     loadSessions();
   }
   load();
+  Coach.onChange(pid, load);  // new sessions, suggestions and plan changes show without reloading the page
 })();

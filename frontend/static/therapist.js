@@ -1,66 +1,67 @@
-/* Therapist dashboard: assigned patients with adherence, indicators and pending advice, most in need first. */
+/* Therapist dashboard: assigned patients in the server's attention order, with reasons, indicator trends and advice. */
 "use strict";
 (() => {
-  const { api, url, el, fmtDate, daysAgo, showError } = Coach;
+  const { api, url, el, fmtDate, showError } = Coach;
   const INDICATORS = ["flexibility", "endurance", "strength", "balance"];
+  const LEVELS = { now: ["high", "Now"], soon: ["mid", "Soon"], ok: ["low", "OK"] };
+  const ARROWS = { up: "↑", down: "↓", flat: "→" };
+  const SVG = "http://www.w3.org/2000/svg";
 
-  /** Returns {score, level, reasons} for how much a patient needs attention now (higher = sooner). */
-  function attention(row) {
-    let score = 0;
-    const reasons = [];
-    if (row.pending_suggestions > 0) {
-      score += 2 * row.pending_suggestions;
-      reasons.push(`${row.pending_suggestions} suggestion${row.pending_suggestions > 1 ? "s" : ""} to review`);
-    }
-    const last = row.last_session;
-    if (!last) { score += 4; reasons.push("no session yet"); }
-    else {
-      const d = daysAgo(last.started_at);
-      if (d >= 7) { score += 3; reasons.push(`no session for ${d} days`); }
-    }
-    if (row.planned_this_week) {
-      const weekday = (new Date().getUTCDay() + 6) % 7;  // 0 = Monday
-      const expected = row.planned_this_week * (weekday + 1) / 7;
-      if (row.sessions_this_week < expected - 0.5) {
-        score += 3 * (1 - row.sessions_this_week / expected);
-        reasons.push("behind this week's plan");
-      }
-    }
-    const ind = row.latest_indicators || {};
-    if (INDICATORS.some((k) => ind[k] && ind[k].score !== null && ind[k].quality_ok === false)) { score += 1; reasons.push("poor recording quality"); }
-    const low = INDICATORS.filter((k) => ind[k] && ind[k].score !== null && ind[k].score < 50);
-    if (low.length) { score += low.length; reasons.push("low " + low.join(", ")); }
-    if (last && last.quality_ok === false && !reasons.includes("poor recording quality")) { score += 1; reasons.push("poor recording quality"); }
-    return { score, level: score >= 5 ? "high" : score >= 2 ? "mid" : "low", reasons };
+  /** Returns an SVG polyline of weekly medians (0..100, null = gap) or null with fewer than two points. */
+  function sparkline(values) {
+    const w = 56, h = 16, n = values.length;
+    const points = values.map((v, i) => (v === null ? null : `${(i * w / Math.max(n - 1, 1)).toFixed(1)},${(h - 1 - v / 100 * (h - 2)).toFixed(1)}`))
+      .filter((p) => p !== null);
+    if (points.length < 2) return null;
+    const svg = document.createElementNS(SVG, "svg");
+    svg.setAttribute("viewBox", `-1 -1 ${w + 2} ${h + 2}`);
+    svg.setAttribute("aria-hidden", "true");
+    svg.setAttribute("focusable", "false");
+    const line = document.createElementNS(SVG, "polyline");
+    line.setAttribute("points", points.join(" "));
+    svg.append(line);
+    return svg;
   }
 
-  function indicatorCell(ind) {
-    if (!ind || ind.score === null || ind.score === undefined) return el("td", { class: "muted", title: ind ? ind.basis : "no data" }, "—");
+  /** Returns the trend of one indicator: a sparkline and an arrow, read out as the server's sentence. */
+  function trend(t) {
+    if (!t || !t.direction) return null;
+    return el("span", { class: `trend ${t.direction}`, role: "img", "aria-label": t.text, title: t.text },
+      sparkline(t.weekly_median), el("span", { class: "arrow" }, ARROWS[t.direction]));
+  }
+
+  function indicatorCell(name, ind, t, missing) {
+    const tr = trend(t);
+    if (!ind || ind.score === null || ind.score === undefined) {
+      const why = name === "balance" && missing ? el("span", { class: "reasons why-missing" }, missing) : null;
+      return el("td", { class: "indicator" }, el("span", { class: "muted", title: ind ? ind.basis : "no data" }, "—"), tr, why);
+    }
     const flag = ind.quality_ok === false ? el("span", { class: "flag", title: "data quality: the recording was poor; treat this score with care" }, "⚠") : null;
     const prev = ind.previous !== null && ind.previous !== undefined ? `; value ${ind.value}, earlier median ${ind.previous}` : "";
-    return el("td", { title: `${ind.basis || ""}${prev}` },
+    return el("td", { class: "indicator", title: `${ind.basis || ""}${prev}` },
       el("span", { class: "score" }, el("span", { class: "bar", "aria-hidden": "true" }, el("i", { style: `width:${Math.round(ind.score)}%` })),
-        Math.round(ind.score), flag));
+        Math.round(ind.score), flag), tr);
   }
 
   function row(r) {
-    const a = attention(r);
     const href = url(`/therapist/patients/${r.patient_id}`);
     const last = r.last_session;
     const week = r.planned_this_week ? `${r.sessions_this_week} of ${r.planned_this_week} (${Math.round(100 * r.sessions_this_week / r.planned_this_week)}%)`
       : `${r.sessions_this_week} (no plan)`;
     const ind = r.latest_indicators || {};
-    const tr = el("tr", { "data-patient-id": r.patient_id },
+    const trends = r.indicator_trends || {};
+    const [cls, label] = LEVELS[r.attention_level] || LEVELS.ok;
+    return el("tr", { "data-patient-id": r.patient_id, "data-attention-score": r.attention_score, "data-attention-level": r.attention_level },
       el("td", {}, el("a", { href, class: "patient-link" }, r.full_name || r.email), el("span", { class: "reasons" }, r.email)),
-      el("td", {}, el("span", { class: `pill ${a.level}` }, a.level === "high" ? "Now" : a.level === "mid" ? "Soon" : "OK"),
-        el("span", { class: "reasons" }, a.reasons.join("; ") || "on track")),
+      el("td", { class: "attention" }, el("span", { class: `pill ${cls}` }, label), " ",
+        el("span", { class: "attention-score", title: "attention score, 0–100" }, `score ${r.attention_score}`),
+        r.attention_reasons.length ? el("ul", { class: "reasons" }, ...r.attention_reasons.map((t) => el("li", {}, t)))
+          : el("span", { class: "reasons" }, "on track")),
       el("td", {}, last ? el("a", { href: url(`/therapist/sessions/${last.id}`), class: "session-link" }, fmtDate(last.started_at)) : "never",
         last ? el("span", { class: "reasons" }, `${(last.exercise_slug || "").replace(/_/g, " ")}${last.repetitions !== null ? ", " + last.repetitions + " reps" : ""}`) : null),
       el("td", {}, week),
-      ...INDICATORS.map((k) => indicatorCell(ind[k])),
+      ...INDICATORS.map((k) => indicatorCell(k, ind[k], trends[k], r.balance_missing)),
       el("td", {}, r.pending_suggestions ? el("a", { href: href + "#pending-h" }, String(r.pending_suggestions)) : "0"));
-    tr._attention = a.score;
-    return tr;
   }
 
   async function load() {
@@ -72,10 +73,10 @@
         rows.push(...page.items);
         if (rows.length >= page.total || !page.items.length) break;
       }
-      const trs = rows.map(row).sort((a, b) => b._attention - a._attention || a.textContent.localeCompare(b.textContent));
-      body.replaceChildren(...trs);
-      if (!trs.length) body.append(el("tr", {}, el("td", { colspan: 9 }, "No patients are assigned to you yet.")));
+      body.replaceChildren(...rows.map(row));  // the server's order: attention score, highest first, then name
+      if (!rows.length) body.append(el("tr", {}, el("td", { colspan: 9 }, "No patients are assigned to you yet.")));
     } catch (err) { body.replaceChildren(); showError(err); }
   }
   load();
+  Coach.onChange(null, load);  // new sessions and advice re-rank the list without reloading the page
 })();

@@ -126,7 +126,8 @@ def db_session(db_connection) -> Iterator[Session]:
 @pytest.fixture
 def settings() -> Settings:
     """Settings of the test app (local environment, migration check off: the test DB is migrated)."""
-    return Settings(ENVIRONMENT="local", CHECK_MIGRATIONS=False, DATABASE_URL="sqlite://")
+    # event streams end at once: the test client reads a response to its end
+    return Settings(ENVIRONMENT="local", CHECK_MIGRATIONS=False, DATABASE_URL="sqlite://", EVENTS_STREAM_MAX_S=0.0)
 
 
 def make_test_app(db_session: Session, settings: Settings):

@@ -4,11 +4,22 @@ from __future__ import annotations
 
 import uuid
 
+from backend.sessions.metrics import indicator_scores
 from backend.sessions.models import ExerciseSession, SessionMetric
 
 
 def store_session(
-    db_session, patient, exercise, started_at, *, reps=10, rom=90.0, data=b"khs-bytes", doc=None, metrics=True
+    db_session,
+    patient,
+    exercise,
+    started_at,
+    *,
+    reps=10,
+    rom=90.0,
+    data=b"khs-bytes",
+    doc=None,
+    metrics=True,
+    quality_ok=True,
 ) -> ExerciseSession:
     """Stores one session (and, with metrics=True, its metrics document) and returns it (flushed)."""
     row = ExerciseSession(
@@ -29,9 +40,12 @@ def store_session(
         doc = doc or {
             "repetitions": reps,
             "rom_deg": rom,
-            "quality": {"ok": True},
+            "quality": {"ok": quality_ok},
             "indicators": {"flexibility": {"score": rom / 2, "value": rom, "basis": "test", "quality_ok": True}},
         }
-        db_session.add(SessionMetric(session_id=row.id, document=doc, repetitions=reps, rom_deg=rom, quality_ok=True))
+        db_session.add(
+            SessionMetric(session_id=row.id, document=doc, repetitions=reps, rom_deg=rom, quality_ok=quality_ok,
+                          indicator_scores=indicator_scores(doc))  # fmt: skip
+        )
         db_session.flush()
     return row

@@ -93,6 +93,7 @@ ROUTES = {
     ("GET", "/api/v1/sessions/{session_id}/file"): (CARE_DEV, None),
     ("GET", "/api/v1/sessions/{session_id}/detail"): (CARE, None),  # people only: devices do not read it
     ("GET", "/api/v1/sessions/{session_id}/replay"): (CARE_DEV, None),
+    ("GET", "/api/v1/events"): (AUTHED, None),  # each caller gets the events of the patients they may see
     ("GET", "/api/v1/patients/{patient_id}/progress"): (CARE_DEV, None),
     ("GET", "/api/v1/patients/{patient_id}/summary"): (CARE_DEV, None),
     ("GET", "/api/v1/dashboard"): (STAFF, None),  # therapists: assigned patients only

@@ -64,3 +64,69 @@ def test_unknown_exercise_is_404(client, make_patient_with_therapist, auth_heade
         "error": "ExerciseNotFound",
         "detail": "exercise 'no_such' does not exist",
     }
+
+
+def test_target_range_of_motion_and_note_are_stored_and_edited(
+    client, make_patient_with_therapist, auth_headers, exercise
+):
+    patient, therapist = make_patient_with_therapist()
+    headers = auth_headers(therapist)
+    body = _body(exercise.slug, notes="Rest a minute between the sets.")
+    body["items"][0]["target_rom_deg"] = 90
+    r = client.post(f"/api/v1/patients/{patient.id}/plans", json=body, headers=headers)
+    assert r.status_code == 201, r.text
+    plan = r.json()
+    assert plan["notes"] == "Rest a minute between the sets."
+    assert plan["items"][0]["target_rom_deg"] == 90
+    assert plan["therapist_name"] == (therapist.full_name or therapist.email)
+    body["items"][0].update(target_rom_deg=75.5, repetitions=12)
+    r = client.put(f"/api/v1/plans/{plan['id']}", json=body | {"notes": "Slowly."}, headers=headers)
+    assert r.status_code == 200, r.text
+    seen = client.get(f"/api/v1/patients/{patient.id}/plans", headers=auth_headers(patient)).json()["items"][0]
+    assert seen["notes"] == "Slowly."
+    assert seen["items"][0]["target_rom_deg"] == 75.5 and seen["items"][0]["repetitions"] == 12
+
+
+def test_target_range_of_motion_is_optional(client, make_patient_with_therapist, auth_headers, exercise):
+    patient, therapist = make_patient_with_therapist()
+    r = client.post(f"/api/v1/patients/{patient.id}/plans", json=_body(exercise.slug), headers=auth_headers(therapist))
+    assert r.status_code == 201 and r.json()["items"][0]["target_rom_deg"] is None
+
+
+def test_target_range_of_motion_above_180_is_a_validation_error(
+    client, make_patient_with_therapist, auth_headers, exercise
+):
+    patient, therapist = make_patient_with_therapist()
+    body = _body(exercise.slug)
+    body["items"][0]["target_rom_deg"] = 200
+    r = client.post(f"/api/v1/patients/{patient.id}/plans", json=body, headers=auth_headers(therapist))
+    assert r.status_code == 422 and r.json()["error"] == "ValidationError"
+    assert r.json()["detail"] == "body.items.0.target_rom_deg: Input should be less than or equal to 180"
+
+
+def test_zero_repetitions_is_a_validation_error_naming_the_row(
+    client, make_patient_with_therapist, auth_headers, exercise
+):
+    patient, therapist = make_patient_with_therapist()
+    body = _body(exercise.slug)
+    body["items"].append(dict(body["items"][0], repetitions=0))
+    r = client.post(f"/api/v1/patients/{patient.id}/plans", json=body, headers=auth_headers(therapist))
+    assert r.status_code == 422
+    assert r.json()["detail"] == "body.items.1.repetitions: Input should be greater than or equal to 1"
+
+
+def test_another_therapist_cannot_edit_the_plan(client, make_patient_with_therapist, make_user, auth_headers, exercise):
+    patient, therapist = make_patient_with_therapist()
+    other = make_user("therapist")
+    plan = client.post(
+        f"/api/v1/patients/{patient.id}/plans", json=_body(exercise.slug), headers=auth_headers(therapist)
+    ).json()
+    r = client.put(f"/api/v1/plans/{plan['id']}", json=_body(exercise.slug, notes="x"), headers=auth_headers(other))
+    assert r.status_code == 403 and r.json() == {
+        "error": "Forbidden",
+        "detail": f"you may not access patient {patient.id}",
+    }
+    r = client.post(f"/api/v1/patients/{patient.id}/plans", json=_body(exercise.slug), headers=auth_headers(other))
+    assert r.status_code == 403 and r.json()["error"] == "Forbidden"
+    r = client.get(f"/api/v1/plans/{plan['id']}", headers=auth_headers(therapist))
+    assert r.json()["notes"] == ""

@@ -87,6 +87,7 @@ def test_summary_counts_this_week_against_the_plan(
 def test_summary_of_a_patient_without_sessions(client, make_user, auth_headers):
     patient = make_user("patient")
     body = client.get(f"/api/v1/patients/{patient.id}/summary", headers=auth_headers(patient)).json()
+    trends = body.pop("indicator_trends")
     assert body == {
         "patient_id": patient.id,
         "last_session": None,
@@ -94,10 +95,16 @@ def test_summary_of_a_patient_without_sessions(client, make_user, auth_headers):
         "planned_this_week": None,
         "latest_indicators": None,
         "pending_suggestions": 0,
+        "attention_score": 0,
+        "attention_level": "ok",
+        "attention_reasons": [],
+        "balance_missing": "Not measured: no analysed session yet",
     }
+    assert set(trends) == {"flexibility", "endurance", "strength", "balance"}
+    assert all(t["direction"] is None and t["weekly_median"] == [None] * 6 for t in trends.values())
 
 
-def test_summaries_of_many_patients_take_two_queries(db_session, make_user, exercise, store):
+def test_summaries_of_many_patients_take_three_queries(db_session, make_user, exercise, store):
     patients = [make_user("patient") for _ in range(20)]
     t0 = utcnow() - dt.timedelta(days=20)
     for i, patient in enumerate(patients):
@@ -111,7 +118,7 @@ def test_summaries_of_many_patients_take_two_queries(db_session, make_user, exer
         result = dashboard.summaries(db_session=db_session, patient_ids=[p.id for p in patients], now=utcnow())
     finally:
         event.remove(connection, "before_cursor_execute", listener)
-    assert len(statements) <= 2, statements
+    assert len(statements) <= 3, statements
     assert all("file_bytes" not in s for s in statements)
     assert {r["latest_indicators"]["flexibility"]["value"] for r in result.values()} == {54.0}
 
@@ -184,3 +191,168 @@ def test_dashboard_past_the_last_page_is_empty_with_the_total(client, make_patie
     _, therapist = make_patient_with_therapist()
     body = client.get("/api/v1/dashboard", headers=auth_headers(therapist), params={"offset": 5}).json()
     assert (body["items"], body["total"], body["offset"]) == ([], 1, 5)
+
+
+# ------------------------------------------------------------------------------------------------ triage
+
+THURSDAY_NOON = dt.datetime(2026, 11, 26, 12, 0, tzinfo=dt.UTC)  # week of Monday 23 Nov
+
+
+def _plan(db_session, patient, therapist, exercise, start: dt.date, per_week: int = 3) -> Plan:
+    plan = Plan(patient_id=patient.id, therapist_id=therapist.id, title="home", start_date=start)
+    plan.items = [PlanItem(exercise_id=exercise.id, sets=1, repetitions=10, frequency_per_week=per_week, position=0)]
+    db_session.add(plan)
+    db_session.flush()
+    return plan
+
+
+def _on_plan_history(store, patient, exercise, *, recent_rom: float = 90.0, recent_reps: int = 10) -> None:
+    """Monday, Wednesday and Friday sessions for five weeks before THURSDAY_NOON's week, then Mon and Wed of it."""
+    monday = dashboard.week_start(THURSDAY_NOON)
+    for week in range(5, 0, -1):
+        for day in (0, 2, 4):
+            store(patient, exercise, monday - week * dt.timedelta(days=7) + dt.timedelta(days=day, hours=10))
+    for day in (0, 2):
+        store(patient, exercise, monday + dt.timedelta(days=day, hours=10), rom=recent_rom, reps=recent_reps)
+
+
+def _summary(db_session, patient, now=THURSDAY_NOON) -> dict:
+    return dashboard.summaries(db_session=db_session, patient_ids=[patient.id], now=now)[patient.id]
+
+
+def test_a_patient_on_plan_with_every_session_done_scores_low(db_session, make_patient_with_therapist, exercise, store):
+    patient, therapist = make_patient_with_therapist()
+    _plan(db_session, patient, therapist, exercise, THURSDAY_NOON.date() - dt.timedelta(days=40))
+    _on_plan_history(store, patient, exercise)
+    row = _summary(db_session, patient)
+    assert (row["attention_score"], row["attention_level"], row["attention_reasons"]) == (0, "ok", [])
+    assert row["indicator_trends"]["flexibility"]["direction"] == "flat"
+    assert row["indicator_trends"]["flexibility"]["weekly_median"] == [45.0] * 6
+
+
+def test_a_falling_range_of_motion_scores_higher_with_the_reason_in_words(
+    db_session, make_patient_with_therapist, exercise, store
+):
+    patient, therapist = make_patient_with_therapist()
+    _plan(db_session, patient, therapist, exercise, THURSDAY_NOON.date() - dt.timedelta(days=40))
+    _on_plan_history(store, patient, exercise, recent_rom=60.0)
+    row = _summary(db_session, patient)
+    name = exercise.slug.replace("_", " ")
+    expected = round(35 * ((90 - 60) / 90 - 0.10) / 0.30)
+    assert row["attention_score"] == expected and row["attention_level"] == "soon", row
+    assert row["attention_reasons"] == [
+        f"Range of motion of {name} fell from 90° to 60° (last 7 days vs the 4 weeks before)"
+    ]
+    assert row["indicator_trends"]["flexibility"]["direction"] == "down"
+    assert row["indicator_trends"]["flexibility"]["text"] == "Flexibility fell from 45 to 30 over 5 weeks"
+
+
+def test_falling_repetitions_are_a_reason_and_poor_quality_sessions_do_not_count_as_a_fall(
+    db_session, make_patient_with_therapist, exercise, store
+):
+    patient, therapist = make_patient_with_therapist()
+    _plan(db_session, patient, therapist, exercise, THURSDAY_NOON.date() - dt.timedelta(days=40))
+    _on_plan_history(store, patient, exercise, recent_reps=5)
+    store(patient, exercise, THURSDAY_NOON - dt.timedelta(hours=1), rom=20.0, reps=1, quality_ok=False)
+    row = _summary(db_session, patient)
+    name = exercise.slug.replace("_", " ")
+    assert row["attention_reasons"] == [
+        f"Repetitions of {name} fell from 10 to 5 (last 7 days vs the 4 weeks before)",
+        "1 of the last 5 sessions recorded with poor tracking quality",
+    ]
+    assert row["attention_score"] == round(35 + 15 / 5)
+
+
+def test_a_new_patient_without_sessions_is_not_now_but_an_absent_one_is(
+    db_session, make_patient_with_therapist, exercise
+):
+    new, therapist = make_patient_with_therapist()
+    _plan(db_session, new, therapist, exercise, THURSDAY_NOON.date() - dt.timedelta(days=1), per_week=7)
+    db_session.add_all(
+        [Suggestion(patient_id=new.id, source="system", rule="r", text="t", status="pending") for _ in range(3)]
+    )
+    absent, _ = make_patient_with_therapist()
+    _plan(db_session, absent, therapist, exercise, THURSDAY_NOON.date() - dt.timedelta(days=21))
+    db_session.flush()
+    rows = dashboard.summaries(db_session=db_session, patient_ids=[new.id, absent.id], now=THURSDAY_NOON)
+    assert rows[new.id]["attention_level"] != "now", rows[new.id]
+    assert rows[new.id]["attention_reasons"][-1] == "New plan since 25 Nov; no session yet"
+    assert rows[absent.id]["attention_level"] == "now", rows[absent.id]
+    assert rows[absent.id]["attention_reasons"][0] == "No session at all since the plan started on 5 Nov"
+
+
+def test_monday_morning_is_not_behind_the_plan(db_session, make_patient_with_therapist, exercise, store):
+    patient, therapist = make_patient_with_therapist()
+    _plan(db_session, patient, therapist, exercise, THURSDAY_NOON.date() - dt.timedelta(days=40), per_week=6)
+    monday_morning = dashboard.week_start(THURSDAY_NOON) + dt.timedelta(hours=8)
+    store(patient, exercise, monday_morning - dt.timedelta(days=2))
+    row = _summary(db_session, patient, now=monday_morning)
+    assert (row["attention_score"], row["attention_reasons"]) == (0, [])
+    thursday = _summary(db_session, patient)
+    assert (
+        thursday["attention_reasons"][0]
+        == "Behind this week's plan: 0 of the 3 sessions due by now done (6 a week planned)"
+    )
+
+
+def test_missing_balance_is_explained_in_words(db_session, make_user, exercise, store):
+    patient = make_user("patient")
+    store(patient, exercise, THURSDAY_NOON - dt.timedelta(days=1))
+    row = _summary(db_session, patient)
+    name = exercise.slug.replace("_", " ")
+    assert row["balance_missing"] == (f"Not measured: no still standing of 2 s or more in the last session ({name})")
+    doc = {"repetitions": 5, "rom_deg": 50.0, "quality": {"ok": True}, "indicators": {"balance": {"score": 80.0}}}
+    store(patient, exercise, THURSDAY_NOON - dt.timedelta(hours=1), doc=doc)
+    assert _summary(db_session, patient)["balance_missing"] is None
+
+
+def test_dashboard_is_sorted_by_attention_then_name_and_pages(client, db_session, make_user, auth_headers, exercise):
+    from backend.patients.models import TherapistPatient
+
+    therapist = make_user("therapist")
+    calm, pending, absent = (make_user("patient", full_name=n) for n in ("Aaron Calm", "Bea Pending", "Zed Absent"))
+    for p in (calm, pending, absent):
+        db_session.add(TherapistPatient(therapist_id=therapist.id, patient_id=p.id, created_at=utcnow()))
+    db_session.add_all(
+        [Suggestion(patient_id=pending.id, source="system", rule="r", text="t", status="pending") for _ in range(3)]
+    )
+    _plan(db_session, absent, therapist, exercise, utcnow().date() - dt.timedelta(days=30))
+    headers = auth_headers(therapist)
+    items = client.get("/api/v1/dashboard", headers=headers).json()["items"]
+    assert [r["patient_id"] for r in items] == [absent.id, pending.id, calm.id]
+    scores = [r["attention_score"] for r in items]
+    assert scores == sorted(scores, reverse=True) and scores[-1] == 0 and scores[1] == 20, scores
+    page = client.get("/api/v1/dashboard", headers=headers, params={"limit": 1, "offset": 1}).json()
+    assert ([r["patient_id"] for r in page["items"]], page["total"]) == ([pending.id], 3)
+
+
+def test_dashboard_queries_do_not_grow_with_patients(client, db_session, make_user, auth_headers, exercise, store):
+    from backend.patients.models import TherapistPatient
+
+    therapist = make_user("therapist")
+    headers = auth_headers(therapist)
+
+    def add_patients(n: int) -> None:
+        for _ in range(n):
+            patient = make_user("patient")
+            db_session.add(TherapistPatient(therapist_id=therapist.id, patient_id=patient.id, created_at=utcnow()))
+            _plan(db_session, patient, therapist, exercise, utcnow().date() - dt.timedelta(days=30))
+            for k in range(4):
+                store(patient, exercise, utcnow() - dt.timedelta(days=3 + 5 * k))
+        db_session.flush()
+
+    def count_selects() -> int:
+        statements = []
+        listener = lambda *args: statements.append(args[2])  # noqa: E731 - (conn, cursor, statement, ...)
+        connection = db_session.connection()
+        event.listen(connection, "before_cursor_execute", listener)
+        try:
+            assert client.get("/api/v1/dashboard", headers=headers).status_code == 200
+        finally:
+            event.remove(connection, "before_cursor_execute", listener)
+        return sum(1 for s in statements if s.lstrip().upper().startswith(("SELECT", "WITH")))
+
+    add_patients(2)
+    few = count_selects()
+    add_patients(10)
+    assert count_selects() == few

@@ -137,7 +137,7 @@ def run_server(database_url: str, log_dir: Path, **env: str) -> Iterator[str]:
     log = open(log_dir / f"server-{port}.log", "w+")  # noqa: SIM115 - closed below
     command = [sys.executable, "-m", "uvicorn", "backend.main:create_app", "--factory", "--host", "127.0.0.1",
                "--port", str(port), "--log-level", "warning", "--proxy-headers",
-               "--forwarded-allow-ips", "127.0.0.1"]  # fmt: skip
+               "--forwarded-allow-ips", "127.0.0.1", "--timeout-graceful-shutdown", "2"]  # fmt: skip
     proc = subprocess.Popen(command, cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT)
     base = f"http://127.0.0.1:{port}"
     try:

@@ -50,10 +50,17 @@ class PrefixProxy:
         if scope["query_string"]:
             url += "?" + scope["query_string"].decode()
         assert self.client is not None
-        resp = await self.client.request(scope["method"], url, headers=headers, content=body)
-        out = [(k.encode(), v.encode()) for k, v in resp.headers.multi_items() if k.lower() not in HOP_BY_HOP]
-        out = [(k, v) for k, v in out if k.lower() != b"content-encoding"]  # httpx already decoded the body
-        await _answer(send, resp.status_code, out, resp.content)
+        request = self.client.build_request(scope["method"], url, headers=headers, content=body)
+        resp = await self.client.send(request, stream=True)  # streamed through, as nginx does (event streams)
+        try:
+            out = [(k.encode(), v.encode()) for k, v in resp.headers.multi_items() if k.lower() not in HOP_BY_HOP]
+            out = [(k, v) for k, v in out if k.lower() != b"content-encoding"]  # httpx decodes the body
+            await send({"type": "http.response.start", "status": resp.status_code, "headers": out})
+            async for chunk in resp.aiter_bytes():
+                await send({"type": "http.response.body", "body": chunk, "more_body": True})
+            await send({"type": "http.response.body", "body": b""})
+        finally:
+            await resp.aclose()
 
     async def _lifespan(self, receive, send) -> None:
         while True:
@@ -102,4 +109,5 @@ class ProxyServer:
 
     def __exit__(self, *_exc) -> None:
         self.server.should_exit = True
+        self.server.force_exit = True  # open event streams do not hold the shutdown
         self.thread.join(timeout=10)

@@ -29,6 +29,7 @@ class PageCase:
     ready: str | None = None  # a selector that appears once the page's data is shown
     chart_px: int | None = None  # the smallest chart label allowed, px (pages with charts)
     optional: bool = False  # built by another change: skipped while the address answers 404
+    click: str | None = None  # a button pressed once the page is ready (a page state, e.g. an open form)
 
 
 PAGES = (
@@ -43,6 +44,7 @@ PAGES = (
         "#sessions tbody tr[data-session-id]",
         chart_px=14,
     ),  # fmt: skip
+    PageCase("plan_form", "therapist", "/therapist/patients/{patient}", "#plan-items li", click="#plan-edit"),
     PageCase("session", "therapist", "/therapist/sessions/{session}", None, chart_px=14, optional=True),
     PageCase("replay", "therapist", "/therapist/sessions/{session}/replay", None, optional=True),
 )
@@ -115,6 +117,8 @@ def test_page_is_accessible_and_fits_the_width(role_pages, live_server, session_
         page.locator(case.ready).first.wait_for()
     if case.chart_px:
         page.locator(".js-plotly-plot .main-svg").first.wait_for()
+    if case.click:
+        page.click(case.click)
     shot(page, f"{case.name}_{width}")
 
     violations = _violations(page)

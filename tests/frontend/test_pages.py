@@ -28,7 +28,9 @@ def test_therapist_sees_patients_sorted_by_attention(page, live_server):
     rows = page.locator("#patients tbody tr[data-patient-id]")
     rows.first.wait_for()
     expect(rows).to_have_count(3)
-    scores = page.eval_on_selector_all("#patients tbody tr[data-patient-id]", "trs => trs.map(tr => tr._attention)")
+    scores = page.eval_on_selector_all(
+        "#patients tbody tr[data-patient-id]", "trs => trs.map(tr => Number(tr.dataset.attentionScore))"
+    )
     assert scores == sorted(scores, reverse=True) and scores[0] > 0, scores  # who needs attention first
     rose = rows.filter(has_text="Rose Miller")
     assert "to review" in rose.inner_text()  # her pending suggestions are one of the reasons shown

@@ -1,0 +1,130 @@
+"""Events the pages listen to (a new session, changed advice, a changed plan), from any worker or replica.
+
+publish() attaches an event to the database transaction that makes the change, so an event goes out only for data
+that is committed, and only once:
+- PostgreSQL (production, several workers and replicas): `pg_notify` inside the transaction; PostgreSQL delivers
+  it at commit to every process LISTENing on CHANNEL (listener.py), each of which hands it to its own HUB.
+- SQLite (the embedded demo, one process): straight to this process's HUB after the commit.
+HUB fans events out to the server-sent-event streams of this process (router.py), each filtered by the patients
+its caller may see.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import threading
+from dataclasses import asdict, dataclass, field
+
+from sqlalchemy import event, select
+from sqlalchemy import func as sa_func
+from sqlalchemy.orm import Session
+
+CHANNEL = "coach_events"
+_PENDING = "coach_events"  # key in Session.info: events waiting for the commit
+KINDS = ("session.stored", "suggestion.changed", "plan.changed")
+
+
+@dataclass(frozen=True)
+class Event:
+    """Something changed about one patient: `kind` (one of KINDS), the patient, and ids the page may use."""
+
+    kind: str
+    patient_id: int
+    data: dict = field(default_factory=dict)
+
+    def to_json(self) -> str:
+        """Returns the event as compact JSON."""
+        return json.dumps(asdict(self), separators=(",", ":"))
+
+    @classmethod
+    def from_json(cls, text: str) -> Event:
+        """Returns the event of a JSON text written by to_json; raises ValueError when it is not one."""
+        raw = json.loads(text)
+        if not isinstance(raw, dict) or raw.get("kind") not in KINDS or not isinstance(raw.get("patient_id"), int):
+            raise ValueError(f"not an event: {text[:200]!r}")
+        return cls(kind=raw["kind"], patient_id=raw["patient_id"], data=dict(raw.get("data") or {}))
+
+
+class Subscriber:
+    """One event stream: the events of some patients (None = all), queued for an asyncio consumer."""
+
+    def __init__(self, patient_ids: frozenset[int] | None, maxsize: int = 100) -> None:
+        self.patient_ids = patient_ids
+        self.loop = asyncio.get_running_loop()
+        self.queue: asyncio.Queue[Event] = asyncio.Queue(maxsize=maxsize)
+
+    def wants(self, ev: Event) -> bool:
+        """Returns whether this stream shows events of ev's patient."""
+        return self.patient_ids is None or ev.patient_id in self.patient_ids
+
+    def offer(self, ev: Event) -> None:
+        """Queues ev (called on the subscriber's event loop); a full queue drops it (the page reloads anyway)."""
+        if not self.queue.full():
+            self.queue.put_nowait(ev)
+
+
+class Hub:
+    """This process's fan-out of events to its subscribers; deliver() may be called from any thread."""
+
+    def __init__(self) -> None:
+        self._subscribers: set[Subscriber] = set()
+        self._lock = threading.Lock()
+
+    def subscribe(self, patient_ids: frozenset[int] | None) -> Subscriber:
+        """Returns a new subscriber (call on the event loop that will read it)."""
+        sub = Subscriber(patient_ids)
+        with self._lock:
+            self._subscribers.add(sub)
+        return sub
+
+    def unsubscribe(self, sub: Subscriber) -> None:
+        """Forgets a subscriber."""
+        with self._lock:
+            self._subscribers.discard(sub)
+
+    def deliver(self, ev: Event) -> int:
+        """Hands ev to every subscriber that wants it; returns how many."""
+        with self._lock:
+            targets = [s for s in self._subscribers if s.wants(ev)]
+        for sub in targets:
+            try:
+                sub.loop.call_soon_threadsafe(sub.offer, ev)
+            except RuntimeError:  # its loop is closed: the stream ended
+                self.unsubscribe(sub)
+        return len(targets)
+
+    def count(self) -> int:
+        """Returns the number of subscribers."""
+        with self._lock:
+            return len(self._subscribers)
+
+
+HUB = Hub()
+
+
+def publish(db_session: Session, ev: Event) -> None:
+    """Sends ev when db_session's transaction commits (never when it rolls back)."""
+    db_session.info.setdefault(_PENDING, []).append(ev)
+
+
+@event.listens_for(Session, "before_commit")
+def _notify_in_transaction(db_session: Session) -> None:
+    events = db_session.info.get(_PENDING)
+    if not events or db_session.get_bind().dialect.name != "postgresql":
+        return
+    db_session.info[_PENDING] = []
+    for ev in events:
+        db_session.execute(select(sa_func.pg_notify(CHANNEL, ev.to_json())))
+
+
+@event.listens_for(Session, "after_commit")
+def _deliver_in_process(db_session: Session) -> None:
+    events = db_session.info.pop(_PENDING, None)  # left only on databases without NOTIFY (SQLite)
+    for ev in events or ():
+        HUB.deliver(ev)
+
+
+@event.listens_for(Session, "after_rollback")
+def _forget(db_session: Session) -> None:
+    db_session.info.pop(_PENDING, None)

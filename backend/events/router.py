@@ -1,0 +1,83 @@
+"""GET /api/v1/events: server-sent events about the patients the caller may see, so pages update by themselves."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import AsyncIterator
+from typing import Annotated
+
+from fastapi import APIRouter, Query, Request
+from fastapi.responses import StreamingResponse
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+from starlette.concurrency import run_in_threadpool
+
+from backend.deps import Caller, CurrentCaller, DbSession, require_patient_access
+from backend.events.hub import HUB, Subscriber
+from backend.exceptions import AUTH_ERRORS, PatientNotFound, error_responses
+from backend.patients.models import TherapistPatient
+from backend.schemas import IdQuery
+
+router = APIRouter(prefix="/api/v1", tags=["events"])
+KEEPALIVE_S = 15.0  # a comment line this often keeps proxies from closing an idle stream
+RETRY_MS = 3000  # how long the browser waits before reconnecting
+
+
+def visible_patients(caller: Caller, db_session: Session, patient_id: int | None) -> frozenset[int] | None:
+    """Returns the patient ids whose events the caller may receive (None = every patient: admins)."""
+    if patient_id is not None:
+        require_patient_access(patient_id, caller=caller, db_session=db_session)
+        return frozenset({patient_id})
+    if caller.role == "device":
+        return frozenset({caller.device.patient_id})
+    if caller.role == "patient":
+        return frozenset({caller.user.id})
+    if caller.role == "therapist":
+        assigned = select(TherapistPatient.patient_id).where(TherapistPatient.therapist_id == caller.user.id)
+        return frozenset(db_session.scalars(assigned))
+    return None
+
+
+@router.get(
+    "/events",
+    response_class=StreamingResponse,
+    responses={
+        200: {"content": {"text/event-stream": {}}, "description": "events: session.stored, suggestion.changed, "
+              "plan.changed; data: {kind, patient_id, data}"},  # fmt: skip
+        **error_responses(*AUTH_ERRORS, PatientNotFound),
+    },
+)
+async def stream_events(
+    request: Request,
+    caller: CurrentCaller,
+    db_session: DbSession,
+    patient_id: Annotated[IdQuery, Query(description="only this patient's events")] = None,
+):
+    """Streams server-sent events about the patients the caller may see (one patient with patient_id)."""
+    patients = await run_in_threadpool(visible_patients, caller, db_session, patient_id)
+    await run_in_threadpool(db_session.commit)  # gives the connection back to the pool for the stream's lifetime
+    subscriber = HUB.subscribe(patients)
+    return StreamingResponse(
+        _stream(request, subscriber, request.app.state.settings.EVENTS_STREAM_MAX_S),
+        media_type="text/event-stream",
+        headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"},
+    )
+
+
+async def _stream(request: Request, subscriber: Subscriber, max_s: float) -> AsyncIterator[str]:
+    """Yields the stream's text: the retry delay, then events and keep-alive comments until the client leaves or
+    max_s seconds pass (the browser then reconnects, and its login is checked again)."""
+    deadline = time.monotonic() + max_s
+    try:
+        yield f"retry: {RETRY_MS}\n: connected\n\n"
+        while time.monotonic() < deadline and not await request.is_disconnected():
+            try:
+                left = deadline - time.monotonic()
+                ev = await asyncio.wait_for(subscriber.queue.get(), timeout=max(0.0, min(KEEPALIVE_S, left)))
+            except TimeoutError:
+                yield ": keep-alive\n\n"
+                continue
+            yield f"event: {ev.kind}\ndata: {ev.to_json()}\n\n"
+    finally:
+        HUB.unsubscribe(subscriber)

@@ -1,0 +1,65 @@
+"""The therapist dashboard's triage end to end: rows in the server's attention order, "Now" only above the threshold."""
+
+from __future__ import annotations
+
+import pytest
+from playwright.sync_api import expect
+
+from backend.sessions.triage import NOW_AT
+from tests.frontend.conftest import THERAPIST, login, shot
+
+pytestmark = pytest.mark.browser
+
+
+def _dashboard(page) -> list[dict]:
+    """Returns the rows the dashboard API gives the logged-in therapist, in its order."""
+    return page.evaluate("async () => (await (await fetch(Coach.url('/api/v1/dashboard?limit=200'))).json()).items")
+
+
+def test_dashboard_rows_follow_the_score_and_only_urgent_patients_show_now(page, live_server):
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    rows = page.locator("#patients tbody tr[data-patient-id]")
+    rows.first.wait_for()
+    api = _dashboard(page)
+    expect(rows).to_have_count(len(api))
+    shown = page.eval_on_selector_all(
+        "#patients tbody tr[data-patient-id]",
+        "trs => trs.map(tr => [Number(tr.dataset.patientId), Number(tr.dataset.attentionScore),"
+        " tr.querySelector('.pill').textContent])",
+    )
+    assert [pid for pid, _, _ in shown] == [r["patient_id"] for r in api]
+    scores = [score for _, score, _ in shown]
+    assert scores == sorted(scores, reverse=True), shown
+    for pid, score, pill in shown:
+        assert (pill == "Now") == (score >= NOW_AT), (pid, score, pill)
+    assert sum(pill == "Now" for _, _, pill in shown) < len(shown), shown  # it singles patients out
+    for row, r in zip(rows.all(), api, strict=True):
+        for reason in r["attention_reasons"]:
+            expect(row.locator("td.attention")).to_contain_text(reason)
+    assert not page.js_errors
+
+
+def test_indicator_trends_have_a_text_alternative_and_missing_balance_says_why(page, live_server):
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    page.locator("#patients tbody tr[data-patient-id]").first.wait_for()
+    rose = next(r for r in _dashboard(page) if r["patient_id"] == live_server.patient_id)
+    row = page.locator(f'#patients tbody tr[data-patient-id="{rose["patient_id"]}"]')
+    for t in rose["indicator_trends"].values():
+        if t["direction"]:
+            expect(row.get_by_role("img", name=t["text"])).to_be_visible()
+    if rose["balance_missing"]:
+        expect(row.locator(".why-missing")).to_have_text(rose["balance_missing"])
+    assert not page.js_errors
+
+
+@pytest.mark.parametrize("width", [1366, 390])
+def test_dashboard_fits_the_width(page, live_server, width):
+    page.set_viewport_size({"width": width, "height": 900})
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    page.locator("#patients tbody tr[data-patient-id]").first.wait_for()
+    page_scroll = page.evaluate("document.documentElement.scrollWidth - document.documentElement.clientWidth")
+    assert page_scroll <= 0, f"the page scrolls sideways by {page_scroll} px at {width} px"
+    shot(page, f"triage_dashboard_{width}")
