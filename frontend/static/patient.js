@@ -135,7 +135,7 @@
         title: `${exerciseName(lib, slug)}: how many each time`, traces, fontSize: 20, height: 320,
         config: { displayModeBar: false },
         layout: { shapes, showlegend: true, dragmode: false,
-          xaxis: { type: "date", tickformat: "%-d %b", fixedrange: true, nticks: window.innerWidth < 600 ? 3 : 5 },
+          xaxis: Plots.dateAxis(mine.map((p) => p.started_at), { fixedrange: true, nticks: window.innerWidth < 600 ? 3 : 5 }),
           yaxis: { fixedrange: true, range: [0, Math.ceil(top * 1.15)], nticks: 4 } },
         table: { caption: `${exerciseName(lib, slug)}: how many you did each time`,
           columns: ["Day", "How many", ...(item ? ["Your goal"] : [])],

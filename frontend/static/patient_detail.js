@@ -109,7 +109,7 @@
     return Plots.figure({
       title, traces, fontSize: FONT, height: 340,
       layout: { shapes, showlegend: true, hovermode: "closest",
-        xaxis: { type: "date", tickformat: "%-d %b" },
+        xaxis: Plots.dateAxis(mine.map((p) => p.started_at)),
         yaxis: { title: { text: yTitle + (unit ? ` (${unit})` : "") }, rangemode } },
       table: { caption: `${title} — one row per session`, columns, rows },
     });

@@ -98,5 +98,20 @@ const Plots = (() => {
     return fig;
   }
 
-  return { figure, table, draw, COLORS, MIN_FONT };
+  /** Returns an x-axis layout for dates (ISO strings): day-month ticks, at most one tick a day, so a few
+      sessions close together never show the same date under several ticks. */
+  function dateAxis(dates, extra = {}) {
+    const DAY = 86400000, times = dates.map((d) => +new Date(d)).filter(isFinite);
+    const axis = { type: "date", tickformat: "%-d %b", ...extra };
+    if (!times.length) return axis;
+    const lo = Math.min(...times), hi = Math.max(...times);
+    if (hi - lo < 6 * DAY) {  // short span: one tick per day, with half a day of room on each side
+      const first = new Date(lo); first.setHours(12, 0, 0, 0);  // a tick at noon: under the middle of its day
+      Object.assign(axis, { dtick: DAY, tick0: first.toISOString(), range: [new Date(lo - DAY / 2).toISOString(), new Date(hi + DAY / 2).toISOString()] });
+      delete axis.nticks;
+    }
+    return axis;
+  }
+
+  return { figure, table, draw, dateAxis, COLORS, MIN_FONT };
 })();
