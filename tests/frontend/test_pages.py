@@ -8,6 +8,7 @@ import httpx
 import pytest
 from playwright.sync_api import expect
 
+from backend.demo import DEMO_PASSWORD
 from tests.frontend.conftest import PATIENT, THERAPIST, login, shot
 
 pytestmark = pytest.mark.browser
@@ -98,3 +99,15 @@ def test_not_logged_in_goes_to_login_page(page):
     page.goto("/therapist")
     assert re.search(r"/\?next=%2Ftherapist$", page.url), page.url
     page.locator("#login-form").wait_for()
+
+
+OFF_SITE = ["/\\evil.example/", "/%09/evil.example/", "%2F%5Cevil.example%2F", "//evil.example/"]
+
+
+@pytest.mark.parametrize("next_", OFF_SITE)
+def test_login_never_follows_next_off_the_site(page, live_server, next_):
+    page.goto(f"/?next={next_}")
+    page.fill("#email", THERAPIST)
+    page.fill("#password", DEMO_PASSWORD)
+    page.click("#login-submit")
+    page.wait_for_url(f"{live_server.url}/therapist")
