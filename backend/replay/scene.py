@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from backend.analysis import data_quality
 from kinect_agent import skeleton
 from kinect_agent.formats.session_file import SessionPayload
-from kinect_agent.processing.combined_outliers import outlier_probabilities_combined
 from kinect_agent.processing.pipeline import PipelineConfig
 from kinect_agent.recording import Recording
 
@@ -88,10 +88,11 @@ def camera_pose(reference: np.ndarray, plane: str) -> tuple[tuple[float, ...], t
     return tuple(float(v) for v in position), tuple(float(v) for v in look_at), view
 
 
-def outlier_flags(raw: Recording) -> np.ndarray:
-    """Returns (T, 20) bool: the raw samples the agent's outlier step removes (mixture model + excursions)."""
-    config = PipelineConfig()
-    prob = outlier_probabilities_combined(raw, config)
+def outlier_flags(raw: Recording, config: PipelineConfig | None = None) -> np.ndarray:
+    """Returns (T, 20) bool: the raw samples the agent's outlier step removes (mixture model + excursions), as the
+    session page's tracking-error strip computes them (data_quality.outlier_probabilities)."""
+    config = config or PipelineConfig()
+    prob = data_quality.outlier_probabilities(raw, config)
     return (prob > config.outlier_threshold) & np.isfinite(raw.positions).all(axis=2)
 
 
@@ -116,7 +117,8 @@ def build(payload: SessionPayload, plane: str) -> Replay:
     filtered = payload.filtered
     if filtered is not None and filtered.n_frames != raw.n_frames:
         filtered = None  # a file whose recordings disagree shows its raw skeleton only
-    flags = outlier_flags(raw) if raw.n_frames >= 3 else np.zeros((raw.n_frames, skeleton.J), dtype=bool)
+    config = data_quality.pipeline_config(payload.params.get("config") if isinstance(payload.params, dict) else None)
+    flags = outlier_flags(raw, config) if raw.n_frames >= 3 else np.zeros((raw.n_frames, skeleton.J), dtype=bool)
     reference = filtered.positions if filtered is not None else raw.positions
     shift = ground_frame(reference)
     raw_pos = raw.positions - shift
