@@ -43,6 +43,12 @@ def _root(request: Request) -> str:
     return request.app.state.settings.root_path
 
 
+def _here(request: Request) -> str:
+    """Returns the address of this request as a path of the app's public URL (prefix, path, query): the ?next=
+    a login comes back to."""
+    return _root(request) + request.url.path + (f"?{request.url.query}" if request.url.query else "")
+
+
 def _page(request: Request, name: str, caller: Caller | None, status_code: int = 200, **context) -> HTMLResponse:
     user = caller.user if caller is not None else None
     root = _root(request)
@@ -74,8 +80,7 @@ def error_page(request: Request, status_code: int) -> HTMLResponse:
 def _gate(request: Request, caller: Caller | None, roles: tuple[str, ...]) -> Response | None:
     """Returns a redirect to the login page (not logged in) or a 403 page (wrong role); None lets the page show."""
     if caller is None or caller.user is None:
-        target = _root(request) + request.url.path + (f"?{request.url.query}" if request.url.query else "")
-        return RedirectResponse(f"{_root(request)}/?next={quote(target, safe='')}", status_code=303)
+        return RedirectResponse(f"{_root(request)}/?next={quote(_here(request), safe='')}", status_code=303)
     if caller.user.role not in roles:
         return _page(request, "error.html", caller, status_code=403, title="Not for this account",
                      message="This page is for therapists. Your own page is one click away.")  # fmt: skip
@@ -151,11 +156,9 @@ def replay_viewer(request: Request, caller: OptionalCaller) -> Response:
 
 def _sign_in_first(request: Request) -> HTMLResponse:
     """Returns the 401 page of a page that needs a login, with a link to sign in and come back."""
-    root = _root(request)
-    target = root + request.url.path + (f"?{request.url.query}" if request.url.query else "")
     return _page(request, "error.html", None, status_code=401, title="Please sign in",
                  message="This page shows personal health data. Please sign in to see it.",
-                 home=f"{root}/?next={quote(target, safe='')}", link_text="Sign in")  # fmt: skip
+                 home=f"{_root(request)}/?next={quote(_here(request), safe='')}", link_text="Sign in")  # fmt: skip
 
 
 @router.get("/static/vendor/plotly.min.js")
