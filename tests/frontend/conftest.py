@@ -67,6 +67,40 @@ def _login(client: httpx.Client, email: str) -> dict:
     return r.json()
 
 
+def api_client(base: str, email: str) -> tuple[httpx.Client, dict[str, str]]:
+    """Returns an httpx client of the server at base signed in as a demo user (login cookie) and its CSRF header;
+    the caller closes the client (client.close(): a used httpx client cannot be entered with `with`)."""
+    client = httpx.Client(base_url=base, timeout=60)
+    return client, {"X-CSRF-Token": _login(client, email)["csrf_token"]}
+
+
+def upload_session(base: str, email: str, exercise: str, reps: int, *, seed: int,
+                   created_at: str = "2026-11-20T10:00:00Z") -> dict:  # fmt: skip
+    """Uploads a simulated set (tests.backend.khs_files.make_khs) as the demo patient `email`; returns the stored
+    session (201 asserted)."""
+    client, headers = api_client(base, email)
+    data = make_khs(exercise, reps, seed=seed, created_at=created_at)
+    try:
+        r = client.post(f"/api/v1/sessions?exercise={exercise}", content=data,
+                        headers=headers | {"Content-Type": "application/octet-stream"})  # fmt: skip
+    finally:
+        client.close()
+    assert r.status_code == 201, r.text
+    return r.json()
+
+
+def newest_session_id(base: str, email: str, patient_id: int | None = None) -> int:
+    """Returns the id of the newest session the demo user `email` may see (of patient_id when given)."""
+    client, _ = api_client(base, email)
+    params = {"limit": 1} | ({"patient_id": patient_id} if patient_id is not None else {})
+    try:
+        r = client.get("/api/v1/sessions", params=params)
+    finally:
+        client.close()
+    r.raise_for_status()
+    return r.json()["items"][0]["id"]
+
+
 def _iso(when: dt.datetime) -> str:
     return when.astimezone(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
 

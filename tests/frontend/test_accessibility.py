@@ -5,12 +5,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import httpx
 import pytest
 from axe_playwright_python.sync_playwright import Axe
 
 from backend.demo import DEMO_PASSWORD
-from tests.frontend.conftest import PATIENT, THERAPIST, shot
+from tests.frontend.conftest import PATIENT, THERAPIST, newest_session_id, shot
 
 pytestmark = pytest.mark.browser
 
@@ -53,11 +52,7 @@ PAGES = (
 @pytest.fixture(scope="module")
 def session_id(live_server) -> int:
     """The id of one of Rose's sessions (the newest)."""
-    with httpx.Client(base_url=live_server.url, timeout=30) as client:
-        client.post("/api/v1/auth/login", json={"email": THERAPIST, "password": DEMO_PASSWORD}).raise_for_status()
-        r = client.get("/api/v1/sessions", params={"patient_id": live_server.patient_id, "limit": 1})
-        r.raise_for_status()
-        return r.json()["items"][0]["id"]
+    return newest_session_id(live_server.url, THERAPIST, live_server.patient_id)
 
 
 @pytest.fixture(scope="module")

@@ -8,14 +8,11 @@ import datetime as dt
 import json
 import re
 
-import httpx
 import pytest
 from playwright.sync_api import TimeoutError as PlaywrightTimeout
 from playwright.sync_api import expect
 
-from backend.demo import DEMO_PASSWORD
-from tests.backend.khs_files import make_khs
-from tests.frontend.conftest import THERAPIST, login, shot
+from tests.frontend.conftest import THERAPIST, login, shot, upload_session
 
 pytestmark = pytest.mark.browser
 
@@ -26,15 +23,8 @@ NOTE = "Rest a minute between the two sets."
 @pytest.fixture(scope="module")
 def ines_id(live_server) -> int:
     """Ines's id, after she uploaded one sit-to-stand set of 6 today."""
-    with httpx.Client(base_url=live_server.url, timeout=60) as client:
-        r = client.post("/api/v1/auth/login", json={"email": INES, "password": DEMO_PASSWORD})
-        r.raise_for_status()
-        when = (dt.datetime.now(dt.UTC) - dt.timedelta(minutes=2)).strftime("%Y-%m-%dT%H:%M:%SZ")
-        headers = {"X-CSRF-Token": r.json()["csrf_token"], "Content-Type": "application/octet-stream"}
-        up = client.post("/api/v1/sessions?exercise=sit_to_stand", content=make_khs("sit_to_stand", 6, seed=40,
-                         created_at=when), headers=headers)  # fmt: skip
-        assert up.status_code == 201, up.text
-        return r.json()["user"]["id"]
+    when = (dt.datetime.now(dt.UTC) - dt.timedelta(minutes=2)).strftime("%Y-%m-%dT%H:%M:%SZ")
+    return upload_session(live_server.url, INES, "sit_to_stand", 6, seed=40, created_at=when)["patient_id"]
 
 
 FITS = "document.documentElement.scrollWidth <= document.documentElement.clientWidth"

@@ -8,7 +8,7 @@ import re
 import pytest
 from playwright.sync_api import expect
 
-from tests.frontend.conftest import THERAPIST, login, shot
+from tests.frontend.conftest import PATIENT, THERAPIST, login, newest_session_id, shot
 
 pytestmark = pytest.mark.browser
 OTHER_PATIENT = "george@demo.clinic"  # not Rose: may not see her sessions
@@ -86,12 +86,4 @@ def test_another_patient_gets_403_for_the_replay(page, live_server):
 
 
 def _a_session_of_rose(live_server) -> int:
-    import httpx
-
-    from backend.demo import DEMO_PASSWORD
-    from tests.frontend.conftest import PATIENT
-
-    with httpx.Client(base_url=live_server.url, timeout=30) as client:
-        client.post("/api/v1/auth/login", json={"email": PATIENT, "password": DEMO_PASSWORD}).raise_for_status()
-        items = client.get("/api/v1/sessions", params={"limit": 1}).json()["items"]
-    return items[0]["id"]
+    return newest_session_id(live_server.url, PATIENT)

@@ -5,13 +5,10 @@ from __future__ import annotations
 
 import re
 
-import httpx
 import pytest
 from playwright.sync_api import expect
 
-from backend.demo import DEMO_PASSWORD
-from tests.backend.khs_files import make_khs
-from tests.frontend.conftest import PATIENT, THERAPIST, login, shot
+from tests.frontend.conftest import PATIENT, THERAPIST, login, shot, upload_session
 
 pytestmark = pytest.mark.browser
 
@@ -23,14 +20,8 @@ WIDTHS = (1366, 768, 390)
 @pytest.fixture(scope="module")
 def arm_session(live_server) -> int:
     """Uploads one shoulder-abduction session as George (not one of Tara's patients); returns its id."""
-    with httpx.Client(base_url=live_server.url, timeout=60) as client:
-        r = client.post("/api/v1/auth/login", json={"email": GEORGE, "password": DEMO_PASSWORD})
-        r.raise_for_status()
-        headers = {"X-CSRF-Token": r.json()["csrf_token"], "Content-Type": "application/octet-stream"}
-        data = make_khs("shoulder_abduction", 4, seed=21, created_at="2026-11-19T09:30:00Z")
-        r = client.post("/api/v1/sessions?exercise=shoulder_abduction", content=data, headers=headers)
-        assert r.status_code == 201, r.text
-        return r.json()["id"]
+    return upload_session(live_server.url, GEORGE, "shoulder_abduction", 4, seed=21,
+                          created_at="2026-11-19T09:30:00Z")["id"]  # fmt: skip
 
 
 def _plots(page, selector: str) -> list[dict]:
