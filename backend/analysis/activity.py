@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.analysis import series
-from backend.analysis.repetitions import Repetition
+from kinect_agent.analysis import series
+from kinect_agent.analysis.repetitions import Repetition
 
 MOVING_M_S = 0.15
 MIN_RUN_S = 0.3

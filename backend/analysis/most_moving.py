@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.analysis import series
+from kinect_agent.analysis import series
 from kinect_agent.skeleton import JOINTS
 
 

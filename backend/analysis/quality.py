@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.analysis import series
+from kinect_agent.analysis import series
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INDEX, JOINTS, NOT_TRACKED
 

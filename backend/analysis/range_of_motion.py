@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.analysis import series
+from kinect_agent.analysis import series
 
 LOW_PCT, HIGH_PCT = 1.0, 99.0
 

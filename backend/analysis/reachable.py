@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.analysis import series
+from kinect_agent.analysis import series
 from kinect_agent.processing.angles import body_frame
 from kinect_agent.skeleton import INDEX
 

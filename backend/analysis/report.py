@@ -17,16 +17,17 @@ from typing import Any
 
 import numpy as np
 
-from backend.analysis import activity, quality, series
-from backend.analysis.angles import counting_angles
+from backend.analysis import activity, quality
 from backend.analysis.balance import sway
 from backend.analysis.errors import AnalysisError, UnknownExercise, UnreadableRecording
 from backend.analysis.most_moving import most_moving_joints
 from backend.analysis.range_of_motion import range_of_motion
 from backend.analysis.reachable import reachable_range
-from backend.analysis.repetitions import RepetitionParams, count_repetitions
 from backend.analysis.sit_to_stand import sit_to_stand
 from backend.exercises.library import EXERCISES, ExerciseSpec
+from kinect_agent.analysis import series
+from kinect_agent.analysis.angles import counting_angles
+from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
 from kinect_agent.errors import FormatError
 from kinect_agent.processing.angles import body_frame, joint_angles
 from kinect_agent.processing.params import KinematicParams

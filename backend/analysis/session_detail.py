@@ -22,9 +22,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.analysis import series
-from backend.analysis.angles import counting_angles
 from backend.analysis.reachable import hand_path
+from kinect_agent.analysis import series
+from kinect_agent.analysis.angles import counting_angles
 from kinect_agent.processing.angles import body_frame, joint_angles
 
 MAX_CURVE_POINTS = 1500

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.ndimage import gaussian_filter1d
 
-from backend.analysis import series
+from kinect_agent.analysis import series
 from tests.backend.analysis._data import noisy
 
 

@@ -5,15 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from backend.analysis.angles import counting_angles
-from backend.analysis.repetitions import count_repetitions
 from backend.exercises.library import EXERCISES
+from kinect_agent.analysis.angles import counting_angles
+from kinect_agent.analysis.repetitions import count_repetitions
 from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.pipeline import process
 from kinect_agent.sources.simulator import EXERCISES as SIMULATED
 from kinect_agent.sources.simulator import simulate_truth
 
-from ._data import noisy, uiprmd
+from tests.backend.analysis._data import noisy, uiprmd
 
 
 def _count(rec, slug: str):
@@ -153,7 +153,7 @@ def test_a_bump_before_one_knees_excursion_does_not_split_the_repetition() -> No
     """Right knee bends over frames 86-119; the left knee bumps (87-95) before its own bend (99-133). The right
     excursion pairs with the left bend it overlaps most; the bump stands alone and is dropped as a weak lone event.
     Found on a simulated squat after the pipeline (7 squats counted as 8)."""
-    from backend.analysis.repetitions import _Event, _merge
+    from kinect_agent.analysis.repetitions import _Event, _merge
 
     def ev(start, end, amplitude, side):
         return _Event(start=start, peak=(start + end) // 2, end=end, amplitude=amplitude, peak_deg=amplitude,

@@ -34,7 +34,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from backend.analysis import series
+from kinect_agent.analysis import series
 
 
 @dataclass(frozen=True)

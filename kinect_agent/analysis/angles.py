@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.analysis import series
+from kinect_agent.analysis import series
 from kinect_agent.processing.angles import body_frame, joint_angles
 from kinect_agent.skeleton import INDEX
 
