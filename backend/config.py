@@ -38,6 +38,7 @@ class Settings(BaseSettings):
     PUBLIC_URL: str = ""
     # an event stream (GET /api/v1/events) ends after this long and the browser reconnects, checking its login again
     EVENTS_STREAM_MAX_S: float = Field(default=300.0, ge=0.0)
+    LIVE_OFFLINE_GRACE_S: float = Field(default=2.0, ge=0.0, le=60.0)  # a home agent's reconnection is no "offline"
 
     @model_validator(mode="after")
     def _refuse_default_secrets(self) -> Settings:

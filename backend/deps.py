@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import datetime as dt
 from dataclasses import dataclass, field
 from typing import Annotated
 
@@ -19,6 +20,7 @@ from backend.users.models import ApiToken, LoginSession, User
 SESSION_COOKIE = "coach_session"
 CSRF_HEADER = "X-CSRF-Token"
 SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
+LAST_SEEN_RESOLUTION = dt.timedelta(seconds=10)  # a device's last_seen_at is kept to within this
 
 # scope="function": commit (or roll back) before the response is sent, so a failed commit is never answered 2xx.
 DbSession = Annotated[Session, Depends(get_db, scope="function")]
@@ -62,7 +64,8 @@ def _from_bearer(token: str, db_session: Session, ip: str) -> Caller:
         device = db_session.scalar(select(Device).where(Device.token_hash == token_hash(token)))
         if device is None or device.revoked_at is not None:
             raise NotAuthenticated("device token is unknown or revoked")
-        device.last_seen_at = now
+        if device.last_seen_at is None or now - device.last_seen_at > LAST_SEEN_RESOLUTION:
+            device.last_seen_at = now  # not on every live message: a write per message would be 5 a second
         return Caller(via="device", device=device, scopes=frozenset({"read", "write"}), ip=ip)
     if token.startswith(API_TOKEN_PREFIX):
         row = db_session.scalar(select(ApiToken).where(ApiToken.token_hash == token_hash(token)))

@@ -108,6 +108,10 @@ class SuggestionNotPending(Conflict):
     pass
 
 
+class AgentOffline(Conflict):
+    """The patient's home agent is not connected, so it cannot be asked to record."""
+
+
 class PairingCodeInvalid(AppError):
     status_code = 400
 

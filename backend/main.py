@@ -38,6 +38,7 @@ ROUTERS = (
     "backend.suggestions.router",
     "backend.replay.router",
     "backend.events.router",
+    "backend.live.router",
 )
 
 

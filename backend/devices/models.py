@@ -22,6 +22,7 @@ class Device(Base):
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
     last_seen_at: Mapped[dt.datetime | None] = mapped_column()
     revoked_at: Mapped[dt.datetime | None] = mapped_column()
+    live_stream_id: Mapped[str | None] = mapped_column(String(36))  # the agent's open command stream (backend/live)
 
 
 class PairingCode(Base):

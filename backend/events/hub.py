@@ -1,12 +1,13 @@
-"""Events the pages listen to (a new session, changed advice, a changed plan), from any worker or replica.
+"""Events the pages and home agents listen to, from any worker or replica: stored data changed (a new session,
+changed advice, a changed plan) and the live loop (an agent connected or left, a command to it, its progress).
 
 publish() attaches an event to the database transaction that makes the change, so an event goes out only for data
 that is committed, and only once:
 - PostgreSQL (production, several workers and replicas): `pg_notify` inside the transaction; PostgreSQL delivers
   it at commit to every process LISTENing on CHANNEL (listener.py), each of which hands it to its own HUB.
 - SQLite (the embedded demo, one process): straight to this process's HUB after the commit.
-HUB fans events out to the server-sent-event streams of this process (router.py), each filtered by the patients
-its caller may see.
+HUB fans events out to the server-sent-event streams of this process (events/router.py, live/router.py), each
+filtered by kind and by the patients its caller may see.
 """
 
 from __future__ import annotations
@@ -22,7 +23,9 @@ from sqlalchemy.orm import Session
 
 CHANNEL = "coach_events"
 _PENDING = "coach_events"  # key in Session.info: events waiting for the commit
-KINDS = ("session.stored", "suggestion.changed", "plan.changed")
+DATA_KINDS = ("session.stored", "suggestion.changed", "plan.changed")  # stored data changed
+LIVE_KINDS = ("live.agent", "live.command", "live.progress")  # a home agent's presence, its commands, its progress
+KINDS = DATA_KINDS + LIVE_KINDS
 
 
 @dataclass(frozen=True)
@@ -47,16 +50,19 @@ class Event:
 
 
 class Subscriber:
-    """One event stream: the events of some patients (None = all), queued for an asyncio consumer."""
+    """One event stream: events of some kinds about some patients (None = all), queued for an asyncio consumer."""
 
-    def __init__(self, patient_ids: frozenset[int] | None, maxsize: int = 100) -> None:
+    def __init__(
+        self, patient_ids: frozenset[int] | None, kinds: frozenset[str] = frozenset(KINDS), maxsize: int = 100
+    ) -> None:
         self.patient_ids = patient_ids
+        self.kinds = kinds
         self.loop = asyncio.get_running_loop()
         self.queue: asyncio.Queue[Event] = asyncio.Queue(maxsize=maxsize)
 
     def wants(self, ev: Event) -> bool:
-        """Returns whether this stream shows events of ev's patient."""
-        return self.patient_ids is None or ev.patient_id in self.patient_ids
+        """Returns whether this stream shows ev (its kind, about one of its patients)."""
+        return ev.kind in self.kinds and (self.patient_ids is None or ev.patient_id in self.patient_ids)
 
     def offer(self, ev: Event) -> None:
         """Queues ev (called on the subscriber's event loop); a full queue drops it (the page reloads anyway)."""
@@ -71,9 +77,9 @@ class Hub:
         self._subscribers: set[Subscriber] = set()
         self._lock = threading.Lock()
 
-    def subscribe(self, patient_ids: frozenset[int] | None) -> Subscriber:
+    def subscribe(self, patient_ids: frozenset[int] | None, kinds: frozenset[str] = frozenset(KINDS)) -> Subscriber:
         """Returns a new subscriber (call on the event loop that will read it)."""
-        sub = Subscriber(patient_ids)
+        sub = Subscriber(patient_ids, kinds)
         with self._lock:
             self._subscribers.add(sub)
         return sub

@@ -14,7 +14,7 @@ from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
 from backend.deps import Caller, CurrentCaller, DbSession, require_patient_access
-from backend.events.hub import HUB, Subscriber
+from backend.events.hub import DATA_KINDS, HUB, KINDS, Subscriber
 from backend.exceptions import AUTH_ERRORS, PatientNotFound, error_responses
 from backend.patients.models import TherapistPatient
 from backend.schemas import IdQuery
@@ -44,7 +44,8 @@ def visible_patients(caller: Caller, db_session: Session, patient_id: int | None
     response_class=StreamingResponse,
     responses={
         200: {"content": {"text/event-stream": {}}, "description": "events: session.stored, suggestion.changed, "
-              "plan.changed; data: {kind, patient_id, data}"},  # fmt: skip
+              "plan.changed (and with live=true live.agent, live.command, live.progress); data: {kind, patient_id, "
+              "data}"},  # fmt: skip
         **error_responses(*AUTH_ERRORS, PatientNotFound),
     },
 )
@@ -53,11 +54,12 @@ async def stream_events(
     caller: CurrentCaller,
     db_session: DbSession,
     patient_id: Annotated[IdQuery, Query(description="only this patient's events")] = None,
+    live: Annotated[bool, Query(description="also the live loop's events (home agent, progress)")] = False,
 ):
     """Streams server-sent events about the patients the caller may see (one patient with patient_id)."""
     patients = await run_in_threadpool(visible_patients, caller, db_session, patient_id)
     await run_in_threadpool(db_session.commit)  # gives the connection back to the pool for the stream's lifetime
-    subscriber = HUB.subscribe(patients)
+    subscriber = HUB.subscribe(patients, frozenset(KINDS if live else DATA_KINDS))
     return StreamingResponse(
         _stream(request, subscriber, request.app.state.settings.EVENTS_STREAM_MAX_S),
         media_type="text/event-stream",

@@ -159,7 +159,8 @@ def _ingest(
     action = "session.create" if created else "session.upload_repeat"
     _audit(db_session, caller, action, row.id, patient_id, {"content_hash": upload.content_hash})
     if created:
-        publish(db_session, Event("session.stored", patient_id, {"session_id": row.id}))
+        data = {"session_id": row.id, "client_session_id": str(upload.client_session_id)}  # the live set's session
+        publish(db_session, Event("session.stored", patient_id, data))
     return _session_out(db_session, caller, row.id), created
 
 

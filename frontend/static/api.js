@@ -129,13 +129,22 @@ const Coach = (() => {
    * give one call; the browser reconnects by itself and the page reloads its data then too.
    * patientId: only that patient's events (null: every patient the signed-in user may see).
    */
-  function onChange(patientId, reload) {
+  /** Opens the page's event stream: reload() after stored data changed (and after a reconnect, for events missed
+   *  meanwhile); with `live` ({kind: handler(data)}, open: called on each connection), also the live loop's events. */
+  function onChange(patientId, reload, live) {
     if (!window.EventSource) return null;
-    const source = new EventSource(url("/api/v1/events" + (patientId ? `?patient_id=${patientId}` : "")));
+    const query = new URLSearchParams();
+    if (patientId) query.set("patient_id", patientId);
+    if (live) query.set("live", "true");
+    const source = new EventSource(url("/api/v1/events" + (query.toString() ? "?" + query : "")));
     let timer = null, opened = false;
     const soon = () => { clearTimeout(timer); timer = setTimeout(reload, 300); };
     for (const kind of ["session.stored", "suggestion.changed", "plan.changed"]) source.addEventListener(kind, soon);
-    source.addEventListener("open", () => { if (opened) soon(); opened = true; });  // missed events while away
+    for (const [kind, handler] of Object.entries(live || {})) {
+      if (kind === "open") continue;  // called on every (re)connection, below
+      source.addEventListener(kind, (e) => { try { handler(JSON.parse(e.data).data || {}, e); } catch (err) { console.error(err); } });
+    }
+    source.addEventListener("open", () => { if (opened) soon(); opened = true; if (live && live.open) live.open(); });
     window.addEventListener("pagehide", () => source.close());
     return source;
   }

@@ -68,6 +68,15 @@
     return lines;
   }
 
+  /** The big Start of one exercise (shown while the home computer is connected: Live.render). */
+  function startButton(lib, item, doneToday) {
+    const next = doneToday + 1;
+    const label = next <= item.sets ? `set ${next} of ${item.sets}` : "extra set";
+    const name = exerciseName(lib, item.exercise_slug);
+    return el("button", { class: "btn btn-big btn-good start", type: "button", hidden: true, "aria-label": `Start ${name}, ${label}`,
+      onclick: () => Live.start(item, label) }, "Start");
+  }
+
   function planBlock(plan, lib, weekSessions) {
     const list = document.getElementById("plan");
     const note = document.getElementById("plan-note");
@@ -94,7 +103,8 @@
           el("div", { class: "how" }, `${item.sets} ${item.sets === 1 ? "set" : "sets"} of ${item.repetitions}, ${times} a week${rom}`),
           el("div", {}, status),
           el("div", { class: "today" }, el("strong", {}, "Today:"), todaySets(item, mineToday).map((t) => el("span", {}, t))),
-          item.notes ? el("div", { class: "muted" }, item.notes) : null)));
+          item.notes ? el("div", { class: "muted" }, item.notes) : null),
+        startButton(lib, item, mineToday.length)));
     }
   }
 
@@ -163,8 +173,11 @@
       adviceBlock(suggestions.items);
       planBlock(plan, lib, week.items);
       chartBlock(plan, lib, progress.points);
+      Live.render();  // the new Start buttons follow the home computer's state
     } catch (err) { showError(err); }
   }
-  load();
-  Coach.onChange(null, load);  // a new result, new advice or a new plan shows without reloading the page
+  load().then(() => exercises()).then((lib) => Live.init(pid, (slug) => exerciseName(lib, slug)));
+  // a new result, new advice or a new plan shows without reloading the page; the home computer's set live
+  Coach.onChange(pid, load, { "live.agent": Live.onAgent, "live.command": Live.onCommand, "live.progress": Live.onProgress,
+    "session.stored": Live.onStored, open: Live.status });
 })();

@@ -14,7 +14,7 @@ from fastapi.routing import iter_route_contexts
 
 from backend.database import utcnow
 from backend.devices.service import create_pairing_code
-from backend.plans.models import Plan
+from backend.plans.models import Plan, PlanItem
 from backend.sessions.models import ExerciseSession
 from backend.suggestions.models import Suggestion
 from tests.backend.conftest import PASSWORD
@@ -29,6 +29,10 @@ CARE_DEV = CARE | {"device"}
 PRESCRIBE = {"therapist_assigned", "admin"}
 STAFF = {"therapist_assigned", "therapist_other", "admin"}  # sees only the patients they may see
 ADMIN = {"admin"}
+
+
+def _progress_body():
+    return {"set_id": str(uuid.uuid4()), "exercise_slug": "squat", "state": "recording", "count": 2, "target": 5}
 
 
 def _plan_body(w):
@@ -94,6 +98,11 @@ ROUTES = {
     ("GET", "/api/v1/sessions/{session_id}/detail"): (CARE, None),  # people only: devices do not read it
     ("GET", "/api/v1/sessions/{session_id}/replay"): (CARE_DEV, None),
     ("GET", "/api/v1/events"): (AUTHED, None),  # each caller gets the events of the patients they may see
+    ("GET", "/api/v1/live/agent"): ({"device"}, None),
+    ("POST", "/api/v1/live/progress"): ({"device"}, lambda w: _progress_body()),
+    ("GET", "/api/v1/live/status"): ({"patient_own", "patient_other", "device"}, None),  # without patient_id: own
+    ("POST", "/api/v1/live/start"): ({"patient_own"}, lambda w: {"plan_item_id": w["params"]["plan_item_id"]}),
+    ("POST", "/api/v1/live/stop"): ({"patient_own", "patient_other"}, lambda w: {"set_id": str(uuid.uuid4())}),
     ("GET", "/api/v1/patients/{patient_id}/progress"): (CARE_DEV, None),
     ("GET", "/api/v1/patients/{patient_id}/summary"): (CARE_DEV, None),
     ("GET", "/api/v1/dashboard"): (STAFF, None),  # therapists: assigned patients only
@@ -109,7 +118,9 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
     device, device_hdr = device_headers(own)
     second_device, _ = device_headers(own)
     plan = Plan(patient_id=own.id, therapist_id=therapist.id, title="p", start_date=utcnow().date())
+    plan.items.append(PlanItem(exercise_id=exercise.id, sets=1, repetitions=5, frequency_per_week=2))
     db_session.add(plan)
+    device.live_stream_id, device.last_seen_at = str(uuid.uuid4()), utcnow()  # the home agent is connected
     suggestion = Suggestion(patient_id=own.id, source="system", rule="too_fast", text="Slow down.", status="pending")
     db_session.add(suggestion)
     session = ExerciseSession(
@@ -143,6 +154,7 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
         "user_id": own.id,
         "device_id": second_device.id,
         "plan_id": plan.id,
+        "plan_item_id": plan.items[0].id,
         "suggestion_id": suggestion.id,
         "token_id": admin_token.id,
         "slug": exercise.slug,
