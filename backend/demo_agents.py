@@ -20,6 +20,7 @@ import json
 import os
 import random
 import signal
+import subprocess
 import sys
 import threading
 import time
@@ -203,16 +204,40 @@ class _Stop:
             time.sleep(min(0.5, max(end - time.monotonic(), 0.0)))
 
 
+def start_live_agent(patient: Agent, server: str) -> subprocess.Popen:
+    """Pairs a second home agent of the patient (its own folder and queue) and runs it as `kinect-agent serve` with
+    the simulator as its camera, so the demo's patient page can start a set live."""
+    live = Agent(email=patient.email, name=patient.name, exercises=patient.exercises, index=patient.index,
+                 home=patient.home.with_name(f"{patient.home.name}-live"))  # fmt: skip
+    connect(live, server)
+    command = [sys.executable, "-m", "kinect_agent.cli", "serve", "--source", "simulator", "--home", str(live.home)]
+    log = open(live.home / "serve.log", "a")  # noqa: SIM115 - the child holds it for its lifetime
+    proc = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT)
+    _say(f"{patient.label}'s home computer waits for Start on the patient page (live sets; log {live.home}/serve.log)")
+    return proc
+
+
 def run_agents(args: argparse.Namespace) -> int:
     """Pairs the agents, uploads the backdated history, then a new session every 30-60 s until stopped."""
     stop = _Stop(args.parent_pid)
-    rng = random.Random(args.seed)
     wait_for_server(args.server)
     agents = [Agent(email=e, name=n, exercises=ex, index=i, home=args.home / e.split("@")[0])
               for i, (e, n, ex) in enumerate(PATIENTS)]  # fmt: skip
     for agent in agents:
         connect(agent, args.server)
     _say(f"{len(agents)} home agents ready (paired, or their device tokens still valid); queues in {args.home}")
+    live = start_live_agent(agents[0], args.server) if args.live else None
+    try:
+        return _upload_sessions(args, agents, stop)
+    finally:
+        if live is not None:
+            live.terminate()
+            live.wait(timeout=60)
+
+
+def _upload_sessions(args: argparse.Namespace, agents: list[Agent], stop: _Stop) -> int:
+    """Uploads the backdated history, then a new session every min..max interval seconds until stopped."""
+    rng = random.Random(args.seed)
     todo = [a for a in agents if not _state(a).get("backfilled")]
     plan = backfill_plan(todo, args.history_weeks, dt.date.today(), args.seed)
     if plan:
@@ -250,6 +275,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-sessions", type=int, help="stop after this many live sessions (default: never)")
     p.add_argument("--parent-pid", type=int, help="exit when this process is no longer the parent")
     p.add_argument("--seed", type=int, default=2026)
+    p.add_argument("--no-live", dest="live", action="store_false",
+                   help="do not run the first patient's live home agent (kinect-agent serve)")  # fmt: skip
     return p
 
 

@@ -51,6 +51,7 @@ class RepetitionParams:
     min_ratio: float = 0.4
     min_duration_s: float = 0.4
     merge_overlap: float = 0.5
+    rest: str = "auto"  # "auto": step 3 of the module doc; "start": where the recording starts (a set counted live)
 
 
 @dataclass(frozen=True)
@@ -118,11 +119,12 @@ def _hysteresis(e: np.ndarray, enter: float, leave: float) -> np.ndarray:
     return mark[idx] == 1  # frames before the first decision read mark[0] = -1: at rest
 
 
-def _rest_is_low(y: np.ndarray, lo: float, hi: float) -> bool:
-    """True when the rest level is the low end: where the recording starts and ends, else where it stays longer."""
+def _rest_is_low(y: np.ndarray, lo: float, hi: float, rest: str = "auto") -> bool:
+    """True when the rest level is the low end: where the recording starts and ends, else where it stays longer
+    (rest="start": where it starts)."""
     mid = 0.5 * (lo + hi)
     start_low, end_low = y[0] < mid, y[-1] < mid
-    if start_low == end_low:
+    if start_low == end_low or rest == "start":
         return bool(start_low)
     return bool(np.mean(y < mid) >= 0.5)
 
@@ -133,7 +135,7 @@ def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) ->
     R = float(hi - lo)
     if R <= 0:
         return []
-    rest_low = _rest_is_low(y, lo, hi)
+    rest_low = _rest_is_low(y, lo, hi, params.rest)
     e = np.clip(y - lo if rest_low else hi - y, 0.0, R)
     inside = _hysteresis(e, params.enter_frac * R, params.exit_frac * R)
     edges = np.flatnonzero(np.diff(np.concatenate(([0], inside.astype(np.int8), [0]))))

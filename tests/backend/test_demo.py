@@ -104,6 +104,14 @@ def test_demo_agents_upload_backdated_and_live_sessions(demo_server, tmp_path: P
         assert any(s["started_at"][:10] < today for s in sessions), "backdated history comes first"
         devices = client.get(f"/api/v1/patients/{sessions[0]['patient_id']}/devices").json()["items"]
         assert any("home agent (simulated)" in d["name"] and d["last_seen_at"] for d in devices)
+        patients = client.get("/api/v1/patients", params={"limit": 100}).json()["items"]
+        first = next(p for p in patients if p["email"] == demo.PATIENTS[0][0])
+        while time.monotonic() < deadline:  # the first patient's second agent serves live sets (kinect-agent serve)
+            state = client.get("/api/v1/live/status", params={"patient_id": first["id"]}).json()["state"]
+            if state == "online":
+                break
+            time.sleep(1)
+        assert state == "online", "the demo's live home agent did not connect"
     receipts = list((tmp_path / "demo-agents").glob("*/queue/sent/*.json"))
     assert receipts, "the agents keep a receipt of every confirmed upload"
     assert not list((tmp_path / "demo-agents").glob("*/queue/rejected/*.khs"))

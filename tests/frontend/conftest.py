@@ -162,16 +162,17 @@ def live_server(tmp_path_factory) -> Iterator[LiveServer]:
 
 
 @contextmanager
-def run_server(database_url: str, log_dir: Path, **env: str) -> Iterator[str]:
-    """Runs the app with uvicorn in a subprocess on a free port of 127.0.0.1 (extra COACH_* settings in env);
-    yields its base URL; stops it on exit."""
+def run_server(database_url: str, log_dir: Path, workers: int = 1, **env: str) -> Iterator[str]:
+    """Runs the app with uvicorn in a subprocess on a free port of 127.0.0.1 (extra COACH_* settings in env), with
+    `workers` worker processes; yields its base URL; stops it on exit."""
     port = _free_port()
     env = os.environ | {"COACH_DATABASE_URL": database_url, "COACH_ENVIRONMENT": "local", "PYTHONPATH": str(ROOT),
                         **env}  # fmt: skip
     log = open(log_dir / f"server-{port}.log", "w+")  # noqa: SIM115 - closed below
     command = [sys.executable, "-m", "uvicorn", "backend.main:create_app", "--factory", "--host", "127.0.0.1",
                "--port", str(port), "--log-level", "warning", "--proxy-headers",
-               "--forwarded-allow-ips", "127.0.0.1", "--timeout-graceful-shutdown", "2"]  # fmt: skip
+               "--forwarded-allow-ips", "127.0.0.1", "--timeout-graceful-shutdown", "2",
+               *(["--workers", str(workers)] if workers > 1 else [])]  # fmt: skip
     proc = subprocess.Popen(command, cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT)
     base = f"http://127.0.0.1:{port}"
     try:

@@ -1,0 +1,206 @@
+"""Live feedback while a patient does a set: the repetition count, the defining angle now, and a hint in plain words
+when the camera sees the patient badly. Frames arrive one by one (about 30 Hz) from the online filter.
+
+Count. The same logic as the server's analysis of a stored session (backend/analysis/report.py): the filtered
+positions are smoothed (series.smooth_positions), turned into counting angles (angles.counting_angles) and
+counted (repetitions.count_repetitions, with the rest level where the set starts). It runs every `every_s`
+seconds of recording on a window of recent frames, not at every frame. The window starts CONTEXT_S before the
+cut `cut_t`; repetitions before the cut were counted already (`frozen`), so the count is frozen + the window's
+repetitions whose middle is after the cut (their start may move by a few frames from one window to the next)
+and that ended DONE_S before the newest frame (a repetition counts once the patient is back at rest). When the
+window grows longer than window_s, the repetitions that ended more than SETTLE_S ago are frozen and the cut moves
+to the end of the last of them (with none, to 2 × SETTLE_S before now): the cost of an evaluation stays bounded
+(about window_s of frames) however long the set. The shown count never decreases within a set.
+Still. still_s counts the seconds since the dominant defining angle last moved: its range over the last
+MOVE_WINDOW_S seconds reached MOVE_DEG.
+Hints. From the raw frames of the last HINT_S seconds, in this order: the trunk (ROOT, SPINE) seen in less than
+half of them; the trunk closer than NEAR_M or farther than FAR_M; the trunk off-centre by more than
+OFF_CENTRE_FRAC of half the horizontal field of view; the limbs of the defining angles not tracked in more than
+LIMB_MISSING of them. The thresholds are those of the server's camera advice after a session
+(backend/analysis/camera_advice.py); the agent does not import the server, so they are repeated here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from kinect_agent.analysis import series
+from kinect_agent.analysis.angles import counting_angles
+from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
+from kinect_agent.processing.angles import body_frame, joint_angles
+from kinect_agent.skeleton import INDEX, NOT_TRACKED
+
+CONTEXT_S = 20.0
+SETTLE_S = 5.0
+DONE_S = 0.2
+MOVE_WINDOW_S = 2.0
+MOVE_DEG = 10.0
+HINT_S = 1.0
+NEAR_M, FAR_M = 1.5, 3.8  # as camera_advice.NEAR_M, FAR_M
+OFF_CENTRE_FRAC = 0.5  # as camera_advice.OFF_CENTRE_FRAC
+HALF_FOV_DEG = 35.0  # half of Kinect 2's 70° horizontal field of view
+LIMB_MISSING = 0.3
+_TRUNK = [INDEX["ROOT"], INDEX["SPINE"]]
+_ARMS = {"L": ["SHO_L", "ELB_L", "WRI_L"], "R": ["SHO_R", "ELB_R", "WRI_R"]}
+_LEGS = {"L": ["HIP_L", "KNE_L", "ANK_L"], "R": ["HIP_R", "KNE_R", "ANK_R"]}
+
+HINT_OUT_OF_VIEW = "You are out of view: please step in front of the camera."
+HINT_TOO_CLOSE = "Step back a little."
+HINT_TOO_FAR = "Come a little closer."
+HINT_OFF_CENTRE = "Move to the middle of the picture."
+HINT_ARMS = "The camera cannot see your arms well."
+HINT_LEGS = "The camera cannot see your legs well."
+
+
+@dataclass(frozen=True)
+class LiveStatus:
+    """What the patient's page shows now: count so far, the defining angle (degrees), a hint, seconds without
+    movement."""
+
+    count: int
+    angle_name: str | None
+    angle_deg: float | None
+    hint: str | None
+    still_s: float
+
+
+def limb_joints(angle_names: tuple[str, ...]) -> tuple[list[int], str | None]:
+    """Returns (joint indices, "arms"|"legs"|None) of the limbs that the angles measure."""
+    names, kind = [], None
+    for name in angle_names:
+        side = name[-1] if name[-2:] in ("_L", "_R") else None
+        if side is None:
+            continue
+        if name.startswith(("shoulder", "elbow")):
+            names += _ARMS[side]
+            kind = kind or "arms"
+        elif name.startswith(("hip", "knee")):
+            names += _LEGS[side]
+            kind = kind or "legs"
+    return sorted({INDEX[n] for n in names}), kind
+
+
+def hint(positions: np.ndarray, state: np.ndarray, limbs: list[int], kind: str | None) -> str | None:
+    """Returns the hint for the raw frames of the last second, or None when the camera sees the patient well.
+
+    positions: (K, J, 3) float, metres, camera frame, NaN = untracked. state: (K, J) 0/1/2.
+    """
+    if positions.shape[0] == 0:
+        return None
+    seen = np.all(state[:, _TRUNK] != NOT_TRACKED, axis=1) & np.all(np.isfinite(positions[:, _TRUNK]), axis=(1, 2))
+    if seen.mean() < 0.5:
+        return HINT_OUT_OF_VIEW
+    trunk = positions[seen][:, _TRUNK].reshape(-1, 3)
+    x, z = float(np.median(trunk[:, 0])), float(np.median(trunk[:, 2]))
+    if z < NEAR_M:
+        return HINT_TOO_CLOSE
+    if z > FAR_M:
+        return HINT_TOO_FAR
+    if np.degrees(np.arctan2(abs(x), z)) > OFF_CENTRE_FRAC * HALF_FOV_DEG:
+        return HINT_OFF_CENTRE
+    if limbs and np.mean(state[:, limbs] == NOT_TRACKED) > LIMB_MISSING:
+        return HINT_ARMS if kind == "arms" else HINT_LEGS
+    return None
+
+
+class LiveCount:
+    """Counts one set's repetitions incrementally; add() takes each frame and returns what to show."""
+
+    def __init__(
+        self,
+        angle_names: tuple[str, ...],
+        *,
+        every_s: float = 0.25,
+        window_s: float = 60.0,
+        params: RepetitionParams | None = None,
+    ) -> None:
+        if not angle_names:
+            raise ValueError("LiveCount needs at least one defining angle")
+        self.names = tuple(angle_names)
+        self.every_s, self.window_s = every_s, window_s
+        self.params = params or RepetitionParams(rest="start")  # a set starts at rest; its end may be mid-movement
+        self.limbs, self.limb_kind = limb_joints(self.names)
+        self._t: list[float] = []
+        self._filtered: list[np.ndarray] = []
+        self._raw: list[np.ndarray] = []
+        self._state: list[np.ndarray] = []
+        self.frozen, self.cut_t = 0, None
+        self.shown = 0
+        self._next_eval = None
+        self._last_moving = None
+        self._status = LiveStatus(0, None, None, None, 0.0)
+
+    def add(self, t: float, raw_positions: np.ndarray, raw_state: np.ndarray, filtered: np.ndarray) -> LiveStatus:
+        """Takes one frame and returns the status to show.
+
+        t: s, increasing. raw_positions: (J, 3) m camera frame, NaN = untracked; raw_state: (J,) 0/1/2;
+        filtered: (J, 3) m, the online filter's output for the frame.
+        """
+        self._t.append(float(t))
+        self._filtered.append(np.asarray(filtered, dtype=np.float64))
+        self._raw.append(np.asarray(raw_positions, dtype=np.float64))
+        self._state.append(np.asarray(raw_state))
+        if self.cut_t is None:
+            self.cut_t, self._last_moving, self._next_eval = t, t, t + self.every_s
+        if t >= self._next_eval:
+            self._next_eval = t + self.every_s
+            self._evaluate()
+        return self._status
+
+    def final(self) -> int:
+        """Returns the count of the whole set so far (evaluated on the newest frames)."""
+        if len(self._t) >= 2:
+            self._evaluate()
+        return self._status.count
+
+    def _window(self) -> int:
+        """Returns the index of the first frame of the evaluation window."""
+        start = self.cut_t - CONTEXT_S
+        return int(np.searchsorted(np.asarray(self._t), start))
+
+    def _evaluate(self) -> None:
+        first = self._window()
+        t = np.asarray(self._t[first:])
+        now = float(t[-1])
+        angle_name, angle_deg, count = None, None, self.shown
+        if t.shape[0] >= 2:
+            smoothed = series.smooth_positions(t, np.stack(self._filtered[first:]))
+            clinical = joint_angles(smoothed)
+            angles = counting_angles(smoothed, self.names, clinical, body_frame(smoothed)[0])
+            result = count_repetitions(t, angles, self.names, self.params)
+            ends = np.array([t[0] + r.end_s for r in result.repetitions])
+            middles = np.array([t[0] + 0.5 * (r.start_s + r.end_s) for r in result.repetitions])
+            after_cut = middles > self.cut_t
+            done = ends < now - DONE_S  # back at rest: an excursion still under way may yet merge or shrink
+            count = self.frozen + int((after_cut & done).sum())
+            angle_name = result.defining_angle or self.names[0]
+            y = angles[angle_name]
+            angle_deg = float(y[-1]) if np.isfinite(y[-1]) else None
+            recent = y[t >= now - MOVE_WINDOW_S]
+            recent = recent[np.isfinite(recent)]
+            if recent.size and np.ptp(recent) >= MOVE_DEG:
+                self._last_moving = now
+            if now - self.cut_t > self.window_s:
+                self._freeze(ends[after_cut], now)
+        self.shown = max(self.shown, count)
+        k = max(0, len(self._t) - int(round(HINT_S * self._rate())))
+        raw, state = np.stack(self._raw[k:]), np.stack(self._state[k:])
+        self._status = LiveStatus(self.shown, angle_name, angle_deg, hint(raw, state, self.limbs, self.limb_kind),
+                                  now - self._last_moving)  # fmt: skip
+
+    def _freeze(self, ends: np.ndarray, now: float) -> None:
+        """Freezes the window's repetitions that ended more than SETTLE_S ago and moves the cut past them."""
+        done = ends[ends <= now - SETTLE_S]
+        self.frozen += int(done.size)
+        # no repetition for a whole window (the patient rests): the cut follows, so the window stays bounded
+        self.cut_t = float(done.max()) if done.size else now - 2 * SETTLE_S
+        keep = self._window()
+        del self._t[:keep], self._filtered[:keep], self._raw[:keep], self._state[:keep]
+
+    def _rate(self) -> float:
+        n = len(self._t)
+        if n < 2:
+            return 30.0
+        return (n - 1) / max(self._t[-1] - self._t[0], 1e-6)

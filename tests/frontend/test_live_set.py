@@ -1,0 +1,194 @@
+"""The live loop end to end: the patient presses Start in the browser, a real `kinect-agent serve` process (the
+simulator as its camera) records the set, the page shows the count rising to the target and then the stored
+result; and when the agent is killed mid-set the page says so, and the set's frames are kept (the journal rule:
+at least 5 s) and stored once the agent is back.
+
+On PostgreSQL the agent talks to a second server with 2 workers while the page is served by the first, so every
+step (Start, each progress message, the stored session, the agent's presence) crosses processes: it travels by
+LISTEN/NOTIFY, as between the workers and replicas of a deployment."""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+import uuid
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import httpx
+import pytest
+from axe_playwright_python.sync_playwright import Axe
+from playwright.sync_api import expect
+
+from tests.frontend.conftest import ROOT, api_client, login, run_server, shot
+
+pytestmark = pytest.mark.browser
+PASSWORD = "live-password-2026"
+EXERCISE, NAME, TARGET = "elbow_flexion", "Elbow flexion", 3
+COUNT = "#live-count .n"
+
+
+@dataclass
+class Home:
+    """A patient of their own (not in the demo's therapist lists), their plan, and a paired agent's home folder."""
+
+    email: str
+    patient_id: int
+    agent_home: Path
+    log: Path
+
+
+@pytest.fixture(scope="module")
+def agent_server(live_server, tmp_path_factory):
+    """The server the agents use: on PostgreSQL a second one with 2 workers, on SQLite (one process) the same."""
+    if not live_server.database_url.startswith("postgresql"):
+        yield live_server.url
+        return
+    with run_server(live_server.database_url, tmp_path_factory.mktemp("agent-server"), workers=2) as base:
+        yield base
+
+
+def _new_home(base: str, agent_base: str, tmp: Path) -> Home:
+    """Creates a patient with a plan of TARGET elbow flexions (2 sets) as the admin, and pairs an agent with the
+    server at agent_base."""
+    email = f"live-{uuid.uuid4().hex[:8]}@example.org"
+    admin, headers = api_client(base, "admin@demo.clinic")
+    try:
+        r = admin.post("/api/v1/users", json={"email": email, "role": "patient", "password": PASSWORD,
+                                              "full_name": "Lena Live"}, headers=headers)  # fmt: skip
+        assert r.status_code == 201, r.text
+        pid = r.json()["id"]
+        item = {"exercise_slug": EXERCISE, "sets": 2, "repetitions": TARGET, "frequency_per_week": 3}
+        plan = {"title": "Arms", "start_date": time.strftime("%Y-%m-%d"), "notes": "", "items": [item]}
+        r = admin.post(f"/api/v1/patients/{pid}/plans", json=plan, headers=headers)
+        assert r.status_code == 201, r.text
+        code = admin.post(f"/api/v1/patients/{pid}/pairing-codes", headers=headers).json()["code"]
+    finally:
+        admin.close()
+    home = Home(email, pid, tmp / "agent", tmp / "agent.log")
+    done = subprocess.run([sys.executable, "-m", "kinect_agent.cli", "pair", "--server", agent_base, "--code", code],
+                          env=_agent_env(home), cwd=ROOT, capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    return home
+
+
+def _agent_env(home: Home) -> dict[str, str]:
+    return os.environ | {"KINECT_AGENT_HOME": str(home.agent_home), "PYTHONPATH": str(ROOT)}
+
+
+@contextmanager
+def agent(home: Home, seed: int = 0):
+    """Runs `kinect-agent serve --source simulator` for the home; yields the process; stops it (SIGTERM) at the end."""
+    log = open(home.log, "a")  # noqa: SIM115 - closed below
+    command = [sys.executable, "-m", "kinect_agent.cli", "serve", "--source", "simulator", "--seed", str(seed)]
+    proc = subprocess.Popen(command, env=_agent_env(home), cwd=ROOT, stdout=log, stderr=subprocess.STDOUT)
+    try:
+        yield proc
+    finally:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+            try:
+                proc.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+        log.close()
+
+
+def _sessions(base: str, home: Home) -> list[dict]:
+    with httpx.Client(base_url=base, timeout=30) as c:
+        c.post("/api/v1/auth/login", json={"email": home.email, "password": PASSWORD}).raise_for_status()
+        return c.get("/api/v1/sessions", params={"patient_id": home.patient_id, "limit": 50}).json()["items"]
+
+
+def _axe_clean(page) -> None:
+    results = Axe().run(page)
+    bad = [
+        f"{v['id']} ({v['impact']})" for v in results.response["violations"] if v["impact"] in ("serious", "critical")
+    ]
+    assert not bad, bad
+
+
+@pytest.fixture
+def patient_page(browser, live_server):
+    context = browser.new_context(viewport={"width": 1280, "height": 900}, base_url=live_server.url)
+    context.set_default_timeout(20_000)
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    page.js_errors = errors
+    yield page
+    context.close()
+
+
+def _start(page) -> None:
+    page.evaluate("window.__counts = []; addEventListener('coach-live-shown', (e) => __counts.push(e.detail.count))")
+    page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2")).click()
+
+
+def test_patient_starts_a_set_and_sees_the_count_reach_the_target(patient_page, live_server, agent_server, tmp_path):
+    page, base = patient_page, live_server.url
+    home = _new_home(base, agent_server, tmp_path)
+    login(page, home.email, PASSWORD)
+    status = page.locator("#agent-status")
+    expect(status).to_have_attribute("data-state", "offline")
+    expect(status).to_contain_text("not connected right now")
+    expect(page.locator("button.start")).to_be_hidden()  # no Start while the home computer is away
+    shot(page, "live-offline")
+    _axe_clean(page)
+    with agent(home):
+        expect(status).to_have_attribute("data-state", "online")  # without reloading the page
+        expect(status).to_contain_text("ready")
+        _start(page)
+        expect(page.locator(COUNT)).to_be_visible()
+        size = page.eval_on_selector(COUNT, "e => parseFloat(getComputedStyle(e).fontSize)")
+        assert size >= 96, f"the live count is {size} px; it must be at least 96 px"
+        page.wait_for_function(f"+document.querySelector('{COUNT}').textContent >= 1", timeout=30_000)
+        shot(page, "live-recording")
+        _axe_clean(page)
+        expect(page.locator("#live-ended")).to_contain_text(f"You did all {TARGET}", timeout=60_000)
+        expect(page.locator("#live-result")).to_contain_text("Saved:", timeout=60_000)
+        shot(page, "live-ended")
+        _axe_clean(page)
+        counts = page.evaluate("window.__counts")
+        assert counts == sorted(counts) and counts[0] < TARGET and counts[-1] == TARGET, counts
+        stored = _sessions(base, home)
+        assert len(stored) == 1 and stored[0]["exercise_slug"] == EXERCISE, stored
+        assert stored[0]["repetitions"] == TARGET, stored[0]  # the server's count of the stored set agrees
+        expect(page.locator("#live-result")).to_contain_text(f"Saved: {TARGET} repetitions")
+        expect(page.locator(f"li[data-exercise={EXERCISE}] .today")).to_contain_text(
+            f"set 1 of 2: {TARGET} of {TARGET}"
+        )
+    assert not page.js_errors, page.js_errors
+
+
+def test_agent_killed_mid_set_page_says_offline_and_the_set_is_kept(patient_page, live_server, agent_server, tmp_path):
+    page, base = patient_page, live_server.url
+    home = _new_home(base, agent_server, tmp_path)
+    login(page, home.email, PASSWORD)
+    status = page.locator("#agent-status")
+    with agent(home, seed=5) as proc:
+        expect(status).to_have_attribute("data-state", "online")
+        _start(page)
+        page.wait_for_function(f"+(document.querySelector('{COUNT}') || {{}}).textContent >= 1", timeout=30_000)
+        time.sleep(1.0)  # a little more than the journal's flush interval after the count showed
+        proc.kill()  # SIGKILL: no goodbye, the frames on disk are all that is left
+        proc.wait()
+        expect(page.locator("#live-lost")).to_be_visible(timeout=15_000)
+        expect(status).to_have_attribute("data-state", "offline")
+        shot(page, "live-agent-lost")
+        _axe_clean(page)
+    assert _sessions(base, home) == []
+    with agent(home, seed=6):  # back on: the interrupted set is queued from its journal and uploaded
+        expect(status).to_have_attribute("data-state", "online", timeout=30_000)
+        deadline = time.monotonic() + 60
+        while not (stored := _sessions(base, home)) and time.monotonic() < deadline:
+            time.sleep(0.5)
+        assert len(stored) == 1 and stored[0]["exercise_slug"] == EXERCISE, stored
+        assert stored[0]["duration_s"] >= 5.0, stored[0]
+        expect(page.locator("#last-sentence")).to_be_visible(timeout=15_000)  # the page shows it without reload
+    assert not page.js_errors, page.js_errors
