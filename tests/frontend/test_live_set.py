@@ -174,8 +174,9 @@ def test_agent_killed_mid_set_page_says_offline_and_the_set_is_kept(patient_page
     with agent(home, seed=5) as proc:
         expect(status).to_have_attribute("data-state", "online")
         _start(page)
-        page.wait_for_function(f"+(document.querySelector('{COUNT}') || {{}}).textContent >= 1", timeout=30_000)
-        time.sleep(1.0)  # a little more than the journal's flush interval after the count showed
+        # two of three repetitions (about 7 s of frames, over the 5 s the journal rule keeps), the set still running
+        page.wait_for_function(f"+(document.querySelector('{COUNT}') || {{}}).textContent >= 2", timeout=30_000)
+        time.sleep(0.6)  # a little more than the journal's flush interval
         proc.kill()  # SIGKILL: no goodbye, the frames on disk are all that is left
         proc.wait()
         expect(page.locator("#live-lost")).to_be_visible(timeout=15_000)
