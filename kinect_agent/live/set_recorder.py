@@ -38,11 +38,14 @@ class SetCommand:
     @classmethod
     def from_message(cls, data: dict) -> SetCommand:
         """Returns the command in a live.command start message; raises ValueError naming a bad field."""
+        missing = [k for k in ("set_id", "exercise_slug", "target_reps", "angles") if k not in data]
+        if missing:
+            raise ValueError(f"start command without {', '.join(missing)}")
         try:
             set_id = str(uuid.UUID(str(data["set_id"])))
-            exercise, target, angles = data["exercise_slug"], data["target_reps"], data["angles"]
-        except (KeyError, ValueError) as exc:
-            raise ValueError(f"start command without a valid {exc}") from None
+        except ValueError:
+            raise ValueError(f"start command with a bad set_id {data['set_id']!r}") from None
+        exercise, target, angles = data["exercise_slug"], data["target_reps"], data["angles"]
         if not isinstance(exercise, str) or not isinstance(target, int) or target < 1:
             raise ValueError(f"start command with a bad exercise {exercise!r} or target {target!r}")
         if not isinstance(angles, list) or not angles or not all(isinstance(a, str) for a in angles):

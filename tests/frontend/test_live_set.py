@@ -193,3 +193,23 @@ def test_agent_killed_mid_set_page_says_offline_and_the_set_is_kept(patient_page
         assert stored[0]["duration_s"] >= 5.0, stored[0]
         expect(page.locator("#last-sentence")).to_be_visible(timeout=15_000)  # the page shows it without reload
     assert not page.js_errors, page.js_errors
+
+
+def test_stop_ends_the_set_and_its_result_is_stored(patient_page, live_server, agent_server, tmp_path):
+    page, base = patient_page, live_server.url
+    home = _new_home(base, agent_server, tmp_path)
+    login(page, home.email, PASSWORD)
+    with agent(home, seed=7):
+        expect(page.locator("#agent-status")).to_have_attribute("data-state", "online")
+        _start(page)
+        page.wait_for_function(f"+(document.querySelector('{COUNT}') || {{}}).textContent >= 1", timeout=30_000)
+        page.get_by_role("button", name="Stop").click()
+        expect(page.locator("#live-ended")).to_contain_text(f"of {TARGET}. Good effort!", timeout=15_000)
+        expect(page.locator("#live")).to_contain_text("You stopped the set.")
+        expect(page.locator("#live-result")).to_contain_text("Saved:", timeout=60_000)
+        (stored,) = _sessions(base, home)
+        assert stored["repetitions"] is not None and stored["repetitions"] < TARGET, stored
+        page.get_by_role("button", name="Close").click()
+        expect(page.locator("#live")).to_be_hidden()
+        expect(page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 2 of 2"))).to_be_visible()
+    assert not page.js_errors, page.js_errors
