@@ -14,6 +14,7 @@ from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
 from backend.audit.service import record
+from backend.config import Settings
 from backend.deps import Caller, CurrentCaller, CurrentDevice, DbSession, UserCaller, require_patient_access
 from backend.events.hub import HUB, Event, Subscriber, publish
 from backend.events.router import RETRY_MS
@@ -49,10 +50,8 @@ async def agent_stream(request: Request, device: CurrentDevice, db_session: DbSe
     """Streams the commands for the calling home agent; the device counts as online while the stream is open."""
     stream_id = await run_in_threadpool(_committed, service.connect, db_session, device=device)
     subscriber = HUB.subscribe(frozenset({device.patient_id}), frozenset({"live.command"}))
-    settings = request.app.state.settings
     return StreamingResponse(
-        _agent_events(request, subscriber, db_session, device.id, stream_id, settings.EVENTS_STREAM_MAX_S,
-                      settings.LIVE_OFFLINE_GRACE_S),  # fmt: skip
+        _agent_events(request, subscriber, db_session, device.id, stream_id, request.app.state.settings),
         media_type="text/event-stream",
         headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"},
     )
@@ -64,15 +63,15 @@ async def _agent_events(
     db_session: Session,
     device_id: int,
     stream_id: str,
-    max_s: float,
-    grace_s: float,
+    settings: Settings,
 ) -> AsyncIterator[str]:
-    """Yields the device's commands and keep-alives until it leaves, is revoked or replaced, or max_s pass.
+    """Yields the device's commands and keep-alives until it leaves, is revoked or replaced, or EVENTS_STREAM_MAX_S
+    pass.
 
-    When it ends, the device is announced offline after grace_s seconds unless a new stream of it began meanwhile
-    (an agent reconnecting after max_s, or after a network blip, never shows as offline)."""
+    When it ends, the device is announced offline after LIVE_OFFLINE_GRACE_S unless a new stream of it began
+    meanwhile (an agent reconnecting after the stream's lifetime, or after a network blip, never shows offline)."""
     now = time.monotonic()
-    deadline, beat = now + max_s, now + service.HEARTBEAT_S
+    deadline, beat = now + settings.EVENTS_STREAM_MAX_S, now + service.HEARTBEAT_S
     try:
         yield f"retry: {RETRY_MS}\n: connected\n\n"
         while time.monotonic() < deadline and not await request.is_disconnected():
@@ -92,7 +91,7 @@ async def _agent_events(
     finally:
         HUB.unsubscribe(subscriber)
         with anyio.CancelScope(shield=True):
-            await anyio.sleep(grace_s)
+            await anyio.sleep(settings.LIVE_OFFLINE_GRACE_S)
             await run_in_threadpool(_committed, service.disconnect, db_session, device_id=device_id,
                                     stream_id=stream_id)  # fmt: skip
 

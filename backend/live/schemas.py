@@ -17,7 +17,7 @@ class StartIn(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    plan_item_id: int = Field(ge=1, le=2**31 - 1, description="an item of the patient's current plan")
+    plan_item_id: int = Field(ge=1, le=2**31 - 1, description="an item of the patient's current plan", examples=[41])
 
 
 class StopIn(BaseModel):
@@ -25,26 +25,32 @@ class StopIn(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    set_id: str = Field(pattern=SET_ID_PATTERN, description="the set_id that start answered")
+    set_id: str = Field(
+        pattern=SET_ID_PATTERN,
+        description="the set_id that start answered",
+        examples=["3f2b8c1e-4d5a-4e6f-8a9b-0c1d2e3f4a5b"],
+    )
 
 
 class LiveSetOut(BaseModel):
     """A set the home agent was asked to record (or to stop)."""
 
-    set_id: str
-    patient_id: int
-    device_id: int | None = Field(description="the device asked; None: every device of the patient (stop)")
-    exercise_slug: str
-    target_reps: int | None
+    set_id: str = Field(examples=["3f2b8c1e-4d5a-4e6f-8a9b-0c1d2e3f4a5b"])
+    patient_id: int = Field(examples=[12])
+    device_id: int | None = Field(description="the device asked; None: every device of the patient (stop)",
+                                  examples=[7])  # fmt: skip
+    exercise_slug: str = Field(examples=["elbow_flexion"])
+    target_reps: int | None = Field(examples=[10])
     action: Literal["start", "stop"]
 
 
 class AgentStatusOut(BaseModel):
     """Whether the patient's home agent is connected now."""
 
-    patient_id: int
+    patient_id: int = Field(examples=[12])
     state: Literal["online", "offline", "unpaired"] = Field(
-        description="online: connected now; offline: paired but not connected; unpaired: no device"
+        description="online: connected now; offline: paired but not connected; unpaired: no device",
+        examples=["online"],
     )
     device_id: int | None = None
     device_name: str | None = None
@@ -56,8 +62,8 @@ class ProgressIn(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    set_id: str = Field(pattern=SET_ID_PATTERN)
-    exercise_slug: str = Field(pattern=r"^[a-z0-9][a-z0-9_]{0,63}$")
+    set_id: str = Field(pattern=SET_ID_PATTERN, examples=["3f2b8c1e-4d5a-4e6f-8a9b-0c1d2e3f4a5b"])
+    exercise_slug: str = Field(pattern=r"^[a-z0-9][a-z0-9_]{0,63}$", examples=["elbow_flexion"])
     state: Literal["recording", "ended", "failed"]
     count: int = Field(ge=0, le=10_000, description="repetitions so far")
     target: int | None = Field(default=None, ge=1, le=10_000)
