@@ -5,7 +5,8 @@ Definition. A repetition is one excursion of a defining angle away from its rest
     2. its range R = p98 − p2 of the smoothed values; an angle with R < min_range_deg, or below side_ratio × the
        largest R among the exercise's angles, does not move and yields no repetitions;
     3. the rest level is the end (low p2 or high p98) nearer to the first and the last smoothed value; when
-       those two disagree (a recording cut mid-movement), the end the signal spends more time near.
+       those two disagree (a recording cut mid-movement), the end the signal spends more time near; with
+       rest="start" (the live count of a set still being recorded), the end nearer to the first value.
        The excursion e(t) = |angle − rest level|, clipped to [0, R];
     4. hysteresis: an excursion begins when e rises above enter_frac·R and ends when it falls below exit_frac·R
        (noise smaller than (enter_frac − exit_frac)·R cannot split or add repetitions);

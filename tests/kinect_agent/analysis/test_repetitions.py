@@ -7,12 +7,11 @@ import pytest
 
 from backend.exercises.library import EXERCISES
 from kinect_agent.analysis.angles import counting_angles
-from kinect_agent.analysis.repetitions import count_repetitions
+from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
 from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.pipeline import process
 from kinect_agent.sources.simulator import EXERCISES as SIMULATED
 from kinect_agent.sources.simulator import simulate_truth
-
 from tests.backend.analysis._data import noisy, uiprmd
 
 
@@ -161,3 +160,19 @@ def test_a_bump_before_one_knees_excursion_does_not_split_the_repetition() -> No
 
     merged = _merge([ev(86, 119, 92.5, "right"), ev(87, 95, 31.2, "left"), ev(99, 133, 90.3, "left")], 0.5)
     assert [(m.side, m.start, m.end) for m in merged] == [("both", 86, 133), ("left", 87, 95)]
+
+
+def test_rest_start_takes_the_rest_level_where_the_recording_starts():
+    """A set cut while the limb is held up for long: 'auto' takes the raised hold for rest, 'start' (the live
+    count) keeps the rest where the set began, so the excursions are the raised phases."""
+    t = np.arange(0, 20, 1 / 30)
+    y = np.zeros_like(t)
+    bumps = (t >= 2) & (t < 8)
+    y[bumps] = 90 * np.sin(np.pi * (t[bumps] - 2) / 2) ** 2  # three 2-s repetitions to 90°
+    y[t >= 8] = 90 * np.clip(t[t >= 8] - 8, 0, 1)  # then up, and held there until the end
+    names = ("elbow_flexion_L",)
+    auto = count_repetitions(t, {names[0]: y}, names)
+    start = count_repetitions(t, {names[0]: y}, names, RepetitionParams(rest="start"))
+    assert all(r.peak_deg < 30 for r in auto.repetitions), [r.peak_deg for r in auto.repetitions]
+    peaks = [r.peak_deg for r in start.repetitions]
+    assert len(peaks) >= 3 and all(p > 60 for p in peaks), peaks
