@@ -24,6 +24,7 @@ const Live = (() => {
   }
 
   async function status() {
+    if (pid === null) return;  // the event stream opened before init(): init() asks itself
     try { agent = (await api(`/live/status?patient_id=${pid}`)).state; } catch (err) { agent = "unknown"; }
     render();
   }
