@@ -34,9 +34,14 @@ class Metadata:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Metadata:
-        """Builds metadata from `to_dict` output, ignoring unknown keys."""
+        """Builds metadata from `to_dict` output, ignoring unknown keys; raises ValueError naming a field of the
+        wrong type (a text where a number belongs, a list where a text belongs, ...)."""
+        if not isinstance(data, dict):
+            raise ValueError(f"metadata must be an object, got {type(data).__name__}")
         names = {f.name for f in dataclasses.fields(cls)}
         known = {k: v for k, v in data.items() if k in names}
+        for key, value in known.items():
+            _check_meta_field(key, value)
         known["history"] = list(known.get("history") or [])
         known["extra"] = dict(known.get("extra") or {})
         return cls(**known)
@@ -152,6 +157,30 @@ class Recording:
             np.concatenate([p.state for p in parts]),
             meta,
         )
+
+
+_NUMBERS = {"rate_hz", "view_deg"}
+_LISTS_OF_TEXT = {"history"}
+_OBJECTS = {"extra"}
+
+
+def _check_meta_field(key: str, value: Any) -> None:
+    """Raises ValueError when a metadata field has the wrong type (None is always allowed)."""
+    if value is None:
+        return
+    if key in _NUMBERS:
+        ok = isinstance(value, int | float) and not isinstance(value, bool) and np.isfinite(value)
+        if ok and key == "rate_hz":
+            ok = 0 < value <= 10_000
+        expected = "a finite number" + (" in (0, 10000] Hz" if key == "rate_hz" else "")
+    elif key in _LISTS_OF_TEXT:
+        ok, expected = isinstance(value, list) and all(isinstance(v, str) for v in value), "a list of texts"
+    elif key in _OBJECTS:
+        ok, expected = isinstance(value, dict), "an object"
+    else:
+        ok, expected = isinstance(value, str) and len(value) <= 1000, "a text of at most 1000 characters"
+    if not ok:
+        raise ValueError(f"{key} must be {expected}, got {str(value)[:80]!r}")
 
 
 def _check_shape(name: str, actual: tuple[int, ...], expected: tuple[int, ...]) -> None:

@@ -74,6 +74,9 @@ def _session_uuid(value: str) -> uuid.UUID:
         raise InvalidSessionFile(f"bad_header: session_id {value[:80]!r} is not a UUID") from None
 
 
+EARLIEST_START = dt.datetime(2000, 1, 1, tzinfo=dt.UTC)  # no session of this system is older
+
+
 def _started_at(value: str) -> dt.datetime:
     try:
         when = dt.datetime.fromisoformat(value.replace("Z", "+00:00"))
@@ -81,4 +84,12 @@ def _started_at(value: str) -> dt.datetime:
         raise InvalidSessionFile(f"bad_header: created_at {value[:80]!r} is not an ISO 8601 time") from None
     if when.tzinfo is None:
         raise InvalidSessionFile(f"bad_header: created_at {value[:80]!r} has no time zone (expected UTC, '...Z')")
-    return when.astimezone(dt.UTC)
+    latest = dt.datetime.now(dt.UTC) + dt.timedelta(days=1)
+    try:
+        when = when.astimezone(dt.UTC)
+    except OverflowError:
+        when = None
+    if when is None or not EARLIEST_START <= when <= latest:
+        raise InvalidSessionFile(f"bad_header: created_at {value[:80]!r} is not between "
+                                 f"{EARLIEST_START.date()} and tomorrow")  # fmt: skip
+    return when

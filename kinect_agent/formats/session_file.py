@@ -60,8 +60,11 @@ ERROR_CODES = frozenset(
         "too_long",
         "too_large",
         "bad_header",
+        "implausible_timing",
     }
 )
+MIN_FRAME_INTERVAL_S = 1e-3  # frames closer than this (over 1000 Hz) are no camera or mocap recording
+MAX_MEDIAN_INTERVAL_S = 1.0  # nor frames usually further apart than this (under 1 Hz)
 
 
 def _now_utc() -> str:
@@ -228,10 +231,18 @@ def _check_envelope(data: bytes) -> tuple[int, int]:
     return version, header_len
 
 
+def _refuse_constant(name: str) -> None:
+    raise SessionFileError("bad_header", f"JSON header holds {name}, which JSON does not allow")
+
+
 def _parse_header(raw: bytes, version: int) -> dict[str, Any]:
     try:
-        header = json.loads(raw.decode("utf-8"))
+        header = json.loads(raw.decode("utf-8"), parse_constant=_refuse_constant)
+    except RecursionError:
+        raise SessionFileError("bad_header", "JSON header is nested too deeply") from None
     except (UnicodeDecodeError, ValueError) as exc:
+        if isinstance(exc, SessionFileError):
+            raise
         raise SessionFileError("bad_header", f"JSON header is unreadable: {exc}") from None
     expected = {"session_id": str, "created_at": str, "params": dict, "recordings": dict, "joints": list}
     for key, kind in expected.items():
@@ -266,9 +277,12 @@ def _recording_specs(header: dict, max_frames: int, max_decoded_bytes: int) -> l
         if n > max_frames:
             raise SessionFileError("too_long", f"recording {name!r} has {n} frames, the limit is {max_frames}")
         total += sum(_block_sizes(n))
+        meta = desc.get("meta") or {}
+        if not isinstance(meta, dict):
+            raise SessionFileError("bad_header", f"recording {name!r} metadata must be an object")
         try:
-            meta = Metadata.from_dict(desc.get("meta") or {})
-        except TypeError as exc:
+            meta = Metadata.from_dict(meta)
+        except (TypeError, ValueError) as exc:
             raise SessionFileError("bad_header", f"recording {name!r} metadata: {exc}") from None
         specs.append((name, n, meta))
     if total > max_decoded_bytes:
@@ -349,6 +363,7 @@ def _build_recording(name: str, n_frames: int, raw: list[bytes], meta: Metadata,
     if bad.size:
         i = int(bad[0]) + 1
         raise SessionFileError("non_monotonic_time", f"recording {name!r}: frame {i} t={t[i]} after t={t[i - 1]}")
+    _check_timing(name, t)
     if np.any((state < 0) | (state > 2)):
         raise SessionFileError("bad_header", f"recording {name!r}: state values must be 0, 1 or 2")
     tracked = state != skeleton.NOT_TRACKED
@@ -357,6 +372,21 @@ def _build_recording(name: str, n_frames: int, raw: list[bytes], meta: Metadata,
         raise SessionFileError("non_finite", f"recording {name!r}: frame {f} joint {skeleton.JOINTS[j]} not finite")
     positions[~tracked] = np.nan
     return Recording(t, positions, state, meta)
+
+
+def _check_timing(name: str, t: np.ndarray) -> None:
+    """Refuses frame times no recording device makes: t (T,) s, strictly increasing. The analysis sizes its
+    filters from the frame interval, so such files would also cost unbounded time."""
+    if t.shape[0] < 2:
+        return
+    dt = np.diff(t)
+    closest, median = float(dt.min()), float(np.median(dt))
+    if closest < MIN_FRAME_INTERVAL_S:
+        raise SessionFileError("implausible_timing", f"recording {name!r}: frames {closest:.3g} s apart; a camera "
+                               f"or motion capture gives at least {MIN_FRAME_INTERVAL_S:g} s (1000 Hz)")  # fmt: skip
+    if median > MAX_MEDIAN_INTERVAL_S:
+        raise SessionFileError("implausible_timing", f"recording {name!r}: frames {median:.3g} s apart (median); "
+                               f"at most {MAX_MEDIAN_INTERVAL_S:g} s expected")  # fmt: skip
 
 
 def _positions(raw: bytes, n_frames: int, version: int) -> np.ndarray:

@@ -53,7 +53,12 @@ def split(data: bytes) -> tuple[int, dict, list[bytes]]:
 
 def join(header: dict, blocks: list[bytes], version: int = sf.VERSION) -> bytes:
     """Returns a file with a correct length and checksum around any header and blocks."""
-    head = json.dumps(header, separators=(",", ":")).encode()
+    return join_text(json.dumps(header, separators=(",", ":")), blocks, version)
+
+
+def join_text(text: str, blocks: list[bytes], version: int = sf.VERSION) -> bytes:
+    """Returns a file with a correct length and checksum around any header text and blocks."""
+    head = text.encode()
     body = b"".join(_LEN.pack(len(b)) + b for b in blocks)
     total = _FIXED.size + len(head) + len(body) + 32
     data = _FIXED.pack(sf.MAGIC, version, 0, len(head), total) + head + body

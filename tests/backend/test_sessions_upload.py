@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import hashlib
+import json
 import uuid
 
 import numpy as np
@@ -230,7 +231,48 @@ def _not_uuid(data):
     return khs_files.with_header(data, lambda h: h.__setitem__("session_id", "abc"))
 
 
+def _raw_meta(key, value):
+    def change(h):
+        h["recordings"]["raw"].setdefault("meta", {})
+        if key is None:
+            h["recordings"]["raw"]["meta"] = value
+        else:
+            h["recordings"]["raw"]["meta"][key] = value
+
+    return lambda data: khs_files.with_header(data, change)
+
+
+def _deep_params(data):
+    """params nested 100 000 lists deep (JSON that makes a recursive parser overflow its stack)."""
+    version, header, blocks = khs_files.split(data)
+    header["params"] = {"deep": "@@"}
+    text = json.dumps(header, separators=(",", ":")).replace('"@@"', "[" * 100_000 + "]" * 100_000)
+    return khs_files.join_text(text, blocks, version)
+
+
+def _times(step_s):
+    return lambda data: khs_files.with_time(data, np.arange(khs_files.n_frames(data)) * step_s)
+
+
 BAD_FILES = {
+    "meta_as_list": (_raw_meta(None, [1, 2]), "bad_header: recording 'raw' metadata must be an object"),
+    "rate_as_text": (_raw_meta("rate_hz", "fast"), "bad_header: recording 'raw' metadata: rate_hz"),
+    "exercise_as_list": (_raw_meta("exercise", ["squat"]), "bad_header: recording 'raw' metadata: exercise"),
+    "params_100000_deep": (_deep_params, "bad_header: JSON header is nested too deeply"),
+    "nan_in_header": (
+        lambda d: khs_files.with_header(d, lambda h: h["params"].__setitem__("x", float("nan"))),
+        "bad_header: JSON header holds NaN",
+    ),
+    "created_in_year_9999": (
+        lambda d: khs_files.with_header(d, lambda h: h.__setitem__("created_at", "9999-12-31T23:59:59Z")),
+        "bad_header: created_at '9999-12-31T23:59:59Z' is not between",
+    ),
+    "created_with_extreme_offset": (
+        lambda d: khs_files.with_header(d, lambda h: h.__setitem__("created_at", "0001-01-01T00:00:00+23:59")),
+        "bad_header: created_at '0001-01-01T00:00:00+23:59' is not between",
+    ),
+    "frames_1e-7_s_apart": (_times(1e-7), "implausible_timing: recording 'raw': frames 1e-07 s apart"),
+    "frames_10_s_apart": (_times(10.0), "implausible_timing: recording 'raw': frames 10 s apart"),
     "bad_magic": (lambda d: b"NOT A KHS FILE" + d[14:], "bad_magic: "),
     "unsupported_version": (_bad_version, "unsupported_version: file version 3"),
     "checksum_mismatch": (_flip, "checksum_mismatch: "),
