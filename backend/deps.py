@@ -12,7 +12,7 @@ from sqlalchemy.orm import Session
 
 from backend.database import get_db, utcnow
 from backend.devices.models import Device
-from backend.exceptions import CsrfFailed, Forbidden, InsufficientScope, NotAuthenticated, PatientNotFound
+from backend.exceptions import AppError, CsrfFailed, Forbidden, InsufficientScope, NotAuthenticated, PatientNotFound
 from backend.patients.models import TherapistPatient
 from backend.security import API_TOKEN_PREFIX, DEVICE_TOKEN_PREFIX, same_secret, token_hash
 from backend.users.models import ApiToken, LoginSession, User
@@ -172,6 +172,20 @@ def is_assigned(*, db_session: Session, therapist_id: int, patient_id: int) -> b
     return db_session.get(TherapistPatient, key) is not None
 
 
+def may_see_patient(patient_id: int, *, caller: Caller, db_session: Session) -> bool:
+    """Returns whether the caller has any right to the patient: patients themselves, their devices, assigned
+    therapists, admins."""
+    if caller.device is not None:
+        return caller.device.patient_id == patient_id
+    user = caller.user
+    assert user is not None
+    if user.role == "admin":
+        return True
+    if user.role == "patient":
+        return user.id == patient_id
+    return user.role == "therapist" and is_assigned(db_session=db_session, therapist_id=user.id, patient_id=patient_id)
+
+
 def require_patient_access(
     patient_id: int,
     *,
@@ -179,31 +193,26 @@ def require_patient_access(
     db_session: Session,
     write: bool = False,
     allow_device: bool | None = None,
+    hidden_as: AppError | None = None,
 ) -> User:
     """Returns the patient when the caller may see (write=False) or change (write=True) their data.
 
     Patients: only themselves. Therapists: only assigned patients. Admins: everyone. Devices: only their own
     patient, and for writes only when allow_device=True (uploads); allow_device=None means reads yes, writes no.
-    Raises PatientNotFound (404) or Forbidden (403).
+    A caller without any right to the patient cannot tell it from one that does not exist: both raise
+    hidden_as (the error of the object asked for, e.g. SessionNotFound) or PatientNotFound (404). A caller who
+    may see the patient but not make this change gets Forbidden (403).
     """
     if allow_device is None:
         allow_device = not write
+    missing = hidden_as or PatientNotFound(f"patient {patient_id} does not exist")
     patient = db_session.get(User, patient_id)
-    if patient is None or patient.role != "patient":
-        raise PatientNotFound(f"patient {patient_id} does not exist")
-    if caller.device is not None:
-        if allow_device and caller.device.patient_id == patient_id:
-            return patient
-        raise Forbidden(f"this device may not access patient {patient_id}")
-    user = caller.user
-    assert user is not None
-    if user.role == "admin":
-        return patient
-    if user.role == "patient" and user.id == patient_id:
-        return patient
-    if user.role == "therapist" and is_assigned(db_session=db_session, therapist_id=user.id, patient_id=patient_id):
-        return patient
-    raise Forbidden(f"you may not access patient {patient_id}")
+    if patient is None or patient.role != "patient" or not may_see_patient(patient_id, caller=caller,
+                                                                            db_session=db_session):  # fmt: skip
+        raise missing
+    if caller.device is not None and not allow_device:
+        raise Forbidden(f"this device may not change the data of patient {patient_id}")
+    return patient
 
 
 def patient_access(

@@ -17,7 +17,7 @@ from fastapi.responses import FileResponse, HTMLResponse, RedirectResponse, Resp
 from fastapi.templating import Jinja2Templates
 
 from backend.deps import Caller, DbSession, optional_caller, require_patient_access
-from backend.exceptions import Forbidden, NotFound
+from backend.exceptions import NotFound
 from backend.schemas import IdPath
 
 HERE = Path(__file__).resolve().parent
@@ -127,21 +127,19 @@ def session_page(session_id: IdPath, request: Request, caller: OptionalCaller) -
 def replay_page(session_id: IdPath, request: Request, caller: OptionalCaller, db_session: DbSession) -> Response:
     """Shows the 3D replay of one session (viser's client on this origin playing the session's recording).
 
-    Open to whoever may see the session: the patient's therapists, the patient, admins. No login: 401 page.
+    Open to whoever may see the session: the patient's therapists, the patient, admins; anyone else gets the 404
+    page of a session that is not there. No login: 401 page.
     """
     if caller is None or caller.user is None:
         return _sign_in_first(request)
-    from backend.sessions.service import session_patient
+    from backend.sessions.service import missing, session_patient
 
     try:
         patient_id = session_patient(db_session=db_session, session_id=session_id)
-        require_patient_access(patient_id, caller=caller, db_session=db_session)
-    except NotFound:
+        require_patient_access(patient_id, caller=caller, db_session=db_session, hidden_as=missing(session_id))
+    except NotFound:  # also another person's session: whether it exists is not theirs to know
         return _page(request, "error.html", caller, status_code=404, title="Session not found",
-                     message=f"There is no session {session_id}, or it was deleted.")  # fmt: skip
-    except Forbidden:
-        return _page(request, "error.html", caller, status_code=403, title="Not your session",
-                     message="This replay belongs to another person. Your own page is one click away.")  # fmt: skip
+                     message=f"There is no session {session_id} that you may see.")  # fmt: skip
     return _page(request, "replay.html", caller, session_id=session_id, patient_id=patient_id)
 
 

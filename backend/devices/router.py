@@ -109,7 +109,8 @@ def revoke_device(device_id: IdPath, caller: CurrentCaller, db_session: DbSessio
     if caller.device is not None and caller.device.id != device.id:
         raise Forbidden("a device may only revoke itself")
     if caller.device is None:
-        require_patient_access(device.patient_id, caller=caller, db_session=db_session, write=True)
+        require_patient_access(device.patient_id, caller=caller, db_session=db_session, write=True,
+                               hidden_as=service.missing(device_id))  # fmt: skip
     service.revoke(db_session=db_session, device=device)
     record(
         db_session=db_session,

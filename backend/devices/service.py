@@ -13,6 +13,11 @@ from backend.exceptions import DeviceNotFound, PairingCodeInvalid
 from backend.security import DEVICE_TOKEN_PREFIX, new_pairing_code, new_token, normalize_pairing_code, token_hash
 
 
+def missing(device_id: int) -> DeviceNotFound:
+    """Returns the error for a device that does not exist, or that the caller has no right to know of."""
+    return DeviceNotFound(f"device {device_id} does not exist")
+
+
 def create_pairing_code(
     *, db_session: Session, patient_id: int, created_by_id: int | None, minutes: float
 ) -> tuple[PairingCode, str]:
@@ -60,7 +65,7 @@ def get_device(*, db_session: Session, device_id: int) -> Device:
     """Returns one device or raises DeviceNotFound."""
     device = db_session.get(Device, device_id)
     if device is None:
-        raise DeviceNotFound(f"device {device_id} does not exist")
+        raise missing(device_id)
     return device
 
 

@@ -74,7 +74,7 @@ def create_plan(patient_id: IdPath, body: PlanIn, caller: TherapistOrAdminCaller
 def get_plan(plan_id: IdPath, caller: CurrentCaller, db_session: DbSession) -> PlanOut:
     """Returns one plan the caller may see."""
     plan = service.get_plan(db_session=db_session, plan_id=plan_id)
-    require_patient_access(plan.patient_id, caller=caller, db_session=db_session)
+    require_patient_access(plan.patient_id, caller=caller, db_session=db_session, hidden_as=service.missing(plan_id))
     _audit(db_session, caller, "plan.read", plan.id, plan.patient_id)
     return service.plan_out(db_session=db_session, plan=plan)
 
@@ -87,7 +87,8 @@ def get_plan(plan_id: IdPath, caller: CurrentCaller, db_session: DbSession) -> P
 def replace_plan(plan_id: IdPath, body: PlanIn, caller: TherapistOrAdminCaller, db_session: DbSession) -> PlanOut:
     """Replaces a plan (an assigned therapist or an admin)."""
     plan = service.get_plan(db_session=db_session, plan_id=plan_id)
-    require_patient_access(plan.patient_id, caller=caller, db_session=db_session, write=True)
+    require_patient_access(plan.patient_id, caller=caller, db_session=db_session, write=True,
+                           hidden_as=service.missing(plan_id))  # fmt: skip
     service.replace_plan(db_session=db_session, plan=plan, body=body)
     _audit(db_session, caller, "plan.update", plan.id, plan.patient_id)
     publish(db_session, Event("plan.changed", plan.patient_id, {"plan_id": plan.id}))
@@ -100,7 +101,8 @@ def replace_plan(plan_id: IdPath, body: PlanIn, caller: TherapistOrAdminCaller, 
 def delete_plan(plan_id: IdPath, caller: TherapistOrAdminCaller, db_session: DbSession) -> None:
     """Deletes a plan (an assigned therapist or an admin)."""
     plan = service.get_plan(db_session=db_session, plan_id=plan_id)
-    require_patient_access(plan.patient_id, caller=caller, db_session=db_session, write=True)
+    require_patient_access(plan.patient_id, caller=caller, db_session=db_session, write=True,
+                           hidden_as=service.missing(plan_id))  # fmt: skip
     _audit(db_session, caller, "plan.delete", plan.id, plan.patient_id)
     publish(db_session, Event("plan.changed", plan.patient_id, {"plan_id": plan.id}))
     service.delete_plan(db_session=db_session, plan=plan)

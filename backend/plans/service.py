@@ -14,6 +14,11 @@ from backend.plans.schemas import PlanIn, PlanItemOut, PlanOut
 from backend.users.models import User
 
 
+def missing(plan_id: int) -> PlanNotFound:
+    """Returns the error for a plan that does not exist, or that the caller has no right to know of."""
+    return PlanNotFound(f"plan {plan_id} does not exist")
+
+
 def _items(db_session: Session, body: PlanIn) -> list[PlanItem]:
     items = []
     for position, item in enumerate(body.items):
@@ -68,7 +73,7 @@ def get_plan(*, db_session: Session, plan_id: int) -> Plan:
     """Returns one plan or raises PlanNotFound."""
     plan = db_session.get(Plan, plan_id)
     if plan is None:
-        raise PlanNotFound(f"plan {plan_id} does not exist")
+        raise missing(plan_id)
     return plan
 
 

@@ -9,7 +9,7 @@ from backend.deps import CurrentCaller, DbSession, require_patient_access
 from backend.exceptions import AUTH_ERRORS, InvalidSessionFile, SessionNotFound, error_responses
 from backend.replay import service
 from backend.schemas import IdPath
-from backend.sessions.service import session_patient
+from backend.sessions.service import missing, session_patient
 
 router = APIRouter(prefix="/api/v1", tags=["sessions"])
 MEDIA_TYPE = "application/octet-stream"
@@ -26,7 +26,7 @@ MEDIA_TYPE = "application/octet-stream"
 def read_replay(session_id: IdPath, caller: CurrentCaller, db_session: DbSession):
     """Returns the 3D replay of a session as a viser scene recording (built on first use, then kept)."""
     patient_id = session_patient(db_session=db_session, session_id=session_id)
-    require_patient_access(patient_id, caller=caller, db_session=db_session)
+    require_patient_access(patient_id, caller=caller, db_session=db_session, hidden_as=missing(session_id))
     data = service.replay_data(db_session=db_session, session_id=session_id)
     record(db_session=db_session, caller=caller, action="session.replay.read", object_type="exercise_session",
            object_id=session_id, patient_id=patient_id)  # fmt: skip

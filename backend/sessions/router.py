@@ -251,7 +251,7 @@ def read_session(session_id: IdPath, caller: CurrentCaller, db_session: DbSessio
     """Returns one session with its metrics document and the suggestions the caller may see."""
     row = service.get_session_row(db_session=db_session, session_id=session_id)  # one query, file never loaded
     patient_id = row[0].patient_id
-    require_patient_access(patient_id, caller=caller, db_session=db_session)
+    require_patient_access(patient_id, caller=caller, db_session=db_session, hidden_as=service.missing(session_id))
     _audit(db_session, caller, "session.read", session_id, patient_id)
     return _session_out(db_session, caller, session_id, row)
 
@@ -265,7 +265,8 @@ def read_session_detail(session_id: IdPath, request: Request, caller: CurrentCal
     """Returns the evidence behind a session's numbers: angle curves, repetitions, workspace, data quality."""
     row = service.get_session_row(db_session=db_session, session_id=session_id)
     patient_id = row[0].patient_id
-    require_patient_access(patient_id, caller=caller, db_session=db_session, allow_device=False)
+    require_patient_access(patient_id, caller=caller, db_session=db_session, allow_device=False,
+                           hidden_as=service.missing(session_id))  # fmt: skip
     settings = request.app.state.settings
     body = detail.session_detail(
         db_session=db_session,
@@ -288,7 +289,7 @@ def read_session_detail(session_id: IdPath, request: Request, caller: CurrentCal
 def read_session_file(session_id: IdPath, caller: CurrentCaller, db_session: DbSession):
     """Returns the stored session file exactly as it was uploaded."""
     patient_id = service.session_patient(db_session=db_session, session_id=session_id)
-    require_patient_access(patient_id, caller=caller, db_session=db_session)
+    require_patient_access(patient_id, caller=caller, db_session=db_session, hidden_as=service.missing(session_id))
     data = service.session_file(db_session=db_session, session_id=session_id)
     _audit(db_session, caller, "session.file.read", session_id, patient_id)
     return Response(

@@ -196,15 +196,20 @@ def get_session_row(*, db_session: Session, session_id: int) -> tuple:
         _with_metrics(*_ITEM_COLUMNS, SessionMetric.document).where(ExerciseSession.id == session_id)
     ).first()
     if row is None:
-        raise SessionNotFound(f"session {session_id} does not exist")
+        raise missing(session_id)
     return tuple(row)
+
+
+def missing(session_id: int) -> SessionNotFound:
+    """Returns the error for a session that does not exist, or that the caller has no right to know of."""
+    return SessionNotFound(f"session {session_id} does not exist")
 
 
 def session_patient(*, db_session: Session, session_id: int) -> int:
     """Returns the patient id of a session or raises SessionNotFound."""
     patient_id = db_session.scalar(select(ExerciseSession.patient_id).where(ExerciseSession.id == session_id))
     if patient_id is None:
-        raise SessionNotFound(f"session {session_id} does not exist")
+        raise missing(session_id)
     return patient_id
 
 
@@ -212,7 +217,7 @@ def session_file(*, db_session: Session, session_id: int) -> bytes:
     """Returns the stored .khs bytes of a session or raises SessionNotFound."""
     data = db_session.scalar(select(ExerciseSession.file_bytes).where(ExerciseSession.id == session_id))
     if data is None:
-        raise SessionNotFound(f"session {session_id} does not exist")
+        raise missing(session_id)
     return data
 
 

@@ -103,7 +103,8 @@ def create_suggestion(
 
 def _decide(suggestion_id: int, new_status: str, caller: Caller, db_session) -> SuggestionOut:
     row = service.get_suggestion(db_session=db_session, suggestion_id=suggestion_id)
-    require_patient_access(row.patient_id, caller=caller, db_session=db_session, write=True)
+    require_patient_access(row.patient_id, caller=caller, db_session=db_session, write=True,
+                           hidden_as=service.missing(suggestion_id))  # fmt: skip
     service.decide(
         db_session=db_session,
         suggestion=row,

@@ -18,6 +18,11 @@ from backend.suggestions.rules import ACTIVE_DAYS_WINDOW, MISSED_DAYS, RULES, Su
 THERAPIST_RULE = "therapist"  # the rule field of suggestions written by a person
 
 
+def missing(suggestion_id: int) -> SuggestionNotFound:
+    """Returns the error for a suggestion that does not exist, or that the caller has no right to know of."""
+    return SuggestionNotFound(f"suggestion {suggestion_id} does not exist")
+
+
 def add_system_suggestions(
     drafts: Iterable[SuggestionDraft], *, patient_id: int, session_id: int | None, db_session: Session
 ) -> list[Suggestion]:
@@ -125,7 +130,7 @@ def get_suggestion(*, db_session: Session, suggestion_id: int) -> Suggestion:
     """Returns one suggestion or raises SuggestionNotFound."""
     row = db_session.get(Suggestion, suggestion_id)
     if row is None:
-        raise SuggestionNotFound(f"suggestion {suggestion_id} does not exist")
+        raise missing(suggestion_id)
     return row
 
 

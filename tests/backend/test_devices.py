@@ -51,7 +51,7 @@ def test_device_reaches_only_its_patient(client, make_user, device_headers):
     _, headers = device_headers(own)
     assert client.get(f"/api/v1/patients/{own.id}", headers=headers).status_code == 200
     r = client.get(f"/api/v1/patients/{other.id}", headers=headers)
-    assert r.status_code == 403 and r.json()["error"] == "Forbidden"
+    assert r.status_code == 404 and r.json()["error"] == "PatientNotFound"
     assert client.get("/api/v1/users/me", headers=headers).status_code == 403
 
 
@@ -69,4 +69,4 @@ def test_revoked_device_is_refused_and_audited(
 def test_unassigned_therapist_cannot_create_code(client, make_user, auth_headers):
     patient, therapist = make_user("patient"), make_user("therapist")
     r = client.post(f"/api/v1/patients/{patient.id}/pairing-codes", headers=auth_headers(therapist))
-    assert r.status_code == 403
+    assert r.status_code == 404

@@ -122,11 +122,11 @@ def test_another_therapist_cannot_edit_the_plan(client, make_patient_with_therap
         f"/api/v1/patients/{patient.id}/plans", json=_body(exercise.slug), headers=auth_headers(therapist)
     ).json()
     r = client.put(f"/api/v1/plans/{plan['id']}", json=_body(exercise.slug, notes="x"), headers=auth_headers(other))
-    assert r.status_code == 403 and r.json() == {
-        "error": "Forbidden",
-        "detail": f"you may not access patient {patient.id}",
+    assert r.status_code == 404 and r.json() == {
+        "error": "PlanNotFound",
+        "detail": f"plan {plan['id']} does not exist",  # as for a plan that is not there: nothing leaks
     }
     r = client.post(f"/api/v1/patients/{patient.id}/plans", json=_body(exercise.slug), headers=auth_headers(other))
-    assert r.status_code == 403 and r.json()["error"] == "Forbidden"
+    assert r.status_code == 404 and r.json()["error"] == "PatientNotFound"
     r = client.get(f"/api/v1/plans/{plan['id']}", headers=auth_headers(therapist))
     assert r.json()["notes"] == ""

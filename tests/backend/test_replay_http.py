@@ -47,12 +47,12 @@ def test_a_recording_of_an_older_version_is_rebuilt(client, make_user, auth_head
     assert stored.version == scene.VERSION and stored.data == response.content
 
 
-def test_no_login_is_401_and_another_patient_is_403(client, make_user, auth_headers, exercise, store):
+def test_no_login_is_401_and_another_patient_is_404(client, make_user, auth_headers, exercise, store):
     patient, stranger = make_user("patient"), make_user("patient")
     row = store(patient, exercise, T0, data=make_khs("squat", 1, seed=23))
     headers = auth_headers(stranger)  # made before any error response rolls the test's transaction back
     response = client.get(f"/api/v1/sessions/{row.id}/replay", headers=headers)
-    assert response.status_code == 403, response.text
+    assert response.status_code == 404, response.text
     response = client.get(f"/api/v1/sessions/{row.id}/replay")
     assert response.status_code == 401 and response.json()["error"] == "NotAuthenticated"
 

@@ -131,16 +131,16 @@ def test_reading_the_detail_is_audited(client, db_session, upload, auth_headers)
     assert "session.detail.read" in actions
 
 
-def test_another_patient_gets_403(client, upload, make_user, auth_headers):
+def test_another_patient_gets_404(client, upload, make_user, auth_headers):
     session_id, _, _ = upload(make_khs("squat", 2, seed=8), "squat")
     response = _detail(client, session_id, auth_headers(make_user("patient")))
-    assert response.status_code == 403, response.text
-    assert response.json()["error"] == "Forbidden"
+    assert response.status_code == 404, response.text
+    assert response.json()["error"] == "SessionNotFound"
 
 
-def test_unassigned_therapist_gets_403(client, upload, make_user, auth_headers):
+def test_unassigned_therapist_gets_404(client, upload, make_user, auth_headers):
     session_id, _, _ = upload(make_khs("squat", 2, seed=8), "squat")
-    assert _detail(client, session_id, auth_headers(make_user("therapist"))).status_code == 403
+    assert _detail(client, session_id, auth_headers(make_user("therapist"))).status_code == 404
 
 
 def test_unknown_session_is_404(client, make_user, auth_headers):

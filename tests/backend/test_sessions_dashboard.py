@@ -47,9 +47,9 @@ def test_progress_without_exercise_has_every_session(client, make_user, auth_hea
     assert body["points"][1]["rom_deg"] is None and body["points"][1]["indicators"] is None
 
 
-def test_progress_of_another_patient_is_403(client, make_user, auth_headers):
+def test_progress_of_another_patient_is_404(client, make_user, auth_headers):
     patient, other = make_user("patient"), make_user("patient")
-    assert client.get(f"/api/v1/patients/{other.id}/progress", headers=auth_headers(patient)).status_code == 403
+    assert client.get(f"/api/v1/patients/{other.id}/progress", headers=auth_headers(patient)).status_code == 404
 
 
 def test_summary_counts_this_week_against_the_plan(

@@ -57,10 +57,10 @@ def test_list_without_patient_shows_only_what_the_caller_may_see(
         assert ids == [own_row.id]
 
 
-def test_list_of_another_patient_is_403(client, make_user, auth_headers):
+def test_list_of_another_patient_is_404(client, make_user, auth_headers):
     patient, other = make_user("patient"), make_user("patient")
     response = client.get("/api/v1/sessions", headers=auth_headers(patient), params={"patient_id": other.id})
-    assert response.status_code == 403, response.text
+    assert response.status_code == 404, response.text
 
 
 def test_list_with_unknown_exercise_is_404(client, make_user, auth_headers):
@@ -102,13 +102,13 @@ def test_detail_of_unknown_session_is_404(client, make_user, auth_headers):
     assert response.json() == {"error": "SessionNotFound", "detail": "session 999999 does not exist"}
 
 
-def test_detail_of_another_patients_session_is_403(client, db_session, make_user, auth_headers, exercise, store):
+def test_detail_of_another_patients_session_is_404(client, db_session, make_user, auth_headers, exercise, store):
     owner, other = make_user("patient"), make_user("patient")
     row = store(owner, exercise, T0)
     headers = auth_headers(other)
     db_session.commit()  # a refused request rolls back; keep the setup out of its reach
-    assert client.get(f"/api/v1/sessions/{row.id}", headers=headers).status_code == 403
-    assert client.get(f"/api/v1/sessions/{row.id}/file", headers=headers).status_code == 403
+    assert client.get(f"/api/v1/sessions/{row.id}", headers=headers).status_code == 404
+    assert client.get(f"/api/v1/sessions/{row.id}/file", headers=headers).status_code == 404
 
 
 def test_file_returns_the_stored_bytes(client, make_user, auth_headers, exercise, store):

@@ -335,19 +335,19 @@ def test_declared_length_over_the_limit_is_413_before_reading(post, patient_devi
 # ---------------------------------------------------------------------------------------------- callers
 
 
-def test_device_uploading_for_another_patient_is_403(post, db_session, make_user, patient_device, khs):
+def test_device_uploading_for_another_patient_is_404(post, db_session, make_user, patient_device, khs):
     _, headers = patient_device
     other = make_user("patient")
     response = post(khs, headers, patient_id=other.id)
-    assert response.status_code == 403, response.text
-    assert response.json()["detail"] == f"this device may not access patient {other.id}"
+    assert response.status_code == 404, response.text
+    assert response.json()["detail"] == f"patient {other.id} does not exist"
     assert _stored(db_session, other.id) == (0, 0, 0)
 
 
-def test_unassigned_therapist_is_403(post, db_session, make_user, auth_headers, khs):
+def test_unassigned_therapist_is_404(post, db_session, make_user, auth_headers, khs):
     patient, therapist = make_user("patient"), make_user("therapist")
     response = post(khs, auth_headers(therapist), patient_id=patient.id)
-    assert response.status_code == 403, response.text
+    assert response.status_code == 404, response.text
     assert _stored(db_session, patient.id) == (0, 0, 0)
 
 

@@ -287,8 +287,8 @@ def test_unknown_suggestion_is_404(client, care):
 def test_unassigned_therapist_cannot_approve(client, care, make_suggestion, make_user, auth_headers):
     row = make_suggestion(care["patient"])
     response = client.post(f"/api/v1/suggestions/{row.id}/approve", headers=auth_headers(make_user("therapist")))
-    assert response.status_code == 403
-    assert response.json()["detail"] == f"you may not access patient {care['patient'].id}"
+    assert response.status_code == 404
+    assert response.json()["detail"] == f"suggestion {row.id} does not exist"
 
 
 # --- storing rule drafts ---

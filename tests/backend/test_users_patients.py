@@ -35,11 +35,11 @@ def test_assignment_controls_what_a_therapist_sees(client, make_user, auth_heade
     assert r.status_code == 204
     listed = client.get("/api/v1/patients", headers=t_headers).json()
     assert [p["id"] for p in listed["items"]] == [p1.id] and listed["items"][0]["therapist_ids"] == [therapist.id]
-    assert client.get(f"/api/v1/patients/{p2.id}", headers=t_headers).status_code == 403
+    assert client.get(f"/api/v1/patients/{p2.id}", headers=t_headers).status_code == 404
     bad = client.put(f"/api/v1/patients/{p1.id}/therapists/{p2.id}", headers=a_headers)
     assert bad.status_code == 404 and bad.json()["error"] == "TherapistNotFound"
     assert client.delete(f"/api/v1/patients/{p1.id}/therapists/{therapist.id}", headers=a_headers).status_code == 204
-    assert client.get(f"/api/v1/patients/{p1.id}", headers=t_headers).status_code == 403
+    assert client.get(f"/api/v1/patients/{p1.id}", headers=t_headers).status_code == 404
 
 
 def test_patient_sees_only_self_and_reads_are_audited(client, make_user, auth_headers):

@@ -145,7 +145,8 @@ def test_patient_starts_a_set_and_sees_the_count_reach_the_target(patient_page, 
         expect(status).to_contain_text("ready")
         _start(page)
         expect(page.locator(COUNT)).to_be_visible()
-        size = page.eval_on_selector(COUNT, "e => parseFloat(getComputedStyle(e).fontSize)")
+        # one JS turn: the panel is redrawn with every message, so an element handle may already be detached
+        size = page.evaluate(f"parseFloat(getComputedStyle(document.querySelector('{COUNT}')).fontSize)")
         assert size >= 96, f"the live count is {size} px; it must be at least 96 px"
         page.wait_for_function(f"+document.querySelector('{COUNT}').textContent >= 1", timeout=30_000)
         shot(page, "live-recording")

@@ -74,14 +74,14 @@ def test_replay_urls_are_401_without_login(browser, live_server):
         context.close()
 
 
-def test_another_patient_gets_403_for_the_replay(page, live_server):
+def test_another_patient_gets_404_for_the_replay(page, live_server):
     sid = _a_session_of_rose(live_server)
     login(page, OTHER_PATIENT)
     page.wait_for_url("**/patient")
     response = page.goto(f"/therapist/sessions/{sid}/replay")
-    assert response.status == 403
-    expect(page.locator("h1")).to_contain_text("Not your session")
-    assert page.request.get(f"/api/v1/sessions/{sid}/replay").status == 403
+    assert response.status == 404  # the same as for a session that is not there
+    expect(page.locator("h1")).to_contain_text("Session not found")
+    assert page.request.get(f"/api/v1/sessions/{sid}/replay").status == 404
     assert page.locator("#viewer").count() == 0
 
 

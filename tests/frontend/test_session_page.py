@@ -141,7 +141,7 @@ def test_other_therapist_sees_no_data_of_a_session_not_theirs(page, live_server,
     login(page, THERAPIST)  # Tara is not George's therapist
     page.wait_for_url("**/therapist")
     page.goto(f"/therapist/sessions/{arm_session}")
-    expect(page.locator("#error")).to_contain_text("may not see")
+    expect(page.locator("#error")).to_contain_text(f"could not find this. (session {arm_session} does not exist)")
     assert page.locator(".js-plotly-plot").count() == 0
 
 

@@ -19,7 +19,7 @@ def test_another_patients_stream_is_refused_and_no_login_is_401(client, make_use
     patient, stranger = make_user("patient"), make_user("patient")
     headers = auth_headers(stranger)  # made before an error response rolls the test's transaction back
     response = client.get("/api/v1/events", params={"patient_id": patient.id}, headers=headers)
-    assert response.status_code == 403, response.text
+    assert response.status_code == 404, response.text
     assert client.get("/api/v1/events").status_code == 401
 
 
