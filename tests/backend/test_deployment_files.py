@@ -1,0 +1,32 @@
+"""The shipped deployment (docker-compose.yml, Dockerfile) trusts no client to say who it is: only the reverse proxy
+it ships in front of the server may set X-Forwarded-For, and the server publishes no port of its own."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import yaml
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _compose() -> dict:
+    return yaml.safe_load((ROOT / "docker-compose.yml").read_text())
+
+
+def test_the_image_trusts_no_forwarding_proxy_by_default():
+    dockerfile = (ROOT / "Dockerfile").read_text()
+    assert "*" not in re.findall(r"COACH_FORWARDED_ALLOW_IPS:-([^}\"]*)", dockerfile)[0], "the image trusts every client"
+
+
+def test_compose_puts_a_proxy_in_front_and_trusts_only_it():
+    services = _compose()["services"]
+    server, proxy = services["server"], services["proxy"]
+    assert "ports" not in server, "the server publishes a port: clients could reach it past the proxy"
+    assert {"80:80", "443:443"} <= {str(p) for p in proxy["ports"]}
+    trusted = server["environment"]["COACH_FORWARDED_ALLOW_IPS"]
+    proxy_ip = proxy["networks"]["coach"]["ipv4_address"]
+    assert trusted == proxy_ip, f"the server trusts {trusted!r}, the proxy is {proxy_ip}"
+    caddyfile = (ROOT / "deploy" / "Caddyfile").read_text()
+    assert "reverse_proxy server:8000" in caddyfile and "flush_interval -1" in caddyfile  # events unbuffered
