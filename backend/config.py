@@ -9,17 +9,15 @@ from urllib.parse import urlsplit
 from pydantic import Field, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-DEFAULT_SECRET_KEY = "change-me-local-only"
-
 
 class Settings(BaseSettings):
-    """Holds every setting of the coaching server; secrets are refused at their defaults outside local."""
+    """Holds every setting of the coaching server. It needs no secret of its own: login sessions, CSRF secrets,
+    API and device tokens are random values kept in the database (tokens as SHA-256 hashes)."""
 
     model_config = SettingsConfigDict(env_prefix="COACH_", case_sensitive=True, extra="ignore")
 
     ENVIRONMENT: Literal["local", "staging", "production"] = "local"
     DATABASE_URL: str = "sqlite:///./var/coach.db"
-    SECRET_KEY: str = DEFAULT_SECRET_KEY
     HOST: str = "127.0.0.1"
     PORT: int = 8000
     WORKERS: int = Field(default=1, ge=1, le=64)  # uvicorn worker processes of `coach-server serve`
@@ -39,14 +37,6 @@ class Settings(BaseSettings):
     # an event stream (GET /api/v1/events) ends after this long and the browser reconnects, checking its login again
     EVENTS_STREAM_MAX_S: float = Field(default=300.0, ge=0.0)
     LIVE_OFFLINE_GRACE_S: float = Field(default=2.0, ge=0.0, le=60.0)  # a home agent's reconnection is no "offline"
-
-    @model_validator(mode="after")
-    def _refuse_default_secrets(self) -> Settings:
-        if self.ENVIRONMENT != "local" and self.SECRET_KEY == DEFAULT_SECRET_KEY:
-            raise ValueError("COACH_SECRET_KEY must be set to a random value when COACH_ENVIRONMENT is not 'local'")
-        if self.ENVIRONMENT != "local" and len(self.SECRET_KEY) < 32:
-            raise ValueError("COACH_SECRET_KEY must be at least 32 characters outside COACH_ENVIRONMENT=local")
-        return self
 
     @model_validator(mode="after")
     def _check_public_url(self) -> Settings:

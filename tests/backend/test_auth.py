@@ -27,7 +27,7 @@ def test_login_sets_httponly_lax_cookie_and_returns_csrf(client, make_user):
 
 
 def test_cookie_is_secure_outside_local(db_session, make_user):
-    settings = Settings(ENVIRONMENT="production", SECRET_KEY="x" * 40, CHECK_MIGRATIONS=False)
+    settings = Settings(ENVIRONMENT="production", CHECK_MIGRATIONS=False)
     user = make_user("patient", password=PASSWORD)
     with TestClient(make_test_app(db_session, settings), base_url="https://testserver") as client:
         r = _login(client, user.email)
