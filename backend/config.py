@@ -27,6 +27,7 @@ class Settings(BaseSettings):
     PAIRING_CODE_MINUTES: float = 15.0
     # session uploads: ~116 B/frame (raw + filtered) measured on simulated sets, so 16 MiB holds an hour at 30 Hz
     MAX_UPLOAD_BYTES: int = 16 * 1024 * 1024
+    MAX_JSON_BYTES: int = Field(default=1024 * 1024, ge=1024)  # any other request body (JSON): 413 above it
     SESSION_MAX_FRAMES: int = 30 * 60 * 60  # per recording: one hour at 30 Hz
     SESSION_MAX_DECODED_BYTES: int = 64 * 1024 * 1024  # all recordings of one file, after decompression
     CHECK_MIGRATIONS: bool = True

@@ -22,6 +22,7 @@ from backend.config import Settings, get_settings
 from backend.deps import DbSession
 from backend.events.listener import Listener
 from backend.exceptions import AppError, DatabaseBusy
+from backend.request_limits import RequestLimits
 from backend.schemas import ErrorOut
 
 log = logging.getLogger(__name__)
@@ -200,6 +201,7 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     _install_error_handlers(app)
     # plotly.js (4.8 MB), viser's client and JSON compress 3-5x; the replay recording is already zstd (identity)
     app.add_middleware(GZipMiddleware, minimum_size=1024)
+    app.add_middleware(RequestLimits, max_json_bytes=settings.MAX_JSON_BYTES)  # outermost: before anything reads
     app.include_router(_system_router())
     for name in ROUTERS:
         app.include_router(importlib.import_module(name).router)
