@@ -35,6 +35,7 @@ class Caller:
     device: Device | None = None
     scopes: frozenset[str] = field(default_factory=lambda: frozenset({"read", "write"}))
     login_session: LoginSession | None = None
+    api_token: ApiToken | None = None
     ip: str | None = None
 
     @property
@@ -71,11 +72,13 @@ def _from_bearer(token: str, db_session: Session, ip: str) -> Caller:
         row = db_session.scalar(select(ApiToken).where(ApiToken.token_hash == token_hash(token)))
         if row is None or row.revoked_at is not None:
             raise NotAuthenticated("API token is unknown or revoked")
+        if row.expires_at <= now:
+            raise NotAuthenticated(f"API token expired at {row.expires_at.isoformat(timespec='seconds')}")
         user = db_session.get(User, row.user_id)
         if user is None or not user.is_active:
             raise NotAuthenticated("the account of this API token is deactivated")
         row.last_used_at = now
-        return Caller(via="token", user=user, scopes=frozenset(row.scopes), ip=ip)
+        return Caller(via="token", user=user, scopes=frozenset(row.scopes), api_token=row, ip=ip)
     raise NotAuthenticated("unknown token type (expected an API token khc_... or a device token khd_...)")
 
 

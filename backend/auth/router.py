@@ -89,7 +89,14 @@ def create_token(body: TokenCreate, user: CurrentUser, caller: UserCaller, db_se
     """Creates a personal API token; the secret is in the answer only this once."""
     if caller.via == "token" and not set(body.scopes) <= caller.scopes:
         raise InsufficientScope("an API token cannot create a token with more scopes than its own")
-    row, token = service.create_api_token(db_session=db_session, user=user, name=body.name, scopes=body.scopes)
+    row, token = service.create_api_token(
+        db_session=db_session,
+        user=user,
+        name=body.name,
+        scopes=body.scopes,
+        days=body.expires_in_days,
+        parent=caller.api_token,
+    )
     record(db_session=db_session, caller=caller, action="token.create", object_type="api_token", object_id=row.id)
     return TokenCreated(**TokenOut.model_validate(row).model_dump(), token=token)
 

@@ -29,7 +29,11 @@ class User(Base):
 
 
 class ApiToken(Base):
-    """A personal API token (sent as `Authorization: Bearer khc_...`); only its sha256 is stored."""
+    """A personal API token (sent as `Authorization: Bearer khc_...`); only its sha256 is stored.
+
+    A token expires at expires_at; a token made with another token (parent_id) expires no later than its parent
+    and is revoked with it.
+    """
 
     __tablename__ = "api_token"
 
@@ -41,6 +45,8 @@ class ApiToken(Base):
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
     last_used_at: Mapped[dt.datetime | None] = mapped_column()
     revoked_at: Mapped[dt.datetime | None] = mapped_column()
+    expires_at: Mapped[dt.datetime] = mapped_column()
+    parent_id: Mapped[int | None] = mapped_column(ForeignKey("api_token.id", ondelete="CASCADE"), index=True)
 
 
 class LoginSession(Base):

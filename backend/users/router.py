@@ -81,12 +81,20 @@ def get_user(user_id: IdPath, caller: AdminCaller, db_session: DbSession) -> Use
 
 @router.patch("/{user_id}", response_model=UserOut, responses=error_responses(*AUTH_ERRORS, UserNotFound))
 def update_user(user_id: IdPath, body: UserUpdate, caller: AdminCaller, db_session: DbSession) -> UserOut:
-    """Changes a user's name, password or active flag (admin only); deactivation revokes their logins."""
+    """Changes a user's name, password or active flag (admin only). A new password ends the user's browser logins
+    (except the caller's own, when admins change their own password) and API tokens unless keep_api_tokens;
+    deactivation revokes all of them."""
     user = service.get_user(db_session=db_session, user_id=user_id)
     if body.is_active is False and user.id == caller.user.id:
         raise Forbidden("admins cannot deactivate themselves")
     service.update_user(
-        db_session=db_session, user=user, full_name=body.full_name, is_active=body.is_active, password=body.password
+        db_session=db_session,
+        user=user,
+        full_name=body.full_name,
+        is_active=body.is_active,
+        password=body.password,
+        keep_api_tokens=body.keep_api_tokens,
+        keep_login=caller.login_session,
     )
     record(
         db_session=db_session,

@@ -9,6 +9,8 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 Role = Literal["admin", "therapist", "patient"]
 Scope = Literal["read", "write"]
+TOKEN_DEFAULT_DAYS = 90  # an API token's lifetime unless its maker asks for less or more
+TOKEN_MAX_DAYS = 365
 
 
 def _email(value: str) -> str:
@@ -48,6 +50,10 @@ class UserUpdate(BaseModel):
     full_name: str | None = Field(default=None, max_length=200, examples=["Rose Miller"])
     is_active: bool | None = Field(default=None, examples=[True])
     password: str | None = Field(default=None, min_length=10, max_length=256, examples=["a new long passphrase"])
+    keep_api_tokens: bool = Field(
+        default=False,
+        description="with a new password: keep the user's API tokens (their browser logins end either way)",
+    )
 
 
 class LoginIn(BaseModel):
@@ -76,6 +82,14 @@ class TokenCreate(BaseModel):
 
     name: str = Field(min_length=1, max_length=100, examples=["analysis notebook"])
     scopes: list[Scope] = Field(default=["read"], min_length=1, examples=[["read"]])
+    expires_in_days: int = Field(
+        default=TOKEN_DEFAULT_DAYS,
+        ge=1,
+        le=TOKEN_MAX_DAYS,
+        description=f"lifetime in days ({TOKEN_DEFAULT_DAYS} by default, at most {TOKEN_MAX_DAYS}); a token made "
+        "with a token expires no later than the token that made it",
+        examples=[30],
+    )
 
 
 class TokenOut(BaseModel):
@@ -88,6 +102,8 @@ class TokenOut(BaseModel):
     created_at: dt.datetime
     last_used_at: dt.datetime | None
     revoked_at: dt.datetime | None
+    expires_at: dt.datetime
+    parent_id: int | None = Field(description="the token that made this one, if one did; revoking it revokes this")
 
 
 class TokenCreated(TokenOut):

@@ -75,13 +75,19 @@ def update_user(
     full_name: str | None = None,
     is_active: bool | None = None,
     password: str | None = None,
+    keep_api_tokens: bool = False,
+    keep_login: LoginSession | None = None,
 ) -> User:
-    """Changes a user; deactivating revokes every login session and API token."""
+    """Changes a user; a new password ends their login sessions but keep_login (the caller's own) and their API
+    tokens unless keep_api_tokens; deactivating revokes every login session and API token."""
     now = utcnow()
     if full_name is not None:
         user.full_name = full_name
     if password is not None:
         user.password_hash = hash_password(password)
+        revoke_all_credentials(
+            db_session=db_session, user_id=user.id, api_tokens=not keep_api_tokens, keep_login=keep_login
+        )
     if is_active is not None and is_active != user.is_active:
         user.is_active = is_active
         user.deactivated_at = None if is_active else now
@@ -91,12 +97,20 @@ def update_user(
     return user
 
 
-def revoke_all_credentials(*, db_session: Session, user_id: int) -> None:
-    """Revokes every login session and API token of a user."""
+def revoke_all_credentials(
+    *, db_session: Session, user_id: int, api_tokens: bool = True, keep_login: LoginSession | None = None
+) -> None:
+    """Revokes every login session of a user but keep_login and, unless api_tokens=False, every API token."""
     now = utcnow()
-    for model in (LoginSession, ApiToken):
+    kept = keep_login.id if keep_login is not None else -1
+    db_session.execute(
+        update(LoginSession)
+        .where(LoginSession.user_id == user_id, LoginSession.revoked_at.is_(None), LoginSession.id != kept)
+        .values(revoked_at=now)
+    )
+    if api_tokens:
         db_session.execute(
-            update(model).where(model.user_id == user_id, model.revoked_at.is_(None)).values(revoked_at=now)
+            update(ApiToken).where(ApiToken.user_id == user_id, ApiToken.revoked_at.is_(None)).values(revoked_at=now)
         )
 
 
@@ -152,11 +166,23 @@ def logout(*, db_session: Session, login_session: LoginSession) -> None:
     db_session.flush()
 
 
-def create_api_token(*, db_session: Session, user: User, name: str, scopes: list[str]) -> tuple[ApiToken, str]:
-    """Creates a personal API token and returns (row, secret token shown once)."""
-    token = new_token(API_TOKEN_PREFIX)
+def create_api_token(
+    *, db_session: Session, user: User, name: str, scopes: list[str], days: int, parent: ApiToken | None = None
+) -> tuple[ApiToken, str]:
+    """Creates a personal API token valid for days (no longer than its parent, the token that asked for it) and
+    returns (row, secret token shown once)."""
+    token, now = new_token(API_TOKEN_PREFIX), utcnow()
+    expires = now + dt.timedelta(days=days)
+    if parent is not None:
+        expires = min(expires, parent.expires_at)
     row = ApiToken(
-        user_id=user.id, name=name, token_hash=token_hash(token), scopes=sorted(set(scopes)), created_at=utcnow()
+        user_id=user.id,
+        name=name,
+        token_hash=token_hash(token),
+        scopes=sorted(set(scopes)),
+        created_at=now,
+        expires_at=expires,
+        parent_id=parent.id if parent is not None else None,
     )
     db_session.add(row)
     db_session.flush()
@@ -171,11 +197,17 @@ def list_api_tokens(*, db_session: Session, user: User, limit: int, offset: int)
 
 
 def revoke_api_token(*, db_session: Session, user: User, token_id: int) -> ApiToken:
-    """Revokes one of the user's API tokens; raises TokenNotFound for tokens of others."""
+    """Revokes one of the user's API tokens and every token made with it; raises TokenNotFound for tokens of
+    others."""
     row = db_session.get(ApiToken, token_id)
     if row is None or row.user_id != user.id:
         raise TokenNotFound(f"API token {token_id} does not exist")
-    if row.revoked_at is None:
-        row.revoked_at = utcnow()
+    now, ids = utcnow(), [row.id]
+    while ids:  # down the tree of tokens made with tokens, one generation a query
+        db_session.execute(
+            update(ApiToken).where(ApiToken.id.in_(ids), ApiToken.revoked_at.is_(None)).values(revoked_at=now)
+        )
+        ids = list(db_session.scalars(select(ApiToken.id).where(ApiToken.parent_id.in_(ids))))
     db_session.flush()
+    db_session.refresh(row)
     return row

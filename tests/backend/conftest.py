@@ -23,8 +23,9 @@ from backend.exercises.models import Exercise
 from backend.main import create_app
 from backend.migrate import upgrade
 from backend.patients.models import TherapistPatient
-from backend.security import API_TOKEN_PREFIX, DEVICE_TOKEN_PREFIX, new_token, token_hash
-from backend.users.models import ApiToken, User
+from backend.security import DEVICE_TOKEN_PREFIX, new_token, token_hash
+from backend.users.models import User
+from backend.users.service import create_api_token
 
 import_all_models()
 
@@ -188,9 +189,7 @@ def auth_headers(db_session):
     """Factory: auth_headers(user, scopes=('read', 'write')) -> {'Authorization': 'Bearer khc_...'}."""
 
     def make(user: User, scopes=("read", "write")) -> dict[str, str]:
-        token = new_token(API_TOKEN_PREFIX)
-        db_session.add(ApiToken(user_id=user.id, name="test", token_hash=token_hash(token), scopes=list(scopes)))
-        db_session.flush()
+        _, token = create_api_token(db_session=db_session, user=user, name="test", scopes=list(scopes), days=365)
         return {"Authorization": f"Bearer {token}"}
 
     return make

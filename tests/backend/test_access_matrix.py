@@ -138,7 +138,7 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
     _, code = create_pairing_code(db_session=db_session, patient_id=own.id, created_by_id=own.id, minutes=15)
     from backend.users.service import create_api_token
 
-    admin_token, _ = create_api_token(db_session=db_session, user=admin, name="victim", scopes=["read"])
+    admin_token, _ = create_api_token(db_session=db_session, user=admin, name="victim", scopes=["read"], days=1)
     headers = {
         "anonymous": {},
         "patient_own": auth_headers(own),
