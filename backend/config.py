@@ -22,9 +22,14 @@ class Settings(BaseSettings):
     PORT: int = 8000
     WORKERS: int = Field(default=1, ge=1, le=64)  # uvicorn worker processes of `coach-server serve`
     LOGIN_SESSION_HOURS: float = 12.0
-    LOGIN_MAX_FAILURES: int = 5
-    LOGIN_WINDOW_MINUTES: float = 15.0
+    # failed logins within LOGIN_WINDOW_MINUTES before the next is refused (429): per account from one address, per
+    # address over all accounts (one password tried on many), per account over all addresses (a spread-out guess)
+    LOGIN_MAX_FAILURES: int = Field(default=5, ge=1)
+    LOGIN_MAX_FAILURES_PER_IP: int = Field(default=20, ge=1)
+    LOGIN_MAX_FAILURES_PER_ACCOUNT: int = Field(default=30, ge=1)
+    LOGIN_WINDOW_MINUTES: float = Field(default=15.0, gt=0)
     PAIRING_CODE_MINUTES: float = 15.0
+    PAIRING_MAX_FAILURES: int = Field(default=10, ge=1)  # wrong pairing codes per address within the login window
     # session uploads: ~116 B/frame (raw + filtered) measured on simulated sets, so 16 MiB holds an hour at 30 Hz
     MAX_UPLOAD_BYTES: int = 16 * 1024 * 1024
     MAX_JSON_BYTES: int = Field(default=1024 * 1024, ge=1024)  # any other request body (JSON): 413 above it

@@ -133,7 +133,8 @@ def record_one(
     t0 = time.monotonic()
     if session_id is None or queue.where(session_id) is None:  # a backfilled session is made once
         rec = capture("simulator", exercise=exercise, reps=reps, seed=seed)
-        session_id = queue_session(queue, rec, created_at=started, session_id=session_id).stem
+        session_id = queue_session(queue, rec, created_at=started, session_id=session_id,
+                                   recorded_by=agent.config.recorded_by).stem  # fmt: skip
     t1 = time.monotonic()
     agent.sessions += 1
     with Uploader(agent.config.server_url, agent.config.device_token,

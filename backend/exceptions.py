@@ -44,6 +44,12 @@ class TooManyLoginAttempts(AppError):
     status_code = 429
 
 
+class PasswordCheckBusy(AppError):
+    """Every password-hashing slot of this server process stayed taken while the request waited."""
+
+    status_code = 503
+
+
 class NotFound(AppError):
     status_code = 404
 
@@ -110,6 +116,13 @@ class SuggestionNotPending(Conflict):
 
 class AgentOffline(Conflict):
     """The patient's home agent is not connected, so it cannot be asked to record."""
+
+
+class SessionOwnerMismatch(AppError):
+    """The session file names (recorded_by) another patient than the one it is stored for, or another device than
+    the one sending it."""
+
+    status_code = 403
 
 
 class PairingCodeInvalid(AppError):

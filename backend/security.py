@@ -5,9 +5,14 @@ from __future__ import annotations
 import hashlib
 import hmac
 import secrets
+import threading
+from collections.abc import Callable
+from typing import TypeVar
 
 from argon2 import PasswordHasher
 from argon2.exceptions import InvalidHashError, VerificationError
+
+from backend.exceptions import PasswordCheckBusy
 
 API_TOKEN_PREFIX = "khc_"  # personal API tokens
 DEVICE_TOKEN_PREFIX = "khd_"  # home-device tokens
@@ -15,21 +20,45 @@ SESSION_TOKEN_PREFIX = "khs_"  # browser login cookie
 PAIRING_ALPHABET = "ABCDEFGHJKLMNPQRSTUVWXYZ23456789"  # no 0/O, 1/I
 PAIRING_CODE_LENGTH = 8
 
+# An argon2id hash costs about 0.5 s of one core and 64 MiB: at most this many at once per server process, so that
+# a flood of logins (even unthrottled ones: every address and e-mail new) cannot take every core from the others.
+MAX_CONCURRENT_HASHES = 2
+HASH_WAIT_S = 10.0  # a request waits this long for a slot, then gets 503 PasswordCheckBusy with Retry-After
+
 _hasher = PasswordHasher()  # argon2id with the library's current recommended parameters
 _DUMMY_HASH = _hasher.hash("not-a-real-password")
+_hash_slots = threading.BoundedSemaphore(MAX_CONCURRENT_HASHES)
+T = TypeVar("T")
+
+
+def with_hash_slot(work: Callable[[], T]) -> T:
+    """Returns work() run in one of the process's password-hashing slots; raises PasswordCheckBusy when none
+    frees up within HASH_WAIT_S."""
+    if not _hash_slots.acquire(timeout=HASH_WAIT_S):
+        raise PasswordCheckBusy(
+            "the server is checking many passwords at once; retry in a few seconds", headers={"Retry-After": "5"}
+        )
+    try:
+        return work()
+    finally:
+        _hash_slots.release()
 
 
 def hash_password(password: str) -> str:
     """Returns the argon2id hash of a password."""
-    return _hasher.hash(password)
+    return with_hash_slot(lambda: _hasher.hash(password))
 
 
 def verify_password(password_hash: str | None, password: str) -> bool:
     """Returns whether password matches the hash (spends the same time when there is no hash)."""
-    try:
-        return _hasher.verify(password_hash or _DUMMY_HASH, password) and password_hash is not None
-    except (VerificationError, InvalidHashError):
-        return False
+
+    def check() -> bool:
+        try:
+            return _hasher.verify(password_hash or _DUMMY_HASH, password) and password_hash is not None
+        except (VerificationError, InvalidHashError):
+            return False
+
+    return with_hash_slot(check)
 
 
 def new_token(prefix: str) -> str:

@@ -37,6 +37,13 @@ class AgentConfig:
     patient_id: int | None = None
     device_name: str | None = None
 
+    @property
+    def recorded_by(self) -> dict[str, int] | None:
+        """Returns the pairing that the agent writes into each session file, or None when it is not known."""
+        if self.device_id is None or self.patient_id is None:
+            return None
+        return {"device_id": self.device_id, "patient_id": self.patient_id}
+
 
 def agent_home(home: str | Path | None = None) -> Path:
     """Returns the agent's home folder: `home`, else $KINECT_AGENT_HOME, else ~/.config/kinect-agent."""

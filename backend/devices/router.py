@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import datetime as dt
 from typing import Annotated
 
 from fastapi import APIRouter, Depends, Request, status
@@ -17,9 +18,12 @@ from backend.exceptions import (
     Forbidden,
     PairingCodeInvalid,
     PatientNotFound,
+    TooManyLoginAttempts,
     error_responses,
 )
 from backend.schemas import IdPath, Page, PageParams, page_params
+from backend.users import throttle
+from backend.users.models import LoginAttempt
 
 router = APIRouter(prefix="/api/v1", tags=["devices"])
 
@@ -56,12 +60,25 @@ def create_pairing_code(
     "/devices/pair",
     response_model=PairOut,
     status_code=status.HTTP_201_CREATED,
-    responses=error_responses(PairingCodeInvalid),
+    responses=error_responses(PairingCodeInvalid, TooManyLoginAttempts),
 )
-def pair(body: PairIn, request: Request, db_session: DbSession) -> PairOut:
-    """Exchanges a pairing code (no other credentials) for a device token bound to the code's patient."""
+def pair(
+    body: PairIn, request: Request, db_session: DbSession, settings: Annotated[Settings, Depends(get_settings)]
+) -> PairOut:
+    """Exchanges a pairing code (no other credentials) for a device token bound to the code's patient; at most
+    PAIRING_MAX_FAILURES wrong codes per address within the login window."""
+    ip = client_ip(request)
+    attempt = throttle.claim(
+        db_session=db_session,
+        kind="pairing",
+        email="",
+        ip=ip,
+        window=dt.timedelta(minutes=settings.LOGIN_WINDOW_MINUTES),
+        limits=[throttle.Limit(settings.PAIRING_MAX_FAILURES, "from this address", (LoginAttempt.ip == ip,))],
+    )
     device, token = service.pair(db_session=db_session, code=body.code, name=body.name)
-    caller = Caller(via="device", device=device, ip=client_ip(request))
+    throttle.settle(db_session=db_session, attempt=attempt, succeeded=True)
+    caller = Caller(via="device", device=device, ip=ip)
     record(
         db_session=db_session,
         caller=caller,

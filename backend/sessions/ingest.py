@@ -7,7 +7,7 @@ import uuid
 from collections.abc import AsyncIterator
 from dataclasses import dataclass
 
-from backend.exceptions import InvalidSessionFile, SessionTooLarge
+from backend.exceptions import InvalidSessionFile, SessionOwnerMismatch, SessionTooLarge
 from kinect_agent.formats import session_file
 from kinect_agent.formats.session_file import SessionFileError, SessionPayload
 
@@ -65,6 +65,23 @@ def decode_upload(data: bytes, *, max_frames: int, max_decoded_bytes: int) -> Up
         client_session_id=_session_uuid(payload.session_id),
         started_at=_started_at(payload.created_at),
     )
+
+
+def check_owner(upload: Upload, *, patient_id: int, device_id: int | None) -> None:
+    """Raises SessionOwnerMismatch when the file's recorded_by names another patient than patient_id, or another
+    device than device_id (the uploading device; None for users, who may relay a file of the right patient)."""
+    recorded_by = upload.payload.recorded_by
+    if recorded_by is None:
+        return
+    if recorded_by["patient_id"] != patient_id:
+        raise SessionOwnerMismatch(
+            f"recorded_by.patient_id: this session was recorded for another patient, not for patient {patient_id}"
+        )
+    if device_id is not None and recorded_by["device_id"] != device_id:
+        raise SessionOwnerMismatch(
+            f"recorded_by.device_id: this session was recorded by device {recorded_by['device_id']}, "
+            f"not by device {device_id} that sends it"
+        )
 
 
 def _session_uuid(value: str) -> uuid.UUID:

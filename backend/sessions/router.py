@@ -28,13 +28,14 @@ from backend.exceptions import (
     PatientNotFound,
     SessionConflict,
     SessionNotFound,
+    SessionOwnerMismatch,
     SessionTooLarge,
     error_responses,
 )
 from backend.exercises.service import get_exercise
 from backend.schemas import IdPath, IdQuery, Page, PageParams, page_params
 from backend.sessions import dashboard, detail, service
-from backend.sessions.ingest import check_declared_length, decode_upload, read_limited
+from backend.sessions.ingest import check_declared_length, check_owner, decode_upload, read_limited
 from backend.sessions.schemas import (
     DashboardRowOut,
     ProgressOut,
@@ -153,6 +154,7 @@ def _ingest(
     with db_session.no_autoflush:
         exercise = get_exercise(db_session=db_session, slug=slug)
     device_id = caller.device.id if caller.device is not None else None
+    check_owner(upload, patient_id=patient_id, device_id=device_id)
     row, created = service.store_upload(
         db_session=db_session, upload=upload, patient_id=patient_id, exercise=exercise, device_id=device_id
     )
@@ -178,6 +180,7 @@ def _ingest(
             ExerciseNotFound,
             SessionConflict,
             SessionTooLarge,
+            SessionOwnerMismatch,
             InvalidInput,
         ),
     },

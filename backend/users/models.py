@@ -65,12 +65,18 @@ class LoginSession(Base):
 
 
 class LoginAttempt(Base):
-    """One password login attempt, kept for throttling (failures per account + IP within a window)."""
+    """One attempt at a secret, kept for throttling (backend.users.throttle): a password login (kind 'password',
+    with the e-mail tried) or a pairing code (kind 'pairing', email empty). Recorded as failed before the secret is
+    checked, so that attempts in flight count too; marked succeeded after."""
 
     __tablename__ = "login_attempt"
-    __table_args__ = (Index("ix_login_attempt_email_ip_at", "email", "ip", "at"),)
+    __table_args__ = (
+        Index("ix_login_attempt_email_ip_at", "email", "ip", "at"),
+        Index("ix_login_attempt_ip_at", "ip", "at"),
+    )
 
     id: Mapped[int] = mapped_column(primary_key=True)
+    kind: Mapped[str] = mapped_column(String(16), default="password", server_default="password")
     email: Mapped[str] = mapped_column(String(320))
     ip: Mapped[str] = mapped_column(String(64))
     succeeded: Mapped[bool] = mapped_column(Boolean)

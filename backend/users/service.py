@@ -12,8 +12,8 @@ from backend.database import utcnow
 from backend.exceptions import (
     EmailAlreadyRegistered,
     NotAuthenticated,
+    PasswordCheckBusy,
     TokenNotFound,
-    TooManyLoginAttempts,
     UserNotFound,
 )
 from backend.security import (
@@ -25,6 +25,7 @@ from backend.security import (
     token_hash,
     verify_password,
 )
+from backend.users import throttle
 from backend.users.models import ApiToken, LoginAttempt, LoginSession, User
 
 
@@ -114,38 +115,35 @@ def revoke_all_credentials(
         )
 
 
-def _failures_since(*, db_session: Session, email: str, ip: str, since: dt.datetime) -> list[dt.datetime]:
-    rows = db_session.scalars(
-        select(LoginAttempt.at).where(
-            LoginAttempt.email == email,
-            LoginAttempt.ip == ip,
-            LoginAttempt.at > since,
-            LoginAttempt.succeeded.is_(False),
-        )
-    )
-    return sorted(rows)
-
-
 def login(
     *, db_session: Session, settings: Settings, email: str, password: str, ip: str
 ) -> tuple[User, LoginSession, str]:
-    """Checks a password login (throttled per account + IP) and returns (user, login session, cookie token)."""
+    """Checks a password login and returns (user, login session, cookie token). Throttled (backend.users.throttle)
+    per account and address, per address and per account; commits the attempt before the password is checked."""
     email = email.strip().lower()
-    now = utcnow()
-    window = dt.timedelta(minutes=settings.LOGIN_WINDOW_MINUTES)
-    failures = _failures_since(db_session=db_session, email=email, ip=ip, since=now - window)
-    if len(failures) >= settings.LOGIN_MAX_FAILURES:
-        retry = max(1, int((failures[-settings.LOGIN_MAX_FAILURES] + window - now).total_seconds()) + 1)
-        raise TooManyLoginAttempts(
-            f"too many failed logins for this account from this address; retry in {retry} s",
-            headers={"Retry-After": str(retry)},
-        )
+    attempt = throttle.claim(
+        db_session=db_session,
+        kind="password",
+        email=email,
+        ip=ip,
+        window=dt.timedelta(minutes=settings.LOGIN_WINDOW_MINUTES),
+        limits=[
+            throttle.Limit(settings.LOGIN_MAX_FAILURES, "for this account from this address",
+                           (LoginAttempt.email == email, LoginAttempt.ip == ip)),
+            throttle.Limit(settings.LOGIN_MAX_FAILURES_PER_IP, "from this address", (LoginAttempt.ip == ip,)),
+            throttle.Limit(settings.LOGIN_MAX_FAILURES_PER_ACCOUNT, "for this account", (LoginAttempt.email == email,)),
+        ],  # fmt: skip
+    )
     user = get_user_by_email(db_session=db_session, email=email)
-    ok = verify_password(user.password_hash if user else None, password) and user is not None and user.is_active
-    db_session.add(LoginAttempt(email=email, ip=ip, succeeded=ok, at=now))
-    db_session.flush()
+    try:
+        ok = verify_password(user.password_hash if user else None, password) and user is not None and user.is_active
+    except PasswordCheckBusy:
+        throttle.withdraw(db_session=db_session, attempt=attempt)
+        raise
+    throttle.settle(db_session=db_session, attempt=attempt, succeeded=ok)
     if not ok:
         raise NotAuthenticated("wrong e-mail or password, or the account is deactivated", keep_changes=True)
+    now = utcnow()
     token = new_token(SESSION_TOKEN_PREFIX)
     session = LoginSession(
         user_id=user.id,

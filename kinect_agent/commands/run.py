@@ -93,8 +93,10 @@ def make_payload(
     session_id: str | None = None,
     created_at: str | None = None,
     config: PipelineConfig | None = None,
+    recorded_by: dict[str, int] | None = None,
 ) -> SessionPayload:
-    """Filters the recording and returns the session (raw + filtered + a small params summary)."""
+    """Filters the recording and returns the session (raw + filtered + a small params summary), saying which
+    device and patient recorded it (recorded_by)."""
     config = config or PipelineConfig()
     result = process(rec, config=config)
     q = result.quality
@@ -106,26 +108,33 @@ def make_payload(
         "segment_lengths_m": q["segment_lengths_m"],
     }
     payload = SessionPayload(session_id=session_id or str(uuid.uuid4()), raw=rec, filtered=result.filtered,
-                             params=params)  # fmt: skip
+                             params=params, recorded_by=recorded_by)  # fmt: skip
     if created_at is not None:
         payload.created_at = created_at
     return payload
 
 
 def queue_session(
-    queue: SessionQueue, rec: Recording, *, created_at: str | None = None, session_id: str | None = None
+    queue: SessionQueue,
+    rec: Recording,
+    *,
+    created_at: str | None = None,
+    session_id: str | None = None,
+    recorded_by: dict[str, int] | None = None,
 ) -> Path:
     """Holds the raw session durably, filters it, queues the full session; returns the pending file.
 
-    When the filter fails the raw session is queued instead (the server can filter it), so nothing is lost.
+    recorded_by: the pairing that recorded it (AgentConfig.recorded_by), written into the file. When the filter
+    fails the raw session is queued instead (the server can filter it), so nothing is lost.
     """
     if created_at is None:  # the session started when its first frame was taken
         start = datetime.now(UTC) - timedelta(seconds=rec.duration)
         created_at = start.isoformat(timespec="seconds").replace("+00:00", "Z")
-    raw = SessionPayload(session_id=session_id or str(uuid.uuid4()), raw=rec, created_at=created_at)
+    raw = SessionPayload(session_id=session_id or str(uuid.uuid4()), raw=rec, created_at=created_at,
+                         recorded_by=recorded_by)  # fmt: skip
     queue.hold(raw)
     try:
-        payload = make_payload(rec, session_id=raw.session_id, created_at=raw.created_at)
+        payload = make_payload(rec, session_id=raw.session_id, created_at=raw.created_at, recorded_by=recorded_by)
     except ValueError as exc:
         print(f"filtering failed ({exc}); queuing the raw session for the server to filter", file=sys.stderr)
         payload = raw
@@ -147,7 +156,7 @@ def run(args: argparse.Namespace) -> int:
     queue.recover_held()
     rec = capture(args.source, exercise=args.exercise, file=args.file, reps=args.reps, seconds=args.seconds,
                   seed=args.seed)  # fmt: skip
-    path = queue_session(queue, rec)
+    path = queue_session(queue, rec, recorded_by=config.recorded_by)
     print(f"{args.source}: {rec.n_frames} frames, {rec.duration:.1f} s of {args.exercise} -> {path}", file=sys.stderr)
     if not args.no_upload:
         report = upload_now(queue, config.server_url, config.device_token)

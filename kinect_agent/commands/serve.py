@@ -77,12 +77,14 @@ class Uploads:
             self._wake.clear()
 
 
-def recover_interrupted(queue: SessionQueue, folder: Path) -> int:
-    """Queues the sets a crash interrupted (those long enough) and removes their journals; returns how many."""
+def recover_interrupted(queue: SessionQueue, folder: Path, recorded_by: dict[str, int] | None = None) -> int:
+    """Queues the sets a crash interrupted (those long enough, as recorded by the pairing recorded_by) and removes
+    their journals; returns how many."""
     kept = 0
     for found in journal.recover(folder):
         if found.recording is not None:
-            queue_session(queue, found.recording, created_at=found.created_at, session_id=found.session_id)
+            queue_session(queue, found.recording, created_at=found.created_at, session_id=found.session_id,
+                          recorded_by=recorded_by)  # fmt: skip
             kept += 1
             log(f"kept the interrupted set {found.session_id} ({found.recording.duration:.0f} s)")
         else:
@@ -142,7 +144,8 @@ class Service:
             return
         log(f"set {recorder.command.set_id} ended ({result.reason}): {result.count} repetitions")
         if result.recording is not None and result.recording.n_frames >= 2:
-            queue_session(self.queue, result.recording, created_at=result.created_at, session_id=result.session_id)
+            queue_session(self.queue, result.recording, created_at=result.created_at, session_id=result.session_id,
+                          recorded_by=self.config.recorded_by)  # fmt: skip
             uploads.now()
         result.journal.discard()
 
@@ -166,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
     config = load_config(args.home)
     service = Service(args, config)
     service.queue.recover_held(older_than_s=0.0)  # this is the only agent of this queue: nothing is in progress
-    recover_interrupted(service.queue, service.journal_dir)
+    recover_interrupted(service.queue, service.journal_dir, config.recorded_by)
     uploads = Uploads(service.queue, config, args.upload_every)
     publisher = Publisher(config.server_url, config.device_token, log=log)
     stream = CommandStream(config.server_url, config.device_token, log=log)

@@ -77,6 +77,8 @@ class SessionPayload:
 
     raw, filtered: Recording on the 20-joint model (t (T,) s, positions (T, J, 3) m camera frame, state (T, J)).
     params: JSON-ready dict (e.g. filter settings). created_at: ISO 8601 UTC.
+    recorded_by: {"device_id": int, "patient_id": int} of the paired home agent that recorded the session (the
+    server stores the file for that patient only, through that device or a user), or None for files of other origin.
     """
 
     session_id: str
@@ -84,6 +86,7 @@ class SessionPayload:
     filtered: Recording | None = None
     params: dict = field(default_factory=dict)
     created_at: str = field(default_factory=_now_utc)
+    recorded_by: dict[str, int] | None = None
 
 
 class SessionFileError(FormatError):
@@ -131,6 +134,9 @@ def encode(payload: SessionPayload) -> bytes:
         "codec": CODEC,
         "recordings": described,
     }
+    if payload.recorded_by is not None:
+        _check_recorded_by(payload.recorded_by)
+        header["recorded_by"] = payload.recorded_by
     header_bytes = json.dumps(header, separators=(",", ":"), allow_nan=False).encode("utf-8")
     body = b"".join(_BLOCK_LEN.pack(len(b)) + b for b in blocks)
     total = _FIXED.size + len(header_bytes) + len(body) + _DIGEST
@@ -204,6 +210,7 @@ def decode(data: bytes, *, max_frames: int = 30 * 60 * 60, max_decoded_bytes: in
         filtered=recordings.get("filtered"),
         params=header["params"],
         created_at=header["created_at"],
+        recorded_by=header.get("recorded_by"),
     )
 
 
@@ -255,7 +262,19 @@ def _parse_header(raw: bytes, version: int) -> dict[str, Any]:
         )
     if not isinstance(header["recordings"].get("raw"), dict):
         raise SessionFileError("bad_header", "JSON header lacks the 'raw' recording")
+    _check_recorded_by(header.get("recorded_by", None))
     return header
+
+
+def _check_recorded_by(value: Any) -> None:
+    """Checks the optional recorded_by: absent, or exactly {"device_id": int >= 1, "patient_id": int >= 1}."""
+    if value is None:
+        return
+    ok = isinstance(value, dict) and set(value) == {"device_id", "patient_id"}
+    if not ok or not all(type(v) is int and v >= 1 for v in value.values()):
+        raise SessionFileError(
+            "bad_header", 'recorded_by must be {"device_id": <id>, "patient_id": <id>} with positive whole numbers'
+        )
 
 
 def _recording_specs(header: dict, max_frames: int, max_decoded_bytes: int) -> list[tuple[str, int, Metadata]]:

@@ -135,6 +135,17 @@ def test_run_queues_first_even_when_the_server_is_down(home, capsys) -> None:
     assert list((home / "queue" / "captured").iterdir()) == []
 
 
+def test_run_writes_whose_session_it_is_into_the_file(home) -> None:
+    config = AgentConfig(server_url="http://127.0.0.1:1", device_token="khd_x", queue_dir=str(home / "queue"),
+                         device_id=4, patient_id=9)  # fmt: skip
+    save_config(config)
+    assert cli.main(["run", "--source", "simulator", "--exercise", "squat", "--reps", "2", "--no-upload"]) == 0
+    from kinect_agent.formats.session_file import read_payload
+
+    (pending,) = SessionQueue(config.queue_dir).pending()
+    assert read_payload(pending).recorded_by == {"device_id": 4, "patient_id": 9}
+
+
 def test_run_replay_needs_a_file(home, capsys) -> None:
     _config(home, "http://127.0.0.1:1")
     assert cli.main(["run", "--source", "replay", "--exercise", "squat"]) == 2
