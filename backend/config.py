@@ -30,11 +30,11 @@ class Settings(BaseSettings):
     LOGIN_WINDOW_MINUTES: float = Field(default=15.0, gt=0)
     PAIRING_CODE_MINUTES: float = 15.0
     PAIRING_MAX_FAILURES: int = Field(default=10, ge=1)  # wrong pairing codes per address within the login window
-    # session uploads: ~116 B/frame (raw + filtered) measured on simulated sets, so 16 MiB holds an hour at 30 Hz
-    MAX_UPLOAD_BYTES: int = 16 * 1024 * 1024
+    # session uploads: ~116 B/frame (raw + filtered) measured on simulated sets, so 32 MiB holds two hours at 30 Hz
+    MAX_UPLOAD_BYTES: int = 32 * 1024 * 1024
     MAX_JSON_BYTES: int = Field(default=1024 * 1024, ge=1024)  # any other request body (JSON): 413 above it
-    SESSION_MAX_FRAMES: int = 30 * 60 * 60  # per recording: one hour at 30 Hz
-    SESSION_MAX_DECODED_BYTES: int = 64 * 1024 * 1024  # all recordings of one file, after decompression
+    SESSION_MAX_FRAMES: int = 2 * 30 * 60 * 60  # per recording: two hours at 30 Hz (analysis of the most: ~1.5 s)
+    SESSION_MAX_DECODED_BYTES: int = 128 * 1024 * 1024  # all recordings of one file, after decompression (268 B/frame)
     CHECK_MIGRATIONS: bool = True
     COOKIE_SECURE: bool | None = None  # None: secure everywhere except ENVIRONMENT=local
     # where people reach the app, e.g. https://coach.example.org/clinic behind a reverse proxy; its path is the

@@ -18,15 +18,19 @@ from backend.sessions.models import ExerciseSession
 from kinect_agent.formats.session_file import SessionFileError, decode
 
 
-def replay_data(*, db_session: Session, session_id: int) -> bytes:
-    """Returns the `.viser` recording of a session, building and storing it when missing or of an older version."""
+def replay_data(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int) -> bytes:
+    """Returns the `.viser` recording of a session, building and storing it when missing or of an older version;
+    the stored file is read with the server's upload limits (max_frames, max_decoded_bytes)."""
     data = db_session.scalar(
         select(SessionReplay.data).where(SessionReplay.session_id == session_id, SessionReplay.version == scene.VERSION)
     )
-    return data if data is not None else _build_and_store(db_session=db_session, session_id=session_id)
+    if data is not None:
+        return data
+    return _build_and_store(db_session=db_session, session_id=session_id, max_frames=max_frames,
+                            max_decoded_bytes=max_decoded_bytes)  # fmt: skip
 
 
-def _build_and_store(*, db_session: Session, session_id: int) -> bytes:
+def _build_and_store(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int) -> bytes:
     row = db_session.execute(
         select(ExerciseSession.file_bytes, Exercise.plane)
         .outerjoin(Exercise, Exercise.id == ExerciseSession.exercise_id)
@@ -35,7 +39,8 @@ def _build_and_store(*, db_session: Session, session_id: int) -> bytes:
     if row is None:
         raise SessionNotFound(f"session {session_id} does not exist")
     try:
-        replay = scene.build(decode(row.file_bytes), row.plane or "frontal")
+        payload = decode(row.file_bytes, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
+        replay = scene.build(payload, row.plane or "frontal")
     except (SessionFileError, ValueError) as exc:
         raise InvalidSessionFile(f"the stored file of session {session_id} cannot be replayed: {exc}") from None
     _store(db_session=db_session, session_id=session_id, replay=replay)

@@ -61,10 +61,12 @@ ERROR_CODES = frozenset(
         "too_large",
         "bad_header",
         "implausible_timing",
+        "implausible_position",
     }
 )
 MIN_FRAME_INTERVAL_S = 1e-3  # frames closer than this (over 1000 Hz) are no camera or mocap recording
 MAX_MEDIAN_INTERVAL_S = 1.0  # nor frames usually further apart than this (under 1 Hz)
+PLAUSIBLE_ABS_M = 50.0  # no depth camera (under 10 m) or motion-capture room puts a joint further from its origin
 
 
 def _now_utc() -> str:
@@ -390,7 +392,21 @@ def _build_recording(name: str, n_frames: int, raw: list[bytes], meta: Metadata,
         f, j = np.argwhere(tracked & ~np.all(np.isfinite(positions), axis=-1))[0]
         raise SessionFileError("non_finite", f"recording {name!r}: frame {f} joint {skeleton.JOINTS[j]} not finite")
     positions[~tracked] = np.nan
+    _check_positions(name, positions)
     return Recording(t, positions, state, meta)
+
+
+def _check_positions(name: str, positions: np.ndarray) -> None:
+    """Refuses joint positions (T, J, 3) m, NaN = untracked, further than PLAUSIBLE_ABS_M from the origin."""
+    with np.errstate(invalid="ignore"):
+        far = np.abs(positions) > PLAUSIBLE_ABS_M
+    if far.any():
+        f, j, axis = (int(i) for i in np.argwhere(far)[0])
+        raise SessionFileError(
+            "implausible_position",
+            f"recording {name!r}: frame {f} joint {skeleton.JOINTS[j]} at {'xyz'[axis]} = {positions[f, j, axis]:.6g}"
+            f" m; a depth camera or motion capture sees at most {PLAUSIBLE_ABS_M:g} m from its origin",
+        )
 
 
 def _check_timing(name: str, t: np.ndarray) -> None:

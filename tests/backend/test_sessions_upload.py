@@ -250,6 +250,12 @@ def _deep_params(data):
     return khs_files.join_text(text, blocks, version)
 
 
+def _far_joint(data):
+    payload = sf.decode(data)
+    payload.raw.positions[5, 3, 0] = 900.0  # within the format's range, 900 m from the camera
+    return sf.encode(payload)
+
+
 def _times(step_s):
     return lambda data: khs_files.with_time(data, np.arange(khs_files.n_frames(data)) * step_s)
 
@@ -273,6 +279,7 @@ BAD_FILES = {
     ),
     "frames_1e-7_s_apart": (_times(1e-7), "implausible_timing: recording 'raw': frames 1e-07 s apart"),
     "frames_10_s_apart": (_times(10.0), "implausible_timing: recording 'raw': frames 10 s apart"),
+    "joint_900_m_away": (_far_joint, "implausible_position: recording 'raw': frame 5 joint HEAD at x = 900"),
     "bad_magic": (lambda d: b"NOT A KHS FILE" + d[14:], "bad_magic: "),
     "unsupported_version": (_bad_version, "unsupported_version: file version 3"),
     "checksum_mismatch": (_flip, "checksum_mismatch: "),
