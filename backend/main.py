@@ -16,6 +16,7 @@ from sqlalchemy.engine import Engine
 from sqlalchemy.exc import DBAPIError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.middleware.gzip import GZipMiddleware
+from starlette.routing import compile_path
 
 from backend import __version__
 from backend.config import Settings, get_settings
@@ -66,6 +67,21 @@ def _validation_detail(exc: RequestValidationError) -> str:
     return "; ".join(parts) or "invalid request"
 
 
+def _allowed_methods(app: FastAPI, request: Request) -> list[str]:
+    """Returns the methods the OpenAPI document gives the request's path (Starlette's Allow names only the first
+    matching route's), with OPTIONS, which the app answers for every path; empty for paths it does not list."""
+    if not hasattr(app.state, "path_methods"):
+        app.state.path_methods = [
+            (compile_path(path)[0], {method.upper() for method in operations})
+            for path, operations in app.openapi().get("paths", {}).items()
+        ]
+    methods = set()
+    for regex, found in app.state.path_methods:
+        if regex.match(request.url.path.removeprefix(request.scope.get("root_path", ""))):
+            methods |= found
+    return sorted(methods | {"OPTIONS"}) if methods else []
+
+
 def _is_busy(exc: DBAPIError) -> bool:
     """True for lock contention a retry resolves: SQLite "database is locked", PostgreSQL serialisation/deadlock."""
     pgcode = getattr(exc.orig, "sqlstate", None) or getattr(exc.orig, "pgcode", None)
@@ -91,6 +107,11 @@ def _install_error_handlers(app: FastAPI) -> None:
     async def http_error(request: Request, exc: StarletteHTTPException) -> Response:
         from frontend.pages import error_page, wants_html
 
+        allowed = _allowed_methods(app, request) if exc.status_code == 405 else []
+        if allowed and request.method == "OPTIONS":
+            return Response(status_code=204, headers={"Allow": ", ".join(allowed)})
+        if allowed:
+            exc.headers = {**(exc.headers or {}), "Allow": ", ".join(allowed)}
         if wants_html(request):
             page = error_page(request, exc.status_code)
             page.headers.update(exc.headers or {})
@@ -136,6 +157,36 @@ def _system_router() -> APIRouter:
     return router
 
 
+def _error_answer(description: str, error: str, detail: str) -> dict:
+    return {
+        "description": description,
+        "content": {
+            "application/json": {
+                "schema": {"$ref": "#/components/schemas/ErrorOut"},
+                "example": {"error": error, "detail": detail},
+            }
+        },
+    }
+
+
+def _document_request_checks(schema: dict) -> None:
+    """Adds to every operation the answers that come before its route (backend.request_limits, the database)."""
+    for path in schema.get("paths", {}).values():
+        for method, op in path.items():
+            responses = op.setdefault("responses", {})
+            nul = _error_answer("InvalidInput", "InvalidInput", "the URL contains a NUL character")
+            responses.setdefault("400", nul)
+            if "requestBody" in op:
+                json_body = "application/json" in op["requestBody"].get("content", {})
+                responses.setdefault("413", _error_answer("RequestTooLarge", "RequestTooLarge" if json_body else
+                                                          "SessionTooLarge", "the body is over the limit"))  # fmt: skip
+                responses.setdefault("422", _error_answer("InvalidInput", "InvalidInput",
+                                                          "body: JSON text must be UTF-8; byte 3 is not"))  # fmt: skip
+            if method.upper() not in ("GET", "HEAD"):
+                responses.setdefault("503", _error_answer("DatabaseBusy", "DatabaseBusy",
+                                                          "the database is busy with another write; retry in a second"))
+
+
 def _openapi(app: FastAPI):
     def build() -> dict:
         if app.openapi_schema:
@@ -157,6 +208,7 @@ def _openapi(app: FastAPI):
                             }
                         },
                     }
+        _document_request_checks(schema)
         components.pop("HTTPValidationError", None)
         components.pop("ValidationError", None)
         schema.setdefault("components", {})["securitySchemes"] = {

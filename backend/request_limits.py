@@ -2,8 +2,9 @@
 cannot store one, and no name, title or e-mail has one), and JSON bodies no larger than any form of the API.
 
 Session uploads (application/octet-stream) are not read here: their route streams them with its own limit
-(COACH_MAX_UPLOAD_BYTES). Answers: 400 InvalidInput (NUL in the URL), 422 InvalidInput (NUL in JSON text),
-413 RequestTooLarge (declared or actual JSON body over the limit, refused before it is read whole).
+(COACH_MAX_UPLOAD_BYTES). Answers: 400 InvalidInput (NUL in the URL), 422 InvalidInput (NUL in JSON text, or a
+JSON body that is not UTF-8), 413 RequestTooLarge (declared or actual JSON body over the limit, refused before it is
+read whole). The OpenAPI document lists these answers on every operation (backend.main._openapi).
 """
 
 from __future__ import annotations
@@ -31,6 +32,15 @@ def _error(status: int, error: str, detail: str) -> JSONResponse:
     return JSONResponse({"error": error, "detail": detail}, status_code=status)
 
 
+def _not_utf8(body: bytes) -> JSONResponse | None:
+    """Returns a 422 answer naming the first bad byte when a JSON body is not UTF-8 text, else None."""
+    try:
+        body.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        return _error(422, "InvalidInput", f"body: JSON text must be UTF-8; byte {exc.start} is not")
+    return None
+
+
 class RequestLimits:
     """ASGI middleware applying the module's checks; max_json_bytes: the largest JSON body accepted."""
 
@@ -50,6 +60,8 @@ class RequestLimits:
             await self.app(scope, receive, send)
             return
         body, refusal = await self._read(headers, receive)
+        if refusal is None:
+            refusal = _not_utf8(body)
         if refusal is None and NUL_ESCAPE in body and self._nul_in(body):
             refusal = _error(422, "InvalidInput", "text fields may not contain NUL characters (\\u0000)")
         if refusal is not None:

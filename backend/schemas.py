@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import datetime as dt
+import re
 from typing import Annotated, Generic, TypeVar
 
 from fastapi import Path, Query
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import AwareDatetime, BaseModel, BeforeValidator, ConfigDict, Field
 
 T = TypeVar("T")
 
@@ -45,3 +47,19 @@ def page_params(
 MAX_ID = 2**31 - 1
 IdPath = Annotated[int, Path(ge=1, le=MAX_ID)]
 IdQuery = Annotated[int | None, Query(ge=1, le=MAX_ID)]
+
+# RFC 3339 date-time, as OpenAPI's "date-time" format says: date, time and offset ("Z" or +hh:mm)
+_RFC3339 = re.compile(r"\d{4}-\d{2}-\d{2}[Tt ]\d{2}:\d{2}:\d{2}(\.\d+)?([Zz]|[+-]\d{2}:\d{2})")
+
+
+def _rfc3339(value: object) -> object:
+    """Passes on an RFC 3339 date-time text; refuses numbers, bare dates and times without an offset, which
+    pydantic's lax parsing would otherwise read."""
+    if isinstance(value, dt.datetime):
+        return value
+    if not isinstance(value, str) or not _RFC3339.fullmatch(value):
+        raise ValueError("must be a date-time with its offset, e.g. 2026-11-01T09:30:00Z")
+    return value
+
+
+DateTimeQuery = Annotated[AwareDatetime | None, BeforeValidator(_rfc3339)]

@@ -33,7 +33,7 @@ from backend.exceptions import (
     error_responses,
 )
 from backend.exercises.service import get_exercise
-from backend.schemas import IdPath, IdQuery, Page, PageParams, page_params
+from backend.schemas import DateTimeQuery, IdPath, IdQuery, Page, PageParams, page_params
 from backend.sessions import dashboard, detail, service
 from backend.sessions.ingest import check_declared_length, check_owner, decode_upload, read_limited
 from backend.sessions.schemas import (
@@ -220,7 +220,7 @@ def list_sessions(
     page: Annotated[PageParams, Depends(page_params)],
     patient_id: Annotated[IdQuery, Query(description="only this patient's sessions")] = None,
     exercise: SlugQuery = None,
-    since: Annotated[dt.datetime | None, Query(description="only sessions started at or after this time")] = None,
+    since: Annotated[DateTimeQuery, Query(description="only sessions started at or after this time")] = None,
 ):
     """Lists the sessions the caller may see, newest first (patients: own; therapists: assigned patients')."""
     if patient_id is not None:
@@ -312,7 +312,7 @@ def read_progress(
     caller: CurrentCaller,
     db_session: DbSession,
     exercise: SlugQuery = None,
-    since: Annotated[dt.datetime | None, Query(description="only sessions started at or after this time")] = None,
+    since: Annotated[DateTimeQuery, Query(description="only sessions started at or after this time")] = None,
 ):
     """Returns the patient's sessions as a time series (repetitions, range of motion, indicators), oldest first."""
     exercise_id = service.find_exercise_id(db_session=db_session, slug=exercise) if exercise else None
