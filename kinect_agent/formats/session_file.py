@@ -367,8 +367,10 @@ def _check_inflated(out: bytes, size: int, cap: int, complete: bool, budget: lis
     if len(out) > cap:
         limit = "its declared size" if cap == size else "the remaining max_decoded_bytes budget"
         raise SessionFileError("too_large", f"a block decodes to more than {cap} bytes ({limit})")
-    if len(out) != size or not complete:
+    if len(out) != size:
         raise SessionFileError("bad_header", f"a block decodes to {len(out)} bytes, expected {size}")
+    if not complete:
+        raise SessionFileError("bad_header", "a block's compressed stream is cut short or followed by other data")
     budget[0] -= len(out)
 
 
@@ -377,8 +379,7 @@ def _build_recording(name: str, n_frames: int, raw: list[bytes], meta: Metadata,
     with np.errstate(invalid="ignore", over="ignore"):  # non-finite sums are refused just below
         t = np.cumsum(_unshuffle(raw[0], "<f8"))
     state = np.frombuffer(raw[1], dtype=np.int8).reshape(n_frames, skeleton.J).copy()
-    positions = _positions(raw[2], n_frames, version)
-    if not np.all(np.isfinite(t)):
+    if not np.all(np.isfinite(t)):  # times and states first: a bad file is refused before positions take memory
         raise SessionFileError("non_finite", f"recording {name!r}: time stamps are not finite")
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:
@@ -387,6 +388,7 @@ def _build_recording(name: str, n_frames: int, raw: list[bytes], meta: Metadata,
     _check_timing(name, t)
     if np.any((state < 0) | (state > 2)):
         raise SessionFileError("bad_header", f"recording {name!r}: state values must be 0, 1 or 2")
+    positions = _positions(raw[2], n_frames, version)
     tracked = state != skeleton.NOT_TRACKED
     if not np.isfinite(positions).all() and not np.all(np.isfinite(positions[tracked])):  # cheap check first
         f, j = np.argwhere(tracked & ~np.all(np.isfinite(positions), axis=-1))[0]

@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import datetime as dt
 import hashlib
-import json
 import uuid
 
-import numpy as np
 import pytest
 from sqlalchemy import func, select
 
@@ -21,7 +19,7 @@ from backend.suggestions.models import Suggestion
 from kinect_agent.formats import session_file as sf
 from kinect_agent.sources.simulator import simulate
 from tests.backend import khs_files
-from tests.backend.khs_files import make_khs
+from tests.backend.khs_files import DEFECTS, make_khs
 
 URL = "/api/v1/sessions"
 OCTET = {"Content-Type": "application/octet-stream"}
@@ -193,111 +191,10 @@ def test_upload_is_audited(post, db_session, patient_device, khs):
 # ---------------------------------------------------------------------------------------------- bad files
 
 
-def _bad_version(data):
-    return data[:8] + (3).to_bytes(2, "little") + data[10:]
-
-
-def _flip(data):
-    i = len(data) // 2
-    return data[:i] + bytes([data[i] ^ 0xFF]) + data[i + 1 :]
-
-
-def _joints(data):
-    return khs_files.with_header(data, lambda h: h.__setitem__("joints", h["joints"][:19]))
-
-
-def _non_finite(data):
-    t = np.arange(khs_files.n_frames(data)) / 30.0  # version-2 positions are integers: only times can be non-finite
-    t[7] = np.inf
-    return khs_files.with_time(data, t)
-
-
-def _non_monotonic(data):
-    n = khs_files.n_frames(data)
-    t = np.arange(n) / 30.0
-    t[10] = t[8]
-    return khs_files.with_time(data, t)
-
-
-def _no_frames(data):
-    return khs_files.with_header(data, lambda h: h["recordings"]["raw"].__setitem__("n_frames", 0))
-
-
-def _zlib_bomb(data):
-    return khs_files.with_block(data, 2, bytes(40 * 2**20))
-
-
-def _not_uuid(data):
-    return khs_files.with_header(data, lambda h: h.__setitem__("session_id", "abc"))
-
-
-def _raw_meta(key, value):
-    def change(h):
-        h["recordings"]["raw"].setdefault("meta", {})
-        if key is None:
-            h["recordings"]["raw"]["meta"] = value
-        else:
-            h["recordings"]["raw"]["meta"][key] = value
-
-    return lambda data: khs_files.with_header(data, change)
-
-
-def _deep_params(data):
-    """params nested 100 000 lists deep (JSON that makes a recursive parser overflow its stack)."""
-    version, header, blocks = khs_files.split(data)
-    header["params"] = {"deep": "@@"}
-    text = json.dumps(header, separators=(",", ":")).replace('"@@"', "[" * 100_000 + "]" * 100_000)
-    return khs_files.join_text(text, blocks, version)
-
-
-def _far_joint(data):
-    payload = sf.decode(data)
-    payload.raw.positions[5, 3, 0] = 900.0  # within the format's range, 900 m from the camera
-    return sf.encode(payload)
-
-
-def _times(step_s):
-    return lambda data: khs_files.with_time(data, np.arange(khs_files.n_frames(data)) * step_s)
-
-
-BAD_FILES = {
-    "meta_as_list": (_raw_meta(None, [1, 2]), "bad_header: recording 'raw' metadata must be an object"),
-    "rate_as_text": (_raw_meta("rate_hz", "fast"), "bad_header: recording 'raw' metadata: rate_hz"),
-    "exercise_as_list": (_raw_meta("exercise", ["squat"]), "bad_header: recording 'raw' metadata: exercise"),
-    "params_100000_deep": (_deep_params, "bad_header: JSON header is nested too deeply"),
-    "nan_in_header": (
-        lambda d: khs_files.with_header(d, lambda h: h["params"].__setitem__("x", float("nan"))),
-        "bad_header: JSON header holds NaN",
-    ),
-    "created_in_year_9999": (
-        lambda d: khs_files.with_header(d, lambda h: h.__setitem__("created_at", "9999-12-31T23:59:59Z")),
-        "bad_header: created_at '9999-12-31T23:59:59Z' is not between",
-    ),
-    "created_with_extreme_offset": (
-        lambda d: khs_files.with_header(d, lambda h: h.__setitem__("created_at", "0001-01-01T00:00:00+23:59")),
-        "bad_header: created_at '0001-01-01T00:00:00+23:59' is not between",
-    ),
-    "frames_1e-7_s_apart": (_times(1e-7), "implausible_timing: recording 'raw': frames 1e-07 s apart"),
-    "frames_10_s_apart": (_times(10.0), "implausible_timing: recording 'raw': frames 10 s apart"),
-    "joint_900_m_away": (_far_joint, "implausible_position: recording 'raw': frame 5 joint HEAD at x = 900"),
-    "bad_magic": (lambda d: b"NOT A KHS FILE" + d[14:], "bad_magic: "),
-    "unsupported_version": (_bad_version, "unsupported_version: file version 3"),
-    "checksum_mismatch": (_flip, "checksum_mismatch: "),
-    "truncated": (lambda d: d[:-100], "truncated: "),
-    "wrong_joint_count": (_joints, "wrong_joint_count: joint list has 19 joints"),
-    "non_finite": (_non_finite, "non_finite: recording 'raw'"),
-    "non_monotonic_time": (_non_monotonic, "non_monotonic_time: recording 'raw': frame 10"),
-    "no_frames": (_no_frames, "no_frames: recording 'raw' has 0 frames"),
-    "zlib_bomb": (_zlib_bomb, "too_large: a block decodes to more than"),
-    "empty_body": (lambda d: b"", "bad_magic: "),
-    "session_id_not_uuid": (_not_uuid, "bad_header: session_id 'abc' is not a UUID"),
-}
-
-
-@pytest.mark.parametrize("case", sorted(BAD_FILES))
+@pytest.mark.parametrize("case", sorted(DEFECTS))
 def test_bad_file_is_400_and_stores_nothing(post, case, client, db_session, patient_device, khs):
     patient, headers = patient_device
-    corrupt, detail = BAD_FILES[case]
+    corrupt, detail = DEFECTS[case]
     response = post(corrupt(khs), headers)
     assert response.status_code == 400, response.text
     assert response.json()["error"] == "InvalidSessionFile"
