@@ -13,7 +13,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
-from backend.deps import Caller, CurrentCaller, DbSession, require_patient_access
+from backend.deps import Caller, DbSession, current_caller, optional_caller, require_patient_access
 from backend.events.hub import DATA_KINDS, HUB, KINDS, Subscriber
 from backend.exceptions import AUTH_ERRORS, PatientNotFound, error_responses
 from backend.patients.models import TherapistPatient
@@ -51,20 +51,29 @@ def visible_patients(caller: Caller, db_session: Session, patient_id: int | None
 )
 async def stream_events(
     request: Request,
-    caller: CurrentCaller,
     db_session: DbSession,
     patient_id: Annotated[IdQuery, Query(description="only this patient's events")] = None,
     live: Annotated[bool, Query(description="also the live loop's events (home agent, progress)")] = False,
 ):
     """Streams server-sent events about the patients the caller may see (one patient with patient_id)."""
-    patients = await run_in_threadpool(visible_patients, caller, db_session, patient_id)
-    await run_in_threadpool(db_session.commit)  # gives the connection back to the pool for the stream's lifetime
+    patients = await run_in_threadpool(_authorize, request, db_session, patient_id)
     subscriber = HUB.subscribe(patients, frozenset(KINDS if live else DATA_KINDS))
     return StreamingResponse(
         _stream(request, subscriber, request.app.state.settings.EVENTS_STREAM_MAX_S),
         media_type="text/event-stream",
         headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"},
     )
+
+
+def _authorize(request: Request, db_session: Session, patient_id: int | None) -> frozenset[int] | None:
+    """Returns the patients whose events the caller may receive, checking the login, in one thread from the first
+    query to the commit that gives the connection back. A reconnecting crowd of pages (every stream ends after
+    EVENTS_STREAM_MAX_S) then never holds pooled connections while it waits for a thread, which had starved the
+    pool with 200 pages open."""
+    caller = current_caller(request, optional_caller(request, db_session))
+    patients = visible_patients(caller, db_session, patient_id)
+    db_session.commit()
+    return patients
 
 
 async def _stream(request: Request, subscriber: Subscriber, max_s: float) -> AsyncIterator[str]:
