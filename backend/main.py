@@ -25,6 +25,7 @@ from backend.events.listener import Listener
 from backend.exceptions import AppError, DatabaseBusy
 from backend.request_limits import RequestLimits
 from backend.schemas import ErrorOut
+from kinect_agent.blas_threads import one_blas_thread
 
 log = logging.getLogger(__name__)
 
@@ -223,8 +224,10 @@ def _openapi(app: FastAPI):
 
 
 def create_app(settings: Settings | None = None, engine: Engine | None = None) -> FastAPI:
-    """Returns the configured application; at start-up it refuses a database that is not at Alembic head."""
+    """Returns the configured application; at start-up it refuses a database that is not at Alembic head. Every
+    worker runs BLAS on one thread (kinect_agent.blas_threads: the analysis' matrices are small)."""
     settings = settings or get_settings()
+    one_blas_thread()
 
     @asynccontextmanager
     async def lifespan(_app: FastAPI):

@@ -35,20 +35,15 @@ outlier-removal gain (mean and SD) at least the paper's.
 
 from __future__ import annotations
 
-import os
+import argparse
+import json
+import sys
+import time
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ[_var] = "1"
-
-import argparse  # noqa: E402
-import json  # noqa: E402
-import sys  # noqa: E402
-import time  # noqa: E402
-import warnings  # noqa: E402
-from dataclasses import dataclass, field  # noqa: E402
-from pathlib import Path  # noqa: E402
-
-import numpy as np  # noqa: E402
+import numpy as np
 
 ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/accuracy.py` puts bench/ first, not the repository
@@ -128,7 +123,7 @@ def _hdm05_truths(per_subject: int = HDM05_CLIPS) -> list[tuple[str, np.ndarray,
             for clip in sorted(folder.glob(f"HDM_{subject}_*.amc"))[:per_subject]:
                 try:
                     rec = amc.read(clip)
-                except Exception as exc:  # noqa: BLE001 - report and go on: the benchmark must not die on a reader
+                except Exception as exc:
                     print(f"HDM05 {clip.name} skipped: {type(exc).__name__}: {exc}", file=sys.stderr)
                     continue
                 if not np.all(np.isfinite(rec.positions)):

@@ -9,29 +9,25 @@ trailer recomputed), so each run is a real insert, never the idempotent replay.
     python bench/ingest.py [--quick] [--json OUT] [--db URL] [--runs N] [--profile OUT]
 
 --db: default an embedded SQLite file in a temp folder; a postgresql+psycopg:// URL runs in its own schema
-(coach_bench_<pid>, dropped at the end). Single-threaded BLAS (set below, before numpy loads).
+(coach_bench_<pid>, dropped at the end). BLAS threads are the product's own (one: kinect_agent.blas_threads).
 """
 
 from __future__ import annotations
 
+import argparse
+import hashlib
+import json
 import os
-
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
-
-import argparse  # noqa: E402
-import hashlib  # noqa: E402
-import json  # noqa: E402
-import statistics  # noqa: E402
-import struct  # noqa: E402
-import sys  # noqa: E402
-import tempfile  # noqa: E402
-import time  # noqa: E402
-import uuid  # noqa: E402
-from collections import defaultdict  # noqa: E402
-from collections.abc import Callable, Iterator  # noqa: E402
-from contextlib import contextmanager  # noqa: E402
-from pathlib import Path  # noqa: E402
+import statistics
+import struct
+import sys
+import tempfile
+import time
+import uuid
+from collections import defaultdict
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
 
 ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/ingest.py` puts bench/ first, not the repository

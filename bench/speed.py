@@ -1,34 +1,48 @@
 """Speed of the signal pipeline: UKF step vs filterpy, whole pipeline on 10 minutes, online step p99.
 
-Single-threaded BLAS (set below, before numpy loads). Prints the median of several repeats.
-    python bench/speed.py [--quick] [--json out.json]
+The environment is left as the user's: the product limits BLAS to one thread itself (kinect_agent.blas_threads;
+pipeline.process does, and the agent's command line does for the whole process, which this script does the same way
+for the step timings). Prints the median of several repeats. --busy N runs N CPU-bound processes beside it, as on a
+home computer or a server busy with other work.
+    python bench/speed.py [--quick] [--busy N] [--json out.json]
 """
 
 from __future__ import annotations
 
-import os
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+import time
+from contextlib import contextmanager
+from pathlib import Path
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ[_var] = "1"
-
-import argparse  # noqa: E402
-import json  # noqa: E402
-import statistics  # noqa: E402
-import sys  # noqa: E402
-import time  # noqa: E402
-from pathlib import Path  # noqa: E402
-
-import numpy as np  # noqa: E402
-from filterpy.kalman import MerweScaledSigmaPoints as FMerwe  # noqa: E402
-from filterpy.kalman import UnscentedKalmanFilter as FUKF  # noqa: E402
+import numpy as np
+from filterpy.kalman import MerweScaledSigmaPoints as FMerwe
+from filterpy.kalman import UnscentedKalmanFilter as FUKF
 
 ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/speed.py` puts bench/ first, not the repository
     sys.path.insert(0, str(ROOT_DIR))
 
 from bench.sessions import squat_session  # noqa: E402
+from kinect_agent.blas_threads import one_blas_thread  # noqa: E402
 from kinect_agent.processing import ik, pipeline  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
+
+
+@contextmanager
+def busy_cores(n: int):
+    """Runs n CPU-bound processes (a Python loop each) while the block runs; stops them after."""
+    procs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(n)]
+    try:
+        time.sleep(0.5 if n else 0.0)  # let them take their cores
+        yield
+    finally:
+        for proc in procs:
+            proc.kill()
+            proc.wait()
 
 
 def _time_steps(step, z: np.ndarray, repeats: int) -> float:
@@ -103,15 +117,19 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="short smoke run (not for reporting)")
     parser.add_argument("--json", help="also write the numbers to this file")
+    parser.add_argument("--busy", type=int, default=0, help="CPU-bound processes running beside the measurements")
     args = parser.parse_args()
     minutes, repeats, frames = (0.5, 1, 60) if args.quick else (10.0, 3, 600)
+    one_blas_thread()  # what the agent's command line does at start (kinect_agent.cli.main)
     pipeline.process(squat_session(0.1))  # compile the numba kernels before timing
     rec = squat_session(minutes)
-    results = {
-        "ukf_step": ukf_step_comparison(rec, frames, repeats),
-        "pipeline": whole_pipeline(rec, repeats),
-        "online": online_latency(rec),
-    }
+    with busy_cores(args.busy):
+        results = {
+            "busy_processes": args.busy,
+            "ukf_step": ukf_step_comparison(rec, frames, repeats),
+            "pipeline": whole_pipeline(rec, repeats),
+            "online": online_latency(rec),
+        }
     u, p, o = results["ukf_step"], results["pipeline"], results["online"]
     print(f"UKF step (n={u['state_dim']}): ours {u['ours_ms']:.3f} ms, filterpy {u['filterpy_ms']:.3f} ms, "
           f"speed-up {u['speedup']:.1f}x (target >= 20x: {'PASS' if u['speedup'] >= 20 else 'FAIL'})")  # fmt: skip

@@ -7,6 +7,7 @@ import importlib
 import sys
 
 from kinect_agent import __version__
+from kinect_agent.blas_threads import one_blas_thread
 from kinect_agent.errors import AgentError
 
 # Subcommand modules; each defines NAME, HELP, add_arguments(parser) and run(args) -> int.
@@ -43,6 +44,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Runs one subcommand; user errors print one clear line and exit with status 2."""
     args = build_parser().parse_args(argv)
+    one_blas_thread()
     try:
         return int(args._run(args) or 0)
     except (AgentError, ValueError) as exc:

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from kinect_agent import formats
 from kinect_agent.errors import AgentError
+from kinect_agent.formats import skeleton_csv
 from kinect_agent.formats._atomic import atomic_open
 from kinect_agent.processing.pipeline import SMOOTHERS, PipelineConfig, process
 
@@ -43,11 +44,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="do not remove sustained tracking loss (a joint that jumps away faster than a body moves, sits there "
         "and jumps back); only the temporal mixture model",
     )  # fmt: skip
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar (there is none unless stderr is "
+                        "a terminal)")  # fmt: skip
 
 
 def _progress_bar(n_frames: int, enabled: bool):
-    if not enabled or n_frames < _PROGRESS_MIN_FRAMES:
+    """Returns (bar, progress callback) for a long recording when stderr is a terminal, else (None, None): a log
+    file would get a line per update."""
+    if not enabled or n_frames < _PROGRESS_MIN_FRAMES or not sys.stderr.isatty():
         return None, None
     from tqdm import tqdm
 
@@ -66,8 +70,9 @@ def run(args: argparse.Namespace) -> int:
     """Filters the input and writes the outputs atomically; returns 0."""
     if args.output.suffix.lower() != ".csv":
         raise AgentError(f"{args.output}: the filtered recording is written as Skeleton CSV; use a .csv name")
-    if args.params is not None and args.params.resolve() == args.output.resolve():
-        raise AgentError(f"{args.params}: --params must differ from the output file")
+    if args.params is not None and args.params.resolve() in (args.output.resolve(),
+                                                             skeleton_csv.sidecar_path(args.output).resolve()):
+        raise AgentError(f"{args.params}: --params must differ from the output file and its metadata sidecar")
     rec = formats.read(args.input, args.format)
     config = PipelineConfig()
     if args.smoother:

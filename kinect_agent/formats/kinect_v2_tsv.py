@@ -8,6 +8,9 @@ No file of this layout is in ../shared/data (KERAAL's Kinect files are headerles
     Timestamp<TAB>SpineBase_X<TAB>SpineBase_Y<TAB>SpineBase_Z<TAB>SpineBase_State<TAB>SpineMid_X ...
     1250000<TAB>0.0123<TAB>-0.31<TAB>2.05<TAB>Tracked<TAB>...
 
+The header block may also be `key<TAB>value` lines without `#` (FrameID, SensorID, Date recording, Floor,
+processing_steps ...), as some recorders write it; keys are kept lower-case without spaces ("daterecording").
+
 Columns: `Timestamp` first; `<Joint>_X|_Y|_Z` (metres, Kinect camera space, y up) for joints named as the SDK's
 JointType (kinect_joints.KINECT_V2_JOINTS); optional `<Joint>_State` / `<Joint>_TrackingState`
 (Tracked / Inferred / NotTracked, or 2 / 1 / 0); other columns without a joint suffix (BodyIndex, TrackingId,
@@ -43,15 +46,23 @@ _NEEDED = sorted(set(kinect_joints.source_indices("kinect2").tolist()))
 
 
 def sniff(path: Path, head: bytes) -> bool:
-    """True when the first line after the `#` header block is tab separated and starts with Timestamp."""
+    """True when the first line after the header block is tab separated and starts with Timestamp."""
     if b"\0" in head:
         return False
     for line in head.decode("utf-8", "replace").splitlines():
-        if line.startswith("#") or not line.strip():
+        if _is_header_line(line):
             continue
         cells = line.rstrip("\r\n").split("\t")
         return len(cells) > 3 and _TIME.match(cells[0].strip()) is not None
     return False
+
+
+def _is_header_line(line: str) -> bool:
+    """True for a line of the header block: blank, `# ...`, or `key<TAB>value` (at most two cells, not Timestamp)."""
+    cells = line.rstrip("\r\n").split("\t")
+    if line.startswith("#") or not line.strip():
+        return True
+    return len(cells) <= 2 and _TIME.match(cells[0].strip()) is None
 
 
 def read(path: Path) -> Recording:
@@ -100,12 +111,17 @@ def write(rec: Recording, path: str | Path) -> None:
 
 
 def _header_block(lines: list[tuple[int, str]]) -> tuple[dict[str, str], int]:
-    """Returns ({lower-case key: value} of the `# key: value` lines, index of the first other non-blank line)."""
+    """Returns ({lower-case key: value} of the `# key: value` and `key<TAB>value` lines, index of the first line
+    after the block)."""
     header: dict[str, str] = {}
     pos = 0
-    while pos < len(lines) and (lines[pos][1].startswith("#") or not lines[pos][1].strip()):
-        key, sep, value = lines[pos][1].lstrip("#").partition(":")
-        if sep:
+    while pos < len(lines) and _is_header_line(lines[pos][1]):
+        text = lines[pos][1].rstrip("\r\n")
+        if text.startswith("#"):
+            key, sep, value = text.lstrip("#").partition(":")
+        else:
+            key, sep, value = text.partition("\t")
+        if sep and key.strip():
             header[key.strip().lower().replace(" ", "")] = value.strip()
         pos += 1
     return header, pos

@@ -3,6 +3,10 @@
 One row per frame: `time` (s), then `<JOINT>_x,<JOINT>_y,<JOINT>_z` (m, y up) for the 20 joints;
 an empty cell means not tracked. Optional `<JOINT>_state` columns (0/1/2) may follow. Columns that
 are not joint columns are ignored; a joint column naming an unknown joint is an error.
+
+The file is plain CSV, header first, so spreadsheets and pandas' defaults read it. The recording's metadata
+(device, exercise, rate, history ...) goes to a sidecar `<name>.meta.json` beside it (`out.csv` ->
+`out.meta.json`). Files of earlier versions carried it in a `# meta: {...}` line before the header; both are read.
 """
 
 from __future__ import annotations
@@ -46,7 +50,7 @@ def sniff(path: Path, head: bytes) -> bool:
 
 def read(path: Path) -> Recording:
     """Reads a Skeleton CSV file; raises FormatError naming the line and cell that is wrong."""
-    meta = Metadata(source=str(path))
+    meta = _read_sidecar(Path(path))
     with open(path, encoding="utf-8") as f:
         lines = _numbered_lines(f, path, meta)
         try:
@@ -70,10 +74,14 @@ def read(path: Path) -> Recording:
     return Recording(t, positions, state, meta)
 
 
+def sidecar_path(path: str | Path) -> Path:
+    """Returns where the metadata of the CSV file at path is kept: `out.csv` -> `out.meta.json`."""
+    return Path(path).with_suffix(".meta.json")
+
+
 def write(rec: Recording, path: Path) -> None:
-    """Writes `rec` as Skeleton CSV with state columns and a `# meta:` comment line; atomic."""
+    """Writes `rec` as Skeleton CSV with state columns, then its metadata to the sidecar; each atomically."""
     with atomic_open(path, "w", newline="", encoding="utf-8") as f:
-        f.write(META_PREFIX + json.dumps(rec.meta.to_dict(), separators=(",", ":")) + "\n")
         f.write(",".join(header()) + "\n")
         times = np.char.mod("%.6f", rec.t)
         coords = np.char.mod("%.5f", rec.positions.reshape(rec.n_frames, -1))
@@ -81,6 +89,22 @@ def write(rec: Recording, path: Path) -> None:
         states = rec.state.astype(str)
         for i in range(rec.n_frames):
             f.write(times[i] + "," + ",".join(coords[i]) + "," + ",".join(states[i]) + "\n")
+    with atomic_open(sidecar_path(path), "w", encoding="utf-8") as f:
+        f.write(json.dumps(rec.meta.to_dict(), indent=2, sort_keys=True) + "\n")
+
+
+def _read_sidecar(path: Path) -> Metadata:
+    """Returns the metadata of the sidecar beside path (empty metadata when there is none); names it when broken."""
+    side = sidecar_path(path)
+    meta = Metadata(source=str(path))
+    if not side.is_file():
+        return meta
+    try:
+        loaded = Metadata.from_dict(json.loads(side.read_text(encoding="utf-8")))
+    except (ValueError, TypeError, UnicodeDecodeError) as exc:
+        raise FormatError(side, f"unreadable metadata sidecar of {path.name}: {exc}") from None
+    loaded.source = str(path)
+    return loaded
 
 
 def _numbered_lines(f, path: Path, meta: Metadata):

@@ -4,7 +4,8 @@
 space, y up) in SDK v1 order, whitespace separated. Frame ids have gaps (kept as time gaps, t = id / 30 s)
 and repeated ids: exact duplicate lines are dropped, and a repeated id with different data keeps its first
 line (the count goes to meta.extra["dropped_duplicate_frames"]). `actionLabel.txt` beside the file gives
-action intervals in frame ids, put into meta.extra["actions"].
+action intervals in frame ids, put into meta.extra["actions"]; an action marked `NaN NaN` (it did not happen in that
+sequence) is left out and named in meta.extra["actions_not_performed"].
 """
 
 from __future__ import annotations
@@ -50,9 +51,9 @@ def read(path: Path) -> Recording:
     meta.extra["dropped_duplicate_lines"] = exact
     meta.extra["dropped_duplicate_frames"] = conflicting
     meta.extra["first_frame_id"] = int(frame_ids[keep[0]])
-    actions = _actions(path.parent / "actionLabel.txt", meta.extra.get("sequence"))
-    if actions is not None:
-        meta.extra["actions"] = actions
+    labels = _actions(path.parent / "actionLabel.txt", meta.extra.get("sequence"))
+    if labels is not None:
+        meta.extra["actions"], meta.extra["actions_not_performed"] = labels
     return Recording(frame_ids[keep] / RATE_HZ, positions, state, meta)
 
 
@@ -76,11 +77,13 @@ def _first_of_each_frame(
     return np.array(keep), exact, conflicting
 
 
-def _actions(label_path: Path, sequence: str | None) -> dict[str, list[int]] | None:
-    """Returns {action: [start id, end id]} for `sequence` from actionLabel.txt, or None when absent."""
+def _actions(label_path: Path, sequence: str | None) -> tuple[dict[str, list[int]], list[str]] | None:
+    """Returns ({action: [start id, end id]}, [actions marked NaN NaN]) for `sequence` from actionLabel.txt, or
+    None when absent."""
     if sequence is None or not label_path.is_file():
         return None
     actions: dict[str, list[int]] | None = None
+    not_performed: list[str] = []
     with open(label_path, encoding="utf-8", errors="replace") as f:
         for line_no, line in enumerate(f, start=1):
             text = line.strip()
@@ -95,7 +98,10 @@ def _actions(label_path: Path, sequence: str | None) -> dict[str, list[int]] | N
             if actions is not None:
                 name, _, span = text.partition(":")
                 numbers = span.split()
+                if [n.lower() for n in numbers] == ["nan", "nan"]:
+                    not_performed.append(name.strip())
+                    continue
                 if len(numbers) != 2 or not all(n.lstrip("-").isdigit() for n in numbers):
                     raise FormatError(label_path, f"expected 'action: start end', found {text!r}", line_no)
                 actions[name.strip()] = [int(n) for n in numbers]
-    return actions
+    return None if actions is None else (actions, not_performed)

@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from kinect_agent import skeleton
+from kinect_agent.blas_threads import one_blas_thread
 from kinect_agent.processing import _ukf_numba
 from kinect_agent.processing import kinematics as km
 from kinect_agent.processing.angles import joint_angles
@@ -641,8 +642,16 @@ def process(
     """Filters a recording: outlier removal then the four-pass UKF (or, online=True, the forward pass only).
 
     rec: positions (T, J, 3) m, NaN = untracked; state (T, J). progress(done, total) is called now and then.
-    Returns the filtered recording (same t), the kinematic parameters and a quality summary.
+    Returns the filtered recording (same t), the kinematic parameters and a quality summary. Runs with one BLAS
+    thread (kinect_agent.blas_threads), whatever the caller's environment says.
     """
+    with one_blas_thread():
+        return _process(rec, online=online, config=config, progress=progress)
+
+
+def _process(
+    rec: Recording, *, online: bool, config: PipelineConfig | None, progress: Progress | None
+) -> PipelineResult:
     started = time.perf_counter()
     config = config or PipelineConfig()
     config.check()

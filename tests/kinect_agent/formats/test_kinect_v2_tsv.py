@@ -158,3 +158,28 @@ def test_bad_file_convert_returns_2_and_leaves_no_output(export, tmp_path: Path)
     out = tmp_path / "o.csv"
     assert cli.main(["convert", str(path), "-o", str(out)]) == 2
     assert not out.exists() and list(tmp_path.glob("*o.csv*")) == []
+
+
+def test_reads_an_export_with_a_key_value_header_21_joints_and_irregular_16_hz(data_dir: Path, tmp_path: Path):
+    """The layout of some Kinect v2 recorders: `key<TAB>value` header lines without '#', Timestamp in seconds,
+    the SDK's first 21 joints (no hand tips or thumbs), frames about 16 Hz apart with jitter."""
+    source = _keraal_files(data_dir)[0]
+    values = np.loadtxt(source).reshape(-1, 25, 7)[:, :21]
+    rng = np.random.default_rng(3)
+    t = np.cumsum(rng.uniform(0.045, 0.080, len(values)))  # irregular, median about 16 Hz
+    names = kinect_joints.KINECT_V2_JOINTS[:21]
+    block = ["FrameID\t1", "SensorID\tKinect-2 0042", "Date recording\t2025-03-14 10:22:05", "Floor\t-0.98 0.99 0.05",
+             "processing_steps\tnone"]  # fmt: skip
+    lines = block + ["\t".join(["Timestamp"] + [f"{n}_{c}" for n in names for c in "XYZ"])]
+    for i, frame in enumerate(values):
+        lines.append("\t".join([f"{t[i]:.4f}"] + [f"{v:.6f}" for p in frame[:, :3] for v in p]))
+    out = tmp_path / "session.txt"
+    out.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    assert formats.detect(out) is kinect_v2_tsv  # found without --format
+    rec, ref = formats.read(out), keraal.read(source)
+    assert rec.n_frames == ref.n_frames and rec.meta.extra["timestamp_unit"] == "s"
+    np.testing.assert_allclose(rec.t, np.round(t, 4) - round(t[0], 4), atol=1e-9)
+    np.testing.assert_allclose(rec.positions, ref.positions, atol=1e-6, equal_nan=True)
+    header = rec.meta.extra["header"]
+    assert header["sensorid"] == "Kinect-2 0042" and header["daterecording"] == "2025-03-14 10:22:05"
+    assert 14 < rec.meta.rate_hz < 18

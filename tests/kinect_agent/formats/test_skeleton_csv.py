@@ -33,6 +33,38 @@ def test_round_trip_keeps_positions_states_and_metadata(tmp_path: Path, rng: np.
     assert back.meta.device == "kinect2" and back.meta.subject == "s1"
 
 
+def test_the_csv_is_plain_with_its_metadata_beside_it(tmp_path: Path, rng: np.random.Generator) -> None:
+    import csv
+    import json
+
+    out = tmp_path / "r.csv"
+    formats.write(_recording(rng), out)
+    with open(out, newline="") as f:
+        rows = list(csv.reader(f))  # what spreadsheet tools and pandas' defaults do: header first, no comment line
+    assert rows[0] == skeleton_csv.header() and len(rows) == 31 and all(len(r) == len(rows[0]) for r in rows)
+    side = json.loads((tmp_path / "r.meta.json").read_text())
+    assert side["device"] == "kinect2" and side["subject"] == "s1" and side["rate_hz"] == 30.0
+
+
+def test_files_with_a_meta_comment_line_are_still_read(tmp_path: Path, rng: np.random.Generator) -> None:
+    out = tmp_path / "old.csv"
+    formats.write(_recording(rng), out)
+    (tmp_path / "old.meta.json").unlink()
+    text = out.read_text()
+    out.write_text('# meta: {"device":"kinect1","subject":"s9","exercise":"squat"}\n' + text)
+    back = formats.read(out)
+    assert (back.meta.device, back.meta.subject, back.meta.exercise) == ("kinect1", "s9", "squat")
+    assert back.n_frames == 30
+
+
+def test_a_broken_sidecar_is_named(tmp_path: Path, rng: np.random.Generator) -> None:
+    out = tmp_path / "r.csv"
+    formats.write(_recording(rng), out)
+    (tmp_path / "r.meta.json").write_text("{not json")
+    with pytest.raises(FormatError, match=r"r\.meta\.json.*unreadable metadata sidecar of r\.csv"):
+        formats.read(out)
+
+
 def test_minimal_file_without_state_columns_marks_empty_cells_untracked(tmp_path: Path) -> None:
     cols = skeleton_csv.header()[: 1 + 3 * skeleton.J] + ["comment"]
     row = ["0.0"] + ["0.1"] * (3 * skeleton.J) + ["hello"]

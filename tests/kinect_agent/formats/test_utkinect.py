@@ -94,6 +94,18 @@ def test_subject_and_actions_from_label_file(data_dir: Path) -> None:
     assert len(rec.meta.extra["actions"]) == 10
 
 
+def test_an_action_marked_nan_is_left_out_and_named(data_dir: Path, tmp_path: Path) -> None:
+    """actionLabel.txt has `carry:  NaN NaN` for s10_e02 (not done in that sequence): the recording still reads."""
+    import shutil
+
+    shutil.copy(data_dir / "utkinect" / "actionLabel.txt", tmp_path / "actionLabel.txt")
+    shutil.copy(data_dir / "utkinect" / "joints_s01_e01.txt", tmp_path / "joints_s10_e02.txt")
+    rec = utkinect.read(tmp_path / "joints_s10_e02.txt")
+    assert rec.meta.extra["actions_not_performed"] == ["carry"]
+    assert "carry" not in rec.meta.extra["actions"] and rec.meta.extra["actions"]["walk"] == [96, 220]
+    assert len(rec.meta.extra["actions"]) == 9
+
+
 def test_detect_picks_utkinect(data_dir: Path) -> None:
     for path in _files(data_dir):
         assert formats.detect(path).NAME == "utkinect", path

@@ -78,3 +78,18 @@ def test_filter_bad_arguments_say_what_is_wrong(
     args = [str(tmp_path / a) if a.endswith((".csv", ".json")) else a for a in args]
     assert main(["filter", *args]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_no_progress_bar_when_stderr_is_a_log_file(tmp_path: Path, rng: np.random.Generator, capsys) -> None:
+    src, _ = _write_input(tmp_path, rng, 1200)  # long enough for a bar on a terminal
+    assert main(["filter", str(src), "-o", str(tmp_path / "f.csv")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 2 and "\r" not in err and "step/s" not in err, err  # the summary lines only
+
+
+def test_params_may_not_overwrite_the_metadata_sidecar(tmp_path: Path, rng: np.random.Generator, capsys) -> None:
+    src, _ = _write_input(tmp_path, rng)
+    out = tmp_path / "f.csv"
+    assert main(["filter", str(src), "-o", str(out), "--params", str(tmp_path / "f.meta.json")]) == 2
+    assert "must differ from the output file and its metadata sidecar" in capsys.readouterr().err
+    assert not out.exists()
