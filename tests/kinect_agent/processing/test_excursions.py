@@ -55,6 +55,17 @@ def test_real_arm_exercises_are_not_flagged(data_dir: Path, movement: str) -> No
 
 
 @pytest.mark.shared_data
+@pytest.mark.parametrize("subject", ["s02", "s04"])
+def test_a_raised_knee_that_keeps_its_bones_is_not_an_excursion(data_dir: Path, subject: str) -> None:
+    """UI-PRMD hurdle step: the knee is raised fast, held and lowered, like a lost joint's jump, sit and jump back,
+    but thigh and shank keep their lengths (26 % of the right knee's frames were flagged, and the filtered hip
+    angle then dipped mid-step: 15 repetitions counted for 10)."""
+    flags = excursion_probabilities(_uiprmd(data_dir, "m02", subject))
+    for joint in ("KNE_R", "ANK_R", "FOO_R", "KNE_L", "ANK_L", "FOO_L"):
+        assert flags[:, skeleton.INDEX[joint]].mean() < 0.01, (subject, joint)
+
+
+@pytest.mark.shared_data
 def test_real_leg_raise_travelling_away_is_not_an_excursion(data_dir: Path) -> None:
     """UI-PRMD m06 s01: the raised leg glitches at the top of each raise; the standing phase between two glitches
     looks like jump away, sit, jump back, but the leg travelled there (calm steps), so it is kept (before the travel
