@@ -18,6 +18,7 @@ COMMANDS = (
     "kinect_agent.commands.capture",
     "kinect_agent.commands.pair",
     "kinect_agent.commands.upload",
+    "kinect_agent.commands.status",
     "kinect_agent.commands.run",
     "kinect_agent.commands.serve",
 )

@@ -7,6 +7,8 @@ response was lost) stores it once and answers 200. Outcomes per file:
     404/405 without a domain error -> "kept"     (no upload endpoint at that URL: a wrong URL is no bad file)
     other 4xx except 408 and 429  -> "rejected"  (moved to queue/rejected/ with the server's error)
     408, 429, 5xx, network errors -> retried with exponential backoff and full jitter, then "kept"
+    the same server error (5xx but 502/503/504) in HOLD_AFTER_SERVER_ERRORS passes in a row -> "held" (set aside in
+                                     queue/held/ with the server's answer, so that it no longer holds back the others)
 """
 
 from __future__ import annotations
@@ -21,17 +23,19 @@ from typing import Any
 import httpx
 
 from kinect_agent import __version__
-from kinect_agent.queue import SessionQueue
+from kinect_agent.queue import HOLD_AFTER_SERVER_ERRORS, SessionQueue
 
 UPLOAD_PATH = "/api/v1/sessions"
 RETRYABLE_4XX = frozenset({408, 429})
 _NO_ROUTE = (None, "NotFound", "MethodNotAllowed")  # a 404/405 without a domain error: the route is missing
+PASSING_5XX = frozenset({502, 503, 504})  # a proxy without its server, or a busy server: never this file's fault
 DEFAULT_TIMEOUT = httpx.Timeout(60.0, connect=5.0)
 
 
 @dataclass
 class UploadResult:
-    """What happened to one queued file: outcome "sent", "rejected", "kept" (still queued) or "gone" (not found)."""
+    """What happened to one queued file: outcome "sent", "rejected", "held" (set aside after the same server error
+    pass after pass), "kept" (still queued) or "gone" (not found)."""
 
     path: Path
     session_id: str
@@ -161,24 +165,37 @@ class DrainReport:
         return sum(r.outcome == outcome for r in self.results)
 
 
+def _lasting(status_code: int | None) -> bool:
+    """True for a server error that may be this file's own (a 500), not a server that is down or busy."""
+    return status_code is not None and status_code >= 500 and status_code not in PASSING_5XX
+
+
 def drain(queue: SessionQueue, uploader: Uploader, *, log: Callable[[str], None] | None = None) -> DrainReport:
     """Uploads pending files oldest first; stops at the first file that stays queued (server down, busy or auth),
-    except after a 500: that may be caused by this one file, which must not hold back the files behind it.
+    except after a lasting server error (a 500): that may be caused by this one file, which must not hold back the
+    files behind it. A file that meets the same lasting error in HOLD_AFTER_SERVER_ERRORS passes in a row is held
+    aside (queue/held/, with the server's answer).
 
-    A file leaves pending/ only after the server confirmed it (receipt written first) or refused it (4xx).
+    A file leaves pending/ only after the server confirmed it (receipt written first), refused it (4xx) or failed
+    on it again and again (held).
     """
     results = []
     for path in queue.pending():
         result = uploader.upload_file(path)
         results.append(result)
+        error = {"status_code": result.status_code, "detail": result.detail, "response": result.response}
         if result.outcome == "sent":
             queue.mark_sent(path, _receipt(result))
         elif result.outcome == "rejected":
-            queue.mark_rejected(path, {"status_code": result.status_code, "detail": result.detail,
-                                       "response": result.response})  # fmt: skip
+            queue.mark_rejected(path, error)
+        elif result.outcome == "kept" and _lasting(result.status_code):
+            passes = queue.note_server_error(path, result.status_code, result.detail)
+            if passes >= HOLD_AFTER_SERVER_ERRORS:
+                queue.mark_held(path, {**error, "passes": passes})
+                result.outcome = "held"
         if log is not None:
             log(_describe(result))
-        if result.outcome == "kept" and result.status_code != 500:
+        if result.outcome == "kept" and not _lasting(result.status_code):
             break  # server down, overloaded or refusing the token: the next files would fare the same
     return DrainReport(results=results, remaining=len(queue.pending()))
 
@@ -204,6 +221,9 @@ def _describe(result: UploadResult) -> str:
         return f"{name}: rejected by the server (HTTP {result.status_code}: {result.detail}); moved to rejected/"
     if result.outcome == "gone":
         return f"{name}: {result.detail}"
+    if result.outcome == "held":
+        return (f"{name}: the server failed on it in {HOLD_AFTER_SERVER_ERRORS} passes in a row (HTTP "
+                f"{result.status_code}: {result.detail}); set aside in held/ (kinect-agent upload --retry-held)")
     if result.status_code in (404, 405):
         return f"{name}: the server has no {UPLOAD_PATH} endpoint (HTTP {result.status_code}); file kept"
     if result.status_code == 401:

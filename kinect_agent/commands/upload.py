@@ -19,6 +19,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--once", action="store_true", help="one pass over the queue, then exit")
     parser.add_argument("--interval", type=float, default=30.0, help="seconds between passes (default 30)")
     parser.add_argument("--retry-rejected", action="store_true", help="move rejected sessions back to the queue first")
+    parser.add_argument("--retry-held", action="store_true", help="move held sessions (the same server error again "
+                        "and again) back to the queue first")  # fmt: skip
 
 
 def upload_queue(home=None, *, transport=None, log=None) -> DrainReport:
@@ -39,13 +41,16 @@ def run(args: argparse.Namespace) -> int:
     """Drains the queue once (exit 0 when nothing is left pending, 1 otherwise) or forever."""
     if not args.interval > 0:
         raise ValueError(f"--interval must be a positive number of seconds, got {args.interval}")
-    if args.retry_rejected:
-        config = load_config()
-        moved = SessionQueue(config.queue_dir).requeue_rejected()
-        _say(f"{len(moved)} rejected session(s) moved back to the queue")
+    if args.retry_rejected or args.retry_held:
+        queue = SessionQueue(load_config().queue_dir)
+        if args.retry_rejected:
+            _say(f"{len(queue.requeue_rejected())} rejected session(s) moved back to the queue")
+        if args.retry_held:
+            _say(f"{len(queue.requeue_held())} held session(s) moved back to the queue")
     while True:
         report = upload_queue(log=_say)
-        _say(f"{report.count('sent')} sent, {report.count('rejected')} rejected, {report.remaining} still queued")
+        _say(f"{report.count('sent')} sent, {report.count('rejected')} rejected, {report.count('held')} held, "
+             f"{report.remaining} still queued")  # fmt: skip
         if args.once:
-            return 0 if report.remaining == 0 and report.count("rejected") == 0 else 1
+            return 0 if report.remaining == 0 and report.count("rejected") == report.count("held") == 0 else 1
         time.sleep(args.interval)

@@ -139,9 +139,23 @@ def test_held_session_is_recovered_after_a_crash(tmp_path) -> None:
     payload = _payload()
     queue.hold(payload)
     assert queue.pending() == []
-    assert queue.recover_held() == [], "a fresh held file may be filtered by another process right now"
+    assert queue.recover_held() == [], "a held file this process is filtering right now stays with it"
+    lock = queue._locks.pop(payload.session_id, None)
+    if lock is not None:
+        lock.close()  # the process dies: its lock goes with it
     recovered = SessionQueue(tmp_path).recover_held(older_than_s=0)
     assert recovered == [tmp_path / "pending" / f"{payload.session_id}.khs"]
     assert read_payload(recovered[0]).session_id == payload.session_id
     assert list((tmp_path / "captured").iterdir()) == []
     assert queue.where(payload.session_id) == "pending" and queue.where("unknown-id") is None
+
+
+def test_without_flock_held_files_are_recovered_by_age(tmp_path, monkeypatch) -> None:
+    import kinect_agent.queue as module
+
+    monkeypatch.setattr(module, "fcntl", None)  # as on Windows
+    queue = SessionQueue(tmp_path)
+    payload = _payload()
+    queue.hold(payload)
+    assert SessionQueue(tmp_path).recover_held() == [], "younger than 30 minutes: maybe still being filtered"
+    assert SessionQueue(tmp_path).recover_held(older_than_s=0) == [tmp_path / "pending" / f"{payload.session_id}.khs"]
