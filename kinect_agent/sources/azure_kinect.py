@@ -3,7 +3,14 @@
 Device access is checked with `pyk4a`; skeletons come from the Azure Kinect Body Tracking SDK through
 `pykinect_azure`. Both are imported inside open(), so this module loads everywhere and open() raises
 DeviceUnavailable with what to install when it cannot run. Azure camera space (mm, x right, y down, z forward)
-is turned into the project's frame (m, x left, y up, z forward, like Kinect v2) by negating x and y.
+is turned into the project's frame (m, x left, y up, z forward, like Kinect v2) by negating x and y. Joint positions
+come as the SDK's k4a_float3_t union (position.xyz.x ...). The patient is chosen among the tracked bodies by
+body_choice.PatientChooser (by k4abt body id); frame times are the body frame's device timestamp (microseconds).
+
+Orbbec Femto Bolt and Mega, the Azure Kinect's successors, run through this same path: Orbbec's K4A wrapper
+(OrbbecSDK-K4A-Wrapper) stands in for the Azure Kinect Sensor SDK, and Microsoft's Body Tracking SDK does the
+skeletons. Orbbec's own Python SDK (pyorbbecsdk) gives depth and colour images but no body tracking, so it cannot
+feed this agent by itself.
 """
 
 from __future__ import annotations
@@ -18,6 +25,7 @@ from kinect_agent import skeleton
 from kinect_agent.errors import DeviceUnavailable
 from kinect_agent.recording import Metadata
 from kinect_agent.sources.base import Frame, SourceBase
+from kinect_agent.sources.body_choice import Body, PatientChooser
 
 # k4abt joint index of each of our joints (NECK stands for the Kinect 1 shoulder centre).
 K4ABT_JOINT: dict[str, int] = {
@@ -44,7 +52,8 @@ def _import(name: str):
 
 
 class AzureKinectSource(SourceBase):
-    """Yields the skeleton of the first body the Body Tracking SDK reports, one frame per capture (30 Hz)."""
+    """Yields the patient's skeleton (body_choice) from the Body Tracking SDK, one frame per capture (30 Hz), timed by
+    the device."""
 
     name = "azure_kinect"
 
@@ -54,6 +63,7 @@ class AzureKinectSource(SourceBase):
         self.device, self.device_index = device, device_index
         self._camera = None
         self._tracker = None
+        self._chooser = PatientChooser()
 
     def open(self) -> None:
         """Starts the camera and the body tracker; raises DeviceUnavailable when a part is missing."""
@@ -75,27 +85,24 @@ class AzureKinectSource(SourceBase):
             raise DeviceUnavailable(f"the Azure Kinect body tracker did not start: {exc}") from exc
 
     def frames(self) -> Iterator[Frame]:
-        """Yields frames forever; frames without a body give all joints NaN with state 0."""
+        """Yields frames forever; frames without the patient give all joints NaN with state 0."""
         if self._tracker is None:
             raise RuntimeError("AzureKinectSource.frames() called before open()")
         while True:
             self._camera.update()
             body_frame = self._tracker.update()
-            now = time.monotonic()
-            pos = np.full((skeleton.J, 3), np.nan)
-            state = np.zeros(skeleton.J, dtype=np.int8)
-            if body_frame.get_num_bodies() > 0:
-                joints = body_frame.get_body_skeleton(0).joints
-                for j, name in enumerate(skeleton.JOINTS):
-                    joint = joints[K4ABT_JOINT[name]]
-                    state[j] = CONFIDENCE_STATE[min(int(joint.confidence_level), 3)]
-                    if state[j] != skeleton.NOT_TRACKED:
-                        p = joint.position
-                        pos[j] = (-p.x / 1000.0, -p.y / 1000.0, p.z / 1000.0)
-            yield Frame(now, pos, state)
+            stamp = getattr(body_frame, "get_device_timestamp_usec", None)
+            t = stamp() / 1e6 if stamp is not None else time.monotonic()
+            bodies = [_body(body_frame, i) for i in range(int(body_frame.get_num_bodies()))]
+            body = self._chooser.choose(bodies)
+            if body is None:
+                yield Frame(t, np.full((skeleton.J, 3), np.nan), np.zeros(skeleton.J, dtype=np.int8))
+            else:
+                yield Frame(t, body.positions, body.state)
 
     def close(self) -> None:
         """Stops the tracker and the camera."""
+        self._chooser = PatientChooser()
         for part, stop in ((self._tracker, "destroy"), (self._camera, "close")):
             if part is not None and hasattr(part, stop):
                 getattr(part, stop)()
@@ -104,3 +111,18 @@ class AzureKinectSource(SourceBase):
     def metadata(self) -> Metadata:
         """Returns the capture's metadata."""
         return Metadata(device=self.device, rate_hz=30.0, source=self.name)
+
+
+def _body(body_frame, index: int) -> Body:
+    """Returns body `index` of a k4abt body frame as a Body: the 20 joints in metres, project frame, confidence as
+    state."""
+    joints = body_frame.get_body_skeleton(index).joints
+    pos = np.full((skeleton.J, 3), np.nan)
+    state = np.zeros(skeleton.J, dtype=np.int8)
+    for j, name in enumerate(skeleton.JOINTS):
+        joint = joints[K4ABT_JOINT[name]]
+        state[j] = CONFIDENCE_STATE[min(max(int(joint.confidence_level), 0), 3)]
+        if state[j] != skeleton.NOT_TRACKED:
+            p = joint.position.xyz
+            pos[j] = (-p.x / 1000.0, -p.y / 1000.0, p.z / 1000.0)
+    return Body(int(body_frame.get_body_id(index)), pos, state)
