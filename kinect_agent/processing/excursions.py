@@ -39,7 +39,10 @@ truth) and the tuning set of bench/accuracy.py (simulator + CMU; HDM05 held out)
                                      after the pipeline 49 of 50 correct s01-s05 recordings count 10 (47 before),
                                      35 of 50 incorrect ones (32); real pairs unchanged (76.3 mm, elbow 11.1 deg);
                                      accuracy.py --quick precision 0.688 -> 0.761 at the same recall 0.967, RMSE
-                                     118.9 -> 118.8 mm. The online hold (LiveExcursions) has no limb rule yet.
+                                     118.9 -> 118.8 mm. Online (LiveExcursions: a held joint keeping its bones for
+                                     0.3 s is let go): UI-PRMD correct s01-s05 after the online filter 44 -> 48 of 50
+                                     count 10 (sit to stand s02: 5 -> 9, s05: 7 -> 10; without any hold 49); real
+                                     pairs online RMSE 92.7 -> 98.8 mm (raw 134.6), elbow 18.0 -> 17.0 deg.
 LiveExcursions is the causal form for the online filter (PipelineConfig.online_excursions, on by default): real pairs
 online RMSE 134.9 -> 92.7 mm, elbow 36.2 -> 18.0 deg; accuracy.py online 121.9 -> 123.6 mm (it cannot see the jump
 back before holding a joint out), still below every causal baseline in every setting; 0.08 ms per frame.
@@ -69,6 +72,8 @@ ABRUPTNESS = 5.0  # a jump is this many times faster than the motion around it
 RETURN_FRACTION = 0.3  # the jump back ends this close to where the jump away started, as a fraction of it
 TRAVEL_FRACTION = 0.5  # a lost joint does not travel: calm-step travel at most this fraction of its distance
 BONE_TOLERANCE_M, BONE_TOLERANCE_FRAC = 0.05, 0.2  # a limb that really moved keeps its bone to within these
+BONE_EMA = 0.05  # per frame: the live rule's running bone lengths follow over about 20 frames
+LIMB_RELEASE_S = 0.3  # a held joint that keeps its bones this long is a real limb: the live hold ends
 
 
 def jump_events(t: np.ndarray, p: np.ndarray, speed_limit: float) -> list[tuple[int, int]]:
@@ -227,7 +232,10 @@ class LiveExcursions:
     where the run began, the joint having been calm for min_len_s before it. It ends at the frame that jumps back
     within RETURN_FRACTION of that distance (that frame is observed again), once the calm steps since the jump add
     up to more than TRAVEL_FRACTION of the joint's distance from where it left (it moved there: the limb is real),
-    or after max_len_s.
+    or after max_len_s, or once the joint has kept its bones to its parent and children for LIMB_RELEASE_S while
+    its parent is not held (the limb rule, causal: a lost elbow may keep its upper arm when it jumps, and only the
+    forearm shows it lost while it sits; a raised knee keeps thigh and shank throughout). The typical bone lengths
+    are running averages over the frames where both ends are seen and neither is held (BONE_EMA per frame).
     """
 
     def __init__(self, min_dev_m: float = 0.2, min_len_s: float = 0.3, max_len_s: float = 3.0) -> None:
@@ -246,6 +254,8 @@ class LiveExcursions:
         self.away = np.zeros(J)  # its jump distance, m
         self.path = np.zeros((J, 3))  # its calm steps since, summed, m
         self.hold_t = np.full(J, np.nan)  # s, when the hold began
+        self.bone = np.full(J, np.nan)  # running typical length of each joint's bone to its parent, m
+        self.limb_since = np.full(J, np.nan)  # s, since when a held joint has kept its bones (NaN: it has not)
 
     def step(self, t: float, positions: np.ndarray, present: np.ndarray) -> np.ndarray:
         """Returns (J,) bool: the joints to treat as missing in this frame.
@@ -278,7 +288,10 @@ class LiveExcursions:
         self.away = np.where(was_held & jump, np.fmax(self.away, distance), self.away)  # landing takes 2-3 frames
         back = was_held & jump & (distance <= RETURN_FRACTION * self.away)
         travelled = was_held & ~jump & (np.linalg.norm(self.path, axis=1) > TRAVEL_FRACTION * distance)
-        release = back | travelled | (was_held & (t - self.hold_t > self.max_len_s))
+        limb = was_held & self._limbs_kept(positions, present)
+        self.limb_since = np.where(limb, np.fmin(self.limb_since, t), np.nan)
+        limb_real = limb & (t - self.limb_since >= LIMB_RELEASE_S - 1e-6)
+        release = back | travelled | limb_real | (was_held & (t - self.hold_t > self.max_len_s))
         self.held[release], self.quiet_since[release] = False, t
         out = was_held & ~release
 
@@ -289,5 +302,31 @@ class LiveExcursions:
             self.run_anchor[start], leave[start], 0.0, t,
         )  # fmt: skip
         out |= start
+        self._learn_bones(positions, present & ~out)
         self.last_p[present], self.last_t[present] = positions[present], t
         return out
+
+    def _bone_lengths(self, positions: np.ndarray, present: np.ndarray) -> np.ndarray:
+        """Returns (J,) m: each joint's distance to its parent this frame (NaN where an end is missing, and ROOT)."""
+        parents = np.maximum(skeleton.PARENT, 0)
+        both = present & present[parents] & (skeleton.PARENT >= 0)
+        return np.where(both, np.linalg.norm(positions - positions[parents], axis=1), np.nan)
+
+    def _learn_bones(self, positions: np.ndarray, usable: np.ndarray) -> None:
+        """Updates the running bone lengths from the bones whose two ends are usable (seen, not held)."""
+        lengths = self._bone_lengths(positions, usable)
+        new = np.isfinite(lengths) & np.isnan(self.bone)
+        self.bone[new] = lengths[new]
+        update = np.isfinite(lengths) & ~new
+        self.bone[update] += BONE_EMA * (lengths[update] - self.bone[update])
+
+    def _limbs_kept(self, positions: np.ndarray, present: np.ndarray) -> np.ndarray:
+        """Returns (J,) bool: the joints whose bones to parent and children all keep their running length this
+        frame, their parent not held (False where a length is not known: no release without evidence)."""
+        lengths = self._bone_lengths(positions, present)
+        tolerance = np.maximum(BONE_TOLERANCE_M, BONE_TOLERANCE_FRAC * self.bone)
+        fits = np.abs(lengths - self.bone) <= tolerance
+        parents = np.maximum(skeleton.PARENT, 0)
+        children_fit = np.ones(skeleton.J, dtype=bool)
+        np.logical_and.at(children_fit, parents[1:], fits[1:])  # each joint: all of its children's bones fit
+        return (skeleton.PARENT >= 0) & fits & children_fit & ~self.held[parents]

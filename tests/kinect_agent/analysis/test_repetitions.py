@@ -139,6 +139,16 @@ def test_uiprmd_after_pipeline_gives_ten_repetitions(data_dir, movement: str, su
 
 
 @pytest.mark.shared_data
+@pytest.mark.parametrize(("movement", "subject"), [("m02", "s02"), ("m03", "s01"), ("m05", "s05")])
+def test_uiprmd_after_the_online_filter_gives_ten_repetitions(data_dir, movement: str, subject: str) -> None:
+    """The live count's filter: its excursion hold took a raised knee or a rising body for lost (hurdle step s02: 8,
+    inline lunge s01: 9, sit to stand s05: 7) until a held joint that keeps its bones is let go."""
+    slug = next(s.slug for s in EXERCISES.values() if s.uiprmd_movement == movement)
+    filtered = process(uiprmd(data_dir, movement, subject), online=True).filtered
+    assert len(_count(filtered, slug).repetitions) == 10
+
+
+@pytest.mark.shared_data
 def test_uiprmd_shoulder_abduction_amplitude_is_that_of_the_episodes(data_dir) -> None:
     rec = uiprmd(data_dir, "m07", "s01")
     reps = _count(rec, "standing_shoulder_abduction").repetitions
