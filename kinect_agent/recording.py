@@ -160,6 +160,7 @@ class Recording:
 
 
 _NUMBERS = {"rate_hz", "view_deg"}
+RATE_RANGE_HZ = (1.0, 1000.0)  # no camera or motion capture records slower or faster
 _LISTS_OF_TEXT = {"history"}
 _OBJECTS = {"extra"}
 
@@ -170,9 +171,10 @@ def _check_meta_field(key: str, value: Any) -> None:
         return
     if key in _NUMBERS:
         ok = isinstance(value, int | float) and not isinstance(value, bool) and np.isfinite(value)
-        if ok and key == "rate_hz":
-            ok = 0 < value <= 10_000
-        expected = "a finite number" + (" in (0, 10000] Hz" if key == "rate_hz" else "")
+        if ok and key == "rate_hz":  # as the session file's timing rule: frames 1 ms to 1 s apart
+            ok = RATE_RANGE_HZ[0] <= value <= RATE_RANGE_HZ[1]
+        low, high = RATE_RANGE_HZ
+        expected = "a finite number" + (f" in [{low:g}, {high:g}] Hz" if key == "rate_hz" else "")
     elif key in _LISTS_OF_TEXT:
         ok, expected = isinstance(value, list) and all(isinstance(v, str) for v in value), "a list of texts"
     elif key in _OBJECTS:

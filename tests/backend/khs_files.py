@@ -174,6 +174,8 @@ def _times(step_s):
 DEFECTS = {
     "meta_as_list": (_raw_meta(None, [1, 2]), "bad_header: recording 'raw' metadata must be an object"),
     "rate_as_text": (_raw_meta("rate_hz", "fast"), "bad_header: recording 'raw' metadata: rate_hz"),
+    "rate_of_a_billionth_hz": (_raw_meta("rate_hz", 1e-9), "bad_header: recording 'raw' metadata: rate_hz must be a "
+                               "finite number in [1, 1000] Hz"),
     "exercise_as_list": (_raw_meta("exercise", ["squat"]), "bad_header: recording 'raw' metadata: exercise"),
     "params_100000_deep": (_deep_params, "bad_header: JSON header is nested too deeply"),
     "nan_in_header": (
