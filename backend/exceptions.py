@@ -106,6 +106,12 @@ class SessionTooLarge(AppError):
     status_code = 413
 
 
+class UploadCutOff(AppError):
+    """The client went away before the whole upload arrived."""
+
+    status_code = 400
+
+
 class EmailAlreadyRegistered(Conflict):
     pass
 

@@ -7,7 +7,9 @@ import uuid
 from collections.abc import AsyncIterator
 from dataclasses import dataclass
 
-from backend.exceptions import InvalidSessionFile, SessionOwnerMismatch, SessionTooLarge
+from starlette.requests import ClientDisconnect
+
+from backend.exceptions import InvalidSessionFile, SessionOwnerMismatch, SessionTooLarge, UploadCutOff
 from kinect_agent.formats import session_file
 from kinect_agent.formats.session_file import SessionFileError, SessionPayload
 
@@ -41,14 +43,19 @@ def check_declared_length(content_length: str | None, limit: int) -> None:
 
 
 async def read_limited(chunks: AsyncIterator[bytes], limit: int) -> bytes:
-    """Returns the streamed body; raises SessionTooLarge as soon as more than limit bytes arrived."""
+    """Returns the streamed body; raises SessionTooLarge as soon as more than limit bytes arrived, and UploadCutOff
+    when the client goes away before the end (a home connection dropping mid-upload: an answer, not a server
+    error; nothing is stored and the agent sends the file again)."""
     parts: list[bytes] = []
     size = 0
-    async for chunk in chunks:
-        size += len(chunk)
-        if size > limit:
-            raise SessionTooLarge(f"the upload exceeds {limit} bytes")
-        parts.append(chunk)
+    try:
+        async for chunk in chunks:
+            size += len(chunk)
+            if size > limit:
+                raise SessionTooLarge(f"the upload exceeds {limit} bytes")
+            parts.append(chunk)
+    except ClientDisconnect:
+        raise UploadCutOff(f"the upload was cut off after {size} bytes") from None
     return b"".join(parts)
 
 

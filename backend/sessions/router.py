@@ -30,6 +30,7 @@ from backend.exceptions import (
     SessionNotFound,
     SessionOwnerMismatch,
     SessionTooLarge,
+    UploadCutOff,
     error_responses,
 )
 from backend.exercises.service import get_exercise
@@ -181,6 +182,7 @@ def _ingest(
             SessionConflict,
             SessionTooLarge,
             SessionOwnerMismatch,
+            UploadCutOff,
             InvalidInput,
         ),
     },

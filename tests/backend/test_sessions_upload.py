@@ -346,3 +346,20 @@ def test_recording_without_exercise_needs_the_query(post, db_session, patient_de
     response = post(data, headers, exercise="squat")
     assert response.status_code == 201, response.text
     assert response.json()["exercise_slug"] == "squat"
+
+
+def test_an_upload_cut_off_by_the_client_is_an_answer_not_a_server_error() -> None:
+    """A home connection dropping mid-upload: UploadCutOff (400, nothing stored), not an unhandled exception."""
+    import asyncio
+
+    from starlette.requests import ClientDisconnect
+
+    from backend.exceptions import UploadCutOff
+    from backend.sessions.ingest import read_limited
+
+    async def body():
+        yield b"KHSESS\x00\x02" + bytes(100)
+        raise ClientDisconnect()
+
+    with pytest.raises(UploadCutOff, match="cut off after 108 bytes"):
+        asyncio.run(read_limited(body(), 10_000))
