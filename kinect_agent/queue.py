@@ -258,15 +258,7 @@ class SessionQueue:
 
     def mark_rejected(self, path: Path, error: dict[str, Any]) -> Path:
         """Moves a pending file to rejected/ after writing the server's error beside it; returns the new path."""
-        session_id = self._id_of(path)
-        _write_json(self.rejected_dir / f"{session_id}.error.json", {"session_id": session_id,
-                                                                     "rejected_at": _now_utc(), **error})  # fmt: skip
-        target = self.rejected_dir / path.name
-        os.replace(path, target)
-        (self.pending_dir / f"{session_id}.failures.json").unlink(missing_ok=True)
-        fsync_dir(self.rejected_dir)
-        fsync_dir(path.parent)
-        return target
+        return self._set_aside(path, self.rejected_dir, {"rejected_at": _now_utc(), **error})
 
     def note_server_error(self, path: Path, status_code: int, detail: str) -> int:
         """Counts one more pass in which the server answered this pending file with status_code (a 5xx); returns
@@ -285,13 +277,16 @@ class SessionQueue:
 
     def mark_held(self, path: Path, error: dict[str, Any]) -> Path:
         """Sets a pending file aside in held/ with the server's repeated error; returns the new path."""
+        return self._set_aside(path, self.held_dir, {"held_at": _now_utc(), **error})
+
+    def _set_aside(self, path: Path, folder: Path, record: dict[str, Any]) -> Path:
+        """Writes record as <id>.error.json in folder, then moves the pending file there; returns its new path."""
         session_id = self._id_of(path)
-        _write_json(self.held_dir / f"{session_id}.error.json", {"session_id": session_id, "held_at": _now_utc(),
-                                                                 **error})  # fmt: skip
-        target = self.held_dir / path.name
+        _write_json(folder / f"{session_id}.error.json", {"session_id": session_id, **record})
+        target = folder / path.name
         os.replace(path, target)
         (self.pending_dir / f"{session_id}.failures.json").unlink(missing_ok=True)
-        fsync_dir(self.held_dir)
+        fsync_dir(folder)
         fsync_dir(self.pending_dir)
         return target
 
