@@ -8,7 +8,6 @@ from contextlib import asynccontextmanager
 
 from fastapi import APIRouter, FastAPI, Request
 from fastapi.exceptions import RequestValidationError
-from fastapi.openapi.utils import get_openapi
 from fastapi.responses import JSONResponse, Response
 from pydantic import BaseModel, Field
 from sqlalchemy import text
@@ -23,6 +22,7 @@ from backend.config import Settings, get_settings
 from backend.deps import DbSession
 from backend.events.listener import Listener
 from backend.exceptions import AppError, DatabaseBusy
+from backend.openapi import openapi_builder
 from backend.request_limits import RequestLimits
 from backend.schemas import ErrorOut
 from kinect_agent.blas_threads import one_blas_thread
@@ -158,71 +158,6 @@ def _system_router() -> APIRouter:
     return router
 
 
-def _error_answer(description: str, error: str, detail: str) -> dict:
-    return {
-        "description": description,
-        "content": {
-            "application/json": {
-                "schema": {"$ref": "#/components/schemas/ErrorOut"},
-                "example": {"error": error, "detail": detail},
-            }
-        },
-    }
-
-
-def _document_request_checks(schema: dict) -> None:
-    """Adds to every operation the answers that come before its route (backend.request_limits, the database)."""
-    for path in schema.get("paths", {}).values():
-        for method, op in path.items():
-            responses = op.setdefault("responses", {})
-            nul = _error_answer("InvalidInput", "InvalidInput", "the URL contains a NUL character")
-            responses.setdefault("400", nul)
-            if "requestBody" in op:
-                json_body = "application/json" in op["requestBody"].get("content", {})
-                responses.setdefault("413", _error_answer("RequestTooLarge", "RequestTooLarge" if json_body else
-                                                          "SessionTooLarge", "the body is over the limit"))  # fmt: skip
-                responses.setdefault("422", _error_answer("InvalidInput", "InvalidInput",
-                                                          "body: JSON text must be UTF-8; byte 3 is not"))  # fmt: skip
-            if method.upper() not in ("GET", "HEAD"):
-                responses.setdefault("503", _error_answer("DatabaseBusy", "DatabaseBusy",
-                                                          "the database is busy with another write; retry in a second"))
-
-
-def _openapi(app: FastAPI):
-    def build() -> dict:
-        if app.openapi_schema:
-            return app.openapi_schema
-        schema = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes)
-        components = schema.setdefault("components", {}).setdefault("schemas", {})
-        components["ErrorOut"] = ErrorOut.model_json_schema(ref_template="#/components/schemas/{model}")
-        example = {"error": "ValidationError", "detail": "body.email: Field required"}
-        for path in schema.get("paths", {}).values():
-            for op in path.values():
-                responses = op.get("responses", {})
-                if "422" in responses:
-                    responses["422"] = {
-                        "description": "ValidationError",
-                        "content": {
-                            "application/json": {
-                                "schema": {"$ref": "#/components/schemas/ErrorOut"},
-                                "example": example,
-                            }
-                        },
-                    }
-        _document_request_checks(schema)
-        components.pop("HTTPValidationError", None)
-        components.pop("ValidationError", None)
-        schema.setdefault("components", {})["securitySchemes"] = {
-            "bearer": {"type": "http", "scheme": "bearer", "description": "API token khc_... or device token khd_..."},
-            "cookie": {"type": "apiKey", "in": "cookie", "name": "coach_session"},
-        }
-        schema["security"] = [{"bearer": []}, {"cookie": []}]
-        app.openapi_schema = schema
-        return schema
-
-    return build
-
-
 def create_app(settings: Settings | None = None, engine: Engine | None = None) -> FastAPI:
     """Returns the configured application; at start-up it refuses a database that is not at Alembic head. Every
     worker runs BLAS on one thread (kinect_agent.blas_threads: the analysis' matrices are small)."""
@@ -261,5 +196,5 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     for name in ROUTERS:
         app.include_router(importlib.import_module(name).router)
     app.include_router(importlib.import_module("frontend.pages").router)  # HTML pages, not in the OpenAPI schema
-    app.openapi = _openapi(app)  # type: ignore[method-assign]
+    app.openapi = openapi_builder(app)  # type: ignore[method-assign]
     return app

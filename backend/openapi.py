@@ -1,0 +1,77 @@
+"""The API's OpenAPI document: FastAPI's, with every error answer as {"error", "detail"} (ErrorOut), the answers
+every operation can give before its route runs, and the security schemes (bearer token, login cookie)."""
+
+from __future__ import annotations
+
+from fastapi import FastAPI
+from fastapi.openapi.utils import get_openapi
+
+from backend.schemas import ErrorOut
+
+
+def _error_answer(description: str, error: str, detail: str) -> dict:
+    return {
+        "description": description,
+        "content": {
+            "application/json": {
+                "schema": {"$ref": "#/components/schemas/ErrorOut"},
+                "example": {"error": error, "detail": detail},
+            }
+        },
+    }
+
+
+def _document_request_checks(schema: dict) -> None:
+    """Adds to every operation the answers that come before its route (backend.request_limits, the database)."""
+    for path in schema.get("paths", {}).values():
+        for method, op in path.items():
+            responses = op.setdefault("responses", {})
+            nul = _error_answer("InvalidInput", "InvalidInput", "the URL contains a NUL character")
+            responses.setdefault("400", nul)
+            if "requestBody" in op:
+                json_body = "application/json" in op["requestBody"].get("content", {})
+                responses.setdefault("413", _error_answer("RequestTooLarge", "RequestTooLarge" if json_body else
+                                                          "SessionTooLarge", "the body is over the limit"))  # fmt: skip
+                responses.setdefault("422", _error_answer("InvalidInput", "InvalidInput",
+                                                          "body: JSON text must be UTF-8; byte 3 is not"))  # fmt: skip
+            if method.upper() not in ("GET", "HEAD"):
+                responses.setdefault("503", _error_answer("DatabaseBusy", "DatabaseBusy",
+                                                          "the database is busy with another write; retry in a second"))
+
+
+def openapi_builder(app: FastAPI):
+    """Returns app.openapi: FastAPI's document with the error body ErrorOut on every error answer, the answers
+    given before any route (_document_request_checks) and the two security schemes."""
+
+    def build() -> dict:
+        if app.openapi_schema:
+            return app.openapi_schema
+        schema = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes)
+        components = schema.setdefault("components", {}).setdefault("schemas", {})
+        components["ErrorOut"] = ErrorOut.model_json_schema(ref_template="#/components/schemas/{model}")
+        example = {"error": "ValidationError", "detail": "body.email: Field required"}
+        for path in schema.get("paths", {}).values():
+            for op in path.values():
+                responses = op.get("responses", {})
+                if "422" in responses:
+                    responses["422"] = {
+                        "description": "ValidationError",
+                        "content": {
+                            "application/json": {
+                                "schema": {"$ref": "#/components/schemas/ErrorOut"},
+                                "example": example,
+                            }
+                        },
+                    }
+        _document_request_checks(schema)
+        components.pop("HTTPValidationError", None)
+        components.pop("ValidationError", None)
+        schema.setdefault("components", {})["securitySchemes"] = {
+            "bearer": {"type": "http", "scheme": "bearer", "description": "API token khc_... or device token khd_..."},
+            "cookie": {"type": "apiKey", "in": "cookie", "name": "coach_session"},
+        }
+        schema["security"] = [{"bearer": []}, {"cookie": []}]
+        app.openapi_schema = schema
+        return schema
+
+    return build
