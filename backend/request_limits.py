@@ -4,7 +4,7 @@ cannot store one, and no name, title or e-mail has one), and JSON bodies no larg
 Session uploads (application/octet-stream) are not read here: their route streams them with its own limit
 (COACH_MAX_UPLOAD_BYTES). Answers: 400 InvalidInput (NUL in the URL), 422 InvalidInput (NUL in JSON text, or a
 JSON body that is not UTF-8), 413 RequestTooLarge (declared or actual JSON body over the limit, refused before it is
-read whole). The OpenAPI document lists these answers on every operation (backend.main._openapi).
+read whole). The OpenAPI document lists these answers on every operation (backend.openapi).
 """
 
 from __future__ import annotations
