@@ -14,7 +14,7 @@ COPY kinect_agent ./kinect_agent
 COPY backend ./backend
 COPY migrations ./migrations
 COPY frontend ./frontend
-RUN pip install . && rm -rf /app/*
+RUN pip install ".[server]" && rm -rf /app/*
 
 RUN useradd --system --create-home --uid 10001 coach && mkdir -p /data && chown coach /data
 USER coach
