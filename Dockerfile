@@ -9,12 +9,14 @@ ENV PYTHONDONTWRITEBYTECODE=1 \
     COACH_PORT=8000
 
 WORKDIR /app
+COPY requirements/server.lock ./requirements/
+RUN pip install --require-hashes -r requirements/server.lock
 COPY pyproject.toml README.md ./
 COPY kinect_agent ./kinect_agent
 COPY backend ./backend
 COPY migrations ./migrations
 COPY frontend ./frontend
-RUN pip install ".[server]" && rm -rf /app/*
+RUN pip install --no-deps . && rm -rf /app/*
 
 RUN useradd --system --create-home --uid 10001 coach && mkdir -p /data && chown coach /data
 USER coach

@@ -2,7 +2,7 @@
 # The whole test suite, on embedded SQLite and then on PostgreSQL (127.0.0.1:5432, database test).
 # Extra arguments go to pytest (e.g. -k upload). Set COACH_TEST_PG_URL for another PostgreSQL.
 set -euo pipefail
-source "$(dirname "$0")/_venv.sh" test "[test]"
+source "$(dirname "$0")/_venv.sh" test
 cd "$ROOT"
 PG_URL="${COACH_TEST_PG_URL:-postgresql+psycopg://postgres@127.0.0.1:5432/test}"
 
