@@ -2,10 +2,11 @@
 
 Each agent has its own home folder (config.json with the device token, mode 0600, and its disk queue) under
 --home. On start an agent reuses its token when the server still accepts it; otherwise the patient logs in,
-creates a pairing code and the agent pairs with it (`kinect_agent.commands.pair.pair`). Then the agents upload a
-few weeks of backdated sessions (patient after patient, oldest first, so the first progress plots fill up
-early), and after that one new session every --min-interval..--max-interval seconds, patient after
-patient. Every session goes capture (simulator) -> filter -> disk queue -> upload, as on a real home computer.
+creates a pairing code and the agent pairs with it (through `kinect_agent.home.HomeAgent`, the agent's public
+entry). Then the agents upload a few weeks of backdated sessions (patient after patient, oldest first, so the
+first progress plots fill up early), and after that one new session every --min-interval..--max-interval seconds,
+patient after patient. Every session goes capture (simulator) -> filter -> disk queue -> upload, as on a real
+home computer.
 
 Run by `coach-server demo` as a child process: `python -m backend.demo_agents --server URL --home DIR`.
 It exits when its parent process ends, on SIGTERM, or after --max-sessions live sessions.
@@ -31,12 +32,7 @@ from pathlib import Path
 import httpx
 
 from backend.demo import DEMO_PASSWORD, PATIENTS
-from kinect_agent.commands.pair import pair
-from kinect_agent.commands.run import capture, queue_session
-from kinect_agent.config import AgentConfig, ConfigError, load_config
-from kinect_agent.errors import AgentError
-from kinect_agent.queue import SessionQueue
-from kinect_agent.upload import RetryPolicy, Uploader, drain
+from kinect_agent.home import AgentConfig, AgentError, ConfigError, HomeAgent
 
 STATE_NAME = "demo_state.json"
 SESSIONS_PER_WEEK = 2  # backdated sessions per exercise and week
@@ -51,8 +47,13 @@ class Agent:
     exercises: tuple[str, ...]
     index: int
     home: Path
-    config: AgentConfig | None = None
+    agent: HomeAgent | None = None
     sessions: int = 0
+
+    @property
+    def config(self) -> AgentConfig:
+        assert self.agent is not None, "connect() first"
+        return self.agent.config
 
     @property
     def label(self) -> str:
@@ -101,17 +102,14 @@ def _pairing_code(server: str, email: str) -> str:
 def connect(agent: Agent, server: str) -> None:
     """Reuses the agent's device token when the server accepts it, else pairs the agent anew."""
     try:
-        config = load_config(agent.home)
+        home = HomeAgent.load(agent.home)
     except ConfigError:
-        config = None
-    if config is None or not _token_works(config, server):
+        home = None
+    if home is None or not _token_works(home.config, server):
         code = _pairing_code(server, agent.email)
-        config = pair(server, code, name=f"{agent.name.split()[0]}'s home agent (simulated)", home=agent.home,
-                      force=True)  # fmt: skip
-    agent.config = config
-    queue = SessionQueue(config.queue_dir)
-    queue.recover_held(older_than_s=0)  # sessions interrupted while filtered (demo stopped): queued as recorded
-    queue.clean_partial()
+        home = HomeAgent.pair(server, code, name=f"{agent.name.split()[0]}'s home agent (simulated)", home=agent.home)
+    agent.agent = home
+    home.recover()  # sessions interrupted while filtered (demo stopped): queued as recorded
 
 
 def record_one(
@@ -128,18 +126,14 @@ def record_one(
 
     progress: printed before the outcome line (e.g. "history 5/72: ").
     """
-    queue = SessionQueue(agent.config.queue_dir)
+    home = agent.agent
     started = when.astimezone(dt.UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
     t0 = time.monotonic()
-    if session_id is None or queue.where(session_id) is None:  # a backfilled session is made once
-        rec = capture("simulator", exercise=exercise, reps=reps, seed=seed)
-        session_id = queue_session(queue, rec, created_at=started, session_id=session_id,
-                                   recorded_by=agent.config.recorded_by).stem  # fmt: skip
+    if session_id is None or home.where(session_id) is None:  # a backfilled session is made once
+        session_id = home.record_simulated(exercise, reps=reps, seed=seed, started=started, session_id=session_id)
     t1 = time.monotonic()
     agent.sessions += 1
-    with Uploader(agent.config.server_url, agent.config.device_token,
-                  policy=RetryPolicy(max_attempts=3, base_delay_s=1.0)) as uploader:  # fmt: skip
-        report = drain(queue, uploader)
+    report = home.upload()
     took = f"filter {t1 - t0:.1f} s, upload {time.monotonic() - t1:.1f} s"
     for r in report.results:
         outcome = {"sent": f"uploaded (HTTP {r.status_code})", "rejected": f"REJECTED: {r.detail}"}.get(
