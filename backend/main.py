@@ -25,6 +25,7 @@ from backend.exceptions import AppError, DatabaseBusy
 from backend.openapi import openapi_builder
 from backend.request_limits import RequestLimits
 from backend.schemas import ErrorOut
+from frontend.pages import mount as mount_pages
 from kinect_agent.blas_threads import one_blas_thread
 
 log = logging.getLogger(__name__)
@@ -83,6 +84,12 @@ def _allowed_methods(app: FastAPI, request: Request) -> list[str]:
     return sorted(methods | {"OPTIONS"}) if methods else []
 
 
+def _page_for(app: FastAPI, request: Request, status_code: int) -> Response | None:
+    """Returns the HTML error page the mounted pages give a browser (frontend.pages.mount), or None: JSON."""
+    render = getattr(app.state, "error_page", None)
+    return render(request, status_code) if render is not None else None
+
+
 def _is_busy(exc: DBAPIError) -> bool:
     """True for lock contention a retry resolves: SQLite "database is locked", PostgreSQL serialisation/deadlock."""
     pgcode = getattr(exc.orig, "sqlstate", None) or getattr(exc.orig, "pgcode", None)
@@ -98,23 +105,20 @@ def _install_error_handlers(app: FastAPI) -> None:
 
     @app.exception_handler(RequestValidationError)
     async def validation_error(request: Request, exc: RequestValidationError) -> Response:
-        from frontend.pages import error_page, wants_html
-
-        if wants_html(request) and request.method == "GET":  # a page address with a malformed id: no such page
-            return error_page(request, 404)
+        page = _page_for(app, request, 404) if request.method == "GET" else None
+        if page is not None:  # a page address with a malformed id: no such page
+            return page
         return JSONResponse({"error": "ValidationError", "detail": _validation_detail(exc)}, status_code=422)
 
     @app.exception_handler(StarletteHTTPException)
     async def http_error(request: Request, exc: StarletteHTTPException) -> Response:
-        from frontend.pages import error_page, wants_html
-
         allowed = _allowed_methods(app, request) if exc.status_code == 405 else []
         if allowed and request.method == "OPTIONS":
             return Response(status_code=204, headers={"Allow": ", ".join(allowed)})
         if allowed:
             exc.headers = {**(exc.headers or {}), "Allow": ", ".join(allowed)}
-        if wants_html(request):
-            page = error_page(request, exc.status_code)
+        page = _page_for(app, request, exc.status_code)
+        if page is not None:
             page.headers.update(exc.headers or {})
             return page
         name = {404: "NotFound", 405: "MethodNotAllowed"}.get(exc.status_code, "HTTPError")
@@ -195,6 +199,6 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     app.include_router(_system_router())
     for name in ROUTERS:
         app.include_router(importlib.import_module(name).router)
-    app.include_router(importlib.import_module("frontend.pages").router)  # HTML pages, not in the OpenAPI schema
+    mount_pages(app)  # the HTML pages and their error pages, not in the OpenAPI schema
     app.openapi = openapi_builder(app)  # type: ignore[method-assign]
     return app

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Annotated
 from urllib.parse import quote
 
-from fastapi import APIRouter, Depends, Request
+from fastapi import APIRouter, Depends, FastAPI, Request
 from fastapi.responses import FileResponse, HTMLResponse, RedirectResponse, Response
 from fastapi.templating import Jinja2Templates
 
@@ -60,6 +60,18 @@ _ERROR_PAGES = {
     404: ("Page not found", "There is no page at this address. It may have moved, or the link has a typo."),
     405: ("Not possible here", "This address cannot be opened this way."),
 }
+
+
+def mount(app: FastAPI) -> None:
+    """Mounts the pages on the app, the one place that does: their routes, and the HTML page that answers a
+    browser's error outside /api/ (app.state.error_page, which the app's error handlers call)."""
+    app.include_router(router)
+    app.state.error_page = browser_error_page
+
+
+def browser_error_page(request: Request, status_code: int) -> HTMLResponse | None:
+    """Returns the error page when a browser asked for a page (wants_html), else None (the API's JSON answers)."""
+    return error_page(request, status_code) if wants_html(request) else None
 
 
 def wants_html(request: Request) -> bool:
