@@ -54,6 +54,7 @@ from sqlalchemy.orm import Session  # noqa: E402
 
 from bench.dashboard_load import start_server  # noqa: E402
 from bench.ingest import _engine  # noqa: E402
+from kinect_agent.home import HomeAgent  # noqa: E402
 
 KINDS = ("server_down", "server_killed", "agent_killed_writing", "agent_killed_uploading", "cut_request",
          "lost_response", "sent_twice", "disk_full", "broken_file")  # fmt: skip
@@ -187,17 +188,10 @@ class Bench:
     def record(self, kill_after: float | None = None) -> str:
         """Records one set (in an agent process SIGKILLed after kill_after s when given, else in this one); returns
         its session id."""
-        from kinect_agent.commands.run import capture, queue_session
-        from kinect_agent.config import load_config
-        from kinect_agent.queue import SessionQueue
-
         session_id, exercise = str(uuid.uuid4()), self.rng.choice(EXERCISES)
         reps, seed = self.rng.randint(2, 3), self.rng.randint(0, 10**6)
         if kill_after is None:
-            config = load_config()
-            queue = SessionQueue(config.queue_dir)
-            rec = capture("simulator", exercise=exercise, reps=reps, seed=seed)
-            queue_session(queue, rec, session_id=session_id, recorded_by=config.recorded_by)
+            HomeAgent.load(self.home).record_simulated(exercise, reps=reps, seed=seed, session_id=session_id)
             self.captured[session_id] = exercise
             return session_id
         proc = self.agent("record", exercise, str(reps), str(seed), session_id)
@@ -217,30 +211,19 @@ class Bench:
         proc.communicate(timeout=300)
 
     def drain_here(self, base_url: str | None = None) -> None:
-        """One upload pass in this process, optionally through another address (the proxy)."""
-        from kinect_agent.config import load_config
-        from kinect_agent.queue import SessionQueue
-        from kinect_agent.upload import RetryPolicy, Uploader, drain
-
-        config = load_config()
-        queue = SessionQueue(config.queue_dir)
-        policy = RetryPolicy(max_attempts=1 if base_url else 3, base_delay_s=0.05)  # a proxied fault hits its one try
-        with Uploader(base_url or config.server_url, config.device_token, policy=policy) as uploader:
-            drain(queue, uploader)
+        """One upload pass in this process, optionally through another address (the proxy, whose fault must hit the
+        pass's one try)."""
+        HomeAgent.load(self.home).upload(attempts=1 if base_url else 3, base_delay_s=0.05, server_url=base_url)
 
     def settle(self) -> None:
-        """Server up, agent restarted (the start-up recovery of a new queue) and the queue drained until nothing is
+        """Server up, agent restarted (the start-up recovery of a new agent) and the queue drained until nothing is
         pending."""
-        from kinect_agent.config import load_config
-        from kinect_agent.queue import SessionQueue
-
         self.start_server()
         for _ in range(5):
-            queue = SessionQueue(load_config().queue_dir)
-            queue.clean_partial(older_than_s=0)
-            queue.recover_held()
+            agent = HomeAgent.load(self.home)
+            agent.recover()
             self.drain_here()
-            if not queue.pending() and not list(queue.captured_dir.glob("*.khs")):
+            if not agent.queue.pending() and not list(agent.queue.captured_dir.glob("*.khs")):
                 return
 
     # -- the trials ------------------------------------------------------------------------------------------

@@ -54,16 +54,17 @@ class HomeAgent:
         """Returns where a session is: "captured", "pending", "sent", "rejected", "held", or None."""
         return self.queue.where(session_id)
 
-    def record_simulated(self, exercise: str, *, reps: int, seed: int, started: str, session_id: str | None = None
-                         ) -> str:  # fmt: skip
+    def record_simulated(self, exercise: str, *, reps: int, seed: int, started: str | None = None,
+                         session_id: str | None = None) -> str:  # fmt: skip
         """Simulates a set, filters and queues it (bound to this pairing) as a recorded one would be; returns its
-        session id. started: ISO 8601 UTC of its first frame."""
+        session id. started: ISO 8601 UTC of its first frame (None: it ends now)."""
         rec = capture("simulator", exercise=exercise, reps=reps, seed=seed)
         return queue_session(self.queue, rec, created_at=started, session_id=session_id,
                              recorded_by=self.config.recorded_by).stem  # fmt: skip
 
-    def upload(self, *, attempts: int = 3, base_delay_s: float = 1.0) -> DrainReport:
-        """Uploads the queue once (oldest first, idempotent) and returns what happened to each file."""
+    def upload(self, *, attempts: int = 3, base_delay_s: float = 1.0, server_url: str | None = None) -> DrainReport:
+        """Uploads the queue once (oldest first, idempotent) and returns what happened to each file. server_url:
+        another address of the same server (a proxy) instead of the paired one."""
         policy = RetryPolicy(max_attempts=attempts, base_delay_s=base_delay_s)
-        with Uploader(self.config.server_url, self.config.device_token, policy=policy) as uploader:
+        with Uploader(server_url or self.config.server_url, self.config.device_token, policy=policy) as uploader:
             return drain(self.queue, uploader)
