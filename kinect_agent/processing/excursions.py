@@ -162,15 +162,27 @@ def find_excursions(
     return found
 
 
+def bone_lengths(positions: np.ndarray) -> np.ndarray:
+    """Returns (..., J) m: each joint's distance to its parent in positions (..., J, 3) m (NaN for ROOT and where an
+    end is NaN)."""
+    parents = np.maximum(skeleton.PARENT, 0)
+    lengths = np.linalg.norm(positions - positions[..., parents, :], axis=-1)
+    lengths[..., skeleton.PARENT < 0] = np.nan
+    return lengths
+
+
+def bone_tolerance(typical_m: np.ndarray | float) -> np.ndarray | float:
+    """Returns how far (m) a bone of typical length typical_m may stray in a limb that really moved."""
+    return np.maximum(BONE_TOLERANCE_M, BONE_TOLERANCE_FRAC * typical_m)
+
+
 def _bone_kept(positions: np.ndarray, child: int, a: int, b: int, typical_m: np.ndarray) -> bool:
     """True when the bone from child's parent to child keeps its typical length (typical_m[child], m) during the
-    span a+1 .. b-1, in median to within BONE_TOLERANCE_M or BONE_TOLERANCE_FRAC of it."""
-    parent = skeleton.PARENT[child]
-    bone = np.linalg.norm(positions[a + 1 : b, child] - positions[a + 1 : b, parent], axis=1)
+    span a+1 .. b-1, in median to within bone_tolerance."""
+    bone = bone_lengths(positions[a + 1 : b])[:, child]
     if not np.any(np.isfinite(bone)) or not np.isfinite(typical_m[child]):
         return False
-    limit = max(BONE_TOLERANCE_M, BONE_TOLERANCE_FRAC * typical_m[child])
-    return float(np.nanmedian(np.abs(bone - typical_m[child]))) <= limit
+    return float(np.nanmedian(np.abs(bone - typical_m[child]))) <= bone_tolerance(typical_m[child])
 
 
 def limb_kept(positions: np.ndarray, j: int, a: int, b: int, typical_m: np.ndarray) -> bool:
@@ -214,13 +226,9 @@ def excursion_probabilities(rec: Recording, config: PipelineConfig | None = None
 def _typical_bones(positions: np.ndarray) -> np.ndarray:
     """Returns (J,) m: the median length of each joint's bone to its parent where both are present (NaN for ROOT
     and for bones never seen whole). positions: (T, J, 3) m, NaN = missing."""
-    parents = np.maximum(skeleton.PARENT, 0)
-    bones = np.linalg.norm(positions - positions[:, parents], axis=2)  # (T, J); ROOT's is 0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # a bone never seen whole: NaN
-        typical = np.nanmedian(bones, axis=0)
-    typical[skeleton.PARENT < 0] = np.nan
-    return typical
+        return np.nanmedian(bone_lengths(positions), axis=0)
 
 
 class LiveExcursions:
@@ -308,9 +316,8 @@ class LiveExcursions:
 
     def _bone_lengths(self, positions: np.ndarray, present: np.ndarray) -> np.ndarray:
         """Returns (J,) m: each joint's distance to its parent this frame (NaN where an end is missing, and ROOT)."""
-        parents = np.maximum(skeleton.PARENT, 0)
-        both = present & present[parents] & (skeleton.PARENT >= 0)
-        return np.where(both, np.linalg.norm(positions - positions[parents], axis=1), np.nan)
+        both = present & present[np.maximum(skeleton.PARENT, 0)]
+        return np.where(both, bone_lengths(positions), np.nan)
 
     def _learn_bones(self, positions: np.ndarray, usable: np.ndarray) -> None:
         """Updates the running bone lengths from the bones whose two ends are usable (seen, not held)."""
@@ -324,8 +331,7 @@ class LiveExcursions:
         """Returns (J,) bool: the joints whose bones to parent and children all keep their running length this
         frame, their parent not held (False where a length is not known: no release without evidence)."""
         lengths = self._bone_lengths(positions, present)
-        tolerance = np.maximum(BONE_TOLERANCE_M, BONE_TOLERANCE_FRAC * self.bone)
-        fits = np.abs(lengths - self.bone) <= tolerance
+        fits = np.abs(lengths - self.bone) <= bone_tolerance(self.bone)
         parents = np.maximum(skeleton.PARENT, 0)
         children_fit = np.ones(skeleton.J, dtype=bool)
         np.logical_and.at(children_fit, parents[1:], fits[1:])  # each joint: all of its children's bones fit
