@@ -583,43 +583,17 @@ def _wrong_owner(rng: random.Random, data: bytes, n: int, ctx: Context) -> list[
     )
     mismatch = ("SessionOwnerMismatch",)
     unknown = 10**6 + rng.randrange(10**6)
+    variants = [  # (what the file says, device id, patient id, query, expected answer), all sent by device B
+        ("recorded by device A for patient A", *a, {}, mismatch),
+        ("recorded by device B for patient A", b[0], a[1], {}, mismatch),
+        ("recorded by device A for patient B", a[0], b[1], {}, mismatch),
+        (f"recorded by unknown device {unknown} for patient B", unknown, b[1], {}, mismatch),
+        ("recorded by device A for patient A", *a, {"patient_id": a[1]}, ("PatientNotFound",)),
+    ]
     return [
-        Case(
-            "wrong_owner",
-            "recorded by device A for patient A, sent by device B",
-            owned(*a),
-            device="B",
-            expect=mismatch,
-        ),
-        Case(
-            "wrong_owner",
-            "recorded by device B for patient A, sent by device B",
-            owned(b[0], a[1]),
-            device="B",
-            expect=mismatch,
-        ),
-        Case(
-            "wrong_owner",
-            "recorded by device A for patient B, sent by device B",
-            owned(a[0], b[1]),
-            device="B",
-            expect=mismatch,
-        ),
-        Case(
-            "wrong_owner",
-            f"recorded by unknown device {unknown} for patient B, sent by device B",
-            owned(unknown, b[1]),
-            device="B",
-            expect=mismatch,
-        ),
-        Case(
-            "wrong_owner",
-            "recorded by device A for patient A, sent by device B with ?patient_id=A",
-            owned(*a),
-            params={"patient_id": a[1]},
-            device="B",
-            expect=("PatientNotFound",),
-        ),
+        Case("wrong_owner", f"{what}, sent by device B" + (" with ?patient_id=A" if query else ""),
+             owned(device, patient), params=query, device="B", expect=expect)  # fmt: skip
+        for what, device, patient, query, expect in variants
     ]
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import datetime as dt
 
+import pytest
 from sqlalchemy import update
 
 from backend.database import utcnow
@@ -26,30 +27,22 @@ def _token(client, headers, **body) -> dict:
     return r.json()
 
 
-def test_a_password_change_ends_logins_and_tokens(client, db_session, make_user, auth_headers):
+@pytest.mark.parametrize(("keep_api_tokens", "token_status"), [(None, 401), (True, 200)])
+def test_a_password_change_ends_logins_and_tokens_unless_the_admin_keeps_the_tokens(
+    client, db_session, make_user, auth_headers, keep_api_tokens, token_status
+):
     user, admin = make_user("therapist", password=PASSWORD), make_user("admin")
     admin_hdr = auth_headers(admin)
     csrf = _cookie_login(client, user)
     token = _token(client, csrf)["token"]
     db_session.commit()
-    r = client.patch(f"/api/v1/users/{user.id}", json={"password": NEW_PASSWORD}, headers=admin_hdr)
+    body = {"password": NEW_PASSWORD} | ({} if keep_api_tokens is None else {"keep_api_tokens": keep_api_tokens})
+    r = client.patch(f"/api/v1/users/{user.id}", json=body, headers=admin_hdr)
     assert r.status_code == 200, r.text
-    assert client.get("/api/v1/users/me").status_code == 401  # the old cookie
+    assert client.get("/api/v1/users/me").status_code == 401  # the old cookie, either way
     client.cookies.clear()
-    assert client.get("/api/v1/users/me", headers={"Authorization": f"Bearer {token}"}).status_code == 401
-
-
-def test_the_admin_may_keep_a_users_tokens_on_a_password_change(client, db_session, make_user, auth_headers):
-    user, admin = make_user("therapist", password=PASSWORD), make_user("admin")
-    admin_hdr = auth_headers(admin)
-    csrf = _cookie_login(client, user)
-    token = _token(client, csrf)["token"]
-    db_session.commit()
-    body = {"password": NEW_PASSWORD, "keep_api_tokens": True}
-    assert client.patch(f"/api/v1/users/{user.id}", json=body, headers=admin_hdr).status_code == 200
-    assert client.get("/api/v1/users/me").status_code == 401
-    client.cookies.clear()
-    assert client.get("/api/v1/users/me", headers={"Authorization": f"Bearer {token}"}).status_code == 200
+    r = client.get("/api/v1/users/me", headers={"Authorization": f"Bearer {token}"})
+    assert r.status_code == token_status, r.text
 
 
 def test_tokens_expire_after_90_days_by_default_and_at_most_after_365(client, make_user, auth_headers):
