@@ -54,7 +54,8 @@ from bench.baselines import butterworth, cv_kalman_rts, holt_kinect, one_euro  #
 from bench.baselines._common import hold_last  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
 from kinect_agent.processing.angles import joint_angles  # noqa: E402
-from kinect_agent.processing.pipeline import PipelineConfig, process  # noqa: E402
+from kinect_agent.processing.config import PipelineConfig  # noqa: E402
+from kinect_agent.processing.pipeline import process  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.skeleton import NOT_TRACKED  # noqa: E402
 from kinect_agent.sources.kinect_noise import add_kinect_noise, load_tables  # noqa: E402
@@ -461,12 +462,12 @@ def tune_one_euro() -> None:
 
 def pipeline_config(overrides: list[str]) -> PipelineConfig:
     """Returns the default PipelineConfig with NAME=VALUE overrides (floats, ints, bools, None); checked."""
-    config = PipelineConfig()
+    default, changes = PipelineConfig(), {}
     for item in overrides:
         name, sep, text = item.partition("=")
-        if not sep or name not in PipelineConfig.__dataclass_fields__ or name == "extra":
+        if not sep or name not in PipelineConfig.model_fields:
             raise ValueError(f"--set {item!r}: expected NAME=VALUE with NAME a PipelineConfig setting")
-        current = getattr(config, name)
+        current = getattr(default, name)
         if text == "None":
             value = None
         elif isinstance(current, bool):
@@ -482,9 +483,8 @@ def pipeline_config(overrides: list[str]) -> PipelineConfig:
                 if current is not None:
                     raise ValueError(f"--set {item!r}: {text!r} is not a number") from None
                 value = text  # an optional setting given a name, e.g. outlier_segment=max
-        setattr(config, name, value)
-    config.check()
-    return config
+        changes[name] = value
+    return PipelineConfig(**changes)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -54,14 +54,13 @@ _STAGE_LABELS = (
 
 def session_file(minutes: float, cache_dir: Path) -> bytes:
     """Returns the .khs bytes (raw + agent-filtered recording) of a `minutes`-minute session; cached in cache_dir."""
-    from dataclasses import asdict
-
     from kinect_agent.commands.run import make_payload
     from kinect_agent.formats import session_file as sf
-    from kinect_agent.processing.pipeline import VERSION, PipelineConfig
+    from kinect_agent.processing.config import PipelineConfig
+    from kinect_agent.processing.pipeline import VERSION
 
     # A new format version or different pipeline defaults (the filtered recording in the file) make a new file.
-    pipeline = json.dumps([VERSION, asdict(PipelineConfig())], sort_keys=True, default=str).encode()
+    pipeline = json.dumps([VERSION, PipelineConfig().model_dump()], sort_keys=True, default=str).encode()
     key = hashlib.sha256(pipeline).hexdigest()[:12]
     path = cache_dir / f"khc-bench-ingest-{minutes:g}min-v{sf.VERSION}-{key}.khs"
     if path.exists():

@@ -53,8 +53,9 @@ from bench.accuracy import METHODS, pipeline_config, run_method  # noqa: E402
 from bench.accuracy_tables import cell  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
 from kinect_agent.processing.angles import joint_angles  # noqa: E402
+from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.outliers import fit_mixture  # noqa: E402
-from kinect_agent.processing.pipeline import PipelineConfig, process  # noqa: E402
+from kinect_agent.processing.pipeline import process  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.skeleton import NOT_TRACKED  # noqa: E402
 

@@ -29,6 +29,9 @@ if str(ROOT_DIR) not in sys.path:  # `python bench/speed.py` puts bench/ first, 
 from bench.sessions import squat_session  # noqa: E402
 from kinect_agent.blas_threads import one_blas_thread  # noqa: E402
 from kinect_agent.processing import ik, pipeline  # noqa: E402
+from kinect_agent.processing.chain_filter import ChainFilter  # noqa: E402
+from kinect_agent.processing.config import PipelineConfig  # noqa: E402
+from kinect_agent.processing.online import OnlineFilter  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 
 
@@ -61,23 +64,22 @@ def _time_steps(step, z: np.ndarray, repeats: int) -> float:
 def ukf_step_comparison(rec: Recording, frames: int, repeats: int) -> dict:
     """Times one predict+update of this UKF and of filterpy's UKF with the same chain model and data."""
     fit = ik.inverse_kinematics(rec.positions)
-    chain = pipeline._Chain(fit.model, fit.lengths)  # segment lengths fixed: the state of passes 3-4
     x0 = np.concatenate([fit.root[0], fit.theta[0]])
     n = x0.size
     z = np.nan_to_num(rec.positions[:frames].reshape(frames, -1), nan=0.0)
     Q, R = np.eye(n) * 1e-4, np.eye(60) * 0.015**2
 
     # This pipeline's step, as pipeline.process runs it: random walk (diagonal Q) then the gated update.
-    ours = pipeline._make_filter(chain, pipeline.PipelineConfig())
-    ours.x, ours.P = x0.copy(), np.eye(n) * 0.01
-    diag, q, observed, R_diag = np.arange(n), Q.diagonal(), np.ones(60, dtype=bool), R.diagonal()
+    ours = ChainFilter(fit.model, fit.lengths, PipelineConfig(), x0.copy())  # lengths fixed: passes 3-4's state
+    ours.P, ours.Q = np.eye(n) * 0.01, Q
+    observed, R_diag = np.ones(60, dtype=bool), R.diagonal()
 
     def our_step(frame: np.ndarray) -> None:
-        pipeline._add_process_noise(ours.P, diag, q, ours.P0_ceiling)
-        pipeline._update(ours, frame, observed, R_diag, None)
+        ours.predict_random_walk(1.0)
+        ours.update_joints(frame, observed, R_diag, None)
 
     points = FMerwe(n, alpha=0.5, beta=2.0, kappa=0.0)
-    theirs = FUKF(dim_x=n, dim_z=60, dt=1 / 30, hx=lambda x: chain.hx(x[None, :])[0].copy(), fx=lambda x, dt: x,
+    theirs = FUKF(dim_x=n, dim_z=60, dt=1 / 30, hx=lambda x: ours.hx(x[None, :])[0].copy(), fx=lambda x, dt: x,
                   points=points)  # fmt: skip
     theirs.x, theirs.P, theirs.Q, theirs.R = x0.copy(), np.eye(n) * 0.01, Q, R
 
@@ -102,7 +104,7 @@ def whole_pipeline(rec: Recording, repeats: int) -> dict:
 
 def online_latency(rec: Recording) -> dict:
     """Times every OnlineFilter.step after the first second; returns median and p99 in ms."""
-    live = pipeline.OnlineFilter()
+    live = OnlineFilter()
     times = []
     for i in range(rec.n_frames):
         start = time.perf_counter()

@@ -20,13 +20,11 @@ probability (null), so a column where the joint was never seen is null.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from backend.analysis.quality import angle_joints
 from kinect_agent.processing.combined_outliers import outlier_probabilities_combined
-from kinect_agent.processing.pipeline import PipelineConfig
+from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import JOINTS, NOT_TRACKED, SEGMENT_NAMES, segment_lengths
 
@@ -45,17 +43,15 @@ PARTS = {
 def pipeline_config(stored: dict | None) -> PipelineConfig:
     """Returns the PipelineConfig described by a session file's params["config"], or the default one.
 
-    Unknown keys are ignored; a description the pipeline refuses (PipelineConfig.check) gives the default.
+    Unknown keys are ignored; a description the pipeline refuses (a value out of range) gives the default.
     """
     if not isinstance(stored, dict):
         return PipelineConfig()
-    names = {f.name for f in dataclasses.fields(PipelineConfig)}
+    names = PipelineConfig.model_fields
     try:
-        config = PipelineConfig(**{k: v for k, v in stored.items() if k in names})
-        config.check()
-    except (TypeError, ValueError):
+        return PipelineConfig(**{k: v for k, v in stored.items() if k in names})
+    except ValueError:  # pydantic.ValidationError
         return PipelineConfig()
-    return config
 
 
 def outlier_probabilities(raw: Recording, config: PipelineConfig | None = None) -> np.ndarray:

@@ -22,7 +22,7 @@ import numpy as np
 from backend.analysis import data_quality
 from kinect_agent import skeleton
 from kinect_agent.formats.session_file import SessionPayload
-from kinect_agent.processing.pipeline import PipelineConfig
+from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.recording import Recording
 
 VERSION = "replay-1"  # stored with each recording; a new version rebuilds the stored ones on first use

@@ -18,7 +18,8 @@ from kinect_agent import formats
 from kinect_agent.errors import AgentError
 from kinect_agent.formats import skeleton_csv
 from kinect_agent.formats._atomic import atomic_open
-from kinect_agent.processing.pipeline import SMOOTHERS, PipelineConfig, process
+from kinect_agent.processing.config import SMOOTHERS, PipelineConfig
+from kinect_agent.processing.pipeline import process
 
 NAME = "filter"
 HELP = "Remove tracking-loss outliers and smooth a recording with the four-pass kinematic UKF."
@@ -70,14 +71,15 @@ def run(args: argparse.Namespace) -> int:
     """Filters the input and writes the outputs atomically; returns 0."""
     if args.output.suffix.lower() != ".csv":
         raise AgentError(f"{args.output}: the filtered recording is written as Skeleton CSV; use a .csv name")
-    if args.params is not None and args.params.resolve() in (args.output.resolve(),
-                                                             skeleton_csv.sidecar_path(args.output).resolve()):
+    if args.params is not None and args.params.resolve() in (
+        args.output.resolve(),
+        skeleton_csv.sidecar_path(args.output).resolve(),
+    ):
         raise AgentError(f"{args.params}: --params must differ from the output file and its metadata sidecar")
     rec = formats.read(args.input, args.format)
-    config = PipelineConfig()
-    if args.smoother:
-        config.smoother = args.smoother
-    config.outlier_excursions = config.online_excursions = not args.no_excursions
+    smoother = {"smoother": args.smoother} if args.smoother else {}
+    excursions = not args.no_excursions
+    config = PipelineConfig(**smoother, outlier_excursions=excursions, online_excursions=excursions)
     bar, progress = _progress_bar(rec.n_frames, not args.no_progress)
     try:
         result = process(rec, online=args.online, config=config, progress=progress)

@@ -12,14 +12,14 @@ import argparse
 import re
 import sys
 import uuid
-from dataclasses import asdict
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
 from kinect_agent import formats
 from kinect_agent.config import load_config
 from kinect_agent.formats.session_file import SessionPayload
-from kinect_agent.processing.pipeline import VERSION, PipelineConfig, process
+from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.processing.pipeline import VERSION, process
 from kinect_agent.queue import SessionQueue
 from kinect_agent.recording import Recording
 from kinect_agent.upload import DrainReport, Uploader, drain
@@ -102,7 +102,7 @@ def make_payload(
     q = result.quality
     params = {
         "pipeline": VERSION,
-        "config": asdict(config),
+        "config": config.model_dump(),
         # no timings here: the same recording must give the same bytes (the server deduplicates on the hash)
         "quality": {k: q[k] for k in ("n_frames", "n_outliers", "n_gated", "frames_without_observation")},
         "segment_lengths_m": q["segment_lengths_m"],

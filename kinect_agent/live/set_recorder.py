@@ -21,7 +21,7 @@ from datetime import UTC, datetime
 
 from kinect_agent.analysis.live import LiveCount, LiveStatus
 from kinect_agent.live.journal import Journal
-from kinect_agent.processing.pipeline import OnlineFilter
+from kinect_agent.processing.online import OnlineFilter
 from kinect_agent.recording import Recording
 from kinect_agent.sources.base import Source
 

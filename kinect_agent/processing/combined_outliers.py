@@ -6,17 +6,13 @@ gives its measurements.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
+from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.excursions import excursion_probabilities
 from kinect_agent.processing.outliers import drop_outliers, outlier_probabilities
 from kinect_agent.processing.segment_outliers import segment_outlier_probabilities
 from kinect_agent.recording import Recording
-
-if TYPE_CHECKING:
-    from kinect_agent.processing.pipeline import PipelineConfig
 
 
 def combine(p_temporal: np.ndarray, p_other: np.ndarray, how: str = "or") -> np.ndarray:
@@ -41,8 +37,6 @@ def outlier_probabilities_combined(rec: Recording, config: PipelineConfig) -> np
 
 def remove_outliers_combined(rec: Recording, config: PipelineConfig | None = None) -> tuple[Recording, np.ndarray]:
     """Returns (recording with outliers set to NaN and state 0, prob (T, J)); the input is not changed."""
-    from kinect_agent.processing.pipeline import PipelineConfig
-
     config = config or PipelineConfig()
     prob = outlier_probabilities_combined(rec, config)
     extras = [f"segment length ({config.outlier_segment})"] if config.outlier_segment else []

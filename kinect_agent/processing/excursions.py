@@ -51,17 +51,14 @@ back before holding a joint out), still below every causal baseline in every set
 from __future__ import annotations
 
 import warnings
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from kinect_agent import skeleton
+from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import NOT_TRACKED
-
-if TYPE_CHECKING:
-    from kinect_agent.processing.pipeline import PipelineConfig
 
 _TRUNK = {"ROOT", "SPINE", "NECK", "HEAD", "SHO_L", "SHO_R", "HIP_L", "HIP_R"}
 _MIDDLE = {"ELB_L", "ELB_R", "KNE_L", "KNE_R"}
@@ -202,8 +199,6 @@ def excursion_probabilities(rec: Recording, config: PipelineConfig | None = None
     before children in skeleton.JOINTS, so a parent's excursions are settled first. Uses
     config.excursion_min_dev_m, excursion_min_len_s and excursion_max_len_s.
     """
-    from kinect_agent.processing.pipeline import PipelineConfig
-
     config = config or PipelineConfig()
     positions = np.where((rec.state != NOT_TRACKED)[..., None], rec.positions, np.nan)
     prob = np.where(rec.state == NOT_TRACKED, 1.0, 0.0)

@@ -193,13 +193,13 @@ def inverse_kinematics(positions: np.ndarray) -> IKResult:
             F = U @ axis_rotation(0, hinge)
             a, b = _two_dof(F, J(e_) - J(l_), rest[IDX[e_] - 1], axis)
             angles[l_] = np.stack((a, b), axis=-1)
-    R_ref = np.empty((len(km._R3), 3, 3))
+    R_ref = np.empty((len(km.ROT_3DOF), 3, 3))
     theta = np.zeros((T, km.N_THETA))
     for r, j in enumerate(km.ROT_JOINTS):
         name = skeleton.JOINTS[j]
         s = km.ROT_START[r]
         if km.ROT_DOF[r] == 3:
-            i3 = int(np.flatnonzero(km._R3 == r)[0])
+            i3 = int(np.flatnonzero(km.ROT_3DOF == r)[0])
             ref = quat_to_matrix(quat_mean(matrix_to_quat(loc[name])))
             R_ref[i3] = ref
             theta[:, s : s + 3] = matrix_to_rotvec(ref.T @ loc[name])

@@ -17,7 +17,7 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.processing import _fk_numba
-from kinect_agent.processing.rotations import quat_to_matrix
+from kinect_agent.processing.rotations import matrix_to_rotvec, quat_to_matrix
 
 N_BONES = skeleton.J - 1
 
@@ -105,12 +105,12 @@ ROT_DOF: np.ndarray = np.array([skeleton.DOF[skeleton.JOINTS[j]] for j in ROT_JO
 ROT_START: np.ndarray = np.concatenate(([0], np.cumsum(ROT_DOF)[:-1]))  # (15,) first theta index of each
 N_THETA = int(ROT_DOF.sum())  # 33
 _SECOND_AXIS = {"WRI_L": 2, "WRI_R": 2, "ANK_L": 1, "ANK_R": 1}
-_R3 = np.flatnonzero(ROT_DOF == 3)  # rotation indices of 3-DoF joints (7)
-_R1 = np.flatnonzero(ROT_DOF == 1)  # hinges (4)
+ROT_3DOF = np.flatnonzero(ROT_DOF == 3)  # rotation indices of 3-DoF joints (7)
+ROT_1DOF = np.flatnonzero(ROT_DOF == 1)  # hinges (4)
 _R2 = np.flatnonzero(ROT_DOF == 2)  # 2-DoF (4)
 _R2_Y = np.array([r for r in _R2 if _SECOND_AXIS[skeleton.JOINTS[ROT_JOINTS[r]]] == 1])
 _R2_Z = np.array([r for r in _R2 if _SECOND_AXIS[skeleton.JOINTS[ROT_JOINTS[r]]] == 2])
-THETA_3DOF: np.ndarray = np.concatenate([ROT_START[r] + np.arange(3) for r in _R3])  # (21,) theta indices
+THETA_3DOF: np.ndarray = np.concatenate([ROT_START[r] + np.arange(3) for r in ROT_3DOF])  # (21,) theta indices
 # BONE_GROUP[k]: rotation index (into ROT_JOINTS) of the parent joint of bone k.
 BONE_GROUP: np.ndarray = np.array([ROT_INDEX[p] for p, _ in skeleton.BONES])
 
@@ -142,7 +142,7 @@ def _rx_rw(a: np.ndarray, b: np.ndarray, axis: int) -> np.ndarray:
     return R
 
 
-def _rodrigues(v: np.ndarray) -> np.ndarray:
+def rodrigues(v: np.ndarray) -> np.ndarray:
     """Returns exp([v]x), (..., 3, 3), for rotation vectors v (..., 3) rad; exact series near zero."""
     th2 = np.sum(v * v, axis=-1)
     th = np.sqrt(th2)
@@ -163,7 +163,7 @@ def _rodrigues(v: np.ndarray) -> np.ndarray:
 
 
 _REF_INDEX = np.full(len(ROT_JOINTS), -1)
-_REF_INDEX[_R3] = np.arange(len(_R3))
+_REF_INDEX[ROT_3DOF] = np.arange(len(ROT_3DOF))
 _KERNEL_TABLES = (
     ROT_DOF.astype(np.int64),
     ROT_START.astype(np.int64),
@@ -185,24 +185,24 @@ class ChainModel:
     def __init__(self, rest: np.ndarray | None = None, R_ref: np.ndarray | None = None, compiled: bool = True) -> None:
         self.compiled = compiled  # use the numba kernel when numba is installed
         self.rest = np.array(REST_DIRECTIONS if rest is None else rest, dtype=np.float64)
-        self.R_ref = np.tile(np.eye(3), (len(_R3), 1, 1)) if R_ref is None else np.array(R_ref, dtype=np.float64)
+        self.R_ref = np.tile(np.eye(3), (len(ROT_3DOF), 1, 1)) if R_ref is None else np.array(R_ref, dtype=np.float64)
         if self.rest.shape != (N_BONES, 3):
             raise ValueError(f"rest must have shape (19, 3), got {self.rest.shape}")
-        if self.R_ref.shape != (len(_R3), 3, 3):
-            raise ValueError(f"R_ref must have shape ({len(_R3)}, 3, 3), got {self.R_ref.shape}")
+        if self.R_ref.shape != (len(ROT_3DOF), 3, 3):
+            raise ValueError(f"R_ref must have shape ({len(ROT_3DOF)}, 3, 3), got {self.R_ref.shape}")
 
     def local_rotations(self, theta: np.ndarray) -> np.ndarray:
         """Returns R_j for the 15 rotating joints, (..., 15, 3, 3), from theta (..., 33) rad."""
         lead = theta.shape[:-1]
         R = np.empty(lead + (len(ROT_JOINTS), 3, 3))
-        v = theta[..., THETA_3DOF].reshape(lead + (len(_R3), 3))
-        R[..., _R3, :, :] = self.R_ref @ _rodrigues(v)
-        h = theta[..., ROT_START[_R1]]
+        v = theta[..., THETA_3DOF].reshape(lead + (len(ROT_3DOF), 3))
+        R[..., ROT_3DOF, :, :] = self.R_ref @ rodrigues(v)
+        h = theta[..., ROT_START[ROT_1DOF]]
         c, s = np.cos(h), np.sin(h)
         Rh = np.zeros(h.shape + (3, 3))
         Rh[..., 0, 0] = 1.0
         Rh[..., 1, 1], Rh[..., 1, 2], Rh[..., 2, 1], Rh[..., 2, 2] = c, -s, s, c
-        R[..., _R1, :, :] = Rh
+        R[..., ROT_1DOF, :, :] = Rh
         for group, axis in ((_R2_Z, 2), (_R2_Y, 1)):
             R[..., group, :, :] = _rx_rw(theta[..., ROT_START[group]], theta[..., ROT_START[group] + 1], axis)
         return R
@@ -232,6 +232,41 @@ class ChainModel:
         out = np.empty((r.shape[0], skeleton.J, 3))
         _fk_numba.fk_many(r, ln, th, self.rest, self.R_ref, *_KERNEL_TABLES, out)
         return out.reshape(lead + (skeleton.J, 3))
+
+    @property
+    def runs_compiled(self) -> bool:
+        """True when positions (and positions_into) run the compiled kernel: numba installed and self.compiled."""
+        return _fk_numba.AVAILABLE and self.compiled
+
+    def positions_into(self, root: np.ndarray, lengths: np.ndarray, theta: np.ndarray, out: np.ndarray) -> None:
+        """Writes the joint positions of S states into out (S, J, 3) m by the compiled kernel (needs runs_compiled).
+
+        root: (S, 3) m. lengths: (S, 19) m. theta: (S, 33) rad; views need not be contiguous. No copies are made.
+        """
+        _fk_numba.fk_many(root, lengths, theta, self.rest, self.R_ref, *_KERNEL_TABLES, out)
+
+    def fold_references(self, theta: np.ndarray, limit_rad: float = 1.5) -> None:
+        """Folds 3-DoF rotation vectors longer than limit_rad into the references, so they stay far from ±π.
+
+        theta: (33,) rad, changed in place (those rotation vectors become zero); self.R_ref changes to match, so
+        positions(root, lengths, theta) is the same rotation as before.
+        """
+        v = theta[THETA_3DOF].reshape(len(ROT_3DOF), 3)
+        big = np.linalg.norm(v, axis=1) > limit_rad
+        if big.any():
+            self.R_ref[big] = self.R_ref[big] @ rodrigues(v[big])
+            v[big] = 0.0
+            theta[THETA_3DOF] = v.reshape(-1)
+
+    def rebase(self, theta: np.ndarray, refs: np.ndarray) -> np.ndarray:
+        """Returns theta (T, 33) rad with its 3-DoF rotation vectors, given against refs (T, 7, 3, 3), re-expressed
+        against self.R_ref (the other angles unchanged)."""
+        T = len(theta)
+        v = theta[:, THETA_3DOF].reshape(T, len(ROT_3DOF), 3)
+        R = refs @ rodrigues(v)
+        out = theta.copy()
+        out[:, THETA_3DOF] = matrix_to_rotvec(np.swapaxes(self.R_ref, -1, -2) @ R).reshape(T, -1)
+        return out
 
     def positions_numpy(self, root: np.ndarray, lengths: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Returns joint positions (..., J, 3) m by numpy broadcasting (reference implementation)."""

@@ -30,16 +30,13 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
+from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INFERRED, NOT_TRACKED
-
-if TYPE_CHECKING:
-    from kinect_agent.processing.pipeline import PipelineConfig
 
 _SQRT_2PI = np.sqrt(2.0 * np.pi)
 
@@ -234,8 +231,6 @@ def fit(rec: Recording, config: PipelineConfig | None = None) -> tuple[MixtureFi
     e = (position − leave-one-out local quadratic prediction weighted by 1 − prob) / sqrt(1 + leverage), which
     follows turning points that a median clips, and which the previous stage's outliers no longer pull.
     """
-    from kinect_agent.processing.pipeline import PipelineConfig
-
     config = config or PipelineConfig()
     w = _window_frames(rec, config.outlier_window_s)
     cls = (rec.state == INFERRED).astype(int)
@@ -278,8 +273,6 @@ def drop_outliers(rec: Recording, prob: np.ndarray, threshold: float, method: st
 
 def remove_outliers(rec: Recording, config: PipelineConfig | None = None) -> tuple[Recording, np.ndarray]:
     """Returns (recording with outliers set to NaN and state 0, prob (T, J)); the input is not changed."""
-    from kinect_agent.processing.pipeline import PipelineConfig
-
     config = config or PipelineConfig()
     prob = outlier_probabilities(rec, config)
     return drop_outliers(rec, prob, config.outlier_threshold, "mixture-model v1"), prob

@@ -37,17 +37,14 @@ So the pipeline default is off (None).
 from __future__ import annotations
 
 import warnings
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from kinect_agent import skeleton
+from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.outliers import fit_mixture
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INFERRED, NOT_TRACKED
-
-if TYPE_CHECKING:
-    from kinect_agent.processing.pipeline import PipelineConfig
 
 Z_OTHER = 4.0  # robust z of a joint's other bones at which that end takes full blame
 DISTAL_PRIOR = 0.25  # blame the distal end gets when neither end's other bones deviate
@@ -109,8 +106,6 @@ def segment_outlier_probabilities(rec: Recording, config: PipelineConfig | None 
     config.outlier_min_range_m, Gaussian weights ≥ 0.5, tracked / inferred classes) fitted by EM to
     attributed_residual(); 0 where the residual is undefined, 1 where the joint is not tracked.
     """
-    from kinect_agent.processing.pipeline import PipelineConfig
-
     config = config or PipelineConfig()
     if rec.n_frames == 0:
         return np.zeros((0, rec.positions.shape[1]))

@@ -19,7 +19,7 @@ from backend.analysis.data_quality import (
     segment_spread_mm,
 )
 from backend.exercises.library import EXERCISES
-from kinect_agent.processing.pipeline import PipelineConfig
+from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.skeleton import INDEX, NOT_TRACKED
 from tests.backend.analysis._data import noisy, uiprmd
 

@@ -22,7 +22,7 @@ def smooth_motion(
     amp = rng.uniform(0.05, 0.4, km.N_THETA)
     phase = rng.uniform(0.0, 2 * np.pi, km.N_THETA)
     theta = amp * np.sin(2 * np.pi * freq * t[:, None] + phase)
-    for r in km._R1:
+    for r in km.ROT_1DOF:
         name = skeleton.JOINTS[km.ROT_JOINTS[r]]
         bend = 0.1 + 0.5 * rng.uniform(0.3, 1.2) * (1 - np.cos(2 * np.pi * rng.uniform(0.2, 0.5) * t))
         theta[:, km.ROT_START[r]] = -bend if name.startswith("ELB") else bend

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from kinect_agent import formats, skeleton
-from kinect_agent.processing.pipeline import PipelineConfig, process
+from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.processing.pipeline import process
 from kinect_agent.recording import Recording
 
 from ._data import inject_outliers

@@ -9,7 +9,7 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
-from kinect_agent.processing.pipeline import PipelineConfig
+from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.segment_outliers import segment_outlier_probabilities
 from kinect_agent.recording import Recording
 

@@ -6,9 +6,12 @@ import numpy as np
 import pytest
 
 from kinect_agent import skeleton
-from kinect_agent.processing import _blas_numba, _ukf_numba, pipeline
+from kinect_agent.processing import _blas_numba, _ukf_numba
 from kinect_agent.processing import kinematics as km
+from kinect_agent.processing.chain_filter import ChainFilter
+from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.ik import inverse_kinematics
+from kinect_agent.processing.pipeline import observations
 from kinect_agent.recording import Metadata, Recording
 
 from ._data import inject_outliers, smooth_motion
@@ -32,14 +35,12 @@ def _filters(rec: Recording, fixed: bool) -> tuple:
     """Returns (fast, reference) filters with the same chain and start; the reference uses numpy throughout."""
     fit = inverse_kinematics(rec.positions)
     lengths = fit.lengths if fixed else None
-    config = pipeline.PipelineConfig()
-    fast = pipeline._make_filter(pipeline._Chain(fit.model, lengths), config)
-    plain_model = km.ChainModel(fit.model.rest, fit.model.R_ref, compiled=False)
-    ref = pipeline._make_filter(pipeline._Chain(plain_model, lengths), config)
+    config = PipelineConfig()
     x0 = np.concatenate([fit.root[0]] + ([] if fixed else [fit.lengths]) + [fit.theta[0]])
-    for kf in (fast, ref):
-        kf.x, kf.P = x0.copy(), np.diag(kf.hx.__self__.p0_diag(config))
-        kf.Q = np.diag(kf.hx.__self__.q_diag(config))
+    fast = ChainFilter(fit.model, lengths, config, x0)
+    plain_model = km.ChainModel(fit.model.rest, fit.model.R_ref, compiled=False)
+    ref = ChainFilter(plain_model, lengths, config, x0)
+    assert fast.compiled and not ref.compiled
     return fast, ref, config
 
 
@@ -47,14 +48,13 @@ def _filters(rec: Recording, fixed: bool) -> tuple:
 def test_fast_step_equals_the_reference_step(rng: np.random.Generator, fixed: bool) -> None:
     rec = _recording(rng)
     fast, ref, config = _filters(rec, fixed)
-    z, observed, R_diag = pipeline._observations(rec, config)
-    n = fast.dim_x
+    z, observed, R_diag = observations(rec, config)
     gated = 0
     for k in range(rec.n_frames):
         for kf in (fast, ref):
-            pipeline._add_process_noise(kf.P, np.arange(n), kf.Q.diagonal().copy(), kf.P0_ceiling)
-        used_fast = pipeline._update(fast, z[k], observed[k], R_diag[k], config.gate_chi2)
-        used_ref = pipeline._update(ref, z[k], observed[k], R_diag[k], config.gate_chi2)
+            kf.predict_random_walk(1.0)
+        used_fast = fast.update_joints(z[k], observed[k], R_diag[k], config.gate_chi2)
+        used_ref = ref.update_joints(z[k], observed[k], R_diag[k], config.gate_chi2)
         np.testing.assert_array_equal(used_fast, used_ref, err_msg=f"joints used at frame {k}")
         np.testing.assert_allclose(fast.x, ref.x, rtol=0, atol=1e-9, err_msg=f"state at frame {k}")
         np.testing.assert_allclose(fast.P, ref.P, rtol=0, atol=1e-9, err_msg=f"covariance at frame {k}")
@@ -66,12 +66,11 @@ def test_fast_step_refuses_a_covariance_that_is_not_positive_definite(rng: np.ra
     fast, _, config = _filters(_recording(rng, 10), fixed=True)
     fast.P[0, 0] = -1.0
     x, P = fast.x.copy(), fast.P.copy()
-    z, observed, R_diag = pipeline._observations(_recording(rng, 10), config)
+    z, observed, R_diag = observations(_recording(rng, 10), config)
     used = np.empty(skeleton.J, dtype=bool)
-    chain = fast.hx.__self__
     status = _ukf_numba.chain_step(
-        fast.x, fast.P, z[0], observed[0], R_diag[0], fast.kernel_weights, 30.0, chain.fixed_lengths, chain.n_len,
-        chain.model.rest, chain.model.R_ref, km.STEP_TABLES, used,
+        fast.x, fast.P, z[0], observed[0], R_diag[0], fast.kernel_weights, 30.0, fast.fixed_lengths, fast.n_len,
+        fast.model.rest, fast.model.R_ref, km.STEP_TABLES, used,
     )  # fmt: skip
     assert status == _ukf_numba.P_NOT_POSITIVE
     np.testing.assert_array_equal(fast.x, x, err_msg="x changed although the step was refused")
