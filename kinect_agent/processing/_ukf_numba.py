@@ -302,7 +302,7 @@ def _chain_step(x, P, z, observed, R_diag, w, gate, fixed_lengths, n_len, rest, 
 
 
 def _add_capped(P, diag, q, ceiling):  # pragma: no cover - compiled
-    """P[d, d] += min(q, max(ceiling − P[d, d], 0)) for d in diag (see pipeline._add_process_noise)."""
+    """P[d, d] += min(q, max(ceiling − P[d, d], 0)) for d in diag (see chain_filter.ChainFilter.predict_random_walk)."""
     for i in range(diag.shape[0]):
         d = diag[i]
         P[d, d] += min(q[i], max(ceiling[i] - P[d, d], 0.0))
