@@ -90,7 +90,7 @@ def _page_for(app: FastAPI, request: Request, status_code: int) -> Response | No
     return render(request, status_code) if render is not None else None
 
 
-def _is_busy(exc: DBAPIError) -> bool:
+def is_database_busy(exc: DBAPIError) -> bool:
     """True for lock contention a retry resolves: SQLite "database is locked", PostgreSQL serialisation/deadlock."""
     pgcode = getattr(exc.orig, "sqlstate", None) or getattr(exc.orig, "pgcode", None)
     return pgcode in {"40001", "40P01"} or "database is locked" in str(exc.orig)
@@ -128,7 +128,7 @@ def _install_error_handlers(app: FastAPI) -> None:
 
     @app.exception_handler(DBAPIError)
     async def database_error(request: Request, exc: DBAPIError) -> JSONResponse:
-        if _is_busy(exc):
+        if is_database_busy(exc):
             busy = DatabaseBusy("the database is busy with another write; retry in a second")
             return await app_error(request, busy)
         return await unexpected(request, exc)

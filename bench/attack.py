@@ -40,7 +40,7 @@ ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/attack.py` puts bench/ first, not the repository
     sys.path.insert(0, str(ROOT_DIR))
 
-from bench.ingest import _app, _db_label, _engine  # noqa: E402
+from bench.ingest import db_label, make_app, open_engine  # noqa: E402
 from kinect_agent.formats import session_file as sf  # noqa: E402
 from tests.backend import khs_files  # noqa: E402
 from tests.backend.khs_files import DEFECTS, join, join_text, make_khs, n_frames, split, with_header  # noqa: E402
@@ -794,11 +794,11 @@ def run_database(url: str, seeds: list[int], quick: bool, cache_dir: Path) -> di
     """Runs every case against the real app on a fresh database at `url`; returns the database's report."""
     from fastapi.testclient import TestClient
 
-    engine, cleanup = _engine(url)
+    engine, cleanup = open_engine(url)
     try:
         users = _patients_with_devices(engine)
         patient_ids = [users["A"][1], users["B"][1]]
-        app = _app(engine)
+        app = make_app(engine)
         settings = app.state.settings
         ids = (users["A"][0], users["A"][1], users["B"][0], users["B"][1])
         ctx = Context(*ids, settings.MAX_UPLOAD_BYTES, settings.SESSION_MAX_FRAMES, cache_dir)
@@ -811,7 +811,7 @@ def run_database(url: str, seeds: list[int], quick: bool, cache_dir: Path) -> di
             valid = _valid_upload(client, engine, users, patient_ids)
     finally:
         cleanup()
-    return summarise(_db_label(url), records, valid)
+    return summarise(db_label(url), records, valid)
 
 
 def summarise(db: str, records: list[dict], valid: dict) -> dict:

@@ -53,7 +53,7 @@ from sqlalchemy import select  # noqa: E402
 from sqlalchemy.orm import Session  # noqa: E402
 
 from bench.dashboard_load import start_server  # noqa: E402
-from bench.ingest import _engine  # noqa: E402
+from bench.ingest import open_engine  # noqa: E402
 from kinect_agent.home import HomeAgent  # noqa: E402
 
 KINDS = ("server_down", "server_killed", "agent_killed_writing", "agent_killed_uploading", "cut_request",
@@ -144,7 +144,7 @@ class Bench:
 
     def __init__(self, db_url: str, folder: Path, seed: int) -> None:
         self.folder, self.rng = folder, random.Random(seed)
-        self.engine, self.cleanup = _engine(db_url)
+        self.engine, self.cleanup = open_engine(db_url)
         self.url = str(self.engine.url.render_as_string(hide_password=False))
         self.port = _free_port()
         self.server = start_server(self.url, self.port, 1)

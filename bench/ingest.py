@@ -89,7 +89,7 @@ def with_new_session_id(data: bytes) -> bytes:
 # ---------------------------------------------------------------------------------------------- database
 
 
-def _engine(url: str):
+def open_engine(url: str):
     """Returns (engine on an empty migrated database with the exercise library, cleanup callable)."""
     from sqlalchemy import create_engine, text
     from sqlalchemy.orm import Session
@@ -140,7 +140,7 @@ def _device_headers(engine) -> dict[str, str]:
     return {"Authorization": f"Bearer {token}", "Content-Type": "application/octet-stream"}
 
 
-def _app(engine):
+def make_app(engine):
     """Returns the real app with its requests on `engine` (get_db: commit on success, roll back on error)."""
     from sqlalchemy.orm import sessionmaker
 
@@ -305,7 +305,7 @@ def _profile(client, headers: dict, data: bytes, out: Path) -> None:
     pstats.Stats(str(out)).sort_stats("cumulative").print_stats(30)
 
 
-def _db_label(url: str) -> str:
+def db_label(url: str) -> str:
     return "PostgreSQL" if url.startswith("postgresql") else "SQLite"
 
 
@@ -326,12 +326,12 @@ def main(argv: list[str] | None = None) -> int:
     frames = json.loads(data[_FIXED.size : _FIXED.size + _FIXED.unpack_from(data)[3]])["recordings"]["raw"]["n_frames"]
     with tempfile.TemporaryDirectory() as tmp:
         url = args.db or f"sqlite:///{tmp}/bench.db"
-        engine, cleanup = _engine(url)
+        engine, cleanup = open_engine(url)
         try:
             headers = _device_headers(engine)
-            with TestClient(_app(engine)) as client:
+            with TestClient(make_app(engine)) as client:
                 time_uploads(client, headers, data, 1)  # warm-up: imports, caches, first connection
-                report = summarise(time_uploads(client, headers, data, runs), len(data), frames, _db_label(url))
+                report = summarise(time_uploads(client, headers, data, runs), len(data), frames, db_label(url))
                 if args.profile:
                     _profile(client, headers, data, args.profile)
         finally:

@@ -29,6 +29,11 @@ the state's own spread, so a limb that once outruns the random walk, e.g. a knee
 would stay gated for good): the angles that place it restart from inverse kinematics of that frame with the initial
 variance, and the gate admits it again.
 Passes 1-2 use the first length_pass_max_frames frames of longer recordings (they only estimate the lengths).
+
+Where the parts live: the settings in config.py (PipelineConfig), the chain's UKF (state layout, observation
+function, variance ceiling, gated update, re-acquisition) in chain_filter.py (ChainFilter), the forward pass frame
+by frame for live feedback and process(online=True) in online.py (OnlineFilter, run_online); here the passes,
+the smoother and process().
 """
 
 from __future__ import annotations

@@ -17,7 +17,7 @@ from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import Session
 
 from backend.exercises.models import Exercise
-from backend.main import _is_busy
+from backend.main import is_database_busy
 from backend.sessions import service
 from backend.sessions.ingest import decode_upload
 from backend.sessions.models import ExerciseSession
@@ -73,7 +73,7 @@ def test_simultaneous_first_uploads_store_one_session(engine, committed_patient,
                 return
             except DBAPIError as exc:
                 results[name] = exc
-                if not (engine.dialect.name == "sqlite" and _is_busy(exc)) or attempt:
+                if not (engine.dialect.name == "sqlite" and is_database_busy(exc)) or attempt:
                     return
                 time.sleep(1)  # 503 DatabaseBusy, Retry-After: 1 - the agent retries
             except Exception as exc:  # noqa: BLE001 - reported by the assertion below

@@ -48,7 +48,7 @@ class LiveServer:
     database_url: str = ""  # what the server process uses (PostgreSQL: with its schema)
 
 
-def _free_port() -> int:
+def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
@@ -165,7 +165,7 @@ def live_server(tmp_path_factory) -> Iterator[LiveServer]:
 def run_server(database_url: str, log_dir: Path, workers: int = 1, **env: str) -> Iterator[str]:
     """Runs the app with uvicorn in a subprocess on a free port of 127.0.0.1 (extra COACH_* settings in env), with
     `workers` worker processes; yields its base URL; stops it on exit."""
-    port = _free_port()
+    port = free_port()
     env = os.environ | {"COACH_DATABASE_URL": database_url, "COACH_ENVIRONMENT": "local", "PYTHONPATH": str(ROOT),
                         **env}  # fmt: skip
     log = open(log_dir / f"server-{port}.log", "w+")  # noqa: SIM115 - closed below

@@ -12,7 +12,7 @@ import pytest
 from playwright.sync_api import expect
 
 from backend.demo import DEMO_PASSWORD
-from tests.frontend.conftest import THERAPIST, _free_port, run_server, shot
+from tests.frontend.conftest import THERAPIST, free_port, run_server, shot
 from tests.frontend.proxy import ProxyServer, self_signed_certificate
 
 pytestmark = pytest.mark.browser
@@ -23,7 +23,7 @@ PREFIX = "/clinic"
 def public_url(live_server, tmp_path_factory):
     """The app (same database as live_server) behind an HTTPS proxy at https://127.0.0.1:PORT/clinic."""
     folder = tmp_path_factory.mktemp("proxy")
-    port = _free_port()
+    port = free_port()
     public = f"https://127.0.0.1:{port}{PREFIX}"
     with run_server(live_server.database_url, folder, COACH_PUBLIC_URL=public, COACH_COOKIE_SECURE="true") as app:
         cert, key = self_signed_certificate(folder)

@@ -25,7 +25,7 @@ REPO = Path(__file__).resolve().parents[2]
 FAST = RetryPolicy(max_attempts=2, base_delay_s=0.0)
 
 
-def _payload(seed: int) -> SessionPayload:
+def session_payload(seed: int) -> SessionPayload:
     rng = np.random.default_rng(seed)
     positions = rng.normal(0.0, 0.3, (30, skeleton.J, 3)) + [0.0, 0.0, 2.5]
     rec = Recording.from_positions(np.arange(30) / 30.0, positions, Metadata(device="simulator", exercise="squat"))
@@ -48,7 +48,7 @@ class Server(httpx.BaseTransport):
 
 def _queue_three(tmp_path: Path) -> tuple[SessionQueue, list[Path]]:
     queue = SessionQueue(tmp_path / "queue")
-    return queue, [queue.enqueue(_payload(seed)) for seed in range(3)]
+    return queue, [queue.enqueue(session_payload(seed)) for seed in range(3)]
 
 
 def _passes(queue: SessionQueue, server: Server, n: int) -> list:
@@ -118,10 +118,10 @@ def test_a_raw_copy_whose_process_died_is_queued_at_once(tmp_path) -> None:
         import sys, os
         sys.path.insert(0, {str(REPO)!r})
         import numpy as np, uuid
-        from tests.kinect_agent.test_held_sessions import _payload
+        from tests.kinect_agent.test_held_sessions import session_payload
         from kinect_agent.queue import SessionQueue
         q = SessionQueue({str(root)!r})
-        q.hold(_payload(7))
+        q.hold(session_payload(7))
         os._exit(0)  # killed while filtering: no release
     """)
     subprocess.run([sys.executable, "-c", script], check=True, timeout=60)
@@ -134,7 +134,7 @@ def test_a_raw_copy_whose_process_died_is_queued_at_once(tmp_path) -> None:
 def test_a_raw_copy_a_living_process_is_filtering_stays_with_it(tmp_path) -> None:
     root = tmp_path / "queue"
     working = SessionQueue(root)
-    working.hold(_payload(8))
+    working.hold(session_payload(8))
     assert SessionQueue(root).recover_held(older_than_s=0) == []  # another queue object: another open file
     assert working.recover_held(older_than_s=0) == []  # nor its own while it works on it
 
@@ -144,7 +144,7 @@ def test_a_raw_copy_of_a_session_already_stored_is_dropped_not_queued_again(tmp_
     content under the same session id, refused as a conflict and shown as "rejected"."""
     root = tmp_path / "queue"
     queue = SessionQueue(root)
-    payload = _payload(9)
+    payload = session_payload(9)
     queue.hold(payload)
     pending = queue.enqueue(payload.__class__(session_id=payload.session_id, raw=payload.raw, params={"filtered": 1}))
     queue.mark_sent(pending, {"status_code": 201})

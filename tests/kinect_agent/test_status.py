@@ -11,7 +11,7 @@ from kinect_agent.commands import status
 from kinect_agent.config import AgentConfig, save_config
 from kinect_agent.queue import SessionQueue
 from tests.kinect_agent._backend import free_port
-from tests.kinect_agent.test_held_sessions import _payload
+from tests.kinect_agent.test_held_sessions import session_payload
 
 
 def _config(tmp_path, monkeypatch, url: str) -> AgentConfig:
@@ -30,7 +30,7 @@ def test_not_paired_says_to_pair_first(tmp_path, monkeypatch, capsys) -> None:
 
 def test_server_down_is_said_plainly_and_sessions_wait(tmp_path, monkeypatch, capsys) -> None:
     config = _config(tmp_path, monkeypatch, f"http://127.0.0.1:{free_port()}")
-    SessionQueue(config.queue_dir).enqueue(_payload(1))
+    SessionQueue(config.queue_dir).enqueue(session_payload(1))
     assert cli.main(["status"]) == 0
     out = capsys.readouterr().out
     assert "Paired with http://127.0.0.1" in out and "device 3 (living-room Kinect) for patient 7" in out
@@ -41,7 +41,7 @@ def test_server_down_is_said_plainly_and_sessions_wait(tmp_path, monkeypatch, ca
 def test_a_refused_device_and_sessions_set_aside_are_explained(tmp_path, monkeypatch) -> None:
     config = _config(tmp_path, monkeypatch, "http://coach.test")
     queue = SessionQueue(config.queue_dir)
-    bad, held = queue.enqueue(_payload(2)), queue.enqueue(_payload(3))
+    bad, held = queue.enqueue(session_payload(2)), queue.enqueue(session_payload(3))
     queue.mark_rejected(bad, {"status_code": 400, "detail": "InvalidSessionFile: truncated: file is 9 bytes"})
     queue.mark_held(held, {"status_code": 500, "detail": "InternalError: internal server error", "passes": 5})
     refused = httpx.MockTransport(lambda request: httpx.Response(401, json={"error": "NotAuthenticated"}))
