@@ -77,3 +77,28 @@ def test_fill_gaps_refuses_an_empty_recording() -> None:
 def test_ik_names_a_wrong_shape() -> None:
     with pytest.raises(ValueError, match=r"positions must have shape \(T>=1, 20, 3\), got \(5, 19, 3\)"):
         inverse_kinematics(np.zeros((5, 19, 3)))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_folding_large_rotations_into_the_references_keeps_the_pose(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    model = _random_model(rng)
+    root, lengths = rng.normal(size=3), rng.uniform(0.1, 0.5, km.N_BONES)
+    theta = rng.normal(size=km.N_THETA) * 1.5  # several 3-DoF rotation vectors longer than 1.5 rad
+    before = model.positions(root, lengths, theta)
+    folded = theta.copy()
+    model.fold_references(folded)
+    v = folded[km.THETA_3DOF].reshape(-1, 3)
+    assert np.all(np.linalg.norm(v, axis=1) <= 1.5) and not np.allclose(folded, theta)
+    np.testing.assert_allclose(model.positions(root, lengths, folded), before, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_rebasing_angles_onto_other_references_keeps_the_poses(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    old, new = _random_model(rng), _random_model(rng)
+    new.rest[:] = old.rest
+    theta = rng.normal(size=(5, km.N_THETA))
+    root, lengths = rng.normal(size=(5, 3)), rng.uniform(0.1, 0.5, (5, km.N_BONES))
+    rebased = new.rebase(theta, np.broadcast_to(old.R_ref, (5, 7, 3, 3)))
+    np.testing.assert_allclose(new.positions(root, lengths, rebased), old.positions(root, lengths, theta), atol=1e-12)

@@ -11,8 +11,9 @@ from hypothesis import strategies as st
 
 from kinect_agent import skeleton
 from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.processing.ik import inverse_kinematics
 from kinect_agent.processing.online import OnlineFilter
-from kinect_agent.processing.pipeline import process
+from kinect_agent.processing.pipeline import process, smooth
 from kinect_agent.recording import Metadata, Recording
 
 from ._data import inject_outliers, smooth_motion, utkinect
@@ -186,3 +187,20 @@ def test_a_knee_that_outruns_the_random_walk_is_reacquired(rng: np.random.Genera
     got = joint_angles(filtered.positions)["knee_flexion_L"]
     settled = np.r_[60:100, 110:T]  # a few frames after each jump
     np.testing.assert_allclose(got[settled], want[settled], atol=10.0, err_msg="knee flexion (deg) after the jumps")
+
+
+@pytest.mark.parametrize("smoother", ["urts", "four_pass"])
+def test_smoother_gives_its_covariance_per_frame_when_asked(rng: np.random.Generator, smoother: str) -> None:
+    rec, _, _ = _noisy(rng, 60)
+    config = PipelineConfig(smoother=smoother)
+    root, lengths, theta, info = smooth(rec, inverse_kinematics(rec.positions), config)
+    root_c, lengths_c, theta_c, info_c = smooth(rec, inverse_kinematics(rec.positions), config, covariances=True)
+    assert "covariance" not in info
+    np.testing.assert_array_equal(root_c, root)  # asking for P changes no estimate
+    np.testing.assert_array_equal(theta_c, theta)
+    P = info_c["covariance"]
+    assert P.shape == (rec.n_frames, 36, 36)
+    np.testing.assert_allclose(P, np.swapaxes(P, -1, -2), atol=1e-15)
+    assert np.all(np.linalg.eigvalsh(P) > 0), "each frame's covariance is positive definite"
+    sd_root = np.sqrt(P[:, np.arange(3), np.arange(3)])
+    assert np.all(sd_root < config.p0_root_m), "observed frames know the root better than the start"
