@@ -80,6 +80,8 @@ def test_pipeline_config_reads_known_keys_and_falls_back_on_bad_ones() -> None:
     assert pipeline_config({"outlier_threshold": 0.9, "unknown": 1}).outlier_threshold == 0.9
     assert pipeline_config({"outlier_threshold": 7.0}) == PipelineConfig()
     assert pipeline_config(None) == PipelineConfig()
+    # Files written before the settings became a pydantic model also stored "extra": {}; it is ignored.
+    assert pipeline_config({"extra": {}, "smoother": "four_pass"}) == PipelineConfig(smoother="four_pass")
 
 
 @pytest.mark.parametrize("seed", SEEDS)
