@@ -42,7 +42,7 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.blas_threads import one_blas_thread
-from kinect_agent.processing import _ukf_numba
+from kinect_agent.processing import _ukf_numba, offset_model
 from kinect_agent.processing import kinematics as km
 from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
@@ -137,6 +137,7 @@ class PipelineConfig:
     length_pass_max_frames: int | None = 6000  # passes 1-2 (length estimation) run over at most this many first
     # frames (200 s at 30 Hz); None = every frame (the paper exactly). Passes 3-4 always use every frame.
     online_init_s: float = 1.0  # online: segment lengths are estimated over this first stretch, then fixed
+    offset_model: bool = False  # subtract Kinect's per-joint body-frame offset (offset_model.py) from the output
     extra: dict[str, Any] = field(default_factory=dict)
 
     def check(self) -> None:
@@ -671,6 +672,8 @@ def _process(
     positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta)
     if not np.all(np.isfinite(positions)):
         raise ValueError("the filter diverged (non-finite estimate); check the recording's units (metres expected)")
+    if config.offset_model:
+        positions = offset_model.correct(positions)
     observed = clean.state != NOT_TRACKED
     state = np.where(observed, TRACKED, INFERRED).astype(np.int8)
     mode = "online forward pass" if online else config.smoother
