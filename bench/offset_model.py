@@ -83,6 +83,7 @@ class Pair:
     lag_rms_s: float
     rms_mm: float
     accepted: bool
+    vicon_s: float = 0.0  # duration of the Vicon recording
     filtered: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (T, J, 3) m, pipeline offline
 
 
@@ -116,7 +117,7 @@ def make_pair(name: str, dataset: str, group: str, kinect: Recording, vicon: Rec
     lag_rms = lag_by_rms(kinect, vicon, joints) if check else al.lag_s
     ok = abs(lag_rms - al.lag_s) <= LAG_AGREE_S + 1e-9 and al.xcorr >= MIN_XCORR and al.rms_m <= MAX_RMS_M
     return Pair(name, dataset, group, kinect, v, joints, al.lag_s, al.xcorr, lag_rms, 1e3 * al.rms_m,
-                ok or not check)  # fmt: skip
+                ok or not check, vicon_s=float(vicon.t[-1]))  # fmt: skip
 
 
 def keraal_pairs() -> list[Pair]:
@@ -256,6 +257,8 @@ def validate(keraal: list[Pair], ui: list[Pair]) -> dict:
     out = {}
     for per_pose in (False, True):
         tag = "per_pose" if per_pose else "per_joint"
+        out[f"KERAAL in-sample, fit and test on all ({tag})"] = _result(*evaluate(keraal, keraal, per_pose))
+        out[f"UI-PRMD in-sample, fit and test on all ({tag})"] = _result(*evaluate(ui, ui, per_pose))
         out[f"KERAAL leave-one-trial-out ({tag})"] = _result(*cross_validate(keraal, per_pose))
         out[f"UI-PRMD leave-one-movement-out ({tag})"] = _result(*cross_validate(ui, per_pose))
         out[f"fit KERAAL, test UI-PRMD ({tag})"] = _result(*evaluate(keraal, ui, per_pose))
@@ -364,6 +367,10 @@ def run(quick: bool = False, config: PipelineConfig | None = None) -> tuple[dict
     res = {
         "date": datetime.date.today().isoformat(),
         "uiprmd_alignment": alignment_summary(ui_all),
+        "uiprmd_durations_s": {
+            "kinect": [min(p.kinect.t[-1] for p in ui_all), max(p.kinect.t[-1] for p in ui_all)],
+            "vicon": [min(p.vicon_s for p in ui_all), max(p.vicon_s for p in ui_all)],
+        },
         "measurement": {
             d: {s: measure(ps, s == "filtered") for s in ("raw", "filtered")}
             for d, ps in (("KERAAL", keraal), ("UI-PRMD", ui))

@@ -17,6 +17,14 @@ PROVENANCE: dict = {
     "n_pairs": 3,
     "input": "pipeline offline output (PipelineConfig defaults)",
     "validation_rmse_mm": {
+        "KERAAL in-sample, fit and test on all (per_joint)": [
+            75.1,
+            69.0
+        ],
+        "UI-PRMD in-sample, fit and test on all (per_joint)": [
+            97.7,
+            83.5
+        ],
         "KERAAL leave-one-trial-out (per_joint)": [
             75.1,
             74.9
