@@ -47,6 +47,7 @@ class OffsetModel:
 
     @property
     def per_pose(self) -> bool:
+        """True when the offsets depend on each frame's pose (no "all" entry)."""
         return "all" not in self.offsets_m
 
     def offsets_per_frame(self, positions: np.ndarray) -> np.ndarray:
