@@ -87,7 +87,8 @@ class Pair:
     filtered: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (T, J, 3) m, pipeline offline
 
 
-def _mask(joints: np.ndarray) -> np.ndarray:
+def joint_mask(joints: tuple[str, ...]) -> np.ndarray:
+    """Returns (J,) bool: True for the named joints."""
     return np.array([j in joints for j in skeleton.JOINTS])
 
 
@@ -96,15 +97,15 @@ def _raw(rec: Recording) -> np.ndarray:
 
 
 def lag_by_rms(kinect: Recording, vicon: Recording, joints: np.ndarray) -> float:
-    """Returns the lag (s, over +-MAX_LAG_S in 1/30 s steps) minimising the trimmed registration RMS."""
+    """Returns the lag (s, over +-MAX_LAG_S in 1/30 s steps) minimising the trimmed registration RMS of the joints
+    (J,) bool, over lags that leave at least half of the Kinect frames with Vicon beside them."""
     lags = np.arange(-MAX_LAG_S, MAX_LAG_S + 1e-9, 1.0 / 30.0)
-    idx = np.flatnonzero(joints)
-    rms = []
-    for lag in lags:
-        truth = rp.interpolate(vicon.t, vicon.positions, kinect.t + lag)
-        ok = np.all(np.isfinite(truth[:, idx]), axis=(1, 2))
-        rms.append(rp._registration_rms(kinect.t, _raw(kinect), vicon.t, vicon.positions, lag, idx)
-                   if ok.sum() >= 0.5 * kinect.n_frames else np.inf)  # fmt: skip
+    p_k = _raw(kinect)[:, joints]
+    rms = np.full(len(lags), np.inf)
+    for i, lag in enumerate(lags):
+        truth = rp.interpolate(vicon.t, vicon.positions, kinect.t + lag)[:, joints]
+        if np.all(np.isfinite(truth), axis=(1, 2)).sum() >= 0.5 * kinect.n_frames:
+            rms[i] = rp.robust_kabsch(truth.reshape(-1, 3), p_k.reshape(-1, 3))[2]
     return float(lags[int(np.argmin(rms))])
 
 
@@ -134,7 +135,7 @@ def uiprmd_pairs(episodes: range) -> list[Pair]:
     from kinect_agent.formats import ui_prmd, ui_prmd_vicon
 
     out = []
-    joints = _mask(UI_JOINTS)
+    joints = joint_mask(UI_JOINTS)
     for folder, suffix in UI_FOLDERS:
         for m in range(1, 11):
             for e in episodes:
