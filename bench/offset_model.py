@@ -11,9 +11,10 @@ Pairs (both in ../shared/data; one subject each, so no leave-one-subject-out ins
              independently by the lowest registration RMS over the same range. A pair is kept when the two lags
              agree within LAG_AGREE_S, the speed correlation is >= MIN_XCORR and the registration RMS is <= MAX_RMS_M;
              the others are dropped (counted in the report). Scored joints: UI_JOINTS. Not the knees and ankles: the
-             UI-PRMD Kinect reader's legs follow the pelvis (deep squat: Kinect ankles move 0.56-0.64 m, Vicon's
-             0.02 m), and not HEAD/HAN/FOO (marker clusters, not joint centres). The Vicon joints are Plug-in Gait
-             skin markers (acromion, lateral epicondyle), not joint centres: their offsets include marker placement.
+             Kinect legs as formats/ui_prmd.py rebuilds them move with the pelvis (deep squat: Kinect ankles move
+             0.56-0.64 m, Vicon's 0.02 m), and not HEAD/HAN/FOO (marker clusters, not joint centres). The Vicon
+             joints are Plug-in Gait skin markers (acromion, lateral epicondyle), not joint centres: their offsets
+             include marker placement.
 Registration: each estimate is registered to Vicon by its own rigid transform (trimmed Kabsch on the scored joints,
     real_pairs.robust_kabsch), so every error here is a shape error: the mean offset common to all scored joints is
     absorbed (not observable without a shared calibration; it changes no angle).
@@ -24,7 +25,8 @@ Measurement table: per dataset and joint, the mean over trials of the trial offs
     knees > 60 deg) where the data has it.
 Validation: the model (per joint; per joint and pose) is fitted on the pipeline's offline output of training pairs
     and applied to that of test pairs: KERAAL leave-one-trial-out, UI-PRMD leave-one-movement-out (all episodes of
-    the left-out movement held out), cross-dataset both ways. Metrics on the pooled test frames, per joint and
+    the left-out movement held out), cross-dataset both ways, both datasets leave-one-trial/movement-out, and
+    in-sample (fit and test on all, an upper bound). Metrics on the pooled test frames, per joint and
     pooled: RMSE before/after, the bias part (RMS over trials of each trial's mean error per joint in the
     body frame: what a constant per recording could remove) and the random part sqrt(RMSE^2 - bias^2).
 
