@@ -83,6 +83,9 @@ class PipelineConfig(BaseModel):
         6000, description="passes 1-2 (lengths) run over at most this many first frames (None or 0: every frame)"
     )
     online_init_s: float = Field(1.0, description="online: segment lengths are estimated over this first stretch, s")
+    offset_model: bool = Field(
+        False, description="subtract Kinect's per-joint body-frame offset (offset_model.py) from the offline output"
+    )
 
     @field_validator("excursion_max_len_s")
     @classmethod

@@ -47,6 +47,7 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.blas_threads import one_blas_thread
+from kinect_agent.processing import offset_model
 from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.chain_filter import N_LEN, N_ROOT, ChainFilter
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
@@ -274,6 +275,8 @@ def _process(
     positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta)
     if not np.all(np.isfinite(positions)):
         raise ValueError("the filter diverged (non-finite estimate); check the recording's units (metres expected)")
+    if config.offset_model:
+        positions = offset_model.correct(positions)
     observed = clean.state != NOT_TRACKED
     state = np.where(observed, TRACKED, INFERRED).astype(np.int8)
     mode = "online forward pass" if online else config.smoother
