@@ -52,7 +52,7 @@ if str(ROOT_DIR) not in sys.path:
 from bench import real_pairs as rp  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
 from kinect_agent.processing import offset_model as om  # noqa: E402
-from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.skeleton import NOT_TRACKED  # noqa: E402
