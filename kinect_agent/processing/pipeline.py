@@ -42,7 +42,7 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.blas_threads import one_blas_thread
-from kinect_agent.processing import _ukf_numba
+from kinect_agent.processing import _ukf_numba, uncertainty
 from kinect_agent.processing import kinematics as km
 from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
@@ -179,12 +179,15 @@ class PipelineResult:
 
     params: kinematic parameters. quality: outlier_fraction {joint: fraction of present samples removed},
     segment_sd_before_mm / segment_sd_after_mm {segment: SD of its length}, frames_without_observation,
-    n_frames, n_outliers, n_gated, smoother, online, seconds.
+    n_frames, n_outliers, n_gated, smoother, online, seconds, angle_sd_seconds.
+    angle_sd: {angle of angles.ANGLE_NAMES: (T,) degrees}, the calibrated SD of each clinical angle per frame
+    (uncertainty.angle_sd of the smoother's covariance); None online (the forward pass keeps no covariances).
     """
 
     filtered: Recording
     params: KinematicParams
     quality: dict[str, Any]
+    angle_sd: dict[str, np.ndarray] | None = None
 
 
 # ----------------------------------------------------------------------------------------------------- filtering
@@ -405,7 +408,10 @@ def _step_scales(t: np.ndarray, config: PipelineConfig) -> np.ndarray:
 def smooth(
     clean: Recording, ik: IKResult, config: PipelineConfig, progress: Progress | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-    """Runs the four passes on an outlier-free recording; returns (root (T, 3), lengths (19,), theta (T, 33), info)."""
+    """Runs the four passes on an outlier-free recording; returns (root (T, 3), lengths (19,), theta (T, 33), info).
+
+    info["state_cov"]: (T, 36, 36) the smoothed covariance of (root m, theta rad) per frame.
+    """
     config = replace(
         config,
         q_rot_rad=config.q_rot_rad if config.offline_q_rot_rad is None else config.offline_q_rot_rad,
@@ -459,15 +465,21 @@ def smooth(
     xs3, Ps3, g3 = _run_pass(kf3, fwd, obs, scale, config, True, tick, restart)
     if config.smoother == "urts":
         Qs = np.einsum("t,ij->tij", np.append(scale[1:], 0.0), kf3.Q)
-        xs, _ = unscented_rts(xs3, Ps3, Qs, None, kf3.points)
+        xs, Ps = unscented_rts(xs3, Ps3, Qs, None, kf3.points)
         tick(T)
         g4 = 0
     else:
         kf4 = _make_filter(fixed, config)
         kf4.x, kf4.P, kf4.Q = kf3.x.copy(), kf3.P.copy(), kf3.Q
         xs4, Ps4, g4 = _run_pass(kf4, bwd, obs, scale_bwd, config, True, tick, restart)
-        xs = xs4 if config.four_pass_combine == "last" else combine_information(xs3, Ps3, xs4, Ps4)[0]
-    info = {"length_sd_m": length_sd, "gated_per_pass": [g1, g2, g3, g4], "length_pass_frames": n_len}
+        last = config.four_pass_combine == "last"
+        xs, Ps = (xs4, Ps4) if last else combine_information(xs3, Ps3, xs4, Ps4)
+    info = {
+        "length_sd_m": length_sd,
+        "gated_per_pass": [g1, g2, g3, g4],
+        "length_pass_frames": n_len,
+        "state_cov": Ps,  # (T, 36, 36): covariance of (root m, theta rad) per frame, the smoother's output
+    }
     return xs[:, :N_ROOT], lengths, xs[:, N_ROOT:], info
 
 
@@ -662,12 +674,16 @@ def _process(
         outlier = (prob > config.outlier_threshold) & (rec.state != NOT_TRACKED)
     else:
         clean, prob, outlier = rec, np.where(rec.state == NOT_TRACKED, 1.0, 0.0), np.zeros((T, skeleton.J), bool)
+    sd = None
     if online:
         root, lengths, theta, model, info = _online_run(clean, config, progress)
     else:
         ik = inverse_kinematics(clean.positions)
         root, lengths, theta, info = smooth(clean, ik, config, progress)
         model = ik.model
+        sd_started = time.perf_counter()
+        sd = uncertainty.angle_sd(model, root, lengths, theta, info.pop("state_cov"))
+        info["angle_sd_seconds"] = round(time.perf_counter() - sd_started, 3)
     positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta)
     if not np.all(np.isfinite(positions)):
         raise ValueError("the filter diverged (non-finite estimate); check the recording's units (metres expected)")
@@ -704,9 +720,10 @@ def _process(
         },
         "n_gated": int(sum(info.get("gated_per_pass", [info.get("n_gated", 0)]))),
         "length_pass_frames": info.get("length_pass_frames"),
+        "angle_sd_seconds": info.get("angle_sd_seconds"),
         "seconds": round(time.perf_counter() - started, 3),
     }
-    return PipelineResult(filtered, params, quality)
+    return PipelineResult(filtered, params, quality, sd)
 
 
 def _online_run(
