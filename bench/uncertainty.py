@@ -175,7 +175,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  {name:24s} {v:6.2f}")
     print(f"  median {np.nanmedian(list(inflation.values())):.2f} (shipped INFLATION = {uncertainty.INFLATION})")
     fitted = fit_systematic(train)
-    print("systematic part b fitted on train (level, range), degrees:")
+    print("systematic part b fitted on train (min_deg, max_deg, range_deg), degrees:")
     for name, b in fitted.items():
         print(f"  {name:24s} {b}   shipped {intervals.SYSTEMATIC_DEG.get(name)}")
     report = {"inflation": inflation, "fitted_systematic": fitted}
