@@ -27,7 +27,7 @@ from kinect_agent.processing.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.processing.kinematics import N_BONES, ChainModel
 
 DEFAULT_STRIDE = 5  # frames between two covariance propagations (6 Hz at 30 Hz)
-CHUNK_FRAMES = 256  # computed frames per block (bounds memory: 256 × 72 poses)
+CHUNK_FRAMES = 256  # computed frames per block (bounds memory: 256 × 67 poses)
 # SD of the angle error (its session mean removed) / the model's SD: the median over the angles on the training
 # sessions of bench/uncertainty.py (1.78; per angle 0.8-4.2, shoulder rotation 2.9-7.8), bench/README.md.
 INFLATION = 1.8
