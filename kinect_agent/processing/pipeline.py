@@ -682,7 +682,7 @@ def _process(
         root, lengths, theta, info = smooth(clean, ik, config, progress)
         model = ik.model
         sd_started = time.perf_counter()
-        sd = uncertainty.angle_sd(model, root, lengths, theta, info.pop("state_cov"))
+        sd = uncertainty.angle_sd(model, lengths, theta, info.pop("state_cov"))
         info["angle_sd_seconds"] = round(time.perf_counter() - sd_started, 3)
     positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta)
     if not np.all(np.isfinite(positions)):

@@ -70,7 +70,6 @@ def _block_sd(model: ChainModel, lengths: np.ndarray, theta: np.ndarray, P_theta
 
 def model_angle_sd(
     model: ChainModel,
-    root: np.ndarray,
     lengths: np.ndarray,
     theta: np.ndarray,
     P: np.ndarray,
@@ -78,15 +77,15 @@ def model_angle_sd(
 ) -> np.ndarray:
     """Returns (T, A) degrees: the SD of every angle of ANGLE_NAMES implied by the state covariance alone.
 
-    model: the chain of the smoother. root: (T, 3) m, camera frame. lengths: (19,) m. theta: (T, 33) rad.
-    P: (T, 36, 36), covariance of (root, theta) per frame (m², rad²). NaN where an angle is undefined
-    (e.g. shoulder rotation with a straight elbow reads NaN in some sigma points).
+    model: the chain of the smoother. lengths: (19,) m. theta: (T, 33) rad. P: (T, 36, 36), covariance of
+    (root m, theta rad) per frame; the root's rows do not matter (angles are differences of positions). NaN where
+    an angle is undefined (e.g. shoulder rotation with a straight elbow reads NaN in some sigma points).
     """
     T = theta.shape[0]
-    if root.shape != (T, 3) or P.shape != (T, 36, 36) or lengths.shape != (N_BONES,):
+    if theta.shape != (T, 33) or P.shape != (T, 36, 36) or lengths.shape != (N_BONES,):
         raise ValueError(
-            f"expected root (T, 3), theta (T, 33), P (T, 36, 36), lengths ({N_BONES},); got root {root.shape}, "
-            f"theta {theta.shape}, P {P.shape}, lengths {lengths.shape}"
+            f"expected theta (T, 33), P (T, 36, 36), lengths ({N_BONES},); got theta {theta.shape}, P {P.shape}, "
+            f"lengths {lengths.shape}"
         )
     if stride < 1:
         raise ValueError(f"stride must be >= 1, got {stride}")
@@ -105,7 +104,6 @@ def model_angle_sd(
 
 def angle_sd(
     model: ChainModel,
-    root: np.ndarray,
     lengths: np.ndarray,
     theta: np.ndarray,
     P: np.ndarray,
@@ -115,7 +113,7 @@ def angle_sd(
 
     INFLATION × model_angle_sd, floored at SD_FLOOR_DEG; arguments as model_angle_sd.
     """
-    sd = np.maximum(INFLATION * model_angle_sd(model, root, lengths, theta, P, stride), SD_FLOOR_DEG)
+    sd = np.maximum(INFLATION * model_angle_sd(model, lengths, theta, P, stride), SD_FLOOR_DEG)
     return {name: sd[:, a] for a, name in enumerate(ANGLE_NAMES)}
 
 

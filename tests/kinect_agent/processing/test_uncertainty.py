@@ -8,7 +8,7 @@ import pytest
 from kinect_agent.processing import uncertainty
 from kinect_agent.processing.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.processing.ik import inverse_kinematics
-from kinect_agent.processing.pipeline import process
+from kinect_agent.processing.pipeline import PipelineConfig, process, smooth
 from kinect_agent.sources.simulator import simulate, simulate_truth
 
 SEEDS = (1, 2, 3)
@@ -32,7 +32,7 @@ def _frames(seed: int, n: int = 6) -> tuple:
 @pytest.mark.parametrize("seed", SEEDS)
 def test_the_sigma_point_sd_matches_monte_carlo_for_small_covariances(seed):
     ik, k, P, rng = _frames(seed)
-    sd = uncertainty.model_angle_sd(ik.model, ik.root[k], ik.lengths, ik.theta[k], P, stride=1)
+    sd = uncertainty.model_angle_sd(ik.model, ik.lengths, ik.theta[k], P, stride=1)
     L = np.linalg.cholesky(P)
     draws = np.concatenate((ik.root[k], ik.theta[k]), axis=1)[:, None, :] + np.einsum(
         "fij,fsj->fsi", L, rng.standard_normal((len(k), 4000, 36))
@@ -49,23 +49,36 @@ def test_the_sigma_point_sd_matches_monte_carlo_for_small_covariances(seed):
         assert np.all((sd[fold, a] >= 0.95 * mc[fold]) & (sd[fold, a] <= 1.7 * mc[fold])), f"{name} fold, seed {seed}"
 
 
-def test_the_root_position_does_not_change_any_sd():
+def test_the_root_block_of_the_covariance_does_not_change_any_sd():
     ik, k, P, _ = _frames(1)
-    sd = uncertainty.model_angle_sd(ik.model, ik.root[k], ik.lengths, ik.theta[k], P, stride=1)
+    sd = uncertainty.model_angle_sd(ik.model, ik.lengths, ik.theta[k], P, stride=1)
     P2 = P.copy()
     P2[:, :3, :3] += np.eye(3) * 0.5**2  # half a metre more root uncertainty
-    sd2 = uncertainty.model_angle_sd(ik.model, ik.root[k], ik.lengths, ik.theta[k], P2, stride=1)
+    sd2 = uncertainty.model_angle_sd(ik.model, ik.lengths, ik.theta[k], P2, stride=1)
     np.testing.assert_allclose(sd2, sd, rtol=1e-9, err_msg="angles are differences of positions")
 
 
 def test_shapes_are_checked():
     ik, k, P, _ = _frames(1)
     with pytest.raises(ValueError, match="P"):
-        uncertainty.model_angle_sd(ik.model, ik.root[k], ik.lengths, ik.theta[k], P[:, :35, :35])
+        uncertainty.model_angle_sd(ik.model, ik.lengths, ik.theta[k], P[:, :35, :35])
 
 
 @pytest.mark.parametrize("seed", SEEDS)
-def test_the_pipeline_returns_finite_sds_close_to_every_frame(seed):
+def test_every_fifth_frame_interpolated_is_close_to_every_frame(seed):
+    measured, _, _ = simulate("squat", 2, seed=seed)
+    ik = inverse_kinematics(measured.positions)
+    _, lengths, theta, info = smooth(measured, ik, PipelineConfig())  # the smoother's own covariances
+    every = uncertainty.model_angle_sd(ik.model, lengths, theta, info["state_cov"], stride=1)
+    fifth = uncertainty.model_angle_sd(ik.model, lengths, theta, info["state_cov"], stride=5)
+    for a, name in enumerate(ANGLE_NAMES):
+        if name in WELL_DEFINED:
+            rel = np.abs(fifth[:, a] - every[:, a]) / every[:, a]
+            assert np.median(rel) < 0.03 and np.percentile(rel, 95) < 0.2, f"{name}, seed {seed}"
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_the_pipeline_returns_finite_sds_of_every_angle(seed):
     measured, _, _ = simulate("elbow_flexion", 3, seed=seed)
     result = process(measured)
     assert set(result.angle_sd) == set(ANGLE_NAMES)
