@@ -71,7 +71,7 @@ ERROR_CODES = frozenset(
 )
 MIN_FRAME_INTERVAL_S = 1e-3  # frames closer than this (over 1000 Hz) are no camera or mocap recording
 MAX_MEDIAN_INTERVAL_S = 1.0  # nor frames usually further apart than this (under 1 Hz)
-ANGLE_SD_STEP_DEG = 0.01  # quantum of the stored angle SDs, degrees
+ANGLE_SD_STEP_DEG = 0.1  # quantum of the stored angle SDs, degrees (0.01: 1.8x the bytes, 213 vs 118 kB on 10 min)
 ANGLE_SD_MISSING = 65535  # stored code of an undefined SD; larger SDs are stored as the largest finite code
 PLAUSIBLE_ABS_M = 50.0  # no depth camera (under 10 m) or motion-capture room puts a joint further from its origin
 

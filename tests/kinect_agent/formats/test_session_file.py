@@ -529,7 +529,7 @@ def test_angle_sds_need_the_filtered_recording_and_its_frame_count(rng):
         {"names": ["elbow_flexion_L", "elbow_flexion_L", "trunk_flexion"]},
         {"names": ["not_an_angle", "knee_flexion_R", "trunk_flexion"]},
         {"names": "elbow_flexion_L"},
-        {"step_deg": 0.1},
+        {"step_deg": 0.01},
     ],
 )
 def test_a_malformed_angle_sd_header_is_refused(rng, change):
