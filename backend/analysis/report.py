@@ -20,6 +20,7 @@ import numpy as np
 from backend.analysis import activity, quality
 from backend.analysis.balance import sway
 from backend.analysis.errors import AnalysisError, UnknownExercise, UnreadableRecording
+from backend.analysis.intervals import count_interval, rom_intervals
 from backend.analysis.most_moving import most_moving_joints
 from backend.analysis.range_of_motion import range_of_motion
 from backend.analysis.reachable import reachable_range
@@ -56,6 +57,15 @@ def _measured_positions(
     return recording.positions, "raw"
 
 
+def _angle_sd(angle_sd: dict[str, np.ndarray] | None, n_frames: int) -> dict[str, np.ndarray] | None:
+    """Returns the per-frame angle SDs when they describe n_frames frames, else None."""
+    if not angle_sd:
+        return None
+    if any(np.shape(v) != (n_frames,) for v in angle_sd.values()):
+        raise AnalysisError(f"angle_sd must hold ({n_frames},) per angle, like the recording")
+    return angle_sd
+
+
 def _median(values: list[float]) -> float | None:
     return round(float(np.median(values)), 1) if values else None
 
@@ -67,11 +77,15 @@ def analyze_recording(
     params: KinematicParams | None = None,
     filtered: Recording | None = None,
     repetition_params: RepetitionParams | None = None,
+    angle_sd: dict[str, np.ndarray] | None = None,
 ) -> dict[str, Any]:
     """Returns the JSON-ready analysis document of one session (keys: .notes/CONTRACTS.md).
 
     recording: the raw recording (its tracking states feed the quality check). filtered: the pipeline's output
     for the same frames, measured when given; else the positions rebuilt from params; else the recording itself.
+    angle_sd: {angle: (T,) degrees}, the per-frame SD of the filtered angles (the session file's angle SDs); with
+    it and `filtered`, "range_of_motion_95" ({angle: {"min_deg", "max_deg", "range_deg": [lo, hi]} or None}) and
+    "repetitions_95" ({"low", "high", "ambiguous"}) hold 95 % intervals (intervals.py); else both are None.
     """
     if recording.n_frames < 2:
         raise AnalysisError(f"the recording has {recording.n_frames} frame(s); at least 2 are needed")
@@ -81,8 +95,10 @@ def analyze_recording(
     smoothed = series.smooth_positions(t, positions)
     clinical = joint_angles(smoothed)
     frame = body_frame(smoothed)
-    reps = count_repetitions(t, counting_angles(smoothed, names, clinical, frame[0]), names, repetition_params)
+    counted = counting_angles(smoothed, names, clinical, frame[0])
+    reps = count_repetitions(t, counted, names, repetition_params)
     rep_list = [r.to_dict() for r in reps.repetitions]
+    sd = _angle_sd(angle_sd, recording.n_frames) if source == "filtered" else None
     moving_s, rest_s = activity.moving_time(t, smoothed)
     return {
         "exercise": exercise.slug,
@@ -94,6 +110,8 @@ def analyze_recording(
         "repetition_list": rep_list,
         "defining_angle": reps.defining_angle,
         "range_of_motion": range_of_motion(t, clinical, presmoothed=True),
+        "range_of_motion_95": None if sd is None else rom_intervals(t, clinical, sd),
+        "repetitions_95": None if sd is None else count_interval(t, counted, sd, names, repetition_params).to_dict(),
         "rom_deg": _median([r.amplitude_deg for r in reps.repetitions]),
         "most_moving_joints": most_moving_joints(smoothed),
         "reachable_range": reachable_range(smoothed, frame),
@@ -107,11 +125,11 @@ def analyze_recording(
     }
 
 
-def load(path: str | Path) -> tuple[Recording, Recording]:
-    """Returns (raw, filtered) of a recording file of any supported format.
+def load(path: str | Path) -> tuple[Recording, Recording, dict[str, np.ndarray] | None]:
+    """Returns (raw, filtered, angle SDs {angle: (T,) degrees} or None) of a recording file of any supported format.
 
-    A .khs session file's own filtered recording is used when present; otherwise the agent's pipeline runs on
-    the raw input. Raises UnreadableRecording naming the file and the reason.
+    A .khs session file's own filtered recording (and its angle SDs) is used when present; otherwise the agent's
+    pipeline runs on the raw input. Raises UnreadableRecording naming the file and the reason.
     """
     from kinect_agent import formats
     from kinect_agent.formats import session_file
@@ -122,9 +140,9 @@ def load(path: str | Path) -> tuple[Recording, Recording]:
         module = formats.detect(path)
         if module is session_file:
             payload = session_file.read_payload(path)
-            raw, filtered = payload.raw, payload.filtered
+            raw, filtered, angle_sd = payload.raw, payload.filtered, payload.angle_sd
         else:
-            raw, filtered = formats.read(path), None
+            raw, filtered, angle_sd = formats.read(path), None, None
     except FormatError as exc:
         raise UnreadableRecording(str(exc)) from None
     except OSError as exc:
@@ -133,17 +151,18 @@ def load(path: str | Path) -> tuple[Recording, Recording]:
         raise UnreadableRecording(f"{path}: {raw.n_frames} frame(s); at least 2 are needed")
     if filtered is None:
         try:
-            filtered = process(raw).filtered
+            result = process(raw)
         except ValueError as exc:
             raise UnreadableRecording(f"{path}: the pipeline cannot filter this recording: {exc}") from None
-    return raw, filtered
+        filtered, angle_sd = result.filtered, result.angle_sd
+    return raw, filtered, angle_sd
 
 
 def analyze_file(path: str | Path, exercise_slug: str) -> dict[str, Any]:
     """Returns the analysis document of the recording file at `path` as exercise `exercise_slug`."""
     exercise = get_exercise(exercise_slug)
-    raw, filtered = load(path)
-    doc = analyze_recording(raw, exercise, filtered=filtered)
+    raw, filtered, angle_sd = load(path)
+    doc = analyze_recording(raw, exercise, filtered=filtered, angle_sd=angle_sd)
     doc["source"] = str(path)
     return doc
 

@@ -26,3 +26,10 @@ class Exercise(Base):
     pose: Mapped[str] = mapped_column(String(64), default="")
     uiprmd_movement: Mapped[str | None] = mapped_column(String(16))
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
+
+    @property
+    def mdc95_rom_deg(self) -> float | None:
+        """The minimal detectable change of rom_deg, degrees (backend.analysis.mdc), or None when not measured."""
+        from backend.analysis.mdc import rom_mdc95
+
+        return rom_mdc95(self.slug)

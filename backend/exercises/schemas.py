@@ -19,3 +19,8 @@ class ExerciseOut(BaseModel):
     normal_range_max_deg: float = Field(examples=[120.0])
     pose: str = Field(examples=["standing"])
     uiprmd_movement: str | None = Field(examples=["m03"])
+    mdc95_rom_deg: float | None = Field(
+        description="minimal detectable change of the range of motion between two sessions (MDC95, degrees, from "
+        "repeated simulated sessions); null: not measured",
+        examples=[25.5],
+    )

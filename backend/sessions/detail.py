@@ -37,8 +37,12 @@ from kinect_agent.formats.session_file import SessionFileError, SessionPayload
 DETAIL_VERSION = 1  # part of the cache key: bump when the file-derived output changes
 CACHE_SIZE = 8
 UNCERTAINTY_NOTE = (
-    "The home agent's filter keeps its uncertainty only while it runs; the session file stores none, "
-    "so the curves and numbers are shown without a ± band."
+    "95 % intervals from the per-frame angle SDs the home agent stored (the filter's covariance, calibrated on "
+    "simulated sessions with known truth)."
+)
+NO_UNCERTAINTY_NOTE = (
+    "The session file stores no per-frame uncertainty of the filtered recording (an older agent), "
+    "so the numbers are shown without intervals."
 )
 
 
@@ -95,7 +99,8 @@ def analysis_document(payload: SessionPayload, spec: ExerciseSpec | None, stored
     if spec is None:
         return {}, "recomputed"
     try:
-        return json_ready(analyze_recording(payload.raw, spec, filtered=payload.filtered)), "recomputed"
+        doc = analyze_recording(payload.raw, spec, filtered=payload.filtered, angle_sd=payload.angle_sd)
+        return json_ready(doc), "recomputed"
     except (AnalysisError, ValueError):
         return {}, "recomputed"
 
@@ -219,6 +224,22 @@ def detail_body(
             "filter_history": list(filtered.meta.history) if filtered is not None else [],
             "analysis": source,
         },
-        "uncertainty": None,
-        "uncertainty_note": UNCERTAINTY_NOTE,
+        "uncertainty": (uncertainty := _uncertainty(doc)),
+        "uncertainty_note": UNCERTAINTY_NOTE if uncertainty is not None else NO_UNCERTAINTY_NOTE,
     }
+
+
+def _uncertainty(doc: dict) -> dict | None:
+    """Returns the detail's uncertainty (keys: UncertaintyOut) from a document's 95 % intervals, or None."""
+    intervals, rom = doc.get("range_of_motion_95"), doc.get("range_of_motion")
+    if not isinstance(intervals, dict) or not isinstance(rom, dict):
+        return None
+    angles = {}
+    for name, iv in intervals.items():
+        value = rom.get(name)
+        if isinstance(iv, dict) and isinstance(value, dict):
+            angles[name] = {key: value.get(key) for key in ("min_deg", "max_deg", "range_deg")} | {
+                f"{key[:-4]}_ci95": iv.get(key) for key in ("min_deg", "max_deg", "range_deg")
+            }
+    reps = doc.get("repetitions_95")
+    return {"angles": angles, "repetitions": reps if isinstance(reps, dict) else None}

@@ -19,7 +19,7 @@ def metrics_document(
     from backend.analysis.indicators import indicators
     from backend.analysis.report import analyze_recording
 
-    doc = analyze_recording(payload.raw, spec, filtered=payload.filtered)
+    doc = analyze_recording(payload.raw, spec, filtered=payload.filtered, angle_sd=payload.angle_sd)
     doc = json_ready(doc)
     doc["indicators"] = json_ready(indicators(doc, exercise=spec, target_reps=target_reps, history=history))
     return doc

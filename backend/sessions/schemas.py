@@ -310,6 +310,32 @@ class ProcessingOut(BaseModel):
     analysis: str = Field(description="'stored' (the metrics document) or 'recomputed' (none was stored)")
 
 
+class AngleUncertaintyOut(BaseModel):
+    """One angle's range of motion (1st / 99th percentiles, degrees) with 95 % intervals (analysis/intervals.py)."""
+
+    min_deg: float | None = Field(description="1st percentile of the angle, degrees")
+    max_deg: float | None = Field(description="99th percentile: the peak angle, degrees", examples=[131.2])
+    range_deg: float | None = Field(description="max_deg − min_deg, degrees", examples=[118.4])
+    min_ci95: list[float] | None = Field(description="95 % interval [low, high] of min_deg; null: none")
+    max_ci95: list[float] | None = Field(description="95 % interval of max_deg", examples=[[108.3, 154.1]])
+    range_ci95: list[float] | None = Field(description="95 % interval of range_deg", examples=[[96.0, 140.8]])
+
+
+class CountIntervalOut(BaseModel):
+    """The repetition count under perturbed angles: low..high; ambiguous when they differ."""
+
+    low: int = Field(examples=[9])
+    high: int = Field(examples=[10])
+    ambiguous: bool
+
+
+class UncertaintyOut(BaseModel):
+    """95 % intervals of the session's figures from the per-frame angle SDs stored in its file."""
+
+    angles: dict[str, AngleUncertaintyOut] = Field(description="by angle name (every angle with an interval)")
+    repetitions: CountIntervalOut | None = Field(description="interval of the repetition count")
+
+
 class SessionDetailOut(BaseModel):
     """What the therapist's session page shows: the evidence behind the session's numbers."""
 
@@ -396,8 +422,20 @@ class SessionDetailOut(BaseModel):
                         "filter_history": ["ukf-4pass v1 (four_pass; 12 outliers removed)"],
                         "analysis": "stored",
                     },
-                    "uncertainty": None,
-                    "uncertainty_note": "the session file stores no per-frame uncertainty of the filtered recording",
+                    "uncertainty": {
+                        "angles": {
+                            "knee_flexion_R": {
+                                "min_deg": 2.1,
+                                "max_deg": 88.5,
+                                "range_deg": 86.4,
+                                "min_ci95": [0.0, 6.2],
+                                "max_ci95": [31.9, 145.1],
+                                "range_ci95": [35.1, 137.7],
+                            }
+                        },
+                        "repetitions": {"low": 10, "high": 10, "ambiguous": False},
+                    },
+                    "uncertainty_note": "95 % intervals from the per-frame angle SDs the home agent stored",
                 }
             ]
         }
@@ -426,5 +464,7 @@ class SessionDetailOut(BaseModel):
     workspace: WorkspaceOut | None = Field(description="arm exercises only")
     quality: DataQualityOut
     processing: ProcessingOut
-    uncertainty: dict | None = Field(description="uncertainty of the figures; null: the pipeline stores none")
+    uncertainty: UncertaintyOut | None = Field(
+        description="95 % intervals of the figures; null: the session file stores no angle SDs (older agents)"
+    )
     uncertainty_note: str

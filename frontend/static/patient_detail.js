@@ -129,6 +129,10 @@
       const ex = lib[slug];
       box.append(progressChart(`${name}: range of motion` + (ex ? ` (normal ${ex.normal_range_min_deg}–${ex.normal_range_max_deg}°)` : ""),
         mine, "rom_deg", { color: Plots.COLORS[4], unit: "°", yTitle: "range of motion", digits: 1 }));
+      if (ex && ex.mdc95_rom_deg !== null && ex.mdc95_rom_deg !== undefined) {
+        box.append(el("p", { class: "muted small" }, `A change in range of motion under ${Math.round(ex.mdc95_rom_deg)}° `
+          + "between two sessions is within what the measurement and the movement vary by (minimal detectable change, 95 %)."));
+      }
     }
   }
 

@@ -26,12 +26,25 @@
     return [el("div", { class: "stat" }, el("dt", {}, label), el("dd", {}, value, note ? el("span", { class: "reasons" }, note) : null))];
   }
 
+  /** Returns "a–b° (95 %)" for an interval [a, b], or null. */
+  const ci = (iv) => (iv ? `${iv[0].toFixed(0)}–${iv[1].toFixed(0)}° (95 %)` : null);
+
+  /** Returns the stats of the defining angle's full range and peak with their 95 % intervals (none without). */
+  function intervalStats(d) {
+    const a = d.uncertainty && d.defining_angle ? d.uncertainty.angles[d.defining_angle] : null;
+    if (!a) return [];
+    return [...stat("Full range", deg(a.range_deg), ci(a.range_ci95)), ...stat("Peak angle", deg(a.max_deg), ci(a.max_ci95))];
+  }
+
   function keyNumbers(d) {
     const total = (d.moving_time_s || 0) + (d.rest_time_s || 0);
     const moving = d.moving_time_s === null ? "—" : `${Math.round(d.moving_time_s)} s`;
+    const reps = d.uncertainty && d.uncertainty.repetitions;
+    const repNote = reps && reps.ambiguous ? `uncertain: ${reps.low}–${reps.high}` : null;
     document.getElementById("numbers").replaceChildren(
-      ...stat("Repetitions", String(d.repetition_count)),
+      ...stat("Repetitions", String(d.repetition_count), repNote),
       ...stat("Range of motion", deg(d.rom_deg), "median of the repetitions"),
+      ...intervalStats(d),
       ...stat("Duration", `${Math.round(d.duration_s)} s`, `${d.n_frames} frames`),
       ...stat("Moving", moving, total ? `${Math.round(100 * d.moving_time_s / total)}% of the time` : null),
       ...stat("Time per repetition", secs(d.tempo_s_per_rep)),

@@ -95,8 +95,8 @@ def make_payload(
     config: PipelineConfig | None = None,
     recorded_by: dict[str, int] | None = None,
 ) -> SessionPayload:
-    """Filters the recording and returns the session (raw + filtered + a small params summary), saying which
-    device and patient recorded it (recorded_by)."""
+    """Filters the recording and returns the session (raw + filtered + the per-frame angle SDs + a small params
+    summary), saying which device and patient recorded it (recorded_by)."""
     config = config or PipelineConfig()
     result = process(rec, config=config)
     q = result.quality
@@ -108,7 +108,7 @@ def make_payload(
         "segment_lengths_m": q["segment_lengths_m"],
     }
     payload = SessionPayload(session_id=session_id or str(uuid.uuid4()), raw=rec, filtered=result.filtered,
-                             params=params, recorded_by=recorded_by)  # fmt: skip
+                             params=params, recorded_by=recorded_by, angle_sd=result.angle_sd)  # fmt: skip
     if created_at is not None:
         payload.created_at = created_at
     return payload

@@ -47,7 +47,7 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.blas_threads import one_blas_thread
-from kinect_agent.processing import offset_model
+from kinect_agent.processing import offset_model, uncertainty
 from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.chain_filter import N_LEN, N_ROOT, ChainFilter
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
@@ -70,12 +70,15 @@ class PipelineResult:
 
     params: kinematic parameters. quality: outlier_fraction {joint: fraction of present samples removed},
     segment_sd_before_mm / segment_sd_after_mm {segment: SD of its length}, frames_without_observation,
-    n_frames, n_outliers, n_gated, smoother, online, seconds.
+    n_frames, n_outliers, n_gated, smoother, online, seconds, angle_sd_seconds.
+    angle_sd: {angle of angles.ANGLE_NAMES: (T,) degrees}, the calibrated SD of each clinical angle per frame
+    (uncertainty.angle_sd of the smoother's covariance); None online (the forward pass keeps no covariances).
     """
 
     filtered: Recording
     params: KinematicParams
     quality: dict[str, Any]
+    angle_sd: dict[str, np.ndarray] | None = None
 
 
 # ----------------------------------------------------------------------------------------------------- filtering
@@ -266,12 +269,16 @@ def _process(
         outlier = (prob > config.outlier_threshold) & (rec.state != NOT_TRACKED)
     else:
         clean, prob, outlier = rec, np.where(rec.state == NOT_TRACKED, 1.0, 0.0), np.zeros((T, skeleton.J), bool)
+    sd = None
     if online:
         root, lengths, theta, model, info = run_online(clean, config, progress)
     else:
         ik = inverse_kinematics(clean.positions)
-        root, lengths, theta, info = smooth(clean, ik, config, progress)
+        root, lengths, theta, info = smooth(clean, ik, config, progress, covariances=True)
         model = ik.model
+        sd_started = time.perf_counter()
+        sd = uncertainty.angle_sd(model, lengths, theta, info.pop("covariance"))
+        info["angle_sd_seconds"] = round(time.perf_counter() - sd_started, 3)
     positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta)
     if not np.all(np.isfinite(positions)):
         raise ValueError("the filter diverged (non-finite estimate); check the recording's units (metres expected)")
@@ -310,9 +317,10 @@ def _process(
         },
         "n_gated": int(sum(info.get("gated_per_pass", [info.get("n_gated", 0)]))),
         "length_pass_frames": info.get("length_pass_frames"),
+        "angle_sd_seconds": info.get("angle_sd_seconds"),
         "seconds": round(time.perf_counter() - started, 3),
     }
-    return PipelineResult(filtered, params, quality)
+    return PipelineResult(filtered, params, quality, sd)
 
 
 __all__ = ["VERSION", "PipelineResult", "observations", "process", "smooth"]

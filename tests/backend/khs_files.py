@@ -39,6 +39,14 @@ def make_khs(
     return sf.encode(payload)
 
 
+def make_processed_khs(exercise: str = "squat", reps: int = 3, *, seed: int = 0) -> bytes:
+    """Returns the session file the home agent makes of a simulated set: raw, filtered by the pipeline, angle SDs."""
+    from kinect_agent.commands.run import make_payload
+
+    measured, _, _ = simulate(exercise, reps, seed=seed)
+    return sf.encode(make_payload(measured, created_at="2026-11-20T10:00:00Z"))
+
+
 def split(data: bytes) -> tuple[int, dict, list[bytes]]:
     """Returns (version, JSON header, compressed blocks) of a valid file."""
     _, version, _, header_len, _ = _FIXED.unpack_from(data)
@@ -174,8 +182,10 @@ def _times(step_s):
 DEFECTS = {
     "meta_as_list": (_raw_meta(None, [1, 2]), "bad_header: recording 'raw' metadata must be an object"),
     "rate_as_text": (_raw_meta("rate_hz", "fast"), "bad_header: recording 'raw' metadata: rate_hz"),
-    "rate_of_a_billionth_hz": (_raw_meta("rate_hz", 1e-9), "bad_header: recording 'raw' metadata: rate_hz must be a "
-                               "finite number in [1, 1000] Hz"),
+    "rate_of_a_billionth_hz": (
+        _raw_meta("rate_hz", 1e-9),
+        "bad_header: recording 'raw' metadata: rate_hz must be a finite number in [1, 1000] Hz",
+    ),
     "exercise_as_list": (_raw_meta("exercise", ["squat"]), "bad_header: recording 'raw' metadata: exercise"),
     "params_100000_deep": (_deep_params, "bad_header: JSON header is nested too deeply"),
     "nan_in_header": (

@@ -14,7 +14,7 @@ from backend.exercises.models import Exercise
 from kinect_agent.formats import session_file as sf
 from kinect_agent.skeleton import INDEX, JOINTS
 from kinect_agent.sources.simulator import simulate
-from tests.backend.khs_files import make_khs
+from tests.backend.khs_files import make_khs, make_processed_khs
 
 OCTET = {"Content-Type": "application/octet-stream"}
 T0 = dt.datetime(2026, 11, 2, 9, 0, tzinfo=dt.UTC)
@@ -174,3 +174,30 @@ def test_session_without_metrics_is_analysed_from_its_file(
     body = _detail(client, row.id, auth_headers(therapist)).json()
     assert body["processing"]["analysis"] == "recomputed"
     assert body["repetition_count"] == 3
+
+
+@pytest.mark.parametrize("seed", (1, 2, 3))
+def test_detail_shows_the_95_percent_intervals_of_an_agent_made_file(client, upload, auth_headers, seed):
+    session_id, patient, _ = upload(make_processed_khs("squat", 4, seed=seed), "squat")
+    body = _detail(client, session_id, auth_headers(patient)).json()
+    unc = body["uncertainty"]
+    assert unc is not None, body["uncertainty_note"]
+    for angle in body["angles"]:
+        a = unc["angles"][angle]
+        for key in ("min", "max", "range"):
+            lo, hi = a[f"{key}_ci95"]
+            assert lo <= a[f"{key}_deg"] <= hi and hi - lo > 0, f"seed {seed}: {angle} {key}: {a}"
+    reps = unc["repetitions"]
+    assert reps["low"] <= body["repetition_count"] <= reps["high"], f"seed {seed}: {reps}"
+    stored = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient)).json()["metrics"]
+    assert (
+        stored["range_of_motion_95"][body["defining_angle"]]["max_deg"]
+        == unc["angles"][body["defining_angle"]]["max_ci95"]
+    ), "the intervals are stored with the session's metrics at ingest"
+
+
+def test_a_file_without_angle_sds_has_no_intervals(client, upload, auth_headers):
+    session_id, patient, _ = upload(make_khs("squat", 3, seed=1), "squat")
+    body = _detail(client, session_id, auth_headers(patient)).json()
+    assert body["uncertainty"] is None
+    assert "no per-frame uncertainty" in body["uncertainty_note"]

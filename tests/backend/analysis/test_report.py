@@ -24,7 +24,7 @@ from ._data import UI_PRMD_KINECT, noisy, uiprmd
 CONTRACT_KEYS = {
     "exercise", "duration_s", "n_frames", "rate_hz", "repetitions", "repetition_list", "defining_angle",
     "range_of_motion", "rom_deg", "most_moving_joints", "reachable_range", "moving_time_s", "rest_time_s",
-    "tempo_s_per_rep", "fatigue", "balance", "sit_to_stand", "quality",
+    "tempo_s_per_rep", "fatigue", "balance", "sit_to_stand", "quality", "range_of_motion_95", "repetitions_95",
 }  # fmt: skip
 REP_KEYS = {"index", "start_s", "end_s", "duration_s", "amplitude_deg", "peak_deg", "side"}
 
@@ -42,7 +42,8 @@ def test_document_has_every_contract_key_and_is_json() -> None:
 
 def test_standing_session_fills_every_metric() -> None:
     doc = analyze_recording(simulate_truth("shoulder_abduction", 5, seed=2), EXERCISES["shoulder_abduction"])
-    assert all(doc[k] is not None for k in CONTRACT_KEYS - {"sit_to_stand"}), [k for k in doc if doc[k] is None]
+    no_sd = {"sit_to_stand", "range_of_motion_95", "repetitions_95"}  # the intervals need the agent's angle SDs
+    assert all(doc[k] is not None for k in CONTRACT_KEYS - no_sd), [k for k in doc if doc[k] is None]
     assert doc["most_moving_joints"][0]["joint"] in ("HAN_L", "HAN_R")
     assert doc["moving_time_s"] + doc["rest_time_s"] == pytest.approx(doc["duration_s"], abs=0.02)
     assert set(doc["reachable_range"]) == {"left", "right"} and doc["reachable_range"]["left"]["area_ratio"] > 0
@@ -178,3 +179,23 @@ def test_uiprmd_document_counts_ten_repetitions(data_dir: Path, movement: str, s
     doc = analyze_recording(uiprmd(data_dir, movement, subject), exercise)
     assert doc["repetitions"] == 10, f"{movement} {subject}: {[r['start_s'] for r in doc['repetition_list']]}"
     assert doc["quality"]["ok"], doc["quality"]["reasons"]
+
+
+def test_intervals_need_the_filtered_recording_and_its_angle_sds() -> None:
+    from kinect_agent.processing.pipeline import process
+    from kinect_agent.sources.simulator import simulate
+
+    measured, _, _ = simulate("elbow_flexion", 4, seed=3)
+    result = process(measured)
+    spec = EXERCISES["elbow_flexion"]
+    doc = analyze_recording(measured, spec, filtered=result.filtered, angle_sd=result.angle_sd)
+    for name, rom in doc["range_of_motion"].items():
+        iv = doc["range_of_motion_95"][name]
+        if iv is None:
+            continue
+        assert iv["max_deg"][0] <= rom["max_deg"] <= iv["max_deg"][1], name
+    assert doc["range_of_motion_95"]["shoulder_rotation_L"] is None
+    assert doc["repetitions_95"]["low"] <= doc["repetitions"] <= doc["repetitions_95"]["high"]
+    json.dumps(doc, allow_nan=False)
+    bare = analyze_recording(measured, spec, filtered=result.filtered)
+    assert bare["range_of_motion_95"] is None and bare["repetitions_95"] is None

@@ -482,3 +482,79 @@ def test_non_finite_delta_of_untracked_last_frame_decodes_as_nan():
     back = sf.decode(_one_recording(t, positions, state))
     assert np.all(np.isnan(back.raw.positions[3, 5]))
     np.testing.assert_allclose(back.raw.positions[:3], 0.5)
+
+
+# ---------------------------------------------------------------------------------------------- angle SDs
+
+
+def _with_sd(rng: np.random.Generator, n_frames: int = 120) -> sf.SessionPayload:
+    payload = small_payload(rng, n_frames)
+    sd = {name: rng.uniform(0.5, 30.0, n_frames) for name in ("elbow_flexion_L", "knee_flexion_R", "trunk_flexion")}
+    sd["trunk_flexion"][5] = np.nan
+    payload.angle_sd = sd
+    return payload
+
+
+def test_angle_sds_round_trip_to_their_step(rng):
+    payload = _with_sd(rng)
+    back = sf.decode(sf.encode(payload))
+    assert set(back.angle_sd) == set(payload.angle_sd)
+    for name, sd in payload.angle_sd.items():
+        np.testing.assert_allclose(back.angle_sd[name], sd, atol=sf.ANGLE_SD_STEP_DEG / 2 + 1e-9, err_msg=name)
+    assert np.isnan(back.angle_sd["trunk_flexion"][5])
+
+
+def test_a_file_without_angle_sds_reads_none(rng):
+    assert sf.decode(sf.encode(small_payload(rng))).angle_sd is None
+
+
+def test_angle_sds_need_the_filtered_recording_and_its_frame_count(rng):
+    payload = _with_sd(rng)
+    payload.angle_sd["elbow_flexion_L"] = payload.angle_sd["elbow_flexion_L"][:-1]
+    with pytest.raises(ValueError, match="shape"):
+        sf.encode(payload)
+    payload = _with_sd(rng)
+    payload.filtered = None
+    with pytest.raises(ValueError, match="filtered"):
+        sf.encode(payload)
+    payload = _with_sd(rng)
+    payload.angle_sd["wrist_twist"] = np.ones(payload.raw.n_frames)
+    with pytest.raises(ValueError, match="unknown"):
+        sf.encode(payload)
+
+
+@pytest.mark.parametrize(
+    "change",
+    [
+        {"names": ["elbow_flexion_L", "elbow_flexion_L", "trunk_flexion"]},
+        {"names": ["not_an_angle", "knee_flexion_R", "trunk_flexion"]},
+        {"names": "elbow_flexion_L"},
+        {"step_deg": 0.01},
+    ],
+)
+def test_a_malformed_angle_sd_header_is_refused(rng, change):
+    data = sf.encode(_with_sd(rng))
+    header = header_of(data)
+    header["angle_sd"] |= change
+    expect("bad_header", rebuild(header, blocks_of(data)))
+
+
+def test_an_angle_sd_block_without_a_filtered_recording_is_refused(rng):
+    data = sf.encode(_with_sd(rng))
+    header = header_of(data)
+    header["recordings"]["filtered"] = None
+    blocks = blocks_of(data)
+    expect("bad_header", rebuild(header, blocks[:3] + blocks[-1:]))
+
+
+def test_an_angle_sd_block_counts_against_the_decoded_budget(rng):
+    payload = _with_sd(rng, 600)
+    data = sf.encode(payload)
+    recordings = 2 * (8 + 20 + 240) * 600
+    sf.decode(data, max_decoded_bytes=recordings + 2 * 3 * 600)
+    expect("too_large", data, max_decoded_bytes=recordings + 2 * 3 * 600 - 1)
+
+
+def test_a_missing_angle_sd_block_is_refused(rng):
+    data = sf.encode(_with_sd(rng))
+    expect("bad_header", rebuild(header_of(data), blocks_of(data)[:-1]))

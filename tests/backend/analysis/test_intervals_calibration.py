@@ -1,0 +1,58 @@
+"""Calibration of the 95 % intervals of range of motion and peak angle on simulated sessions with known truth.
+
+Held-out cases: the constants of backend.analysis.intervals and kinect_agent.processing.uncertainty were fitted on
+views 0° and 60°, seeds 101-103 (bench/uncertainty.py); these use view 30° beside 0° and seeds 201-203.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from backend.analysis import intervals
+from backend.analysis.range_of_motion import range_of_motion
+from kinect_agent.analysis import series
+from kinect_agent.processing.angles import ANGLE_NAMES, joint_angles
+from kinect_agent.processing.pipeline import process
+from kinect_agent.sources.simulator import simulate
+
+MOTIONS = ("shoulder_abduction", "elbow_flexion", "squat")
+VIEWS = (0, 30)
+SEEDS = (201, 202, 203)
+KINDS = ("min_deg", "max_deg", "range_deg")
+# Per (motion, view) family the held-out coverage runs 0.87-1.00 (bench/README.md): elbow_flexion at 30° misses
+# peaks of angles that stand still (an arm reads abducted, a straight knee bent, for more than 1 % of the frames).
+FAMILY_FLOOR = 0.85
+
+
+def _hits(motion: str, view: int, seed: int) -> list[bool]:
+    measured, truth, _ = simulate(motion, 5, view_deg=view, seed=seed)
+    result = process(measured)
+    est = joint_angles(series.smooth_positions(measured.t, result.filtered.positions))
+    true = range_of_motion(truth.t, joint_angles(series.smooth_positions(truth.t, truth.positions)), presmoothed=True)
+    hits = []
+    for name in ANGLE_NAMES:
+        iv = intervals.angle_intervals(measured.t, est[name], result.angle_sd[name], name)
+        if iv is None or true[name]["range_deg"] is None or true[name]["range_deg"] >= intervals.MAX_RANGE_DEG:
+            continue
+        hits += [intervals.covers(iv[kind], true[name][kind], kind) for kind in KINDS]
+    return hits
+
+
+@pytest.fixture(scope="module")
+def coverage() -> dict[tuple[str, int], list[bool]]:
+    return {(m, v): sum((_hits(m, v, s) for s in SEEDS), []) for m in MOTIONS for v in VIEWS}
+
+
+def test_the_95_percent_intervals_cover_the_truth_90_to_98_percent_pooled(coverage):
+    pooled = np.mean(sum(coverage.values(), []))
+    assert 0.90 <= pooled <= 0.98, f"pooled coverage {pooled:.3f} over {MOTIONS} x views {VIEWS} x seeds {SEEDS}"
+
+
+@pytest.mark.parametrize("motion", MOTIONS)
+@pytest.mark.parametrize("view", VIEWS)
+def test_every_motion_and_view_keeps_its_coverage(coverage, motion, view):
+    hits = coverage[(motion, view)]
+    assert len(hits) >= 60, f"{motion}@{view}: only {len(hits)} intervals"
+    rate = float(np.mean(hits))
+    assert FAMILY_FLOOR <= rate <= 1.0, f"{motion}@{view}: coverage {rate:.3f} over seeds {SEEDS}"
