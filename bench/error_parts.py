@@ -61,7 +61,7 @@ def error_sums(estimate: np.ndarray, truth: np.ndarray) -> ErrorSums:
     """
     estimate, truth = np.asarray(estimate, dtype=float), np.asarray(truth, dtype=float)
     if estimate.shape != truth.shape or estimate.ndim != 3 or estimate.shape[-1] != 3:
-        raise ValueError(f"expected estimate and truth of the same shape (T, J, 3); got {estimate.shape}, {truth.shape}")
+        raise ValueError(f"expected estimate and truth of one shape (T, J, 3); got {estimate.shape}, {truth.shape}")
     err_body = np.einsum("tab,tjb->tja", body_rotations(truth), estimate - truth)  # (T, J, 3)
     mean = err_body.mean(axis=0)  # (J, 3)
     return ErrorSums(
