@@ -30,7 +30,15 @@ Targets (PASS/FAIL per setting and for the summary): offline RMSE below every ba
 length SD ≤ 2 mm; elbow/knee angle RMSE ≤ 0.8 × the best baseline's; outlier recall ≥ 0.95 at precision ≥ 0.9;
 outlier-removal gain (mean and SD) at least the paper's.
 
-    python bench/accuracy.py [--quick] [--json OUT] [--set NAME=VALUE ...] [--tune-one-euro]
+Per motion (issue 13; `--only motions`): each HDM05 class (all clips of bd and bk), CMU 13_29 and each UI-PRMD
+movement driven by its Vicon episodes (kinect_agent.formats.ui_prmd_vicon), seen by a simulated Kinect 2 at 0° and
+60°, on every seed of --seeds; per motion, view and seed: raw, pipeline offline and online, CV Kalman + RTS, One Euro
+and two truth-knowing references (bench/error_floor.py) — position RMSE, its random and bias parts in the body frame
+(bench/error_parts.py), elbow/knee RMSE; the median over seeds; targets per seed (offline position and angle RMSE
+below CV Kalman + RTS and One Euro, random part <= 1/2 raw's) with a PASS/FAIL column and the failures' margins.
+
+    python bench/accuracy.py [--quick] [--json OUT] [--seeds 1 2 3] [--only settings|motions]
+                             [--set NAME=VALUE ...] [--tune-one-euro]
 """
 
 from __future__ import annotations
