@@ -31,13 +31,14 @@ length SD ≤ 2 mm; elbow/knee angle RMSE ≤ 0.8 × the best baseline's; outlie
 outlier-removal gain (mean and SD) at least the paper's.
 
 Per motion (issue 13; `--only motions`): each HDM05 class (all clips of bd and bk), CMU 13_29 and each UI-PRMD
-movement driven by its Vicon episodes (kinect_agent.formats.ui_prmd_vicon), seen by a simulated Kinect 2 at 0° and
-60°, on every seed of --seeds; per motion, view and seed: raw, pipeline offline and online, CV Kalman + RTS, One Euro
-and two truth-knowing references (bench/error_floor.py) — position RMSE, its random and bias parts in the body frame
-(bench/error_parts.py), elbow/knee RMSE; the median over seeds; targets per seed (offline position and angle RMSE
-below CV Kalman + RTS and One Euro, random part <= 1/2 raw's) with a PASS/FAIL column and the failures' margins.
+movement driven by its Vicon episodes (kinect_agent.formats.ui_prmd_vicon), seen by a simulated Kinect 2 (--device)
+at 0° and 60°, on every seed of --seeds; per motion, view and seed: raw, pipeline offline and online, CV Kalman +
+RTS, One Euro and two truth-knowing references (bench/error_floor.py) — position RMSE, its random and bias parts in
+the body frame (bench/error_parts.py), elbow/knee RMSE; the median over seeds; targets per seed (offline position
+and angle RMSE below CV Kalman + RTS and One Euro, random part <= 1/2 raw's) with a PASS/FAIL column and the
+failures' margins.
 
-    python bench/accuracy.py [--quick] [--json OUT] [--seeds 1 2 3] [--only settings|motions]
+    python bench/accuracy.py [--quick] [--json OUT] [--seeds 1 2 3] [--only settings|motions] [--device kinect1]
                              [--set NAME=VALUE ...] [--tune-one-euro]
 """
 
@@ -570,10 +571,10 @@ def judge_motion(m: dict[str, dict]) -> dict[str, dict]:
     return out
 
 
-def run_motion(motion: Motion, view: int, seed: int, config: PipelineConfig) -> dict:
+def run_motion(motion: Motion, view: int, seed: int, config: PipelineConfig, device: str = MOTION_DEVICE) -> dict:
     """Runs the MOTION_METHODS on every clip of one motion at one view and seed; returns metrics and targets."""
     sums = {name: MotionSums() for name in MOTION_METHODS}
-    cases = motion_cases(motion, view, seed)
+    cases = motion_cases(motion, view, seed, device)
     for case in cases:
         for name in MOTION_METHODS:
             sums[name].add_case(case, run_method(name, case.measured, config)[0])
@@ -608,10 +609,12 @@ def median_rows(rows: list[dict]) -> list[dict]:
     return out
 
 
-def run_motions(seeds: tuple[int, ...], config: PipelineConfig, quick: bool = False) -> dict:
+def run_motions(
+    seeds: tuple[int, ...], config: PipelineConfig, quick: bool = False, device: str = MOTION_DEVICE
+) -> dict:
     """Runs every motion at MOTION_VIEWS for every seed; returns {"device", "rows" (per seed), "medians"}."""
-    rows = [run_motion(m, v, s, config) for m in motions(quick) for v in MOTION_VIEWS for s in seeds]
-    return {"device": MOTION_DEVICE, "views_deg": list(MOTION_VIEWS), "seeds": list(seeds), "rows": rows,
+    rows = [run_motion(m, v, s, config, device) for m in motions(quick) for v in MOTION_VIEWS for s in seeds]
+    return {"device": device, "views_deg": list(MOTION_VIEWS), "seeds": list(seeds), "rows": rows,
             "medians": median_rows(rows)}  # fmt: skip
 
 
@@ -666,6 +669,7 @@ def run(
     config: PipelineConfig | None = None,
     seeds: tuple[int, ...] = DEFAULT_SEEDS,
     parts: tuple[str, ...] = ("settings", "motions"),
+    motion_device: str = MOTION_DEVICE,
 ) -> dict:
     """Runs the benchmark; returns the JSON-ready results (settings, summary, per-motion tables, what was run).
 
@@ -685,7 +689,7 @@ def run(
             del s["_sums"], s["_by_source"]
         out.update(mocap=[m[0] for m in mocap], settings_seed=seeds[0], settings=settings, summary=summary)
     if "motions" in parts:
-        out["motions"] = run_motions(tuple(seeds), config, quick)
+        out["motions"] = run_motions(tuple(seeds), config, quick, motion_device)
     return out
 
 
@@ -767,6 +771,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", "--seed", type=int, nargs="+", default=list(DEFAULT_SEEDS), metavar="SEED",
                         help="noise seeds (default 1 2 3); per-motion numbers are given per seed and as the median, "
                         "the pooled settings use the first")  # fmt: skip
+    parser.add_argument("--device", choices=("kinect2", "kinect1"), default=MOTION_DEVICE,
+                        help="the simulated sensor of the per-motion tables (default kinect2)")  # fmt: skip
     parser.add_argument("--only", choices=("settings", "motions"),
                         help="run only the pooled settings or only the per-motion tables (default: both)")  # fmt: skip
     parser.add_argument(
@@ -786,7 +792,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     started = time.perf_counter()
     parts = (args.only,) if args.only else ("settings", "motions")
-    results = run(quick=args.quick, config=config, seeds=tuple(args.seeds), parts=parts)
+    results = run(quick=args.quick, config=config, seeds=tuple(args.seeds), parts=parts, motion_device=args.device)
     results["config_overrides"] = args.set
     if "settings" in results:
         print_settings(results)
