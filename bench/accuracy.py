@@ -30,7 +30,16 @@ Targets (PASS/FAIL per setting and for the summary): offline RMSE below every ba
 length SD ≤ 2 mm; elbow/knee angle RMSE ≤ 0.8 × the best baseline's; outlier recall ≥ 0.95 at precision ≥ 0.9;
 outlier-removal gain (mean and SD) at least the paper's.
 
-    python bench/accuracy.py [--quick] [--json OUT] [--set NAME=VALUE ...] [--tune-one-euro]
+Per motion (issue 13; `--only motions`): each HDM05 class (all clips of bd and bk), CMU 13_29 and each UI-PRMD
+movement driven by its Vicon episodes (kinect_agent.formats.ui_prmd_vicon), seen by a simulated Kinect 2 (--device)
+at 0° and 60°, on every seed of --seeds; per motion, view and seed: raw, pipeline offline and online, CV Kalman +
+RTS, One Euro and two truth-knowing references (bench/error_floor.py) — position RMSE, its random and bias parts in
+the body frame (bench/error_parts.py), elbow/knee RMSE; the median over seeds; targets per seed (offline position
+and angle RMSE below CV Kalman + RTS and One Euro, random part <= 1/2 raw's) with a PASS/FAIL column and the
+failures' margins.
+
+    python bench/accuracy.py [--quick] [--json OUT] [--seeds 1 2 3] [--only settings|motions] [--device kinect1]
+                             [--set NAME=VALUE ...] [--tune-one-euro]
 """
 
 from __future__ import annotations
@@ -40,6 +49,7 @@ import json
 import sys
 import time
 import warnings
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -52,13 +62,15 @@ if str(ROOT_DIR) not in sys.path:  # `python bench/accuracy.py` puts bench/ firs
 from bench.accuracy_tables import cell  # noqa: E402
 from bench.baselines import butterworth, cv_kalman_rts, holt_kinect, one_euro  # noqa: E402
 from bench.baselines._common import hold_last  # noqa: E402
+from bench.error_floor import oracle_estimate  # noqa: E402
+from bench.error_parts import ErrorSums, error_sums  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
 from kinect_agent.processing.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.skeleton import NOT_TRACKED  # noqa: E402
-from kinect_agent.sources.kinect_noise import add_kinect_noise, load_tables  # noqa: E402
+from kinect_agent.sources.kinect_noise import SimulationError, add_kinect_noise, load_tables  # noqa: E402
 from kinect_agent.sources.mocap_truth import place_in_camera, resample  # noqa: E402
 from kinect_agent.sources.simulator import simulate  # noqa: E402
 
@@ -350,9 +362,9 @@ def judge(m: dict[str, dict], gains: dict[str, dict]) -> dict[str, dict]:
 # ----------------------------------------------------------------------------------------------- running
 
 
-def run_setting(device: str, view: int, mocap: list, quick: bool, config: PipelineConfig) -> dict:
+def run_setting(device: str, view: int, mocap: list, quick: bool, config: PipelineConfig, seed: int = 0) -> dict:
     """Runs every method on every recording of one setting; returns its metrics, gains and targets."""
-    cases = build_cases(device, view, mocap, quick)
+    cases = build_cases(device, view, mocap, quick, seed)
     sums = {name: Sums() for name in METHODS}
     by_source = {src: {name: Sums() for name in METHODS} for src in SOURCES}
     gains_by_pose: dict[str, GainSums] = {}
@@ -422,23 +434,264 @@ def print_targets(targets: dict[str, dict]) -> None:
         print(f"- {name}: {'PASS' if t['pass'] else 'FAIL'} — {t['detail']}")
 
 
-def run(quick: bool = False, config: PipelineConfig | None = None) -> dict:
-    """Runs the benchmark; returns the JSON-ready results (settings, summary, what was run)."""
+# ----------------------------------------------------------------------------------------------- per motion (issue 13)
+
+MOTION_DEVICE = "kinect2"
+MOTION_VIEWS = (0, 60)
+MOTION_METHODS = ("raw", "pipeline_offline", "pipeline_online", "cv_kalman_rts", "one_euro")
+MOTION_REFERENCES = {"oracle_clean": None, "oracle_lowpass_2hz": 2.0}  # bench/error_floor.py: name -> cutoff Hz
+UI_PRMD_VICON_DIR = DATA_DIR / "ui-prmd" / "Segmented Movements" / "Vicon" / "Positions"
+DEFAULT_SEEDS = (1, 2, 3)
+
+
+@dataclass(frozen=True)
+class Clip:
+    """One mocap truth: name, t (T,) s from 0 at RATE_HZ, positions (T, J, 3) m in its mocap frame (y up), the
+    subject's heading there in degrees about +y from +z."""
+
+    name: str
+    t: np.ndarray
+    positions: np.ndarray
+    facing_deg: float
+
+
+@dataclass(frozen=True)
+class Motion:
+    """One motion reported on its own: its clips (HDM05: every clip of the class; UI-PRMD: every episode)."""
+
+    name: str
+    source: str  # "hdm05", "cmu" or "ui_prmd_vicon"
+    clips: tuple[Clip, ...]
+
+
+def motions(quick: bool = False) -> list[Motion]:
+    """Returns the per-motion truths in ../shared/data: each HDM05 class (all clips of bd and bk), CMU 13_29 and
+    each UI-PRMD movement driven by its Vicon episodes (s01, m01-m10). quick: one short motion per source
+    (CMU's first 12 s, HDM05's first squat clip, UI-PRMD m01's first episode)."""
+    out = []
+    if CMU_FILE.is_file():
+        from kinect_agent.formats import bvh
+
+        t, p = resample(bvh.read(CMU_FILE), RATE_HZ)
+        if quick:
+            t, p = t[: int(12 * RATE_HZ)], p[: int(12 * RATE_HZ)]
+        out.append(Motion("cmu_13_29", "cmu", (Clip("cmu_13_29", t, p, 0.0),)))
+    out.extend(hdm05_motions(quick))
+    out.extend(ui_prmd_motions(quick))
+    return out
+
+
+def hdm05_motions(quick: bool = False) -> list[Motion]:
+    """Returns one Motion per HDM05 class folder (every clip of both actors; quick: the squat class's first clip)."""
+    from kinect_agent.formats import amc
+
+    out = []
+    folders = sorted(p for p in HDM05_DIR.glob("*") if p.is_dir() and p.name != "asf")
+    if quick:
+        folders = [f for f in folders if f.name.startswith("squat")]
+    for folder in folders:
+        clips = []
+        for path in sorted(folder.glob("HDM_*.amc"))[: 1 if quick else None]:
+            rec = amc.read(path)
+            t, p = resample(rec, RATE_HZ)
+            clips.append(Clip(path.stem.removesuffix("_120"), t, p, float(rec.meta.extra["facing_deg"])))
+        if clips:
+            out.append(Motion(f"hdm05_{folder.name}", "hdm05", tuple(clips)))
+    return out
+
+
+def ui_prmd_motions(quick: bool = False) -> list[Motion]:
+    """Returns one Motion per UI-PRMD movement (mXX) with every Vicon episode of it (quick: m01, first episode)."""
+    from kinect_agent.formats import ui_prmd_vicon
+    from kinect_agent.sources.mocap_truth import heading_deg
+
+    by_movement: dict[str, list[Clip]] = {}
+    for path in sorted(UI_PRMD_VICON_DIR.glob("m*_positions.txt*")):
+        movement = path.name[:3]
+        if quick and (movement != "m01" or by_movement):
+            continue
+        try:
+            t, p = resample(ui_prmd_vicon.read(path), RATE_HZ)
+        except SimulationError as exc:  # a joint whose markers are all missing in the episode
+            print(f"UI-PRMD {path.name} skipped: {exc}", file=sys.stderr)
+            continue
+        by_movement.setdefault(movement, []).append(Clip(path.name.split("_positions")[0], t, p, heading_deg(p)))
+    return [Motion(f"ui_prmd_{m}", "ui_prmd_vicon", tuple(c)) for m, c in sorted(by_movement.items())]
+
+
+def motion_cases(motion: Motion, view: int, seed: int, device: str = MOTION_DEVICE) -> list[Case]:
+    """Returns the clips of one motion seen by a simulated Kinect at `view` degrees; the noise of a clip depends
+    only on (seed, clip name, device, view), so a subset run draws the same numbers as the full run."""
+    cases = []
+    for clip in motion.clips:
+        truth = Recording.from_positions(clip.t, place_in_camera(clip.positions, view, clip.facing_deg))
+        truth.meta.rate_hz = RATE_HZ
+        rng = np.random.default_rng([seed, zlib.crc32(clip.name.encode()), 1 if device == "kinect1" else 2, view])
+        measured, mask = add_kinect_noise(truth, device=device, view_deg=view, pose="standing", rng=rng)
+        cases.append(Case(clip.name, "standing", measured, truth.positions, mask))
+    return cases
+
+
+@dataclass
+class MotionSums:
+    """Running sums of one method over the clips of one motion: position error parts and elbow/knee angles."""
+
+    error: ErrorSums = field(default_factory=ErrorSums)
+    sq_angle: float = 0.0
+    n_angle: int = 0
+
+    def add_case(self, case: Case, est: np.ndarray) -> None:
+        """Adds one clip's errors. est: (T, J, 3) m, camera frame, finite."""
+        self.error.add(error_sums(est, case.truth))
+        a_est, a_true = joint_angles(est), joint_angles(case.truth)
+        da = np.concatenate([a_est[n] - a_true[n] for n in ANGLES])
+        da = da[np.isfinite(da)]
+        self.sq_angle += float(np.sum(da**2))
+        self.n_angle += int(da.size)
+
+    def metrics(self) -> dict[str, float | None]:
+        """Returns {"rmse_mm", "random_mm", "bias_mm", "angle_rmse_deg"}."""
+        ang = float(np.sqrt(self.sq_angle / self.n_angle)) if self.n_angle else None
+        return {**self.error.rms_mm(), "angle_rmse_deg": ang}
+
+
+def judge_motion(m: dict[str, dict]) -> dict[str, dict]:
+    """Returns {target: {"pass", "margin", "detail"}} of the offline pipeline on one motion, view and seed.
+
+    margin: offline minus its limit (mm or degrees; negative = passes by that much)."""
+    off = m["pipeline_offline"]
+    out = {}
+    for key, unit in (("rmse_mm", "mm"), ("angle_rmse_deg", "deg")):
+        for base in ("cv_kalman_rts", "one_euro"):
+            margin = off[key] - m[base][key]
+            out[f"{key.split('_')[0]}<{base}"] = {"pass": bool(margin < 0), "margin": margin, "unit": unit, "detail": (
+                f"offline {off[key]:.1f} vs {base} {m[base][key]:.1f} {unit}")}  # fmt: skip
+    limit = 0.5 * m["raw"]["random_mm"]
+    out["random<=raw/2"] = {"pass": bool(off["random_mm"] <= limit), "margin": off["random_mm"] - limit, "unit": "mm",
+                            "detail": f"offline random {off['random_mm']:.1f} vs ½ raw {limit:.1f} mm"}  # fmt: skip
+    return out
+
+
+def run_motion(motion: Motion, view: int, seed: int, config: PipelineConfig, device: str = MOTION_DEVICE) -> dict:
+    """Runs the MOTION_METHODS on every clip of one motion at one view and seed; returns metrics and targets."""
+    sums = {name: MotionSums() for name in MOTION_METHODS}
+    cases = motion_cases(motion, view, seed, device)
+    for case in cases:
+        for name in MOTION_METHODS:
+            sums[name].add_case(case, run_method(name, case.measured, config)[0])
+        for name, cutoff in MOTION_REFERENCES.items():
+            est = oracle_estimate(case.measured.positions, case.measured.state, case.truth, case.mask, RATE_HZ, cutoff)
+            sums.setdefault(name, MotionSums()).add_case(case, est)
+    metrics = {name: s.metrics() for name, s in sums.items()}
+    return {"motion": motion.name, "source": motion.source, "view_deg": view, "seed": seed, "clips": len(cases),
+            "frames": int(sum(len(c.truth) for c in cases)), "methods": metrics,
+            "targets": judge_motion(metrics)}  # fmt: skip
+
+
+def median_rows(rows: list[dict]) -> list[dict]:
+    """Returns one row per (motion, view): each metric's median over seeds, and the targets judged per seed
+    ("seeds_passed" of "seeds") with the median margin."""
+    groups: dict[tuple[str, int], list[dict]] = {}
+    for r in rows:
+        groups.setdefault((r["motion"], r["view_deg"]), []).append(r)
+    out = []
+    for (name, view), runs in groups.items():
+        methods = {meth: {k: float(np.median([r["methods"][meth][k] for r in runs])) for k in runs[0]["methods"][meth]}
+                   for meth in runs[0]["methods"]}  # fmt: skip
+        targets = {}
+        for t, first in runs[0]["targets"].items():
+            passed = sum(r["targets"][t]["pass"] for r in runs)
+            margin = float(np.median([r["targets"][t]["margin"] for r in runs]))
+            targets[t] = {"pass": passed == len(runs), "seeds_passed": passed, "seeds": len(runs), "margin": margin,
+                          "unit": first["unit"]}  # fmt: skip
+        out.append({"motion": name, "source": runs[0]["source"], "view_deg": view, "clips": runs[0]["clips"],
+                    "frames": runs[0]["frames"], "seeds": [r["seed"] for r in runs], "methods": methods,
+                    "targets": targets, "pass": all(t["pass"] for t in targets.values())})  # fmt: skip
+    return out
+
+
+def run_motions(
+    seeds: tuple[int, ...], config: PipelineConfig, quick: bool = False, device: str = MOTION_DEVICE
+) -> dict:
+    """Runs every motion at MOTION_VIEWS for every seed; returns {"device", "rows" (per seed), "medians"}."""
+    rows = [run_motion(m, v, s, config, device) for m in motions(quick) for v in MOTION_VIEWS for s in seeds]
+    return {"device": device, "views_deg": list(MOTION_VIEWS), "seeds": list(seeds), "rows": rows,
+            "medians": median_rows(rows)}  # fmt: skip
+
+
+MOTION_COLUMNS = (  # (metric key, title, digits)
+    ("rmse_mm", "Joint position RMSE, mm", 1),
+    ("random_mm", "Random part (RMSE after removing each joint's mean error in the body frame), mm", 1),
+    ("bias_mm", "Bias part (RMS of each joint's mean error in the body frame), mm", 1),
+    ("angle_rmse_deg", "Elbow/knee flexion RMSE, degrees", 2),
+)
+
+
+def print_motion_tables(result: dict) -> None:
+    """Prints, per metric, one table with a row per motion and view: median over seeds (each seed in brackets)."""
+    per_seed: dict[tuple[str, int], list[dict]] = {}
+    for r in result["rows"]:
+        per_seed.setdefault((r["motion"], r["view_deg"]), []).append(r)
+    seeds = "/".join(map(str, result["seeds"]))
+    for key, title, digits in MOTION_COLUMNS:
+        print(f"\n### {title}; {result['device']}, median over seeds (seeds {seeds})\n")
+        columns = (*MOTION_METHODS, *MOTION_REFERENCES)
+        print("| motion | view | " + " | ".join(columns) + " |")
+        print("|---|---|" + "---|" * len(columns))
+        for row in result["medians"]:
+            runs = per_seed[row["motion"], row["view_deg"]]
+            cells = []
+            for m in columns:
+                each = "/".join(f"{r['methods'][m][key]:.{digits}f}" for r in runs)
+                cells.append(f"{row['methods'][m][key]:.{digits}f} ({each})")
+            print(f"| {row['motion']} | {row['view_deg']}° | " + " | ".join(cells) + " |")
+
+
+def print_motion_verdicts(result: dict) -> None:
+    """Prints the PASS/FAIL column per motion and view and the failures with their median margins."""
+    print(f"\n### Targets per motion (offline; PASS = every seed of {result['seeds']} passes)\n")
+    names = list(result["medians"][0]["targets"]) if result["medians"] else []
+    print("| motion | view | clips | frames | " + " | ".join(names) + " | verdict |")
+    print("|---|---|---|---|" + "---|" * (len(names) + 1))
+    for row in result["medians"]:
+        cells = [f"{t['seeds_passed']}/{t['seeds']}" for t in row["targets"].values()]
+        print(f"| {row['motion']} | {row['view_deg']}° | {row['clips']} | {row['frames']} | " + " | ".join(cells)
+              + f" | {'PASS' if row['pass'] else 'FAIL'} |")  # fmt: skip
+    failures = [(row, name, t) for row in result["medians"] for name, t in row["targets"].items() if not t["pass"]]
+    print(f"\n{sum(r['pass'] for r in result['medians'])}/{len(result['medians'])} motion/view rows pass; failures "
+          "(median margin over seeds: offline minus the limit):")  # fmt: skip
+    for row, name, t in failures:
+        print(f"- {row['motion']} {row['view_deg']}°: {name} fails on {t['seeds'] - t['seeds_passed']}/{t['seeds']} "
+              f"seeds, by {t['margin']:+.1f} {t['unit']}")  # fmt: skip
+
+
+def run(
+    quick: bool = False,
+    config: PipelineConfig | None = None,
+    seeds: tuple[int, ...] = DEFAULT_SEEDS,
+    parts: tuple[str, ...] = ("settings", "motions"),
+    motion_device: str = MOTION_DEVICE,
+) -> dict:
+    """Runs the benchmark; returns the JSON-ready results (settings, summary, per-motion tables, what was run).
+
+    parts: "settings" (the pooled tables per device and view, on the first seed) and/or "motions" (every motion
+    on its own at MOTION_VIEWS, every seed)."""
     config = config or PipelineConfig()
-    process(simulate("squat", 1, seed=999)[0], config=config)  # compile the numba kernels outside the timing
-    mocap = mocap_truths(quick)
-    settings_run = (("kinect2", 30),) if quick else SETTINGS
-    settings = [run_setting(d, v, mocap, quick, config) for d, v in settings_run]
-    summary = summarise(settings)
-    for s in settings:
-        del s["_sums"], s["_by_source"]
-    return {
-        "quick": quick,
-        "rate_hz": RATE_HZ,
-        "mocap": [m[0] for m in mocap],
-        "settings": settings,
-        "summary": summary,
-    }
+    warm = simulate("squat", 1, seed=999)[0]
+    process(warm, config=config)  # compile the numba kernels outside the timing
+    process(warm, online=True, config=config)
+    out: dict = {"quick": quick, "rate_hz": RATE_HZ, "seeds": list(seeds)}
+    if "settings" in parts:
+        mocap = mocap_truths(quick)
+        settings_run = (("kinect2", 30),) if quick else SETTINGS
+        settings = [run_setting(d, v, mocap, quick, config, seeds[0]) for d, v in settings_run]
+        summary = summarise(settings)
+        for s in settings:
+            del s["_sums"], s["_by_source"]
+        out.update(mocap=[m[0] for m in mocap], settings_seed=seeds[0], settings=settings, summary=summary)
+    if "motions" in parts:
+        out["motions"] = run_motions(tuple(seeds), config, quick, motion_device)
+    return out
 
 
 def tune_one_euro() -> None:
@@ -487,12 +740,41 @@ def pipeline_config(overrides: list[str]) -> PipelineConfig:
     return PipelineConfig(**changes)
 
 
+def print_settings(results: dict) -> None:
+    """Prints the pooled tables per device and view, per source and pooled, with their targets."""
+    print(f"\n## Pooled per setting (seed {results['settings_seed']})")
+    for s in results["settings"]:
+        print_table(f"{s['device']}, view {s['view_deg']}° ({s['frames']} frames: {', '.join(s['cases'])})",
+                    s["methods"])  # fmt: skip
+        for pose, g in s["gain"].items():
+            print(f"\noutlier-removal gain, {pose}: ours mean {g['mean_pct']:.1f} % / SD {g['sd_pct']:.1f} % "
+                  f"(oracle {g['oracle_mean_pct']:.1f} / {g['oracle_sd_pct']:.1f} %); "
+                  f"paper {g['paper_mean_pct']:.0f} / {g['paper_sd_pct']:.0f} %")  # fmt: skip
+        print()
+        print_targets(s["targets"])
+    for src, table in results["summary"]["by_source"].items():
+        role = "held out: never tuned on" if src == "hdm05" else "tuning set"
+        print_table(f"{src} recordings only ({role}), all settings pooled", table)
+    print_table("summary (all settings pooled)", results["summary"]["methods"])
+    print()
+    print_targets(results["summary"]["targets"])
+
+
 def main(argv: list[str] | None = None) -> int:
     """Runs the benchmark and prints the tables and PASS/FAIL per target."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--quick", action="store_true", help="short smoke run: Kinect 2 at 30°, two recordings")
+    parser.add_argument(
+        "--quick", action="store_true", help="short smoke run: Kinect 2 at 30°, two recordings; one motion per source"
+    )
     parser.add_argument("--json", help="also write the results to this file")
     parser.add_argument("--tune-one-euro", action="store_true", help="print the One Euro parameter grid and exit")
+    parser.add_argument("--seeds", "--seed", type=int, nargs="+", default=list(DEFAULT_SEEDS), metavar="SEED",
+                        help="noise seeds (default 1 2 3); per-motion numbers are given per seed and as the median, "
+                        "the pooled settings use the first")  # fmt: skip
+    parser.add_argument("--device", choices=("kinect2", "kinect1"), default=MOTION_DEVICE,
+                        help="the simulated sensor of the per-motion tables (default kinect2)")  # fmt: skip
+    parser.add_argument("--only", choices=("settings", "motions"),
+                        help="run only the pooled settings or only the per-motion tables (default: both)")  # fmt: skip
     parser.add_argument(
         "--set",
         action="append",
@@ -509,23 +791,15 @@ def main(argv: list[str] | None = None) -> int:
         tune_one_euro()
         return 0
     started = time.perf_counter()
-    results = run(quick=args.quick, config=config)
+    parts = (args.only,) if args.only else ("settings", "motions")
+    results = run(quick=args.quick, config=config, seeds=tuple(args.seeds), parts=parts, motion_device=args.device)
     results["config_overrides"] = args.set
-    for s in results["settings"]:
-        print_table(f"{s['device']}, view {s['view_deg']}° ({s['frames']} frames: {', '.join(s['cases'])})",
-                    s["methods"])  # fmt: skip
-        for pose, g in s["gain"].items():
-            print(f"\noutlier-removal gain, {pose}: ours mean {g['mean_pct']:.1f} % / SD {g['sd_pct']:.1f} % "
-                  f"(oracle {g['oracle_mean_pct']:.1f} / {g['oracle_sd_pct']:.1f} %); "
-                  f"paper {g['paper_mean_pct']:.0f} / {g['paper_sd_pct']:.0f} %")  # fmt: skip
-        print()
-        print_targets(s["targets"])
-    for src, table in results["summary"]["by_source"].items():
-        role = "held out: never tuned on" if src == "hdm05" else "tuning set"
-        print_table(f"{src} recordings only ({role}), all settings pooled", table)
-    print_table("summary (all settings pooled)", results["summary"]["methods"])
-    print()
-    print_targets(results["summary"]["targets"])
+    if "settings" in results:
+        print_settings(results)
+    if "motions" in results:
+        print(f"\n## Per motion ({results['motions']['device']}, views {results['motions']['views_deg']})")
+        print_motion_tables(results["motions"])
+        print_motion_verdicts(results["motions"])
     print(f"\n({time.perf_counter() - started:.0f} s)")
     if args.json:
         with open(args.json, "w", encoding="utf-8") as f:

@@ -1,0 +1,65 @@
+"""bench/accuracy.py per motion (issue 13): one short motion per source (CMU 13_29's first 12 s, an HDM05 squat clip,
+a UI-PRMD Vicon deep-squat episode) seen by a simulated Kinect 2 at 0° and 60°, on three seeds; the offline pipeline
+must meet, on every seed separately, the targets that hold there.
+
+Not asserted, because they do not hold (bench/README.md, "Per-motion accuracy (issue 13)"): random part ≤ ½ raw's
+(the Kinect's clean error is too slow for any filter that follows the motion: even perfect outlier removal plus an
+ideal 2 Hz low-pass of the error stays above it), and the elbow/knee target on CMU's 12 s, the HDM05 squat at 0° and
+UI-PRMD m01 at 60° (off by 0.1-2.6° on one to three seeds).
+"""
+
+import pytest
+
+from bench import accuracy
+
+SEEDS = (1, 2, 3)  # never one seed: a gain that holds on one draw only is no gain
+
+
+@pytest.fixture(scope="module")
+def rows() -> dict[tuple[str, int, int], dict]:
+    """{(motion, view, seed): bench/accuracy.py's result row}: the quick motions, every view and seed."""
+    config = accuracy.PipelineConfig()
+    out = {}
+    for motion in accuracy.motions(quick=True):
+        for view in accuracy.MOTION_VIEWS:
+            for seed in SEEDS:
+                out[motion.name, view, seed] = accuracy.run_motion(motion, view, seed, config)
+    return out
+
+
+@pytest.mark.shared_data
+def test_one_motion_per_source(rows: dict) -> None:
+    sources = {row["source"] for row in rows.values()}
+    assert sources == {"cmu", "hdm05", "ui_prmd_vicon"}, sources
+    for (motion, view, seed), row in rows.items():
+        for name in accuracy.MOTION_METHODS:
+            m = row["methods"][name]
+            assert abs(m["random_mm"] ** 2 + m["bias_mm"] ** 2 - m["rmse_mm"] ** 2) < 1e-6 * m["rmse_mm"] ** 2, (
+                f"{motion} {view}° seed {seed} {name}: random² + bias² must equal RMSE², {m}"
+            )
+
+
+@pytest.mark.shared_data
+@pytest.mark.parametrize("baseline", ["cv_kalman_rts", "one_euro"])
+def test_offline_position_rmse_is_below_the_baseline(rows: dict, baseline: str) -> None:
+    for (motion, view, seed), row in rows.items():
+        off, base = row["methods"]["pipeline_offline"]["rmse_mm"], row["methods"][baseline]["rmse_mm"]
+        assert off < base, f"{motion} {view}° seed {seed}: offline {off:.1f} mm vs {baseline} {base:.1f} mm"
+
+
+@pytest.mark.shared_data
+@pytest.mark.parametrize("baseline", ["cv_kalman_rts", "one_euro"])
+def test_offline_random_part_is_below_the_baseline(rows: dict, baseline: str) -> None:
+    for (motion, view, seed), row in rows.items():
+        off, base = row["methods"]["pipeline_offline"]["random_mm"], row["methods"][baseline]["random_mm"]
+        assert off < base, f"{motion} {view}° seed {seed}: offline random part {off:.1f} mm vs {baseline} {base:.1f} mm"
+
+
+@pytest.mark.shared_data
+@pytest.mark.parametrize(("motion", "view"), [("ui_prmd_m01", 0), ("hdm05_squat1Reps", 60)])
+@pytest.mark.parametrize("baseline", ["cv_kalman_rts", "one_euro"])
+def test_offline_elbow_knee_rmse_is_below_the_baseline(rows: dict, motion: str, view: int, baseline: str) -> None:
+    for seed in SEEDS:
+        m = rows[motion, view, seed]["methods"]
+        off, base = m["pipeline_offline"]["angle_rmse_deg"], m[baseline]["angle_rmse_deg"]
+        assert off < base, f"{motion} {view}° seed {seed}: offline elbow/knee {off:.2f}° vs {baseline} {base:.2f}°"
