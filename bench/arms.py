@@ -4,7 +4,7 @@ Truth: HDM05 clips per motion class (rotateArmsBothBackward, squat, kickLFront, 
 of each subject, 1-2.5 s each) and CMU 13_29 cut into its labelled actions (arm circles, jumping jacks, twists, toe
 touches, knee raises, squats; 3-9 s each, mocap6 labels), 30 Hz,
 placed in the camera frame (kinect_agent.sources.mocap_truth) and measured by a simulated Kinect 2
-(kinect_agent.sources.kinect_noise) at each view and seed.
+(kinect_agent.sources.kinect_noise; `--device kinect1` for Kinect 1) at each view and seed.
 Methods: raw (gaps held), One Euro, CV Kalman + RTS (bench/baselines), the pipeline offline (process()).
 Per motion, view and seed (pooled over the motion's clips), then the median over seeds:
     rmse_mm       3-D RMSE over every joint-frame, mm
@@ -107,7 +107,7 @@ def truths(motions: list[str], clips: int) -> list[Truth]:
 
 
 def measure(
-    truth: Truth, k: int, view: int, seed: int, white_m: float | None = None
+    truth: Truth, k: int, view: int, seed: int, white_m: float | None = None, device: str = "kinect2"
 ) -> tuple[Recording, np.ndarray, np.ndarray]:
     """Returns (measured Recording, truth positions (T, J, 3) m camera frame, loss mask (T, J) bool) of one clip.
 
@@ -115,7 +115,7 @@ def measure(
     """
     rec = Recording.from_positions(truth.t, place_in_camera(truth.positions, view, truth.facing))
     rec.meta.rate_hz = RATE_HZ
-    rng = np.random.default_rng([seed, k, 2, view])
+    rng = np.random.default_rng([seed, k, 1 if device == "kinect1" else 2, view])
     if white_m is not None:
         noisy = rec.positions + white_m * rng.standard_normal(rec.positions.shape)
         return (
@@ -123,7 +123,7 @@ def measure(
             rec.positions,
             np.zeros(noisy.shape[:2], bool),
         )
-    measured, mask = add_kinect_noise(rec, device="kinect2", view_deg=view, pose="standing", rng=rng)
+    measured, mask = add_kinect_noise(rec, device=device, view_deg=view, pose="standing", rng=rng)
     return measured, rec.positions, mask
 
 
@@ -207,6 +207,7 @@ def run(
     config: PipelineConfig,
     clips: int = 3,
     white_m: float | None = None,
+    device: str = "kinect2",
 ) -> dict[tuple[str, int], dict[str, dict[str, float]]]:
     """Returns {(motion, view): {method: {metric: median over seeds}}}."""
     clips_all = truths(motions, clips)
@@ -215,7 +216,7 @@ def run(
         for seed in seeds:
             sums: dict[tuple[str, str], dict] = {}
             for k, truth in enumerate(clips_all):
-                measured, pos, mask = measure(truth, k, view, seed, white_m)
+                measured, pos, mask = measure(truth, k, view, seed, white_m, device)
                 for method in METHODS:
                     est, flags = estimate(method, measured, config)
                     one = clip_sums(est, flags, pos, mask, measured.state)
@@ -279,12 +280,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--views", nargs="+", type=int, default=[0, 60])
     parser.add_argument("--seeds", nargs="+", type=int, default=[1, 2, 3])
     parser.add_argument("--clips", type=int, default=3, help="HDM05 clips per subject and motion")
+    parser.add_argument("--device", default="kinect2", choices=["kinect2", "kinect1"])
     parser.add_argument("--white", type=float, default=None, help="white noise SD per axis, m, instead of Kinect's")
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
     args = parser.parse_args(argv)
     config = config_from(args.set)
     started = time.perf_counter()
-    results = run(args.motions, args.views, args.seeds, config, args.clips, args.white)
+    results = run(args.motions, args.views, args.seeds, config, args.clips, args.white, args.device)
     print(f"overrides: {args.set or 'none'}\n")
     print_results(results)
     print(f"\n({time.perf_counter() - started:.0f} s)")
