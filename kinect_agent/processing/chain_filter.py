@@ -30,7 +30,9 @@ def _placing_entries() -> tuple[np.ndarray, ...]:
     """Returns, per joint, the state entries (offsets into root (3) + theta (33)) that place it relative to the trunk.
 
     ROOT: the root position. Others: the angles of their rotating ancestors below ROOT (ANK_L: the KNE_L hinge and
-    the HIP_L rotation), or ROOT's rotation for the joints that hang from ROOT itself (SPINE, HIP_*).
+    the HIP_L rotation); none for the joints that hang from ROOT itself (SPINE, HIP_*): ROOT's rotation turns the
+    whole body, and one frame's inverse kinematics can have it flipped by about π in fast motion (HDM05 arm circles:
+    a hip gated for 0.1 s restarted it and threw the arms 1.3 m off), so it is never restarted.
     """
     out = [np.arange(N_ROOT)]
     for j in range(1, skeleton.J):
@@ -38,8 +40,8 @@ def _placing_entries() -> tuple[np.ndarray, ...]:
         while p > 0:
             rots.append(km.ROT_INDEX[p])
             p = int(skeleton.PARENT[p])
-        rots = rots or [km.ROT_INDEX[0]]
-        out.append(N_ROOT + np.concatenate([km.ROT_START[r] + np.arange(km.ROT_DOF[r]) for r in rots]))
+        starts = [km.ROT_START[r] + np.arange(km.ROT_DOF[r]) for r in rots]
+        out.append(N_ROOT + np.concatenate(starts) if starts else np.zeros(0, dtype=np.int64))
     return tuple(out)
 
 
