@@ -7,20 +7,28 @@ Definition. A repetition is one excursion of a defining angle away from its rest
     3. the rest level is the end (low p2 or high p98) nearer to the first and the last smoothed value; when
        those two disagree (a recording cut mid-movement), the end the signal spends more time near; with
        rest="start" (the live count of a set still being recorded), the end nearer to the first value.
-       The excursion e(t) = |angle − rest level|, clipped to [0, R];
-    4. hysteresis: an excursion begins when e rises above enter_frac·R and ends when it falls below exit_frac·R
-       (noise smaller than (enter_frac − exit_frac)·R cannot split or add repetitions);
+       The excursion e(t) = |angle − rest level|, clipped to [0, R]. Its cycle (cycles.cycle): period P from the
+       autocorrelation and typical amplitude A = median prominence of the duration/P most prominent peaks (R when
+       there is no period); e then is taken from its lower envelope over 1.5 P (cycles.baseline), so a rest level
+       that drifts (an arm held a little further back as the set goes on) does not merge or hide repetitions;
+    4. hysteresis: an excursion begins when e rises above enter_frac·A and ends when it falls below exit_frac·A
+       (noise smaller than (enter_frac − exit_frac)·A cannot split or add repetitions). A, not R: one mistracked
+       spike inflates R (a side lunge's knee read at 175° once), and the smaller repetitions of a patient who does
+       them badly then fall under thresholds drawn from the range;
     5. each excursion is widened to its onset and return: in the stretch between the neighbouring excursions,
-       the repetition starts at the last frame (ends at the first frame) whose e is within onset_frac·R of that
+       the repetition starts at the last frame (ends at the first frame) whose e is within onset_frac·A of that
        stretch's minimum; excursions shorter than min_duration_s are dropped.
    Amplitude = e at the peak minus the mean rest e just before and just after (degrees); peak = the smoothed
    angle at the peak (degrees). Side = "left"/"right" from the angle's _L/_R suffix, "center" otherwise.
 Several angles (both sides): repetitions of different angles that overlap in time by more than merge_overlap of
 the shorter one are one repetition (side "both", amplitude and peak averaged). A repetition of one side alone
-counts when that side is the dominant one (largest R), or when that side alternates with the dominant one: at
-most alternate_shared of its excursions coincide with the dominant side's. A side that sometimes moves together
-with the dominant one and sometimes alone is the other limb drifting or mistracked (UI-PRMD one-arm movements
-show the idle arm wandering by 40-50°), and its lone excursions are not repetitions. When at least half of the
+counts when that side is the dominant one, or when that side alternates with the dominant one: at most
+alternate_shared of its excursions overlap one of the dominant side's by more than alternate_overlap of their own
+duration. The dominant side is the one whose excursions add up to the most degrees (Σ amplitude): the limb that
+repeats the movement, not the one with the largest range (an idle arm mistracked through 130° three times beside
+ten 40° shoulder extensions). A side that sometimes moves together with the dominant one and sometimes alone, or
+follows it half a repetition late, is the other limb drifting or mistracked (UI-PRMD one-arm movements show the
+idle arm wandering by 40-50°), and its lone excursions are not repetitions. When at least half of the
 repetitions are "both" (a bilateral exercise), a one-sided excursion counts only if its amplitude reaches
 lone_ratio × the median amplitude of the "both" repetitions (one limb's filtered angle can bump by a third of
 the range at rest). So a bilateral exercise counts once per movement, an alternating one counts each side's
@@ -35,7 +43,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from kinect_agent.analysis import series
+from kinect_agent.analysis import cycles, series
 
 
 @dataclass(frozen=True)
@@ -48,6 +56,7 @@ class RepetitionParams:
     min_range_deg: float = 10.0
     side_ratio: float = 0.35
     alternate_shared: float = 0.2
+    alternate_overlap: float = 0.2
     lone_ratio: float = 0.6
     min_ratio: float = 0.4
     min_duration_s: float = 0.4
@@ -138,6 +147,9 @@ def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) ->
         return []
     rest_low = _rest_is_low(y, lo, hi, params.rest)
     e = np.clip(y - lo if rest_low else hi - y, 0.0, R)
+    cyc = cycles.cycle(t, e)
+    e = e - cycles.baseline(t, e, cyc)
+    R = cyc.amplitude_deg if cyc.amplitude_deg > 0 else R
     inside = _hysteresis(e, params.enter_frac * R, params.exit_frac * R)
     edges = np.flatnonzero(np.diff(np.concatenate(([0], inside.astype(np.int8), [0]))))
     runs = edges.reshape(-1, 2)  # [first, stop) of each excursion core
@@ -222,11 +234,15 @@ def _drop_weak_lone(merged: list[_Event], lone_ratio: float) -> list[_Event]:
     return [ev for ev in merged if ev.side == "both" or ev.amplitude >= floor]
 
 
-def _alternates(name: str, dominant: str, events: list[_Event], merged: list[_Event], params: RepetitionParams) -> bool:
-    """True when at most alternate_shared of the excursions of angle `name` coincide with the dominant angle's."""
-    own = sum(1 for ev in events if ev.angles == (name,))
-    shared = sum(1 for ev in merged if name in ev.angles and dominant in ev.angles)
-    return own > 0 and shared <= params.alternate_shared * own
+def _alternates(name: str, dominant: str, events: list[_Event], params: RepetitionParams) -> bool:
+    """True when at most alternate_shared of the excursions of angle `name` overlap one of the dominant angle's by
+    more than alternate_overlap of their own duration."""
+    own = [ev for ev in events if ev.angles == (name,)]
+    lead = [ev for ev in events if ev.angles == (dominant,)]
+    shared = sum(
+        1 for ev in own if any(_shared(ev, d) > params.alternate_overlap * max(1, ev.end - ev.start) for d in lead)
+    )
+    return bool(own) and shared <= params.alternate_shared * len(own)
 
 
 def count_repetitions(
@@ -246,12 +262,11 @@ def count_repetitions(
     ranges = {n: angle_range(y) if np.all(np.isfinite(y)) else 0.0 for n, y in smoothed.items()}
     top = max(ranges.values(), default=0.0)
     moving = tuple(n for n in names if ranges[n] >= max(params.min_range_deg, params.side_ratio * top))
-    events: list[_Event] = []
-    for name in moving:
-        events += detect(t, smoothed[name], name, params)
-    dominant = max(moving, key=lambda n: ranges[n]) if moving else None
+    per_angle = {name: detect(t, smoothed[name], name, params) for name in moving}
+    events = [ev for name in moving for ev in per_angle[name]]
+    dominant = max(moving, key=lambda n: sum(ev.amplitude for ev in per_angle[n])) if moving else None
     merged = _merge(events, params.merge_overlap)
-    counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, merged, params)}
+    counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, params)}
     merged = _drop_weak_lone(_keep_counted(merged, counted), params.lone_ratio)
     if merged:
         floor = params.min_ratio * float(np.median([ev.amplitude for ev in merged]))
