@@ -33,8 +33,11 @@ repetitions are "both" (a bilateral exercise), a one-sided excursion counts only
 lone_ratio × the median amplitude of the "both" repetitions (one limb's filtered angle can bump by a third of
 the range at rest). So a bilateral exercise counts once per movement, an alternating one counts each side's
 movement, a one-sided one the moving side. Last, an excursion smaller than min_ratio (0.4) × the median amplitude
-of the counted ones is a bump, not a repetition (filtered Kinect knees can bump by 35° at rest; UI-PRMD's
-smallest genuine repetitions are half the median).
+of the counted ones is a bump, not a repetition (filtered Kinect knees can bump by 35° at rest), unless it reaches
+shallow_ratio (0.2) × that median and lasts at least shallow_duration (0.6) × the median duration: a shallow
+repetition still takes a repetition's time (UI-PRMD incorrect executions: first repetitions at a quarter to a third
+of the others' amplitude), a bump is brief (simulated filtered squats: 30° bumps of a third to half a repetition's
+duration).
 """
 
 from __future__ import annotations
@@ -50,7 +53,7 @@ from kinect_agent.analysis import cycles, series
 class RepetitionParams:
     """Thresholds of the repetition detector; fractions are of the angle's own range R."""
 
-    enter_frac: float = 0.35
+    enter_frac: float = 0.3
     exit_frac: float = 0.2
     onset_frac: float = 0.1
     min_range_deg: float = 10.0
@@ -59,6 +62,8 @@ class RepetitionParams:
     alternate_overlap: float = 0.2
     lone_ratio: float = 0.6
     min_ratio: float = 0.4
+    shallow_ratio: float = 0.2
+    shallow_duration: float = 0.6
     min_duration_s: float = 0.4
     merge_overlap: float = 0.5
     rest: str = "auto"  # "auto": step 3 of the module doc; "start": where the recording starts (a set counted live)
@@ -234,10 +239,29 @@ def _drop_weak_lone(merged: list[_Event], lone_ratio: float) -> list[_Event]:
     return [ev for ev in merged if ev.side == "both" or ev.amplitude >= floor]
 
 
+def _drop_bumps(merged: list[_Event], params: RepetitionParams) -> list[_Event]:
+    """Drops the excursions below min_ratio × the median amplitude, except those above shallow_ratio × it that last
+    at least shallow_duration × the median duration (a shallow repetition takes a repetition's time, a bump not)."""
+    if not merged:
+        return merged
+    amplitude = float(np.median([ev.amplitude for ev in merged]))
+    duration = float(np.median([ev.end - ev.start for ev in merged]))
+    shallow_floor, long_enough = params.shallow_ratio * amplitude, params.shallow_duration * duration
+    return [
+        ev
+        for ev in merged
+        if ev.amplitude >= params.min_ratio * amplitude
+        or (ev.amplitude >= shallow_floor and ev.end - ev.start >= long_enough)
+    ]
+
+
 def _alternates(name: str, dominant: str, events: list[_Event], params: RepetitionParams) -> bool:
-    """True when at most alternate_shared of the excursions of angle `name` overlap one of the dominant angle's by
-    more than alternate_overlap of their own duration."""
+    """True when at most alternate_shared of the excursions of angle `name` (those above min_ratio × their median
+    amplitude) overlap one of the dominant angle's by more than alternate_overlap of their own duration."""
     own = [ev for ev in events if ev.angles == (name,)]
+    if own:  # its bumps (below min_ratio × its median amplitude) neither make nor break the alternation
+        floor = params.min_ratio * float(np.median([ev.amplitude for ev in own]))
+        own = [ev for ev in own if ev.amplitude >= floor]
     lead = [ev for ev in events if ev.angles == (dominant,)]
     shared = sum(
         1 for ev in own if any(_shared(ev, d) > params.alternate_overlap * max(1, ev.end - ev.start) for d in lead)
@@ -268,9 +292,7 @@ def count_repetitions(
     merged = _merge(events, params.merge_overlap)
     counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, params)}
     merged = _drop_weak_lone(_keep_counted(merged, counted), params.lone_ratio)
-    if merged:
-        floor = params.min_ratio * float(np.median([ev.amplitude for ev in merged]))
-        merged = [ev for ev in merged if ev.amplitude >= floor]
+    merged = _drop_bumps(merged, params)
     t0 = float(t[0]) if t.shape[0] else 0.0
     reps = [
         Repetition(
