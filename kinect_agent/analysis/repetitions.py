@@ -5,7 +5,9 @@ Definition. A repetition is one excursion of a defining angle away from its rest
     2. its range R = p98 − p2 of the smoothed values; an angle with R < min_range_deg, or below side_ratio × the
        largest R among the exercise's angles, does not move and yields no repetitions;
     3. the rest level is the end (low p2 or high p98) nearer to the first and the last smoothed value; when
-       those two disagree (a recording cut mid-movement), the end the signal spends more time near; with
+       those two disagree (a recording cut mid-movement), the end the signal spends more time near; when it spends
+       as long near either (a symmetric oscillation, e.g. shoulder rotation), the end whose excursions number
+       closest to the cycles of the autocorrelation's period (duration / P); with
        rest="start" (the live count of a set still being recorded), the end nearer to the first value.
        The excursion e(t) = |angle − rest level|, clipped to [0, R]. Its cycle (cycles.cycle): period P from the
        autocorrelation and typical amplitude A = median prominence of the duration/P most prominent peaks (R when
@@ -47,6 +49,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from kinect_agent.analysis import cycles, series
+
+TIE_DWELL = 0.05  # |share of time below the middle − 0.5| under which neither end is the rest level
 
 
 @dataclass(frozen=True)
@@ -134,23 +138,43 @@ def _hysteresis(e: np.ndarray, enter: float, leave: float) -> np.ndarray:
     return mark[idx] == 1  # frames before the first decision read mark[0] = -1: at rest
 
 
-def _rest_is_low(y: np.ndarray, lo: float, hi: float, rest: str = "auto") -> bool:
+def _rest_is_low(y: np.ndarray, lo: float, hi: float, rest: str = "auto") -> bool | None:
     """True when the rest level is the low end: where the recording starts and ends, else where it stays longer
-    (rest="start": where it starts)."""
+    (rest="start": where it starts); None when start and end disagree and it stays as long at either end (within
+    TIE_DWELL of half the time: a symmetric oscillation, e.g. shoulder rotation)."""
     mid = 0.5 * (lo + hi)
     start_low, end_low = y[0] < mid, y[-1] < mid
     if start_low == end_low or rest == "start":
         return bool(start_low)
-    return bool(np.mean(y < mid) >= 0.5)
+    low_share = float(np.mean(y < mid))
+    if abs(low_share - 0.5) < TIE_DWELL:
+        return None
+    return low_share >= 0.5
 
 
 def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) -> list[_Event]:
-    """Returns the excursions of one smoothed angle y: (T,) degrees at t: (T,) s (steps 3-5 of the module doc)."""
+    """Returns the excursions of one smoothed angle y: (T,) degrees at t: (T,) s (steps 3-5 of the module doc).
+
+    When the rest end is a tie (_rest_is_low gives None), both ends are tried and the one whose number of
+    excursions is nearer the number of cycles the autocorrelation's period gives wins (the low end on a tie).
+    """
     lo, hi = np.percentile(y, [2.0, 98.0])
-    R = float(hi - lo)
-    if R <= 0:
+    if hi - lo <= 0:
         return []
     rest_low = _rest_is_low(y, lo, hi, params.rest)
+    if rest_low is not None:
+        return _excursions(t, y, name, params, rest_low)[0]
+    tries = [_excursions(t, y, name, params, low) for low in (True, False)]
+    return min(tries, key=lambda tried: abs(len(tried[0]) - tried[1]))[0]
+
+
+def _excursions(
+    t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams, rest_low: bool
+) -> tuple[list[_Event], int]:
+    """Returns (the excursions of y: (T,) degrees away from its low (rest_low) or high end, the cycles its period
+    gives: duration / P, 0 without a period)."""
+    lo, hi = np.percentile(y, [2.0, 98.0])
+    R = float(hi - lo)
     e = np.clip(y - lo if rest_low else hi - y, 0.0, R)
     cyc = cycles.cycle(t, e)
     e = e - cycles.baseline(t, e, cyc)
@@ -172,7 +196,7 @@ def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) ->
             continue
         amplitude = float(e[peak] - 0.5 * (base0 + base1))
         events.append(_Event(start, peak, end, amplitude, float(y[peak]), side_of(name), (name,)))
-    return events
+    return events, cyc.n_cycles if cyc.period_s is not None else 0
 
 
 def _shared(a: _Event, b: _Event) -> int:
