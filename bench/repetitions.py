@@ -4,7 +4,9 @@ Each UI-PRMD episode (`mXX_sYY_eZZ_positions[_inc].txt.gz`) is one segmented rep
 movement and subject joined (kinect_agent.formats.ui_prmd.read_episodes) hold exactly ten. Counted as the server
 counts them (kinect_agent.analysis.repetitions on the exercise's defining angles, backend.exercises.library), on the
 raw recording and after the home agent's pipeline (kinect_agent.processing.pipeline.process, defaults). Prints every
-case that is not 10, then per movement and overall: exact, off by one, off by more than one.
+case that is not 10, then per kind (correct, incorrect) and stage (raw, filtered): per movement, per subject and
+overall, exact / off by one / off by more than one. Subjects: every one found in the folders (UI-PRMD has s01-s10;
+subjects beyond s05 are held out from the detector's development and reported apart when present).
 
     python bench/repetitions.py [--data ../shared/data] [--no-filter] [--json OUT]
 
@@ -32,7 +34,7 @@ from kinect_agent.recording import Recording  # noqa: E402
 
 KINDS = {"correct": "Segmented Movements", "incorrect": "Incorrect Segmented Movements"}
 MOVEMENTS = [f"m{i:02d}" for i in range(1, 11)]
-SUBJECTS = [f"s{i:02d}" for i in range(1, 6)]
+DEVELOPED_ON = {f"s{i:02d}" for i in range(1, 6)}  # the subjects the detector was tuned on
 TRUE_COUNT = 10
 
 
@@ -43,14 +45,20 @@ def count(rec: Recording, movement: str) -> int:
     return len(count_repetitions(rec.t, counting_angles(rec.positions, names), names).repetitions)
 
 
+def subjects(folder: Path) -> list[str]:
+    """Returns the subjects ("s01") with episodes in a UI-PRMD Kinect folder, sorted."""
+    return sorted({name.split("_")[1] for name in (p.name for p in folder.rglob("m*_s*_e*_positions*"))})
+
+
 def measure(data: Path, filtered: bool) -> list[dict]:
     """Returns one row per kind, movement and subject: the raw count and (filtered=True) the count after the
     pipeline."""
     rows = []
     for kind, folder in KINDS.items():
-        for movement in MOVEMENTS:
-            for subject in SUBJECTS:
-                rec = ui_prmd.read_episodes(data / "ui-prmd" / folder / "Kinect", movement=movement, subject=subject)
+        kinect = data / "ui-prmd" / folder / "Kinect"
+        for subject in subjects(kinect):
+            for movement in MOVEMENTS:
+                rec = ui_prmd.read_episodes(kinect, movement=movement, subject=subject)
                 row = {"kind": kind, "movement": movement, "subject": subject, "raw": count(rec, movement)}
                 row["filtered"] = count(process(rec).filtered, movement) if filtered else None
                 rows.append(row)
@@ -65,7 +73,7 @@ def summary(counts: list[int]) -> str:
 
 
 def print_report(rows: list[dict]) -> None:
-    """Prints the cases that are not TRUE_COUNT, then the summaries per kind and movement."""
+    """Prints the cases that are not TRUE_COUNT, then the summaries per kind, stage, movement and subject."""
     stages = [s for s in ("raw", "filtered") if rows and rows[0][s] is not None]
     print("cases not counted 10:")
     for r in rows:
@@ -73,13 +81,17 @@ def print_report(rows: list[dict]) -> None:
             slug = next(s.slug for s in EXERCISES.values() if s.uiprmd_movement == r["movement"])
             print(f"  {r['kind']:<9} {r['movement']} {r['subject']} {slug:<36} " +
                   "  ".join(f"{s} {r[s]}" for s in stages))  # fmt: skip
-    for kind in KINDS:
-        print(f"\n{kind} executions")
-        for movement in MOVEMENTS:
-            mine = [r for r in rows if r["kind"] == kind and r["movement"] == movement]
-            print(f"  {movement}: " + "; ".join(f"{s} {summary([r[s] for r in mine])}" for s in stages))
-        mine = [r for r in rows if r["kind"] == kind]
-        print("  all: " + "; ".join(f"{s} {summary([r[s] for r in mine])}" for s in stages))
+    for held_out in (False, True):
+        for kind in KINDS:
+            mine = [r for r in rows if r["kind"] == kind and (r["subject"] not in DEVELOPED_ON) == held_out]
+            if not mine:
+                continue
+            print(f"\n{kind} executions" + (" (held-out subjects)" if held_out else ""))
+            for key in ("movement", "subject"):
+                for value in sorted({r[key] for r in mine}):
+                    part = [r for r in mine if r[key] == value]
+                    print(f"  {value}: " + "; ".join(f"{s} {summary([r[s] for r in part])}" for s in stages))
+            print("  all: " + "; ".join(f"{s} {summary([r[s] for r in mine])}" for s in stages))
 
 
 def main(argv: list[str] | None = None) -> int:

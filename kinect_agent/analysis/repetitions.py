@@ -5,28 +5,41 @@ Definition. A repetition is one excursion of a defining angle away from its rest
     2. its range R = p98 − p2 of the smoothed values; an angle with R < min_range_deg, or below side_ratio × the
        largest R among the exercise's angles, does not move and yields no repetitions;
     3. the rest level is the end (low p2 or high p98) nearer to the first and the last smoothed value; when
-       those two disagree (a recording cut mid-movement), the end the signal spends more time near; with
+       those two disagree (a recording cut mid-movement), the end the signal spends more time near; when it spends
+       as long near either (a symmetric oscillation, e.g. shoulder rotation), the end whose excursions number
+       closest to the cycles of the autocorrelation's period (duration / P); with
        rest="start" (the live count of a set still being recorded), the end nearer to the first value.
-       The excursion e(t) = |angle − rest level|, clipped to [0, R];
-    4. hysteresis: an excursion begins when e rises above enter_frac·R and ends when it falls below exit_frac·R
-       (noise smaller than (enter_frac − exit_frac)·R cannot split or add repetitions);
+       The excursion e(t) = |angle − rest level|, clipped to [0, R]. Its cycle (cycles.cycle): period P from the
+       autocorrelation and typical amplitude A = median prominence of the duration/P most prominent peaks (R when
+       there is no period); e then is taken from its lower envelope over 1.5 P (cycles.baseline), so a rest level
+       that drifts (an arm held a little further back as the set goes on) does not merge or hide repetitions;
+    4. hysteresis: an excursion begins when e rises above enter_frac·A and ends when it falls below exit_frac·A
+       (noise smaller than (enter_frac − exit_frac)·A cannot split or add repetitions). A, not R: one mistracked
+       spike inflates R (a side lunge's knee read at 175° once), and the smaller repetitions of a patient who does
+       them badly then fall under thresholds drawn from the range;
     5. each excursion is widened to its onset and return: in the stretch between the neighbouring excursions,
-       the repetition starts at the last frame (ends at the first frame) whose e is within onset_frac·R of that
+       the repetition starts at the last frame (ends at the first frame) whose e is within onset_frac·A of that
        stretch's minimum; excursions shorter than min_duration_s are dropped.
    Amplitude = e at the peak minus the mean rest e just before and just after (degrees); peak = the smoothed
    angle at the peak (degrees). Side = "left"/"right" from the angle's _L/_R suffix, "center" otherwise.
 Several angles (both sides): repetitions of different angles that overlap in time by more than merge_overlap of
 the shorter one are one repetition (side "both", amplitude and peak averaged). A repetition of one side alone
-counts when that side is the dominant one (largest R), or when that side alternates with the dominant one: at
-most alternate_shared of its excursions coincide with the dominant side's. A side that sometimes moves together
-with the dominant one and sometimes alone is the other limb drifting or mistracked (UI-PRMD one-arm movements
-show the idle arm wandering by 40-50°), and its lone excursions are not repetitions. When at least half of the
+counts when that side is the dominant one, or when that side alternates with the dominant one: at most
+alternate_shared of its excursions overlap one of the dominant side's by more than alternate_overlap of their own
+duration. The dominant side is the one whose excursions add up to the most degrees (Σ amplitude): the limb that
+repeats the movement, not the one with the largest range (an idle arm mistracked through 130° three times beside
+ten 40° shoulder extensions). A side that sometimes moves together with the dominant one and sometimes alone, or
+follows it half a repetition late, is the other limb drifting or mistracked (UI-PRMD one-arm movements show the
+idle arm wandering by 40-50°), and its lone excursions are not repetitions. When at least half of the
 repetitions are "both" (a bilateral exercise), a one-sided excursion counts only if its amplitude reaches
 lone_ratio × the median amplitude of the "both" repetitions (one limb's filtered angle can bump by a third of
 the range at rest). So a bilateral exercise counts once per movement, an alternating one counts each side's
 movement, a one-sided one the moving side. Last, an excursion smaller than min_ratio (0.4) × the median amplitude
-of the counted ones is a bump, not a repetition (filtered Kinect knees can bump by 35° at rest; UI-PRMD's
-smallest genuine repetitions are half the median).
+of the counted ones is a bump, not a repetition (filtered Kinect knees can bump by 35° at rest), unless it reaches
+shallow_ratio (0.2) × that median and lasts at least shallow_duration (0.6) × the median duration: a shallow
+repetition still takes a repetition's time (UI-PRMD incorrect executions: first repetitions at a quarter to a third
+of the others' amplitude), a bump is brief (simulated filtered squats: 30° bumps of a third to half a repetition's
+duration).
 """
 
 from __future__ import annotations
@@ -35,21 +48,26 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from kinect_agent.analysis import series
+from kinect_agent.analysis import cycles, series
+
+TIE_DWELL = 0.05  # |share of time below the middle − 0.5| under which neither end is the rest level
 
 
 @dataclass(frozen=True)
 class RepetitionParams:
     """Thresholds of the repetition detector; fractions are of the angle's own range R."""
 
-    enter_frac: float = 0.35
+    enter_frac: float = 0.3
     exit_frac: float = 0.2
     onset_frac: float = 0.1
     min_range_deg: float = 10.0
     side_ratio: float = 0.35
     alternate_shared: float = 0.2
+    alternate_overlap: float = 0.2
     lone_ratio: float = 0.6
     min_ratio: float = 0.4
+    shallow_ratio: float = 0.2
+    shallow_duration: float = 0.6
     min_duration_s: float = 0.4
     merge_overlap: float = 0.5
     rest: str = "auto"  # "auto": step 3 of the module doc; "start": where the recording starts (a set counted live)
@@ -120,24 +138,47 @@ def _hysteresis(e: np.ndarray, enter: float, leave: float) -> np.ndarray:
     return mark[idx] == 1  # frames before the first decision read mark[0] = -1: at rest
 
 
-def _rest_is_low(y: np.ndarray, lo: float, hi: float, rest: str = "auto") -> bool:
+def _rest_is_low(y: np.ndarray, lo: float, hi: float, rest: str = "auto") -> bool | None:
     """True when the rest level is the low end: where the recording starts and ends, else where it stays longer
-    (rest="start": where it starts)."""
+    (rest="start": where it starts); None when start and end disagree and it stays as long at either end (within
+    TIE_DWELL of half the time: a symmetric oscillation, e.g. shoulder rotation)."""
     mid = 0.5 * (lo + hi)
     start_low, end_low = y[0] < mid, y[-1] < mid
     if start_low == end_low or rest == "start":
         return bool(start_low)
-    return bool(np.mean(y < mid) >= 0.5)
+    low_share = float(np.mean(y < mid))
+    if abs(low_share - 0.5) < TIE_DWELL:
+        return None
+    return low_share >= 0.5
 
 
 def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) -> list[_Event]:
-    """Returns the excursions of one smoothed angle y: (T,) degrees at t: (T,) s (steps 3-5 of the module doc)."""
+    """Returns the excursions of one smoothed angle y: (T,) degrees at t: (T,) s (steps 3-5 of the module doc).
+
+    When the rest end is a tie (_rest_is_low gives None), both ends are tried and the one whose number of
+    excursions is nearer the number of cycles the autocorrelation's period gives wins (the low end on a tie).
+    """
     lo, hi = np.percentile(y, [2.0, 98.0])
-    R = float(hi - lo)
-    if R <= 0:
+    if hi - lo <= 0:
         return []
     rest_low = _rest_is_low(y, lo, hi, params.rest)
+    if rest_low is not None:
+        return _excursions(t, y, name, params, rest_low)[0]
+    tries = [_excursions(t, y, name, params, low) for low in (True, False)]
+    return min(tries, key=lambda tried: abs(len(tried[0]) - tried[1]))[0]
+
+
+def _excursions(
+    t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams, rest_low: bool
+) -> tuple[list[_Event], int]:
+    """Returns (the excursions of y: (T,) degrees away from its low (rest_low) or high end, the cycles its period
+    gives: duration / P, 0 without a period)."""
+    lo, hi = np.percentile(y, [2.0, 98.0])
+    R = float(hi - lo)
     e = np.clip(y - lo if rest_low else hi - y, 0.0, R)
+    cyc = cycles.cycle(t, e)
+    e = e - cycles.baseline(t, e, cyc)
+    R = cyc.amplitude_deg if cyc.amplitude_deg > 0 else R
     inside = _hysteresis(e, params.enter_frac * R, params.exit_frac * R)
     edges = np.flatnonzero(np.diff(np.concatenate(([0], inside.astype(np.int8), [0]))))
     runs = edges.reshape(-1, 2)  # [first, stop) of each excursion core
@@ -155,7 +196,7 @@ def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) ->
             continue
         amplitude = float(e[peak] - 0.5 * (base0 + base1))
         events.append(_Event(start, peak, end, amplitude, float(y[peak]), side_of(name), (name,)))
-    return events
+    return events, cyc.n_cycles if cyc.period_s is not None else 0
 
 
 def _shared(a: _Event, b: _Event) -> int:
@@ -222,11 +263,34 @@ def _drop_weak_lone(merged: list[_Event], lone_ratio: float) -> list[_Event]:
     return [ev for ev in merged if ev.side == "both" or ev.amplitude >= floor]
 
 
-def _alternates(name: str, dominant: str, events: list[_Event], merged: list[_Event], params: RepetitionParams) -> bool:
-    """True when at most alternate_shared of the excursions of angle `name` coincide with the dominant angle's."""
-    own = sum(1 for ev in events if ev.angles == (name,))
-    shared = sum(1 for ev in merged if name in ev.angles and dominant in ev.angles)
-    return own > 0 and shared <= params.alternate_shared * own
+def _drop_bumps(merged: list[_Event], params: RepetitionParams) -> list[_Event]:
+    """Drops the excursions below min_ratio × the median amplitude, except those above shallow_ratio × it that last
+    at least shallow_duration × the median duration (a shallow repetition takes a repetition's time, a bump not)."""
+    if not merged:
+        return merged
+    amplitude = float(np.median([ev.amplitude for ev in merged]))
+    duration = float(np.median([ev.end - ev.start for ev in merged]))
+    shallow_floor, long_enough = params.shallow_ratio * amplitude, params.shallow_duration * duration
+    return [
+        ev
+        for ev in merged
+        if ev.amplitude >= params.min_ratio * amplitude
+        or (ev.amplitude >= shallow_floor and ev.end - ev.start >= long_enough)
+    ]
+
+
+def _alternates(name: str, dominant: str, events: list[_Event], params: RepetitionParams) -> bool:
+    """True when at most alternate_shared of the excursions of angle `name` (those above min_ratio × their median
+    amplitude) overlap one of the dominant angle's by more than alternate_overlap of their own duration."""
+    own = [ev for ev in events if ev.angles == (name,)]
+    if own:  # its bumps (below min_ratio × its median amplitude) neither make nor break the alternation
+        floor = params.min_ratio * float(np.median([ev.amplitude for ev in own]))
+        own = [ev for ev in own if ev.amplitude >= floor]
+    lead = [ev for ev in events if ev.angles == (dominant,)]
+    shared = sum(
+        1 for ev in own if any(_shared(ev, d) > params.alternate_overlap * max(1, ev.end - ev.start) for d in lead)
+    )
+    return bool(own) and shared <= params.alternate_shared * len(own)
 
 
 def count_repetitions(
@@ -246,16 +310,13 @@ def count_repetitions(
     ranges = {n: angle_range(y) if np.all(np.isfinite(y)) else 0.0 for n, y in smoothed.items()}
     top = max(ranges.values(), default=0.0)
     moving = tuple(n for n in names if ranges[n] >= max(params.min_range_deg, params.side_ratio * top))
-    events: list[_Event] = []
-    for name in moving:
-        events += detect(t, smoothed[name], name, params)
-    dominant = max(moving, key=lambda n: ranges[n]) if moving else None
+    per_angle = {name: detect(t, smoothed[name], name, params) for name in moving}
+    events = [ev for name in moving for ev in per_angle[name]]
+    dominant = max(moving, key=lambda n: sum(ev.amplitude for ev in per_angle[n])) if moving else None
     merged = _merge(events, params.merge_overlap)
-    counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, merged, params)}
+    counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, params)}
     merged = _drop_weak_lone(_keep_counted(merged, counted), params.lone_ratio)
-    if merged:
-        floor = params.min_ratio * float(np.median([ev.amplitude for ev in merged]))
-        merged = [ev for ev in merged if ev.amplitude >= floor]
+    merged = _drop_bumps(merged, params)
     t0 = float(t[0]) if t.shape[0] else 0.0
     reps = [
         Repetition(
