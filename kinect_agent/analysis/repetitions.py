@@ -96,7 +96,9 @@ class Repetition:
 
 
 @dataclass(frozen=True)
-class _Event:
+class RepEvent:
+    """One excursion of one angle (or of both sides once merged): frames of onset, peak and end."""
+
     start: int  # frame of onset
     peak: int
     end: int  # frame of return
@@ -152,7 +154,7 @@ def _rest_is_low(y: np.ndarray, lo: float, hi: float, rest: str = "auto") -> boo
     return low_share >= 0.5
 
 
-def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) -> list[_Event]:
+def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) -> list[RepEvent]:
     """Returns the excursions of one smoothed angle y: (T,) degrees at t: (T,) s (steps 3-5 of the module doc).
 
     When the rest end is a tie (_rest_is_low gives None), both ends are tried and the one whose number of
@@ -170,7 +172,7 @@ def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) ->
 
 def _excursions(
     t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams, rest_low: bool
-) -> tuple[list[_Event], int]:
+) -> tuple[list[RepEvent], int]:
     """Returns (the excursions of y: (T,) degrees away from its low (rest_low) or high end, the cycles its period
     gives: duration / P, 0 without a period)."""
     lo, hi = np.percentile(y, [2.0, 98.0])
@@ -182,7 +184,7 @@ def _excursions(
     inside = _hysteresis(e, params.enter_frac * R, params.exit_frac * R)
     edges = np.flatnonzero(np.diff(np.concatenate(([0], inside.astype(np.int8), [0]))))
     runs = edges.reshape(-1, 2)  # [first, stop) of each excursion core
-    events: list[_Event] = []
+    events: list[RepEvent] = []
     T = y.shape[0]
     for k, (a, b) in enumerate(runs):
         prev_stop = runs[k - 1][1] if k else 0
@@ -195,23 +197,23 @@ def _excursions(
         if t[end] - t[start] < params.min_duration_s:
             continue
         amplitude = float(e[peak] - 0.5 * (base0 + base1))
-        events.append(_Event(start, peak, end, amplitude, float(y[peak]), side_of(name), (name,)))
+        events.append(RepEvent(start, peak, end, amplitude, float(y[peak]), side_of(name), (name,)))
     return events, cyc.n_cycles if cyc.period_s is not None else 0
 
 
-def _shared(a: _Event, b: _Event) -> int:
+def _shared(a: RepEvent, b: RepEvent) -> int:
     """Frames two events share (0 when they do not overlap)."""
     return max(0, min(a.end, b.end) - max(a.start, b.start))
 
 
-def _merge(events: list[_Event], overlap: float) -> list[_Event]:
+def merge_events(events: list[RepEvent], overlap: float) -> list[RepEvent]:
     """Joins events of different angles that overlap by more than `overlap` of the shorter one.
 
     When an event of a side already in the group overlaps the group's other members more than that side's member
     does (a bump just before the real excursion of one knee paired first with the other knee's excursion), the
     event takes the member's place and the member stands alone.
     """
-    merged: list[list[_Event]] = []
+    merged: list[list[RepEvent]] = []
     for ev in sorted(events, key=lambda ev: ev.start):
         if merged:
             group = merged[-1]
@@ -237,7 +239,7 @@ def _merge(events: list[_Event], overlap: float) -> list[_Event]:
             out.append(group[0])
             continue
         out.append(
-            _Event(
+            RepEvent(
                 start=min(x.start for x in group),
                 peak=max(group, key=lambda x: x.amplitude).peak,
                 end=max(x.end for x in group),
@@ -250,11 +252,11 @@ def _merge(events: list[_Event], overlap: float) -> list[_Event]:
     return sorted(out, key=lambda ev: ev.start)
 
 
-def _keep_counted(merged: list[_Event], counted: set[str]) -> list[_Event]:
+def _keep_counted(merged: list[RepEvent], counted: set[str]) -> list[RepEvent]:
     return [ev for ev in merged if counted & set(ev.angles)]
 
 
-def _drop_weak_lone(merged: list[_Event], lone_ratio: float) -> list[_Event]:
+def _drop_weak_lone(merged: list[RepEvent], lone_ratio: float) -> list[RepEvent]:
     """In a bilateral session (at least half the events "both"), drops one-sided events below lone_ratio × median."""
     both = [ev.amplitude for ev in merged if ev.side == "both"]
     if not merged or 2 * len(both) < len(merged):
@@ -263,7 +265,7 @@ def _drop_weak_lone(merged: list[_Event], lone_ratio: float) -> list[_Event]:
     return [ev for ev in merged if ev.side == "both" or ev.amplitude >= floor]
 
 
-def _drop_bumps(merged: list[_Event], params: RepetitionParams) -> list[_Event]:
+def _drop_bumps(merged: list[RepEvent], params: RepetitionParams) -> list[RepEvent]:
     """Drops the excursions below min_ratio × the median amplitude, except those above shallow_ratio × it that last
     at least shallow_duration × the median duration (a shallow repetition takes a repetition's time, a bump not)."""
     if not merged:
@@ -279,7 +281,7 @@ def _drop_bumps(merged: list[_Event], params: RepetitionParams) -> list[_Event]:
     ]
 
 
-def _alternates(name: str, dominant: str, events: list[_Event], params: RepetitionParams) -> bool:
+def _alternates(name: str, dominant: str, events: list[RepEvent], params: RepetitionParams) -> bool:
     """True when at most alternate_shared of the excursions of angle `name` (those above min_ratio × their median
     amplitude) overlap one of the dominant angle's by more than alternate_overlap of their own duration."""
     own = [ev for ev in events if ev.angles == (name,)]
@@ -313,7 +315,7 @@ def count_repetitions(
     per_angle = {name: detect(t, smoothed[name], name, params) for name in moving}
     events = [ev for name in moving for ev in per_angle[name]]
     dominant = max(moving, key=lambda n: sum(ev.amplitude for ev in per_angle[n])) if moving else None
-    merged = _merge(events, params.merge_overlap)
+    merged = merge_events(events, params.merge_overlap)
     counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, params)}
     merged = _drop_weak_lone(_keep_counted(merged, counted), params.lone_ratio)
     merged = _drop_bumps(merged, params)

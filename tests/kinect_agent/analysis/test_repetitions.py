@@ -163,13 +163,13 @@ def test_a_bump_before_one_knees_excursion_does_not_split_the_repetition() -> No
     """Right knee bends over frames 86-119; the left knee bumps (87-95) before its own bend (99-133). The right
     excursion pairs with the left bend it overlaps most; the bump stands alone and is dropped as a weak lone event.
     Found on a simulated squat after the pipeline (7 squats counted as 8)."""
-    from kinect_agent.analysis.repetitions import _Event, _merge
+    from kinect_agent.analysis.repetitions import RepEvent, merge_events
 
     def ev(start, end, amplitude, side):
-        return _Event(start=start, peak=(start + end) // 2, end=end, amplitude=amplitude, peak_deg=amplitude,
+        return RepEvent(start=start, peak=(start + end) // 2, end=end, amplitude=amplitude, peak_deg=amplitude,
                       side=side, angles=(f"knee_flexion_{side[0].upper()}",))  # fmt: skip
 
-    merged = _merge([ev(86, 119, 92.5, "right"), ev(87, 95, 31.2, "left"), ev(99, 133, 90.3, "left")], 0.5)
+    merged = merge_events([ev(86, 119, 92.5, "right"), ev(87, 95, 31.2, "left"), ev(99, 133, 90.3, "left")], 0.5)
     assert [(m.side, m.start, m.end) for m in merged] == [("both", 86, 133), ("left", 87, 95)]
 
 
