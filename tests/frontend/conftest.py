@@ -75,11 +75,11 @@ def api_client(base: str, email: str) -> tuple[httpx.Client, dict[str, str]]:
 
 
 def upload_session(base: str, email: str, exercise: str, reps: int, *, seed: int,
-                   created_at: str = "2026-11-20T10:00:00Z") -> dict:  # fmt: skip
-    """Uploads a simulated set (tests.backend.khs_files.make_khs) as the demo patient `email`; returns the stored
-    session (201 asserted)."""
+                   created_at: str = "2026-11-20T10:00:00Z", data: bytes | None = None) -> dict:  # fmt: skip
+    """Uploads a simulated set (tests.backend.khs_files.make_khs, or the file `data`) as the demo patient `email`;
+    returns the stored session (201 asserted)."""
     client, headers = api_client(base, email)
-    data = make_khs(exercise, reps, seed=seed, created_at=created_at)
+    data = data or make_khs(exercise, reps, seed=seed, created_at=created_at)
     try:
         r = client.post(f"/api/v1/sessions?exercise={exercise}", content=data,
                         headers=headers | {"Content-Type": "application/octet-stream"})  # fmt: skip

@@ -130,6 +130,29 @@ def test_arm_exercise_shows_the_reach_of_each_arm(page, live_server, arm_session
     assert not page.js_errors
 
 
+def test_a_session_filtered_at_home_shows_its_95_percent_intervals(page, live_server):
+    """A file the home agent made (pipeline output with angle SDs) shows the full range and the peak angle of the
+    defining angle with their 95 % intervals, the interval around the number shown."""
+    from tests.backend.khs_files import make_processed_khs
+
+    data = make_processed_khs("shoulder_abduction", 4, seed=23)
+    sid = upload_session(live_server.url, GEORGE, "shoulder_abduction", 4, seed=23, data=data)["id"]
+    login(page, PAUL)
+    page.wait_for_url("**/therapist")
+    page.goto(f"/therapist/sessions/{sid}")
+    stats = page.locator("#numbers .stat")
+    expect(stats.filter(has_text="Full range")).to_have_count(1)
+    for label in ("Full range", "Peak angle"):
+        text = stats.filter(has_text=label).inner_text()
+        found = re.search(r"(-?[\d.]+)°.*?(-?[\d.]+)–(-?[\d.]+)° \(95 %\)", text, re.S)
+        assert found, f"{label}: no value and interval in {text!r}"
+        value, low, high = (float(x) for x in found.groups())
+        assert low - 0.5 <= value <= high + 0.5 and high > low, f"{label}: {text!r}"  # the interval is rounded
+        assert "(95 %)" in text, text
+    shot(page, "session_intervals_1366")
+    assert not page.js_errors
+
+
 def test_patient_gets_403_on_the_session_page(page, live_server):
     login(page, PATIENT)
     page.wait_for_url("**/patient")
