@@ -20,15 +20,28 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--pairs", type=Path, action="append", default=[],
                         help="folder of pairs: X-Kinect-* with X-Vicon-*, .../Kinect/... with .../Vicon/..., or "
                              "NAME_kinect.* with NAME_mocap.* (repeatable)")  # fmt: skip
-    parser.add_argument("--view", type=float, action="append", default=[],
-                        help="view angle from the frontal direction, degrees (one for all pairs, or one per pair)")
-    parser.add_argument("--pose", choices=("sitting", "standing"), action="append", default=[],
-                        help="pose of the exercises (one for all pairs, or one per pair; default standing)")
+    parser.add_argument(
+        "--view",
+        type=float,
+        action="append",
+        default=[],
+        help="view angle from the frontal direction, degrees (one for all pairs, or one per pair)",
+    )
+    parser.add_argument(
+        "--pose",
+        choices=("sitting", "standing"),
+        action="append",
+        default=[],
+        help="pose of the exercises (one for all pairs, or one per pair; default standing)",
+    )
     parser.add_argument("--out", type=Path, required=True, help="folder for report.md, the CSV tables, the figures")
     parser.add_argument("--kinect-format", help="Kinect file format (default: detected)")
     parser.add_argument("--mocap-format", help="mocap file format (default: detected)")
-    parser.add_argument("--no-registration", action="store_true",
-                        help="the mocap is already in the Kinect camera frame (calibrated): align in time only")
+    parser.add_argument(
+        "--no-registration",
+        action="store_true",
+        help="the mocap is already in the Kinect camera frame (calibrated): align in time only",
+    )
     parser.add_argument("--max-lag", type=float, default=2.0, help="largest time offset searched, s (default 2)")
     parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures (no matplotlib needed)")
 
@@ -79,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
         return 1
     for r in outcome.refused:
         print(f"kinect-agent evaluate: {r}", file=sys.stderr)
-    print(f"{len(outcome.errors)} pair(s) evaluated, {len(outcome.refused)} refused; report in {args.out / 'report.md'}",
+    report = args.out / "report.md"
+    print(f"{len(outcome.errors)} pair(s) evaluated, {len(outcome.refused)} refused; report in {report}",
           file=sys.stderr)  # fmt: skip
     return 0

@@ -81,7 +81,12 @@ def xcorr_lag(kinect: Recording, mocap: Recording, joints: np.ndarray, max_lag_s
 
 
 def registration_rms(
-    t_k: np.ndarray, p_k: np.ndarray, mocap: Recording, lag: float, joints: np.ndarray, min_overlap: float = 0.0,
+    t_k: np.ndarray,
+    p_k: np.ndarray,
+    mocap: Recording,
+    lag: float,
+    joints: np.ndarray,
+    min_overlap: float = 0.0,
     rigid: bool = True,
 ) -> float:
     """Returns the trimmed registration RMS (m) of mocap at t_k + lag onto p_k (T, J, 3) m; inf with too little
@@ -96,7 +101,12 @@ def registration_rms(
 
 
 def fine_lag(
-    kinect: Recording, mocap: Recording, joints: np.ndarray, around: float, frames: slice = slice(None), rigid: bool = True
+    kinect: Recording,
+    mocap: Recording,
+    joints: np.ndarray,
+    around: float,
+    frames: slice = slice(None),
+    rigid: bool = True,
 ) -> float:
     """Returns the lag (s) within around +- 2 Kinect frames minimising the trimmed registration RMS (over `frames`)."""
     half_width = 2.0 / frame_rate(kinect)
@@ -130,6 +140,21 @@ class Alignment:
     lag_rms_s: float | None
     lag_halves_s: tuple[float, float]
     registration: Registration
+
+    @property
+    def R(self) -> np.ndarray:
+        """Returns the registration's rotation (3, 3)."""
+        return self.registration.R
+
+    @property
+    def t(self) -> np.ndarray:
+        """Returns the registration's translation (3,) m."""
+        return self.registration.t
+
+    @property
+    def rms_m(self) -> float:
+        """Returns the registration's trimmed RMS residual, m."""
+        return self.registration.rms_m
 
     def truth(self, kinect: Recording, mocap: Recording) -> np.ndarray:
         """Returns the mocap joints (T, J, 3) m at the Kinect frames, Kinect camera frame; NaN outside the overlap."""

@@ -1,8 +1,8 @@
 """The paper's figures from measured pairs, as PNG (matplotlib, Agg backend; imported only when drawing):
-    figure 3  per scored joint: the histogram of the raw offset distance with the Gaussian + uniform mixture fitted
-              to it (kinect_agent.processing.outliers.fit_mixture, 1-D, the pipeline's floors) drawn over it
-    figure 4  joint angles over time of one pair: Kinect raw, Kinect filtered (the pipeline) and mocap, for the two
-              angles with the largest mocap range
+figure 3  per scored joint: the histogram of the raw offset distance with the Gaussian + uniform mixture fitted
+          to it (kinect_agent.processing.outliers.fit_mixture, 1-D, the pipeline's floors) drawn over it
+figure 4  joint angles over time of one pair: Kinect raw, Kinect filtered (the pipeline) and mocap, for the two
+          angles with the largest mocap range
 """
 
 from __future__ import annotations

@@ -23,7 +23,12 @@ class Registration:
 
     def rotation_deg(self) -> float:
         """Returns the angle (degrees) of the rotation."""
-        return float(np.degrees(np.arccos(np.clip((np.trace(self.R) - 1.0) / 2.0, -1.0, 1.0))))
+        return rotation_deg(self.R)
+
+
+def rotation_deg(R: np.ndarray) -> float:
+    """Returns the angle (degrees) of the rotation R (3, 3)."""
+    return float(np.degrees(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0))))
 
 
 def kabsch(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -65,7 +70,9 @@ def trimmed_rms(src: np.ndarray, dst: np.ndarray, trim: float = TRIM) -> float:
     return float(np.sqrt(np.mean(r[r <= np.quantile(r, 1.0 - trim)] ** 2)))
 
 
-def register(src: np.ndarray, dst: np.ndarray, joints: np.ndarray, rigid: bool = True, trim: float = TRIM) -> Registration:
+def register(
+    src: np.ndarray, dst: np.ndarray, joints: np.ndarray, rigid: bool = True, trim: float = TRIM
+) -> Registration:
     """Returns the trimmed rigid fit taking src onto dst over the joints (J,) bool; src, dst: (T, J, 3) m.
 
     rigid=False: the two are already in one frame (calibrated, as in the paper): the identity and its trimmed RMS.

@@ -73,7 +73,8 @@ def evaluate(specs: list[PairSpec], out: Path, *, config: PipelineConfig | None 
         "pairs": [pair_summary(e) for e in errors],
         "refused": [{"name": r.name, "reasons": r.reasons} for r in refused],
         "registration": "rigid (Kabsch)" if rigid else "none (mocap given in the Kinect camera frame)",
-        "tables": written, "figures": pngs,
+        "tables": written,
+        "figures": pngs,
     }
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=_json_default), encoding="utf-8")
     (out / "report.md").write_text(markdown(summary), encoding="utf-8")
