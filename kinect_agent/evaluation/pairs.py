@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from kinect_agent import formats, skeleton
-from kinect_agent.errors import AgentError
+from kinect_agent.errors import AgentError, UnknownFormat
 from kinect_agent.evaluation.align import MAX_LAG_S, Alignment, align, frame_rate
 from kinect_agent.recording import Recording
 
@@ -162,20 +162,30 @@ def _twin(path: Path) -> Path | None:
         candidates.append(Path(*parts[:i], "Vicon", *parts[i + 1 :]))
     stem, _, rest = path.name.partition(".")
     if stem.endswith("_kinect"):
-        candidates += sorted(path.parent.glob(stem[: -len("kinect")] + "mocap.*"))
+        candidates.append(path.with_name(f"{stem[: -len('kinect')]}mocap.{rest}"))
     return next((c for c in candidates if c.is_file() and c != path), None)
+
+
+def _readable(path: Path) -> bool:
+    """Returns True when some format recognises the file (folders also hold angle files, notes, ...)."""
+    try:
+        formats.detect(path)
+    except UnknownFormat:
+        return False
+    return True
 
 
 def find_pairs(folder: Path) -> list[tuple[Path, Path]]:
     """Returns the (Kinect, mocap) files under folder, sorted. A Kinect file is paired with: the same name with
     "Kinect" -> "Vicon" (KERAAL), the same path with a Kinect/ folder -> Vicon/ (UI-PRMD), or NAME_kinect.* with
-    NAME_mocap.* (any other format)."""
+    NAME_mocap.* with the same extension (any other format). Side files (*.meta.json) and files no format
+    recognises are skipped."""
     if not folder.is_dir():
         raise FileNotFoundError(f"{folder}: not a folder")
     out = []
-    for path in sorted(p for p in folder.rglob("*") if p.is_file()):
+    for path in sorted(p for p in folder.rglob("*") if p.is_file() and not p.name.endswith(".meta.json")):
         if "Kinect" in path.name or "Kinect" in path.parts[len(folder.parts) :] or "_kinect." in path.name:
             twin = _twin(path)
-            if twin is not None:
+            if twin is not None and _readable(path) and _readable(twin):
                 out.append((path, twin))
     return out
