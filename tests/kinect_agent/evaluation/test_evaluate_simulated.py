@@ -147,3 +147,15 @@ def test_missing_matplotlib_is_a_clear_error(monkeypatch: pytest.MonkeyPatch) ->
     monkeypatch.setitem(sys.modules, "matplotlib", None)
     with pytest.raises(figures.PlottingUnavailable, match=r"kinect-home-coach\[evaluate\]"):
         figures.pyplot()
+
+
+def test_without_matplotlib_the_command_stops_before_the_work(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    kinect, mocap, _ = simulated_pair(2, 0.3, reps=3)
+    k, m = write_pair(tmp_path, "p", kinect, mocap)
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    rc = main(["evaluate", "--kinect", str(k), "--mocap", str(m), "--out", str(tmp_path / "out")])
+    assert rc == 2
+    assert "--no-figures" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
