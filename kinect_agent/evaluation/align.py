@@ -54,20 +54,26 @@ def measured(rec: Recording) -> np.ndarray:
     return np.where((rec.state == NOT_TRACKED)[..., None], np.nan, rec.positions)
 
 
-def despiked(rec: Recording, joints: np.ndarray) -> np.ndarray:
+def despiked(rec: Recording, joints: np.ndarray, window_s: float = MEDIAN_S) -> np.ndarray:
     """Returns (T, J', 3) m: the joints (indices) of rec, untracked NaN, through a centred running median of
-    MEDIAN_S seconds (tracking-loss bursts would otherwise dominate the summed speed; a centred median adds no lag)."""
-    w = max(3, int(round(MEDIAN_S * frame_rate(rec))) | 1)
+    window_s seconds (tracking-loss bursts would otherwise dominate the summed speed; a centred median adds no lag);
+    window_s = 0: as measured."""
+    if window_s <= 0.0:
+        return measured(rec)[:, joints]
+    w = max(3, int(round(window_s * frame_rate(rec))) | 1)
     return running_median(measured(rec)[:, joints], w)
 
 
-def xcorr_lag(kinect: Recording, mocap: Recording, joints: np.ndarray, max_lag_s: float) -> tuple[float, float]:
-    """Returns (lag s, correlation) maximising the correlation of the summed joint speeds; joints (J,) bool."""
+def xcorr_lag(
+    kinect: Recording, mocap: Recording, joints: np.ndarray, max_lag_s: float, despike_s: float = MEDIAN_S
+) -> tuple[float, float]:
+    """Returns (lag s, correlation) maximising the correlation of the summed joint speeds; joints (J,) bool;
+    despike_s: running-median window applied before the speeds (despiked)."""
     t_k, rate = kinect.t, frame_rate(kinect)
     idx = np.flatnonzero(joints)
     all_joints = np.arange(len(idx))
-    s_k = speed_signal(despiked(kinect, idx), all_joints, rate)
-    p_m = despiked(mocap, idx)
+    s_k = speed_signal(despiked(kinect, idx, despike_s), all_joints, rate)
+    p_m = despiked(mocap, idx, despike_s)
     best, best_c = 0.0, -np.inf
     for lag in np.arange(-max_lag_s, max_lag_s + 1e-9, LAG_STEP_S):
         s_m = speed_signal(interpolate(mocap.t, p_m, t_k + lag), all_joints, rate)
@@ -168,13 +174,15 @@ def align(
     max_lag_s: float = MAX_LAG_S,
     check: bool = True,
     rigid: bool = True,
+    despike_s: float = MEDIAN_S,
 ) -> Alignment:
     """Finds the lag and the rigid transform taking mocap (any rate) onto the Kinect frames, using the joints (J,) bool.
 
     check: also the independent registration-RMS lag (rms_lag), for refusing pairs whose two estimates disagree.
     rigid=False: mocap is already in the Kinect camera frame (calibrated); only the lag is estimated.
+    despike_s: running-median window before the speeds (0: the speeds as measured, as bench/README.md's runs).
     """
-    coarse, c = xcorr_lag(kinect, mocap, joints, max_lag_s)
+    coarse, c = xcorr_lag(kinect, mocap, joints, max_lag_s, despike_s)
     lag = fine_lag(kinect, mocap, joints, coarse, rigid=rigid)
     half = kinect.n_frames // 2
     halves = (
