@@ -74,7 +74,7 @@ def mixture_figure(errors: list[PairErrors], path: Path, config: PipelineConfig 
 
 def angle_figure(e: PairErrors, path: Path) -> list[str]:
     """Draws figure 4 for one pair to path (PNG); returns the angles drawn (none: nothing written)."""
-    series = {s: joint_angles(np.nan_to_num(x, nan=np.nan)) for s, x in
+    series = {s: joint_angles(x) for s, x in
               (("raw", e.estimates["raw"]), ("filtered", e.estimates["pipeline"]), ("mocap", e.truth))}  # fmt: skip
     ranges = {}
     for name in ANGLES:
