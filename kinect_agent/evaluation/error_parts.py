@@ -86,14 +86,15 @@ class JointErrorSums:
         """Returns empty sums for n_joints joints."""
         return cls(np.zeros(n_joints), np.zeros(n_joints), np.zeros(n_joints))
 
-    def add(self, estimate: np.ndarray, truth: np.ndarray) -> None:
-        """Adds one recording: estimate, truth (T, J, 3) m, camera frame; NaN in either = not counted."""
-        ok = np.all(np.isfinite(estimate), axis=-1) & np.all(np.isfinite(truth), axis=-1)
-        frames = np.all(np.isfinite(truth), axis=(1, 2))
-        err = np.full(estimate.shape, np.nan)
-        if frames.any():
-            err[frames] = np.einsum("tab,tjb->tja", body_rotations(truth[frames]), estimate[frames] - truth[frames])
-        ok &= np.all(np.isfinite(err), axis=-1)
+    def add(self, estimate: np.ndarray, truth: np.ndarray, frame: np.ndarray | None = None) -> None:
+        """Adds one recording: estimate, truth (T, J, 3) m, camera frame; NaN in either = not counted.
+
+        frame: (T, J, 3) m, the positions whose body frame (body_rotations) the errors are expressed in, default
+        truth (give the full mocap when truth is masked to the scored joints); frames without one are not counted.
+        """
+        R = body_rotations(truth if frame is None else frame)  # (T, 3, 3), NaN where the trunk joints are missing
+        err = np.einsum("tab,tjb->tja", R, estimate - truth)
+        ok = np.all(np.isfinite(err), axis=-1)
         z = np.where(ok[..., None], err, 0.0)
         n = ok.sum(axis=0)
         self.n += n

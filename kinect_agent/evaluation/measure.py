@@ -27,12 +27,14 @@ STAGES = ("raw", "clean", "pipeline")
 @dataclass(frozen=True)
 class PairErrors:
     """One pair's errors on its overlap frames T'. estimates: {stage: (T', J, 3) m, NaN = not counted}; truth:
-    (T', J, 3) m, Kinect camera frame, NaN at unscored joints; t: (T',) s; pipeline_flags: (T', J) bool;
+    (T', J, 3) m, Kinect camera frame, NaN at unscored joints; mocap: (T', J, 3) m, the same with every mocap joint
+    (its trunk gives the body frame of the error parts); t: (T',) s; pipeline_flags: (T', J) bool;
     mixture: the clean stage's fit (K = J columns, D = 3)."""
 
     pair: Pair
     t: np.ndarray
     truth: np.ndarray
+    mocap: np.ndarray
     estimates: dict[str, np.ndarray]
     pipeline_flags: np.ndarray
     mixture: MixtureFit
@@ -66,4 +68,4 @@ def measure(pair: Pair, config: PipelineConfig | None = None) -> PairErrors:
         "clean": np.where(outliers[..., None], np.nan, raw),
         "pipeline": res.filtered.positions[ov],
     }
-    return PairErrors(pair, k.t[ov], truth, estimates, flags[ov], mix)
+    return PairErrors(pair, k.t[ov], truth, pair.truth[ov], estimates, flags[ov], mix)

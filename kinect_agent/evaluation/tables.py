@@ -101,7 +101,7 @@ def error_parts_table(errors: list[PairErrors]) -> Table:
     for stage in STAGES:
         sums = JointErrorSums.zeros(skeleton.J)
         for e in errors:
-            sums.add(e.estimates[stage], e.truth)
+            sums.add(e.estimates[stage], e.truth, e.mocap)
         parts = sums.rms_mm()
         for j, name in enumerate(skeleton.JOINTS):
             if parts["n"][j]:

@@ -66,6 +66,14 @@ def test_writes_every_table_and_a_report(simulated_report: tuple[Path, int]) -> 
     with open(out / "outlier_removal_gain_pct.csv", encoding="utf-8") as f:
         gain = {r["removal"]: r for r in csv.DictReader(f)}
     assert 0.0 < float(gain["mixture"]["sd_gain_0"]) < 80.0  # the simulator's tracking loss is removed
+    with open(out / "error_parts_mm.csv", encoding="utf-8") as f:
+        parts = list(csv.DictReader(f))
+    assert {(r["stage"], r["joint"]) for r in parts} == {
+        (s, j) for s in ("raw", "clean", "pipeline") for j in skeleton.JOINTS
+    }
+    for r in parts:
+        rmse, bias, rand = (float(r[k]) for k in ("rmse_mm", "bias_mm", "random_mm"))
+        assert bias > 0.0 and rand > 0.0 and abs(rmse**2 - bias**2 - rand**2) <= 0.02 * rmse**2 + 0.5, r
     report = (out / "report.md").read_text(encoding="utf-8")
     assert "sim0_kinect" in report and "## joint_offset_standing_clean_mm.csv" in report
 
