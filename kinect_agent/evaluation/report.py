@@ -16,6 +16,7 @@ from kinect_agent.evaluation.align import MAX_LAG_S
 from kinect_agent.evaluation.measure import PairErrors, measure
 from kinect_agent.evaluation.pairs import PairRefused, PairSpec, make_pair
 from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.sources.kinect_noise import VIEWS, load_tables
 
 ANGLE_FIGURES = 3  # figure 4 is drawn for the first pairs only
 
@@ -110,8 +111,32 @@ def _md_table(rows: list[dict]) -> list[str]:
             *("| " + " | ".join(cell(r[k]) for k in keys) + " |" for r in rows)]  # fmt: skip
 
 
+def with_paper(name: str, rows: list[dict]) -> list[dict]:
+    """Returns the rows of a table 1-4 with the paper's Kinect 2 mean and SD (mm) beside each tabled view
+    (kinect_agent/sources/calibration: the paper's tables); other tables unchanged."""
+    kind = "offset" if name.startswith("joint_offset_") else "bone" if name.startswith("bone_length_error_") else None
+    if kind is None or not rows:
+        return rows
+    pose = name.split("_")[2 if kind == "offset" else 3]
+    tables = load_tables()
+    names = list(skeleton.JOINTS if kind == "offset" else skeleton.SEGMENT_NAMES)
+    out = [dict(r) for r in rows]
+    for key in [k for k in rows[0] if k.startswith("sd_")]:
+        view = key[3:]
+        setting = ("kinect2", pose, int(float(view))) if float(view) in VIEWS else None
+        if setting is None:
+            continue
+        mean = (tables.offset_mean if kind == "offset" else tables.bone_mean)[setting]
+        sd = (tables.offset_sd if kind == "offset" else tables.bone_sd)[setting]
+        for r in out:
+            i = names.index(r["joint" if kind == "offset" else "segment"])
+            r[f"paper_k2_mean_{view}"], r[f"paper_k2_sd_{view}"] = 1e3 * float(mean[i]), 1e3 * float(sd[i])
+    return out
+
+
 def markdown(summary: dict) -> str:
-    """Returns report.md: alignment per pair, refused pairs, every table and the figures."""
+    """Returns report.md: alignment per pair, refused pairs, every table (tables 1-4 with the paper's Kinect 2
+    numbers beside ours) and the figures."""
     lines = ["# Kinect accuracy against motion capture", "",
              f"Registration: {summary['registration']}. Lag: mocap time = Kinect time + lag.", "",
              "## Pairs", "", "| pair | pose | view ° | frames K / mocap | lag s (speed r) | lag by RMS s | "
@@ -125,7 +150,7 @@ def markdown(summary: dict) -> str:
         lines += ["", "## Refused pairs", ""]
         lines += [f"- {r['name']}: {'; '.join(r['reasons'])}" for r in summary["refused"]]
     for name, rows in summary["tables"].items():
-        lines += ["", f"## {name}", "", *_md_table(rows)]
+        lines += ["", f"## {name}", "", *_md_table(with_paper(name, rows))]
     if summary["figures"]:
         lines += ["", "## Figures", ""]
         lines += [f"![{n}]({n})" for n in summary["figures"]]

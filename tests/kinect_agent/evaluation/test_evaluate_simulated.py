@@ -76,6 +76,8 @@ def test_writes_every_table_and_a_report(simulated_report: tuple[Path, int]) -> 
         assert bias > 0.0 and rand > 0.0 and abs(rmse**2 - bias**2 - rand**2) <= 0.02 * rmse**2 + 0.5, r
     report = (out / "report.md").read_text(encoding="utf-8")
     assert "sim0_kinect" in report and "## joint_offset_standing_clean_mm.csv" in report
+    assert "| joint | mean_0 | sd_0 | paper_k2_mean_0 | paper_k2_sd_0 |" in report
+    assert "| ROOT | " in report and "| 76.0 | 24.0 |" in report  # the paper's Kinect 2 standing 0° ROOT
 
 
 def _moved(rec: Recording, R: np.ndarray, t: np.ndarray) -> Recording:
