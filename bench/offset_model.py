@@ -51,15 +51,16 @@ if str(ROOT_DIR) not in sys.path:
 
 from bench import real_pairs as rp  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
+from kinect_agent.evaluation.align import measured, rms_lag  # noqa: E402
+from kinect_agent.evaluation.pairs import UI_PRMD_JOINTS, joint_mask  # noqa: E402
 from kinect_agent.processing import offset_model as om  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
-from kinect_agent.skeleton import NOT_TRACKED  # noqa: E402
 
 UI_DIR = rp.DATA_DIR / "ui-prmd"
 UI_FOLDERS = (("Segmented Movements", ""), ("Incorrect Segmented Movements", "_inc"))
-UI_JOINTS = ("ROOT", "SPINE", "NECK", "SHO_L", "ELB_L", "WRI_L", "SHO_R", "ELB_R", "WRI_R", "HIP_L", "HIP_R")
+UI_JOINTS = UI_PRMD_JOINTS
 MAX_LAG_S = 1.5  # UI-PRMD episodes last 1.0-4.6 s
 LAG_AGREE_S = 2.0 / 30.0
 MIN_XCORR = 0.8
@@ -90,26 +91,14 @@ class Pair:
     filtered: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (T, J, 3) m, pipeline offline
 
 
-def joint_mask(joints: tuple[str, ...]) -> np.ndarray:
-    """Returns (J,) bool: True for the named joints."""
-    return np.array([j in joints for j in skeleton.JOINTS])
-
-
 def _raw(rec: Recording) -> np.ndarray:
-    return np.where((rec.state == NOT_TRACKED)[..., None], np.nan, rec.positions)
+    return measured(rec)
 
 
 def lag_by_rms(kinect: Recording, vicon: Recording, joints: np.ndarray) -> float:
-    """Returns the lag (s, over +-MAX_LAG_S in 1/30 s steps) minimising the trimmed registration RMS of the joints
-    (J,) bool, over lags that leave at least half of the Kinect frames with Vicon beside them."""
-    lags = np.arange(-MAX_LAG_S, MAX_LAG_S + 1e-9, 1.0 / 30.0)
-    p_k = _raw(kinect)[:, joints]
-    rms = np.full(len(lags), np.inf)
-    for i, lag in enumerate(lags):
-        truth = rp.interpolate(vicon.t, vicon.positions, kinect.t + lag)[:, joints]
-        if np.all(np.isfinite(truth), axis=(1, 2)).sum() >= 0.5 * kinect.n_frames:
-            rms[i] = rp.robust_kabsch(truth.reshape(-1, 3), p_k.reshape(-1, 3))[2]
-    return float(lags[int(np.argmin(rms))])
+    """Returns the lag (s, over +-MAX_LAG_S in Kinect-frame steps) minimising the trimmed registration RMS of the
+    joints (J,) bool (kinect_agent.evaluation.align.rms_lag)."""
+    return rms_lag(kinect, vicon, joints, MAX_LAG_S)
 
 
 def make_pair(name: str, dataset: str, group: str, kinect: Recording, vicon: Recording, joints: np.ndarray,

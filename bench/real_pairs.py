@@ -8,7 +8,7 @@ Pairs: KERAAL group 3 (/work/shared/data/keraal/kinect_vicon_pairs/G3-Kinect-*.t
 Truth: the Vicon reader's joint centres (SCoRE from 17 rigid bodies). "Well-estimated" joints are the SCoRE joints
     not in meta.extra["fallback_joints"], plus ROOT (mid-hips) when both hips are, plus SPINE (mid ROOT-NECK) when
     ROOT and NECK are. HEAD, HAN_*, FOO_* are rigid-body target positions, not joint centres: never well-estimated.
-Alignment, per pair:
+Alignment, per pair (kinect_agent.evaluation.align, shared with `kinect-agent evaluate`):
     time   the Vicon joints are linearly interpolated at t_kinect + lag (the Kinect frames stay as recorded, so every
            method sees the real 30 Hz data); coarse lag: maximum cross-correlation of the summed speed of the
            well-estimated joints (speed is invariant to the unknown rigid transform), over +-MAX_LAG_S in 1/120 s
@@ -40,7 +40,6 @@ import argparse
 import json
 import sys
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -52,6 +51,10 @@ if str(ROOT_DIR) not in sys.path:
 from bench.accuracy import METHODS, pipeline_config, run_method  # noqa: E402
 from bench.accuracy_tables import cell  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
+from kinect_agent.evaluation.align import Alignment, interpolate, speed_signal  # noqa: E402, F401
+from kinect_agent.evaluation.align import align as evaluation_align  # noqa: E402
+from kinect_agent.evaluation.pairs import SCORE_JOINTS, well_estimated  # noqa: E402, F401
+from kinect_agent.evaluation.register import TRIM, kabsch, robust_kabsch, rotation_deg  # noqa: E402, F401
 from kinect_agent.processing.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.outliers import fit_mixture  # noqa: E402
@@ -65,9 +68,6 @@ RATE_HZ = 30.0  # common grid: the Kinect frames (KERAAL Kinect, 30 Hz assumed)
 VICON_RATE_HZ = 60.0  # KERAAL Vicon, assumed (kinect_agent.formats.keraal_vicon)
 MAX_LAG_S = 2.0
 LAG_STEP_S = 1.0 / 120.0
-TRIM = 0.10  # fraction of the worst registration residuals dropped before refitting
-SCORE_JOINTS = ("SHO_L", "ELB_L", "WRI_L", "SHO_R", "ELB_R", "WRI_R", "HIP_L", "KNE_L", "ANK_L",
-                "HIP_R", "KNE_R", "ANK_R", "NECK")  # fmt: skip
 TARGET_JOINTS = ("HEAD", "HAN_L", "HAN_R", "FOO_L", "FOO_R")
 ARM_JOINTS = ("SHO_L", "ELB_L", "WRI_L", "SHO_R", "ELB_R", "WRI_R")
 PAPER_GAIN_PCT = {"mean": (2.0, 8.0), "sd": (23.0, 49.0)}  # reference README: outlier removal gain ranges
@@ -76,121 +76,16 @@ PAPER_GAIN_PCT = {"mean": (2.0, 8.0), "sd": (23.0, 49.0)}  # reference README: o
 # ----------------------------------------------------------------------------------------------- alignment
 
 
-def well_estimated(fallback: list[str] | tuple[str, ...]) -> np.ndarray:
-    """Returns (J,) bool: the Vicon joints that are real joint-centre estimates (SCoRE fits kept, or derived)."""
-    good = {j for j in SCORE_JOINTS if j not in fallback}
-    if {"HIP_L", "HIP_R"} <= good:
-        good.add("ROOT")
-    if {"ROOT", "NECK"} <= good:
-        good.add("SPINE")
-    return np.array([j in good for j in skeleton.JOINTS])
-
-
-def interpolate(t_src: np.ndarray, p_src: np.ndarray, t_new: np.ndarray) -> np.ndarray:
-    """Returns p_src (T, ...) linearly interpolated at t_new (N,) s; NaN outside [t_src[0], t_src[-1]] and next to
-    NaN samples. t_src: (T,) s, increasing."""
-    x = np.asarray(p_src, dtype=np.float64)
-    i1 = np.clip(np.searchsorted(t_src, t_new), 1, len(t_src) - 1)
-    i0 = i1 - 1
-    w = ((t_new - t_src[i0]) / (t_src[i1] - t_src[i0])).reshape((-1,) + (1,) * (x.ndim - 1))
-    out = x[i0] * (1.0 - w) + x[i1] * w
-    out[(t_new < t_src[0] - 1e-9) | (t_new > t_src[-1] + 1e-9)] = np.nan
-    return out
-
-
-def speed_signal(p: np.ndarray, joints: np.ndarray, rate_hz: float) -> np.ndarray:
-    """Returns (T,) m/s: the summed speed of the given joints of p (T, J, 3) m, smoothed over 5 frames; NaN kept."""
-    v = np.linalg.norm(np.diff(p[:, joints], axis=0), axis=-1).sum(axis=-1) * rate_hz
-    v = np.concatenate([v[:1], v])
-    kernel = np.ones(5) / 5.0
-    return np.convolve(np.nan_to_num(v, nan=0.0), kernel, mode="same") + np.where(np.isfinite(v), 0.0, np.nan)
-
-
-def kabsch(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Returns (R (3, 3), t (3,)) minimising sum |R src + t - dst|^2 (a proper rotation). src, dst: (N, 3) m."""
-    cs, cd = src.mean(axis=0), dst.mean(axis=0)
-    H = (src - cs).T @ (dst - cd)
-    U, _, Vt = np.linalg.svd(H)
-    d = np.sign(np.linalg.det(Vt.T @ U.T))
-    R = Vt.T @ np.diag([1.0, 1.0, d]) @ U.T
-    return R, cd - R @ cs
-
-
-def robust_kabsch(
-    src: np.ndarray, dst: np.ndarray, trim: float = TRIM, iterations: int = 2
-) -> tuple[np.ndarray, np.ndarray, float]:
-    """Kabsch on (N, 3) point pairs (NaN rows ignored), refitted `iterations` times without the worst `trim` of the
-    residuals. Returns R (3, 3), t (3,) m and the RMS residual (m) of the kept pairs."""
-    ok = np.all(np.isfinite(src), axis=-1) & np.all(np.isfinite(dst), axis=-1)
-    s, d = src[ok], dst[ok]
-    keep = np.ones(len(s), bool)
-    for _ in range(iterations + 1):
-        R, t = kabsch(s[keep], d[keep])
-        r = np.linalg.norm(s @ R.T + t - d, axis=-1)
-        rms = float(np.sqrt(np.mean(r[keep] ** 2)))
-        keep = r <= np.quantile(r, 1.0 - trim)
-    return R, t, rms
-
-
-@dataclass
-class Alignment:
-    """Vicon -> Kinect: truth(t_k) = R @ vicon(t_k + lag_s) + t."""
-
-    lag_s: float
-    lag_xcorr_s: float
-    xcorr: float
-    R: np.ndarray
-    t: np.ndarray
-    rms_m: float
-    lag_halves_s: tuple[float, float]
-
-
-def _registration_rms(t_k: np.ndarray, p_k: np.ndarray, t_v: np.ndarray, p_v: np.ndarray, lag: float,
-                      joints: np.ndarray) -> float:  # fmt: skip
-    truth = interpolate(t_v, p_v, t_k + lag)[:, joints]
-    if np.sum(np.all(np.isfinite(truth), axis=-1)) < 30:
-        return np.inf
-    return robust_kabsch(truth.reshape(-1, 3), p_k[:, joints].reshape(-1, 3))[2]
-
-
-def fine_lag(t_k: np.ndarray, p_k: np.ndarray, t_v: np.ndarray, p_v: np.ndarray, joints: np.ndarray,
-             around: float, half_width_s: float = 2.0 / RATE_HZ) -> float:  # fmt: skip
-    """Returns the lag (s) within around +- half_width_s minimising the trimmed registration RMS."""
-    lags = around + np.arange(-half_width_s, half_width_s + 1e-9, LAG_STEP_S)
-    rms = [_registration_rms(t_k, p_k, t_v, p_v, lag, joints) for lag in lags]
-    return float(lags[int(np.argmin(rms))])
-
-
 def align(kinect: Recording, vicon: Recording, joints: np.ndarray, max_lag_s: float = MAX_LAG_S) -> Alignment:
-    """Finds the lag and rigid transform taking vicon (any rate) onto kinect's frames, using the joints (J,) bool."""
-    t_k, p_k = kinect.t, np.where((kinect.state == NOT_TRACKED)[..., None], np.nan, kinect.positions)
-    t_v, p_v = vicon.t, vicon.positions
-    idx = np.flatnonzero(joints)
-    s_k = speed_signal(p_k, idx, RATE_HZ)
-    best, best_c = 0.0, -np.inf
-    for lag in np.arange(-max_lag_s, max_lag_s + 1e-9, LAG_STEP_S):
-        s_v = speed_signal(interpolate(t_v, p_v, t_k + lag), idx, RATE_HZ)
-        ok = np.isfinite(s_k) & np.isfinite(s_v)
-        if ok.sum() < 0.5 * len(t_k):
-            continue
-        c = float(np.corrcoef(s_k[ok], s_v[ok])[0, 1])
-        if c > best_c:
-            best, best_c = float(lag), c
-    lag = fine_lag(t_k, p_k, t_v, p_v, joints, best)
-    half = len(t_k) // 2
-    halves = tuple(fine_lag(t_k[sl], p_k[sl], t_v, p_v, joints, lag) for sl in (slice(0, half), slice(half, None)))
-    truth = interpolate(t_v, p_v, t_k + lag)[:, joints]
-    R, t, rms = robust_kabsch(truth.reshape(-1, 3), p_k[:, joints].reshape(-1, 3))
-    return Alignment(lag, best, best_c, R, t, rms, halves)  # type: ignore[arg-type]
+    """Finds the lag and rigid transform taking vicon (any rate) onto kinect's frames, using the joints (J,) bool
+    (kinect_agent.evaluation.align.align without the independent RMS lag and, as in the runs bench/README.md reports,
+    without the running median before the speeds)."""
+    return evaluation_align(kinect, vicon, joints, max_lag_s=max_lag_s, check=False, despike_s=0.0)
 
 
 def registered_truth(kinect: Recording, vicon: Recording, al: Alignment) -> np.ndarray:
     """Returns the Vicon joints (T, J, 3) m at the Kinect frames, in the Kinect camera frame; NaN outside overlap."""
-    return interpolate(vicon.t, vicon.positions, kinect.t + al.lag_s) @ al.R.T + al.t
-
-
-def rotation_deg(R: np.ndarray) -> float:
-    return float(np.degrees(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0))))
+    return al.truth(kinect, vicon)
 
 
 # ----------------------------------------------------------------------------------------------- one pair
