@@ -34,9 +34,9 @@ Per motion (issue 13; `--only motions`): each HDM05 class (all clips of bd and b
 movement driven by its Vicon episodes (kinect_agent.formats.ui_prmd_vicon), seen by a simulated Kinect 2 (--device)
 at 0° and 60°, on every seed of --seeds; per motion, view and seed: raw, pipeline offline and online, CV Kalman +
 RTS, One Euro and two truth-knowing references (bench/error_floor.py) — position RMSE, its random and bias parts in
-the body frame (bench/error_parts.py), elbow/knee RMSE; the median over seeds; targets per seed (offline position
-and angle RMSE below CV Kalman + RTS and One Euro, random part <= 1/2 raw's) with a PASS/FAIL column and the
-failures' margins.
+the body frame (kinect_agent/evaluation/error_parts.py), elbow/knee RMSE; the median over seeds; targets per
+seed (offline position and angle RMSE below CV Kalman + RTS and One Euro, random part <= 1/2
+raw's) with a PASS/FAIL column and the failures' margins.
 
     python bench/accuracy.py [--quick] [--json OUT] [--seeds 1 2 3] [--only settings|motions] [--device kinect1]
                              [--set NAME=VALUE ...] [--tune-one-euro]
@@ -63,8 +63,8 @@ from bench.accuracy_tables import cell  # noqa: E402
 from bench.baselines import butterworth, cv_kalman_rts, holt_kinect, one_euro  # noqa: E402
 from bench.baselines._common import hold_last  # noqa: E402
 from bench.error_floor import oracle_estimate  # noqa: E402
-from bench.error_parts import ErrorSums, error_sums  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
+from kinect_agent.evaluation.error_parts import ErrorSums, error_sums  # noqa: E402
 from kinect_agent.processing.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402

@@ -1,11 +1,12 @@
-"""bench/error_parts.py: the body-frame bias/random split of joint-position errors, on real mocap motion."""
+"""kinect_agent/evaluation/error_parts.py: the body-frame bias/random split of joint-position errors, on real
+mocap motion."""
 
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from bench.error_parts import body_rotations, error_sums
+from kinect_agent.evaluation.error_parts import body_rotations, error_sums
 from kinect_agent.formats import amc
 from kinect_agent.sources.mocap_truth import resample
 
