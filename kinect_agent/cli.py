@@ -21,6 +21,7 @@ COMMANDS = (
     "kinect_agent.commands.status",
     "kinect_agent.commands.run",
     "kinect_agent.commands.serve",
+    "kinect_agent.commands.export",
 )
 
 
