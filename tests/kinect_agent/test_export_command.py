@@ -22,8 +22,11 @@ def khs(tmp_path_factory):
     return path
 
 
-@pytest.mark.parametrize(("fmt", "suffix", "start"), [("csv", "-csv.zip", b"PK"), ("trc", ".trc", b"PathFileType"),
-                                                      ("bvh", ".bvh", b"HIERARCHY"), ("fhir", "-fhir.json", b"{")])  # fmt: skip
+FORMATS = [("csv", "-csv.zip", b"PK"), ("trc", ".trc", b"PathFileType"), ("bvh", ".bvh", b"HIERARCHY"),
+           ("fhir", "-fhir.json", b"{")]  # fmt: skip
+
+
+@pytest.mark.parametrize(("fmt", "suffix", "start"), FORMATS)
 def test_each_format_is_written_beside_the_session(khs, fmt, suffix, start):
     assert main(["export", str(khs), "--format", fmt, "--metrics", str(khs.with_name("doc.json"))]) == 0
     out = khs.with_name(f"set{suffix}")

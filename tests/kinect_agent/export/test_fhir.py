@@ -46,7 +46,8 @@ def test_observations_carry_patient_device_units_and_body_sites(squat_session):
     knee = obs["range-of-motion.knee_flexion_L"]
     assert knee["valueQuantity"]["code"] == "deg" and knee["valueQuantity"]["system"] == fhir.UCUM
     assert knee["valueQuantity"]["value"] == doc["range_of_motion"]["knee_flexion_L"]["range_deg"]
-    assert knee["bodySite"]["coding"][0] == {"system": fhir.SNOMED, "code": "49076000", "display": "Knee joint structure"}
+    knee_site = {"system": fhir.SNOMED, "code": "49076000", "display": "Knee joint structure"}
+    assert knee["bodySite"]["coding"][0] == knee_site
     assert "left" in knee["bodySite"]["text"]
     assert "bodySite" not in obs["range-of-motion.trunk_flexion"]
     for name in fhir.INDICATORS:

@@ -18,7 +18,10 @@ def _round_trip(tmp_path, t, positions):
     return bvh.read(path)
 
 
-@pytest.mark.parametrize(("exercise", "seed"), [("squat", 0), ("squat", 1), ("elbow_flexion", 2), ("shoulder_abduction", 3), ("side_step", 9)])
+@pytest.mark.parametrize(
+    ("exercise", "seed"),
+    [("squat", 0), ("squat", 1), ("elbow_flexion", 2), ("shoulder_abduction", 3), ("side_step", 9)],
+)
 def test_round_trip_reproduces_the_kinematic_model_within_1_mm(tmp_path, exercise, seed):
     _, truth, _ = simulate(exercise, 2, seed=seed)
     back = _round_trip(tmp_path, truth.t, truth.positions)
