@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import datetime as dt
 import io
 import json
 import zipfile
@@ -11,11 +12,13 @@ import pytest
 from sqlalchemy import select
 
 from backend.audit.models import AuditEvent
+from backend.exercises.models import Exercise
 from kinect_agent.formats import bvh
 from kinect_agent.formats import session_file as sf
 from tests.backend.khs_files import make_khs
 
 OCTET = {"Content-Type": "application/octet-stream"}
+T0 = dt.datetime(2026, 11, 2, 9, 0, tzinfo=dt.UTC)
 R4B = pytest.importorskip("fhir.resources.R4B.bundle", reason="fhir.resources is in the test extra")
 
 
@@ -124,3 +127,38 @@ def test_openapi_documents_the_download_types_and_errors(client):
     param = next(p for p in op["parameters"] if p["name"] == "format")
     assert param["required"] is True and param["schema"]["enum"] == ["csv", "trc", "bvh", "fhir"]
     assert json.dumps(op["responses"]["404"]).count("SessionNotFound") >= 1
+
+
+def test_a_session_without_stored_metrics_is_analysed_again(client, db_session, store, make_patient_with_therapist,
+                                                            auth_headers):  # fmt: skip
+    patient, therapist = make_patient_with_therapist()
+    squat = db_session.scalar(select(Exercise).where(Exercise.slug == "squat"))
+    row = store(patient, squat, T0, data=make_khs("squat", 3, seed=11), metrics=False)
+    body = _export(client, row.id, "fhir", auth_headers(therapist)).json()
+    reps = [e["resource"] for e in body["entry"] if e["resource"]["code"]["coding"][0]["code"] == "repetitions"]
+    assert reps[0]["valueQuantity"]["value"] == 3
+
+
+def test_fhir_without_any_metrics_is_409(client, db_session, store, make_patient_with_therapist, auth_headers):
+    patient, therapist = make_patient_with_therapist()
+    unknown = Exercise(slug="not_in_library", name="N", instructions="-", defining_angles=["knee_flexion_L"],
+                       plane="sagittal", normal_range_min_deg=0.0, normal_range_max_deg=90.0,
+                       pose="standing")  # fmt: skip
+    db_session.add(unknown)
+    db_session.flush()
+    row = store(patient, unknown, T0, data=make_khs("squat", 2, seed=12), metrics=False)
+    headers = auth_headers(therapist)
+    assert _export(client, row.id, "trc", headers).status_code == 200, "trc needs no metrics"
+    response = _export(client, row.id, "fhir", headers)  # last: an error rolls the test's data back
+    assert response.status_code == 409, response.text
+    assert response.json()["error"] == "ExportUnavailable" and "analysis document" in response.json()["detail"]
+
+
+def test_corrupt_stored_file_is_a_typed_400(client, store, make_patient_with_therapist, auth_headers, exercise):
+    patient, therapist = make_patient_with_therapist()
+    data = bytearray(make_khs("squat", 2, seed=13))
+    data[100] ^= 0xFF
+    row = store(patient, exercise, T0, data=bytes(data), metrics=False)
+    response = _export(client, row.id, "bvh", auth_headers(therapist))
+    assert response.status_code == 400 and response.json()["error"] == "InvalidSessionFile"
+    assert "checksum_mismatch" in response.json()["detail"]
