@@ -26,7 +26,7 @@ MEDIA_TYPES: dict[str, str] = {
     "csv": "application/zip",
     "trc": "text/plain; charset=utf-8",
     "bvh": "text/plain; charset=utf-8",
-    "fhir": "application/fhir+json",
+    "fhir": fhir.MEDIA_TYPE,
 }
 SUFFIXES: dict[str, str] = {"csv": "-csv.zip", "trc": ".trc", "bvh": ".bvh", "fhir": "-fhir.json"}
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)  # fixed member times: the same session gives the same bytes

@@ -22,7 +22,6 @@ import numpy as np
 from kinect_agent import skeleton
 
 MM_PER_M = 1000.0
-MEDIA_TYPE = "text/plain"
 
 
 def data_rate(t: np.ndarray) -> float:
