@@ -74,3 +74,19 @@ def test_opensim_reads_the_markers(tmp_path, seed):
         col = table.getDependentColumnAtIndex(j)
         got = np.array([[col[i].get(k) for k in range(3)] for i in range(truth.n_frames)])
         np.testing.assert_allclose(got, truth.positions[:, j] * 1000, atol=5e-4, err_msg=skeleton.JOINTS[j])
+
+
+@pytest.mark.skipif(importlib.util.find_spec("opensim") is None, reason="opensim has no wheel for this platform")
+@pytest.mark.parametrize("seed", [6, 7])
+def test_opensim_reads_untracked_samples_as_missing(tmp_path, seed):
+    import opensim
+
+    _, truth, _ = simulate("squat", 1, seed=seed)
+    positions = truth.positions.copy()
+    head = skeleton.INDEX["HEAD"]
+    positions[5:9, head] = np.nan
+    path = tmp_path / "gaps.trc"
+    path.write_text(trc.write_text(truth.t, positions), encoding="utf-8")
+    col = opensim.TimeSeriesTableVec3(str(path)).getDependentColumnAtIndex(head)
+    missing = [i for i in range(truth.n_frames) if np.isnan(col[i].get(0))]
+    assert missing == [5, 6, 7, 8]
