@@ -112,6 +112,10 @@ class UploadCutOff(AppError):
     status_code = 400
 
 
+class ExportUnavailable(Conflict):
+    """The session cannot be exported in the asked format yet (e.g. fhir before its metrics exist)."""
+
+
 class EmailAlreadyRegistered(Conflict):
     pass
 
@@ -192,6 +196,7 @@ _EXAMPLE_DETAIL = {
     "EmailAlreadyRegistered": "a user with email ana@example.org exists",
     "SessionNotFound": "session 31 does not exist",
     "SessionConflict": "session 8c1e... of patient 12 was already uploaded with different content",
+    "ExportUnavailable": "session 12 has no metrics; the fhir export needs them",
     "InvalidSessionFile": "checksum_mismatch: SHA-256 trailer does not match the content",
     "SessionTooLarge": "the upload exceeds 16777216 bytes",
 }

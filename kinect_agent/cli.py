@@ -22,6 +22,7 @@ COMMANDS = (
     "kinect_agent.commands.run",
     "kinect_agent.commands.serve",
     "kinect_agent.commands.evaluate",
+    "kinect_agent.commands.export",
 )
 
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
-from typing import Annotated
+from typing import Annotated, Literal
 
 from fastapi import APIRouter, Depends, Query, Request, Response, status
 from sqlalchemy.orm import Session
@@ -23,6 +23,7 @@ from backend.events.hub import Event, publish
 from backend.exceptions import (
     AUTH_ERRORS,
     ExerciseNotFound,
+    ExportUnavailable,
     InvalidInput,
     InvalidSessionFile,
     PatientNotFound,
@@ -36,6 +37,7 @@ from backend.exceptions import (
 from backend.exercises.service import get_exercise
 from backend.schemas import DateTimeQuery, IdPath, IdQuery, Page, PageParams, page_params
 from backend.sessions import dashboard, detail, service
+from backend.sessions.export import session_export
 from backend.sessions.ingest import check_declared_length, check_owner, decode_upload, read_limited
 from backend.sessions.schemas import (
     DashboardRowOut,
@@ -281,6 +283,53 @@ def read_session_detail(session_id: IdPath, request: Request, caller: CurrentCal
     )
     _audit(db_session, caller, "session.detail.read", session_id, patient_id)
     return body
+
+
+ExportFormat = Annotated[
+    Literal["csv", "trc", "bvh", "fhir"],
+    Query(description="csv: zip of CSV tables; trc: OpenSim markers (mm); bvh: motion (cm, deg); fhir: R4 Bundle"),
+]
+_EXPORT_CONTENT = {
+    "application/zip": {"schema": {"type": "string", "format": "binary"}},
+    "text/plain": {"schema": {"type": "string"}},
+    "application/fhir+json": {"schema": {"type": "object"}},
+}
+
+
+@router.get(
+    "/sessions/{session_id}/export",
+    response_class=Response,
+    responses={
+        200: {
+            "content": _EXPORT_CONTENT,
+            "description": "the session as a download: csv → application/zip, trc and bvh → text/plain, "
+            "fhir → application/fhir+json",
+        },
+        **error_responses(*AUTH_ERRORS, SessionNotFound, InvalidSessionFile, ExportUnavailable, InvalidInput),
+    },
+)
+def export_session(
+    session_id: IdPath, format: ExportFormat, request: Request, caller: CurrentCaller, db_session: DbSession
+):
+    """Returns the session exported for other software (spreadsheet, OpenSim, animation tools, FHIR servers)."""
+    row = service.get_session_row(db_session=db_session, session_id=session_id)
+    patient_id = row[0].patient_id
+    require_patient_access(patient_id, caller=caller, db_session=db_session, allow_device=False,
+                           hidden_as=service.missing(session_id))  # fmt: skip
+    settings = request.app.state.settings
+    result = session_export(
+        db_session=db_session,
+        row=row,
+        fmt=format,
+        max_frames=settings.SESSION_MAX_FRAMES,
+        max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES,
+    )
+    _audit(db_session, caller, "session.export.read", session_id, patient_id, {"format": format})
+    return Response(
+        content=result.data,
+        media_type=result.media_type,
+        headers={"Content-Disposition": f'attachment; filename="{result.file_name}"'},
+    )
 
 
 @router.get(

@@ -186,3 +186,20 @@ def test_session_page_stays_on_the_origin_and_its_data_needs_a_login(page, brows
             assert anonymous.request.get(url).status == 401, f"{url} answered without a login"
     finally:
         anonymous.close()
+
+
+def test_therapist_downloads_every_export_from_the_session_page(page, live_server):
+    _open_from_patient_page(page, live_server)
+    links = page.locator("#downloads a")
+    expect(links).to_have_count(4)
+    session_id = re.search(r"/therapist/sessions/(\d+)$", page.url).group(1)
+    starts = {"csv": b"PK", "trc": b"PathFileType", "bvh": b"HIERARCHY", "fhir": b"{"}
+    for k, (fmt, start) in enumerate(starts.items()):
+        link = links.nth(k)
+        expect(link).to_have_attribute("href", f"/api/v1/sessions/{session_id}/export?format={fmt}")
+        with page.expect_download() as info:
+            link.click()
+        path = info.value.path()
+        assert path is not None and open(path, "rb").read(len(start)) == start, fmt
+    shot(page, "session_downloads")
+    assert not page.js_errors

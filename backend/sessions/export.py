@@ -1,0 +1,40 @@
+"""A stored session exported for other software (kinect_agent.export.files): csv, trc, bvh or fhir."""
+
+from __future__ import annotations
+
+import datetime as dt
+
+from sqlalchemy.orm import Session
+
+from backend.exceptions import ExportUnavailable
+from backend.exercises.library import EXERCISES
+from backend.sessions import service
+from backend.sessions.detail import analysis_document, decode_stored
+from kinect_agent.export.fhir import SessionContext
+from kinect_agent.export.files import ExportError, ExportFile, export
+
+
+def session_export(*, db_session: Session, row: tuple, fmt: str, max_frames: int, max_decoded_bytes: int) -> ExportFile:
+    """Returns the session of `row` (service.get_session_row) as `fmt`, with its metrics document: the stored one,
+    else the file analysed again as the session page does (detail.analysis_document, without indicators).
+
+    Raises InvalidSessionFile when the stored file cannot be decoded, ExportUnavailable when the format needs metrics
+    and none can be had (no known exercise, or the analysis fails).
+    """
+    session, slug, _reps, _rom, _quality, stored = row
+    data = service.session_file(db_session=db_session, session_id=session.id)
+    payload = decode_stored(data, session_id=session.id, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
+    document, _ = analysis_document(payload, EXERCISES.get(slug) if slug else None, stored)
+    when = session.started_at
+    when = when.astimezone(dt.UTC).replace(tzinfo=None) if when.tzinfo is not None else when  # stored as UTC
+    started = when.isoformat(timespec="seconds") + "Z"
+    context = SessionContext(
+        session_id=str(session.client_session_id),
+        start=started,
+        patient_id=session.patient_id,
+        device_id=session.device_id,
+    )
+    try:
+        return export(fmt, payload, document=document or None, context=context, stem=f"session-{session.id}")
+    except ExportError as exc:
+        raise ExportUnavailable(f"session {session.id}: {exc}") from None

@@ -1,0 +1,198 @@
+"""FHIR R4 Bundle (type collection) of one session's Observations, as JSON-ready dicts (stdlib only).
+
+Entries: the Device that recorded the session (when known), then Observations, each with status final, the patient
+as subject (`Patient/<id>`, a reference to the clinic's server), the Device as device, the session's period as
+effectivePeriod:
+    exercise duration      LOINC 55411-3 "Exercise duration", s
+    repetitions            project code `repetitions`, {repetitions} (UCUM annotation: a count)
+    range of motion        one per clinical angle with a value: project code `range-of-motion.<angle>`, value the
+                           range (p98 − p2), components min and max, UCUM `deg`, bodySite the SNOMED CT joint
+                           structure (BODY_SITES; trunk angles have none) with laterality in its text
+    indicators             project codes `indicator.<flexibility|endurance|strength|balance>`, score 0-100
+                           (UCUM `1`), the measured value as a component
+Project codes live in CODE_SYSTEM, documented in docs/fhir.md. SNOMED CT codes (body structures) were checked in
+published mappings (DICOM anatomic region tables, HL7 examples): 16953009 elbow joint structure, 49076000 knee joint
+structure, 85537004 glenohumeral (shoulder) joint structure, 24136001 hip joint structure.
+"""
+
+from __future__ import annotations
+
+import uuid
+from dataclasses import dataclass
+from datetime import UTC, datetime, timedelta
+from typing import Any
+
+CODE_SYSTEM = "https://kinect-home-coach.example/fhir/CodeSystem/metrics"
+DEVICE_ID_SYSTEM = "https://kinect-home-coach.example/fhir/NamingSystem/device-id"
+SESSION_ID_SYSTEM = "https://kinect-home-coach.example/fhir/NamingSystem/session-id"
+LOINC = "http://loinc.org"
+SNOMED = "http://snomed.info/sct"
+UCUM = "http://unitsofmeasure.org"
+CATEGORY = "http://terminology.hl7.org/CodeSystem/observation-category"
+MEDIA_TYPE = "application/fhir+json"
+INDICATORS = ("flexibility", "endurance", "strength", "balance")
+BODY_SITES: dict[str, tuple[str, str]] = {
+    "elbow": ("16953009", "Elbow joint structure"),
+    "knee": ("49076000", "Knee joint structure"),
+    "shoulder": ("85537004", "Glenohumeral joint structure"),
+    "hip": ("24136001", "Hip joint structure"),
+}
+_SIDES = {"L": "left", "R": "right"}
+
+
+@dataclass(frozen=True)
+class SessionContext:
+    """Who and what a bundle describes: ids on the clinic's server (None when unknown) and the session's start.
+
+    start: ISO 8601 UTC time the session started (e.g. the file's created_at); session_id: the session's id.
+    """
+
+    session_id: str
+    start: str
+    patient_id: int | None = None
+    device_id: int | None = None
+
+
+def _urn() -> str:
+    return f"urn:uuid:{uuid.uuid4()}"
+
+
+def _quantity(value: float, unit: str, code: str) -> dict[str, Any]:
+    return {"value": value, "unit": unit, "system": UCUM, "code": code}
+
+
+def _concept(system: str, code: str, display: str) -> dict[str, Any]:
+    return {"coding": [{"system": system, "code": code, "display": display}], "text": display}
+
+
+def _period(context: SessionContext, duration_s: float | None) -> dict[str, str]:
+    start = datetime.fromisoformat(context.start.replace("Z", "+00:00"))
+    if start.tzinfo is None:
+        start = start.replace(tzinfo=UTC)
+    end = start + timedelta(seconds=duration_s or 0.0)
+    fmt = "%Y-%m-%dT%H:%M:%S%z"
+    return {"start": _iso(start.strftime(fmt)), "end": _iso(end.strftime(fmt))}
+
+
+def _iso(text: str) -> str:
+    return text[:-2] + ":" + text[-2:] if text[-5] in "+-" else text
+
+
+def _label(angle: str) -> str:
+    return angle.replace("_", " ")
+
+
+def body_site(angle: str) -> dict[str, Any] | None:
+    """Returns the bodySite CodeableConcept of a clinical angle (e.g. knee_flexion_L), or None (trunk angles)."""
+    joint = angle.split("_")[0]
+    if joint not in BODY_SITES:
+        return None
+    code, display = BODY_SITES[joint]
+    side = _SIDES.get(angle.rsplit("_", 1)[-1])
+    concept = _concept(SNOMED, code, display)
+    concept["text"] = f"{display} ({side})" if side else display
+    return concept
+
+
+def _observation(common: dict[str, Any], code: dict[str, Any], category: str, **fields: Any) -> dict[str, Any]:
+    obs = {
+        "resourceType": "Observation",
+        "status": "final",
+        "category": [{"coding": [{"system": CATEGORY, "code": category}]}],
+        "code": code,
+        **common,
+        **fields,
+    }
+    return obs
+
+
+def _rom_observations(document: dict[str, Any], common: dict[str, Any]) -> list[dict[str, Any]]:
+    out = []
+    for angle, rom in (document.get("range_of_motion") or {}).items():
+        if not isinstance(rom, dict) or rom.get("range_deg") is None:
+            continue
+        code = _concept(CODE_SYSTEM, f"range-of-motion.{angle}", f"Range of motion, {_label(angle)}")
+        fields: dict[str, Any] = {"valueQuantity": _quantity(rom["range_deg"], "deg", "deg")}
+        site = body_site(angle)
+        if site is not None:
+            fields["bodySite"] = site
+        fields["component"] = [
+            {
+                "code": _concept(CODE_SYSTEM, f"range-of-motion.{key}", f"{key.capitalize()}imum angle"),
+                "valueQuantity": _quantity(rom[f"{key}_deg"], "deg", "deg"),
+            }
+            for key in ("min", "max")
+            if rom.get(f"{key}_deg") is not None
+        ]
+        out.append(_observation(common, code, "exam", **fields))
+    return out
+
+
+def _indicator_observations(document: dict[str, Any], common: dict[str, Any]) -> list[dict[str, Any]]:
+    out = []
+    indicators = document.get("indicators") or {}
+    for name in INDICATORS:
+        item = indicators.get(name)
+        if not isinstance(item, dict) or item.get("score") is None:
+            continue
+        code = _concept(CODE_SYSTEM, f"indicator.{name}", f"{name.capitalize()} indicator (0-100)")
+        fields: dict[str, Any] = {"valueQuantity": _quantity(item["score"], "score", "1")}
+        if item.get("value") is not None:
+            fields["component"] = [
+                {
+                    "code": _concept(CODE_SYSTEM, f"indicator.{name}.value", f"{name.capitalize()} measured value"),
+                    "valueQuantity": {"value": item["value"]},
+                }
+            ]
+        if item.get("basis"):
+            fields["note"] = [{"text": str(item["basis"])}]
+        out.append(_observation(common, code, "exam", **fields))
+    return out
+
+
+def _device(context: SessionContext) -> dict[str, Any]:
+    device: dict[str, Any] = {
+        "resourceType": "Device",
+        "identifier": [{"system": DEVICE_ID_SYSTEM, "value": str(context.device_id)}],
+        "deviceName": [{"name": "Kinect Home Coach home agent", "type": "user-friendly-name"}],
+        "type": {"text": "Depth camera (Kinect) with skeleton tracking"},
+    }
+    if context.patient_id is not None:
+        device["patient"] = {"reference": f"Patient/{context.patient_id}"}
+    return device
+
+
+def bundle(document: dict[str, Any], context: SessionContext) -> dict[str, Any]:
+    """Returns the Bundle of a session's analysis document (report.analyze_recording output with "indicators")."""
+    entries: list[dict[str, Any]] = []
+    common: dict[str, Any] = {
+        "identifier": [{"system": SESSION_ID_SYSTEM, "value": context.session_id}],
+        "effectivePeriod": _period(context, document.get("duration_s")),
+    }
+    if document.get("exercise"):
+        common["method"] = {"text": f"Kinect Home Coach exercise {document['exercise']}"}
+    if context.patient_id is not None:
+        common["subject"] = {"reference": f"Patient/{context.patient_id}"}
+    if context.device_id is not None:
+        device_url = _urn()
+        entries.append({"fullUrl": device_url, "resource": _device(context)})
+        common["device"] = {"reference": device_url}
+    observations = []
+    if document.get("duration_s") is not None:
+        code = _concept(LOINC, "55411-3", "Exercise duration")
+        value = _quantity(document["duration_s"], "s", "s")
+        observations.append(_observation(common, code, "activity", valueQuantity=value))
+    if document.get("repetitions") is not None:
+        code = _concept(CODE_SYSTEM, "repetitions", "Repetitions of the exercise")
+        value = _quantity(document["repetitions"], "repetitions", "{repetitions}")
+        observations.append(_observation(common, code, "activity", valueQuantity=value))
+    observations += _rom_observations(document, common)
+    observations += _indicator_observations(document, common)
+    entries += [{"fullUrl": _urn(), "resource": obs} for obs in observations]
+    return {
+        "resourceType": "Bundle",
+        "type": "collection",
+        "timestamp": datetime.now(UTC).isoformat(timespec="seconds"),
+        "identifier": {"system": SESSION_ID_SYSTEM, "value": context.session_id},
+        "entry": entries,
+    }

@@ -1,0 +1,90 @@
+"""CSV tables of a session, for a spreadsheet: metrics, repetitions, joint angles over time (raw and filtered).
+
+Every table is comma-separated UTF-8 with a header row, numbers with a dot, empty cells for unknown values.
+    metrics.csv       metric, value, unit: duration, frames, rate, repetitions, median repetition amplitude, the
+                      range of motion of every angle (min, max, range) and the four indicators (score, value).
+    repetitions.csv   one row per repetition of the analysis document's repetition_list (its keys as columns).
+    angles_raw.csv, angles_filtered.csv   time_s then every clinical angle (processing.angles.ANGLE_NAMES) in
+                      degrees, one row per frame of the raw / filtered recording.
+The metrics and repetitions come from the server's analysis document (backend.analysis.report.analyze_recording
+plus "indicators"); the angles from the session file itself.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from typing import Any
+
+import numpy as np
+
+from kinect_agent.processing.angles import ANGLE_NAMES, joint_angles
+from kinect_agent.recording import Recording
+
+INDICATORS = ("flexibility", "endurance", "strength", "balance")
+_INDICATOR_UNITS = {"flexibility": "deg", "endurance": "repetitions", "strength": "deg/s", "balance": "m/s"}
+
+
+def _cell(value: Any) -> str:
+    if value is None or (isinstance(value, float) and not np.isfinite(value)):
+        return ""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return str(value)
+
+
+def _text(rows: list[list[Any]]) -> str:
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\r\n")
+    for row in rows:
+        writer.writerow([_cell(v) for v in row])
+    return out.getvalue()
+
+
+def metric_rows(document: dict[str, Any]) -> list[tuple[str, Any, str]]:
+    """Returns (metric, value, unit) rows of an analysis document (missing values as None)."""
+    rows: list[tuple[str, Any, str]] = [
+        ("exercise", document.get("exercise"), ""),
+        ("duration", document.get("duration_s"), "s"),
+        ("frames", document.get("n_frames"), ""),
+        ("frame_rate", document.get("rate_hz"), "Hz"),
+        ("repetitions", document.get("repetitions"), ""),
+        ("defining_angle", document.get("defining_angle"), ""),
+        ("repetition_amplitude_median", document.get("rom_deg"), "deg"),
+        ("moving_time", document.get("moving_time_s"), "s"),
+        ("rest_time", document.get("rest_time_s"), "s"),
+    ]
+    for angle, rom in (document.get("range_of_motion") or {}).items():
+        rom = rom if isinstance(rom, dict) else {}
+        rows += [(f"{angle}.{key}", rom.get(f"{key}_deg"), "deg") for key in ("min", "max", "range")]
+    indicators = document.get("indicators") or {}
+    for name in INDICATORS:
+        item = indicators.get(name) if isinstance(indicators.get(name), dict) else {}
+        rows += [(f"indicator.{name}.score", item.get("score"), "0-100")]
+        unit = "s" if name == "strength" and document.get("exercise") == "sit_to_stand" else _INDICATOR_UNITS[name]
+        rows += [(f"indicator.{name}.value", item.get("value"), unit)]
+    return rows
+
+
+def metrics_csv(document: dict[str, Any]) -> str:
+    """Returns metrics.csv: columns metric, value, unit."""
+    return _text([["metric", "value", "unit"], *[list(r) for r in metric_rows(document)]])
+
+
+def repetitions_csv(document: dict[str, Any]) -> str:
+    """Returns repetitions.csv: a 1-based `repetition` column then the keys of each repetition_list entry."""
+    reps = [r for r in document.get("repetition_list") or [] if isinstance(r, dict)]
+    keys: list[str] = []
+    for rep in reps:
+        keys += [k for k in rep if k not in keys]
+    return _text([["repetition", *keys], *[[i + 1, *[rep.get(k) for k in keys]] for i, rep in enumerate(reps)]])
+
+
+def angles_csv(recording: Recording) -> str:
+    """Returns time_s and every clinical angle (degrees, 0.01°) per frame of a recording; time from the first frame."""
+    angles = joint_angles(recording.positions)
+    t = recording.t - recording.t[0]
+    columns = [np.round(t, 6)] + [np.round(angles[name], 2) for name in ANGLE_NAMES]
+    header = ["time_s", *[f"{name}_deg" for name in ANGLE_NAMES]]
+    body = np.stack(columns, axis=1).tolist()
+    return _text([header, *body])

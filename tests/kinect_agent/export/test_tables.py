@@ -1,0 +1,52 @@
+"""CSV export: a zip whose tables a spreadsheet opens, holding the document's numbers and the angles per frame."""
+
+from __future__ import annotations
+
+import csv
+import io
+import zipfile
+
+import numpy as np
+
+from kinect_agent.export.files import export
+from kinect_agent.processing.angles import ANGLE_NAMES, joint_angles
+
+
+def _tables(data: bytes) -> dict[str, list[dict[str, str]]]:
+    with zipfile.ZipFile(io.BytesIO(data)) as z:
+        return {n: list(csv.DictReader(io.StringIO(z.read(n).decode("utf-8")))) for n in z.namelist()}
+
+
+def test_zip_holds_metrics_repetitions_and_both_angle_tables(squat_session):
+    payload, doc = squat_session
+    tables = _tables(export("csv", payload, document=doc).data)
+    assert sorted(tables) == ["angles_filtered.csv", "angles_raw.csv", "metrics.csv", "repetitions.csv"]
+    metrics = {r["metric"]: (r["value"], r["unit"]) for r in tables["metrics.csv"]}
+    assert metrics["repetitions"] == ("3", "")
+    assert float(metrics["duration"][0]) == doc["duration_s"] and metrics["duration"][1] == "s"
+    assert float(metrics["knee_flexion_L.range"][0]) == doc["range_of_motion"]["knee_flexion_L"]["range_deg"]
+    assert float(metrics["indicator.endurance.score"][0]) == doc["indicators"]["endurance"]["score"]
+    reps = tables["repetitions.csv"]
+    assert [int(r["repetition"]) for r in reps] == [1, 2, 3]
+    assert [float(r["amplitude_deg"]) for r in reps] == [r["amplitude_deg"] for r in doc["repetition_list"]]
+
+
+def test_angle_tables_match_the_angles_of_each_recording(squat_session):
+    payload, doc = squat_session
+    tables = _tables(export("csv", payload, document=doc).data)
+    for name, rec in (("angles_raw.csv", payload.raw), ("angles_filtered.csv", payload.filtered)):
+        rows = tables[name]
+        assert len(rows) == rec.n_frames and list(rows[0]) == ["time_s", *[f"{a}_deg" for a in ANGLE_NAMES]]
+        expected = joint_angles(rec.positions)["knee_flexion_R"]
+        got = np.array([float(r["knee_flexion_R_deg"]) if r["knee_flexion_R_deg"] else np.nan for r in rows])
+        np.testing.assert_allclose(got, expected, atol=0.006, err_msg=name)
+
+
+def test_without_a_document_only_the_angle_tables_are_written(squat_session):
+    payload, _ = squat_session
+    assert sorted(_tables(export("csv", payload).data)) == ["angles_filtered.csv", "angles_raw.csv"]
+
+
+def test_the_same_session_gives_the_same_bytes(squat_session):
+    payload, doc = squat_session
+    assert export("csv", payload, document=doc).data == export("csv", payload, document=doc).data
