@@ -241,3 +241,17 @@ def store(db_session):
     from tests.backend.session_rows import store_session
 
     return lambda *args, **kw: store_session(db_session, *args, **kw)
+
+
+@pytest.fixture
+def upload(client, make_patient_with_therapist, auth_headers):
+    """Factory: upload(data, exercise) -> (session id, patient, therapist) after a real upload by the patient."""
+
+    def send(data: bytes, exercise: str):
+        patient, therapist = make_patient_with_therapist()
+        headers = {"Content-Type": "application/octet-stream", **auth_headers(patient)}
+        response = client.post("/api/v1/sessions", content=data, headers=headers, params={"exercise": exercise})
+        assert response.status_code == 201, response.text
+        return response.json()["id"], patient, therapist
+
+    return send

@@ -16,23 +16,7 @@ from kinect_agent.skeleton import INDEX, JOINTS
 from kinect_agent.sources.simulator import simulate
 from tests.backend.khs_files import make_khs, make_processed_khs
 
-OCTET = {"Content-Type": "application/octet-stream"}
 T0 = dt.datetime(2026, 11, 2, 9, 0, tzinfo=dt.UTC)
-
-
-@pytest.fixture
-def upload(client, make_patient_with_therapist, auth_headers):
-    """Factory: upload(data, exercise) -> (session id, patient, therapist) after a real upload by the patient."""
-
-    def send(data: bytes, exercise: str):
-        patient, therapist = make_patient_with_therapist()
-        response = client.post(
-            "/api/v1/sessions", content=data, headers={**OCTET, **auth_headers(patient)}, params={"exercise": exercise}
-        )
-        assert response.status_code == 201, response.text
-        return response.json()["id"], patient, therapist
-
-    return send
 
 
 def _detail(client, session_id: int, headers: dict):

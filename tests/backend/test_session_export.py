@@ -17,24 +17,8 @@ from kinect_agent.formats import bvh
 from kinect_agent.formats import session_file as sf
 from tests.backend.khs_files import make_khs
 
-OCTET = {"Content-Type": "application/octet-stream"}
 T0 = dt.datetime(2026, 11, 2, 9, 0, tzinfo=dt.UTC)
 R4B = pytest.importorskip("fhir.resources.R4B.bundle", reason="fhir.resources is in the test extra")
-
-
-@pytest.fixture
-def upload(client, make_patient_with_therapist, auth_headers):
-    """Factory: upload(data, exercise) -> (session id, patient, therapist) after a real upload by the patient."""
-
-    def send(data: bytes, exercise: str):
-        patient, therapist = make_patient_with_therapist()
-        response = client.post(
-            "/api/v1/sessions", content=data, headers={**OCTET, **auth_headers(patient)}, params={"exercise": exercise}
-        )
-        assert response.status_code == 201, response.text
-        return response.json()["id"], patient, therapist
-
-    return send
 
 
 def _export(client, session_id: int, fmt: str, headers: dict):
