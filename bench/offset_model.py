@@ -52,6 +52,7 @@ if str(ROOT_DIR) not in sys.path:
 from bench import real_pairs as rp  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
 from kinect_agent.evaluation.align import measured, rms_lag  # noqa: E402
+from kinect_agent.evaluation.error_parts import JointErrorSums  # noqa: E402
 from kinect_agent.evaluation.pairs import UI_PRMD_JOINTS, joint_mask  # noqa: E402
 from kinect_agent.processing import offset_model as om  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
@@ -156,41 +157,11 @@ def errors(estimate: np.ndarray, pair: Pair) -> np.ndarray:
     return om.to_body(estimate - register(estimate, pair.vicon, pair.joints), estimate)
 
 
-@dataclass
-class ErrorSums:
-    """Per joint, over trials: frame count, sum of squared error norms, and sum over trials of n |trial mean|^2 (the
-    part a constant per trial and joint explains: the bias part; the rest is the random part)."""
-
-    n: np.ndarray = field(default_factory=lambda: np.zeros(skeleton.J))
-    sq: np.ndarray = field(default_factory=lambda: np.zeros(skeleton.J))
-    bias_sq: np.ndarray = field(default_factory=lambda: np.zeros(skeleton.J))
-
-    def add(self, e: np.ndarray) -> None:
-        """Adds one trial's errors e (T, J, 3) m, body frame, NaN = not scored."""
-        ok = np.all(np.isfinite(e), axis=-1)
-        z = np.where(ok[..., None], e, 0.0)
-        n = ok.sum(axis=0)
-        self.n += n
-        self.sq += np.sum(z**2, axis=(0, 2))
-        self.bias_sq += np.sum(z.sum(axis=0) ** 2, axis=-1) / np.maximum(n, 1)
-
-    def merge(self, other: ErrorSums) -> None:
-        self.n += other.n
-        self.sq += other.sq
-        self.bias_sq += other.bias_sq
-
-    def per_joint(self) -> dict[str, dict[str, float]]:
-        return {name: _split(self.sq[j] / self.n[j], self.bias_sq[j] / self.n[j], int(self.n[j]))
-                for j, name in enumerate(skeleton.JOINTS) if self.n[j] > 0}  # fmt: skip
-
-    def pooled(self) -> dict[str, float]:
-        n = self.n.sum()
-        return _split(self.sq.sum() / n, self.bias_sq.sum() / n, int(n))
-
-
-def _split(rmse2: float, bias2: float, n: int) -> dict[str, float]:
-    return {"rmse_mm": 1e3 * float(np.sqrt(rmse2)), "bias_mm": 1e3 * float(np.sqrt(bias2)),
-            "random_mm": 1e3 * float(np.sqrt(max(rmse2 - bias2, 0.0))), "n": n}  # fmt: skip
+def per_joint(sums: JointErrorSums) -> dict[str, dict[str, float]]:
+    """Returns {joint: {"rmse_mm", "bias_mm", "random_mm", "n"}} for the joints with errors."""
+    rms = sums.rms_mm()
+    return {name: {key: (int(v[j]) if key == "n" else float(v[j])) for key, v in rms.items()}
+            for j, name in enumerate(skeleton.JOINTS) if sums.n[j] > 0}  # fmt: skip
 
 
 # ----------------------------------------------------------------------------------------------- measurement
@@ -221,19 +192,19 @@ def measure(pairs: list[Pair], use_filtered: bool) -> dict:
 # ----------------------------------------------------------------------------------------------- validation
 
 
-def evaluate(train: list[Pair], test: list[Pair], per_pose: bool) -> tuple[ErrorSums, ErrorSums]:
+def evaluate(train: list[Pair], test: list[Pair], per_pose: bool) -> tuple[JointErrorSums, JointErrorSums]:
     """Fits on train (offline outputs) and returns the error sums of test before and after the model."""
     model = om.fit([(p.filtered, register(p.filtered, p.vicon, p.joints)) for p in train], per_pose)
-    before, after = ErrorSums(), ErrorSums()
+    before, after = JointErrorSums.zeros(skeleton.J), JointErrorSums.zeros(skeleton.J)
     for p in test:
-        before.add(errors(p.filtered, p))
-        after.add(errors(model.apply(p.filtered), p))
+        before.add_body(errors(p.filtered, p))
+        after.add_body(errors(model.apply(p.filtered), p))
     return before, after
 
 
-def cross_validate(pairs: list[Pair], per_pose: bool) -> tuple[ErrorSums, ErrorSums]:
+def cross_validate(pairs: list[Pair], per_pose: bool) -> tuple[JointErrorSums, JointErrorSums]:
     """Leave-one-group-out: each group's pairs tested on a model fitted on the other groups; sums pooled."""
-    before, after = ErrorSums(), ErrorSums()
+    before, after = JointErrorSums.zeros(skeleton.J), JointErrorSums.zeros(skeleton.J)
     for g in sorted({p.group for p in pairs}):
         b, a = evaluate([p for p in pairs if p.group != g], [p for p in pairs if p.group == g], per_pose)
         before.merge(b)
@@ -241,9 +212,9 @@ def cross_validate(pairs: list[Pair], per_pose: bool) -> tuple[ErrorSums, ErrorS
     return before, after
 
 
-def _result(before: ErrorSums, after: ErrorSums) -> dict:
-    return {"before": {"pooled": before.pooled(), "per_joint": before.per_joint()},
-            "after": {"pooled": after.pooled(), "per_joint": after.per_joint()}}  # fmt: skip
+def _result(before: JointErrorSums, after: JointErrorSums) -> dict:
+    return {"before": {"pooled": before.pooled(), "per_joint": per_joint(before)},
+            "after": {"pooled": after.pooled(), "per_joint": per_joint(after)}}  # fmt: skip
 
 
 def validate(keraal: list[Pair], ui: list[Pair]) -> dict:

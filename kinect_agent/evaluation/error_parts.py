@@ -93,13 +93,29 @@ class JointErrorSums:
         truth (give the full mocap when truth is masked to the scored joints); frames without one are not counted.
         """
         R = body_rotations(truth if frame is None else frame)  # (T, 3, 3), NaN where the trunk joints are missing
-        err = np.einsum("tab,tjb->tja", R, estimate - truth)
+        self.add_body(np.einsum("tab,tjb->tja", R, estimate - truth))
+
+    def add_body(self, err: np.ndarray) -> None:
+        """Adds one recording's errors err (T, J, 3) m, already in a body frame; NaN = not counted."""
         ok = np.all(np.isfinite(err), axis=-1)
         z = np.where(ok[..., None], err, 0.0)
         n = ok.sum(axis=0)
         self.n += n
         self.sq += np.sum(z**2, axis=(0, 2))
         self.bias_sq += np.sum(z.sum(axis=0) ** 2, axis=-1) / np.maximum(n, 1)
+
+    def merge(self, other: JointErrorSums) -> None:
+        """Adds the sums of other (the same joints)."""
+        self.n += other.n
+        self.sq += other.sq
+        self.bias_sq += other.bias_sq
+
+    def pooled(self) -> dict[str, float]:
+        """Returns {"rmse_mm", "bias_mm", "random_mm", "n"} over every joint-frame."""
+        n = self.n.sum()
+        rmse2, bias2 = self.sq.sum() / n, self.bias_sq.sum() / n
+        return {"rmse_mm": 1e3 * float(np.sqrt(rmse2)), "bias_mm": 1e3 * float(np.sqrt(bias2)),
+                "random_mm": 1e3 * float(np.sqrt(max(rmse2 - bias2, 0.0))), "n": int(n)}  # fmt: skip
 
     def rms_mm(self) -> dict[str, np.ndarray]:
         """Returns {"rmse_mm", "bias_mm", "random_mm", "n"}: (J,) each; NaN where a joint has no joint-frames."""
