@@ -33,12 +33,10 @@ ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/arms.py` puts bench/ first, not the repository
     sys.path.insert(0, str(ROOT_DIR))
 
-from bench.baselines import cv_kalman_rts, one_euro  # noqa: E402
-from bench.baselines._common import hold_last  # noqa: E402
+from bench.accuracy import run_method  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
 from kinect_agent.processing.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
-from kinect_agent.processing.pipeline import process  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.skeleton import NOT_TRACKED  # noqa: E402
 from kinect_agent.sources.kinect_noise import add_kinect_noise  # noqa: E402
@@ -129,15 +127,9 @@ def measure(
 
 
 def estimate(method: str, rec: Recording, config: PipelineConfig) -> tuple[np.ndarray, np.ndarray | None]:
-    """Returns (estimate (T, J, 3) m, outlier flags (T, J) bool or None) of one method."""
-    if method == "raw":
-        return hold_last(rec.positions), None
-    if method == "one_euro":
-        return hold_last(one_euro(rec.t, rec.positions)), None
-    if method == "cv_kalman_rts":
-        return hold_last(cv_kalman_rts(rec.t, rec.positions)), None
-    res = process(rec, config=config)
-    return res.filtered.positions, (res.params.outlier_prob > config.outlier_threshold) & (rec.state != NOT_TRACKED)
+    """Returns (estimate (T, J, 3) m, outlier flags (T, J) bool or None) of one method (bench.accuracy.run_method;
+    "pipeline" is its pipeline_offline)."""
+    return run_method("pipeline_offline" if method == "pipeline" else method, rec, config)
 
 
 def wrist_lag_frames(est: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
