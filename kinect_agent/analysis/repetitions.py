@@ -289,10 +289,15 @@ def _alternates(name: str, dominant: str, events: list[RepEvent], params: Repeti
         floor = params.min_ratio * float(np.median([ev.amplitude for ev in own]))
         own = [ev for ev in own if ev.amplitude >= floor]
     lead = [ev for ev in events if ev.angles == (dominant,)]
-    shared = sum(
-        1 for ev in own if any(_shared(ev, d) > params.alternate_overlap * max(1, ev.end - ev.start) for d in lead)
-    )
-    return bool(own) and shared <= params.alternate_shared * len(own)
+    if not own:
+        return False
+    own_se = np.array([(ev.start, ev.end) for ev in own])  # (n, 2) frames
+    lead_se = np.array([(ev.start, ev.end) for ev in lead]).reshape(-1, 2)  # (m, 2) frames
+    # (n, m) frames each own excursion shares with each lead one, as _shared
+    frames = np.maximum(0, np.minimum(own_se[:, 1:], lead_se[:, 1]) - np.maximum(own_se[:, :1], lead_se[:, 0]))
+    own_len = np.maximum(1, own_se[:, 1] - own_se[:, 0])
+    shared = int(np.sum(np.any(frames > params.alternate_overlap * own_len[:, None], axis=1)))
+    return shared <= params.alternate_shared * len(own)
 
 
 def count_repetitions(
