@@ -165,7 +165,12 @@ def test_other_therapist_sees_no_data_of_a_session_not_theirs(page, live_server,
     page.wait_for_url("**/therapist")
     page.goto(f"/therapist/sessions/{arm_session}")
     expect(page.locator("#error")).to_contain_text(f"could not find this. (session {arm_session} does not exist)")
+    expect(page.locator("#session-sub")).to_have_text("This session cannot be shown.")
     assert page.locator(".js-plotly-plot").count() == 0
+    # no empty sections, no downloads or replay link under the error
+    for part in ("#numbers-h", "#reps", "#downloads", "#replay-link", "#processing"):
+        expect(page.locator(part)).to_be_hidden()
+    shot(page, "session-missing")
 
 
 def test_session_page_stays_on_the_origin_and_its_data_needs_a_login(page, browser, live_server):
