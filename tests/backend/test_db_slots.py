@@ -14,9 +14,9 @@ import httpx
 import pytest
 from sqlalchemy import create_engine
 from sqlalchemy.engine import Engine
-from sqlalchemy.orm import Session, sessionmaker
+from sqlalchemy.orm import Session
 
-from backend.database import get_db, make_engine, request_session
+from backend.database import db_dependency, get_db, make_engine
 from backend.db_slots import DbSlots, ServerBusyError, pool_capacity
 from backend.main import create_app
 from backend.migrate import upgrade
@@ -67,16 +67,7 @@ def crowd_server(crowd_engine, settings) -> Iterator[tuple[str, dict[str, str]]]
         _, token = create_api_token(db_session=s, user=therapist, name="t", scopes=["read", "write"], days=1)
         s.commit()
     app = create_app(settings, engine=crowd_engine)
-    factory = sessionmaker(bind=crowd_engine, expire_on_commit=False)
-
-    def real_db() -> Iterator[Session]:
-        session = factory()
-        try:
-            yield from request_session(session)
-        finally:
-            session.close()
-
-    app.dependency_overrides[get_db] = real_db
+    app.dependency_overrides[get_db] = db_dependency(crowd_engine)
     server = LiveServer(app).start()
     try:
         yield server.url, {"Authorization": f"Bearer {token}"}
