@@ -36,7 +36,7 @@ def _expected_b(x: np.ndarray, name: str, yaw_deg: float) -> tuple[float, float,
 def test_widths_follow_the_per_frame_sd_and_the_systematic_part(seed, yaw):
     t, x = _sine(seed)
     sd = np.full_like(t, 2.0)
-    name = "trunk_lateral_flexion"  # B = (5.2, 2.0, 0.0)
+    name = "trunk_lateral_flexion"  # B = (6.2, 2.5, 0.0)
     iv = intervals.angle_intervals(t, x, sd, name, yaw_deg=yaw)
     b_min, b_max, b_range = _expected_b(x, name, yaw)
     lo, hi = np.percentile(x, [1, 99])
