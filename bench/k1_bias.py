@@ -41,11 +41,13 @@ from bench.error_floor import clean_error, oracle_estimate  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
 from kinect_agent.evaluation.error_parts import JointErrorSums  # noqa: E402
 from kinect_agent.processing import chain_filter  # noqa: E402
+from kinect_agent.processing.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.combined_outliers import remove_outliers_combined  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.ik import inverse_kinematics  # noqa: E402
 from kinect_agent.processing.pipeline import observations, smooth  # noqa: E402
 
+ELBOWS = ("elbow_flexion_L", "elbow_flexion_R")
 ROW_METHODS = ("raw", "cv_kalman_rts", "one_euro", "pipeline_offline")
 
 
@@ -176,6 +178,7 @@ def study_joints(args: argparse.Namespace) -> None:
         for view in args.views:
             sums: dict[str, JointErrorSums] = {}
             lens: dict[str, list[np.ndarray]] = {"truth": [], "measured median": [], "pipeline": []}
+            angles: dict[tuple[str, str], list[np.ndarray]] = {}
             for seed in args.seeds:
                 for case in motion_cases(motion, view, seed, args.device):
                     m = case.measured
@@ -191,8 +194,12 @@ def study_joints(args: argparse.Namespace) -> None:
                     ests["truth lengths"] = offline_variant(m, config, truth_len, False)
                     ests["measured lengths"] = offline_variant(m, config, raw_len, False)
                     ests["refit"] = offline_variant(m, config, None, True)
+                    a_true = joint_angles(case.truth)
                     for name, est in ests.items():
                         sums.setdefault(name, JointErrorSums.zeros(skeleton.J)).add(est, case.truth)
+                        a_est = joint_angles(est)
+                        for angle in ELBOWS:
+                            angles.setdefault((name, angle), []).append(a_est[angle] - a_true[angle])
             print(f"\n#### {motion.name} {view}°, {args.device}, seeds {args.seeds}: bias / RMSE per joint, mm\n")
             names = list(sums)
             print("| joint | " + " | ".join(names) + " |")
@@ -205,6 +212,14 @@ def study_joints(args: argparse.Namespace) -> None:
             print("| **all** (random) | " + " | ".join(
                 f"**{pooled[n]['bias_mm']:.1f} / {pooled[n]['rmse_mm']:.1f}** ({pooled[n]['random_mm']:.1f})"
                 for n in names) + " |")  # fmt: skip
+            print("\n| elbow flexion error, ° (mean ± SD over frames) | " + " | ".join(names) + " |")
+            print("|---|" + "---|" * len(names))
+            for angle in ELBOWS:
+                cells = []
+                for n in names:
+                    d = np.concatenate(angles[n, angle])
+                    cells.append(f"{np.nanmean(d):+.1f} ± {np.nanstd(d):.1f}")
+                print(f"| {angle} | " + " | ".join(cells) + " |")
             print("\n| bone (child joint) | " + " | ".join(lens) + " |\n|---|" + "---|" * len(lens))
             mean = {k: 1e3 * np.nanmean(np.array(v), axis=0) for k, v in lens.items()}
             for k, (_, c) in enumerate(skeleton.BONES):
