@@ -8,9 +8,11 @@ frame's rotation into the camera frame, and v_0 an extra constant offset of ROOT
 the smoothed G(t) and root(t), the v that minimise the weighted squared residual Σ_t,j w_j(t) |z_j(t) − p_j(t)|²
 over the observed joint-frames are one linear least-squares solve (60 unknowns), the next step of a block
 coordinate descent of the same fit. It lets each bone take the length and direction the measurements have on
-average over the whole recording — with a Kinect whose offsets lengthen some bones in some poses (Kinect 1's hips and
-knees), passes 1-2's lengths from the UKF's random walk leave a mean misfit that moves the joints' means — and
-the chain stays rigid: lengths are constants, rest directions constants in their frames.
+average over the whole recording (passes 1-2's lengths from the UKF's random walk leave a mean misfit that moves the
+joints' means), and the chain stays rigid: lengths are constants, rest directions constants in their frames.
+A study tool of bench/k1_bias.py, not used by the pipeline: it brings the bias to the clean measurement's, which
+helps some simulated motions and loses on others and on the real KERAAL pairs (bench/README.md, "Kinect 1: where
+the offline bias ... comes from", item 5).
 
 Normal equations, 3 × 3 blocks for bones k, m (the ROOT offset counts as a bone above all others):
     A_km = Σ_t S_d(t) G_k(t)ᵀ G_m(t),  d the deeper of k, m when one is on the other's path (else 0),
