@@ -44,7 +44,7 @@ duration).
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -68,6 +68,8 @@ class RepetitionParams:
     min_ratio: float = 0.4
     shallow_ratio: float = 0.2
     shallow_duration: float = 0.6
+    shallow_scale: float = 0.5
+    shallow_spacing: float = 0.75
     min_duration_s: float = 0.4
     merge_overlap: float = 0.5
     rest: str = "auto"  # "auto": step 3 of the module doc; "start": where the recording starts (a set counted live)
@@ -155,19 +157,33 @@ def _rest_is_low(y: np.ndarray, lo: float, hi: float, rest: str = "auto") -> boo
 
 
 def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) -> list[RepEvent]:
-    """Returns the excursions of one smoothed angle y: (T,) degrees at t: (T,) s (steps 3-5 of the module doc).
+    """Returns the excursions of one smoothed angle y: (T,) degrees at t: (T,) s (steps 3-5 of the module doc)."""
+    return detect_angle(t, y, name, params).events
+
+
+@dataclass(frozen=True)
+class AngleExcursions:
+    """The excursions of one angle; n_cycles: duration / P of its period (0 without one); rest_low: its rest end."""
+
+    events: list[RepEvent]
+    n_cycles: int
+    rest_low: bool
+
+
+def detect_angle(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) -> AngleExcursions:
+    """Returns the excursions of one smoothed angle y: (T,) degrees at t: (T,) s, its cycles and its rest end.
 
     When the rest end is a tie (_rest_is_low gives None), both ends are tried and the one whose number of
     excursions is nearer the number of cycles the autocorrelation's period gives wins (the low end on a tie).
     """
     lo, hi = np.percentile(y, [2.0, 98.0])
     if hi - lo <= 0:
-        return []
+        return AngleExcursions([], 0, True)
     rest_low = _rest_is_low(y, lo, hi, params.rest)
     if rest_low is not None:
-        return _excursions(t, y, name, params, rest_low)[0]
-    tries = [_excursions(t, y, name, params, low) for low in (True, False)]
-    return min(tries, key=lambda tried: abs(len(tried[0]) - tried[1]))[0]
+        return AngleExcursions(*_excursions(t, y, name, params, rest_low), rest_low)
+    tries = [AngleExcursions(*_excursions(t, y, name, params, low), low) for low in (True, False)]
+    return min(tries, key=lambda tried: abs(len(tried.events) - tried.n_cycles))
 
 
 def _excursions(
@@ -300,6 +316,73 @@ def _alternates(name: str, dominant: str, events: list[RepEvent], params: Repeti
     return shared <= params.alternate_shared * len(own)
 
 
+def _repeating(found: dict[str, AngleExcursions], name: str, dominant: str | None) -> list[RepEvent]:
+    """Returns the excursions of angle `name`, none when the dominant angle has a period and `name` has not (the
+    idle limb drifting or mistracked: it does not repeat the movement, so its excursions neither count nor pair)."""
+    if name == dominant or dominant is None or found[dominant].n_cycles == 0 or found[name].n_cycles > 0:
+        return found[name].events
+    return []
+
+
+def _drop_rebounds(merged: list[RepEvent], params: RepetitionParams) -> list[RepEvent]:
+    """Drops the excursions that peak within shallow_spacing × the median peak-to-peak spacing of a larger one and
+    last less than shallow_duration × the median duration: a rebound or a split of that one, not a repetition."""
+    if len(merged) < 3:
+        return merged
+    peaks = np.array([ev.peak for ev in merged])  # (n,) frames, in time order
+    amplitude = np.array([ev.amplitude for ev in merged])  # (n,) degrees
+    length = np.array([ev.end - ev.start for ev in merged])  # (n,) frames
+    gap = np.diff(peaks)  # (n − 1,) frames
+    room = params.shallow_spacing * float(np.median(gap))
+    close_prev = np.concatenate(([False], (gap < room) & (amplitude[:-1] > amplitude[1:])))
+    close_next = np.concatenate(((gap < room) & (amplitude[1:] > amplitude[:-1]), [False]))
+    brief = length < params.shallow_duration * float(np.median(length))
+    drop = brief & (close_prev | close_next)
+    return [ev for ev, gone in zip(merged, drop, strict=True) if not gone] if drop.any() else merged
+
+
+def _add_shallow(
+    t: np.ndarray, y: np.ndarray, name: str, rest_low: bool, merged: list[RepEvent], params: RepetitionParams
+) -> list[RepEvent]:
+    """Adds the shallow repetitions of the dominant angle y: (T,) degrees that the hysteresis missed (module doc):
+    excursions above shallow_enter × the cycle amplitude, sharing no frame with a counted repetition, whose peak lies
+    at least shallow_spacing × the median peak-to-peak spacing of the counted ones from each of their peaks, and that
+    reach shallow_ratio × their median amplitude and last shallow_duration × their median duration."""
+    if len(merged) < 3:
+        return merged
+    peaks = np.array([ev.peak for ev in merged])  # (n,) frames, in time order
+    room = params.shallow_spacing * float(np.median(np.diff(peaks)))
+    amplitude = float(np.median([ev.amplitude for ev in merged]))
+    duration = float(np.median([ev.end - ev.start for ev in merged]))
+    # cheap test first: a free frame far enough from every counted peak, where the angle is far enough from rest
+    frames = np.arange(y.shape[0])
+    nearest = np.abs(frames[:, None] - peaks[None, :]).min(axis=1) if peaks.size < 64 else _nearest(frames, peaks)
+    free = nearest >= room
+    for ev in merged:
+        free[ev.start : ev.end + 1] = False
+    lo, hi = np.percentile(y, [2.0, 98.0])
+    far = (y - lo if rest_low else hi - y) >= params.shallow_ratio * amplitude
+    if not np.any(free & far):
+        return merged
+    k = params.shallow_scale
+    low = replace(params, enter_frac=k * params.enter_frac, exit_frac=k * params.exit_frac, onset_frac=k * params.onset_frac)
+    extra = [
+        ev
+        for ev in _excursions(t, y, name, low, rest_low)[0]
+        if free[ev.peak]
+        and ev.amplitude >= params.shallow_ratio * amplitude
+        and ev.end - ev.start >= params.shallow_duration * duration
+        and not any(_shared(ev, m) > 0 for m in merged)
+    ]
+    return sorted(merged + extra, key=lambda ev: ev.start) if extra else merged
+
+
+def _nearest(frames: np.ndarray, peaks: np.ndarray) -> np.ndarray:
+    """Returns (T,) the distance in frames from each of frames: (T,) to the nearest of peaks: (n,) sorted."""
+    k = np.clip(np.searchsorted(peaks, frames), 1, peaks.size - 1)
+    return np.minimum(np.abs(frames - peaks[k - 1]), np.abs(peaks[k] - frames))
+
+
 def count_repetitions(
     t: np.ndarray, angles: dict[str, np.ndarray], names: tuple[str, ...], params: RepetitionParams | None = None
 ) -> RepetitionResult:
@@ -317,13 +400,16 @@ def count_repetitions(
     ranges = {n: angle_range(y) if np.all(np.isfinite(y)) else 0.0 for n, y in smoothed.items()}
     top = max(ranges.values(), default=0.0)
     moving = tuple(n for n in names if ranges[n] >= max(params.min_range_deg, params.side_ratio * top))
-    per_angle = {name: detect(t, smoothed[name], name, params) for name in moving}
+    found = {name: detect_angle(t, smoothed[name], name, params) for name in moving}
+    dominant = max(moving, key=lambda n: sum(ev.amplitude for ev in found[n].events)) if moving else None
+    per_angle = {name: _repeating(found, name, dominant) for name in moving}
     events = [ev for name in moving for ev in per_angle[name]]
-    dominant = max(moving, key=lambda n: sum(ev.amplitude for ev in per_angle[n])) if moving else None
     merged = merge_events(events, params.merge_overlap)
     counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, params)}
     merged = _drop_weak_lone(_keep_counted(merged, counted), params.lone_ratio)
-    merged = _drop_bumps(merged, params)
+    merged = _drop_rebounds(_drop_bumps(merged, params), params)
+    if dominant is not None:
+        merged = _add_shallow(t, smoothed[dominant], dominant, found[dominant].rest_low, merged, params)
     t0 = float(t[0]) if t.shape[0] else 0.0
     reps = [
         Repetition(
