@@ -44,7 +44,7 @@ duration).
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -316,12 +316,17 @@ def _alternates(name: str, dominant: str, events: list[RepEvent], params: Repeti
     return shared <= params.alternate_shared * len(own)
 
 
-def _repeating(found: dict[str, AngleExcursions], name: str, dominant: str | None) -> list[RepEvent]:
-    """Returns the excursions of angle `name`, none when the dominant angle has a period and `name` has not (the
-    idle limb drifting or mistracked: it does not repeat the movement, so its excursions neither count nor pair)."""
+def _repeating(
+    t: np.ndarray, smoothed: dict[str, np.ndarray], found: dict[str, AngleExcursions], name: str, dominant: str | None
+) -> list[RepEvent]:
+    """Returns the excursions of angle `name`, none when it idles beside a repeating dominant angle: the dominant
+    angle has a period P (duration / its cycles), `name` has none and its autocorrelation at lag P is below
+    cycles.MIN_CORRELATION (the idle limb drifting or mistracked, not repeating the movement with a slow start)."""
     if name == dominant or dominant is None or found[dominant].n_cycles == 0 or found[name].n_cycles > 0:
         return found[name].events
-    return []
+    lag = int(round((t[-1] - t[0]) / found[dominant].n_cycles / series.frame_interval(t)))
+    ac = cycles.autocorrelation(smoothed[name])
+    return found[name].events if lag < ac.shape[0] and ac[lag] >= cycles.MIN_CORRELATION else []
 
 
 def _drop_rebounds(merged: list[RepEvent], params: RepetitionParams) -> list[RepEvent]:
@@ -329,6 +334,7 @@ def _drop_rebounds(merged: list[RepEvent], params: RepetitionParams) -> list[Rep
     last less than shallow_duration × the median duration: a rebound or a split of that one, not a repetition."""
     if len(merged) < 3:
         return merged
+    merged = sorted(merged, key=lambda ev: ev.peak)
     peaks = np.array([ev.peak for ev in merged])  # (n,) frames, in time order
     amplitude = np.array([ev.amplitude for ev in merged])  # (n,) degrees
     length = np.array([ev.end - ev.start for ev in merged])  # (n,) frames
@@ -338,42 +344,53 @@ def _drop_rebounds(merged: list[RepEvent], params: RepetitionParams) -> list[Rep
     close_next = np.concatenate(((gap < room) & (amplitude[1:] > amplitude[:-1]), [False]))
     brief = length < params.shallow_duration * float(np.median(length))
     drop = brief & (close_prev | close_next)
-    return [ev for ev, gone in zip(merged, drop, strict=True) if not gone] if drop.any() else merged
+    kept = [ev for ev, gone in zip(merged, drop, strict=True) if not gone]
+    return sorted(kept, key=lambda ev: ev.start)
 
 
 def _add_shallow(
-    t: np.ndarray, y: np.ndarray, name: str, rest_low: bool, merged: list[RepEvent], params: RepetitionParams
+    y: np.ndarray, name: str, rest_low: bool, merged: list[RepEvent], params: RepetitionParams
 ) -> list[RepEvent]:
-    """Adds the shallow repetitions of the dominant angle y: (T,) degrees that the hysteresis missed (module doc):
-    excursions above shallow_enter × the cycle amplitude, sharing no frame with a counted repetition, whose peak lies
-    at least shallow_spacing × the median peak-to-peak spacing of the counted ones from each of their peaks, and that
-    reach shallow_ratio × their median amplitude and last shallow_duration × their median duration."""
+    """Adds the shallow repetitions of the dominant angle y: (T,) degrees that the hysteresis missed (module doc).
+
+    In each stretch between counted repetitions (and before the first, after the last) at least shallow_duration ×
+    their median duration long, the highest point of e = |y − rest end| at least shallow_spacing × their median
+    peak-to-peak spacing from every counted peak is a repetition when e falls by shallow_ratio × their median
+    amplitude M on both sides of it (to the stretch's minimum before and after it) and its onset and return (the
+    last frame before, the first after, within shallow_scale × onset_frac × M of those minima) are at least
+    shallow_duration × the median duration apart.
+    """
     if len(merged) < 3:
         return merged
-    peaks = np.array([ev.peak for ev in merged])  # (n,) frames, in time order
+    peaks = np.sort([ev.peak for ev in merged])  # (n,) frames
     room = params.shallow_spacing * float(np.median(np.diff(peaks)))
     amplitude = float(np.median([ev.amplitude for ev in merged]))
-    duration = float(np.median([ev.end - ev.start for ev in merged]))
-    # cheap test first: a free frame far enough from every counted peak, where the angle is far enough from rest
-    frames = np.arange(y.shape[0])
-    nearest = np.abs(frames[:, None] - peaks[None, :]).min(axis=1) if peaks.size < 64 else _nearest(frames, peaks)
-    free = nearest >= room
-    for ev in merged:
-        free[ev.start : ev.end + 1] = False
+    duration = params.shallow_duration * float(np.median([ev.end - ev.start for ev in merged]))
+    near = params.shallow_scale * params.onset_frac * amplitude
+    rest_tol = params.onset_frac * amplitude  # it starts and ends at one rest level
     lo, hi = np.percentile(y, [2.0, 98.0])
-    far = (y - lo if rest_low else hi - y) >= params.shallow_ratio * amplitude
-    if not np.any(free & far):
-        return merged
-    k = params.shallow_scale
-    low = replace(params, enter_frac=k * params.enter_frac, exit_frac=k * params.exit_frac, onset_frac=k * params.onset_frac)
-    extra = [
-        ev
-        for ev in _excursions(t, y, name, low, rest_low)[0]
-        if free[ev.peak]
-        and ev.amplitude >= params.shallow_ratio * amplitude
-        and ev.end - ev.start >= params.shallow_duration * duration
-        and not any(_shared(ev, m) > 0 for m in merged)
-    ]
+    covered = np.zeros(y.shape[0] + 2, dtype=np.int8)  # frames of a counted repetition, padded by one each side
+    for ev in merged:
+        covered[ev.start + 1 : ev.end + 2] = 1
+    covered[0] = covered[-1] = 1
+    stretches = np.flatnonzero(np.diff(covered)).reshape(-1, 2)  # (m, 2) [first, stop) frames between repetitions
+    free = _nearest(np.arange(y.shape[0]), peaks) >= room  # (T,) far enough from every counted peak
+    n_free = np.concatenate(([0], np.cumsum(free)))  # (T + 1,) free frames before each frame
+    long = stretches[:, 1] - stretches[:, 0] >= duration
+    roomy = n_free[stretches[:, 1]] > n_free[stretches[:, 0]]
+    extra: list[RepEvent] = []
+    for a, start in stretches[long & roomy]:
+        e = y[a:start] - lo if rest_low else hi - y[a:start]
+        p = int(np.argmax(np.where(free[a:start], e, -np.inf)))
+        base0, base1 = float(e[: p + 1].min()), float(e[p:].min())
+        if e[p] - max(base0, base1) < params.shallow_ratio * amplitude or abs(base0 - base1) > rest_tol:
+            continue
+        onset = int(np.flatnonzero(e[: p + 1] <= base0 + near)[-1])
+        back = p + int(np.flatnonzero(e[p:] <= base1 + near)[0])
+        if back - onset < duration:
+            continue
+        rise = float(e[p] - 0.5 * (base0 + base1))
+        extra.append(RepEvent(a + onset, a + p, a + back, rise, float(y[a + p]), side_of(name), (name,)))
     return sorted(merged + extra, key=lambda ev: ev.start) if extra else merged
 
 
@@ -402,14 +419,14 @@ def count_repetitions(
     moving = tuple(n for n in names if ranges[n] >= max(params.min_range_deg, params.side_ratio * top))
     found = {name: detect_angle(t, smoothed[name], name, params) for name in moving}
     dominant = max(moving, key=lambda n: sum(ev.amplitude for ev in found[n].events)) if moving else None
-    per_angle = {name: _repeating(found, name, dominant) for name in moving}
+    per_angle = {name: _repeating(t, smoothed, found, name, dominant) for name in moving}
     events = [ev for name in moving for ev in per_angle[name]]
     merged = merge_events(events, params.merge_overlap)
     counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, params)}
     merged = _drop_weak_lone(_keep_counted(merged, counted), params.lone_ratio)
     merged = _drop_rebounds(_drop_bumps(merged, params), params)
     if dominant is not None:
-        merged = _add_shallow(t, smoothed[dominant], dominant, found[dominant].rest_low, merged, params)
+        merged = _add_shallow(smoothed[dominant], dominant, found[dominant].rest_low, merged, params)
     t0 = float(t[0]) if t.shape[0] else 0.0
     reps = [
         Repetition(
