@@ -178,26 +178,33 @@ def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) ->
 
 @dataclass(frozen=True)
 class AngleExcursions:
-    """The excursions of one angle; n_cycles: duration / P of its period (0 without one); rest_low: its rest end."""
+    """The excursions of one angle; n_cycles: duration / P of its period (0 without one); rest_low: its rest end is
+    the low one; rest_deg: that end (p2 or p98 of the smoothed angle, degrees)."""
 
     events: list[RepEvent]
     n_cycles: int
     rest_low: bool
+    rest_deg: float
 
 
-def detect_angle(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) -> AngleExcursions:
+def detect_angle(
+    t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams, bounds: tuple[float, float] | None = None
+) -> AngleExcursions:
     """Returns the excursions of one smoothed angle y: (T,) degrees at t: (T,) s, its cycles and its rest end.
 
-    When the rest end is a tie (_rest_is_low gives None), both ends are tried and the one whose number of
-    excursions is nearer the number of cycles the autocorrelation's period gives wins (the low end on a tie).
+    bounds: (p2, p98) of y when already computed. When the rest end is a tie (_rest_is_low gives None), both ends are
+    tried and the one whose number of excursions is nearer the number of cycles the autocorrelation's period gives
+    wins (the low end on a tie).
     """
-    lo, hi = np.percentile(y, [2.0, 98.0])
+    lo, hi = bounds if bounds is not None else np.percentile(y, [2.0, 98.0])
     if hi - lo <= 0:
-        return AngleExcursions([], 0, True)
+        return AngleExcursions([], 0, True, float(lo))
     rest_low = _rest_is_low(y, lo, hi, params.rest)
     if rest_low is not None:
-        return AngleExcursions(*_excursions(t, y, name, params, rest_low), rest_low)
-    tries = [AngleExcursions(*_excursions(t, y, name, params, low), low) for low in (True, False)]
+        return AngleExcursions(*_excursions(t, y, name, params, rest_low), rest_low, float(lo if rest_low else hi))
+    tries = [
+        AngleExcursions(*_excursions(t, y, name, params, low), low, float(lo if low else hi)) for low in (True, False)
+    ]
     return min(tries, key=lambda tried: abs(len(tried.events) - tried.n_cycles))
 
 
@@ -364,9 +371,10 @@ def _drop_rebounds(merged: list[RepEvent], params: RepetitionParams) -> list[Rep
 
 
 def _add_shallow(
-    y: np.ndarray, name: str, rest_low: bool, merged: list[RepEvent], params: RepetitionParams
+    y: np.ndarray, name: str, rest: AngleExcursions, merged: list[RepEvent], params: RepetitionParams
 ) -> list[RepEvent]:
-    """Adds the shallow repetitions of the dominant angle y: (T,) degrees that the hysteresis missed (module doc).
+    """Adds the shallow repetitions of the dominant angle y: (T,) degrees, at rest at rest.rest_deg, that the
+    hysteresis missed (module doc).
 
     In each stretch between counted repetitions (and before the first, after the last) at least shallow_duration ×
     their median duration long, the highest point of e = |y − rest end| at least shallow_spacing × their median
@@ -383,7 +391,6 @@ def _add_shallow(
     amplitude = float(np.median([ev.amplitude for ev in merged]))
     duration = params.shallow_duration * float(np.median([ev.end - ev.start for ev in merged]))
     near = params.onset_frac * amplitude  # onset and return; and the two sides' rest levels differ by less
-    lo, hi = np.percentile(y, [2.0, 98.0])
     covered = np.zeros(y.shape[0] + 2, dtype=np.int8)  # frames of a counted repetition, padded by one each side
     for ev in merged:
         covered[ev.start + 1 : ev.end + 2] = 1
@@ -395,7 +402,7 @@ def _add_shallow(
     roomy = n_free[stretches[:, 1]] > n_free[stretches[:, 0]]
     extra: list[RepEvent] = []
     for a, start in stretches[long & roomy]:
-        e = y[a:start] - lo if rest_low else hi - y[a:start]
+        e = y[a:start] - rest.rest_deg if rest.rest_low else rest.rest_deg - y[a:start]
         p = int(np.argmax(np.where(free[a:start], e, -np.inf)))
         base0, base1 = float(e[: p + 1].min()), float(e[p:].min())
         if e[p] - max(base0, base1) < params.shallow_ratio * amplitude or abs(base0 - base1) > near:
@@ -429,10 +436,12 @@ def count_repetitions(
         if name not in angles:
             raise ValueError(f"angle {name!r} is missing; have {sorted(angles)}")
         smoothed[name] = series.smooth(t, np.asarray(angles[name], dtype=np.float64))
-    ranges = {n: angle_range(y) if np.all(np.isfinite(y)) else 0.0 for n, y in smoothed.items()}
+    # (p2, p98) of each smoothed angle, degrees: its range R (angle_range) and its two possible rest ends
+    bounds = {n: tuple(np.percentile(y, [2.0, 98.0])) for n, y in smoothed.items() if y.size and np.isfinite(y).all()}
+    ranges = {n: float(bounds[n][1] - bounds[n][0]) if n in bounds else 0.0 for n in smoothed}
     top = max(ranges.values(), default=0.0)
     moving = tuple(n for n in names if ranges[n] >= max(params.min_range_deg, params.side_ratio * top))
-    found = {name: detect_angle(t, smoothed[name], name, params) for name in moving}
+    found = {name: detect_angle(t, smoothed[name], name, params, bounds[name]) for name in moving}
     dominant = max(moving, key=lambda n: sum(ev.amplitude for ev in found[n].events)) if moving else None
     per_angle = {name: _repeating(t, smoothed, found, name, dominant) for name in moving}
     events = [ev for name in moving for ev in per_angle[name]]
@@ -441,7 +450,7 @@ def count_repetitions(
     merged = _drop_weak_lone(_keep_counted(merged, counted), params.lone_ratio)
     merged = _drop_rebounds(_drop_bumps(merged, params), params)
     if dominant is not None:
-        merged = _add_shallow(smoothed[dominant], dominant, found[dominant].rest_low, merged, params)
+        merged = _add_shallow(smoothed[dominant], dominant, found[dominant], merged, params)
     t0 = float(t[0]) if t.shape[0] else 0.0
     reps = [
         Repetition(
