@@ -42,6 +42,7 @@ class Settings(BaseSettings):
     PUBLIC_URL: str = ""
     # an event stream (GET /api/v1/events) ends after this long and the browser reconnects, checking its login again
     EVENTS_STREAM_MAX_S: float = Field(default=300.0, ge=0.0)
+    DB_SLOT_WAIT_S: float = Field(default=30.0, gt=0.0)  # a request waits this long for a database slot, then 503
     LIVE_OFFLINE_GRACE_S: float = Field(default=2.0, ge=0.0, le=60.0)  # a home agent's reconnection is no "offline"
 
     @model_validator(mode="after")

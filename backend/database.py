@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from functools import lru_cache
 
 from sqlalchemy import DateTime, MetaData, create_engine, event
@@ -105,13 +105,28 @@ def request_session(session: Session) -> Iterator[Session]:
         session.commit()
 
 
-def get_db() -> Iterator[Session]:
-    """Yields one session per request; commits on success and rolls back on any error."""
-    session = get_sessionmaker()()
+def _session_from(factory: sessionmaker[Session]) -> Iterator[Session]:
+    session = factory()
     try:
         yield from request_session(session)
     finally:
         session.close()
+
+
+def get_db() -> Iterator[Session]:
+    """Yields one session per request; commits on success and rolls back on any error."""
+    yield from _session_from(get_sessionmaker())
+
+
+def db_dependency(engine: Engine) -> Callable[[], Iterator[Session]]:
+    """Returns a dependency like get_db on another engine (benchmarks and tests serving their own database:
+    app.dependency_overrides[get_db] = db_dependency(engine))."""
+    factory = sessionmaker(bind=engine, expire_on_commit=False)
+
+    def db() -> Iterator[Session]:
+        yield from _session_from(factory)
+
+    return db
 
 
 def import_all_models() -> None:

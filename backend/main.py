@@ -19,6 +19,8 @@ from starlette.routing import compile_path
 
 from backend import __version__
 from backend.config import Settings, get_settings
+from backend.database import get_engine
+from backend.db_slots import DbAdmission, DbSlots
 from backend.deps import DbSession
 from backend.events.listener import Listener
 from backend.exceptions import AppError, DatabaseBusy
@@ -170,8 +172,6 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
 
     @asynccontextmanager
     async def lifespan(_app: FastAPI):
-        from backend.database import get_engine
-
         bound = engine or get_engine()
         if settings.CHECK_MIGRATIONS:
             from backend.migrate import check_at_head
@@ -195,6 +195,9 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     _install_error_handlers(app)
     # plotly.js (4.8 MB), viser's client and JSON compress 3-5x; the replay recording is already zstd (identity)
     app.add_middleware(GZipMiddleware, minimum_size=1024)
+    # a request waits for a database slot in the event loop, not in a thread holding a connection (backend/db_slots)
+    app.state.db_slots = DbSlots(lambda: engine or get_engine(), wait_s=settings.DB_SLOT_WAIT_S)
+    app.add_middleware(DbAdmission, slots=app.state.db_slots)
     app.add_middleware(RequestLimits, max_json_bytes=settings.MAX_JSON_BYTES)  # outermost: before anything reads
     app.include_router(_system_router())
     for name in ROUTERS:

@@ -262,9 +262,7 @@ def config_from(overrides: list[str]) -> PipelineConfig:
             kwargs[name] = ast.literal_eval(text)
         except (ValueError, SyntaxError):
             kwargs[name] = text
-    config = PipelineConfig(**kwargs)
-    config.check()
-    return config
+    return PipelineConfig(**kwargs)  # checks each field's range, naming the field
 
 
 def main(argv: list[str] | None = None) -> int:

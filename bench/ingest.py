@@ -142,24 +142,13 @@ def _device_headers(engine) -> dict[str, str]:
 
 def make_app(engine):
     """Returns the real app with its requests on `engine` (get_db: commit on success, roll back on error)."""
-    from sqlalchemy.orm import sessionmaker
-
     from backend.config import Settings, get_settings
-    from backend.database import get_db, request_session
+    from backend.database import db_dependency, get_db
     from backend.main import create_app
 
     settings = Settings(ENVIRONMENT="local", CHECK_MIGRATIONS=False, DATABASE_URL=str(engine.url))
-    factory = sessionmaker(bind=engine, expire_on_commit=False)
     app = create_app(settings, engine)
-
-    def db() -> Iterator:
-        session = factory()
-        try:
-            yield from request_session(session)
-        finally:
-            session.close()
-
-    app.dependency_overrides[get_db] = db
+    app.dependency_overrides[get_db] = db_dependency(engine)
     app.dependency_overrides[get_settings] = lambda: settings
     return app
 

@@ -2,20 +2,25 @@
 
     .venv/bin/python bench/uncertainty.py [--reps 5] [--json out.json]
 
-Training set (fit): every simulated exercise at views 0° and 60°, seeds 101-103. Held-out set (validation): every
-exercise at views 0° and 30°, seeds 201-203 (another view, other seeds; the motions are shared because each
-exercise is the only one that moves some angles, and an angle's bias depends on how it moves). Prints
+Training set (fit): every simulated exercise at views 0° and 60°, seeds 101-110. Held-out sets (validation): every
+exercise at views 0° and 30°, seeds 201-203 (another view, other seeds), and at views 30° and 60°, seeds 301-303
+(the motions are shared because each exercise is the only one that moves some angles, and an angle's bias depends
+on how it moves). Prints
   1. the per-frame inflation: SD of (angle error − its session mean) / the model SD, per angle (median = the
      INFLATION of kinect_agent.processing.uncertainty);
-  2. the systematic part b per angle and kind (level: peak/min, range), fitted on the training set so that 95 % of
-     its intervals cover the truth (the SYSTEMATIC_DEG of backend.analysis.intervals);
-  3. the coverage of the shipped intervals on both sets, per (motion, view) family and pooled;
+  2. the systematic part b = (1 + YAW_GAIN · sin ψ) · sqrt(B² + (TAIL_GAIN · τ)²) fitted on the training set: the
+     yaw gain and the tail gain of each kind (min, peak, range) on a grid, the narrowest intervals among those
+     whose per-family coverage deviates from 0.95 (RMS) at most 10 % more than the least; B per angle and kind
+     one quantile (the same for all) of the B each training interval needs, set so that 95.5 % of them cover the
+     truth (YAW_GAIN, TAIL_GAIN and SYSTEMATIC_DEG of backend.analysis.intervals);
+  3. the coverage of the shipped intervals on every set, per (motion, view) family, per seed and pooled;
   4. the cost of the per-frame SDs on 10 minutes at 30 Hz.
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import time
 from dataclasses import dataclass
@@ -31,14 +36,20 @@ from kinect_agent.processing.pipeline import process
 from kinect_agent.sources.simulator import EXERCISES, simulate
 
 MOTIONS = EXERCISES
-TRAIN_VIEWS, TRAIN_SEEDS = (0, 60), (101, 102, 103)
+TRAIN_VIEWS, TRAIN_SEEDS = (0, 60), tuple(range(101, 111))
 TEST_VIEWS, TEST_SEEDS = (0, 30), (201, 202, 203)
+THIRD_VIEWS, THIRD_SEEDS = (30, 60), (301, 302, 303)
+YAW_GAINS = (0.0, 0.25, 0.5, 0.75, 1.0)
+TAIL_GAINS = (1.0, 1.5, 2.0, 3.0, 4.0)  # per kind: min_deg, max_deg, range_deg
+RMS_SLACK = 1.1  # gains within this factor of the least per-family deviation count as equal; the narrowest wins
+TARGET = 0.955  # training coverage the quantile of B is set to
 KINDS = ("min_deg", "max_deg", "range_deg")
 
 
 @dataclass
 class Case:
-    """One simulated session: angles of the filtered and of the true positions (degrees), the shipped SDs."""
+    """One simulated session: angles of the filtered and of the true positions (degrees), the shipped SDs, the
+    body's yaw to the camera measured on the filtered positions (degrees)."""
 
     motion: str
     view: int
@@ -47,15 +58,17 @@ class Case:
     est: dict[str, np.ndarray]
     truth: dict[str, np.ndarray]
     sd: dict[str, np.ndarray]
+    yaw: float
 
 
 def simulate_case(motion: str, view: int, seed: int, reps: int) -> Case:
     """Returns one case: simulate, run the pipeline, measure angles as the server does (smoothed positions)."""
     measured, truth, _ = simulate(motion, reps, view_deg=view, seed=seed)
     result = process(measured)
-    est = joint_angles(series.smooth_positions(measured.t, result.filtered.positions))
+    smoothed = series.smooth_positions(measured.t, result.filtered.positions)
+    est = joint_angles(smoothed)
     true = joint_angles(series.smooth_positions(truth.t, truth.positions))
-    return Case(motion, view, seed, measured.t, est, true, result.angle_sd)
+    return Case(motion, view, seed, measured.t, est, true, result.angle_sd, intervals.camera_yaw(smoothed))
 
 
 def collect(motions: tuple[str, ...], views: tuple[int, ...], seeds: tuple[int, ...], reps: int) -> list[Case]:
@@ -78,17 +91,23 @@ def frame_inflation(cases: list[Case]) -> dict[str, float]:
     return out
 
 
-def metric_errors(case: Case, name: str) -> dict[str, tuple[float, float, float]] | None:
-    """Returns {kind: (estimate, truth, σ_frames)} of one angle, or None when either series is unusable."""
+def metric_errors(case: Case, name: str) -> dict[str, tuple[float, float, float, float]] | None:
+    """Returns {kind: (estimate, truth, σ_frames, τ the tail)} of one angle, or None when either series is
+    unusable."""
     e = intervals.edges(case.t, case.est[name], case.sd[name])
     true = range_of_motion(case.t, {name: case.truth[name]}, presmoothed=True)[name]
-    iv = intervals.angle_intervals(case.t, case.est[name], case.sd[name], name)
+    iv = intervals.angle_intervals(case.t, case.est[name], case.sd[name], name, yaw_deg=case.yaw)
     if e is None or iv is None or true["range_deg"] is None or true["range_deg"] >= intervals.MAX_RANGE_DEG:
         return None
     return {
-        "min_deg": (e.low, true["min_deg"], e.sd_low),
-        "max_deg": (e.high, true["max_deg"], e.sd_high),
-        "range_deg": (e.high - e.low, true["range_deg"], float(np.hypot(e.sd_low, e.sd_high))),
+        "min_deg": (e.low, true["min_deg"], e.sd_low, e.tail_low),
+        "max_deg": (e.high, true["max_deg"], e.sd_high, e.tail_high),
+        "range_deg": (
+            e.high - e.low,
+            true["range_deg"],
+            float(np.hypot(e.sd_low, e.sd_high)),
+            float(np.hypot(e.tail_low, e.tail_high)),
+        ),
     }
 
 
@@ -103,40 +122,115 @@ def _pair(name: str) -> str:
     return name[:-2] if name[-2:] in ("_L", "_R") else name
 
 
-def fit_systematic(cases: list[Case], coverage: float = 0.95) -> dict[str, tuple[float, float, float]]:
-    """Returns {angle: (b_min, b_max, b_range)} degrees: per kind, the smallest b covering `coverage` of the
-    training intervals of that angle, both sides pooled (the body and the errors are left-right symmetric)."""
-    need: dict[str, dict[str, list[float]]] = {}
-    for name in ANGLE_NAMES:
-        for c in cases:
+@dataclass
+class Needs:
+    """Per training interval: its angle (sides pooled) and kind, its family, the b it needs (degrees), its tail τ
+    (degrees), sin of the session's yaw and σ_frames (degrees). All arrays (n,)."""
+
+    key: np.ndarray
+    family: np.ndarray
+    b: np.ndarray
+    tail: np.ndarray
+    sin_yaw: np.ndarray
+    sigma: np.ndarray
+
+
+def needs(cases: list[Case]) -> Needs:
+    """Returns the Needs of every interval of the cases: b² = (error / 1.96)² − σ_frames², floored at 0."""
+    rows = []
+    for c in cases:
+        for name in ANGLE_NAMES:
             errs = metric_errors(c, name)
             if errs is None:
                 continue
-            for kind, (est, true, sigma) in errs.items():
+            for kind, (est, true, sigma, tail) in errs.items():
                 b2 = (_error(est, true, kind) / intervals.Z95) ** 2 - sigma**2
-                need.setdefault(_pair(name), {}).setdefault(kind, []).append(float(np.sqrt(max(b2, 0.0))))
+                row = (f"{_pair(name)}|{kind}", f"{c.motion}@{c.view}", np.sqrt(max(b2, 0.0)), tail, c.yaw, sigma)
+                rows.append(row)
+    key, family, b, tail, yaw, sigma = zip(*rows, strict=True)
+    sin_yaw = np.abs(np.sin(np.radians(yaw)))
+    return Needs(np.array(key), np.array(family), np.array(b), np.array(tail), sin_yaw, np.array(sigma))
+
+
+def _gains(n: Needs, tail_gain: tuple[float, float, float]) -> np.ndarray:
+    """Returns (n,) the tail gain of each interval's kind."""
+    return np.select([np.char.endswith(n.key, "|" + k) for k in KINDS], list(tail_gain))
+
+
+def _table(n: Needs, yaw_gain: float, tail_gain: tuple[float, float, float], q: float) -> dict[str, float]:
+    extra = _gains(n, tail_gain) * n.tail
+    base = np.sqrt(np.maximum((n.b / (1.0 + yaw_gain * n.sin_yaw)) ** 2 - extra**2, 0.0))
+    return {k: float(np.quantile(base[n.key == k], q)) for k in np.unique(n.key)}
+
+
+def _hits(n: Needs, yaw_gain: float, tail_gain: tuple[float, float, float], table: dict[str, float]) -> np.ndarray:
+    B = np.array([table[k] for k in n.key])
+    return n.b <= (1.0 + yaw_gain * n.sin_yaw) * np.hypot(B, _gains(n, tail_gain) * n.tail) + 1e-9
+
+
+def _fit_table(n: Needs, yaw_gain: float, tail_gain: tuple[float, float, float]) -> dict[str, float]:
+    """Returns {pair|kind: B}: one quantile q of the B each interval needs, q bisected so that TARGET of the
+    intervals in n cover the truth."""
+    lo, hi = 0.0, 0.995
+    for _ in range(14):
+        q = 0.5 * (lo + hi)
+        if np.mean(_hits(n, yaw_gain, tail_gain, _table(n, yaw_gain, tail_gain, q))) < TARGET:
+            lo = q
+        else:
+            hi = q
+    return _table(n, yaw_gain, tail_gain, hi)
+
+
+def _half_width(n: Needs, yaw_gain: float, tail_gain: tuple[float, float, float], table: dict[str, float]) -> float:
+    """Returns the mean over the kinds of the median half-width 1.96 · sqrt(σ² + b²) (degrees)."""
+    B = np.array([table[k] for k in n.key])
+    b = (1.0 + yaw_gain * n.sin_yaw) * np.hypot(B, _gains(n, tail_gain) * n.tail)
+    half = intervals.Z95 * np.hypot(n.sigma, b)
+    return float(np.mean([np.median(half[np.char.endswith(n.key, "|" + k)]) for k in KINDS]))
+
+
+def fit_systematic(
+    cases: list[Case],
+) -> tuple[float, tuple[float, float, float], dict[str, tuple[float, float, float]]]:
+    """Returns (YAW_GAIN, TAIL_GAIN (min_deg, max_deg, range_deg), {angle: (B_min, B_max, B_range)} degrees)
+    fitted on the cases. For every gain on the grid, B is one quantile of the needed B for every angle and kind
+    (both sides pooled: the body and the errors are left-right symmetric), set to TARGET coverage; the gains kept
+    are the narrowest intervals (mean over the kinds of the median half-width) among those whose per-(motion, view)
+    coverage deviates from 0.95 (RMS over the families) by at most RMS_SLACK times the least deviation."""
+    n = needs(cases)
+    fams = np.unique(n.family)
+    fits = []
+    for yg in YAW_GAINS:
+        for tg in itertools.product(TAIL_GAINS, repeat=3):
+            table = _fit_table(n, yg, tg)
+            hits = _hits(n, yg, tg, table)
+            rms = float(np.sqrt(np.mean([(np.mean(hits[n.family == f]) - 0.95) ** 2 for f in fams])))
+            fits.append((rms, _half_width(n, yg, tg, table), yg, tg, table))
+    least = min(f[0] for f in fits)
+    _, _, yg, tg, table = min((f for f in fits if f[0] <= RMS_SLACK * least), key=lambda f: f[1])
     out = {}
     for name in ANGLE_NAMES:
-        per = need.get(_pair(name))
-        if per:
-            fit = [round(float(np.quantile(per[k], coverage)), 1) for k in KINDS]
-            out[name] = (fit[0], fit[1], fit[2])
-    return out
+        ks = [f"{_pair(name)}|{k}" for k in KINDS]
+        if all(k in table for k in ks):
+            b = [round(table[k], 1) for k in ks]
+            out[name] = (b[0], b[1], b[2])
+    return yg, (float(tg[0]), float(tg[1]), float(tg[2])), out
 
 
 def coverage_table(cases: list[Case]) -> dict[str, dict[str, float]]:
-    """Returns {family "motion@view" and "pooled": {kind: fraction of 95 % intervals that hold the truth, "n"}}."""
+    """Returns {family "motion@view", "seed N" and "pooled": {kind: fraction of 95 % intervals that hold the truth,
+    "all", "n"}}."""
     hits: dict[str, dict[str, list[bool]]] = {}
     for c in cases:
         fam = f"{c.motion}@{c.view}"
         for name in ANGLE_NAMES:
-            iv = intervals.angle_intervals(c.t, c.est[name], c.sd[name], name)
+            iv = intervals.angle_intervals(c.t, c.est[name], c.sd[name], name, yaw_deg=c.yaw)
             true = range_of_motion(c.t, {name: c.truth[name]}, presmoothed=True)[name]
             if iv is None or true["range_deg"] is None or true["range_deg"] >= intervals.MAX_RANGE_DEG:
                 continue
             for kind in KINDS:
                 ok = intervals.covers(iv[kind], true[kind], kind)
-                for key in (fam, "pooled"):
+                for key in (fam, f"seed {c.seed}", "pooled"):
                     hits.setdefault(key, {}).setdefault(kind, []).append(ok)
     table = {}
     for key, per in hits.items():
@@ -169,17 +263,21 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     train = collect(MOTIONS, TRAIN_VIEWS, TRAIN_SEEDS, args.reps)
     test = collect(MOTIONS, TEST_VIEWS, TEST_SEEDS, args.reps)
+    third = collect(MOTIONS, THIRD_VIEWS, THIRD_SEEDS, args.reps)
     inflation = frame_inflation(train)
     print("per-frame inflation (train), SD of detrended error / model SD:")
     for name, v in inflation.items():
         print(f"  {name:24s} {v:6.2f}")
     print(f"  median {np.nanmedian(list(inflation.values())):.2f} (shipped INFLATION = {uncertainty.INFLATION})")
-    fitted = fit_systematic(train)
-    print("systematic part b fitted on train (min_deg, max_deg, range_deg), degrees:")
+    yaw_gain, tail_gain, fitted = fit_systematic(train)
+    print(
+        f"systematic part fitted on train: YAW_GAIN {yaw_gain} (shipped {intervals.YAW_GAIN}), TAIL_GAIN "
+        f"{tail_gain} (shipped {intervals.TAIL_GAIN}); B (min_deg, max_deg, range_deg), degrees:"
+    )
     for name, b in fitted.items():
         print(f"  {name:24s} {b}   shipped {intervals.SYSTEMATIC_DEG.get(name)}")
-    report = {"inflation": inflation, "fitted_systematic": fitted}
-    for label, cases in (("train", train), ("held-out", test)):
+    report = {"inflation": inflation, "fitted_systematic": fitted, "yaw_gain": yaw_gain, "tail_gain": tail_gain}
+    for label, cases in (("train", train), ("held-out 0/30", test), ("held-out 30/60", third)):
         table = coverage_table(cases)
         report[label] = table
         print(f"coverage of the shipped 95 % intervals, {label}:")

@@ -15,6 +15,7 @@ from urllib.parse import quote
 from fastapi import APIRouter, Depends, FastAPI, Request
 from fastapi.responses import FileResponse, HTMLResponse, RedirectResponse, Response
 from fastapi.templating import Jinja2Templates
+from sqlalchemy.orm import Session
 
 from backend.deps import Caller, DbSession, optional_caller, require_patient_access
 from backend.exceptions import NotFound
@@ -129,10 +130,29 @@ def patient_detail_page(patient_id: IdPath, request: Request, caller: OptionalCa
     )
 
 
+def _session_not_found(request: Request, caller: Caller, db_session: Session, session_id: int) -> Response | None:
+    """Returns the 404 page when the caller may not see session_id (missing, or another person's: whether it
+    exists is not theirs to know), else None."""
+    from backend.sessions.service import missing, session_patient
+
+    try:
+        patient_id = session_patient(db_session=db_session, session_id=session_id)
+        require_patient_access(patient_id, caller=caller, db_session=db_session, hidden_as=missing(session_id))
+    except NotFound:
+        return _page(request, "error.html", caller, status_code=404, title="Session not found",
+                     message=f"There is no session {session_id} that you may see.")  # fmt: skip
+    return None
+
+
 @router.get("/therapist/sessions/{session_id}", response_class=HTMLResponse)
-def session_page(session_id: IdPath, request: Request, caller: OptionalCaller) -> Response:
-    """Shows one session for a therapist: angle curves, repetitions, reach, data quality, processing."""
-    return _gate(request, caller, THERAPIST_ROLES) or _page(request, "session.html", caller, session_id=session_id)
+def session_page(session_id: IdPath, request: Request, caller: OptionalCaller, db_session: DbSession) -> Response:
+    """Shows one session for a therapist: angle curves, repetitions, reach, data quality, processing; the 404 page
+    for a session they may not see."""
+    return (
+        _gate(request, caller, THERAPIST_ROLES)
+        or _session_not_found(request, caller, db_session, session_id)
+        or _page(request, "session.html", caller, session_id=session_id)
+    )
 
 
 @router.get("/therapist/sessions/{session_id}/replay", response_class=HTMLResponse)
@@ -144,14 +164,12 @@ def replay_page(session_id: IdPath, request: Request, caller: OptionalCaller, db
     """
     if caller is None or caller.user is None:
         return _sign_in_first(request)
-    from backend.sessions.service import missing, session_patient
+    from backend.sessions.service import session_patient
 
-    try:
-        patient_id = session_patient(db_session=db_session, session_id=session_id)
-        require_patient_access(patient_id, caller=caller, db_session=db_session, hidden_as=missing(session_id))
-    except NotFound:  # also another person's session: whether it exists is not theirs to know
-        return _page(request, "error.html", caller, status_code=404, title="Session not found",
-                     message=f"There is no session {session_id} that you may see.")  # fmt: skip
+    not_found = _session_not_found(request, caller, db_session, session_id)
+    if not_found is not None:
+        return not_found
+    patient_id = session_patient(db_session=db_session, session_id=session_id)
     return _page(request, "replay.html", caller, session_id=session_id, patient_id=patient_id)
 
 

@@ -1,4 +1,8 @@
-"""`kinect-agent`: the home agent's command line. Each subcommand lives in kinect_agent/commands/."""
+"""`kinect-agent`: the home agent's command line. Each subcommand lives in kinect_agent/commands/<name>.py.
+
+A command imports only its own module (`kinect-agent status` does not load the filter, numba and SciPy that
+`run` needs); the full list is built for `--help`, `--version` and a name that is not a command.
+"""
 
 from __future__ import annotations
 
@@ -10,7 +14,7 @@ from kinect_agent import __version__
 from kinect_agent.blas_threads import one_blas_thread
 from kinect_agent.errors import AgentError
 
-# Subcommand modules; each defines NAME, HELP, add_arguments(parser) and run(args) -> int.
+# Subcommand modules, named as their command; each defines NAME, HELP, add_arguments(parser) and run(args) -> int.
 COMMANDS = (
     "kinect_agent.commands.convert",
     "kinect_agent.commands.simulate",
@@ -26,12 +30,14 @@ COMMANDS = (
 )
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Returns the parser with every available subcommand."""
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """Returns the parser with every available subcommand, or with the subcommand `only` alone."""
     parser = argparse.ArgumentParser(prog="kinect-agent", description="Kinect Home Coach home agent.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for module_name in COMMANDS:
+        if only is not None and module_name.rpartition(".")[2] != only:
+            continue
         try:
             module = importlib.import_module(module_name)
         except ModuleNotFoundError as exc:
@@ -46,7 +52,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Runs one subcommand; user errors print one clear line and exit with status 2."""
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else argv
+    first = next((a for a in argv if not a.startswith("-")), None)  # the command: no top-level option takes a value
+    known = {m.rpartition(".")[2] for m in COMMANDS}
+    args = build_parser(first if first in known else None).parse_args(argv)
     one_blas_thread()
     try:
         return int(args._run(args) or 0)

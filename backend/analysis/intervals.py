@@ -11,10 +11,24 @@ Error model of one metric m (degrees), measured on simulated sessions with known
                combined, sqrt(σ_hi² + σ_lo²) (the random error at the two turning points is nearly independent:
                they lie more than the jitter's correlation time, 0.2 s, apart)
     b          the systematic part the covariance cannot know (Kinect's joint-placement bias seen through the
-               angle definitions; e.g. a straight elbow reads bent), per angle and per metric (min_deg, max_deg,
-               range_deg), fitted on training motions, views and seeds so that 95 % of
-               the training intervals cover the truth, and validated on other motions, views and seeds
-               (bench/README.md, tests/backend/analysis/test_intervals_calibration.py).
+               angle definitions; e.g. a straight elbow reads bent), from what the server measures in the session:
+                   b = (1 + YAW_GAIN · sin ψ) · sqrt(B² + (TAIL_GAIN · τ)²)
+               ψ      the body's yaw to the camera (camera_yaw: the shoulder line against the camera's x axis,
+                      0° facing it, 90° side on); Kinect's joint offsets grow as the body turns away
+               τ      the tail of the angle's distribution beyond the edge: P99 − P90 (max_deg), P10 − P1 (min_deg),
+                      their hypot (range_deg); small where the angle turns smoothly at its ends or stands still,
+                      large where filter excursions or an ill-defined angle (hip abduction in a deep squat) set
+                      the edge
+               B      per angle and metric (min_deg, max_deg, range_deg), both sides pooled
+               YAW_GAIN, TAIL_GAIN (one per metric) and B are fitted on training sessions (every simulated
+               exercise at views 0° and 60°, seeds 101-110): the gains, on a grid, give the narrowest intervals
+               among those whose per-(motion, view) coverage deviates from 95 % (RMS) at most 10 % more than the
+               least deviation on the grid; B is one quantile (the same for every angle and metric)
+               of the B each training interval needs, set so that 95.5 % of the training intervals cover the
+               truth. Validated on views 0°, 30° and 60° with other seeds (bench/README.md,
+               tests/backend/analysis/test_intervals_calibration.py). Limits: the fitted quantile is about the
+               median, so B is 0 for all angles but trunk lateral flexion: a bias that holds still (no tail) is
+               not widened for; fitted on Kinect 2 (simulated Kinect 1 sessions cover 0.88 pooled).
     interval   m̂ ± 1.96 · sqrt(σ_frames² + b²); a range never below 0. None for NO_INTERVAL angles and for ranges
                of a full turn or more.
 
@@ -31,6 +45,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
 from backend.analysis.range_of_motion import HIGH_PCT, LOW_PCT
+from kinect_agent import skeleton
 from kinect_agent.analysis import series
 from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
 
@@ -43,21 +58,28 @@ COUNT_DRAWS = 20
 # and a range of a full turn or more means the angle spun through its ±180° seam (an ill-defined range).
 NO_INTERVAL = ("shoulder_rotation_L", "shoulder_rotation_R")
 MAX_RANGE_DEG = 360.0
-# b (degrees) per angle: (min_deg, max_deg, range_deg), fitted by bench/uncertainty.py (bench/README.md, "Uncertainty").
-# Both sides share one fit (pooled); the shoulder rotations have none (NO_INTERVAL).
+# The systematic part b = (1 + YAW_GAIN · sin ψ) · sqrt(B² + (TAIL_GAIN · τ)²), fitted by bench/uncertainty.py
+# (bench/README.md, "Uncertainty"); B (degrees) per angle: (min_deg, max_deg, range_deg), both sides pooled; the
+# shoulder rotations have none (NO_INTERVAL). The fitted quantile of B is about the median: the tail term alone
+# covers most training intervals, so B is 0 but for trunk lateral flexion, whose error (up to 60° in a squat or an
+# elbow flexion) shows no tail.
+YAW_GAIN = 1.0
+TAIL_GAIN = (2.0, 3.0, 2.0)  # min_deg, max_deg, range_deg
+TAIL_PCT = (10.0, 90.0)  # τ: the 1st to the 10th and the 90th to the 99th percentile
 _PAIRS: dict[str, tuple[float, float, float]] = {
-    "elbow_flexion": (0.0, 23.0, 16.4),
-    "knee_flexion": (1.7, 28.7, 25.6),
-    "shoulder_flexion": (7.1, 21.4, 6.6),
-    "shoulder_abduction": (16.7, 9.7, 25.7),
-    "hip_flexion": (13.0, 4.5, 3.4),
-    "hip_abduction": (3.0, 0.0, 0.0),
+    "elbow_flexion": (0.0, 0.0, 0.0),
+    "knee_flexion": (0.0, 0.0, 0.0),
+    "shoulder_flexion": (0.0, 0.0, 0.0),
+    "shoulder_abduction": (0.0, 0.0, 0.0),
+    "hip_flexion": (0.0, 0.0, 0.0),
+    "hip_abduction": (0.0, 0.0, 0.0),
 }
 SYSTEMATIC_DEG: dict[str, tuple[float, float, float]] = {
     **{f"{pair}_{side}": b for pair, b in _PAIRS.items() for side in ("L", "R")},
-    "trunk_flexion": (0.0, 2.6, 0.0),
-    "trunk_lateral_flexion": (31.0, 34.0, 6.3),
+    "trunk_flexion": (0.0, 0.0, 0.0),
+    "trunk_lateral_flexion": (6.2, 2.5, 0.0),
 }
+_SHOULDERS = (skeleton.INDEX["SHO_L"], skeleton.INDEX["SHO_R"])
 
 
 @dataclass(frozen=True)
@@ -79,12 +101,15 @@ class CountInterval:
 
 @dataclass(frozen=True)
 class Edges:
-    """The ends of one angle's range (1st and 99th percentiles, degrees) and the per-frame SD at each (degrees)."""
+    """The ends of one angle's range (1st and 99th percentiles, degrees), the per-frame SD at each (degrees) and
+    the tail beyond each (degrees: tail_low = P10 − P1, tail_high = P99 − P90)."""
 
     low: float
     high: float
     sd_low: float
     sd_high: float
+    tail_low: float
+    tail_high: float
 
 
 def _edge_sd(y: np.ndarray, sd: np.ndarray, level: float, span: float, upper: bool) -> float:
@@ -105,9 +130,49 @@ def edges(t: np.ndarray, x: np.ndarray, sd: np.ndarray) -> Edges | None:
     sd = np.asarray(sd, dtype=np.float64)
     if not (y.size and np.all(np.isfinite(y)) and np.isfinite(sd).any()):
         return None
-    lo, hi = np.percentile(y, [LOW_PCT, HIGH_PCT])
+    lo, hi, in_lo, in_hi = np.percentile(y, [LOW_PCT, HIGH_PCT, *TAIL_PCT])
     span = max(float(hi - lo), 1e-9)
-    return Edges(float(lo), float(hi), _edge_sd(y, sd, lo, span, False), _edge_sd(y, sd, hi, span, True))
+    return Edges(
+        float(lo),
+        float(hi),
+        _edge_sd(y, sd, lo, span, False),
+        _edge_sd(y, sd, hi, span, True),
+        float(in_lo - lo),
+        float(hi - in_hi),
+    )
+
+
+def camera_yaw(positions: np.ndarray) -> float | None:
+    """Returns the body's yaw to the camera, degrees in [0, 90]: 0 facing it (or facing away), 90 side on; None
+    when no frame has both shoulders.
+
+    positions: (T, J, 3) metres, camera frame (x to the side, y up, z away), the skeleton's joint order. The
+    median over the frames of the angle between the shoulder line (SHO_L − SHO_R) in the camera's horizontal
+    (x, z) plane and the x axis. The shoulders rather than the hips: on simulated sessions (Kinect 2) the shoulder
+    line reads 2.6 ± 1.2°, 32.5 ± 2.1° and 62.3 ± 2.2° at views 0°, 30° and 60°, the hip line 17 ± 17°, 40 ± 29°
+    and 50 ± 30° (Kinect's hip joints sit 0.2 m apart and their offsets turn the line).
+    Raises ValueError when positions is not (T, J, 3).
+    """
+    p = np.asarray(positions, dtype=np.float64)
+    if p.ndim != 3 or p.shape[1:] != (skeleton.J, 3):
+        raise ValueError(f"positions must be (T, {skeleton.J}, 3), got {p.shape}")
+    across = p[:, _SHOULDERS[0]] - p[:, _SHOULDERS[1]]
+    ok = np.all(np.isfinite(across), axis=1) & (np.hypot(across[:, 0], across[:, 2]) > 0)
+    if not ok.any():
+        return None
+    psi = np.degrees(np.arctan2(across[ok, 2], across[ok, 0]))
+    return float(np.median(np.abs((psi + 90.0) % 180.0 - 90.0)))
+
+
+def systematic(name: str, e: Edges, yaw_deg: float) -> tuple[float, float, float]:
+    """Returns b (degrees) of (min_deg, max_deg, range_deg) of angle `name` with edges e at body yaw yaw_deg."""
+    b_min, b_max, b_range = SYSTEMATIC_DEG.get(name, (0.0, 0.0, 0.0))
+    gain = 1.0 + YAW_GAIN * abs(float(np.sin(np.radians(yaw_deg))))
+    tails = (e.tail_low, e.tail_high, float(np.hypot(e.tail_low, e.tail_high)))
+    b_min, b_max, b_range = (
+        gain * float(np.hypot(b, k * tau)) for b, k, tau in zip((b_min, b_max, b_range), TAIL_GAIN, tails, strict=True)
+    )
+    return b_min, b_max, b_range
 
 
 def _interval(centre: float, sd: float, floor: float | None = None) -> list[float]:
@@ -117,17 +182,20 @@ def _interval(centre: float, sd: float, floor: float | None = None) -> list[floa
     return [round(lo, 1), round(hi, 1)]
 
 
-def angle_intervals(t: np.ndarray, x: np.ndarray, sd: np.ndarray, name: str) -> dict[str, list[float]] | None:
+def angle_intervals(
+    t: np.ndarray, x: np.ndarray, sd: np.ndarray, name: str, *, yaw_deg: float
+) -> dict[str, list[float]] | None:
     """Returns {"min_deg": [lo, hi], "max_deg": [lo, hi], "range_deg": [lo, hi]} (95 %, degrees) of one angle.
 
     t: (T,) s. x: (T,) degrees, the angle as range_of_motion measures it (presmoothed). sd: (T,) degrees, its
-    per-frame SD. name: the angle (for its systematic part). None when x or sd has no finite value, for the angles
-    of NO_INTERVAL and for a range of MAX_RANGE_DEG or more.
+    per-frame SD. name: the angle (for its systematic part). yaw_deg: the body's yaw to the camera, degrees
+    (camera_yaw). None when x or sd has no finite value, for the angles of NO_INTERVAL and for a range of
+    MAX_RANGE_DEG or more.
     """
     e = edges(t, x, sd)
     if e is None or name in NO_INTERVAL or e.high - e.low >= MAX_RANGE_DEG:
         return None
-    b_min, b_max, b_range = SYSTEMATIC_DEG.get(name, (0.0, 0.0, 0.0))
+    b_min, b_max, b_range = systematic(name, e, yaw_deg)
     return {
         "min_deg": _interval(e.low, float(np.hypot(e.sd_low, b_min))),
         "max_deg": _interval(e.high, float(np.hypot(e.sd_high, b_max))),
@@ -146,10 +214,16 @@ def covers(interval: list[float], true: float, kind: str) -> bool:
 
 
 def rom_intervals(
-    t: np.ndarray, angles: dict[str, np.ndarray], sd: dict[str, np.ndarray]
+    t: np.ndarray, angles: dict[str, np.ndarray], sd: dict[str, np.ndarray], positions: np.ndarray
 ) -> dict[str, dict[str, list[float]] | None]:
-    """Returns {angle: angle_intervals(...)} for every angle present in both angles and sd ({name: (T,) degrees})."""
-    return {name: angle_intervals(t, angles[name], sd[name], name) for name in angles if name in sd}
+    """Returns {angle: angle_intervals(...)} for every angle present in both angles and sd ({name: (T,) degrees}).
+
+    positions: (T, J, 3) metres, camera frame, the positions the angles were measured on (for camera_yaw; a
+    session without both shoulders in any frame is taken as side on, 90°, the widest intervals).
+    """
+    yaw = camera_yaw(positions)
+    yaw = 90.0 if yaw is None else yaw
+    return {name: angle_intervals(t, angles[name], sd[name], name, yaw_deg=yaw) for name in angles if name in sd}
 
 
 def _smooth_noise(rng: np.random.Generator, T: int, n: int, dt: float) -> np.ndarray:

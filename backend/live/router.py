@@ -70,14 +70,16 @@ async def _agent_events(
 
     When it ends, the device is announced offline after LIVE_OFFLINE_GRACE_S unless a new stream of it began
     meanwhile (an agent reconnecting after the stream's lifetime, or after a network blip, never shows offline)."""
+    slots = request.app.state.db_slots
     now = time.monotonic()
     deadline, beat = now + settings.EVENTS_STREAM_MAX_S, now + service.HEARTBEAT_S
     try:
         yield f"retry: {RETRY_MS}\n: connected\n\n"
         while time.monotonic() < deadline and not await request.is_disconnected():
             if time.monotonic() >= beat:
-                alive = await run_in_threadpool(_committed, service.heartbeat, db_session, device_id=device_id,
-                                                stream_id=stream_id)  # fmt: skip
+                async with slots.held():  # the stream's response has started: it holds no slot of its own
+                    alive = await run_in_threadpool(_committed, service.heartbeat, db_session, device_id=device_id,
+                                                    stream_id=stream_id)  # fmt: skip
                 if not alive:
                     break
                 beat += service.HEARTBEAT_S
@@ -92,8 +94,9 @@ async def _agent_events(
         HUB.unsubscribe(subscriber)
         with anyio.CancelScope(shield=True):
             await anyio.sleep(settings.LIVE_OFFLINE_GRACE_S)
-            await run_in_threadpool(_committed, service.disconnect, db_session, device_id=device_id,
-                                    stream_id=stream_id)  # fmt: skip
+            async with slots.held():
+                await run_in_threadpool(_committed, service.disconnect, db_session, device_id=device_id,
+                                        stream_id=stream_id)  # fmt: skip
 
 
 @router.post("/progress", status_code=status.HTTP_204_NO_CONTENT, responses=error_responses(*AUTH_ERRORS))

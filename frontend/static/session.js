@@ -229,7 +229,7 @@
       }).catch(() => {});
     } catch (err) {
       document.getElementById("session-sub").textContent = "This session cannot be shown.";
-      document.getElementById("curves").replaceChildren();
+      document.getElementById("session-body").hidden = true;  // no empty sections, downloads or replay under the error
       showError(err);
     }
   }

@@ -42,12 +42,14 @@ BASELINE_PERIODS = 1.5
 @dataclass(frozen=True)
 class Cycle:
     """period_s: P in seconds (None: not periodic); correlation: the autocorrelation at P (0 when None);
-    amplitude_deg: A in degrees; n_cycles: N, the cycles the recording holds at that period."""
+    amplitude_deg: A in degrees; n_cycles: N, the cycles the recording holds at that period; top_frames: the
+    frames of the N most prominent peaks, most prominent first (empty when not periodic)."""
 
     period_s: float | None
     correlation: float
     amplitude_deg: float
     n_cycles: int
+    top_frames: tuple[int, ...] = ()
 
 
 def autocorrelation(x: np.ndarray) -> np.ndarray:
@@ -93,22 +95,24 @@ def prominences(e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def cycle(t: np.ndarray, e: np.ndarray) -> Cycle:
     """Returns the Cycle of the excursion series e: (T,) degrees at times t: (T,) s (module doc)."""
-    _, prom = prominences(e)
+    frames, prom = prominences(e)
     if prom.size == 0:
         return Cycle(None, 0.0, 0.0, 0)
     p, corr = period(t, e)
     if p is None:
         return Cycle(None, 0.0, float(prom[0]), 1)
     n = max(1, int(round((t[-1] - t[0]) / p)))
-    return Cycle(p, corr, float(np.median(prom[:n])), n)
+    return Cycle(p, corr, float(np.median(prom[:n])), n, tuple(int(f) for f in frames[:n]))
 
 
 def baseline(t: np.ndarray, e: np.ndarray, cyc: Cycle) -> np.ndarray:
-    """Returns (T,) the rest level of e: (T,) under its cycles (module doc), zeros without a period."""
+    """Returns (T,) the rest level of e: (T,) under its cycles (module doc), zeros without a period.
+
+    cyc: cycle(t, e) of this same e (its top_frames are e's peaks).
+    """
     if cyc.period_s is None:
         return np.zeros_like(e)
-    frames, _ = prominences(e)
-    top = frames[: cyc.n_cycles] + 1  # in the padded series prominences() found them in
+    top = np.asarray(cyc.top_frames, dtype=np.int64) + 1  # in the padded series prominences() found them in
     padded = np.concatenate(([e.min()], e, [e.min()]))
     widest = float(peak_widths(padded, top, rel_height=0.5)[0].max()) if top.size else 0.0
     size = max(3, int(round(BASELINE_PERIODS * cyc.period_s / frame_interval(t))), int(2 * widest)) | 1

@@ -222,21 +222,82 @@ def _excursions(
     inside = _hysteresis(e, params.enter_frac * R, params.exit_frac * R)
     edges = np.flatnonzero(np.diff(np.concatenate(([0], inside.astype(np.int8), [0]))))
     runs = edges.reshape(-1, 2)  # [first, stop) of each excursion core
-    events: list[RepEvent] = []
-    T = y.shape[0]
-    for k, (a, b) in enumerate(runs):
-        prev_stop = runs[k - 1][1] if k else 0
-        next_first = runs[k + 1][0] if k + 1 < len(runs) else T
-        pre, post = e[prev_stop : a + 1], e[b - 1 : next_first]
-        base0, base1 = float(pre.min()), float(post.min())
-        start = prev_stop + int(np.flatnonzero(pre <= base0 + params.onset_frac * R)[-1])
-        end = b - 1 + int(np.flatnonzero(post <= base1 + params.onset_frac * R)[0])
-        peak = a + int(np.argmax(e[a:b]))
-        if t[end] - t[start] < params.min_duration_s:
-            continue
-        amplitude = float(e[peak] - 0.5 * (base0 + base1))
-        events.append(RepEvent(start, peak, end, amplitude, float(y[peak]), side_of(name), (name,)))
-    return events, cyc.n_cycles if cyc.period_s is not None else 0
+    n_cycles = cyc.n_cycles if cyc.period_s is not None else 0
+    if runs.shape[0] == 0:
+        return [], n_cycles
+    start, end, base0, base1 = _widen(e, runs, params.onset_frac * R)
+    peak = _run_argmax(e, runs)
+    keep = t[end] - t[start] >= params.min_duration_s
+    amplitude = e[peak] - 0.5 * (base0 + base1)
+    side = side_of(name)
+    events = [
+        RepEvent(int(a), int(p), int(b), float(amp), float(y[p]), side, (name,))
+        for a, p, b, amp in zip(start[keep], peak[keep], end[keep], amplitude[keep], strict=True)
+    ]
+    return events, n_cycles
+
+
+def _gap_minima(e: np.ndarray, runs: np.ndarray) -> np.ndarray:
+    """Returns (n + 1,) the minimum of e: (T,) in each gap around the n runs ([first, stop) frames, in order): gap k
+    is [stop of run k − 1 (0 for k = 0), first of run k (T for k = n)); +inf for an empty gap."""
+    T = e.shape[0]
+    lo = np.concatenate(([0], runs[:, 1]))
+    hi = np.concatenate((runs[:, 0], [T]))
+    out = np.full(lo.shape[0], np.inf)
+    full = hi > lo
+    if full.any():
+        outside = np.ones(T, dtype=bool)
+        for a, b in runs:  # n slices; the gaps are what is left, in order
+            outside[a:b] = False
+        sizes = (hi - lo)[full]
+        offsets = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+        out[full] = np.minimum.reduceat(e[outside], offsets)
+    return out
+
+
+def _segment_ids(T: int, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Returns (T,) int: k for the frames of segment k = [lo[k], hi[k]) (disjoint, in order), −1 elsewhere."""
+    seg = np.full(T, -1, dtype=np.int64)
+    for k, (a, b) in enumerate(zip(lo, hi, strict=True)):
+        seg[a:b] = k
+    return seg
+
+
+def _widen(e: np.ndarray, runs: np.ndarray, onset: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Widens each run ([first, stop) frames of an excursion core, (n, 2)) of e: (T,) degrees to its onset and
+    return (step 5 of the module doc). Returns (start, end, base0, base1), each (n,): the last frame before the
+    core (first frame after it) within `onset` degrees of the minimum of the stretch back to the previous core
+    (on to the next), and those two minima."""
+    T = e.shape[0]
+    first, stop = runs[:, 0], runs[:, 1]
+    gap = _gap_minima(e, runs)
+    base0 = np.minimum(gap[:-1], e[first])  # stretch [previous stop, first]
+    base1 = np.minimum(e[stop - 1], gap[1:])  # stretch [stop − 1, next first)
+    prev_stop = np.concatenate(([0], stop[:-1]))
+    next_first = np.concatenate((first[1:], [T]))
+    idx = np.arange(T)
+    # onset: the last frame of [previous stop, first] at or under base0 + onset
+    seg = _segment_ids(T, prev_stop, first + 1)
+    ok = (seg >= 0) & (e <= base0[seg] + onset)
+    start = np.zeros(runs.shape[0], dtype=np.int64)
+    np.maximum.at(start, seg[ok], idx[ok])
+    # return: the first frame of [stop − 1, next first) at or under base1 + onset
+    seg = _segment_ids(T, stop - 1, next_first)
+    ok = (seg >= 0) & (e <= base1[seg] + onset)
+    end = np.full(runs.shape[0], T, dtype=np.int64)
+    np.minimum.at(end, seg[ok], idx[ok])
+    return start, end, base0, base1
+
+
+def _run_argmax(e: np.ndarray, runs: np.ndarray) -> np.ndarray:
+    """Returns (n,) the frame of each run's maximum of e: (T,) (its first, as np.argmax)."""
+    seg = _segment_ids(e.shape[0], runs[:, 0], runs[:, 1])
+    inside = seg >= 0
+    top = np.maximum.reduceat(e[inside], np.concatenate(([0], np.cumsum(runs[:, 1] - runs[:, 0])[:-1])))
+    idx = np.flatnonzero(inside & (e == top[np.maximum(seg, 0)]))
+    peak = np.full(runs.shape[0], e.shape[0], dtype=np.int64)
+    np.minimum.at(peak, seg[idx], idx)
+    return peak
 
 
 def _shared(a: RepEvent, b: RepEvent) -> int:
@@ -252,16 +313,17 @@ def merge_events(events: list[RepEvent], overlap: float) -> list[RepEvent]:
     event takes the member's place and the member stands alone.
     """
     merged: list[list[RepEvent]] = []
+    g_start = g_end = 0  # frames spanned by the last group, merged[-1]
     for ev in sorted(events, key=lambda ev: ev.start):
         if merged:
             group = merged[-1]
-            g_start, g_end = min(x.start for x in group), max(x.end for x in group)
             shared = min(g_end, ev.end) - max(g_start, ev.start)
             shorter = max(1, min(g_end - g_start, ev.end - ev.start))
             if shared > overlap * shorter:
                 same = [x for x in group if x.side == ev.side]
                 if not same:
                     group.append(ev)
+                    g_start, g_end = min(g_start, ev.start), max(g_end, ev.end)
                     continue
                 others = [x for x in group if x.side != ev.side]
                 rival = same[0]
@@ -269,8 +331,10 @@ def merge_events(events: list[RepEvent], overlap: float) -> list[RepEvent]:
                     group.remove(rival)
                     group.append(ev)
                     merged.insert(len(merged) - 1, [rival])
+                    g_start, g_end = min(x.start for x in group), max(x.end for x in group)
                     continue
         merged.append([ev])
+        g_start, g_end = ev.start, ev.end
     out = []
     for group in merged:
         if len(group) == 1:
@@ -281,13 +345,18 @@ def merge_events(events: list[RepEvent], overlap: float) -> list[RepEvent]:
                 start=min(x.start for x in group),
                 peak=max(group, key=lambda x: x.amplitude).peak,
                 end=max(x.end for x in group),
-                amplitude=float(np.mean([x.amplitude for x in group])),
-                peak_deg=float(np.mean([x.peak_deg for x in group])),
+                amplitude=_mean([x.amplitude for x in group]),
+                peak_deg=_mean([x.peak_deg for x in group]),
                 side="both",
                 angles=tuple(a for x in group for a in x.angles),
             )
         )
     return sorted(out, key=lambda ev: ev.start)
+
+
+def _mean(values: list[float]) -> float:
+    """The mean of a few floats (a merged group's; np.mean's call costs more than the sum)."""
+    return sum(values) / len(values)
 
 
 def _keep_counted(merged: list[RepEvent], counted: set[str]) -> list[RepEvent]:

@@ -163,8 +163,27 @@ def test_patient_gets_403_on_the_session_page(page, live_server):
 def test_other_therapist_sees_no_data_of_a_session_not_theirs(page, live_server, arm_session):
     login(page, THERAPIST)  # Tara is not George's therapist
     page.wait_for_url("**/therapist")
-    page.goto(f"/therapist/sessions/{arm_session}")
-    expect(page.locator("#error")).to_contain_text(f"could not find this. (session {arm_session} does not exist)")
+    response = page.goto(f"/therapist/sessions/{arm_session}")
+    assert response.status == 404  # the same as for a session that is not there
+    expect(page.locator("main")).to_contain_text(f"There is no session {arm_session} that you may see.")
+    assert page.locator(".js-plotly-plot, #downloads, #replay-link").count() == 0
+    assert page.goto("/therapist/sessions/999999").status == 404
+    shot(page, "session-missing")
+
+
+def test_a_session_whose_data_cannot_load_shows_the_error_alone(page, live_server):
+    """The page is served, then its data fails (here the detail answers 404 as if the session went away): the
+    error and the title, no empty sections, downloads or replay link under it."""
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    page.route("**/api/v1/sessions/*/detail", lambda route: route.fulfill(
+        status=404, content_type="application/json",
+        body='{"error": "SessionNotFound", "detail": "session 1 does not exist"}'))  # fmt: skip
+    page.goto("/therapist/sessions/1")
+    expect(page.locator("#error")).to_contain_text("session 1 does not exist")
+    expect(page.locator("#session-sub")).to_have_text("This session cannot be shown.")
+    for part in ("#numbers-h", "#reps", "#downloads", "#replay-link", "#processing"):
+        expect(page.locator(part)).to_be_hidden()
     assert page.locator(".js-plotly-plot").count() == 0
 
 

@@ -205,3 +205,30 @@ def test_run_replays_a_file_into_the_queue(home, tmp_path) -> None:
     (path,) = SessionQueue(config.queue_dir).pending()
     payload = read_payload(path)
     assert payload.raw.meta.exercise == "squat" and payload.filtered.n_frames == payload.raw.n_frames
+
+
+# ---------------------------------------------------------------------------------------------------- start-up
+
+
+@pytest.mark.parametrize("command", ["status", "upload", "pair", "convert"])
+def test_a_command_loads_only_its_own_module(command: str) -> None:
+    """`kinect-agent status` (and the other commands that do not filter) load neither the filter nor SciPy / numba:
+    the agent's scheduled upload and a patient's status check start in a fraction of a second."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\nfrom kinect_agent import cli\n"
+        f"try:\n    cli.main([{command!r}, '--help'])\nexcept SystemExit:\n    pass\n"
+        "print(sorted(m for m in ('scipy.linalg', 'numba', 'kinect_agent.processing.pipeline') if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip().splitlines()[-1] == "[]", out
+
+
+def test_unknown_command_lists_every_command(capsys) -> None:
+    with pytest.raises(SystemExit) as info:
+        cli.main(["nope"])
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert "invalid choice: 'nope'" in err and "'status'" in err and "'run'" in err

@@ -22,36 +22,105 @@ def _sine(seed: int) -> tuple[np.ndarray, np.ndarray]:
     return t, 60.0 + 40.0 * np.sin(2 * np.pi * t / 4.0 + rng.uniform(0, 6))
 
 
+def _expected_b(x: np.ndarray, name: str, yaw_deg: float) -> tuple[float, float, float]:
+    """b of (min_deg, max_deg, range_deg) from the model's formula, the tails taken from the series' percentiles."""
+    p1, p10, p90, p99 = np.percentile(x, [1, 10, 90, 99])
+    tails = (p10 - p1, p99 - p90, np.hypot(p10 - p1, p99 - p90))
+    gain = 1.0 + intervals.YAW_GAIN * np.sin(np.radians(yaw_deg))
+    B = intervals.SYSTEMATIC_DEG[name]
+    return tuple(gain * np.hypot(b, k * tau) for b, k, tau in zip(B, intervals.TAIL_GAIN, tails, strict=True))
+
+
 @pytest.mark.parametrize("seed", SEEDS)
-def test_widths_follow_the_per_frame_sd_and_the_systematic_part(seed):
+@pytest.mark.parametrize("yaw", (0.0, 30.0, 60.0))
+def test_widths_follow_the_per_frame_sd_and_the_systematic_part(seed, yaw):
     t, x = _sine(seed)
     sd = np.full_like(t, 2.0)
-    iv = intervals.angle_intervals(t, x, sd, "trunk_flexion")  # b = (0, 2.6, 0)
+    name = "trunk_lateral_flexion"  # B = (6.2, 2.5, 0.0)
+    iv = intervals.angle_intervals(t, x, sd, name, yaw_deg=yaw)
+    b_min, b_max, b_range = _expected_b(x, name, yaw)
     lo, hi = np.percentile(x, [1, 99])
-    np.testing.assert_allclose(np.mean(iv["min_deg"]), lo, atol=0.1, err_msg=f"seed {seed}")
-    np.testing.assert_allclose(np.diff(iv["min_deg"])[0], 2 * 1.96 * 2.0, atol=0.2, err_msg=f"seed {seed}")
-    np.testing.assert_allclose(np.diff(iv["max_deg"])[0], 2 * 1.96 * np.hypot(2.0, 2.6), atol=0.2)
-    np.testing.assert_allclose(np.diff(iv["range_deg"])[0], 2 * 1.96 * np.sqrt(8.0), atol=0.2)
+    msg = f"seed {seed}, yaw {yaw}"
+    np.testing.assert_allclose(np.mean(iv["min_deg"]), lo, atol=0.1, err_msg=msg)
+    np.testing.assert_allclose(np.diff(iv["min_deg"])[0], 2 * 1.96 * np.hypot(2.0, b_min), atol=0.2, err_msg=msg)
+    np.testing.assert_allclose(np.diff(iv["max_deg"])[0], 2 * 1.96 * np.hypot(2.0, b_max), atol=0.2, err_msg=msg)
+    np.testing.assert_allclose(np.diff(iv["range_deg"])[0], 2 * 1.96 * np.sqrt(8.0 + b_range**2), atol=0.2, err_msg=msg)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_a_turned_body_and_a_spiky_edge_widen_the_intervals(seed):
+    t, x = _sine(seed)
+    sd = np.full_like(t, 1.0)
+    width = {yaw: np.diff(intervals.angle_intervals(t, x, sd, "knee_flexion_L", yaw_deg=yaw)["max_deg"])[0]
+             for yaw in (0.0, 30.0, 60.0)}  # fmt: skip
+    assert width[0.0] < width[30.0] < width[60.0], f"seed {seed}: {width}"
+    # A still angle whose top 3 % of the frames jump 20° (a filter excursion) has a long upper tail: its peak
+    # interval widens, its minimum's does not.
+    rng = np.random.default_rng(seed)
+    still = 10.0 + rng.normal(0.0, 0.5, t.size)
+    spiky = still.copy()
+    spiky[rng.choice(t.size, t.size * 3 // 100, replace=False)] += 20.0
+    calm = intervals.angle_intervals(t, still, sd, "knee_flexion_L", yaw_deg=0.0)
+    spike = intervals.angle_intervals(t, spiky, sd, "knee_flexion_L", yaw_deg=0.0)
+    assert np.diff(spike["max_deg"])[0] > np.diff(calm["max_deg"])[0] + 20.0, f"seed {seed}: {spike} vs {calm}"
+    np.testing.assert_allclose(np.diff(spike["min_deg"]), np.diff(calm["min_deg"]), atol=1.0)
+
+
+def _rotated(positions: np.ndarray, yaw_deg: float) -> np.ndarray:
+    c, s = np.cos(np.radians(yaw_deg)), np.sin(np.radians(yaw_deg))
+    R = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    return positions @ R.T
+
+
+@pytest.mark.parametrize("yaw", (0.0, 20.0, 45.0, 70.0, 90.0))
+def test_camera_yaw_reads_a_turned_skeleton(yaw):
+    _, truth, _ = simulate("squat", 2, seed=1)  # the true body faces the camera; its shoulders sway about 1°
+    front = intervals.camera_yaw(truth.positions)
+    assert front < 2.0
+    for turn in (yaw, -yaw):
+        np.testing.assert_allclose(intervals.camera_yaw(_rotated(truth.positions, turn)), yaw, atol=front + 0.5)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("view", (0, 30, 60))
+def test_camera_yaw_reads_the_view_of_a_simulated_kinect_session(seed, view):
+    measured, _, _ = simulate("shoulder_abduction", 3, view_deg=view, seed=seed)
+    smoothed = series.smooth_positions(measured.t, process(measured).filtered.positions)
+    assert abs(intervals.camera_yaw(smoothed) - view) < 8.0, f"view {view}, seed {seed}"
+
+
+def test_camera_yaw_without_shoulders_and_bad_shapes():
+    _, truth, _ = simulate("squat", 2, seed=1)
+    p = truth.positions.copy()
+    p[:, 4] = np.nan  # SHO_L
+    assert intervals.camera_yaw(p) is None
+    t = truth.t
+    angles = {"knee_flexion_L": 20 + 10 * np.sin(t)}
+    sd = {"knee_flexion_L": np.ones_like(t)}
+    side_on = intervals.angle_intervals(t, angles["knee_flexion_L"], sd["knee_flexion_L"], "knee_flexion_L", yaw_deg=90)
+    assert intervals.rom_intervals(t, angles, sd, p) == {"knee_flexion_L": side_on}  # unknown yaw: side on, widest
+    with pytest.raises(ValueError, match="positions"):
+        intervals.camera_yaw(p[:, :10])
 
 
 def test_no_interval_for_shoulder_rotation_or_a_spinning_angle():
     t, x = _sine(1)
     sd = np.ones_like(t)
-    assert intervals.angle_intervals(t, x, sd, "shoulder_rotation_L") is None
-    assert intervals.angle_intervals(t, np.linspace(0, 720, t.size), sd, "elbow_flexion_L") is None
-    assert intervals.angle_intervals(t, np.full_like(t, np.nan), sd, "elbow_flexion_L") is None
+    assert intervals.angle_intervals(t, x, sd, "shoulder_rotation_L", yaw_deg=0.0) is None
+    assert intervals.angle_intervals(t, np.linspace(0, 720, t.size), sd, "elbow_flexion_L", yaw_deg=0.0) is None
+    assert intervals.angle_intervals(t, np.full_like(t, np.nan), sd, "elbow_flexion_L", yaw_deg=0.0) is None
 
 
 def test_a_range_never_goes_below_zero():
     t = np.arange(300) / 30.0
-    iv = intervals.angle_intervals(t, np.full_like(t, 10.0), np.full_like(t, 5.0), "elbow_flexion_L")
+    iv = intervals.angle_intervals(t, np.full_like(t, 10.0), np.full_like(t, 5.0), "elbow_flexion_L", yaw_deg=0.0)
     assert iv["range_deg"][0] == 0.0
 
 
 def test_shapes_are_checked():
     t, x = _sine(1)
     with pytest.raises(ValueError, match="shape"):
-        intervals.angle_intervals(t, x[:-1], np.ones_like(t), "elbow_flexion_L")
+        intervals.angle_intervals(t, x[:-1], np.ones_like(t), "elbow_flexion_L", yaw_deg=0.0)
 
 
 def test_covers_compares_the_ends_of_a_range_modulo_a_turn():

@@ -1,7 +1,8 @@
 """Calibration of the 95 % intervals of range of motion and peak angle on simulated sessions with known truth.
 
 Held-out cases: the constants of backend.analysis.intervals and kinect_agent.processing.uncertainty were fitted on
-views 0° and 60°, seeds 101-103 (bench/uncertainty.py); these use view 30° beside 0° and seeds 201-203.
+views 0° and 60°, seeds 101-110 (bench/uncertainty.py); these use view 30° beside 0° and seeds 201-203, every
+simulated exercise.
 """
 
 from __future__ import annotations
@@ -14,25 +15,27 @@ from backend.analysis.range_of_motion import range_of_motion
 from kinect_agent.analysis import series
 from kinect_agent.processing.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.processing.pipeline import process
-from kinect_agent.sources.simulator import simulate
+from kinect_agent.sources.simulator import EXERCISES, simulate
 
-MOTIONS = ("shoulder_abduction", "elbow_flexion", "squat")
+MOTIONS = EXERCISES
 VIEWS = (0, 30)
 SEEDS = (201, 202, 203)
 KINDS = ("min_deg", "max_deg", "range_deg")
-# Per (motion, view) family the held-out coverage runs 0.87-1.00 (bench/README.md): elbow_flexion at 30° misses
-# peaks of angles that stand still (an arm reads abducted, a straight knee bent, for more than 1 % of the frames).
-FAMILY_FLOOR = 0.85
+# Per (motion, view) family the held-out coverage runs 0.935-0.991 (bench/README.md, 2026-11-25): no family
+# under-covers; sit_to_stand at 0° and 30° and squat at 0° cover 0.981-0.991, above the 98 % aimed at.
+FAMILY_RANGE = (0.92, 0.995)
 
 
 def _hits(motion: str, view: int, seed: int) -> list[bool]:
     measured, truth, _ = simulate(motion, 5, view_deg=view, seed=seed)
     result = process(measured)
-    est = joint_angles(series.smooth_positions(measured.t, result.filtered.positions))
+    smoothed = series.smooth_positions(measured.t, result.filtered.positions)
+    est = joint_angles(smoothed)
+    yaw = intervals.camera_yaw(smoothed)
     true = range_of_motion(truth.t, joint_angles(series.smooth_positions(truth.t, truth.positions)), presmoothed=True)
     hits = []
     for name in ANGLE_NAMES:
-        iv = intervals.angle_intervals(measured.t, est[name], result.angle_sd[name], name)
+        iv = intervals.angle_intervals(measured.t, est[name], result.angle_sd[name], name, yaw_deg=yaw)
         if iv is None or true[name]["range_deg"] is None or true[name]["range_deg"] >= intervals.MAX_RANGE_DEG:
             continue
         hits += [intervals.covers(iv[kind], true[name][kind], kind) for kind in KINDS]
@@ -55,4 +58,5 @@ def test_every_motion_and_view_keeps_its_coverage(coverage, motion, view):
     hits = coverage[(motion, view)]
     assert len(hits) >= 60, f"{motion}@{view}: only {len(hits)} intervals"
     rate = float(np.mean(hits))
-    assert FAMILY_FLOOR <= rate <= 1.0, f"{motion}@{view}: coverage {rate:.3f} over seeds {SEEDS}"
+    lo, hi = FAMILY_RANGE
+    assert lo <= rate <= hi, f"{motion}@{view}: coverage {rate:.3f} over seeds {SEEDS}, outside {FAMILY_RANGE}"

@@ -1,0 +1,89 @@
+"""Database admission (backend/db_slots.py): a crowd of simultaneous requests is answered, none starves the pool.
+
+Before it, 60 simultaneous API requests against one server process (pool of 5 + 10 connections) gave 40 × 500 after
+the pool's 30 s timeout: threads waited for connections held by requests that waited for threads.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections import Counter
+from collections.abc import Iterator
+
+import httpx
+import pytest
+from sqlalchemy import create_engine
+from sqlalchemy.engine import Engine
+from sqlalchemy.orm import Session
+
+from backend.database import db_dependency, get_db, make_engine
+from backend.db_slots import DbSlots, ServerBusyError, pool_capacity
+from backend.main import create_app
+from backend.migrate import upgrade
+from backend.users.service import create_api_token, create_user
+from tests.kinect_agent._backend import LiveServer
+
+CROWD = 80  # more than the 40 worker threads plus the 15 pooled connections
+
+
+def test_pool_capacity_is_size_plus_overflow(fresh_engine) -> None:
+    assert pool_capacity(fresh_engine) == 15  # SQLAlchemy's QueuePool defaults, on SQLite files and PostgreSQL alike
+    assert pool_capacity(create_engine("sqlite://")) is None  # one shared in-memory connection: no limit
+
+
+def test_a_request_that_waits_too_long_is_told_the_server_is_busy(fresh_engine) -> None:
+    slots = DbSlots(lambda: fresh_engine, wait_s=0.05)
+
+    async def crowd() -> list[str]:
+        held = [await slots.acquire() for _ in range(slots.capacity)]
+        try:
+            await slots.acquire()
+        except ServerBusyError as exc:
+            return [str(exc)]
+        finally:
+            for release in held:
+                release()
+        return []
+
+    assert asyncio.run(crowd()) == ["no database connection came free within 0.05 s"]
+
+
+@pytest.fixture
+def crowd_engine(fresh_engine, tmp_path) -> Engine:
+    """An empty database with the server's own engine (on SQLite the suite's engine begins every transaction at
+    once, for its rolled-back test transactions, which makes concurrent readers that write fail as locked)."""
+    if fresh_engine.dialect.name == "postgresql":
+        return fresh_engine
+    return make_engine(f"sqlite:///{tmp_path / 'crowd.db'}")
+
+
+@pytest.fixture
+def crowd_server(crowd_engine, settings) -> Iterator[tuple[str, dict[str, str]]]:
+    """The app on a migrated database of its own with the real pool, served by uvicorn; yields (url, headers)."""
+    with crowd_engine.begin() as conn:
+        upgrade(conn)
+    with Session(crowd_engine, expire_on_commit=False) as s:
+        therapist = create_user(db_session=s, email="crowd@example.org", password=None, role="therapist")
+        _, token = create_api_token(db_session=s, user=therapist, name="t", scopes=["read", "write"], days=1)
+        s.commit()
+    app = create_app(settings, engine=crowd_engine)
+    app.dependency_overrides[get_db] = db_dependency(crowd_engine)
+    server = LiveServer(app).start()
+    try:
+        yield server.url, {"Authorization": f"Bearer {token}"}
+    finally:
+        server.stop()
+
+
+def test_a_crowd_of_simultaneous_requests_is_answered(crowd_server) -> None:
+    url, headers = crowd_server
+
+    async def crowd() -> Counter:
+        async with httpx.AsyncClient(base_url=url, headers=headers, timeout=60,
+                                     limits=httpx.Limits(max_connections=CROWD)) as client:  # fmt: skip
+            answers = await asyncio.gather(
+                *(client.get("/api/v1/patients" if i % 2 else "/api/v1/dashboard") for i in range(CROWD))
+            )
+        return Counter(a.status_code for a in answers)
+
+    assert asyncio.run(crowd()) == Counter({200: CROWD})
