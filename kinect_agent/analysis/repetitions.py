@@ -40,6 +40,22 @@ shallow_ratio (0.2) × that median and lasts at least shallow_duration (0.6) × 
 repetition still takes a repetition's time (UI-PRMD incorrect executions: first repetitions at a quarter to a third
 of the others' amplitude), a bump is brief (simulated filtered squats: 30° bumps of a third to half a repetition's
 duration).
+A repetition also takes its place in the cadence. With S the median peak-to-peak spacing of the counted repetitions:
+    - an excursion that peaks within shallow_spacing (0.8) × S of a larger one and lasts less than
+      shallow_duration × the median duration is a rebound or a split of that one, and is dropped (UI-PRMD shoulder
+      extension s04: a 0.6 s mistracked dip 1 s after a repetition's peak);
+    - a shallow repetition the hysteresis missed (its peak under enter_frac × A) is added where the cadence has
+      room for one: in a stretch between counted repetitions, the highest point of the dominant angle's excursion at
+      least shallow_spacing × S from every counted peak, when the excursion falls by shallow_ratio × the median
+      amplitude M to both sides and to one rest level (the two sides' minima within onset_frac × M), and its onset
+      and return (within onset_frac × M of those minima) are shallow_duration × the median duration apart (UI-PRMD
+      side lunge s04: a first lunge of 38° against 80-150°; leg raise s05: 16° against 54°). A rebound right after
+      a repetition is too close to it, a bump on the rest level between repetitions has no rest to rise from
+      (simulated filtered squats).
+An angle that moves without a period of its own beside a dominant angle that has one, and whose autocorrelation at
+the dominant's period is below cycles.MIN_CORRELATION, is the idle limb drifting or mistracked: its excursions are
+dropped before the sides are merged, so that its drift neither pairs with the repetitions nor makes the exercise
+look bilateral (UI-PRMD shoulder extension s05: an idle arm wandering 34° across three repetitions).
 """
 
 from __future__ import annotations
@@ -68,6 +84,7 @@ class RepetitionParams:
     min_ratio: float = 0.4
     shallow_ratio: float = 0.2
     shallow_duration: float = 0.6
+    shallow_spacing: float = 0.8  # × the median peak-to-peak spacing: the least room between two peaks
     min_duration_s: float = 0.4
     merge_overlap: float = 0.5
     rest: str = "auto"  # "auto": step 3 of the module doc; "start": where the recording starts (a set counted live)
@@ -155,19 +172,40 @@ def _rest_is_low(y: np.ndarray, lo: float, hi: float, rest: str = "auto") -> boo
 
 
 def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) -> list[RepEvent]:
-    """Returns the excursions of one smoothed angle y: (T,) degrees at t: (T,) s (steps 3-5 of the module doc).
+    """Returns the excursions of one smoothed angle y: (T,) degrees at t: (T,) s (steps 3-5 of the module doc)."""
+    return detect_angle(t, y, name, params).events
 
-    When the rest end is a tie (_rest_is_low gives None), both ends are tried and the one whose number of
-    excursions is nearer the number of cycles the autocorrelation's period gives wins (the low end on a tie).
+
+@dataclass(frozen=True)
+class AngleExcursions:
+    """The excursions of one angle; n_cycles: duration / P of its period (0 without one); rest_low: its rest end is
+    the low one; rest_deg: that end (p2 or p98 of the smoothed angle, degrees)."""
+
+    events: list[RepEvent]
+    n_cycles: int
+    rest_low: bool
+    rest_deg: float
+
+
+def detect_angle(
+    t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams, bounds: tuple[float, float] | None = None
+) -> AngleExcursions:
+    """Returns the excursions of one smoothed angle y: (T,) degrees at t: (T,) s, its cycles and its rest end.
+
+    bounds: (p2, p98) of y when already computed. When the rest end is a tie (_rest_is_low gives None), both ends are
+    tried and the one whose number of excursions is nearer the number of cycles the autocorrelation's period gives
+    wins (the low end on a tie).
     """
-    lo, hi = np.percentile(y, [2.0, 98.0])
+    lo, hi = bounds if bounds is not None else np.percentile(y, [2.0, 98.0])
     if hi - lo <= 0:
-        return []
+        return AngleExcursions([], 0, True, float(lo))
     rest_low = _rest_is_low(y, lo, hi, params.rest)
     if rest_low is not None:
-        return _excursions(t, y, name, params, rest_low)[0]
-    tries = [_excursions(t, y, name, params, low) for low in (True, False)]
-    return min(tries, key=lambda tried: abs(len(tried[0]) - tried[1]))[0]
+        return AngleExcursions(*_excursions(t, y, name, params, rest_low), rest_low, float(lo if rest_low else hi))
+    tries = [
+        AngleExcursions(*_excursions(t, y, name, params, low), low, float(lo if low else hi)) for low in (True, False)
+    ]
+    return min(tries, key=lambda tried: abs(len(tried.events) - tried.n_cycles))
 
 
 def _excursions(
@@ -369,6 +407,89 @@ def _alternates(name: str, dominant: str, events: list[RepEvent], params: Repeti
     return shared <= params.alternate_shared * len(own)
 
 
+def _repeating(
+    t: np.ndarray, smoothed: dict[str, np.ndarray], found: dict[str, AngleExcursions], name: str, dominant: str | None
+) -> list[RepEvent]:
+    """Returns the excursions of angle `name`, none when it idles beside a repeating dominant angle: the dominant
+    angle has a period P (duration / its cycles), `name` has none and its autocorrelation at lag P is below
+    cycles.MIN_CORRELATION (the idle limb drifting or mistracked, not repeating the movement with a slow start)."""
+    if name == dominant or dominant is None or found[dominant].n_cycles == 0 or found[name].n_cycles > 0:
+        return found[name].events
+    lag = int(round((t[-1] - t[0]) / found[dominant].n_cycles / series.frame_interval(t)))
+    ac = cycles.autocorrelation(smoothed[name])
+    return found[name].events if lag < ac.shape[0] and ac[lag] >= cycles.MIN_CORRELATION else []
+
+
+def _drop_rebounds(merged: list[RepEvent], params: RepetitionParams) -> list[RepEvent]:
+    """Drops the excursions that peak within shallow_spacing × the median peak-to-peak spacing of a larger one and
+    last less than shallow_duration × the median duration: a rebound or a split of that one, not a repetition."""
+    if len(merged) < 3:
+        return merged
+    merged = sorted(merged, key=lambda ev: ev.peak)
+    peaks = np.array([ev.peak for ev in merged])  # (n,) frames, in time order
+    amplitude = np.array([ev.amplitude for ev in merged])  # (n,) degrees
+    length = np.array([ev.end - ev.start for ev in merged])  # (n,) frames
+    gap = np.diff(peaks)  # (n − 1,) frames
+    room = params.shallow_spacing * float(np.median(gap))
+    close_prev = np.concatenate(([False], (gap < room) & (amplitude[:-1] > amplitude[1:])))
+    close_next = np.concatenate(((gap < room) & (amplitude[1:] > amplitude[:-1]), [False]))
+    brief = length < params.shallow_duration * float(np.median(length))
+    drop = brief & (close_prev | close_next)
+    kept = [ev for ev, gone in zip(merged, drop, strict=True) if not gone]
+    return sorted(kept, key=lambda ev: ev.start)
+
+
+def _add_shallow(
+    y: np.ndarray, name: str, rest: AngleExcursions, merged: list[RepEvent], params: RepetitionParams
+) -> list[RepEvent]:
+    """Adds the shallow repetitions of the dominant angle y: (T,) degrees, at rest at rest.rest_deg, that the
+    hysteresis missed (module doc).
+
+    In each stretch between counted repetitions (and before the first, after the last) at least shallow_duration ×
+    their median duration long, the highest point of e = |y − rest end| at least shallow_spacing × their median
+    peak-to-peak spacing from every counted peak is a repetition when e falls by shallow_ratio × their median
+    amplitude M on both sides of it, to minima (the stretch's before and after it) within onset_frac × M of each
+    other, and its onset and return (the last frame before, the first after, within onset_frac × M of those minima)
+    are at least shallow_duration × the median duration apart. Only the stretches and frames that
+    can hold one are searched, as array operations (no second pass of the detector: 0.1 ms on a 10-minute session).
+    """
+    if len(merged) < 3:
+        return merged
+    peaks = np.sort([ev.peak for ev in merged])  # (n,) frames
+    room = params.shallow_spacing * float(np.median(np.diff(peaks)))
+    amplitude = float(np.median([ev.amplitude for ev in merged]))
+    duration = params.shallow_duration * float(np.median([ev.end - ev.start for ev in merged]))
+    near = params.onset_frac * amplitude  # onset and return; and the two sides' rest levels differ by less
+    spans = np.array([(ev.start, ev.end) for ev in merged])  # (n, 2) frames, inclusive
+    depth = np.zeros(y.shape[0] + 3, dtype=np.int64)  # counted repetitions over each frame, padded by one each side
+    np.add.at(depth, spans[:, 0] + 1, 1)
+    np.add.at(depth, spans[:, 1] + 2, -1)
+    covered = np.cumsum(depth)[:-1] > 0
+    covered[0] = covered[-1] = True
+    stretches = np.flatnonzero(np.diff(covered)).reshape(-1, 2)  # (m, 2) [first, stop) frames between repetitions
+    # a stretch holds no counted peak: its nearest are the last one before it and the first one after it
+    k = np.searchsorted(peaks, stretches[:, 0])
+    before = np.where(k > 0, peaks[np.maximum(k - 1, 0)] + room, -np.inf)
+    after = np.where(k < peaks.size, peaks[np.minimum(k, peaks.size - 1)] - room, np.inf)
+    first = np.maximum(stretches[:, 0], np.ceil(before)).astype(np.int64)  # (m,) the free frames: [first, last]
+    last = np.minimum(stretches[:, 1] - 1, np.floor(after)).astype(np.int64)
+    keep = (stretches[:, 1] - stretches[:, 0] >= duration) & (first <= last)
+    extra: list[RepEvent] = []
+    for (a, start), f0, f1 in zip(stretches[keep], first[keep], last[keep], strict=True):
+        e = y[a:start] - rest.rest_deg if rest.rest_low else rest.rest_deg - y[a:start]
+        p = f0 - a + int(np.argmax(e[f0 - a : f1 - a + 1]))
+        base0, base1 = float(e[: p + 1].min()), float(e[p:].min())
+        if e[p] - max(base0, base1) < params.shallow_ratio * amplitude or abs(base0 - base1) > near:
+            continue
+        onset = int(np.flatnonzero(e[: p + 1] <= base0 + near)[-1])
+        back = p + int(np.flatnonzero(e[p:] <= base1 + near)[0])
+        if back - onset < duration:
+            continue
+        rise = float(e[p] - 0.5 * (base0 + base1))
+        extra.append(RepEvent(a + onset, a + p, a + back, rise, float(y[a + p]), side_of(name), (name,)))
+    return sorted(merged + extra, key=lambda ev: ev.start) if extra else merged
+
+
 def count_repetitions(
     t: np.ndarray, angles: dict[str, np.ndarray], names: tuple[str, ...], params: RepetitionParams | None = None
 ) -> RepetitionResult:
@@ -383,16 +504,21 @@ def count_repetitions(
         if name not in angles:
             raise ValueError(f"angle {name!r} is missing; have {sorted(angles)}")
         smoothed[name] = series.smooth(t, np.asarray(angles[name], dtype=np.float64))
-    ranges = {n: angle_range(y) if np.all(np.isfinite(y)) else 0.0 for n, y in smoothed.items()}
+    # (p2, p98) of each smoothed angle, degrees: its range R (angle_range) and its two possible rest ends
+    bounds = {n: tuple(np.percentile(y, [2.0, 98.0])) for n, y in smoothed.items() if y.size and np.isfinite(y).all()}
+    ranges = {n: float(bounds[n][1] - bounds[n][0]) if n in bounds else 0.0 for n in smoothed}
     top = max(ranges.values(), default=0.0)
     moving = tuple(n for n in names if ranges[n] >= max(params.min_range_deg, params.side_ratio * top))
-    per_angle = {name: detect(t, smoothed[name], name, params) for name in moving}
+    found = {name: detect_angle(t, smoothed[name], name, params, bounds[name]) for name in moving}
+    dominant = max(moving, key=lambda n: sum(ev.amplitude for ev in found[n].events)) if moving else None
+    per_angle = {name: _repeating(t, smoothed, found, name, dominant) for name in moving}
     events = [ev for name in moving for ev in per_angle[name]]
-    dominant = max(moving, key=lambda n: sum(ev.amplitude for ev in per_angle[n])) if moving else None
     merged = merge_events(events, params.merge_overlap)
     counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, params)}
     merged = _drop_weak_lone(_keep_counted(merged, counted), params.lone_ratio)
-    merged = _drop_bumps(merged, params)
+    merged = _drop_rebounds(_drop_bumps(merged, params), params)
+    if dominant is not None:
+        merged = _add_shallow(smoothed[dominant], dominant, found[dominant], merged, params)
     t0 = float(t[0]) if t.shape[0] else 0.0
     reps = [
         Repetition(

@@ -187,3 +187,38 @@ def test_rest_start_takes_the_rest_level_where_the_recording_starts():
     assert all(r.peak_deg < 30 for r in auto.repetitions), [r.peak_deg for r in auto.repetitions]
     peaks = [r.peak_deg for r in start.repetitions]
     assert len(peaks) >= 3 and all(p > 60 for p in peaks), peaks
+
+
+def _bumps(t: np.ndarray, centres_s: list[float], heights_deg: list[float], width_s: float) -> np.ndarray:
+    """Returns (T,) degrees: raised-cosine excursions from 0 of the given heights, each width_s wide, at t: (T,) s."""
+    y = np.zeros_like(t)
+    for c, h in zip(centres_s, heights_deg, strict=True):
+        inside = np.abs(t - c) < width_s / 2
+        y[inside] += h * 0.5 * (1 + np.cos(2 * np.pi * (t[inside] - c) / width_s))
+    return y
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_shallow_repetition_in_its_place_in_the_cadence_is_counted(seed: int) -> None:
+    """Nine 100° repetitions every 3 s and, in the cadence, one of 25° that takes a repetition's time (UI-PRMD
+    incorrect executions: a first or a late repetition at a quarter to a third of the others' amplitude)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, 31, 1 / 30)
+    heights = [100.0] * 10
+    heights[6] = 25.0
+    y = _bumps(t, [2.0 + 3 * k for k in range(10)], heights, 2.0) + rng.normal(0, 1.5, t.shape)
+    reps = count_repetitions(t, {"hip_flexion_R": y}, ("hip_flexion_R",)).repetitions
+    assert len(reps) == 10, [(round(r.start_s, 1), round(r.amplitude_deg)) for r in reps]
+    assert any(abs(0.5 * (r.start_s + r.end_s) - 20.0) < 0.5 and r.amplitude_deg < 40 for r in reps)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_brief_rebound_just_after_a_repetition_is_not_counted(seed: int) -> None:
+    """Ten 60° repetitions every 2.2 s; one is followed 1 s after its peak by a 40° rebound a third as long (UI-PRMD
+    shoulder extension s04: a mistracked dip beside a repetition)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, 23, 1 / 30)
+    centres = [1.2 + 2.2 * k for k in range(10)]
+    y = _bumps(t, centres, [60.0] * 10, 1.5) + _bumps(t, [centres[4] + 1.0], [40.0], 0.5) + rng.normal(0, 1, t.shape)
+    reps = count_repetitions(t, {"shoulder_flexion_R": y}, ("shoulder_flexion_R",)).repetitions
+    assert len(reps) == 10, [(round(r.start_s, 1), round(r.amplitude_deg)) for r in reps]
