@@ -183,6 +183,7 @@ def _chain_step(x, P, z, observed, R_diag, w, gate, fixed_lengths, n_len, rest, 
     n = x.shape[0]
     J = used.shape[0]
     scale, Wm0, Wm1, Wc0, Wc1 = w[0], w[1], w[2], w[3], w[4]
+    at_mean = w.shape[0] > 5 and w[5] != 0.0
     gj = np.empty(J, dtype=np.int64)
     g = 0
     for j in range(J):
@@ -224,7 +225,7 @@ def _chain_step(x, P, z, observed, R_diag, w, gate, fixed_lengths, n_len, rest, 
             for s in range(S_n - (S_n - 1) % 4, S_n):
                 acc0 += pos[j, a, s]
             mean = Wm0 * pos[j, a, 0] + Wm1 * ((acc0 + acc1) + (acc2 + acc3))
-            y[c] = z[3 * j + a] - mean
+            y[c] = z[3 * j + a] - (pos[j, a, 0] if at_mean else mean)
             for s in range(S_n):
                 dz[c, s] = pos[j, a, s] - mean
     S = np.empty((m, m))

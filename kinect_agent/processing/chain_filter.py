@@ -70,7 +70,10 @@ class ChainFilter(UnscentedKalmanFilter):
         self.Q = np.diag(self._diag_of(config.q_root_m, config.q_length_m, config.q_rot_rad))
         # The fused kernel (_ukf_numba.chain_step): its weights, the fixed lengths (zeros while in the state).
         self.compiled = _ukf_numba.AVAILABLE and model.runs_compiled
-        self.kernel_weights = np.array([points.scale, points.Wm[0], points.Wm[1], points.Wc[0], points.Wc[1]])
+        self.kernel_weights = np.array(
+            [points.scale, points.Wm[0], points.Wm[1], points.Wc[0], points.Wc[1], float(config.innovation_at_mean)]
+        )
+        self.innovation_at_mean = config.innovation_at_mean
         self.n_len = 0 if lengths is not None else N_LEN
         self.fixed_lengths = np.zeros(N_LEN) if lengths is None else np.ascontiguousarray(lengths, dtype=np.float64)
         self._diag = np.arange(n)
@@ -170,7 +173,9 @@ class ChainFilter(UnscentedKalmanFilter):
                 return used
             # P or S not positive definite (x, P untouched): the numpy path below adds jitter.
         groups = (np.asarray(observed, dtype=bool) & np.isfinite(z)).reshape(-1, 3).all(axis=1)
-        return gated_update(self, np.where(np.isfinite(z), z, 0.0), np.repeat(groups, 3), R_diag, gate)
+        return gated_update(
+            self, np.where(np.isfinite(z), z, 0.0), np.repeat(groups, 3), R_diag, gate, at_mean=self.innovation_at_mean
+        )
 
     def reacquire(self, joints: np.ndarray, start: np.ndarray) -> None:
         """Restarts the state entries that place `joints` from `start` (root (3) m + theta (33) rad, e.g. IK of the

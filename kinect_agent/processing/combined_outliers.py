@@ -16,13 +16,15 @@ from kinect_agent.recording import Recording
 
 
 def combine(p_temporal: np.ndarray, p_other: np.ndarray, how: str = "or") -> np.ndarray:
-    """Returns (T, J): two outlier probabilities combined, "or" = 1 − (1 − p_t)(1 − p_o) (independent evidence)
-    or "max"."""
+    """Returns (T, J): two outlier probabilities combined, "or" = 1 − (1 − p_t)(1 − p_o) (independent evidence),
+    "max", or "and" = min(p_t, p_o) (both must flag it)."""
     if how == "or":
         return 1.0 - (1.0 - p_temporal) * (1.0 - p_other)
     if how == "max":
         return np.maximum(p_temporal, p_other)
-    raise ValueError(f"how must be 'or' or 'max', got {how!r}")
+    if how == "and":
+        return np.minimum(p_temporal, p_other)
+    raise ValueError(f"how must be 'or', 'max' or 'and', got {how!r}")
 
 
 def outlier_probabilities_combined(rec: Recording, config: PipelineConfig) -> np.ndarray:

@@ -47,8 +47,10 @@ class PipelineConfig(BaseModel):
     outlier_iterations: int = Field(
         2, description="local-quadratic refinements of the outlier residual after its running median"
     )
-    outlier_segment: Literal["max", "or"] | None = Field(
-        None, description='also a segment-length residual (segment_outliers.py) combined by "max"/"or"; None: no'
+    outlier_segment: Literal["max", "or", "and"] | None = Field(
+        None,
+        description='also a segment-length residual (segment_outliers.py) combined by "max"/"or", or "and" (a '
+        "temporal outlier must break its bones too: min of both); None: no",
     )
     outlier_excursions: bool = Field(True, description="also flag sustained excursions offline (excursions.py)")
     online_excursions: bool = Field(True, description="online: hold out joints in an excursion (LiveExcursions)")
@@ -75,6 +77,12 @@ class PipelineConfig(BaseModel):
     )
     four_pass_combine: Literal["last", "information"] = Field(
         "last", description='four_pass output: "last" (pass 4) or "information" (passes 3 and 4 averaged)'
+    )
+    innovation_at_mean: bool = Field(
+        False,
+        description="UKF update (offline passes and online filter): innovation z − h(x̄), the mean state's joints, "
+        "instead of z − Σ Wm·h(σ), the sigma points' mean; off: it removes the exact-input bias but loses on Kinect "
+        "data (bench/README.md, Fast arm motion)",
     )
     alpha: float = Field(0.5, gt=0, description="sigma-point spread (van der Merwe)")
     beta: float = Field(2.0, description="sigma-point prior-distribution weight (van der Merwe; 2 for Gaussian)")

@@ -201,12 +201,20 @@ def combine_information(
 
 
 def gated_update(
-    kf: UnscentedKalmanFilter, z: np.ndarray, observed: np.ndarray, R_diag: np.ndarray, gate_chi2: float, group: int = 3
+    kf: UnscentedKalmanFilter,
+    z: np.ndarray,
+    observed: np.ndarray,
+    R_diag: np.ndarray,
+    gate_chi2: float,
+    group: int = 3,
+    at_mean: bool = False,
 ) -> np.ndarray:
     """Updates kf with z (m,), dropping whole groups of `group` rows (one joint = 3 rows) whose innovation is
     improbable: y_gᵀ S_gg⁻¹ y_g > gate_chi2 (S_gg the group's block of the innovation covariance).
 
     observed: (m,) bool. R_diag: (m,) variances. Returns (m // group,) bool: the groups that were used.
+    at_mean: the innovation is z − h(x̄) (the centre sigma point) instead of z − Σ Wm·h(σ) (PipelineConfig
+    .innovation_at_mean); S and Pxz are the same either way.
     One evaluation of hx on the sigma points and one innovation covariance serve both the gate and the update.
     """
     obs = np.asarray(observed, dtype=bool) & np.isfinite(z)
@@ -229,7 +237,7 @@ def gated_update(
     S = (dz[1:].T @ dz[1:]) * pts.Wc[1]
     S += pts.Wc[0] * np.outer(dz[0], dz[0])
     S[np.diag_indices_from(S)] += R_diag[rows]
-    y = z[rows] - zp
+    y = z[rows] - (Z[0] if at_mean else zp)
     g = int(groups.sum())
     ar = np.arange(g)
     blocks = S.reshape(g, group, g, group)[ar, :, ar, :]  # (g, group, group) diagonal blocks

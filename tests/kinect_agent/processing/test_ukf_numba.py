@@ -31,11 +31,11 @@ def _recording(rng: np.random.Generator, frames: int = 60) -> Recording:
     return inject_outliers(rec, rng, rate=0.02)[0]
 
 
-def _filters(rec: Recording, fixed: bool) -> tuple:
+def _filters(rec: Recording, fixed: bool, at_mean: bool = False) -> tuple:
     """Returns (fast, reference) filters with the same chain and start; the reference uses numpy throughout."""
     fit = inverse_kinematics(rec.positions)
     lengths = fit.lengths if fixed else None
-    config = PipelineConfig()
+    config = PipelineConfig(innovation_at_mean=at_mean)
     x0 = np.concatenate([fit.root[0]] + ([] if fixed else [fit.lengths]) + [fit.theta[0]])
     fast = ChainFilter(fit.model, lengths, config, x0)
     plain_model = km.ChainModel(fit.model.rest, fit.model.R_ref, compiled=False)
@@ -44,10 +44,11 @@ def _filters(rec: Recording, fixed: bool) -> tuple:
     return fast, ref, config
 
 
+@pytest.mark.parametrize("at_mean", [False, True], ids=["innovation at the sigma mean", "innovation at h(x̄)"])
 @pytest.mark.parametrize("fixed", [True, False], ids=["lengths fixed (n=36)", "lengths in the state (n=55)"])
-def test_fast_step_equals_the_reference_step(rng: np.random.Generator, fixed: bool) -> None:
+def test_fast_step_equals_the_reference_step(rng: np.random.Generator, fixed: bool, at_mean: bool) -> None:
     rec = _recording(rng)
-    fast, ref, config = _filters(rec, fixed)
+    fast, ref, config = _filters(rec, fixed, at_mean)
     z, observed, R_diag = observations(rec, config)
     gated = 0
     for k in range(rec.n_frames):
