@@ -12,8 +12,10 @@ connection) for one of `capacity` slots, the pool's size plus its overflow, and 
 response starts (the database part is over then: the request's session commits before the answer is sent;
 DbSession is a function-scoped dependency) or when it ends without one. A request that cannot get a slot within
 wait_s is answered 503 ServerBusy with Retry-After. A stream that uses the database later, while it is open (the
-home agent's heartbeat), takes a slot for each such step (DbSlots.held). Pools without a fixed size (SQLite in
-memory, NullPool) get no limit.
+home agent's heartbeat), takes a slot for each such step (DbSlots.held). A route that waits on the network with no
+database work gives its slot back meanwhile (lease_of(request).paused(): a session upload while its body comes in
+over a patient's slow uplink, after committing its login check). Pools without a fixed size (SQLite in memory,
+NullPool) get no limit.
 """
 
 from __future__ import annotations
@@ -26,13 +28,13 @@ from contextlib import asynccontextmanager
 
 from sqlalchemy.engine import Engine
 from sqlalchemy.pool import QueuePool
+from starlette.requests import Request
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from backend.exceptions import ServerBusy
+
 EXEMPT_PREFIXES = ("/static/",)  # files from disk: no database
-
-
-class ServerBusyError(Exception):
-    """No database slot came free within the wait."""
+SCOPE_KEY = "coach.db_lease"
 
 
 def pool_capacity(engine: Engine) -> int | None:
@@ -71,14 +73,15 @@ class DbSlots:
         return sem
 
     async def acquire(self) -> Callable[[], None]:
-        """Waits for a slot; returns the function that gives it back (call it once). Raises ServerBusyError."""
+        """Waits for a slot; returns the function that gives it back (call it once). Raises ServerBusy."""
         sem = self._semaphore()
         if sem is None:
             return lambda: None
         try:
             await asyncio.wait_for(sem.acquire(), timeout=self.wait_s)
         except TimeoutError:
-            raise ServerBusyError(f"no database connection came free within {self.wait_s:g} s") from None
+            detail = f"no database connection came free within {self.wait_s:g} s; retry in a few seconds"
+            raise ServerBusy(detail) from None
         released = False
 
         def release() -> None:
@@ -99,6 +102,40 @@ class DbSlots:
             release()
 
 
+class SlotLease:
+    """One request's slot: taken before the app runs, given back when the response starts. slots None: a lease that
+    holds nothing (an app without DbAdmission)."""
+
+    def __init__(self, slots: DbSlots | None):
+        self._slots = slots
+        self._release: Callable[[], None] | None = None
+
+    async def acquire(self) -> None:
+        """Takes the slot (waits; raises ServerBusy)."""
+        if self._slots is not None and self._release is None:
+            self._release = await self._slots.acquire()
+
+    def release(self) -> None:
+        """Gives the slot back (nothing when not held)."""
+        release, self._release = self._release, None
+        if release is not None:
+            release()
+
+    @asynccontextmanager
+    async def paused(self) -> AsyncIterator[None]:
+        """Gives the slot back for the block (network waits, no database work: commit first) and takes it again."""
+        self.release()
+        try:
+            yield
+        finally:
+            await self.acquire()
+
+
+def lease_of(request: Request) -> SlotLease:
+    """Returns the request's slot lease (a lease that does nothing when the app runs without DbAdmission)."""
+    return request.scope.get(SCOPE_KEY) or SlotLease(None)
+
+
 class DbAdmission:
     """ASGI middleware: each HTTP request (but the static files) holds a DbSlots slot until its response starts."""
 
@@ -110,25 +147,27 @@ class DbAdmission:
         if scope["type"] != "http" or scope["path"].startswith(EXEMPT_PREFIXES):
             await self.app(scope, receive, send)
             return
+        lease = SlotLease(self.slots)
         try:
-            release = await self.slots.acquire()
-        except ServerBusyError as exc:
-            await _busy(send, str(exc))
+            await lease.acquire()
+        except ServerBusy as exc:
+            await _busy(send, exc.message)
             return
+        scope[SCOPE_KEY] = lease
 
         async def send_releasing(message: Message) -> None:
             if message["type"] == "http.response.start":
-                release()
+                lease.release()
             await send(message)
 
         try:
             await self.app(scope, receive, send_releasing)
         finally:
-            release()
+            lease.release()
 
 
 async def _busy(send: Send, detail: str) -> None:
-    body = json.dumps({"error": "ServerBusy", "detail": f"{detail}; retry in a few seconds"}).encode()
+    body = json.dumps({"error": "ServerBusy", "detail": detail}).encode()
     headers = [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode()),
                (b"retry-after", b"5")]  # fmt: skip
     await send({"type": "http.response.start", "status": 503, "headers": headers})

@@ -152,6 +152,15 @@ class DatabaseBusy(AppError):
         super().__init__(message, headers={"Retry-After": "1"})
 
 
+class ServerBusy(AppError):
+    """No database slot of this server process came free within COACH_DB_SLOT_WAIT_S (backend/db_slots.py)."""
+
+    status_code = 503
+
+    def __init__(self, message: str):
+        super().__init__(message, headers={"Retry-After": "5"})
+
+
 class DatabaseNotMigrated(RuntimeError):
     """Raised at start-up when the database revision is not Alembic head."""
 

@@ -11,6 +11,7 @@ from starlette.concurrency import run_in_threadpool
 
 from backend.audit.service import record, record_patients
 from backend.database import utcnow
+from backend.db_slots import lease_of
 from backend.deps import (
     Caller,
     CurrentCaller,
@@ -201,11 +202,12 @@ async def upload_session(
     settings = request.app.state.settings
     limit = settings.MAX_UPLOAD_BYTES
     check_declared_length(request.headers.get("content-length"), limit)
-    # no_autoflush: the caller's pending last_seen_at update is not written (no write lock on SQLite) while the
-    # body streams in; it is flushed with the session row
-    with db_session.no_autoflush:
-        target = await run_in_threadpool(_upload_patient, caller, patient_id, db_session)
-    data = await read_limited(request.stream(), limit)
+    target = await run_in_threadpool(_upload_patient, caller, patient_id, db_session)
+    # The body may take minutes over a patient's uplink: commit the login check (and the device's last_seen_at),
+    # which gives the pooled connection back, and the request's database slot with it while the bytes come in.
+    await run_in_threadpool(db_session.commit)
+    async with lease_of(request).paused():
+        data = await read_limited(request.stream(), limit)
     out, created = await run_in_threadpool(
         _ingest, data, caller=caller, db_session=db_session, patient_id=target, slug=exercise, settings=settings
     )
