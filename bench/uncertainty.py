@@ -39,6 +39,7 @@ MOTIONS = EXERCISES
 TRAIN_VIEWS, TRAIN_SEEDS = (0, 60), tuple(range(101, 111))
 TEST_VIEWS, TEST_SEEDS = (0, 30), (201, 202, 203)
 THIRD_VIEWS, THIRD_SEEDS = (30, 60), (301, 302, 303)
+DEVICE_TRAIN_SEEDS = (501, 502, 503, 504, 505)  # another device's gain (--device): its own training seeds
 YAW_GAINS = (0.0, 0.25, 0.5, 0.75, 1.0)
 TAIL_GAINS = (1.0, 1.5, 2.0, 3.0, 4.0)  # per kind: min_deg, max_deg, range_deg
 RMS_SLACK = 1.1  # gains within this factor of the least per-family deviation count as equal; the narrowest wins
@@ -59,21 +60,25 @@ class Case:
     truth: dict[str, np.ndarray]
     sd: dict[str, np.ndarray]
     yaw: float
+    device: str = "kinect2"
 
 
-def simulate_case(motion: str, view: int, seed: int, reps: int) -> Case:
+def simulate_case(motion: str, view: int, seed: int, reps: int, device: str = "kinect2") -> Case:
     """Returns one case: simulate, run the pipeline, measure angles as the server does (smoothed positions)."""
-    measured, truth, _ = simulate(motion, reps, view_deg=view, seed=seed)
+    measured, truth, _ = simulate(motion, reps, view_deg=view, seed=seed, device=device)
     result = process(measured)
     smoothed = series.smooth_positions(measured.t, result.filtered.positions)
     est = joint_angles(smoothed)
     true = joint_angles(series.smooth_positions(truth.t, truth.positions))
-    return Case(motion, view, seed, measured.t, est, true, result.angle_sd, intervals.camera_yaw(smoothed))
+    yaw = intervals.camera_yaw(smoothed)
+    return Case(motion, view, seed, measured.t, est, true, result.angle_sd, yaw, device)
 
 
-def collect(motions: tuple[str, ...], views: tuple[int, ...], seeds: tuple[int, ...], reps: int) -> list[Case]:
+def collect(
+    motions: tuple[str, ...], views: tuple[int, ...], seeds: tuple[int, ...], reps: int, device: str = "kinect2"
+) -> list[Case]:
     """Returns the cases of every motion × view × seed."""
-    return [simulate_case(m, v, s, reps) for m in motions for v in views for s in seeds]
+    return [simulate_case(m, v, s, reps, device) for m in motions for v in views for s in seeds]
 
 
 def frame_inflation(cases: list[Case]) -> dict[str, float]:
@@ -217,6 +222,44 @@ def fit_systematic(
     return yg, (float(tg[0]), float(tg[1]), float(tg[2])), out
 
 
+def fit_device_gain(cases: list[Case]) -> float:
+    """Returns the gain of b for the cases' device (intervals.DEVICE_GAIN): the TARGET quantile, rounded up to
+    0.05, of the gain each interval needs to hold the truth, given the shipped Kinect 2 constants."""
+    need = []
+    for c in cases:
+        for name in ANGLE_NAMES:
+            errs = metric_errors(c, name)
+            e = intervals.edges(c.t, c.est[name], c.sd[name])
+            if errs is None or e is None:
+                continue
+            b = intervals.systematic(name, e, c.yaw, "kinect2")
+            for (est, true, sigma, _), b_kind, kind in zip(errs.values(), b, KINDS, strict=True):
+                over = (_error(est, true, kind) / intervals.Z95) ** 2 - sigma**2
+                need.append(0.0 if over <= 0 else (np.sqrt(over) / b_kind if b_kind > 0 else np.inf))
+    return float(np.ceil(np.quantile(need, TARGET) * 20.0) / 20.0)
+
+
+def device_study(device: str, reps: int) -> dict:
+    """Fits DEVICE_GAIN[device] on its own training sessions and prints the held-out coverage with the shipped
+    gain and with the fitted one; returns the numbers."""
+    train = collect(MOTIONS, TRAIN_VIEWS, DEVICE_TRAIN_SEEDS, reps, device)
+    test = collect(MOTIONS, TEST_VIEWS, TEST_SEEDS, reps, device)
+    gain = fit_device_gain(train)
+    shipped = intervals.DEVICE_GAIN.get(device, 1.0)
+    print(f"{device}: gain of b fitted on views {TRAIN_VIEWS}, seeds {DEVICE_TRAIN_SEEDS}: {gain} (shipped {shipped})")
+    report: dict = {"device": device, "fitted_gain": gain, "shipped_gain": shipped}
+    for g in sorted({1.0, shipped, gain}):
+        intervals.DEVICE_GAIN[device] = g
+        for label, cases in (("train", train), ("held-out 0/30", test)):
+            table = coverage_table(cases)
+            report[f"{label}, gain {g}"] = table
+            print(f"coverage, {device}, gain {g}, {label}:")
+            for key, row in table.items():
+                print(f"  {key:32s} " + "  ".join(f"{k} {v}" for k, v in row.items()))
+    intervals.DEVICE_GAIN[device] = shipped
+    return report
+
+
 def coverage_table(cases: list[Case]) -> dict[str, dict[str, float]]:
     """Returns {family "motion@view", "seed N" and "pooled": {kind: fraction of 95 % intervals that hold the truth,
     "all", "n"}}."""
@@ -224,7 +267,7 @@ def coverage_table(cases: list[Case]) -> dict[str, dict[str, float]]:
     for c in cases:
         fam = f"{c.motion}@{c.view}"
         for name in ANGLE_NAMES:
-            iv = intervals.angle_intervals(c.t, c.est[name], c.sd[name], name, yaw_deg=c.yaw)
+            iv = intervals.angle_intervals(c.t, c.est[name], c.sd[name], name, yaw_deg=c.yaw, device=c.device)
             true = range_of_motion(c.t, {name: c.truth[name]}, presmoothed=True)[name]
             if iv is None or true["range_deg"] is None or true["range_deg"] >= intervals.MAX_RANGE_DEG:
                 continue
@@ -260,7 +303,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--reps", type=int, default=5)
     parser.add_argument("--json")
     parser.add_argument("--no-cost", action="store_true")
+    parser.add_argument("--device", choices=["kinect1"], help="only fit and check this device's gain of b")
     args = parser.parse_args(argv)
+    if args.device:
+        report = device_study(args.device, args.reps)
+        if args.json:
+            with open(args.json, "w") as fh:
+                json.dump(report, fh, indent=1)
+        return 0
     train = collect(MOTIONS, TRAIN_VIEWS, TRAIN_SEEDS, args.reps)
     test = collect(MOTIONS, TEST_VIEWS, TEST_SEEDS, args.reps)
     third = collect(MOTIONS, THIRD_VIEWS, THIRD_SEEDS, args.reps)

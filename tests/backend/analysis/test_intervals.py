@@ -66,6 +66,22 @@ def test_a_turned_body_and_a_spiky_edge_widen_the_intervals(seed):
     np.testing.assert_allclose(np.diff(spike["min_deg"]), np.diff(calm["min_deg"]), atol=1.0)
 
 
+@pytest.mark.parametrize("seed", SEEDS)
+def test_a_kinect1_session_gets_its_device_gain(seed):
+    """b grows by intervals.DEVICE_GAIN for a Kinect 1 session (larger errors); other devices keep the Kinect 2
+    fit."""
+    t, x = _sine(seed)
+    sd = np.full_like(t, 1.0)
+    e = intervals.edges(t, x, sd)
+    b2 = intervals.systematic("knee_flexion_L", e, 30.0, "kinect2")
+    b1 = intervals.systematic("knee_flexion_L", e, 30.0, "kinect1")
+    np.testing.assert_allclose(b1, np.multiply(b2, intervals.DEVICE_GAIN["kinect1"]))
+    assert intervals.systematic("knee_flexion_L", e, 30.0, "azure_kinect") == b2
+    wide = intervals.angle_intervals(t, x, sd, "knee_flexion_L", yaw_deg=30.0, device="kinect1")["max_deg"]
+    narrow = intervals.angle_intervals(t, x, sd, "knee_flexion_L", yaw_deg=30.0)["max_deg"]
+    assert np.diff(wide)[0] > np.diff(narrow)[0], f"seed {seed}: {wide} vs {narrow}"
+
+
 def _rotated(positions: np.ndarray, yaw_deg: float) -> np.ndarray:
     c, s = np.cos(np.radians(yaw_deg)), np.sin(np.radians(yaw_deg))
     R = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])

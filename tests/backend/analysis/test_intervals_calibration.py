@@ -24,10 +24,13 @@ KINDS = ("min_deg", "max_deg", "range_deg")
 # Per (motion, view) family the held-out coverage runs 0.935-0.991 (bench/README.md, 2026-11-25): no family
 # under-covers; sit_to_stand at 0° and 30° and squat at 0° cover 0.981-0.991, above the 98 % aimed at.
 FAMILY_RANGE = (0.92, 0.995)
+# Kinect 1 (intervals.DEVICE_GAIN, fitted on its own views 0°/60°, seeds 501-505): held out 0.889-1.000 per family
+# (elbow flexion and side step at 0° under 0.90, five families over 0.98), 0.956 pooled; before the gain 0.796-0.954.
+KINECT1_FAMILY_MIN = 0.85
 
 
-def _hits(motion: str, view: int, seed: int) -> list[bool]:
-    measured, truth, _ = simulate(motion, 5, view_deg=view, seed=seed)
+def _hits(motion: str, view: int, seed: int, device: str = "kinect2") -> list[bool]:
+    measured, truth, _ = simulate(motion, 5, view_deg=view, seed=seed, device=device)
     result = process(measured)
     smoothed = series.smooth_positions(measured.t, result.filtered.positions)
     est = joint_angles(smoothed)
@@ -35,7 +38,7 @@ def _hits(motion: str, view: int, seed: int) -> list[bool]:
     true = range_of_motion(truth.t, joint_angles(series.smooth_positions(truth.t, truth.positions)), presmoothed=True)
     hits = []
     for name in ANGLE_NAMES:
-        iv = intervals.angle_intervals(measured.t, est[name], result.angle_sd[name], name, yaw_deg=yaw)
+        iv = intervals.angle_intervals(measured.t, est[name], result.angle_sd[name], name, yaw_deg=yaw, device=device)
         if iv is None or true[name]["range_deg"] is None or true[name]["range_deg"] >= intervals.MAX_RANGE_DEG:
             continue
         hits += [intervals.covers(iv[kind], true[name][kind], kind) for kind in KINDS]
@@ -60,3 +63,16 @@ def test_every_motion_and_view_keeps_its_coverage(coverage, motion, view):
     rate = float(np.mean(hits))
     lo, hi = FAMILY_RANGE
     assert lo <= rate <= hi, f"{motion}@{view}: coverage {rate:.3f} over seeds {SEEDS}, outside {FAMILY_RANGE}"
+
+
+@pytest.fixture(scope="module")
+def coverage_kinect1() -> dict[tuple[str, int], list[bool]]:
+    return {(m, v): sum((_hits(m, v, s, "kinect1") for s in SEEDS), []) for m in MOTIONS for v in VIEWS}
+
+
+def test_kinect1_intervals_cover_90_to_98_percent_pooled_and_each_family_at_least_85(coverage_kinect1):
+    pooled = np.mean(sum(coverage_kinect1.values(), []))
+    assert 0.90 <= pooled <= 0.98, f"Kinect 1 pooled coverage {pooled:.3f}"
+    low = {f"{m}@{v}": round(float(np.mean(h)), 3) for (m, v), h in coverage_kinect1.items()
+           if np.mean(h) < KINECT1_FAMILY_MIN}  # fmt: skip
+    assert not low, f"Kinect 1 families under {KINECT1_FAMILY_MIN}: {low}"
