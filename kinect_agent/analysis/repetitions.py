@@ -44,6 +44,10 @@ A repetition also takes its place in the cadence. With S the median peak-to-peak
     - an excursion that peaks within shallow_spacing (0.8) × S of a larger one and lasts less than
       shallow_duration × the median duration is a rebound or a split of that one, and is dropped (UI-PRMD shoulder
       extension s04: a 0.6 s mistracked dip 1 s after a repetition's peak);
+    - a shallow excursion (below min_ratio × the median amplitude) that peaks within shallow_spacing × the full
+      repetitions' median spacing of a full repetition on both sides is a bump at rest squeezed between two
+      repetitions, and is dropped (simulated filtered squats: the knee reading 25° bent for 2 s while standing);
+      a shallow repetition takes a slot of the cadence of its own;
     - a shallow repetition the hysteresis missed (its peak under enter_frac × A) is added where the cadence has
       room for one: in a stretch between counted repetitions, the highest point of the dominant angle's excursion at
       least shallow_spacing × S from every counted peak, when the excursion falls by shallow_ratio × the median
@@ -439,6 +443,30 @@ def _drop_rebounds(merged: list[RepEvent], params: RepetitionParams) -> list[Rep
     return sorted(kept, key=lambda ev: ev.start)
 
 
+def _drop_off_cadence(merged: list[RepEvent], params: RepetitionParams) -> list[RepEvent]:
+    """Drops the shallow excursions (below min_ratio × the median amplitude) that peak within shallow_spacing × the
+    full repetitions' median peak-to-peak spacing of a full repetition on both sides: squeezed between two
+    repetitions of the cadence there is no slot for one (a knee bump while standing between squats), while a
+    shallow repetition takes a slot of its own, a spacing away from at least one neighbour (UI-PRMD: a first lunge,
+    a low leg raise)."""
+    if len(merged) < 3:
+        return merged
+    merged = sorted(merged, key=lambda ev: ev.peak)
+    peaks = np.array([ev.peak for ev in merged])  # (n,) frames, in time order
+    amplitude = np.array([ev.amplitude for ev in merged])  # (n,) degrees
+    full = amplitude >= params.min_ratio * float(np.median(amplitude))
+    full_peaks = peaks[full]
+    if full_peaks.size < 3 or full.all():
+        return sorted(merged, key=lambda ev: ev.start)
+    room = params.shallow_spacing * float(np.median(np.diff(full_peaks)))
+    k = np.searchsorted(full_peaks, peaks)  # the first full repetition peaking at or after each excursion
+    before = np.where(k > 0, peaks - full_peaks[np.maximum(k - 1, 0)], np.inf)
+    after = np.where(k < full_peaks.size, full_peaks[np.minimum(k, full_peaks.size - 1)] - peaks, np.inf)
+    squeezed = ~full & (before < room) & (after < room)
+    kept = [ev for ev, gone in zip(merged, squeezed, strict=True) if not gone]
+    return sorted(kept, key=lambda ev: ev.start)
+
+
 def _add_shallow(
     y: np.ndarray, name: str, rest: AngleExcursions, merged: list[RepEvent], params: RepetitionParams
 ) -> list[RepEvent]:
@@ -516,7 +544,7 @@ def count_repetitions(
     merged = merge_events(events, params.merge_overlap)
     counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, params)}
     merged = _drop_weak_lone(_keep_counted(merged, counted), params.lone_ratio)
-    merged = _drop_rebounds(_drop_bumps(merged, params), params)
+    merged = _drop_off_cadence(_drop_rebounds(_drop_bumps(merged, params), params), params)
     if dominant is not None:
         merged = _add_shallow(smoothed[dominant], dominant, found[dominant], merged, params)
     t0 = float(t[0]) if t.shape[0] else 0.0

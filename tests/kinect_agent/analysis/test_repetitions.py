@@ -222,3 +222,19 @@ def test_a_brief_rebound_just_after_a_repetition_is_not_counted(seed: int) -> No
     y = _bumps(t, centres, [60.0] * 10, 1.5) + _bumps(t, [centres[4] + 1.0], [40.0], 0.5) + rng.normal(0, 1, t.shape)
     reps = count_repetitions(t, {"shoulder_flexion_R": y}, ("shoulder_flexion_R",)).repetitions
     assert len(reps) == 10, [(round(r.start_s, 1), round(r.amplitude_deg)) for r in reps]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_bump_at_rest_between_two_repetitions_is_not_counted(seed: int) -> None:
+    """Eight 80° repetitions every 4.4 s, each 2 s long; in two of the rests between them the knee reads 25° bent for
+    2 s (simulated filtered squats: a bump as long as a repetition, squeezed half a spacing from both neighbours),
+    while a shallow 25° repetition in a slot of its own (the first) still counts."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, 37, 1 / 30)
+    centres = [1.5 + 4.4 * k for k in range(8)]
+    heights = [25.0] + [80.0] * 7
+    bumps = [centres[2] + 2.2, centres[5] + 2.2]
+    y = _bumps(t, centres + bumps, heights + [25.0, 25.0], 2.0) + rng.normal(0, 1.5, t.shape)
+    reps = count_repetitions(t, {"knee_flexion_L": y}, ("knee_flexion_L",)).repetitions
+    assert len(reps) == 8, [(round(r.start_s, 1), round(r.amplitude_deg)) for r in reps]
+    assert min(abs(0.5 * (r.start_s + r.end_s) - 1.5) for r in reps) < 0.5
