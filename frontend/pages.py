@@ -130,9 +130,9 @@ def patient_detail_page(patient_id: IdPath, request: Request, caller: OptionalCa
     )
 
 
-def _session_not_found(request: Request, caller: Caller, db_session: Session, session_id: int) -> Response | None:
-    """Returns the 404 page when the caller may not see session_id (missing, or another person's: whether it
-    exists is not theirs to know), else None."""
+def _visible_session(request: Request, caller: Caller, db_session: Session, session_id: int) -> int | Response:
+    """Returns the patient id of session_id, or the 404 page when the caller may not see it (missing, or another
+    person's: whether it exists is not theirs to know)."""
     from backend.sessions.service import missing, session_patient
 
     try:
@@ -141,18 +141,18 @@ def _session_not_found(request: Request, caller: Caller, db_session: Session, se
     except NotFound:
         return _page(request, "error.html", caller, status_code=404, title="Session not found",
                      message=f"There is no session {session_id} that you may see.")  # fmt: skip
-    return None
+    return patient_id
 
 
 @router.get("/therapist/sessions/{session_id}", response_class=HTMLResponse)
 def session_page(session_id: IdPath, request: Request, caller: OptionalCaller, db_session: DbSession) -> Response:
     """Shows one session for a therapist: angle curves, repetitions, reach, data quality, processing; the 404 page
     for a session they may not see."""
-    return (
-        _gate(request, caller, THERAPIST_ROLES)
-        or _session_not_found(request, caller, db_session, session_id)
-        or _page(request, "session.html", caller, session_id=session_id)
-    )
+    gate = _gate(request, caller, THERAPIST_ROLES)
+    if gate is not None:
+        return gate
+    found = _visible_session(request, caller, db_session, session_id)
+    return found if isinstance(found, Response) else _page(request, "session.html", caller, session_id=session_id)
 
 
 @router.get("/therapist/sessions/{session_id}/replay", response_class=HTMLResponse)
@@ -164,13 +164,10 @@ def replay_page(session_id: IdPath, request: Request, caller: OptionalCaller, db
     """
     if caller is None or caller.user is None:
         return _sign_in_first(request)
-    from backend.sessions.service import session_patient
-
-    not_found = _session_not_found(request, caller, db_session, session_id)
-    if not_found is not None:
-        return not_found
-    patient_id = session_patient(db_session=db_session, session_id=session_id)
-    return _page(request, "replay.html", caller, session_id=session_id, patient_id=patient_id)
+    found = _visible_session(request, caller, db_session, session_id)
+    if isinstance(found, Response):
+        return found
+    return _page(request, "replay.html", caller, session_id=session_id, patient_id=found)
 
 
 @router.get("/replay/viewer/", response_class=HTMLResponse)
