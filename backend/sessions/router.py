@@ -50,6 +50,7 @@ from backend.sessions.schemas import (
     SummaryOut,
 )
 from backend.suggestions.schemas import SuggestionOut
+from kinect_agent.export.files import FORMATS
 
 router = APIRouter(prefix="/api/v1", tags=["sessions"])
 SlugQuery = Annotated[
@@ -288,7 +289,7 @@ def read_session_detail(session_id: IdPath, request: Request, caller: CurrentCal
 
 
 ExportFormat = Annotated[
-    Literal["csv", "trc", "bvh", "fhir"],
+    Literal[FORMATS],  # kinect_agent.export.files.FORMATS: the formats the exporter writes
     Query(description="csv: zip of CSV tables; trc: OpenSim markers (mm); bvh: motion (cm, deg); fhir: R4 Bundle"),
 ]
 _EXPORT_CONTENT = {
