@@ -25,6 +25,7 @@ import json
 import weakref
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
+from functools import cached_property
 
 from sqlalchemy.engine import Engine
 from sqlalchemy.pool import QueuePool
@@ -51,17 +52,14 @@ class DbSlots:
     def __init__(self, engine: Callable[[], Engine], wait_s: float):
         self._engine = engine
         self.wait_s = wait_s
-        self._capacity: int | None | bool = False  # False: not read yet
         self._per_loop: weakref.WeakKeyDictionary[asyncio.AbstractEventLoop, asyncio.Semaphore] = (
             weakref.WeakKeyDictionary()
         )
 
-    @property
+    @cached_property
     def capacity(self) -> int | None:
         """Returns the number of slots (None: no limit)."""
-        if self._capacity is False:
-            self._capacity = pool_capacity(self._engine())
-        return self._capacity  # type: ignore[return-value]
+        return pool_capacity(self._engine())
 
     def _semaphore(self) -> asyncio.Semaphore | None:
         if self.capacity is None:
@@ -73,7 +71,8 @@ class DbSlots:
         return sem
 
     async def acquire(self) -> Callable[[], None]:
-        """Waits for a slot; returns the function that gives it back (call it once). Raises ServerBusy."""
+        """Waits for a slot; returns the function that gives it back (call it once: SlotLease and held() do).
+        Raises ServerBusy."""
         sem = self._semaphore()
         if sem is None:
             return lambda: None
@@ -82,15 +81,7 @@ class DbSlots:
         except TimeoutError:
             detail = f"no database connection came free within {self.wait_s:g} s; retry in a few seconds"
             raise ServerBusy(detail) from None
-        released = False
-
-        def release() -> None:
-            nonlocal released
-            if not released:
-                released = True
-                sem.release()
-
-        return release
+        return sem.release
 
     @asynccontextmanager
     async def held(self) -> AsyncIterator[None]:
