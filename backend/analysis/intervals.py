@@ -260,15 +260,17 @@ def count_interval(
     *,
     n_draws: int = COUNT_DRAWS,
     seed: int = 0,
+    count: int | None = None,
 ) -> CountInterval:
     """Returns the repetition count's interval: the counts of n_draws perturbed copies of the defining angles.
 
     angles: {name: (T,) degrees} as count_repetitions takes them; sd: {name: (T,) degrees} their per-frame SDs
-    (a name without one is not perturbed). Also counts the unperturbed angles (the interval always holds it).
+    (a name without one is not perturbed). The interval always holds the count of the unperturbed angles: `count`
+    when the caller has it (count_repetitions of the same angles and params), else counted here.
     """
     t = np.asarray(t, dtype=np.float64)
     rng = np.random.default_rng(seed)
-    counts = [len(count_repetitions(t, angles, names, params).repetitions)]
+    counts = [len(count_repetitions(t, angles, names, params).repetitions) if count is None else count]
     dt = series.frame_interval(t)
     for _ in range(n_draws):
         z = _smooth_noise(rng, t.shape[0], len(names), dt)

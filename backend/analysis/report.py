@@ -111,7 +111,9 @@ def analyze_recording(
         "defining_angle": reps.defining_angle,
         "range_of_motion": range_of_motion(t, clinical, presmoothed=True),
         "range_of_motion_95": None if sd is None else rom_intervals(t, clinical, sd, smoothed, recording.meta.device),
-        "repetitions_95": None if sd is None else count_interval(t, counted, sd, names, repetition_params).to_dict(),
+        "repetitions_95": None
+        if sd is None
+        else count_interval(t, counted, sd, names, repetition_params, count=len(rep_list)).to_dict(),
         "rom_deg": _median([r.amplitude_deg for r in reps.repetitions]),
         "most_moving_joints": most_moving_joints(smoothed),
         "reachable_range": reachable_range(smoothed, frame),
