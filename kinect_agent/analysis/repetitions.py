@@ -424,23 +424,30 @@ def _repeating(
     return found[name].events if lag < ac.shape[0] and ac[lag] >= cycles.MIN_CORRELATION else []
 
 
+def _peak_ordered(merged: list[RepEvent]) -> tuple[list[RepEvent], np.ndarray, np.ndarray]:
+    """Returns (the events in the order of their peaks, (n,) peak frames, (n,) amplitudes in degrees)."""
+    merged = sorted(merged, key=lambda ev: ev.peak)
+    return merged, np.array([ev.peak for ev in merged]), np.array([ev.amplitude for ev in merged])
+
+
+def _without(merged: list[RepEvent], drop: np.ndarray) -> list[RepEvent]:
+    """Returns the events whose drop (n,) bool is False, in the order of their starts."""
+    return sorted((ev for ev, gone in zip(merged, drop, strict=True) if not gone), key=lambda ev: ev.start)
+
+
 def _drop_rebounds(merged: list[RepEvent], params: RepetitionParams) -> list[RepEvent]:
     """Drops the excursions that peak within shallow_spacing × the median peak-to-peak spacing of a larger one and
     last less than shallow_duration × the median duration: a rebound or a split of that one, not a repetition."""
     if len(merged) < 3:
         return merged
-    merged = sorted(merged, key=lambda ev: ev.peak)
-    peaks = np.array([ev.peak for ev in merged])  # (n,) frames, in time order
-    amplitude = np.array([ev.amplitude for ev in merged])  # (n,) degrees
+    merged, peaks, amplitude = _peak_ordered(merged)
     length = np.array([ev.end - ev.start for ev in merged])  # (n,) frames
     gap = np.diff(peaks)  # (n − 1,) frames
     room = params.shallow_spacing * float(np.median(gap))
     close_prev = np.concatenate(([False], (gap < room) & (amplitude[:-1] > amplitude[1:])))
     close_next = np.concatenate(((gap < room) & (amplitude[1:] > amplitude[:-1]), [False]))
     brief = length < params.shallow_duration * float(np.median(length))
-    drop = brief & (close_prev | close_next)
-    kept = [ev for ev, gone in zip(merged, drop, strict=True) if not gone]
-    return sorted(kept, key=lambda ev: ev.start)
+    return _without(merged, brief & (close_prev | close_next))
 
 
 def _drop_off_cadence(merged: list[RepEvent], params: RepetitionParams) -> list[RepEvent]:
@@ -451,9 +458,7 @@ def _drop_off_cadence(merged: list[RepEvent], params: RepetitionParams) -> list[
     a low leg raise)."""
     if len(merged) < 3:
         return merged
-    merged = sorted(merged, key=lambda ev: ev.peak)
-    peaks = np.array([ev.peak for ev in merged])  # (n,) frames, in time order
-    amplitude = np.array([ev.amplitude for ev in merged])  # (n,) degrees
+    merged, peaks, amplitude = _peak_ordered(merged)
     full = amplitude >= params.min_ratio * float(np.median(amplitude))
     full_peaks = peaks[full]
     if full_peaks.size < 3 or full.all():
@@ -462,9 +467,7 @@ def _drop_off_cadence(merged: list[RepEvent], params: RepetitionParams) -> list[
     k = np.searchsorted(full_peaks, peaks)  # the first full repetition peaking at or after each excursion
     before = np.where(k > 0, peaks - full_peaks[np.maximum(k - 1, 0)], np.inf)
     after = np.where(k < full_peaks.size, full_peaks[np.minimum(k, full_peaks.size - 1)] - peaks, np.inf)
-    squeezed = ~full & (before < room) & (after < room)
-    kept = [ev for ev, gone in zip(merged, squeezed, strict=True) if not gone]
-    return sorted(kept, key=lambda ev: ev.start)
+    return _without(merged, ~full & (before < room) & (after < room))
 
 
 def _add_shallow(
