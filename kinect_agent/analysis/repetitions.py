@@ -229,7 +229,7 @@ def _excursions(
     n_cycles = cyc.n_cycles if cyc.period_s is not None else 0
     if runs.shape[0] == 0:
         return [], n_cycles
-    start, end, base0, base1 = _widen(e, runs, params.onset_frac * R)
+    start, end, base0, base1 = _widen(e, runs, inside, params.onset_frac * R)
     peak = _run_argmax(e, runs)
     keep = t[end] - t[start] >= params.min_duration_s
     amplitude = e[peak] - 0.5 * (base0 + base1)
@@ -241,21 +241,19 @@ def _excursions(
     return events, n_cycles
 
 
-def _gap_minima(e: np.ndarray, runs: np.ndarray) -> np.ndarray:
-    """Returns (n + 1,) the minimum of e: (T,) in each gap around the n runs ([first, stop) frames, in order): gap k
-    is [stop of run k − 1 (0 for k = 0), first of run k (T for k = n)); +inf for an empty gap."""
+def _gap_minima(e: np.ndarray, runs: np.ndarray, inside: np.ndarray) -> np.ndarray:
+    """Returns (n + 1,) the minimum of e: (T,) in each gap around the n runs ([first, stop) frames, in order, of the
+    True stretches of inside: (T,) bool): gap k is [stop of run k − 1 (0 for k = 0), first of run k (T for k = n));
+    +inf for an empty gap."""
     T = e.shape[0]
     lo = np.concatenate(([0], runs[:, 1]))
     hi = np.concatenate((runs[:, 0], [T]))
     out = np.full(lo.shape[0], np.inf)
     full = hi > lo
     if full.any():
-        outside = np.ones(T, dtype=bool)
-        for a, b in runs:  # n slices; the gaps are what is left, in order
-            outside[a:b] = False
         sizes = (hi - lo)[full]
         offsets = np.concatenate(([0], np.cumsum(sizes)[:-1]))
-        out[full] = np.minimum.reduceat(e[outside], offsets)
+        out[full] = np.minimum.reduceat(e[~inside], offsets)  # the gaps are the frames outside, in order
     return out
 
 
@@ -267,14 +265,16 @@ def _segment_ids(T: int, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return seg
 
 
-def _widen(e: np.ndarray, runs: np.ndarray, onset: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Widens each run ([first, stop) frames of an excursion core, (n, 2)) of e: (T,) degrees to its onset and
-    return (step 5 of the module doc). Returns (start, end, base0, base1), each (n,): the last frame before the
-    core (first frame after it) within `onset` degrees of the minimum of the stretch back to the previous core
-    (on to the next), and those two minima."""
+def _widen(
+    e: np.ndarray, runs: np.ndarray, inside: np.ndarray, onset: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Widens each run ([first, stop) frames of an excursion core, (n, 2); the True stretches of inside: (T,) bool)
+    of e: (T,) degrees to its onset and return (step 5 of the module doc). Returns (start, end, base0, base1), each
+    (n,): the last frame before the core (first frame after it) within `onset` degrees of the minimum of the
+    stretch back to the previous core (on to the next), and those two minima."""
     T = e.shape[0]
     first, stop = runs[:, 0], runs[:, 1]
-    gap = _gap_minima(e, runs)
+    gap = _gap_minima(e, runs, inside)
     base0 = np.minimum(gap[:-1], e[first])  # stretch [previous stop, first]
     base1 = np.minimum(e[stop - 1], gap[1:])  # stretch [stop − 1, next first)
     prev_stop = np.concatenate(([0], stop[:-1]))
