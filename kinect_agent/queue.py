@@ -25,11 +25,11 @@ import os
 import re
 import time
 from dataclasses import dataclass
-from datetime import UTC, datetime
 from io import BufferedReader
 from pathlib import Path
 from typing import Any
 
+from kinect_agent.clock import utc_now_iso
 from kinect_agent.config import fsync_dir
 from kinect_agent.errors import AgentError
 from kinect_agent.formats._atomic import atomic_open
@@ -58,10 +58,6 @@ class QueueCounts:
     sent: int
     rejected: int
     held: int = 0
-
-
-def _now_utc() -> str:
-    return datetime.now(UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
 
 
 def check_session_id(session_id: str) -> str:
@@ -243,7 +239,7 @@ class SessionQueue:
         Only call this after the server answered 200/201: the record is written durably before the file goes.
         """
         session_id = self._id_of(path)
-        record = {"session_id": session_id, "confirmed_at": _now_utc(), **receipt}
+        record = {"session_id": session_id, "confirmed_at": utc_now_iso(), **receipt}
         out = self.sent_dir / f"{session_id}.json"
         _write_json(out, record)
         if self.keep_sent:
@@ -258,7 +254,7 @@ class SessionQueue:
 
     def mark_rejected(self, path: Path, error: dict[str, Any]) -> Path:
         """Moves a pending file to rejected/ after writing the server's error beside it; returns the new path."""
-        return self._set_aside(path, self.rejected_dir, {"rejected_at": _now_utc(), **error})
+        return self._set_aside(path, self.rejected_dir, {"rejected_at": utc_now_iso(), **error})
 
     def note_server_error(self, path: Path, status_code: int, detail: str) -> int:
         """Counts one more pass in which the server answered this pending file with status_code (a 5xx); returns
@@ -268,16 +264,16 @@ class SessionQueue:
         with contextlib.suppress(FileNotFoundError, ValueError):
             record = json.loads(record_path.read_text(encoding="utf-8"))
             if record.get("status_code") == status_code:
-                record.update(count=int(record.get("count", 0)) + 1, detail=detail, last_at=_now_utc())
+                record.update(count=int(record.get("count", 0)) + 1, detail=detail, last_at=utc_now_iso())
                 _write_json(record_path, record)
                 return record["count"]
-        _write_json(record_path, {"status_code": status_code, "count": 1, "detail": detail, "first_at": _now_utc(),
-                                  "last_at": _now_utc()})  # fmt: skip
+        _write_json(record_path, {"status_code": status_code, "count": 1, "detail": detail, "first_at": utc_now_iso(),
+                                  "last_at": utc_now_iso()})  # fmt: skip
         return 1
 
     def mark_held(self, path: Path, error: dict[str, Any]) -> Path:
         """Sets a pending file aside in held/ with the server's repeated error; returns the new path."""
-        return self._set_aside(path, self.held_dir, {"held_at": _now_utc(), **error})
+        return self._set_aside(path, self.held_dir, {"held_at": utc_now_iso(), **error})
 
     def _set_aside(self, path: Path, folder: Path, record: dict[str, Any]) -> Path:
         """Writes record as <id>.error.json in folder, then moves the pending file there; returns its new path."""

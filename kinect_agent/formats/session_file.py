@@ -27,13 +27,13 @@ import struct
 import uuid
 import zlib
 from dataclasses import dataclass, field
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from kinect_agent import skeleton
+from kinect_agent.clock import utc_now_iso
 from kinect_agent.errors import FormatError
 from kinect_agent.formats._atomic import atomic_open
 from kinect_agent.processing.angles import ANGLE_NAMES
@@ -76,10 +76,6 @@ ANGLE_SD_MISSING = 65535  # stored code of an undefined SD; larger SDs are store
 PLAUSIBLE_ABS_M = 50.0  # no depth camera (under 10 m) or motion-capture room puts a joint further from its origin
 
 
-def _now_utc() -> str:
-    return datetime.now(UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
-
-
 @dataclass
 class SessionPayload:
     """One exercise session as uploaded: the raw recording, optionally the filtered one, and filter params.
@@ -96,7 +92,7 @@ class SessionPayload:
     raw: Recording
     filtered: Recording | None = None
     params: dict = field(default_factory=dict)
-    created_at: str = field(default_factory=_now_utc)
+    created_at: str = field(default_factory=utc_now_iso)
     recorded_by: dict[str, int] | None = None
     angle_sd: dict[str, np.ndarray] | None = None
 

@@ -17,9 +17,9 @@ import time
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from datetime import UTC, datetime
 
 from kinect_agent.analysis.live import LiveCount, LiveStatus
+from kinect_agent.clock import utc_now_iso
 from kinect_agent.live.journal import Journal
 from kinect_agent.processing.online import OnlineFilter
 from kinect_agent.recording import Recording
@@ -81,10 +81,6 @@ def failed_message(command: SetCommand, hint: str) -> dict:
             "sent_at": time.time()}  # fmt: skip
 
 
-def _now_iso() -> str:
-    return datetime.now(UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
-
-
 class SetRecorder:
     """Records one set from `source` into a journal in journal_dir, publishing progress while it runs."""
 
@@ -134,7 +130,7 @@ class SetRecorder:
 
     def run(self) -> SetResult:
         """Records until the set ends; returns the result (the journal is still on disk: discard it once queued)."""
-        created_at = _now_iso()
+        created_at = utc_now_iso()
         with self.source:
             meta = self.source.metadata()
             meta.exercise = self.command.exercise
