@@ -18,6 +18,7 @@ from starlette.middleware.gzip import GZipMiddleware
 from starlette.routing import compile_path
 
 from backend import __version__
+from backend.api_docs import mount as mount_api_docs
 from backend.config import Settings, get_settings
 from backend.database import get_engine
 from backend.db_slots import DbAdmission, DbSlots
@@ -190,6 +191,8 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
         version=__version__,
         description="Coaching server: accounts, patients, devices, exercise plans, sessions and suggestions.",
         lifespan=lifespan,
+        docs_url=None,  # backend.api_docs serves /docs from the app itself; no /redoc (api_docs says why)
+        redoc_url=None,
     )
     app.state.settings = settings
     _install_error_handlers(app)
@@ -203,5 +206,6 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     for name in ROUTERS:
         app.include_router(importlib.import_module(name).router)
     mount_pages(app)  # the HTML pages and their error pages, not in the OpenAPI schema
+    mount_api_docs(app)
     app.openapi = openapi_builder(app)  # type: ignore[method-assign]
     return app

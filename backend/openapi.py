@@ -51,7 +51,9 @@ def openapi_builder(app: FastAPI):
     def build() -> dict:
         if app.openapi_schema:
             return app.openapi_schema
-        schema = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes)
+        root = app.state.settings.root_path  # the configured prefix, so that "Try it out" calls the API through it
+        schema = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes,
+                             servers=[{"url": root}] if root else None)  # fmt: skip
         components = schema.setdefault("components", {}).setdefault("schemas", {})
         components["ErrorOut"] = ErrorOut.model_json_schema(ref_template="#/components/schemas/{model}")
         example = {"error": "ValidationError", "detail": "body.email: Field required"}

@@ -60,3 +60,31 @@ def test_replay_page_without_login_is_401_with_a_sign_in_link(prefixed):
 def test_a_public_url_that_is_not_http_is_refused():
     with pytest.raises(ValueError, match="COACH_PUBLIC_URL must be an http"):
         Settings(PUBLIC_URL="coach.example.org/clinic")
+
+
+def test_api_docs_load_every_file_from_the_app_under_the_public_path(prefixed):
+    path = "/docs"
+    response = prefixed.get(path, headers=EVIL)
+    assert response.status_code == 200
+    assert "evil.example" not in response.text
+    urls = re.findall(r"""(?:href|src|url|spec-url)\s*[=:]\s*['"]([^'"]+)['"]""", response.text)
+    assert any(u.endswith(".js") for u in urls) and "/clinic/openapi.json" in urls, urls
+    bad = [u for u in urls if not u.startswith("/clinic/")]
+    assert not bad, f"{path}: URLs outside the app's /clinic/: {bad}"  # no CDN, no unprefixed path
+    for url in urls:  # each one answers through the app (the proxy strips /clinic)
+        answer = prefixed.get(url.removeprefix("/clinic"))
+        assert answer.status_code == 200, url
+        assert answer.content, url
+
+
+def test_api_docs_serve_only_their_own_files(prefixed):
+    assert prefixed.get("/static/vendor/api-docs/swagger-ui-bundle.js").headers["content-type"].startswith(
+        "text/javascript"
+    )
+    for name in ("core.py", "..%2F__init__.py", "%2E%2E/consts.py", "nothing.js", "redoc.standalone.js"):
+        assert prefixed.get(f"/static/vendor/api-docs/{name}").status_code == 404, name
+
+
+def test_openapi_servers_name_the_public_path(prefixed, client):
+    assert prefixed.get("/openapi.json").json()["servers"] == [{"url": "/clinic"}]
+    assert "servers" not in client.get("/openapi.json").json()  # served at /: the default server "/"

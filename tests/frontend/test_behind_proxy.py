@@ -64,3 +64,23 @@ def test_therapist_works_through_the_proxy_and_the_replay_plays(browser, public_
     foreign = [u for u in requests if not (u.startswith(public_url + "/") or u.startswith(("data:", "blob:")))]
     assert not foreign, f"requests that left {public_url}: {foreign}"
     assert not errors, errors
+
+
+def test_api_docs_work_through_the_proxy_without_leaving_its_origin(browser, public_url):
+    context = browser.new_context(ignore_https_errors=True, viewport={"width": 1280, "height": 900})
+    context.set_default_timeout(20_000)
+    page = context.new_page()
+    requests: list[str] = []
+    page.on("request", lambda r: requests.append(r.url))
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    try:
+        page.goto(f"{public_url}/docs")
+        expect(page.locator(".opblock-summary-path", has_text="/api/v1/sessions").first).to_be_visible()
+        expect(page.locator(".servers select option").first).to_have_text(PREFIX)  # "Try it out" goes through it
+        shot(page, "proxy-api-docs")
+    finally:
+        context.close()
+    foreign = [u for u in requests if not (u.startswith(public_url + "/") or u.startswith(("data:", "blob:")))]
+    assert not foreign, f"requests that left {public_url}: {foreign}"
+    assert not errors, errors
