@@ -79,8 +79,10 @@ def jump_events(t: np.ndarray, p: np.ndarray, speed_limit: float) -> list[tuple[
     t: (T,) s. p: (T, 3) m, NaN = missing. A frame i is a jump frame when p[i - 1] and p[i] are both present, the
     speed |p[i] - p[i - 1]| / (t[i] - t[i - 1]) exceeds speed_limit (m/s) and it is ABRUPTNESS times the median
     speed of the other steps within CONTEXT_STEPS (fast motion accelerates; tracking loss teleports). Jump frames
-    at most JUMP_GAP_FRAMES apart are merged.
+    at most JUMP_GAP_FRAMES apart are merged. A recording of one frame has no step, so no jump.
     """
+    if len(t) < 2:
+        return []
     ok = np.all(np.isfinite(p), axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         speed = np.linalg.norm(np.diff(p, axis=0), axis=1) / np.diff(t)  # (T - 1,) m/s, NaN across gaps

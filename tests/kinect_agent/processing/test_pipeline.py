@@ -145,6 +145,15 @@ def test_process_refuses_a_recording_without_any_tracked_joint() -> None:
         process(empty)
 
 
+@pytest.mark.parametrize("frames", [1, 2, 3])
+@pytest.mark.parametrize("online", [False, True])
+def test_a_recording_of_one_to_three_frames_is_filtered(rng: np.random.Generator, frames: int, online: bool) -> None:
+    rec, _, _ = _noisy(rng, frames)  # one frame once failed in the excursion step: "window shape cannot be larger"
+    result = process(rec, online=online)
+    assert result.filtered.n_frames == frames
+    assert np.all(np.isfinite(result.filtered.positions))
+
+
 def test_offline_process_noise_overrides_the_shared_one(rng: np.random.Generator) -> None:
     rec, _, _ = _noisy(rng, 40)
     base = dict(sigma_tracked_m=0.03, q_rot_rad=0.1, q_root_m=0.02)
