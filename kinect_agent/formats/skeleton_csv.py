@@ -1,8 +1,8 @@
 """Skeleton CSV, the interchange format (spec: ../shared/reference/README.md).
 
 One row per frame: `time` (s), then `<JOINT>_x,<JOINT>_y,<JOINT>_z` (m, y up) for the 20 joints;
-an empty cell means not tracked. Optional `<JOINT>_state` columns (0/1/2) may follow. Columns that
-are not joint columns are ignored; a joint column naming an unknown joint is an error.
+an empty cell (or nan, as numpy and R write it) means not tracked. Optional `<JOINT>_state` columns (0/1/2) may
+follow. Columns that are not joint columns are ignored; a joint column naming an unknown joint is an error.
 
 The file is plain CSV, header first, so spreadsheets and pandas' defaults read it. The recording's metadata
 (device, exercise, rate, history ...) goes to a sidecar `<name>.meta.json` beside it (`out.csv` ->
@@ -21,6 +21,7 @@ import numpy as np
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats._atomic import atomic_open
+from kinect_agent.formats._text import read_lines
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "csv"
@@ -51,14 +52,13 @@ def sniff(path: Path, head: bytes) -> bool:
 def read(path: Path) -> Recording:
     """Reads a Skeleton CSV file; raises FormatError naming the line and cell that is wrong."""
     meta = _read_sidecar(Path(path))
-    with open(path, encoding="utf-8") as f:
-        lines = _numbered_lines(f, path, meta)
-        try:
-            line_no, head = next(lines)
-        except StopIteration:
-            raise FormatError(path, "empty file: expected a header line starting with 'time'") from None
-        columns = _parse_header(path, line_no, head)
-        rows = [_parse_row(path, n, cells, columns) for n, cells in lines]
+    lines = _numbered_lines(read_lines(path), path, meta)
+    try:
+        line_no, head = next(lines)
+    except StopIteration:
+        raise FormatError(path, "empty file: expected a header line starting with 'time'") from None
+    columns = _parse_header(path, line_no, head)
+    rows = [_parse_row(path, n, cells, columns) for n, cells in lines]
     if not rows:
         raise FormatError(path, "no frames after the header")
     t = np.array([r[0] for r in rows])
@@ -100,16 +100,16 @@ def _read_sidecar(path: Path) -> Metadata:
     if not side.is_file():
         return meta
     try:
-        loaded = Metadata.from_dict(json.loads(side.read_text(encoding="utf-8")))
+        loaded = Metadata.from_dict(json.loads(side.read_text(encoding="utf-8-sig")))
     except (ValueError, TypeError, UnicodeDecodeError) as exc:
         raise FormatError(side, f"unreadable metadata sidecar of {path.name}: {exc}") from None
     loaded.source = str(path)
     return loaded
 
 
-def _numbered_lines(f, path: Path, meta: Metadata):
+def _numbered_lines(lines: list[str], path: Path, meta: Metadata):
     """Yields (line number, cells) for non-empty, non-comment lines; reads `# meta:` lines into meta."""
-    for line_no, line in enumerate(f, start=1):
+    for line_no, line in enumerate(lines, start=1):
         if line.startswith("#"):
             if line.startswith(META_PREFIX):
                 try:
@@ -120,7 +120,7 @@ def _numbered_lines(f, path: Path, meta: Metadata):
                 meta.__dict__.update(loaded.__dict__)
             continue
         if line.strip():
-            yield line_no, line.rstrip("\r\n").split(",")
+            yield line_no, line.split(",")
 
 
 def _parse_header(path: Path, line_no: int, cells: list[str]) -> dict:
@@ -176,6 +176,8 @@ def _number(path: Path, line_no: int, col: int, cell: str, what: str, allow_empt
         value = float(cell)
     except ValueError:
         raise FormatError(path, f"column {col}: expected a number for {what}, found {cell!r}", line_no) from None
+    if math.isnan(value) and allow_empty:
+        return math.nan  # written by numpy / R for a lost joint, as an empty cell is
     if not math.isfinite(value):
         raise FormatError(path, f"column {col}: {what} must be finite, found {cell!r}", line_no)
     return value
