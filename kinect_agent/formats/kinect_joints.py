@@ -101,7 +101,8 @@ def read_numeric_rows(path: Path, n_fields: int) -> tuple[np.ndarray, list[int],
             continue
         if len(cells) != n_fields:
             hint = " (file truncated?)" if i == last and len(cells) < n_fields else ""
-            raise FormatError(path, f"expected {n_fields} whitespace-separated numbers, found {len(cells)}{hint}", i + 1)
+            message = f"expected {n_fields} whitespace-separated numbers, found {len(cells)}{hint}"
+            raise FormatError(path, message, i + 1)
         try:
             values = [float(c) for c in cells]
         except ValueError:

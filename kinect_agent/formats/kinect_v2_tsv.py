@@ -250,7 +250,12 @@ def _states(path: Path, table: list[list[str]], c: int, names: list[str], row_li
 
 
 def _unit(
-    path: Path, header: dict[str, str], column_unit: str | None, stamps: np.ndarray, row_lines: list[int], header_no: int
+    path: Path,
+    header: dict[str, str],
+    column_unit: str | None,
+    stamps: np.ndarray,
+    row_lines: list[int],
+    header_no: int,
 ) -> str:
     """Returns the timestamp unit (a key of UNITS_S): from the header, the column name, or else the one unit whose
     median step gives 5-120 Hz; refuses a file where no unit or more than one does (say it with TimestampUnit)."""
