@@ -68,7 +68,10 @@ def detect(path: str | Path) -> ModuleType:
     for module in available().values():
         if module.sniff(path, head):
             return module
-    raise UnknownFormat(path, f"format not recognised; name one with --format ({', '.join(sorted(available()))})")
+    known = ", ".join(sorted(available()))
+    if b"\0" in head:
+        raise UnknownFormat(path, f"binary data that is not a recording in a known format ({known})")
+    raise UnknownFormat(path, f"format not recognised; name one with --format ({known})")
 
 
 def read(path: str | Path, format: str | None = None) -> Recording:

@@ -50,15 +50,26 @@ def sniff(path: Path, head: bytes) -> bool:
 
 
 def read(path: Path) -> Recording:
-    """Reads a Skeleton CSV file; raises FormatError naming the line and cell that is wrong."""
+    """Reads a Skeleton CSV file; raises FormatError naming the line and cell that is wrong.
+
+    A row repeating the row before exactly (a frame written twice) is dropped (meta.extra["dropped_duplicate_rows"]);
+    a repeated time with other values is refused."""
     meta = _read_sidecar(Path(path))
-    lines = _numbered_lines(read_lines(path), path, meta)
-    try:
-        line_no, head = next(lines)
-    except StopIteration:
-        raise FormatError(path, "empty file: expected a header line starting with 'time'") from None
-    columns = _parse_header(path, line_no, head)
-    rows = [_parse_row(path, n, cells, columns) for n, cells in lines]
+    lines = list(_numbered_lines(read_lines(path), path, meta))
+    if not lines:
+        raise FormatError(path, "empty file: expected a header line starting with 'time'")
+    columns = _parse_header(path, *lines[0])
+    rows, dropped = [], 0
+    for k in range(1, len(lines)):
+        line_no, cells = lines[k]
+        cells = _fit_width(path, line_no, cells, columns["n"], last=k == len(lines) - 1)
+        if k > 1 and cells == lines[k - 1][1]:
+            dropped += 1
+            continue
+        lines[k] = (line_no, cells)
+        rows.append(_parse_row(path, line_no, cells, columns))
+    if dropped:
+        meta.extra["dropped_duplicate_rows"] = dropped
     if not rows:
         raise FormatError(path, "no frames after the header")
     t = np.array([r[0] for r in rows])
@@ -125,8 +136,11 @@ def _numbered_lines(lines: list[str], path: Path, meta: Metadata):
 
 def _parse_header(path: Path, line_no: int, cells: list[str]) -> dict:
     names = [c.strip() for c in cells]
+    while len(names) > 1 and not names[-1]:
+        names.pop()  # a trailing comma after the last column name
     if names[0].lower() != "time":
-        raise FormatError(path, f"first column must be 'time', found {names[0]!r}", line_no)
+        hint = "; the file is separated by ';' or tabs, expected commas" if ";" in names[0] or "\t" in names[0] else ""
+        raise FormatError(path, f"first column must be 'time', found {names[0][:40]!r}{hint}", line_no)
     coord_index = np.full((skeleton.J, 3), -1)
     state_index = np.full(skeleton.J, -1)
     for col, name in enumerate(names[1:], start=1):
@@ -150,9 +164,17 @@ def _parse_header(path: Path, line_no: int, cells: list[str]) -> dict:
     return {"n": len(names), "coords": coord_index.ravel(), "state": state_index if has_state else None}
 
 
+def _fit_width(path: Path, line_no: int, cells: list[str], n: int, *, last: bool) -> list[str]:
+    """Returns the row's n cells: empty cells after the n-th (a trailing comma) are dropped; FormatError otherwise."""
+    if len(cells) > n and not "".join(cells[n:]).strip():
+        cells = cells[:n]
+    if len(cells) != n:
+        hint = " (file truncated?)" if last and len(cells) < n else ""
+        raise FormatError(path, f"expected {n} columns as in the header, found {len(cells)}{hint}", line_no)
+    return cells
+
+
 def _parse_row(path: Path, line_no: int, cells: list[str], columns: dict):
-    if len(cells) != columns["n"]:
-        raise FormatError(path, f"expected {columns['n']} columns as in the header, found {len(cells)}", line_no)
     t = _number(path, line_no, 1, cells[0], "time", allow_empty=False)
     coords = [_number(path, line_no, c + 1, cells[c], "coordinate") for c in columns["coords"]]
     state = None
