@@ -80,6 +80,8 @@ def read(path: str | Path, format: str | None = None) -> Recording:
     module = get(format) if format else detect(path)
     if not path.exists():
         raise FormatError(path, "no such file or directory")
+    if path.is_file() and path.stat().st_size == 0:
+        raise FormatError(path, "empty file (0 bytes): expected a recording")
     rec = module.read(path)
     rec.meta.source = rec.meta.source or str(path)
     return rec

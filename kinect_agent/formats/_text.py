@@ -4,6 +4,7 @@ Windows tools, CRLF / LF / CR line ends. Binary data and broken gzip streams are
 from __future__ import annotations
 
 import codecs
+import re
 import zlib
 from pathlib import Path
 
@@ -12,6 +13,8 @@ from kinect_agent.errors import FormatError
 GZIP_MAGIC = b"\x1f\x8b"
 MAX_TEXT_BYTES = 1 << 30  # a decompressed recording larger than this (1 GiB) is refused, not read into memory
 _UTF16_BOMS = (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)
+_DECIMAL = re.compile(r"[-+]?\d*\.(\d+)")
+_LAST_FIELD = re.compile(r"[^\s,;]*$")
 
 
 def read_text(path: str | Path) -> str:
@@ -38,14 +41,38 @@ def read_text(path: str | Path) -> str:
 
 
 def read_lines(path: str | Path) -> list[str]:
-    """Returns the file's lines (read_text), line i at index i - 1, without their line ends (CRLF, LF or CR)."""
+    """Returns the file's lines (read_text), line i at index i - 1, without their line ends (CRLF, LF or CR).
+
+    Raises FormatError when the file was cut inside its last number (cut_inside_number)."""
     text = read_text(path)
     if "\r" in text:
         text = text.replace("\r\n", "\n") if "\n" in text else text.replace("\r", "\n")
     lines = text.split("\n")
     if lines and lines[-1] == "":
         lines.pop()
+    elif cut_inside_number(lines):
+        raise FormatError(path, "the last line ends inside a number, with fewer decimals than the lines before "
+                          "(file truncated?)", len(lines))  # fmt: skip
     return lines
+
+
+def cut_inside_number(lines: list[str]) -> bool:
+    """True when the last line (of a file without a final line end) ends in a number with fewer decimals than the
+    last number of each of the (at least 3, at most 5) lines before it, all written with one fixed count of decimals:
+    the file was cut while that number was being written. Files whose numbers have varying decimals are not judged."""
+    previous = [line for line in lines[-6:-1] if line.strip()]
+    if len(previous) < 3 or not lines[-1].strip():
+        return False
+    counts = set()
+    for line in previous:
+        match = _DECIMAL.fullmatch(_LAST_FIELD.search(line.rstrip()).group())
+        if match is None:
+            return False
+        counts.add(len(match.group(1)))
+    if len(counts) != 1:
+        return False
+    last = _DECIMAL.fullmatch(_LAST_FIELD.search(lines[-1].rstrip()).group())
+    return last is None or len(last.group(1)) < counts.pop()
 
 
 def decoded_head(head: bytes) -> bytes:

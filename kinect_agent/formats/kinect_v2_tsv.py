@@ -234,7 +234,8 @@ def _numbers(
             except ValueError:
                 value = np.nan
             if not np.isfinite(value):
-                raise FormatError(path, f"column {c + 1} {names[c]!r}: expected a number, found {text!r}",
+                hint = " (file truncated?)" if i == len(table) - 1 else ""
+                raise FormatError(path, f"column {c + 1} {names[c]!r}: expected a number, found {text!r}{hint}",
                                   row_lines[i])  # fmt: skip
     raise AssertionError("a bad cell was found above")
 
@@ -245,8 +246,9 @@ def _states(path: Path, table: list[list[str]], c: int, names: list[str], row_li
         return [_STATES[row[c].strip().lower()] for row in table]
     except KeyError:
         i = next(i for i, row in enumerate(table) if row[c].strip().lower() not in _STATES)
+        hint = " (file truncated?)" if i == len(table) - 1 else ""
         raise FormatError(path, f"column {c + 1} {names[c]!r}: expected Tracked, Inferred, NotTracked or 2/1/0, "
-                          f"found {table[i][c].strip()!r}", row_lines[i]) from None  # fmt: skip
+                          f"found {table[i][c].strip()!r}{hint}", row_lines[i]) from None  # fmt: skip
 
 
 def _unit(
