@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 import re
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -55,18 +56,19 @@ def read(path: Path) -> Recording:
     A row repeating the row before exactly (a frame written twice) is dropped (meta.extra["dropped_duplicate_rows"]);
     a repeated time with other values is refused."""
     meta = _read_sidecar(Path(path))
-    lines = list(_numbered_lines(read_lines(path), path, meta))
-    if not lines:
+    lines = _numbered_lines(read_lines(path), path, meta)
+    first = next(lines, None)
+    if first is None:
         raise FormatError(path, "empty file: expected a header line starting with 'time'")
-    columns = _parse_header(path, *lines[0])
-    rows, dropped = [], 0
-    for k in range(1, len(lines)):
-        line_no, cells = lines[k]
-        cells = _fit_width(path, line_no, cells, columns["n"], last=k == len(lines) - 1)
-        if k > 1 and cells == lines[k - 1][1]:
+    columns = _parse_header(path, *first)
+    rows, dropped, previous = [], 0, None
+    for line_no, cells in lines:
+        if len(cells) != columns["n"]:
+            cells = _fit_width(path, line_no, cells, columns["n"], lines)
+        if cells == previous:
             dropped += 1
             continue
-        lines[k] = (line_no, cells)
+        previous = cells
         rows.append(_parse_row(path, line_no, cells, columns))
     if dropped:
         meta.extra["dropped_duplicate_rows"] = dropped
@@ -164,12 +166,13 @@ def _parse_header(path: Path, line_no: int, cells: list[str]) -> dict:
     return {"n": len(names), "coords": coord_index.ravel(), "state": state_index if has_state else None}
 
 
-def _fit_width(path: Path, line_no: int, cells: list[str], n: int, *, last: bool) -> list[str]:
-    """Returns the row's n cells: empty cells after the n-th (a trailing comma) are dropped; FormatError otherwise."""
+def _fit_width(path: Path, line_no: int, cells: list[str], n: int, rest: Iterator) -> list[str]:
+    """Returns the row's n cells: empty cells after the n-th (a trailing comma) are dropped; FormatError otherwise
+    (rest: the rows after this one, to tell whether it is the last)."""
     if len(cells) > n and not "".join(cells[n:]).strip():
         cells = cells[:n]
     if len(cells) != n:
-        hint = " (file truncated?)" if last and len(cells) < n else ""
+        hint = " (file truncated?)" if len(cells) < n and next(rest, None) is None else ""
         raise FormatError(path, f"expected {n} columns as in the header, found {len(cells)}{hint}", line_no)
     return cells
 
@@ -189,20 +192,21 @@ def _parse_row(path: Path, line_no: int, cells: list[str], columns: dict):
 
 
 def _number(path: Path, line_no: int, col: int, cell: str, what: str, allow_empty: bool = True) -> float:
-    cell = cell.strip()
-    if not cell:
+    """Returns the cell's finite number; NaN for an empty cell or nan when allow_empty; FormatError otherwise."""
+    try:
+        value = float(cell)  # float() strips the blanks around the number itself
+    except ValueError:
+        cell = cell.strip()
+        if cell:
+            raise FormatError(path, f"column {col}: expected a number for {what}, found {cell!r}", line_no) from None
         if allow_empty:
             return math.nan
-        raise FormatError(path, f"column {col}: {what} is empty", line_no)
-    try:
-        value = float(cell)
-    except ValueError:
-        raise FormatError(path, f"column {col}: expected a number for {what}, found {cell!r}", line_no) from None
-    if math.isnan(value) and allow_empty:
+        raise FormatError(path, f"column {col}: {what} is empty", line_no) from None
+    if value - value == 0.0:  # finite: the common case first
+        return value
+    if value != value and allow_empty:
         return math.nan  # written by numpy / R for a lost joint, as an empty cell is
-    if not math.isfinite(value):
-        raise FormatError(path, f"column {col}: {what} must be finite, found {cell!r}", line_no)
-    return value
+    raise FormatError(path, f"column {col}: {what} must be finite, found {cell.strip()!r}", line_no)
 
 
 def _check_times(path: Path, t: np.ndarray, line_numbers: list[int]) -> None:
