@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +29,17 @@ def parse_csv_row(path: Path, line_no: int, line: str, n_columns: int, layout: s
         bad = next(i for i, v in enumerate(values) if math.isinf(v))
         raise FormatError(path, f"column {bad + 1}: expected a finite number, found {cells[bad]!r}", line_no)
     return values
+
+
+_DECIMAL_COMMA = re.compile(r"\s*[-+]?\d+,\d+\s*")
+
+
+def number_hint(text: str) -> str:
+    """Returns a hint for a cell that is not a number: decimal commas (0,5) are not read, since 1,250 could be
+    1.25 or 1250; '' for other text."""
+    if _DECIMAL_COMMA.fullmatch(text):
+        return " (a decimal comma? write numbers with a decimal point, as 0.5)"
+    return ""
 
 
 def is_number(text: str) -> bool:
@@ -67,7 +79,9 @@ def parse_floats(path: Path, line_no: int, cells: list[str], n: int, what: str) 
     try:
         values = np.array([float(c) for c in cells])
     except ValueError:
-        raise FormatError(path, f"expected numbers for {what}, found {' '.join(cells[:5])!r}", line_no) from None
+        bad = next(c for c in cells if not is_number(c))
+        raise FormatError(path, f"expected numbers for {what}, found {' '.join(cells[:5])!r}{number_hint(bad)}",
+                          line_no) from None  # fmt: skip
     if not np.all(np.isfinite(values)):
         raise FormatError(path, f"{what} must be finite", line_no)
     return values

@@ -22,6 +22,7 @@ import numpy as np
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import asf, mocap_mapping
+from kinect_agent.formats._rows import is_number, number_hint
 from kinect_agent.formats._text import read_lines
 from kinect_agent.recording import Metadata, Recording
 
@@ -214,7 +215,9 @@ def _bone_line(
     try:
         row = [float(c) for c in tok[1:]]
     except ValueError:
-        raise FormatError(path, f"bone {name!r}: expected numbers, found {' '.join(tok[1:])!r}", line_no) from None
+        hint = number_hint(next(c for c in tok[1:] if not is_number(c)))
+        message = f"bone {name!r}: expected numbers, found {' '.join(tok[1:])!r}{hint}"
+        raise FormatError(path, message, line_no) from None
     if not all(np.isfinite(row)):
         raise FormatError(path, f"bone {name!r}: values must be finite", line_no)
     seen.add(name)

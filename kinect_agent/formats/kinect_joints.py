@@ -13,7 +13,7 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
-from kinect_agent.formats._rows import is_number
+from kinect_agent.formats._rows import is_number, number_hint
 from kinect_agent.formats._text import read_lines
 
 KINECT_V1_JOINTS: tuple[str, ...] = (
@@ -107,7 +107,8 @@ def read_numeric_rows(path: Path, n_fields: int) -> tuple[np.ndarray, list[int],
             values = [float(c) for c in cells]
         except ValueError:
             bad = next(k for k, c in enumerate(cells) if not is_number(c))
-            raise FormatError(path, f"field {bad + 1}: expected a number, found {cells[bad]!r}", i + 1) from None
+            message = f"field {bad + 1}: expected a number, found {cells[bad]!r}{number_hint(cells[bad])}"
+            raise FormatError(path, message, i + 1) from None
         rows.append(values)
         line_numbers.append(i + 1)
         texts.append(" ".join(cells))

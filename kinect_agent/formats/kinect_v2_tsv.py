@@ -18,16 +18,20 @@ JointType (kinect_joints.KINECT_V2_JOINTS); optional `<Joint>_State` / `<Joint>_
 orientations `<Joint>_QX`...) are ignored and listed in meta.extra["ignored_columns"]. The 20 joints our
 skeleton uses must be present (Neck, hand tips and thumbs may be absent). An empty cell or nan = not tracked;
 trailing tabs after the last column are ignored. Plain or gzip, UTF-8 (BOM or not) or UTF-16, any line ends.
-Timestamp unit: `TimestampUnit: s|ms|us|ticks` in the header or a column named `Timestamp[ms]`/`Timestamp_ms`/
-`Time (s)`, else inferred from the median step: the one unit of s, ms, us or 100 ns SDK ticks that gives 5-120 Hz;
-a step that fits none or two (e.g. 100000: 100 Hz in ticks or 10 Hz in us) is refused. Timestamps must strictly
-increase; a row repeating the row before exactly (a frame written twice) is dropped (meta.extra
-["dropped_duplicate_rows"]). t starts at 0 and the first raw stamp goes to meta.extra["start_timestamp"].
+Timestamps may be clock times, as a .NET TimeSpan (`00:01:02.1234567`, the SDK's RelativeTime written with
+ToString()) or an ISO 8601 date and time (`2025-03-14T10:22:05.123`): meta.extra["timestamp_unit"] = "clock".
+Timestamp unit of numbers: `TimestampUnit: s|ms|us|ticks` in the header or a column named `Timestamp[ms]`,
+`Timestamp_ms`, `Time (s)`, else inferred from the median step: the one unit of s, ms, us or 100 ns SDK ticks that
+gives 5-120 Hz; a step that fits none or two (e.g. 100000: 100 Hz in ticks or 10 Hz in us) is refused.
+Timestamps must strictly increase; a row repeating the row before exactly (a frame written twice) is dropped
+(meta.extra["dropped_duplicate_rows"]). t starts at 0 and the first raw stamp goes to meta.extra["start_timestamp"].
 """
 
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
+from datetime import datetime
 from pathlib import Path
 
 import numpy as np
@@ -36,7 +40,7 @@ from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import kinect_joints
 from kinect_agent.formats._atomic import atomic_open
-from kinect_agent.formats._rows import is_number
+from kinect_agent.formats._rows import is_number, number_hint
 from kinect_agent.formats._text import read_lines
 from kinect_agent.recording import Metadata, Recording
 
@@ -49,6 +53,7 @@ _STATES = {"tracked": 2, "inferred": 1, "nottracked": 0, "not_tracked": 0, "2": 
 _COLUMN = re.compile(r"^(?P<joint>[A-Za-z]+)_(?P<field>X|Y|Z|State|TrackingState)$", re.IGNORECASE)
 _TIME = re.compile(r"^(timestamp|time|relativetime)(?:\s*[\[_(]?\s*(?P<unit>[a-zµ0-9]+)\s*[\])]?)?$", re.IGNORECASE)
 _RATE_RANGE_HZ = (5.0, 120.0)
+_TIMESPAN = re.compile(r"(?:(\d+)\.)?(\d{1,2}):(\d{2}):(\d{2}(?:\.\d+)?)")  # [d.]hh:mm:ss[.fffffff]
 _V2_INDEX = {name.lower(): i for i, name in enumerate(kinect_joints.KINECT_V2_JOINTS)}
 _NEEDED = sorted(set(kinect_joints.source_indices("kinect2").tolist()))
 
@@ -81,17 +86,22 @@ def read(path: Path) -> Recording:
         names.pop()  # a trailing tab after the last column name
     time_match = _TIME.match(names[0])
     columns, ignored = _columns(path, header_no, names)
-    stamps, xyz, state, row_lines, dropped = _rows(path, lines[pos + 1 :], names, columns)
-    unit = _unit(path, header, time_match.group("unit"), stamps, row_lines, header_no)
-    t = (stamps - stamps[0]) * UNITS_S[unit]
+    rows = _rows(path, lines[pos + 1 :], names, columns)
+    xyz, state = rows.xyz, rows.state
+    if rows.clock:
+        unit, t = "clock", rows.stamps
+    else:
+        unit = _unit(path, header, time_match.group("unit"), rows.stamps, rows.row_lines, header_no)
+        t = (rows.stamps - rows.stamps[0]) * UNITS_S[unit]
     xyz[state == 0] = np.nan
     state[~np.all(np.isfinite(xyz), axis=-1)] = 0
     positions, out_state = kinect_joints.to_skeleton(xyz, "kinect2", state)
     meta = Metadata(device="kinect2", source=str(path), subject=header.get("subject"), exercise=header.get("exercise"))
     rate = header.get("framerate") or header.get("rate")
     meta.rate_hz = _float_or_none(rate) or (float(1.0 / np.median(np.diff(t))) if len(t) > 1 else None)
-    meta.extra.update(header=header, ignored_columns=ignored, start_timestamp=float(stamps[0]), timestamp_unit=unit)
-    meta.extra["dropped_duplicate_rows"] = dropped
+    start = rows.first_stamp if rows.clock else float(rows.stamps[0])
+    meta.extra.update(header=header, ignored_columns=ignored, start_timestamp=start, timestamp_unit=unit)
+    meta.extra["dropped_duplicate_rows"] = rows.dropped
     return Recording(t, positions, out_state, meta)
 
 
@@ -161,11 +171,23 @@ def _columns(path: Path, line_no: int, names: list[str]) -> tuple[dict[tuple[int
     return columns, ignored
 
 
-def _rows(
-    path: Path, lines: list[tuple[int, str]], names: list[str], columns: dict[tuple[int, str], int]
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[int], int]:
-    """Returns stamps (T,), xyz (T, 25, 3) metres (NaN = empty or nan), state (T, 25) int8, each row's line number,
-    and the number of rows dropped as exact repeats of the row before (a recorder writing one frame twice)."""
+@dataclass
+class _Rows:
+    """The data rows of an export: stamps (T,) as written (clock: seconds from the first), xyz (T, 25, 3) metres
+    (NaN = empty or nan), state (T, 25) int8, each row's line number, and the rows dropped as exact repeats of the
+    row before (a recorder writing one frame twice)."""
+
+    stamps: np.ndarray
+    clock: bool
+    first_stamp: str
+    xyz: np.ndarray
+    state: np.ndarray
+    row_lines: list[int]
+    dropped: int
+
+
+def _rows(path: Path, lines: list[tuple[int, str]], names: list[str], columns: dict[tuple[int, str], int]) -> _Rows:
+    """Reads the data rows; FormatError names the line of a bad one."""
     content = [(no, line) for no, line in lines if line.strip()]
     if not content:
         raise FormatError(path, "no frames after the column header", lines[0][0] if lines else None)
@@ -180,7 +202,10 @@ def _rows(
                               "timestamps must strictly increase", line_no)  # fmt: skip
         table.append(cells)
         row_lines.append(line_no)
-    stamps = _numbers(path, table, [0], names, row_lines, allow_empty=False)[:, 0]
+    stamps = _clock_seconds(table)
+    clock = stamps is not None
+    if stamps is None:
+        stamps = _numbers(path, table, [0], names, row_lines, allow_empty=False)[:, 0]
     back = np.flatnonzero(np.diff(stamps) <= 0)
     if back.size:
         i = int(back[0]) + 1
@@ -195,7 +220,28 @@ def _rows(
     for (j, field), c in columns.items():
         if field == "state":
             state[:, j] = _states(path, table, c, names, row_lines)
-    return stamps, xyz, state, row_lines, dropped
+    return _Rows(stamps, clock, table[0][0].strip(), xyz, state, row_lines, dropped)
+
+
+def _clock_seconds(table: list[list[str]]) -> np.ndarray | None:
+    """Returns the stamps (T,) as seconds from the first when every stamp is a clock time: a .NET TimeSpan as Kinect
+    SDK exporters write RelativeTime ([d.]hh:mm:ss[.fffffff]) or an ISO 8601 date and time; None otherwise (numbers,
+    or anything else, left to _numbers)."""
+    first = table[0][0].strip()
+    if ":" not in first:
+        return None
+    if _TIMESPAN.fullmatch(first):
+        parts = [_TIMESPAN.fullmatch(row[0].strip()) for row in table]
+        if not all(parts):
+            return None
+        fields = (p.groups() for p in parts)
+        seconds = [86400 * int(d or 0) + 3600 * int(h) + 60 * int(m) + float(s) for d, h, m, s in fields]
+        return np.array(seconds) - seconds[0]
+    try:
+        times = [datetime.fromisoformat(row[0].strip()) for row in table]
+        return np.array([(t - times[0]).total_seconds() for t in times])
+    except (ValueError, TypeError):  # not ISO 8601, or naive and aware times mixed
+        return None
 
 
 def _cells(path: Path, line_no: int, line: str, n: int, *, last: bool) -> list[str]:
@@ -235,6 +281,7 @@ def _numbers(
                 value = np.nan
             if not np.isfinite(value):
                 hint = " (file truncated?)" if i == len(table) - 1 else ""
+                hint = number_hint(text) + hint
                 raise FormatError(path, f"column {c + 1} {names[c]!r}: expected a number, found {text!r}{hint}",
                                   row_lines[i])  # fmt: skip
     raise AssertionError("a bad cell was found above")

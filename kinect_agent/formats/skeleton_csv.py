@@ -45,7 +45,7 @@ def sniff(path: Path, head: bytes) -> bool:
     for line in head.decode("utf-8", "replace").splitlines():
         if line.startswith("#") or not line.strip():
             continue
-        cells = [c.strip() for c in line.split(",")]
+        cells = [c.strip().strip('"') for c in line.split(",")]
         return cells[0].lower() == "time" and "ROOT_x" in cells
     return False
 
@@ -137,7 +137,7 @@ def _numbered_lines(lines: list[str], path: Path, meta: Metadata):
 
 
 def _parse_header(path: Path, line_no: int, cells: list[str]) -> dict:
-    names = [c.strip() for c in cells]
+    names = [c.strip().strip('"') for c in cells]  # spreadsheets may quote the names
     while len(names) > 1 and not names[-1]:
         names.pop()  # a trailing comma after the last column name
     if names[0].lower() != "time":
@@ -184,7 +184,7 @@ def _parse_row(path: Path, line_no: int, cells: list[str], columns: dict):
     if columns["state"] is not None:
         state = []
         for c in columns["state"]:
-            cell = cells[c].strip()
+            cell = cells[c].strip().strip('"')
             if cell not in ("0", "1", "2", ""):
                 raise FormatError(path, f"column {c + 1}: state must be 0, 1 or 2, found {cell!r}", line_no)
             state.append(int(cell or 0))
@@ -197,6 +197,8 @@ def _number(path: Path, line_no: int, col: int, cell: str, what: str, allow_empt
         value = float(cell)  # float() strips the blanks around the number itself
     except ValueError:
         cell = cell.strip()
+        if len(cell) > 2 and cell[0] == cell[-1] == '"':  # a quoted number, as some spreadsheets write every cell
+            return _number(path, line_no, col, cell[1:-1], what, allow_empty)
         if cell:
             raise FormatError(path, f"column {col}: expected a number for {what}, found {cell!r}", line_no) from None
         if allow_empty:

@@ -334,3 +334,64 @@ def test_keraal_and_tsv_agree_on_the_same_frames(data_dir: Path, tmp_path: Path)
     path, _ = _tsv(data_dir, tmp_path)
     ref = keraal.read(next(tmp_path.glob("G3-*")))
     np.testing.assert_allclose(kinect_v2_tsv.read(path).positions, ref.positions, atol=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("stamp", "seconds"),
+    [
+        (lambda s: f"00:{int(s // 60):02d}:{s % 60:010.7f}", lambda s: s),  # .NET TimeSpan, RelativeTime.ToString()
+        (lambda s: f"1.02:00:{s:010.7f}", lambda s: s),  # a TimeSpan past a day
+        (lambda s: f"2025-03-14T10:22:{5 + s:09.6f}", lambda s: s),  # ISO 8601
+        (lambda s: f"2025-03-14 10:22:{5 + s:09.6f}+01:00", lambda s: s),
+    ],
+    ids=["timespan", "timespan_days", "iso", "iso_offset"],
+)
+def test_tsv_clock_timestamps(data_dir: Path, tmp_path: Path, stamp, seconds) -> None:
+    t = 3.2 + np.arange(40) / 30.0
+    path, values = _tsv(data_dir, tmp_path, np.array([stamp(s) for s in t]))
+    rec = kinect_v2_tsv.read(path)
+    assert rec.meta.extra["timestamp_unit"] == "clock"
+    np.testing.assert_allclose(rec.t, t - t[0], atol=1e-6)
+    np.testing.assert_allclose(rec.positions, _expected(values), atol=1e-6)
+
+
+def test_tsv_clock_timestamps_going_back_are_refused(data_dir: Path, tmp_path: Path) -> None:
+    stamps = np.array([f"00:00:{s:06.3f}" for s in np.arange(40) / 30.0])
+    stamps[9] = stamps[3]
+    path, _ = _tsv(data_dir, tmp_path, stamps)
+    with pytest.raises(FormatError, match=r"body\.tsv:12: timestamp 00:00:00.100 goes back from 00:00:00.267"):
+        kinect_v2_tsv.read(path)
+
+
+def test_decimal_commas_are_refused_with_a_hint(data_dir: Path, tmp_path: Path) -> None:
+    path, _ = _tsv(data_dir, tmp_path, states=False)
+    rows = path.read_text().splitlines()
+    rows[3] = rows[3].replace(".", ",")
+    path.write_text("\n".join(rows) + "\n")
+    with pytest.raises(FormatError, match=r"body\.tsv:4: column 2 'SpineBase_X': expected a number, found '-?\d+,\d+' "
+                       r"\(a decimal comma"):  # fmt: skip
+        kinect_v2_tsv.read(path)
+    ut = _utkinect(data_dir, tmp_path)
+    rows = _rows(ut)
+    rows[2] = rows[2].replace(".", ",")
+    _write(ut, rows)
+    with pytest.raises(FormatError, match=r"joints_s01_e01\.txt:3: field 2: expected a number.*a decimal comma"):
+        utkinect.read(ut)
+
+
+def test_csv_with_quoted_names_and_numbers(data_dir: Path, tmp_path: Path) -> None:
+    path, rows = _csv_file(data_dir, tmp_path)
+    clean = skeleton_csv.read(path)
+    quoted = [",".join(f'"{c}"' if c else c for c in row.split(",")) for row in rows]
+    _write(path, quoted)
+    assert formats.detect(path) is skeleton_csv
+    rec = skeleton_csv.read(path)
+    np.testing.assert_array_equal(rec.positions, clean.positions)
+    np.testing.assert_array_equal(rec.state, clean.state)
+
+
+def test_csv_separated_by_semicolons_is_refused_with_a_hint(data_dir: Path, tmp_path: Path) -> None:
+    path, rows = _csv_file(data_dir, tmp_path)
+    _write(path, [row.replace(",", ";") for row in rows])
+    with pytest.raises(FormatError, match=r"r\.csv:1: first column must be 'time'.*separated by ';'"):
+        skeleton_csv.read(path)
