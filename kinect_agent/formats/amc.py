@@ -110,10 +110,10 @@ def parse_motion(path: Path, skel: asf.Skeleton) -> tuple[np.ndarray, np.ndarray
     """
     expected = {"root": len(skel.root_order)} | {b.name: len(b.dof) for b in skel.bones if b.dof}
     lines = read_lines(path)
-    return _parse_regular(lines, expected) or _parse_checked(path, lines, expected)
+    return parse_motion_fast(lines, expected) or parse_motion_checked(path, lines, expected)
 
 
-def _parse_regular(
+def parse_motion_fast(
     lines: list[str], expected: dict[str, int]
 ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], bool | None] | None:
     """The fast path of parse_motion: None unless every frame lists each expected bone once, in the first frame's
@@ -161,10 +161,10 @@ def _parse_regular(
     return np.array(frames, dtype=np.float64), root, columns, degrees
 
 
-def _parse_checked(
+def parse_motion_checked(
     path: Path, lines: list[str], expected: dict[str, int]
 ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], bool | None]:
-    """The checked twin of _parse_regular: reads bones in any order per frame; FormatError names the line."""
+    """The checked twin of parse_motion_fast: reads bones in any order per frame; FormatError names the line."""
     frames: list[int] = []
     values: dict[str, list[list[float]]] = {name: [] for name in expected}
     seen: set[str] = set()
@@ -238,11 +238,11 @@ def _check_complete(
 
 def _check_thigh(skel: asf.Skeleton, frame: np.ndarray) -> None:
     """Refuses a skeleton whose thigh (hip to knee, first frame) is not 0.25-0.7 m: its `:units length` does not
-    give metres. frame: (20, 3) metres."""
+    give metres. A skeleton without hip and knee keeps its declared unit unchecked. frame: (20, 3) metres."""
     thighs = [frame[skeleton.INDEX[f"KNE_{s}"]] - frame[skeleton.INDEX[f"HIP_{s}"]] for s in "LR"]
     lengths = [float(np.linalg.norm(d)) for d in thighs if np.all(np.isfinite(d))]
     if not lengths:
-        raise FormatError(skel.path, "cannot check the length unit: no femur/tibia bones (hip and knee) found")
+        return
     thigh = max(lengths)
     if not THIGH_RANGE_M[0] <= thigh <= THIGH_RANGE_M[1]:
         raise FormatError(skel.path, f"the thigh is {thigh:.3g} m with ':units length {skel.length_unit:g}' (metres = "

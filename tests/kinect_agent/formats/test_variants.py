@@ -32,24 +32,24 @@ def _head_lines(source: Path, n: int) -> bytes:
     return b"".join(raw.splitlines(keepends=True)[:n])
 
 
-def _utkinect(data: Path, tmp: Path) -> Path:
+def build_utkinect(data: Path, tmp: Path) -> Path:
     (tmp / "joints_s01_e01.txt").write_bytes(_head_lines(data / "utkinect/joints_s01_e01.txt", 40))
     return tmp / "joints_s01_e01.txt"
 
 
-def _keraal(data: Path, tmp: Path) -> Path:
+def build_keraal(data: Path, tmp: Path) -> Path:
     out = tmp / Path(KERAAL_PAIR.format("Kinect")).name
     out.write_bytes(_head_lines(data / KERAAL_PAIR.format("Kinect"), 40))
     return out
 
 
-def _keraal_vicon(data: Path, tmp: Path) -> Path:
+def build_keraal_vicon(data: Path, tmp: Path) -> Path:
     out = tmp / Path(KERAAL_PAIR.format("Vicon")).name
     out.write_bytes(_head_lines(data / KERAAL_PAIR.format("Vicon"), 80))
     return out
 
 
-def _ui_prmd(data: Path, tmp: Path) -> Path:
+def build_ui_prmd(data: Path, tmp: Path) -> Path:
     for kind in ("positions", "angles"):
         folder = tmp / "Kinect" / kind.capitalize()
         folder.mkdir(parents=True)
@@ -59,7 +59,7 @@ def _ui_prmd(data: Path, tmp: Path) -> Path:
     return tmp / "Kinect/Positions/m01_s01_e01_positions.txt.gz"
 
 
-def _ui_prmd_vicon(data: Path, tmp: Path) -> Path:
+def build_ui_prmd_vicon(data: Path, tmp: Path) -> Path:
     folder = tmp / "Vicon/Positions"
     folder.mkdir(parents=True)
     name = "m01_s01_e01_positions.txt.gz"
@@ -67,20 +67,20 @@ def _ui_prmd_vicon(data: Path, tmp: Path) -> Path:
     return folder / name
 
 
-def _csv(data: Path, tmp: Path) -> Path:
-    skeleton_csv.write(formats.read(_utkinect(data, tmp)), tmp / "rec.csv")
+def build_csv(data: Path, tmp: Path) -> Path:
+    skeleton_csv.write(formats.read(build_utkinect(data, tmp)), tmp / "rec.csv")
     (tmp / "rec.meta.json").unlink()
     (tmp / "joints_s01_e01.txt").unlink()
     return tmp / "rec.csv"
 
 
-def _tsv(data: Path, tmp: Path) -> Path:
-    kinect_v2_tsv.write(keraal.read(_keraal(data, tmp)), tmp / "body.tsv")
+def build_tsv(data: Path, tmp: Path) -> Path:
+    kinect_v2_tsv.write(keraal.read(build_keraal(data, tmp)), tmp / "body.tsv")
     next(tmp.glob("G3-*")).unlink()
     return tmp / "body.tsv"
 
 
-def _bvh(data: Path, tmp: Path) -> Path:
+def build_bvh(data: Path, tmp: Path) -> Path:
     text = (data / "cmu-mocap/13_29.bvh").read_text()
     head, _, motion = text.partition("MOTION\n")
     rows = motion.splitlines()[2:32]
@@ -88,7 +88,7 @@ def _bvh(data: Path, tmp: Path) -> Path:
     return tmp / "13_29.bvh"
 
 
-def _amc(data: Path, tmp: Path) -> Path:
+def build_amc(data: Path, tmp: Path) -> Path:
     (tmp / "asf").mkdir()
     shutil.copy(data / "hdm05/asf/HDM_bd.asf", tmp / "asf")
     raw = (data / "hdm05/squat1Reps/HDM_bd_squat1Reps_001_120.amc").read_bytes().splitlines(keepends=True)
@@ -98,8 +98,9 @@ def _amc(data: Path, tmp: Path) -> Path:
 
 
 BUILDERS: dict[str, Callable[[Path, Path], Path]] = {
-    "csv": _csv, "kinect_v2_tsv": _tsv, "utkinect": _utkinect, "keraal": _keraal, "keraal_vicon": _keraal_vicon,
-    "ui_prmd": _ui_prmd, "ui_prmd_vicon": _ui_prmd_vicon, "bvh": _bvh, "amc": _amc,
+    "csv": build_csv, "kinect_v2_tsv": build_tsv, "utkinect": build_utkinect, "keraal": build_keraal,
+    "keraal_vicon": build_keraal_vicon, "ui_prmd": build_ui_prmd, "ui_prmd_vicon": build_ui_prmd_vicon,
+    "bvh": build_bvh, "amc": build_amc,
 }  # fmt: skip
 _NUMBER = re.compile(rb"(?<![\w.+-])(-?)(\d+\.\d+)(?![\d.eE])")
 

@@ -17,7 +17,7 @@ from kinect_agent import formats, skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import keraal, kinect_joints, kinect_v2_tsv, skeleton_csv, ui_prmd, utkinect
 
-from .test_variants import _keraal, _keraal_vicon, _ui_prmd, _ui_prmd_vicon, _utkinect
+from .test_variants import build_keraal, build_keraal_vicon, build_ui_prmd, build_ui_prmd_vicon, build_utkinect
 
 TICKS_PER_S = 10_000_000
 
@@ -38,7 +38,7 @@ def _write(path: Path, rows: list[str]) -> None:
 
 @pytest.mark.parametrize("lost", ["nan", "NaN", ""])
 def test_csv_lost_joint_as_nan_or_empty_is_not_tracked(data_dir: Path, tmp_path: Path, lost: str) -> None:
-    rec = utkinect.read(_utkinect(data_dir, tmp_path))
+    rec = utkinect.read(build_utkinect(data_dir, tmp_path))
     path = tmp_path / "r.csv"
     skeleton_csv.write(rec, path)
     rows = _rows(path)
@@ -58,7 +58,7 @@ def test_csv_lost_joint_as_nan_or_empty_is_not_tracked(data_dir: Path, tmp_path:
 
 def test_csv_infinity_and_nan_time_are_refused(data_dir: Path, tmp_path: Path) -> None:
     path = tmp_path / "r.csv"
-    skeleton_csv.write(utkinect.read(_utkinect(data_dir, tmp_path)), path)
+    skeleton_csv.write(utkinect.read(build_utkinect(data_dir, tmp_path)), path)
     rows = _rows(path)
     for edit, words in (
         (lambda c: ["nan"] + c[1:], "time must be finite"),
@@ -72,7 +72,7 @@ def test_csv_infinity_and_nan_time_are_refused(data_dir: Path, tmp_path: Path) -
 
 @pytest.mark.parametrize("lost", ["nan", "NaN", "-nan"])
 def test_whitespace_kinect_files_take_nan_for_a_lost_joint(data_dir: Path, tmp_path: Path, lost: str) -> None:
-    for build, joint_fields, offset in ((_utkinect, 3, 1), (_keraal, 7, 0)):
+    for build, joint_fields, offset in ((build_utkinect, 3, 1), (build_keraal, 7, 0)):
         folder = tmp_path / build.__name__ / lost
         folder.mkdir(parents=True)
         path = build(data_dir, folder)
@@ -81,7 +81,7 @@ def test_whitespace_kinect_files_take_nan_for_a_lost_joint(data_dir: Path, tmp_p
         cells = rows[-1].split()
         v1 = kinect_joints.KINECT_V1_JOINTS.index("KneeRight")
         v2 = kinect_joints.KINECT_V2_JOINTS.index("KneeRight")
-        j = v1 if build is _utkinect else v2
+        j = v1 if build is build_utkinect else v2
         cells[offset + joint_fields * j : offset + joint_fields * j + 3] = [lost] * 3
         rows[-1] = " ".join(cells)
         _write(path, rows)
@@ -95,7 +95,7 @@ def test_whitespace_kinect_files_take_nan_for_a_lost_joint(data_dir: Path, tmp_p
 
 
 def test_ui_prmd_lost_value_loses_that_joint_and_the_ones_built_on_it(data_dir: Path, tmp_path: Path) -> None:
-    path = _ui_prmd(data_dir, tmp_path)
+    path = build_ui_prmd(data_dir, tmp_path)
     clean = ui_prmd.read(path)
     rows = _rows(path)
     cells = rows[4].split(",")
@@ -113,7 +113,7 @@ def test_ui_prmd_lost_value_loses_that_joint_and_the_ones_built_on_it(data_dir: 
 
 
 def test_ui_prmd_vicon_lost_marker_as_nan_is_missing(data_dir: Path, tmp_path: Path) -> None:
-    path = _ui_prmd_vicon(data_dir, tmp_path)
+    path = build_ui_prmd_vicon(data_dir, tmp_path)
     clean = formats.read(path)
     rows = _rows(path)
     zeros, nans = rows[:], rows[:]
@@ -131,7 +131,7 @@ def test_ui_prmd_vicon_lost_marker_as_nan_is_missing(data_dir: Path, tmp_path: P
 
 
 def test_keraal_vicon_target_as_nan_is_missing(data_dir: Path, tmp_path: Path) -> None:
-    path = _keraal_vicon(data_dir, tmp_path)
+    path = build_keraal_vicon(data_dir, tmp_path)
     rows = _rows(path)
     cells = rows[9].split()
     head = 7 * 14  # HEAD target
@@ -148,7 +148,7 @@ def test_keraal_vicon_target_as_nan_is_missing(data_dir: Path, tmp_path: Path) -
 
 def _csv_file(data_dir: Path, tmp_path: Path) -> tuple[Path, list[str]]:
     path = tmp_path / "r.csv"
-    skeleton_csv.write(utkinect.read(_utkinect(data_dir, tmp_path)), path)
+    skeleton_csv.write(utkinect.read(build_utkinect(data_dir, tmp_path)), path)
     (tmp_path / "r.meta.json").unlink()
     return path, _rows(path)
 
@@ -180,7 +180,7 @@ def test_csv_irregular_times_are_kept(data_dir: Path, tmp_path: Path) -> None:
 
 
 def test_utkinect_repeated_and_decreasing_frame_ids(data_dir: Path, tmp_path: Path) -> None:
-    path = _utkinect(data_dir, tmp_path)
+    path = build_utkinect(data_dir, tmp_path)
     rows = [r for r in _rows(path) if r.strip()]
     clean = utkinect.read(path)
     _write(path, rows[:8] + [rows[7]] + rows[8:])  # a line written twice
@@ -196,7 +196,7 @@ def test_utkinect_repeated_and_decreasing_frame_ids(data_dir: Path, tmp_path: Pa
 
 @pytest.mark.parametrize("line_end", ["\n", "\r\n"])
 def test_utkinect_labels_with_nan_bom_and_crlf(data_dir: Path, tmp_path: Path, line_end: str) -> None:
-    path = _utkinect(data_dir, tmp_path)
+    path = build_utkinect(data_dir, tmp_path)
     labels = ["s01_e01", "walk: 252 390", "sitDown: NaN NaN", "standUp: 704 NaN", "carry:\t1016\t1242  ", "s01_e02",
               "walk: 1 2"]  # fmt: skip
     (tmp_path / "actionLabel.txt").write_bytes(b"\xef\xbb\xbf" + line_end.join(labels).encode() + line_end.encode())
@@ -206,7 +206,7 @@ def test_utkinect_labels_with_nan_bom_and_crlf(data_dir: Path, tmp_path: Path, l
 
 
 def test_utkinect_broken_label_line_is_named(data_dir: Path, tmp_path: Path) -> None:
-    path = _utkinect(data_dir, tmp_path)
+    path = build_utkinect(data_dir, tmp_path)
     (tmp_path / "actionLabel.txt").write_text("s01_e01\nwalk: 252 to 390\n")
     with pytest.raises(FormatError, match=r"actionLabel\.txt:2: expected 'action: start end'"):
         utkinect.read(path)
@@ -215,7 +215,7 @@ def test_utkinect_broken_label_line_is_named(data_dir: Path, tmp_path: Path) -> 
 # --- Kinect v2 TSV -----------------------------------------------------------------------------------------------
 
 
-def _tsv(
+def build_tsv(
     data_dir: Path,
     tmp_path: Path,
     stamps: np.ndarray | None = None,
@@ -228,7 +228,7 @@ def _tsv(
 ) -> tuple[Path, np.ndarray]:
     """Writes the short KERAAL cut as a TSV export with SDK joint names; returns its path and the positions (T, 25, 3)
     it holds (NaN where KERAAL has its all-zero 'not tracked')."""
-    values = np.loadtxt(_keraal(data_dir, tmp_path)).reshape(-1, 25, 7)[:, :, :3]
+    values = np.loadtxt(build_keraal(data_dir, tmp_path)).reshape(-1, 25, 7)[:, :, :3]
     values[np.all(values == 0.0, axis=-1)] = np.nan
     if stamps is None:
         stamps = 130_000_000 + np.arange(len(values)) * (TICKS_PER_S // 30)
@@ -257,7 +257,7 @@ def test_tsv_timestamp_unit_is_inferred_right(data_dir, tmp_path, unit: str, per
     jitter = np.random.default_rng(1).uniform(-0.002, 0.002, 40)
     seconds = 12.5 + np.arange(40) / rate_hz + jitter
     stamps = np.round(seconds * per_s, 6 if unit == "s" else 3)
-    path, values = _tsv(data_dir, tmp_path, stamps)
+    path, values = build_tsv(data_dir, tmp_path, stamps)
     rec = kinect_v2_tsv.read(path)
     assert rec.meta.extra["timestamp_unit"] == unit
     np.testing.assert_allclose(rec.t, seconds - seconds[0], atol=2e-6)
@@ -265,7 +265,7 @@ def test_tsv_timestamp_unit_is_inferred_right(data_dir, tmp_path, unit: str, per
 
 
 def test_tsv_ambiguous_timestamp_step_is_refused(data_dir: Path, tmp_path: Path) -> None:
-    path, _ = _tsv(data_dir, tmp_path, 5_000_000 + np.arange(40) * 100_000)  # 100 Hz in ticks or 10 Hz in us
+    path, _ = build_tsv(data_dir, tmp_path, 5_000_000 + np.arange(40) * 100_000)  # 100 Hz in ticks or 10 Hz in us
     with pytest.raises(FormatError, match=r"body\.tsv:\d+: cannot tell the timestamp unit.*fits more than one unit"):
         kinect_v2_tsv.read(path)
     path.write_text("# TimestampUnit: us\n" + path.read_text())
@@ -277,7 +277,7 @@ def test_tsv_ambiguous_timestamp_step_is_refused(data_dir: Path, tmp_path: Path)
 )
 def test_tsv_unit_in_the_column_name(data_dir: Path, tmp_path: Path, time_name: str, unit: str | None) -> None:
     per_s = {"ms": 1e3, "s": 1.0, "ticks": 1e7, None: 1.0}[unit]
-    path, _ = _tsv(data_dir, tmp_path, np.round(np.arange(40) / 30 * per_s, 6), time_name=time_name)
+    path, _ = build_tsv(data_dir, tmp_path, np.round(np.arange(40) / 30 * per_s, 6), time_name=time_name)
     rec = kinect_v2_tsv.read(path)
     assert rec.meta.extra["timestamp_unit"] == (unit or "s")
     np.testing.assert_allclose(rec.t, np.arange(40) / 30, atol=1e-6)
@@ -287,7 +287,7 @@ def test_tsv_unit_in_the_column_name(data_dir: Path, tmp_path: Path, time_name: 
 def test_tsv_sdk_joint_sets_with_a_key_value_header(data_dir: Path, tmp_path: Path, joints: int) -> None:
     header = ("Version\t2", "SensorID\tKinect-2\t0042", "Date recording\t2025-03-14 10:22:05",
               "Floor\t-0.98\t0.99\t0.05", "", "# Subject: P7")  # fmt: skip
-    path, values = _tsv(data_dir, tmp_path, joints=joints, header=header, states=joints == 25, trailing_tab=True)
+    path, values = build_tsv(data_dir, tmp_path, joints=joints, header=header, states=joints == 25, trailing_tab=True)
     assert formats.detect(path) is kinect_v2_tsv
     rec = formats.read(path)
     np.testing.assert_allclose(rec.positions, _expected(values), atol=1e-6)
@@ -296,7 +296,7 @@ def test_tsv_sdk_joint_sets_with_a_key_value_header(data_dir: Path, tmp_path: Pa
 
 
 def test_tsv_frame_written_twice_is_dropped_other_repeats_refused(data_dir: Path, tmp_path: Path) -> None:
-    path, values = _tsv(data_dir, tmp_path)
+    path, values = build_tsv(data_dir, tmp_path)
     rows = path.read_text().splitlines()
     path.write_text("\n".join(rows[:6] + [rows[5]] + rows[6:]) + "\n")
     rec = kinect_v2_tsv.read(path)
@@ -311,7 +311,7 @@ def test_tsv_frame_written_twice_is_dropped_other_repeats_refused(data_dir: Path
 
 @pytest.mark.parametrize("lost", ["nan", "NaN", ""])
 def test_tsv_lost_joint_as_nan_or_empty(data_dir: Path, tmp_path: Path, lost: str) -> None:
-    path, values = _tsv(data_dir, tmp_path, states=False)
+    path, values = build_tsv(data_dir, tmp_path, states=False)
     rows = path.read_text().splitlines()
     cells = rows[4].split("\t")
     head = kinect_joints.KINECT_V2_JOINTS.index("Head")
@@ -323,7 +323,7 @@ def test_tsv_lost_joint_as_nan_or_empty(data_dir: Path, tmp_path: Path, lost: st
 
 
 def test_tsv_without_column_header_names_the_first_data_line(data_dir: Path, tmp_path: Path) -> None:
-    path, _ = _tsv(data_dir, tmp_path)
+    path, _ = build_tsv(data_dir, tmp_path)
     rows = path.read_text().splitlines()
     path.write_text("\n".join(rows[:1] + rows[2:]) + "\n")
     with pytest.raises(FormatError, match=r"body\.tsv:2: no column header"):
@@ -331,7 +331,7 @@ def test_tsv_without_column_header_names_the_first_data_line(data_dir: Path, tmp
 
 
 def test_keraal_and_tsv_agree_on_the_same_frames(data_dir: Path, tmp_path: Path) -> None:
-    path, _ = _tsv(data_dir, tmp_path)
+    path, _ = build_tsv(data_dir, tmp_path)
     ref = keraal.read(next(tmp_path.glob("G3-*")))
     np.testing.assert_allclose(kinect_v2_tsv.read(path).positions, ref.positions, atol=1e-6)
 
@@ -348,7 +348,7 @@ def test_keraal_and_tsv_agree_on_the_same_frames(data_dir: Path, tmp_path: Path)
 )
 def test_tsv_clock_timestamps(data_dir: Path, tmp_path: Path, stamp, seconds) -> None:
     t = 3.2 + np.arange(40) / 30.0
-    path, values = _tsv(data_dir, tmp_path, np.array([stamp(s) for s in t]))
+    path, values = build_tsv(data_dir, tmp_path, np.array([stamp(s) for s in t]))
     rec = kinect_v2_tsv.read(path)
     assert rec.meta.extra["timestamp_unit"] == "clock"
     np.testing.assert_allclose(rec.t, t - t[0], atol=1e-6)
@@ -358,20 +358,20 @@ def test_tsv_clock_timestamps(data_dir: Path, tmp_path: Path, stamp, seconds) ->
 def test_tsv_clock_timestamps_going_back_are_refused(data_dir: Path, tmp_path: Path) -> None:
     stamps = np.array([f"00:00:{s:06.3f}" for s in np.arange(40) / 30.0])
     stamps[9] = stamps[3]
-    path, _ = _tsv(data_dir, tmp_path, stamps)
+    path, _ = build_tsv(data_dir, tmp_path, stamps)
     with pytest.raises(FormatError, match=r"body\.tsv:12: timestamp 00:00:00.100 goes back from 00:00:00.267"):
         kinect_v2_tsv.read(path)
 
 
 def test_decimal_commas_are_refused_with_a_hint(data_dir: Path, tmp_path: Path) -> None:
-    path, _ = _tsv(data_dir, tmp_path, states=False)
+    path, _ = build_tsv(data_dir, tmp_path, states=False)
     rows = path.read_text().splitlines()
     rows[3] = rows[3].replace(".", ",")
     path.write_text("\n".join(rows) + "\n")
     with pytest.raises(FormatError, match=r"body\.tsv:4: column 2 'SpineBase_X': expected a number, found '-?\d+,\d+' "
                        r"\(a decimal comma"):  # fmt: skip
         kinect_v2_tsv.read(path)
-    ut = _utkinect(data_dir, tmp_path)
+    ut = build_utkinect(data_dir, tmp_path)
     rows = _rows(ut)
     rows[2] = rows[2].replace(".", ",")
     _write(ut, rows)

@@ -20,13 +20,13 @@ from kinect_agent import cli, formats
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import amc, asf, bvh
 
-from .test_variants import _amc, _bvh
+from .test_variants import build_amc, build_bvh
 
 
 @pytest.fixture
 def cmu(data_dir: Path, tmp_path: Path) -> tuple[Path, list[bvh.Joint], np.ndarray]:
     """A 30-frame cut of CMU 13_29: (path, joints, motion (30, C))."""
-    path = _bvh(data_dir, tmp_path)
+    path = build_bvh(data_dir, tmp_path)
     lines = [(n, line.split()) for n, line in enumerate(path.read_text().splitlines(), start=1)]
     lines = [(n, tok) for n, tok in lines if tok]
     joints, pos = bvh.parse_hierarchy(path, lines)
@@ -232,7 +232,7 @@ def test_bvh_nan_in_motion_is_refused_with_its_line(cmu, tmp_path: Path) -> None
 @pytest.fixture
 def squat(data_dir: Path, tmp_path: Path) -> tuple[Path, Path]:
     """A 20-frame cut of an HDM05 squat and its ASF: (amc path, asf path)."""
-    return _amc(data_dir, tmp_path), tmp_path / "asf" / "HDM_bd.asf"
+    return build_amc(data_dir, tmp_path), tmp_path / "asf" / "HDM_bd.asf"
 
 
 def _edit_asf(path: Path, edit_line) -> None:
@@ -333,7 +333,7 @@ def test_amc_bones_in_another_order_per_frame_read_by_the_checked_path(squat) ->
     for k, frame in enumerate(frames):  # each frame its own order
         frame[1:] = frame[1:][k % 3 :] + frame[1:][: k % 3]
     path.write_bytes("\n".join(head + [line for f in frames for line in f]).encode("latin-1") + b"\n")
-    assert amc._parse_regular(path.read_text(encoding="latin-1").splitlines(), {"root": 6} | {
+    assert amc.parse_motion_fast(path.read_text(encoding="latin-1").splitlines(), {"root": 6} | {
         b.name: len(b.dof) for b in skel.bones if b.dof}) is None  # fmt: skip
     rec = amc.read(path)
     np.testing.assert_array_equal(rec.positions, clean.positions)
@@ -344,7 +344,7 @@ def test_amc_fast_path_and_checked_twin_agree(squat) -> None:
     skel = asf.read(asf_path)
     expected = {"root": len(skel.root_order)} | {b.name: len(b.dof) for b in skel.bones if b.dof}
     lines = path.read_text(encoding="latin-1").splitlines()
-    fast, checked = amc._parse_regular(lines, expected), amc._parse_checked(path, lines, expected)
+    fast, checked = amc.parse_motion_fast(lines, expected), amc.parse_motion_checked(path, lines, expected)
     assert fast is not None
     np.testing.assert_array_equal(fast[0], checked[0])
     np.testing.assert_array_equal(fast[1], checked[1])
