@@ -14,7 +14,9 @@ GZIP_MAGIC = b"\x1f\x8b"
 MAX_TEXT_BYTES = 1 << 30  # a decompressed recording larger than this (1 GiB) is refused, not read into memory
 _UTF16_BOMS = (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)
 _DECIMAL = re.compile(r"[-+]?\d*\.(\d+)")
-_LAST_FIELD = re.compile(r"[^\s,;]*$")
+_INTEGER = re.compile(r"[-+]?\d+")
+_NUMBERISH = re.compile(r"[-+.\d]|nan|inf", re.IGNORECASE)
+_FIELDS = re.compile(r"[\s,;]+")
 
 
 def read_text(path: str | Path) -> str:
@@ -57,21 +59,27 @@ def read_lines(path: str | Path) -> list[str]:
 
 
 def cut_inside_number(lines: list[str]) -> bool:
-    """True when the last line (of a file without a final line end) ends in a number with fewer decimals than the
-    last number of each of the (at least 3, at most 5) lines before it, all written with one fixed count of decimals:
-    the file was cut while that number was being written. Files whose numbers have varying decimals are not judged."""
+    """True when the last line (of a file without a final line end) ends in a number with fewer decimals than every
+    number of the (at least 3, at most 5) lines before it, all written with one fixed count of decimals (as %.6f
+    writers do): the file was cut while that number was being written. Files whose numbers have varying decimals
+    (%g, shortest round-trip, exponents) are not judged."""
     previous = [line for line in lines[-6:-1] if line.strip()]
     if len(previous) < 3 or not lines[-1].strip():
         return False
     counts = set()
     for line in previous:
-        match = _DECIMAL.fullmatch(_LAST_FIELD.search(line.rstrip()).group())
-        if match is None:
+        fields = _FIELDS.split(line.strip())
+        if _DECIMAL.fullmatch(fields[-1]) is None:
             return False
-        counts.add(len(match.group(1)))
+        for field in fields:
+            match = _DECIMAL.fullmatch(field)
+            if match is not None:
+                counts.add(len(match.group(1)))
+            elif _INTEGER.fullmatch(field) is None and _NUMBERISH.match(field):
+                return False  # an exponent, nan ...: not a fixed-decimals writer
     if len(counts) != 1:
         return False
-    last = _DECIMAL.fullmatch(_LAST_FIELD.search(lines[-1].rstrip()).group())
+    last = _DECIMAL.fullmatch(_FIELDS.split(lines[-1].strip())[-1])
     return last is None or len(last.group(1)) < counts.pop()
 
 

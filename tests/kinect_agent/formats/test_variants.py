@@ -20,6 +20,7 @@ import pytest
 from kinect_agent import cli, formats
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import keraal, kinect_v2_tsv, skeleton_csv
+from kinect_agent.formats._text import cut_inside_number
 from kinect_agent.recording import Recording
 
 UI_PRMD = "ui-prmd/Segmented Movements"
@@ -257,3 +258,16 @@ def test_cli_refuses_with_status_2_one_line_and_no_output(sample, variant: str, 
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and str(path) in err and "Traceback" not in err, err
         assert not out.parent.exists() or list(out.parent.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("last", "cut"),
+    [("4 0.400000 2.8", True), ("4 0.400000 2.", True), ("4 0.400000 -", True), ("4 0.400000 2.800000", False)],
+)
+def test_a_cut_is_told_only_in_fixed_decimals(last: str, cut: bool) -> None:
+    fixed = ["1 0.100000 2.500000", "2 0.200000 -2.600000", "3 0.300000 2.700000"]
+    assert cut_inside_number(fixed + [last]) is cut
+    varying = ["rfoot 0.1234 12.3456", "rfoot 1.2345 12.3457", "rfoot 0.12 12.3458"]  # %g: never judged
+    assert cut_inside_number(varying + [last.replace("4", "rfoot", 1)]) is False
+    exponent = ["1,0.100000,2.5e-01", "2,0.100000,2.500000", "3,0.100000,2.500000"]
+    assert cut_inside_number(exponent + [last.replace(" ", ",")]) is False
