@@ -8,8 +8,9 @@ or every joint as some exporters write): where their values follow the OFFSET (t
 than zero) they are the joint's local position and replace it, as Blender reads them; where they stay near zero
 they are a displacement added to it; values near neither are refused. Units: the thigh (hip to knee) of the first
 frame must be 0.3-0.6 m in exactly one of CMU ASF units (inches / 0.45, i.e. 0.05644 m; CMU conversions), cm,
-inches, m or mm (the ranges do not overlap); a file with no thigh or none of these is refused. Joint names: CMU,
-Mixamo (`mixamorig:` prefix), Unity, Xsens and `Left_Thigh` styles (mocap_mapping); the thigh must be found.
+inches, m or mm (the ranges do not overlap), else 0.2-0.7 m (a child, a tall adult) in exactly one of them; a file
+with no thigh, or with none or two fitting units (a 0.25 m thigh in cm is 0.64 m in inches) is refused. Joint names:
+CMU, Mixamo (`mixamorig:` prefix), Unity, Xsens and `Left_Thigh` styles (mocap_mapping); the thigh must be found.
 Output is metres in the file's world frame (y up, as BVH is; not rotated into a camera frame: in CMU 13_29 the
 subject faces +z in frame 0 with their left at +x). Plain or gzip, any line ends, BOM (formats._text).
 """
@@ -34,7 +35,8 @@ NAME = "bvh"
 DESCRIPTION = "BVH optical motion capture (CMU naming mapped to the 20 joints)"
 CMU_UNIT_M = 2.54 / 100 / 0.45  # metres per CMU ASF length unit
 UNITS_M = {"CMU units": CMU_UNIT_M, "cm": 0.01, "inches": 0.0254, "m": 1.0, "mm": 0.001}
-THIGH_RANGE_M = (0.3, 0.6)
+THIGH_RANGE_M = (0.3, 0.6)  # adults: the five units' ranges do not overlap
+THIGH_RANGE_WIDE_M = (0.2, 0.7)  # children and tall adults, when no unit gives an adult thigh: one fit needed
 _CHANNELS = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
 
 
@@ -229,12 +231,16 @@ def unit_scale(
     start = np.mean([world[0, names.index(p)] for p in hip], axis=0)
     end = np.mean([world[0, names.index(p)] for p in knee], axis=0)
     thigh = float(np.linalg.norm(end - start))
-    for unit, scale in UNITS_M.items():
-        if THIGH_RANGE_M[0] <= thigh * scale <= THIGH_RANGE_M[1]:
-            return unit, scale
     tried = ", ".join(f"{thigh * scale:.3g} m in {unit}" for unit, scale in UNITS_M.items())
+    for low, high in (THIGH_RANGE_M, THIGH_RANGE_WIDE_M):
+        fits = [unit for unit, scale in UNITS_M.items() if low <= thigh * scale <= high]
+        if len(fits) == 1:
+            return fits[0], UNITS_M[fits[0]]
+        if len(fits) > 1:
+            raise FormatError(path, f"cannot tell the length unit: the thigh {hip[0]} -> {knee[0]} is {thigh:.4g} "
+                              f"file units, {low}-{high} m in more than one unit ({tried})")  # fmt: skip
     raise FormatError(path, f"cannot tell the length unit: the thigh {hip[0]} -> {knee[0]} is {thigh:.4g} file units "
-                      f"({tried}); expected 0.3-0.6 m in one of them")  # fmt: skip
+                      f"({tried}); expected 0.3-0.6 m (0.2-0.7 m) in one of them")  # fmt: skip
 
 
 def _channels(path: Path, line_no: int, tok: list[str]) -> list[str]:

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from kinect_agent import cli, formats
+from kinect_agent import cli, formats, skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import amc, asf, bvh
 
@@ -195,7 +195,7 @@ def test_bvh_length_unit_is_found_on_each_kind(cmu, tmp_path: Path, unit: str) -
     np.testing.assert_allclose(rec.positions, clean.positions, atol=1e-8)
 
 
-@pytest.mark.parametrize("k", [0.25, 30.0])
+@pytest.mark.parametrize("k", [0.25, 13.5])  # thighs of 1.9 and 100 file units: 0.2-0.7 m in no unit
 def test_bvh_length_unit_that_no_thigh_fits_is_refused(cmu, tmp_path: Path, k: float) -> None:
     _, joints, motion = cmu
     scaled = _renamed(joints, lambda n: n)
@@ -205,6 +205,30 @@ def test_bvh_length_unit_that_no_thigh_fits_is_refused(cmu, tmp_path: Path, k: f
     _write_bvh(out, scaled, motion)
     with pytest.raises(FormatError, match=r"odd\.bvh: cannot tell the length unit: the thigh LeftUpLeg -> LeftLeg"):
         formats.read(out)
+
+
+@pytest.mark.parametrize(("unit", "thigh_m", "found"), [("m", 0.25, True), ("mm", 0.65, True), ("cm", 0.25, False)])
+def test_bvh_child_or_tall_thigh_unit_found_when_only_one_fits(cmu, tmp_path, unit: str, thigh_m: float, found) -> None:
+    path, joints, motion = cmu
+    clean = formats.read(path)
+    hip, knee = (clean.positions[0, skeleton.INDEX[j]] for j in ("HIP_L", "KNE_L"))
+    k = thigh_m / float(np.linalg.norm(knee - hip)) * bvh.CMU_UNIT_M / bvh.UNITS_M[unit]
+    scaled, moved = _renamed(joints, lambda n: n), motion.copy()
+    for joint in scaled:
+        joint.offset = joint.offset * k
+        for c, name in enumerate(joint.channels):
+            if name.endswith("position"):
+                moved[:, joint.first_channel + c] *= k
+    out = tmp_path / f"{unit}.bvh"
+    _write_bvh(out, scaled, moved)
+    if not found:  # 25 cm is a child's thigh in cm or an adult's (0.64 m) in inches
+        with pytest.raises(FormatError, match=r"cm\.bvh: cannot tell the length unit: .* in more than one unit"):
+            formats.read(out)
+        return
+    rec = formats.read(out)
+    assert rec.meta.extra["unit"] == unit
+    scale = thigh_m / float(np.linalg.norm(knee - hip))
+    np.testing.assert_allclose(rec.positions, clean.positions * scale, atol=1e-8)
 
 
 def test_bvh_with_unknown_joint_names_is_refused_listing_them(cmu, tmp_path: Path) -> None:
