@@ -218,8 +218,8 @@ def unit_scale(
     path: Path, world: np.ndarray, names: list[str], mapped: dict[str, tuple[str, ...]]
 ) -> tuple[str, float]:
     """Returns (unit name, metres per file unit): the one unit of UNITS_M in which the first frame's thigh (left,
-    else right: hip to knee) is 0.3-0.6 m. world: (T, N, 3) file units. Raises FormatError when there is no thigh or
-    no unit fits."""
+    else right: hip to knee) is 0.3-0.6 m, else 0.2-0.7 m. world: (T, N, 3) file units. Raises FormatError when there
+    is no thigh, or no unit or two units fit."""
     for side in "LR":
         hip, knee = mapped.get(f"HIP_{side}"), mapped.get(f"KNE_{side}")
         if hip and knee:
