@@ -3,7 +3,8 @@
 Every format module defines:
     NAME: str                         the name given to --format
     DESCRIPTION: str                  one line for --help
-    def sniff(path: Path, head: bytes) -> bool      True when the file looks like this format
+    def sniff(path: Path, head: bytes) -> bool      True when the file looks like this format (head: its first
+                                                    bytes as UTF-8 text, gunzipped and without a BOM)
     def read(path: Path) -> Recording               raises FormatError naming file and line
     def write(rec: Recording, path: Path) -> None   optional; writes atomically
 """
@@ -15,6 +16,7 @@ from pathlib import Path
 from types import ModuleType
 
 from kinect_agent.errors import FormatError, UnknownFormat
+from kinect_agent.formats._text import decoded_head
 from kinect_agent.recording import Recording
 
 # Detection order matters: the most specific formats first.
@@ -60,11 +62,16 @@ def detect(path: str | Path) -> ModuleType:
     path = Path(path)
     if not path.exists():
         raise FormatError(path, "no such file or directory")
-    head = b"" if path.is_dir() else _read_head(path)
+    if path.is_file() and path.stat().st_size == 0:
+        raise FormatError(path, "empty file (0 bytes): expected a recording")
+    head = b"" if path.is_dir() else decoded_head(_read_head(path))
     for module in available().values():
         if module.sniff(path, head):
             return module
-    raise UnknownFormat(path, f"format not recognised; name one with --format ({', '.join(sorted(available()))})")
+    known = ", ".join(sorted(available()))
+    if b"\0" in head:
+        raise UnknownFormat(path, f"binary data that is not a recording in a known format ({known})")
+    raise UnknownFormat(path, f"format not recognised; name one with --format ({known})")
 
 
 def read(path: str | Path, format: str | None = None) -> Recording:
@@ -73,6 +80,8 @@ def read(path: str | Path, format: str | None = None) -> Recording:
     module = get(format) if format else detect(path)
     if not path.exists():
         raise FormatError(path, "no such file or directory")
+    if path.is_file() and path.stat().st_size == 0:
+        raise FormatError(path, "empty file (0 bytes): expected a recording")
     rec = module.read(path)
     rec.meta.source = rec.meta.source or str(path)
     return rec

@@ -22,11 +22,14 @@ import numpy as np
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import asf, mocap_mapping
+from kinect_agent.formats._rows import is_number, number_hint
+from kinect_agent.formats._text import read_lines
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "amc"
 DESCRIPTION = "Acclaim AMC motion + ASF skeleton (HDM05, CMU; asf/ folder or beside the .amc)"
 DEFAULT_RATE_HZ = 120.0
+THIGH_RANGE_M = (0.25, 0.7)  # hip to knee; outside it the ASF's `:units length` does not fit the bone lengths
 _RATE_RE = re.compile(r"_(\d+)$")
 _KEYWORDS = (b":FULLY-SPECIFIED", b":DEGREES", b":RADIANS")
 
@@ -65,14 +68,13 @@ def read(path: Path, asf_path: Path | None = None) -> Recording:
     path = Path(path)
     skel = asf.read(asf_path or find_asf(path))
     frame_numbers, root, dof_values, degrees = parse_motion(path, skel)
-    if degrees is not None:
-        skel.degrees = degrees
-    world = asf.forward_kinematics(skel, root, dof_values)
+    world = asf.forward_kinematics(skel, root, dof_values, motion_degrees=degrees)
     names = list(world)
     scale = skel.metres_per_unit
     positions = np.full((root.shape[0], skeleton.J, 3), np.nan)
     for ours, parts in mocap_mapping.resolve(names).items():
         positions[:, skeleton.INDEX[ours]] = np.mean([world[p] for p in parts], axis=0) * scale
+    _check_thigh(skel, positions[0])
     match = _RATE_RE.search(path.stem)
     rate = float(match.group(1)) if match and 0 < int(match.group(1)) <= 10000 else DEFAULT_RATE_HZ
     stem = path.stem.split("_")
@@ -103,30 +105,93 @@ def parse_motion(path: Path, skel: asf.Skeleton) -> tuple[np.ndarray, np.ndarray
 
     Every frame must give the root and every bone that has a dof, once each, with the ASF's number of values;
     frame numbers must increase. The degrees flag is True/False from :DEGREES/:RADIANS, None when absent.
+    A file whose frames all list the bones in one order is read by a fast path; any other file, or one the fast
+    path finds wrong, by the checked twin, which reads the same values or names the line of the error.
     """
     expected = {"root": len(skel.root_order)} | {b.name: len(b.dof) for b in skel.bones if b.dof}
+    lines = read_lines(path)
+    return parse_motion_fast(lines, expected) or parse_motion_checked(path, lines, expected)
+
+
+def parse_motion_fast(
+    lines: list[str], expected: dict[str, int]
+) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], bool | None] | None:
+    """The fast path of parse_motion: None unless every frame lists each expected bone once, in the first frame's
+    order, with the right number of finite values, and frame numbers increase."""
+    frames: list[int] = []
+    order: list[str] | None = None
+    current: list[str] = []
+    flat: list[str] = []
+    degrees: bool | None = None
+    for line in lines:
+        tok = line.split()
+        if not tok or tok[0][0] == "#":
+            continue
+        first = tok[0]
+        if first[0] == ":":
+            degrees = True if first.upper() == ":DEGREES" else False if first.upper() == ":RADIANS" else degrees
+            continue
+        if len(tok) == 1:
+            if not first.isdigit() or (frames and current != order and order is not None):
+                return None
+            order = current if order is None and frames else order
+            frames.append(int(first))
+            current = []
+            continue
+        if not frames or expected.get(first, -1) != len(tok) - 1:
+            return None
+        current.append(first)
+        flat.extend(tok[1:])
+    if not frames or (order is not None and current != order):
+        return None
+    order = current if order is None else order
+    if sorted(order) != sorted(expected) or len(set(order)) != len(order) or np.any(np.diff(frames) <= 0):
+        return None
+    try:
+        values = np.array(flat, dtype=np.float64).reshape(len(frames), -1)
+    except ValueError:
+        return None
+    if not np.all(np.isfinite(values)):
+        return None
+    columns, start = {}, 0
+    for name in order:
+        columns[name] = values[:, start : start + expected[name]]
+        start += expected[name]
+    root = columns.pop("root")
+    return np.array(frames, dtype=np.float64), root, columns, degrees
+
+
+def parse_motion_checked(
+    path: Path, lines: list[str], expected: dict[str, int]
+) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], bool | None]:
+    """The checked twin of parse_motion_fast: reads bones in any order per frame; FormatError names the line."""
     frames: list[int] = []
     values: dict[str, list[list[float]]] = {name: [] for name in expected}
     seen: set[str] = set()
     degrees: bool | None = None
     frame_line = 0
-    with open(path, encoding="utf-8", errors="replace") as f:
-        for line_no, line in enumerate(f, start=1):
-            tok = line.split()
-            if not tok or tok[0].startswith("#"):
-                continue
-            if tok[0].startswith(":"):
-                degrees = True if tok[0].upper() == ":DEGREES" else False if tok[0].upper() == ":RADIANS" else degrees
-                continue
-            if len(tok) == 1 and tok[0].isdigit():
-                _check_complete(path, expected, seen, frames, frame_line)
-                number = int(tok[0])
-                if frames and number <= frames[-1]:
-                    raise FormatError(path, f"frame number {number} after {frames[-1]}: numbers must increase", line_no)
-                frames.append(number)
-                seen, frame_line = set(), line_no
-                continue
+    last = max((i for i, line in enumerate(lines) if line.strip()), default=-1) + 1
+    for line_no, line in enumerate(lines, start=1):
+        tok = line.split()
+        if not tok or tok[0].startswith("#"):
+            continue
+        if tok[0].startswith(":"):
+            degrees = True if tok[0].upper() == ":DEGREES" else False if tok[0].upper() == ":RADIANS" else degrees
+            continue
+        if len(tok) == 1 and tok[0].isdigit():
+            _check_complete(path, expected, seen, frames, frame_line)
+            number = int(tok[0])
+            if frames and number <= frames[-1]:
+                raise FormatError(path, f"frame number {number} after {frames[-1]}: numbers must increase", line_no)
+            frames.append(number)
+            seen, frame_line = set(), line_no
+            continue
+        try:
             _bone_line(path, line_no, tok, expected, seen, values, bool(frames))
+        except FormatError as exc:
+            if line_no == last:
+                raise FormatError(path, f"{exc.message} (file truncated?)", line_no) from None
+            raise
     if not frames:
         raise FormatError(path, "no frames: expected a frame number line followed by bone lines")
     _check_complete(path, expected, seen, frames, frame_line, last=True)
@@ -150,7 +215,9 @@ def _bone_line(
     try:
         row = [float(c) for c in tok[1:]]
     except ValueError:
-        raise FormatError(path, f"bone {name!r}: expected numbers, found {' '.join(tok[1:])!r}", line_no) from None
+        hint = number_hint(next(c for c in tok[1:] if not is_number(c)))
+        message = f"bone {name!r}: expected numbers, found {' '.join(tok[1:])!r}{hint}"
+        raise FormatError(path, message, line_no) from None
     if not all(np.isfinite(row)):
         raise FormatError(path, f"bone {name!r}: values must be finite", line_no)
     seen.add(name)
@@ -167,3 +234,17 @@ def _check_complete(
         hint = " (file truncated?)" if last else ""
         shown = ", ".join(missing[:5]) + (" ..." if len(missing) > 5 else "")
         raise FormatError(path, f"frame {frames[-1]} lacks bone(s) {shown}{hint}", frame_line)
+
+
+def _check_thigh(skel: asf.Skeleton, frame: np.ndarray) -> None:
+    """Refuses a skeleton whose thigh (hip to knee, first frame) is not 0.25-0.7 m: its `:units length` does not
+    give metres. A skeleton without hip and knee keeps its declared unit unchecked. frame: (20, 3) metres."""
+    thighs = [frame[skeleton.INDEX[f"KNE_{s}"]] - frame[skeleton.INDEX[f"HIP_{s}"]] for s in "LR"]
+    lengths = [float(np.linalg.norm(d)) for d in thighs if np.all(np.isfinite(d))]
+    if not lengths:
+        return
+    thigh = max(lengths)
+    if not THIGH_RANGE_M[0] <= thigh <= THIGH_RANGE_M[1]:
+        raise FormatError(skel.path, f"the thigh is {thigh:.3g} m with ':units length {skel.length_unit:g}' (metres = "
+                          f"file units x 0.0254 / {skel.length_unit:g}); expected {THIGH_RANGE_M[0]}-"
+                          f"{THIGH_RANGE_M[1]} m: check the :units length line")  # fmt: skip

@@ -9,7 +9,9 @@ Conventions (Acclaim spec, as in the CMU and HDM05 tools):
     R_world_bone = R_world_parent · C · M · C⁻¹;  end_bone = start_bone + length · R_world_bone · direction.
     The root bone's start is the AMC root translation, its R_world = C_root · M_root · C_root⁻¹.
 Units: lengths in file units; metres = units × (0.0254 / `:units length`) (HDM05 and CMU: length 0.45, i.e.
-0.05644 m per unit, lengths stored as inches × 0.45); angles in degrees unless `:units angle rad`.
+0.05644 m per unit, lengths stored as inches × 0.45); angles in degrees unless `:units angle rad`, which holds for
+the ASF's own angles (bone axes, root orientation) and for the AMC values unless the AMC says :DEGREES / :RADIANS.
+Plain or gzip, any line ends, BOM, Latin-1 comments (formats._text).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import numpy as np
 
 from kinect_agent.errors import FormatError
 from kinect_agent.formats._rows import parse_floats
+from kinect_agent.formats._text import read_lines
 from kinect_agent.processing.rotations import euler
 
 INCH_M = 0.0254
@@ -29,12 +32,13 @@ _AXES = "XYZ"
 
 @dataclass
 class Bone:
-    """One ASF bone: direction (3,) unit, parent frame at rest; length in file units; dof like ["rx", "rz"]."""
+    """One ASF bone: direction (3,) unit, parent frame at rest; length in file units; axis (3,) angles in the ASF's
+    angle unit, composed in axis_order; dof like ["rx", "rz"]."""
 
     name: str
     direction: np.ndarray
     length: float
-    axis_deg: np.ndarray
+    axis: np.ndarray
     axis_order: str
     dof: list[str] = field(default_factory=list)
     parent: int = -1  # index into Skeleton.bones; -1 = the root
@@ -66,11 +70,7 @@ class Skeleton:
 def read(path: str | Path) -> Skeleton:
     """Parses an ASF file; raises FormatError naming the file, line and what was expected."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8", errors="replace")
-    except OSError as exc:
-        raise FormatError(path, f"cannot read the ASF skeleton: {exc.strerror}") from None
-    lines = [(n, line.split()) for n, line in enumerate(text.splitlines(), start=1)]
+    lines = [(n, line.split()) for n, line in enumerate(read_lines(path), start=1)]
     lines = [(n, tok) for n, tok in lines if tok and not tok[0].startswith("#")]
     skel = Skeleton(path)
     bones: dict[str, Bone] = {}
@@ -142,7 +142,7 @@ def _bone_field(bone: Bone, path: Path, line_no: int, tok: list[str]) -> None:
     elif key == "length":
         bone.length = parse_floats(path, line_no, tok[1:], 1, "bone length")[0]
     elif key == "axis":
-        bone.axis_deg = parse_floats(path, line_no, tok[1:4], 3, "axis angles")
+        bone.axis = parse_floats(path, line_no, tok[1:4], 3, "axis angles")
         bone.axis_order = _order_token(path, line_no, tok[4:5])
     elif key == "dof":
         dof = [t.lower() for t in tok[1:]]
@@ -184,15 +184,19 @@ def _order(path: Path, bones: dict[str, Bone], children: list[tuple[int, str, li
     return ordered
 
 
-def forward_kinematics(skel: Skeleton, root: np.ndarray, dof_values: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+def forward_kinematics(
+    skel: Skeleton, root: np.ndarray, dof_values: dict[str, np.ndarray], motion_degrees: bool | None = None
+) -> dict[str, np.ndarray]:
     """Returns the world position of every bone's start and end, file units, ASF world frame.
 
-    root: (T, 6) float, the root channels in skel.root_order (file units, degrees or radians per skel.degrees).
-    dof_values: bone name -> (T, len(bone.dof)) float in the bone's dof order; bones without dof may be absent.
+    root: (T, 6) float, the root channels in skel.root_order (file units; angles in degrees or radians per
+    motion_degrees, or skel.degrees when it is None). dof_values: bone name -> (T, len(bone.dof)) float in the bone's
+    dof order, same angle unit; bones without dof may be absent. The ASF's own angles follow skel.degrees.
     returns: {"root": (T, 3), "<bone>": (T, 3) start of the bone, "<bone>_End": (T, 3) end of the bone}.
     """
     T = root.shape[0]
-    to_rad = np.pi / 180.0 if skel.degrees else 1.0
+    to_rad = np.pi / 180.0 if (skel.degrees if motion_degrees is None else motion_degrees) else 1.0
+    asf_to_rad = np.pi / 180.0 if skel.degrees else 1.0
     translation = np.broadcast_to(skel.root_position, (T, 3)).copy()
     rot = np.zeros((T, 3))
     for k, channel in enumerate(skel.root_order):
@@ -200,7 +204,7 @@ def forward_kinematics(skel: Skeleton, root: np.ndarray, dof_values: dict[str, n
         target[:, _AXES.index(channel[1])] = root[:, k] * (1.0 if channel[0] == "T" else to_rad)
     rot_order = "".join(c[1] for c in skel.root_order if c[0] == "R") or "XYZ"
     rot = rot[:, [_AXES.index(a) for a in rot_order]]
-    C_root = euler(np.radians(skel.root_orientation)[[_AXES.index(a) for a in skel.root_axis_order]],
+    C_root = euler((skel.root_orientation * asf_to_rad)[[_AXES.index(a) for a in skel.root_axis_order]],
                    skel.root_axis_order)  # fmt: skip
     R_root = C_root @ euler(rot, rot_order) @ C_root.T
     out = {"root": translation}
@@ -209,7 +213,7 @@ def forward_kinematics(skel: Skeleton, root: np.ndarray, dof_values: dict[str, n
     for bone in skel.bones:
         R_parent = R_root if bone.parent < 0 else R_world[bone.parent]
         start = translation if bone.parent < 0 else ends[bone.parent]
-        C = euler(np.radians(bone.axis_deg)[[_AXES.index(a) for a in bone.axis_order]], bone.axis_order)
+        C = euler((bone.axis * asf_to_rad)[[_AXES.index(a) for a in bone.axis_order]], bone.axis_order)
         M = _motion_rotation(bone, dof_values.get(bone.name), T, to_rad)
         R = R_parent @ (C @ M @ C.T)
         end = start + bone.length * (R @ bone.direction)

@@ -3,10 +3,16 @@
 HIERARCHY: ROOT/JOINT/End Site blocks with OFFSET (file units, parent frame) and CHANNELS (any order
 of X/Y/Zposition and X/Y/Zrotation, degrees). MOTION: `Frames: N`, `Frame Time: s`, then N rows.
 Rotations compose intrinsically in the listed order: R_parent_joint = R(c1) @ R(c2) @ R(c3).
-Forward kinematics is vectorised over frames and loops over joints only. Units: CMU conversions use
-the ASF length unit (inches / 0.45, i.e. 0.05644 m); a file whose thigh would be implausible in that
-unit is tried as cm, inches, m, mm. Output is metres in the file's world frame (y up, as BVH is; not
-rotated into a camera frame: in CMU 13_29 the subject faces +z in frame 0 with their left at +x).
+Forward kinematics is vectorised over frames and loops over joints only. Position channels on a joint (the root,
+or every joint as some exporters write): where their values follow the OFFSET (their median is nearer the OFFSET
+than zero) they are the joint's local position and replace it, as Blender reads them; where they stay near zero
+they are a displacement added to it; values near neither are refused. Units: the thigh (hip to knee) of the first
+frame must be 0.3-0.6 m in exactly one of CMU ASF units (inches / 0.45, i.e. 0.05644 m; CMU conversions), cm,
+inches, m or mm (the ranges do not overlap), else 0.2-0.7 m (a child, a tall adult) in exactly one of them; a file
+with no thigh, or with none or two fitting units (a 0.25 m thigh in cm is 0.64 m in inches) is refused. Joint names:
+CMU, Mixamo (`mixamorig:` prefix), Unity, Xsens and `Left_Thigh` styles (mocap_mapping); the thigh must be found.
+Output is metres in the file's world frame (y up, as BVH is; not rotated into a camera frame: in CMU 13_29 the
+subject faces +z in frame 0 with their left at +x). Plain or gzip, any line ends, BOM (formats._text).
 """
 
 from __future__ import annotations
@@ -21,12 +27,16 @@ from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import mocap_mapping
 from kinect_agent.formats._rows import parse_floats
+from kinect_agent.formats._text import read_lines
 from kinect_agent.processing.rotations import axis_rotation
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "bvh"
 DESCRIPTION = "BVH optical motion capture (CMU naming mapped to the 20 joints)"
 CMU_UNIT_M = 2.54 / 100 / 0.45  # metres per CMU ASF length unit
+UNITS_M = {"CMU units": CMU_UNIT_M, "cm": 0.01, "inches": 0.0254, "m": 1.0, "mm": 0.001}
+THIGH_RANGE_M = (0.3, 0.6)  # adults: the five units' ranges do not overlap
+THIGH_RANGE_WIDE_M = (0.2, 0.7)  # children and tall adults, when no unit gives an adult thigh: one fit needed
 _CHANNELS = ("Xposition", "Yposition", "Zposition", "Xrotation", "Yrotation", "Zrotation")
 
 
@@ -49,19 +59,23 @@ def sniff(path: Path, head: bytes) -> bool:
 def read(path: Path) -> Recording:
     """Reads a BVH file into a 20-joint Recording (metres, y up); raises FormatError naming the line."""
     path = Path(path)
-    with open(path, encoding="utf-8", errors="replace") as f:
-        lines = [(n, line.split()) for n, line in enumerate(f, start=1)]
+    lines = [(n, line.split()) for n, line in enumerate(read_lines(path), start=1)]
     lines = [(n, tok) for n, tok in lines if tok]
     joints, pos = parse_hierarchy(path, lines)
     rate_hz, motion = parse_motion(path, lines, pos, sum(len(j.channels) for j in joints))
+    position_kind = position_channels(path, joints, motion)
     world = forward_kinematics(joints, motion)
     names = [j.name for j in joints]
-    scale = unit_scale(joints, world, names)
+    mapped = mocap_mapping.resolve(names)
+    unit, scale = unit_scale(path, world, names, mapped)
     positions = np.full((motion.shape[0], skeleton.J, 3), np.nan)
-    for ours, parts in mocap_mapping.resolve(names).items():
+    for ours, parts in mapped.items():
         positions[:, skeleton.INDEX[ours]] = np.mean([world[:, names.index(p)] for p in parts], axis=0) * scale
     meta = Metadata(device="mocap", rate_hz=rate_hz, source=str(path), subject=path.stem.split("_")[0])
-    meta.extra.update(bvh_joints=len([j for j in joints if not j.name.endswith("_End")]), unit_m=scale)
+    meta.extra.update(bvh_joints=len([j for j in joints if not j.name.endswith("_End")]), unit_m=scale, unit=unit)
+    meta.extra["unmapped_joints"] = [j for j in skeleton.JOINTS if j not in mapped]
+    if position_kind:
+        meta.extra["position_channels"] = position_kind
     segments = path.with_name(f"{path.stem}_segments_from_mocap6.csv")
     if segments.is_file():
         with open(segments, encoding="utf-8", newline="") as f:
@@ -137,8 +151,39 @@ def parse_motion(path: Path, lines: list[tuple[int, list[str]]], pos: int, n_cha
         raise FormatError(path, f"more rows than 'Frames: {n_frames}' announces", rows[n_frames][0])
     motion = np.empty((n_frames, n_channels))
     for i, (line_no, tok) in enumerate(rows):
+        if i == n_frames - 1 and len(tok) < n_channels:
+            raise FormatError(path, f"expected {n_channels} channel values (frame {i}), found {len(tok)} (file "
+                              "truncated?)", line_no)  # fmt: skip
         motion[i] = parse_floats(path, line_no, tok, n_channels, f"channel values (frame {i})")
     return 1.0 / frame_time, motion
+
+
+def position_channels(path: Path, joints: list[Joint], motion: np.ndarray) -> dict[str, str]:
+    """Makes the position channels of every joint a displacement from its OFFSET, in place in `motion`: values that
+    follow the OFFSET (the joint's local position, as exporters writing positions on every joint do) have it
+    subtracted. Returns {joint: "local position" | "displacement"} for joints whose OFFSET is not zero.
+
+    motion: (T, C) channel values in file order, file units. Raises FormatError when the values are near neither."""
+    kinds: dict[str, str] = {}
+    for joint in joints:
+        cols = [(joint.first_channel + c, "XYZ".index(n[0])) for c, n in enumerate(joint.channels) if "position" in n]
+        size = float(np.linalg.norm(joint.offset))
+        if not cols or size == 0.0:
+            continue
+        values = motion[:, [c for c, _ in cols]]
+        offset = joint.offset[[a for _, a in cols]]
+        to_offset = float(np.median(np.linalg.norm(values - offset, axis=-1)))
+        to_zero = float(np.median(np.linalg.norm(values, axis=-1)))
+        if min(to_offset, to_zero) > 0.5 * size and joint.parent >= 0:
+            raise FormatError(path, f"position channels of joint {joint.name!r} are neither its OFFSET "
+                              f"({size:.4g} file units) nor a displacement from it (median distance {to_offset:.4g} "
+                              f"and {to_zero:.4g})")  # fmt: skip
+        if to_offset < to_zero:
+            motion[:, [c for c, _ in cols]] -= offset
+            kinds[joint.name] = "local position"
+        else:
+            kinds[joint.name] = "displacement"
+    return kinds
 
 
 def forward_kinematics(joints: list[Joint], motion: np.ndarray) -> np.ndarray:
@@ -169,17 +214,33 @@ def forward_kinematics(joints: list[Joint], motion: np.ndarray) -> np.ndarray:
     return world
 
 
-def unit_scale(joints: list[Joint], world: np.ndarray, names: list[str]) -> float:
-    """Returns metres per file unit: CMU units if the first frame's thigh is 0.3-0.6 m in them, else cm."""
-    mapped = mocap_mapping.resolve(names)
-    if "HIP_L" in mapped and "KNE_L" in mapped:
-        hip = np.mean([world[0, names.index(p)] for p in mapped["HIP_L"]], axis=0)
-        knee = np.mean([world[0, names.index(p)] for p in mapped["KNE_L"]], axis=0)
-        thigh = float(np.linalg.norm(knee - hip))
-        for scale in (CMU_UNIT_M, 0.01, 0.0254, 1.0, 0.001):
-            if 0.3 <= thigh * scale <= 0.6:
-                return scale
-    return CMU_UNIT_M
+def unit_scale(
+    path: Path, world: np.ndarray, names: list[str], mapped: dict[str, tuple[str, ...]]
+) -> tuple[str, float]:
+    """Returns (unit name, metres per file unit): the one unit of UNITS_M in which the first frame's thigh (left,
+    else right: hip to knee) is 0.3-0.6 m, else 0.2-0.7 m. world: (T, N, 3) file units. Raises FormatError when there
+    is no thigh, or no unit or two units fit."""
+    for side in "LR":
+        hip, knee = mapped.get(f"HIP_{side}"), mapped.get(f"KNE_{side}")
+        if hip and knee:
+            break
+    else:
+        shown = ", ".join(n for n in names if not n.endswith("_End"))
+        raise FormatError(path, "cannot tell the length unit: no hip and knee joints found (expected names such as "
+                          f"LeftUpLeg and LeftLeg, Left_Thigh and Left_Shin); joints in the file: {shown}")  # fmt: skip
+    start = np.mean([world[0, names.index(p)] for p in hip], axis=0)
+    end = np.mean([world[0, names.index(p)] for p in knee], axis=0)
+    thigh = float(np.linalg.norm(end - start))
+    tried = ", ".join(f"{thigh * scale:.3g} m in {unit}" for unit, scale in UNITS_M.items())
+    for low, high in (THIGH_RANGE_M, THIGH_RANGE_WIDE_M):
+        fits = [unit for unit, scale in UNITS_M.items() if low <= thigh * scale <= high]
+        if len(fits) == 1:
+            return fits[0], UNITS_M[fits[0]]
+        if len(fits) > 1:
+            raise FormatError(path, f"cannot tell the length unit: the thigh {hip[0]} -> {knee[0]} is {thigh:.4g} "
+                              f"file units, {low}-{high} m in more than one unit ({tried})")  # fmt: skip
+    raise FormatError(path, f"cannot tell the length unit: the thigh {hip[0]} -> {knee[0]} is {thigh:.4g} file units "
+                      f"({tried}); expected 0.3-0.6 m (0.2-0.7 m) in one of them")  # fmt: skip
 
 
 def _channels(path: Path, line_no: int, tok: list[str]) -> list[str]:

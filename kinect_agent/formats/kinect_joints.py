@@ -13,7 +13,8 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
-from kinect_agent.formats._rows import is_number
+from kinect_agent.formats._rows import is_number, number_hint
+from kinect_agent.formats._text import read_lines
 
 KINECT_V1_JOINTS: tuple[str, ...] = (
     "HipCenter", "Spine", "ShoulderCenter", "Head",
@@ -87,27 +88,30 @@ def to_skeleton(
 def read_numeric_rows(path: Path, n_fields: int) -> tuple[np.ndarray, list[int], list[str]]:
     """Reads a whitespace-separated text file of numbers, `n_fields` per non-blank line.
 
-    returns: values (N, n_fields) float64, the 1-based line number of each row, and each row's raw text
-    (stripped). Raises FormatError naming the file and line on a wrong field count or a non-number.
+    returns: values (N, n_fields) float64 (nan allowed: a lost value), the 1-based line number of each row, and
+    each row's raw text (fields joined by one space). Plain or gzip, any line ends, BOM (formats._text). Raises
+    FormatError naming the file and line on a wrong field count or a non-number.
     """
     rows, line_numbers, texts = [], [], []
-    with open(path, encoding="utf-8", errors="replace") as f:
-        for line_no, line in enumerate(f, start=1):
-            cells = line.split()
-            if not cells:
-                continue
-            if len(cells) != n_fields:
-                raise FormatError(
-                    path, f"expected {n_fields} whitespace-separated numbers, found {len(cells)}", line_no
-                )
-            try:
-                values = [float(c) for c in cells]
-            except ValueError:
-                bad = next(i for i, c in enumerate(cells) if not is_number(c))
-                raise FormatError(path, f"field {bad + 1}: expected a number, found {cells[bad]!r}", line_no) from None
-            rows.append(values)
-            line_numbers.append(line_no)
-            texts.append(" ".join(cells))
+    lines = read_lines(path)
+    last = max((i for i, line in enumerate(lines) if line.strip()), default=-1)
+    for i, line in enumerate(lines):
+        cells = line.split()
+        if not cells:
+            continue
+        if len(cells) != n_fields:
+            hint = " (file truncated?)" if i == last and len(cells) < n_fields else ""
+            message = f"expected {n_fields} whitespace-separated numbers, found {len(cells)}{hint}"
+            raise FormatError(path, message, i + 1)
+        try:
+            values = [float(c) for c in cells]
+        except ValueError:
+            bad = next(k for k, c in enumerate(cells) if not is_number(c))
+            message = f"field {bad + 1}: expected a number, found {cells[bad]!r}{number_hint(cells[bad])}"
+            raise FormatError(path, message, i + 1) from None
+        rows.append(values)
+        line_numbers.append(i + 1)
+        texts.append(" ".join(cells))
     if not rows:
         raise FormatError(path, f"no frames: expected lines of {n_fields} numbers")
     return np.array(rows, dtype=np.float64), line_numbers, texts

@@ -9,21 +9,29 @@ No file of this layout is in ../shared/data (KERAAL's Kinect files are headerles
     1250000<TAB>0.0123<TAB>-0.31<TAB>2.05<TAB>Tracked<TAB>...
 
 The header block may also be `key<TAB>value` lines without `#` (FrameID, SensorID, Date recording, Floor,
-processing_steps ...), as some recorders write it; keys are kept lower-case without spaces ("daterecording").
+processing_steps ...), as some recorders write it; keys are kept lower-case without spaces ("daterecording"), a
+value of several cells joined by spaces.
 
 Columns: `Timestamp` first; `<Joint>_X|_Y|_Z` (metres, Kinect camera space, y up) for joints named as the SDK's
 JointType (kinect_joints.KINECT_V2_JOINTS); optional `<Joint>_State` / `<Joint>_TrackingState`
 (Tracked / Inferred / NotTracked, or 2 / 1 / 0); other columns without a joint suffix (BodyIndex, TrackingId,
 orientations `<Joint>_QX`...) are ignored and listed in meta.extra["ignored_columns"]. The 20 joints our
-skeleton uses must be present (Neck, hand tips and thumbs may be absent). An empty cell = not tracked.
-Timestamp unit: `TimestampUnit: s|ms|us|ticks` in the header or a column named `Timestamp[ms]`/`Timestamp_ms`,
-else inferred from the median step (seconds, milliseconds or 100 ns SDK ticks for 5-120 Hz). Timestamps must
-strictly increase; t starts at 0 and the first raw stamp goes to meta.extra["start_timestamp"].
+skeleton uses must be present (Neck, hand tips and thumbs may be absent). An empty cell or nan = not tracked;
+trailing tabs after the last column are ignored. Plain or gzip, UTF-8 (BOM or not) or UTF-16, any line ends.
+Timestamps may be clock times, as a .NET TimeSpan (`00:01:02.1234567`, the SDK's RelativeTime written with
+ToString()) or an ISO 8601 date and time (`2025-03-14T10:22:05.123`): meta.extra["timestamp_unit"] = "clock".
+Timestamp unit of numbers: `TimestampUnit: s|ms|us|ticks` in the header or a column named `Timestamp[ms]`,
+`Timestamp_ms`, `Time (s)`, else inferred from the median step: the one unit of s, ms, us or 100 ns SDK ticks that
+gives 5-120 Hz; a step that fits none or two (e.g. 100000: 100 Hz in ticks or 10 Hz in us) is refused.
+Timestamps must strictly increase; a row repeating the row before exactly (a frame written twice) is dropped
+(meta.extra["dropped_duplicate_rows"]). t starts at 0 and the first raw stamp goes to meta.extra["start_timestamp"].
 """
 
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
+from datetime import datetime
 from pathlib import Path
 
 import numpy as np
@@ -32,63 +40,68 @@ from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import kinect_joints
 from kinect_agent.formats._atomic import atomic_open
+from kinect_agent.formats._rows import is_number, number_hint
+from kinect_agent.formats._text import read_lines
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "kinect_v2_tsv"
 DESCRIPTION = "Kinect v2 tab-separated export (header block, Timestamp, <Joint>_X/_Y/_Z[/_State] columns)"
 UNITS_S = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ticks": 1e-7}
+_UNIT_NAMES = {"sec": "s", "seconds": "s", "msec": "ms", "milliseconds": "ms", "µs": "us", "microseconds": "us",
+               "100ns": "ticks", "tick": "ticks"}  # fmt: skip
 _STATES = {"tracked": 2, "inferred": 1, "nottracked": 0, "not_tracked": 0, "2": 2, "1": 1, "0": 0}
 _COLUMN = re.compile(r"^(?P<joint>[A-Za-z]+)_(?P<field>X|Y|Z|State|TrackingState)$", re.IGNORECASE)
-_TIME = re.compile(r"^(timestamp|time)(?:[\[_( ](?P<unit>s|ms|us|ticks)[\])]?)?$", re.IGNORECASE)
+_TIME = re.compile(r"^(timestamp|time|relativetime)(?:\s*[\[_(]?\s*(?P<unit>[a-zµ0-9]+)\s*[\])]?)?$", re.IGNORECASE)
 _RATE_RANGE_HZ = (5.0, 120.0)
+_TIMESPAN = re.compile(r"(?:(\d+)\.)?(\d{1,2}):(\d{2}):(\d{2}(?:\.\d+)?)")  # [d.]hh:mm:ss[.fffffff]
 _V2_INDEX = {name.lower(): i for i, name in enumerate(kinect_joints.KINECT_V2_JOINTS)}
 _NEEDED = sorted(set(kinect_joints.source_indices("kinect2").tolist()))
 
 
 def sniff(path: Path, head: bytes) -> bool:
-    """True when the first line after the header block is tab separated and starts with Timestamp."""
+    """True when a line of the head is the column header: tab separated, starting with Timestamp."""
     if b"\0" in head:
         return False
-    for line in head.decode("utf-8", "replace").splitlines():
-        if _is_header_line(line):
-            continue
-        cells = line.rstrip("\r\n").split("\t")
-        return len(cells) > 3 and _TIME.match(cells[0].strip()) is not None
-    return False
+    return any(_is_column_header(line) for line in head.decode("utf-8", "replace").splitlines())
 
 
-def _is_header_line(line: str) -> bool:
-    """True for a line of the header block: blank, `# ...`, or `key<TAB>value` (at most two cells, not Timestamp)."""
-    cells = line.rstrip("\r\n").split("\t")
-    if line.startswith("#") or not line.strip():
-        return True
-    return len(cells) <= 2 and _TIME.match(cells[0].strip()) is None
+def _is_column_header(line: str) -> bool:
+    """True for the line of column names: more than 3 tab-separated cells, the first Timestamp (or Time ...)."""
+    cells = line.split("\t")
+    return len(cells) > 3 and _TIME.match(cells[0].strip()) is not None
 
 
 def read(path: Path) -> Recording:
     """Reads a Kinect v2 TSV export into a kinect2 Recording; FormatError names file, line and expectation."""
     path = Path(path)
-    with open(path, encoding="utf-8", errors="replace") as f:
-        lines = list(enumerate(f, start=1))
+    lines = list(enumerate(read_lines(path), start=1))
     header, pos = _header_block(lines)
-    if pos >= len(lines):
-        raise FormatError(path, "no column header: expected a tab-separated line starting with 'Timestamp'")
+    if pos >= len(lines) or not _is_column_header(lines[pos][1]):
+        where = lines[pos][0] if pos < len(lines) else None
+        raise FormatError(path, "no column header: expected a tab-separated line starting with 'Timestamp' before "
+                          "the data", where)  # fmt: skip
     header_no, header_line = lines[pos]
-    names = [c.strip() for c in header_line.rstrip("\r\n").split("\t")]
+    names = [c.strip() for c in header_line.split("\t")]
+    while len(names) > 1 and not names[-1]:
+        names.pop()  # a trailing tab after the last column name
     time_match = _TIME.match(names[0])
-    if time_match is None:
-        raise FormatError(path, f"first column must be 'Timestamp', found {names[0]!r}", header_no)
     columns, ignored = _columns(path, header_no, names)
-    stamps, xyz, state, row_lines = _rows(path, lines[pos + 1 :], names, columns)
-    unit = _unit(path, header, time_match.group("unit"), stamps, row_lines)
-    t = (stamps - stamps[0]) * UNITS_S[unit]
+    rows = _rows(path, lines[pos + 1 :], names, columns)
+    xyz, state = rows.xyz, rows.state
+    if rows.clock:
+        unit, t = "clock", rows.stamps
+    else:
+        unit = _unit(path, header, time_match.group("unit"), rows.stamps, rows.row_lines, header_no)
+        t = (rows.stamps - rows.stamps[0]) * UNITS_S[unit]
     xyz[state == 0] = np.nan
     state[~np.all(np.isfinite(xyz), axis=-1)] = 0
     positions, out_state = kinect_joints.to_skeleton(xyz, "kinect2", state)
     meta = Metadata(device="kinect2", source=str(path), subject=header.get("subject"), exercise=header.get("exercise"))
     rate = header.get("framerate") or header.get("rate")
     meta.rate_hz = _float_or_none(rate) or (float(1.0 / np.median(np.diff(t))) if len(t) > 1 else None)
-    meta.extra.update(header=header, ignored_columns=ignored, start_timestamp=float(stamps[0]), timestamp_unit=unit)
+    start = rows.first_stamp if rows.clock else float(rows.stamps[0])
+    meta.extra.update(header=header, ignored_columns=ignored, start_timestamp=start, timestamp_unit=unit)
+    meta.extra["dropped_duplicate_rows"] = rows.dropped
     return Recording(t, positions, out_state, meta)
 
 
@@ -111,18 +124,21 @@ def write(rec: Recording, path: str | Path) -> None:
 
 
 def _header_block(lines: list[tuple[int, str]]) -> tuple[dict[str, str], int]:
-    """Returns ({lower-case key: value} of the `# key: value` and `key<TAB>value` lines, index of the first line
-    after the block)."""
+    """Returns ({lower-case key: value} of the `# key: value` and `key<TAB>value[<TAB>value ...]` lines before the
+    column header, index of the column header line (len(lines) when there is none)."""
     header: dict[str, str] = {}
     pos = 0
-    while pos < len(lines) and _is_header_line(lines[pos][1]):
-        text = lines[pos][1].rstrip("\r\n")
+    while pos < len(lines) and not _is_column_header(lines[pos][1]):
+        text = lines[pos][1]
+        cells = text.split("\t")
+        if not text.startswith("#") and len(cells) > 3 and is_number(cells[0]):
+            break  # a data row: the column header is missing
         if text.startswith("#"):
             key, sep, value = text.lstrip("#").partition(":")
         else:
             key, sep, value = text.partition("\t")
         if sep and key.strip():
-            header[key.strip().lower().replace(" ", "")] = value.strip()
+            header[key.strip().lower().replace(" ", "")] = " ".join(value.split())
         pos += 1
     return header, pos
 
@@ -155,73 +171,159 @@ def _columns(path: Path, line_no: int, names: list[str]) -> tuple[dict[tuple[int
     return columns, ignored
 
 
-def _rows(
-    path: Path, lines: list[tuple[int, str]], names: list[str], columns: dict[tuple[int, str], int]
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[int]]:
-    """Returns stamps (T,), xyz (T, 25, 3) metres (NaN = empty), state (T, 25) int8, and each row's line number."""
-    n = len(names)
-    stamps, xyz_rows, state_rows, row_lines = [], [], [], []
+@dataclass
+class _Rows:
+    """The data rows of an export: stamps (T,) as written (clock: seconds from the first), xyz (T, 25, 3) metres
+    (NaN = empty or nan), state (T, 25) int8, each row's line number, and the rows dropped as exact repeats of the
+    row before (a recorder writing one frame twice)."""
+
+    stamps: np.ndarray
+    clock: bool
+    first_stamp: str
+    xyz: np.ndarray
+    state: np.ndarray
+    row_lines: list[int]
+    dropped: int
+
+
+def _rows(path: Path, lines: list[tuple[int, str]], names: list[str], columns: dict[tuple[int, str], int]) -> _Rows:
+    """Reads the data rows; FormatError names the line of a bad one."""
     content = [(no, line) for no, line in lines if line.strip()]
-    for k, (line_no, line) in enumerate(content):
-        cells = line.rstrip("\r\n").split("\t")
-        if len(cells) != n:
-            hint = " (file truncated?)" if k == len(content) - 1 and len(cells) < n else ""
-            raise FormatError(path, f"expected {n} tab-separated fields as in the header, found {len(cells)}{hint}",
-                              line_no)  # fmt: skip
-        stamp = _number(path, line_no, cells, 0, names, allow_empty=False)
-        if stamps and stamp <= stamps[-1]:
-            word = "repeats" if stamp == stamps[-1] else "goes back from"
-            raise FormatError(path, f"timestamp {cells[0].strip()} {word} {stamps[-1]:g}: timestamps must strictly "
-                              "increase", line_no)  # fmt: skip
-        xyz = np.full((25, 3), np.nan)
-        state = np.full(25, 2, dtype=np.int8)
-        for (j, field), c in columns.items():
-            if field == "state":
-                text = cells[c].strip().lower()
-                if text not in _STATES:
-                    raise FormatError(path, f"column {c + 1} {names[c]!r}: expected Tracked, Inferred, NotTracked or "
-                                      f"2/1/0, found {cells[c].strip()!r}", line_no)  # fmt: skip
-                state[j] = _STATES[text]
-            else:
-                xyz[j, "xyz".index(field)] = _number(path, line_no, cells, c, names, allow_empty=True)
-        stamps.append(stamp)
-        xyz_rows.append(xyz)
-        state_rows.append(state)
-        row_lines.append(line_no)
-    if not stamps:
+    if not content:
         raise FormatError(path, "no frames after the column header", lines[0][0] if lines else None)
-    return np.array(stamps), np.array(xyz_rows), np.array(state_rows), row_lines
+    table, row_lines, dropped = [], [], 0
+    for k, (line_no, line) in enumerate(content):
+        cells = _cells(path, line_no, line, len(names), last=k == len(content) - 1)
+        if table and cells[0].strip() == table[-1][0].strip():
+            if cells == table[-1]:
+                dropped += 1
+                continue
+            raise FormatError(path, f"timestamp {cells[0].strip()} repeats the row before with other values: "
+                              "timestamps must strictly increase", line_no)  # fmt: skip
+        table.append(cells)
+        row_lines.append(line_no)
+    stamps = _clock_seconds(table)
+    clock = stamps is not None
+    if stamps is None:
+        stamps = _numbers(path, table, [0], names, row_lines, allow_empty=False)[:, 0]
+    back = np.flatnonzero(np.diff(stamps) <= 0)
+    if back.size:
+        i = int(back[0]) + 1
+        word = "repeats" if stamps[i] == stamps[i - 1] else "goes back from"
+        raise FormatError(path, f"timestamp {table[i][0].strip()} {word} {table[i - 1][0].strip()}: timestamps must "
+                          "strictly increase", row_lines[i])  # fmt: skip
+    coords = [(j, "xyz".index(field), c) for (j, field), c in columns.items() if field != "state"]
+    xyz = np.full((len(table), 25, 3), np.nan)
+    values = _numbers(path, table, [c for _, _, c in coords], names, row_lines, allow_empty=True)
+    xyz[:, [j for j, _, _ in coords], [a for _, a, _ in coords]] = values
+    state = np.full((len(table), 25), 2, dtype=np.int8)
+    for (j, field), c in columns.items():
+        if field == "state":
+            state[:, j] = _states(path, table, c, names, row_lines)
+    return _Rows(stamps, clock, table[0][0].strip(), xyz, state, row_lines, dropped)
 
 
-def _number(path: Path, line_no: int, cells: list[str], c: int, names: list[str], *, allow_empty: bool) -> float:
-    text = cells[c].strip()
-    if not text and allow_empty:
-        return float("nan")
+def _clock_seconds(table: list[list[str]]) -> np.ndarray | None:
+    """Returns the stamps (T,) as seconds from the first when every stamp is a clock time: a .NET TimeSpan as Kinect
+    SDK exporters write RelativeTime ([d.]hh:mm:ss[.fffffff]) or an ISO 8601 date and time; None otherwise (numbers,
+    or anything else, left to _numbers)."""
+    first = table[0][0].strip()
+    if ":" not in first:
+        return None
+    if _TIMESPAN.fullmatch(first):
+        parts = [_TIMESPAN.fullmatch(row[0].strip()) for row in table]
+        if not all(parts):
+            return None
+        fields = (p.groups() for p in parts)
+        seconds = [86400 * int(d or 0) + 3600 * int(h) + 60 * int(m) + float(s) for d, h, m, s in fields]
+        return np.array(seconds) - seconds[0]
     try:
-        value = float(text)
+        times = [datetime.fromisoformat(row[0].strip()) for row in table]
+        return np.array([(t - times[0]).total_seconds() for t in times])
+    except (ValueError, TypeError):  # not ISO 8601, or naive and aware times mixed
+        return None
+
+
+def _cells(path: Path, line_no: int, line: str, n: int, *, last: bool) -> list[str]:
+    """Returns the n tab-separated cells of a row; empty cells after the n-th (trailing tabs) are dropped."""
+    cells = line.split("\t")
+    if len(cells) > n and not "".join(cells[n:]).strip():
+        cells = cells[:n]
+    if len(cells) != n:
+        hint = " (file truncated?)" if last and len(cells) < n else ""
+        raise FormatError(path, f"expected {n} tab-separated fields as in the header, found {len(cells)}{hint}",
+                          line_no)  # fmt: skip
+    return cells
+
+
+def _numbers(
+    path: Path, table: list[list[str]], cols: list[int], names: list[str], row_lines: list[int], *, allow_empty: bool
+) -> np.ndarray:
+    """Returns (T, len(cols)) float: the cells as numbers; empty cells and nan are NaN when allow_empty, else (and
+    for any other text or infinity) FormatError naming the line and column."""
+    try:
+        flat = [float(row[c]) if row[c].strip() or not allow_empty else np.nan for row in table for c in cols]
+        values = np.array(flat, dtype=np.float64).reshape(len(table), len(cols))
     except ValueError:
-        value = float("nan")
-    if not np.isfinite(value):
-        raise FormatError(path, f"column {c + 1} {names[c]!r}: expected a number, found {text!r}", line_no)
-    return value
+        values = None
+    if values is not None:
+        bad = ~np.isfinite(values) & ~(np.isnan(values) if allow_empty else False)
+        if not bad.any():
+            return values
+    for i, row in enumerate(table):  # the slow twin, to name the first bad cell
+        for c in cols:
+            text = row[c].strip()
+            if allow_empty and (not text or text.lower() == "nan"):
+                continue
+            try:
+                value = float(text)
+            except ValueError:
+                value = np.nan
+            if not np.isfinite(value):
+                hint = " (file truncated?)" if i == len(table) - 1 else ""
+                hint = number_hint(text) + hint
+                raise FormatError(path, f"column {c + 1} {names[c]!r}: expected a number, found {text!r}{hint}",
+                                  row_lines[i])  # fmt: skip
+    raise AssertionError("a bad cell was found above")
 
 
-def _unit(path: Path, header: dict[str, str], column_unit: str | None, stamps: np.ndarray, row_lines: list[int]) -> str:
-    """Returns the timestamp unit (a key of UNITS_S): header, column name, or the one giving 5-120 Hz steps."""
+def _states(path: Path, table: list[list[str]], c: int, names: list[str], row_lines: list[int]) -> list[int]:
+    """Returns the tracking states (T,) 0/1/2 of column c; FormatError names the line of a value not in _STATES."""
+    try:
+        return [_STATES[row[c].strip().lower()] for row in table]
+    except KeyError:
+        i = next(i for i, row in enumerate(table) if row[c].strip().lower() not in _STATES)
+        hint = " (file truncated?)" if i == len(table) - 1 else ""
+        raise FormatError(path, f"column {c + 1} {names[c]!r}: expected Tracked, Inferred, NotTracked or 2/1/0, "
+                          f"found {table[i][c].strip()!r}{hint}", row_lines[i]) from None  # fmt: skip
+
+
+def _unit(
+    path: Path,
+    header: dict[str, str],
+    column_unit: str | None,
+    stamps: np.ndarray,
+    row_lines: list[int],
+    header_no: int,
+) -> str:
+    """Returns the timestamp unit (a key of UNITS_S): from the header, the column name, or else the one unit whose
+    median step gives 5-120 Hz; refuses a file where no unit or more than one does (say it with TimestampUnit)."""
     named = (header.get("timestampunit") or column_unit or "").lower()
     if named:
+        named = _UNIT_NAMES.get(named, named)
         if named not in UNITS_S:
-            raise FormatError(path, f"timestamp unit {named!r}: expected one of {', '.join(UNITS_S)}")
+            raise FormatError(path, f"timestamp unit {named!r}: expected one of {', '.join(UNITS_S)}", header_no)
         return named
     if len(stamps) < 2:
         return "s"
     step = float(np.median(np.diff(stamps)))
-    for unit in ("s", "ms", "ticks"):
-        scale = UNITS_S[unit]
-        if _RATE_RANGE_HZ[0] <= 1.0 / (step * scale) <= _RATE_RANGE_HZ[1]:
-            return unit
-    raise FormatError(path, f"cannot tell the timestamp unit from the median step {step:g}; add a header line "
-                      "'# TimestampUnit: s|ms|us|ticks'", row_lines[1])  # fmt: skip
+    fits = [unit for unit, scale in UNITS_S.items() if _RATE_RANGE_HZ[0] <= 1.0 / (step * scale) <= _RATE_RANGE_HZ[1]]
+    if len(fits) == 1:
+        return fits[0]
+    rates = ", ".join(f"{1.0 / (step * UNITS_S[u]):.3g} Hz in {u}" for u in (fits or UNITS_S))
+    why = "fits more than one unit" if fits else "fits no unit between 5 and 120 Hz"
+    raise FormatError(path, f"cannot tell the timestamp unit: the median step {step:g} {why} ({rates}); add a "
+                      "header line '# TimestampUnit: s|ms|us|ticks'", row_lines[1])  # fmt: skip
 
 
 def _float_or_none(text: str | None) -> float | None:

@@ -20,9 +20,19 @@ Acclaim ASF bone names (lowercase; a name is the bone's start, `<bone>_End` its 
 lowerback, NECK lowerneck (top of thorax), HEAD head (top of upperneck), SHO lhumerus, ELB lradius, WRI lhand
 (ASF forearms are lradius + lwrist: lradius alone is only ~0.17 m in HDM05), HAN lfingers, HIP lfemur, KNE ltibia,
 ANK lfoot, FOO ltoes.
+
+Other sources name joints otherwise. A namespace (`mixamorig:Hips`, `Armature|Hips`) is dropped first. A joint the
+CMU names do not find is then looked up by its words, side apart (`Left_Thigh`, `LeftThigh`, `Thigh_L`, `L_Thigh`,
+`thigh_l` are all (L, "thigh")), in ALIASES: Mixamo and MotionBuilder (LeftUpLeg, LeftLeg, LeftArm, LeftForeArm,
+Spine1 ...), Unity/VRM humanoid (LeftUpperLeg, LeftLowerLeg, LeftUpperArm, LeftLowerArm), Biovision's sample
+(LeftUpArm, LeftLowArm, LeftLowLeg), Xsens MVN (LeftHip, LeftKnee, LeftAnkle, LeftShoulder = gleno-humeral joint,
+LeftElbow, LeftWrist), thigh/shin/calf style. Earlier names of a list win, so a clavicle named LeftShoulder is used as
+the shoulder only where no upper-arm joint exists (Xsens).
 """
 
 from __future__ import annotations
+
+import re
 
 CMU_TO_OURS: dict[str, tuple[str, ...]] = {
     "ROOT": ("Hips", "mid:LHipJoint_End+RHipJoint_End", "root"),
@@ -48,18 +58,81 @@ CMU_TO_OURS: dict[str, tuple[str, ...]] = {
 }
 
 
-def resolve(names: list[str]) -> dict[str, tuple[str, ...]]:
-    """Returns, for each of our joints, the CMU joint names whose mean gives its position.
+# Our joint -> candidate (side-free) word keys, first present wins; "<key>/end" is the End Site of that joint.
+ALIASES: dict[str, tuple[str, ...]] = {
+    "ROOT": ("hips", "pelvis", "hip"),
+    "SPINE": ("spine", "chest", "spine1"),
+    "NECK": ("neck", "neck1", "upperchest"),
+    "HEAD": ("head",),
+    "SHO": ("arm", "upperarm", "uparm", "humerus", "shoulder"),
+    "ELB": ("forearm", "lowerarm", "lowarm", "elbow"),
+    "WRI": ("hand", "wrist"),
+    "HAN": ("handindex1", "index1", "handmiddle1", "middle1", "fingerbase", "hand/end", "wrist/end"),
+    "HIP": ("upleg", "upperleg", "thigh", "hip"),
+    "KNE": ("leg", "lowerleg", "lowleg", "shin", "calf", "knee"),
+    "ANK": ("foot", "ankle"),
+    "FOO": ("toebase", "toe", "toes", "ball", "foot/end", "ankle/end"),
+}
+_WORDS = re.compile(r"[A-Z]+(?![a-z])|[A-Z]?[a-z]+|\d+")
+_SIDES = {"left": "L", "l": "L", "right": "R", "r": "R"}
 
-    names: the joint (and `<parent>_End`) names present in a file. A joint without any candidate is
-    left out (the reader marks it not tracked).
+
+def base_name(name: str) -> str:
+    """Returns a joint name without its namespace: `mixamorig:LeftArm` -> `LeftArm`, `Armature|Hips` -> `Hips`."""
+    return re.split(r"[:|]", name)[-1]
+
+
+def word_key(name: str) -> tuple[str, str] | None:
+    """Returns (side "L", "R" or "", key) of a joint name: `Left_Thigh` -> ("L", "thigh"), `mixamorig:Spine1` ->
+    ("", "spine1"), `LeftFoot_End` -> ("L", "foot/end"); None when it has no words."""
+    name = base_name(name)
+    end = name.endswith("_End")
+    words = [w.lower() for w in _WORDS.findall(name[:-4] if end else name)]
+    side = ""
+    if len(words) > 1 and words[0] in _SIDES:
+        side, words = _SIDES[words[0]], words[1:]
+    elif len(words) > 1 and words[-1] in _SIDES:
+        side, words = _SIDES[words[-1]], words[:-1]
+    if not words:
+        return None
+    return side, "".join(words) + ("/end" if end else "")
+
+
+def resolve(names: list[str]) -> dict[str, tuple[str, ...]]:
+    """Returns, for each of our joints, the names (as in `names`) of the file's joints whose mean gives its position.
+
+    names: the joint (and `<parent>_End`) names present in a file. CMU names first (namespace dropped), then ALIASES
+    for the joints still missing. A joint without any candidate is left out (the reader marks it not tracked).
     """
-    present = set(names)
+    present: dict[str, str] = {}
+    for name in names:
+        present.setdefault(base_name(name), name)
     found: dict[str, tuple[str, ...]] = {}
     for ours, candidates in CMU_TO_OURS.items():
         for cand in candidates:
             parts = tuple(cand[4:].split("+")) if cand.startswith("mid:") else (cand,)
             if all(p in present for p in parts):
-                found[ours] = parts
+                found[ours] = tuple(present[p] for p in parts)
+                break
+    if len(found) < len(CMU_TO_OURS):
+        found.update(_by_words(names, exclude=set(found)))
+    return found
+
+
+def _by_words(names: list[str], exclude: set[str]) -> dict[str, tuple[str, ...]]:
+    """Returns {our joint: (name,)} found through ALIASES for our joints not in `exclude`."""
+    keyed: dict[tuple[str, str], str] = {}
+    for name in names:
+        key = word_key(name)
+        if key is not None:
+            keyed.setdefault(key, name)
+    found: dict[str, tuple[str, ...]] = {}
+    for ours in CMU_TO_OURS:
+        if ours in exclude:
+            continue
+        side = ours[-1] if ours[-2:] in ("_L", "_R") else ""
+        for alias in ALIASES[ours[:3] if side else ours]:
+            if (side, alias) in keyed:
+                found[ours] = (keyed[(side, alias)],)
                 break
     return found

@@ -278,6 +278,17 @@ def _angle_sd_names(header: dict, specs: list[tuple[str, int, Metadata]], max_de
     return names
 
 
+def _magic_hint(data: bytes) -> str:
+    """Says what a file without the magic most likely is, when it can tell."""
+    if data.startswith(b"\x1f\x8b"):
+        return ": gzip data; send the .khs file itself, not compressed"
+    if data.startswith((b"\x89KHS\r\r\n", b"\x89KHS\n")):
+        return ": its line ends were converted (a text-mode transfer); copy the file as binary"
+    if data.startswith(b"\xef\xbb\xbf") or data[:8].isascii():
+        return ": text, not a session file (kinect-agent convert makes one from a recording)"
+    return ""
+
+
 def _check_envelope(data: bytes) -> tuple[int, int]:
     """Checks magic, version, length and checksum; returns the version and the JSON header length in bytes."""
     if len(data) < len(MAGIC):
@@ -285,7 +296,7 @@ def _check_envelope(data: bytes) -> tuple[int, int]:
             raise SessionFileError("truncated", f"file is {len(data)} bytes, shorter than the magic")
         raise SessionFileError("bad_magic", f"expected magic {MAGIC!r}, found {data[:8]!r}")
     if not data.startswith(MAGIC):
-        raise SessionFileError("bad_magic", f"expected magic {MAGIC!r}, found {data[:8]!r}")
+        raise SessionFileError("bad_magic", f"expected magic {MAGIC!r}, found {data[:8]!r}{_magic_hint(data)}")
     if len(data) < _FIXED.size + _DIGEST:
         raise SessionFileError("truncated", f"file is {len(data)} bytes, less than the {_FIXED.size + _DIGEST} minimum")
     _, version, _, header_len, total = _FIXED.unpack_from(data)

@@ -1,8 +1,8 @@
 """Skeleton CSV, the interchange format (spec: ../shared/reference/README.md).
 
 One row per frame: `time` (s), then `<JOINT>_x,<JOINT>_y,<JOINT>_z` (m, y up) for the 20 joints;
-an empty cell means not tracked. Optional `<JOINT>_state` columns (0/1/2) may follow. Columns that
-are not joint columns are ignored; a joint column naming an unknown joint is an error.
+an empty cell (or nan, as numpy and R write it) means not tracked. Optional `<JOINT>_state` columns (0/1/2) may
+follow. Columns that are not joint columns are ignored; a joint column naming an unknown joint is an error.
 
 The file is plain CSV, header first, so spreadsheets and pandas' defaults read it. The recording's metadata
 (device, exercise, rate, history ...) goes to a sidecar `<name>.meta.json` beside it (`out.csv` ->
@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 import re
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,7 @@ import numpy as np
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats._atomic import atomic_open
+from kinect_agent.formats._text import read_lines
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "csv"
@@ -43,22 +45,33 @@ def sniff(path: Path, head: bytes) -> bool:
     for line in head.decode("utf-8", "replace").splitlines():
         if line.startswith("#") or not line.strip():
             continue
-        cells = [c.strip() for c in line.split(",")]
+        cells = [c.strip().strip('"') for c in line.split(",")]
         return cells[0].lower() == "time" and "ROOT_x" in cells
     return False
 
 
 def read(path: Path) -> Recording:
-    """Reads a Skeleton CSV file; raises FormatError naming the line and cell that is wrong."""
+    """Reads a Skeleton CSV file; raises FormatError naming the line and cell that is wrong.
+
+    A row repeating the row before exactly (a frame written twice) is dropped (meta.extra["dropped_duplicate_rows"]);
+    a repeated time with other values is refused."""
     meta = _read_sidecar(Path(path))
-    with open(path, encoding="utf-8") as f:
-        lines = _numbered_lines(f, path, meta)
-        try:
-            line_no, head = next(lines)
-        except StopIteration:
-            raise FormatError(path, "empty file: expected a header line starting with 'time'") from None
-        columns = _parse_header(path, line_no, head)
-        rows = [_parse_row(path, n, cells, columns) for n, cells in lines]
+    lines = _numbered_lines(read_lines(path), path, meta)
+    first = next(lines, None)
+    if first is None:
+        raise FormatError(path, "empty file: expected a header line starting with 'time'")
+    columns = _parse_header(path, *first)
+    rows, dropped, previous = [], 0, None
+    for line_no, cells in lines:
+        if len(cells) != columns["n"]:
+            cells = _fit_width(path, line_no, cells, columns["n"], lines)
+        if cells == previous:
+            dropped += 1
+            continue
+        previous = cells
+        rows.append(_parse_row(path, line_no, cells, columns))
+    if dropped:
+        meta.extra["dropped_duplicate_rows"] = dropped
     if not rows:
         raise FormatError(path, "no frames after the header")
     t = np.array([r[0] for r in rows])
@@ -100,16 +113,16 @@ def _read_sidecar(path: Path) -> Metadata:
     if not side.is_file():
         return meta
     try:
-        loaded = Metadata.from_dict(json.loads(side.read_text(encoding="utf-8")))
+        loaded = Metadata.from_dict(json.loads(side.read_text(encoding="utf-8-sig")))
     except (ValueError, TypeError, UnicodeDecodeError) as exc:
         raise FormatError(side, f"unreadable metadata sidecar of {path.name}: {exc}") from None
     loaded.source = str(path)
     return loaded
 
 
-def _numbered_lines(f, path: Path, meta: Metadata):
+def _numbered_lines(lines: list[str], path: Path, meta: Metadata):
     """Yields (line number, cells) for non-empty, non-comment lines; reads `# meta:` lines into meta."""
-    for line_no, line in enumerate(f, start=1):
+    for line_no, line in enumerate(lines, start=1):
         if line.startswith("#"):
             if line.startswith(META_PREFIX):
                 try:
@@ -120,13 +133,16 @@ def _numbered_lines(f, path: Path, meta: Metadata):
                 meta.__dict__.update(loaded.__dict__)
             continue
         if line.strip():
-            yield line_no, line.rstrip("\r\n").split(",")
+            yield line_no, line.split(",")
 
 
 def _parse_header(path: Path, line_no: int, cells: list[str]) -> dict:
-    names = [c.strip() for c in cells]
+    names = [c.strip().strip('"') for c in cells]  # spreadsheets may quote the names
+    while len(names) > 1 and not names[-1]:
+        names.pop()  # a trailing comma after the last column name
     if names[0].lower() != "time":
-        raise FormatError(path, f"first column must be 'time', found {names[0]!r}", line_no)
+        hint = "; the file is separated by ';' or tabs, expected commas" if ";" in names[0] or "\t" in names[0] else ""
+        raise FormatError(path, f"first column must be 'time', found {names[0][:40]!r}{hint}", line_no)
     coord_index = np.full((skeleton.J, 3), -1)
     state_index = np.full(skeleton.J, -1)
     for col, name in enumerate(names[1:], start=1):
@@ -150,16 +166,25 @@ def _parse_header(path: Path, line_no: int, cells: list[str]) -> dict:
     return {"n": len(names), "coords": coord_index.ravel(), "state": state_index if has_state else None}
 
 
+def _fit_width(path: Path, line_no: int, cells: list[str], n: int, rest: Iterator) -> list[str]:
+    """Returns the row's n cells: empty cells after the n-th (a trailing comma) are dropped; FormatError otherwise
+    (rest: the rows after this one, to tell whether it is the last)."""
+    if len(cells) > n and not "".join(cells[n:]).strip():
+        cells = cells[:n]
+    if len(cells) != n:
+        hint = " (file truncated?)" if len(cells) < n and next(rest, None) is None else ""
+        raise FormatError(path, f"expected {n} columns as in the header, found {len(cells)}{hint}", line_no)
+    return cells
+
+
 def _parse_row(path: Path, line_no: int, cells: list[str], columns: dict):
-    if len(cells) != columns["n"]:
-        raise FormatError(path, f"expected {columns['n']} columns as in the header, found {len(cells)}", line_no)
     t = _number(path, line_no, 1, cells[0], "time", allow_empty=False)
     coords = [_number(path, line_no, c + 1, cells[c], "coordinate") for c in columns["coords"]]
     state = None
     if columns["state"] is not None:
         state = []
         for c in columns["state"]:
-            cell = cells[c].strip()
+            cell = cells[c].strip().strip('"')
             if cell not in ("0", "1", "2", ""):
                 raise FormatError(path, f"column {c + 1}: state must be 0, 1 or 2, found {cell!r}", line_no)
             state.append(int(cell or 0))
@@ -167,18 +192,23 @@ def _parse_row(path: Path, line_no: int, cells: list[str], columns: dict):
 
 
 def _number(path: Path, line_no: int, col: int, cell: str, what: str, allow_empty: bool = True) -> float:
-    cell = cell.strip()
-    if not cell:
+    """Returns the cell's finite number; NaN for an empty cell or nan when allow_empty; FormatError otherwise."""
+    try:
+        value = float(cell)  # float() strips the blanks around the number itself
+    except ValueError:
+        cell = cell.strip()
+        if len(cell) > 2 and cell[0] == cell[-1] == '"':  # a quoted number, as some spreadsheets write every cell
+            return _number(path, line_no, col, cell[1:-1], what, allow_empty)
+        if cell:
+            raise FormatError(path, f"column {col}: expected a number for {what}, found {cell!r}", line_no) from None
         if allow_empty:
             return math.nan
-        raise FormatError(path, f"column {col}: {what} is empty", line_no)
-    try:
-        value = float(cell)
-    except ValueError:
-        raise FormatError(path, f"column {col}: expected a number for {what}, found {cell!r}", line_no) from None
-    if not math.isfinite(value):
-        raise FormatError(path, f"column {col}: {what} must be finite, found {cell!r}", line_no)
-    return value
+        raise FormatError(path, f"column {col}: {what} is empty", line_no) from None
+    if value - value == 0.0:  # finite: the common case first
+        return value
+    if value != value and allow_empty:
+        return math.nan  # written by numpy / R for a lost joint, as an empty cell is
+    raise FormatError(path, f"column {col}: {what} must be finite, found {cell.strip()!r}", line_no)
 
 
 def _check_times(path: Path, t: np.ndarray, line_numbers: list[int]) -> None:

@@ -17,7 +17,6 @@ Rate: 100 Hz (the UI-PRMD paper's Vicon rate; not in the files), meta.extra["rat
 
 from __future__ import annotations
 
-import gzip
 import re
 import warnings
 from pathlib import Path
@@ -59,12 +58,8 @@ def sniff(path: Path, head: bytes) -> bool:
     """True for a UI-PRMD positions file (by name) whose first row has 117 columns (Kinect files have 66)."""
     if path.is_dir() or not _NAME_RE.match(path.name):
         return False
-    try:
-        opener = gzip.open if path.name.endswith(".gz") else open
-        with opener(path, "rt", encoding="ascii", errors="replace") as f:
-            return len(f.readline().split(",")) == N_COLUMNS
-    except (OSError, EOFError):
-        return False
+    first = next((line for line in head.decode("utf-8", "replace").splitlines() if line.strip()), "")
+    return len(first.split(",")) == N_COLUMNS
 
 
 def read(path: Path) -> Recording:

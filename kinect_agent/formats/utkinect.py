@@ -5,7 +5,8 @@ space, y up) in SDK v1 order, whitespace separated. Frame ids have gaps (kept as
 and repeated ids: exact duplicate lines are dropped, and a repeated id with different data keeps its first
 line (the count goes to meta.extra["dropped_duplicate_frames"]). `actionLabel.txt` beside the file gives
 action intervals in frame ids, put into meta.extra["actions"]; an action marked `NaN NaN` (it did not happen in that
-sequence) is left out and named in meta.extra["actions_not_performed"].
+sequence) is left out and named in meta.extra["actions_not_performed"]; one with a single NaN (start or end unknown)
+is left out and named in meta.extra["actions_without_span"]. A missing joint may be written nan (not tracked).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import numpy as np
 
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import kinect_joints
+from kinect_agent.formats._text import read_lines
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "utkinect"
@@ -53,7 +55,9 @@ def read(path: Path) -> Recording:
     meta.extra["first_frame_id"] = int(frame_ids[keep[0]])
     labels = _actions(path.parent / "actionLabel.txt", meta.extra.get("sequence"))
     if labels is not None:
-        meta.extra["actions"], meta.extra["actions_not_performed"] = labels
+        meta.extra["actions"], meta.extra["actions_not_performed"], without_span = labels
+        if without_span:
+            meta.extra["actions_without_span"] = without_span
     return Recording(frame_ids[keep] / RATE_HZ, positions, state, meta)
 
 
@@ -77,31 +81,32 @@ def _first_of_each_frame(
     return np.array(keep), exact, conflicting
 
 
-def _actions(label_path: Path, sequence: str | None) -> tuple[dict[str, list[int]], list[str]] | None:
-    """Returns ({action: [start id, end id]}, [actions marked NaN NaN]) for `sequence` from actionLabel.txt, or
-    None when absent."""
+def _actions(label_path: Path, sequence: str | None) -> tuple[dict[str, list[int]], list[str], list[str]] | None:
+    """Returns ({action: [start id, end id]}, [actions marked NaN NaN], [actions with one NaN]) for `sequence` from
+    actionLabel.txt, or None when absent."""
     if sequence is None or not label_path.is_file():
         return None
     actions: dict[str, list[int]] | None = None
     not_performed: list[str] = []
-    with open(label_path, encoding="utf-8", errors="replace") as f:
-        for line_no, line in enumerate(f, start=1):
-            text = line.strip()
-            if not text:
-                continue
-            if ":" not in text:
-                if actions is not None:
-                    break
-                if text.lower() == sequence:
-                    actions = {}
-                continue
+    without_span: list[str] = []
+    for line_no, line in enumerate(read_lines(label_path), start=1):
+        text = line.strip()
+        if not text:
+            continue
+        if ":" not in text:
             if actions is not None:
-                name, _, span = text.partition(":")
-                numbers = span.split()
-                if [n.lower() for n in numbers] == ["nan", "nan"]:
-                    not_performed.append(name.strip())
-                    continue
-                if len(numbers) != 2 or not all(n.lstrip("-").isdigit() for n in numbers):
-                    raise FormatError(label_path, f"expected 'action: start end', found {text!r}", line_no)
-                actions[name.strip()] = [int(n) for n in numbers]
-    return None if actions is None else (actions, not_performed)
+                break
+            if text.lower() == sequence:
+                actions = {}
+            continue
+        if actions is not None:
+            name, _, span = text.partition(":")
+            numbers = span.split()
+            nans = [n.lower() == "nan" for n in numbers]
+            if len(numbers) == 2 and any(nans):
+                (not_performed if all(nans) else without_span).append(name.strip())
+                continue
+            if len(numbers) != 2 or not all(n.lstrip("+-").isdigit() for n in numbers):
+                raise FormatError(label_path, f"expected 'action: start end', found {text!r}", line_no)
+            actions[name.strip()] = [int(n) for n in numbers]
+    return None if actions is None else (actions, not_performed, without_span)

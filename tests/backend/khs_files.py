@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import codecs
+import gzip
 import hashlib
 import json
 import lzma
@@ -213,5 +215,11 @@ DEFECTS = {
     "no_frames": (_no_frames, "no_frames: recording 'raw' has 0 frames"),
     "zlib_bomb": (_zlib_bomb, "too_large: a block decodes to more than"),
     "empty_body": (lambda d: b"", "bad_magic: "),
+    "gzipped": (lambda d: gzip.compress(d), "bad_magic: expected magic"),
+    "line_ends_converted_to_crlf": (lambda d: d.replace(b"\n", b"\r\n"), "bad_magic: expected magic"),
+    "line_ends_converted_to_lf": (lambda d: d.replace(b"\r\n", b"\n"), "bad_magic: expected magic"),
+    "utf8_bom_before": (lambda d: codecs.BOM_UTF8 + d, "bad_magic: expected magic"),
+    "skeleton_csv_sent_as_khs": (lambda d: b"time,ROOT_x,ROOT_y,ROOT_z\n0.0,0.1,0.2,2.0\n", "bad_magic: "),
+    "random_bytes": (lambda d: np.random.default_rng(7).bytes(4096), "bad_magic: "),
     "session_id_not_uuid": (_not_uuid, "bad_header: session_id 'abc' is not a UUID"),
 }

@@ -160,6 +160,26 @@ def test_bad_magic():
     expect("bad_magic", b"garbage garbage garbage garbage garbage garbage garbage")
 
 
+@pytest.mark.parametrize(
+    ("edit", "words"),
+    [
+        (lambda d: __import__("gzip").compress(d), "gzip data; send the .khs file itself"),
+        (lambda d: d.replace(b"\n", b"\r\n"), "line ends were converted"),
+        (lambda d: d.replace(b"\r\n", b"\n"), "line ends were converted"),
+        (lambda d: b"\xef\xbb\xbftime,ROOT_x\n0,1\n", "text, not a session file"),
+    ],
+    ids=["gzipped", "crlf", "lf", "csv_with_bom"],
+)
+def test_bad_magic_says_what_the_file_most_likely_is(rng, tmp_path, edit, words):
+    path = tmp_path / "s.khs"
+    path.write_bytes(edit(sf.encode(small_payload(rng))))
+    with pytest.raises(sf.SessionFileError) as info:
+        formats.read(path, "session")
+    assert info.value.code == "bad_magic" and words in str(info.value) and str(path) in str(info.value)
+    out = tmp_path / "o.csv"
+    assert cli.main(["convert", str(path), "-o", str(out)]) == 2 and not out.exists()
+
+
 def test_truncated(rng):
     data = sf.encode(small_payload(rng))
     expect("truncated", data[: len(data) // 2])

@@ -81,7 +81,7 @@ def test_minimal_file_without_state_columns_marks_empty_cells_untracked(tmp_path
     [
         (lambda rows: rows[:2] + [rows[2][: len(rows[2]) // 2]], "expected 61 columns", 4),
         (lambda rows: rows[:2] + [rows[2].replace("0.1", "abc", 1)], "expected a number", 4),
-        (lambda rows: rows[:2] + [rows[1]], "duplicate time stamp", 4),
+        (lambda rows: rows[:2] + [rows[1].replace("0.1", "0.2")], "duplicate time stamp", 4),
         (lambda rows: [rows[0], rows[2], rows[1]], "decreasing time stamp", 4),
         (lambda rows: [rows[0].replace("HEAD_x", "NOSE_x")] + rows[1:], "unknown joint 'NOSE'", 2),
         (lambda rows: rows[:1], "no frames", None),
