@@ -21,12 +21,17 @@ Definition. A repetition is one excursion of a defining angle away from its rest
        the repetition starts at the last frame (ends at the first frame) whose e is within onset_frac·A of that
        stretch's minimum; excursions shorter than min_duration_s are dropped.
    Amplitude = e at the peak minus the mean rest e just before and just after (degrees); peak = the smoothed
-   angle at the peak (degrees). Side = "left"/"right" from the angle's _L/_R suffix, "center" otherwise.
+   angle at the peak (degrees). Side = "left"/"right" from the angle's _L/_R suffix, "center" otherwise. Core =
+   the frames around the peak where e stays at least half the amplitude above the rest: the movement itself,
+   without the slow onset and return that widening adds (an idle leg that creeps up while the other one steps).
 Several angles (both sides): repetitions of different angles that overlap in time by more than merge_overlap of
-the shorter one are one repetition (side "both", amplitude and peak averaged). A repetition of one side alone
-counts when that side is the dominant one, or when that side alternates with the dominant one: at most
-alternate_shared of its excursions overlap one of the dominant side's by more than alternate_overlap of their own
-duration. The dominant side is the one whose excursions add up to the most degrees (Σ amplitude): the limb that
+the shorter one, and whose cores meet (both sides at least half way up at one moment), are one repetition (side
+"both", amplitude and peak averaged). A repetition of one side alone counts when that side is the dominant one,
+or when that side alternates with the dominant one: at most alternate_shared of its excursions (those reaching
+min_ratio × its cycle amplitude A) have a core that overlaps the core of one of the dominant side's by more than
+alternate_overlap of the shorter of the two (simulated side steps: the idle hip reads 5-10° raised while the
+other leg steps, which widens its next step back into the other's and made the two sides look bilateral: 3 of 5
+steps counted). The dominant side is the one whose excursions add up to the most degrees (Σ amplitude): the limb that
 repeats the movement, not the one with the largest range (an idle arm mistracked through 130° three times beside
 ten 40° shoulder extensions). A side that sometimes moves together with the dominant one and sometimes alone, or
 follows it half a repetition late, is the other limb drifting or mistracked (UI-PRMD one-arm movements show the
@@ -41,13 +46,16 @@ repetition still takes a repetition's time (UI-PRMD incorrect executions: first 
 of the others' amplitude), a bump is brief (simulated filtered squats: 30° bumps of a third to half a repetition's
 duration).
 A repetition also takes its place in the cadence. With S the median peak-to-peak spacing of the counted repetitions:
-    - an excursion that peaks within shallow_spacing (0.8) × S of a larger one and lasts less than
-      shallow_duration × the median duration is a rebound or a split of that one, and is dropped (UI-PRMD shoulder
-      extension s04: a 0.6 s mistracked dip 1 s after a repetition's peak);
-    - a shallow excursion (below min_ratio × the median amplitude) that peaks within shallow_spacing × the full
-      repetitions' median spacing of a full repetition on both sides is a bump at rest squeezed between two
-      repetitions, and is dropped (simulated filtered squats: the knee reading 25° bent for 2 s while standing);
-      a shallow repetition takes a slot of the cadence of its own;
+    - an excursion that lasts less than shallow_duration × the median duration and peaks within shallow_spacing
+      (0.8) × S of a larger one, or of one that lasts at least that long, is a rebound, a split or a mistracked
+      spike beside that one, and is dropped (UI-PRMD shoulder extension s04: a 0.6 s mistracked dip 1 s after a
+      repetition's peak; raw simulated side steps: 0.3-0.6 s spikes of the hip beside a 2.5 s step);
+    - a shallow excursion (below min_ratio × the median amplitude) is a bump at rest squeezed between two
+      repetitions, and is dropped, when the full repetitions around it are closer than 2 × shallow_spacing × their
+      median peak-to-peak spacing (no room for one more slot of the cadence between them), or, at an end of the
+      set, when it peaks within shallow_spacing × that spacing of both the full repetition on its one side and
+      the end of the recording (simulated filtered squats: the knee reading 25° bent for 2 s while standing, or
+      at the start of a set); a shallow repetition takes a slot of the cadence of its own;
     - a shallow repetition the hysteresis missed (its peak under enter_frac × A) is added where the cadence has
       room for one: in a stretch between counted repetitions, the highest point of the dominant angle's excursion at
       least shallow_spacing × S from every counted peak, when the excursion falls by shallow_ratio × the median
@@ -127,6 +135,17 @@ class RepEvent:
     peak_deg: float
     side: str
     angles: tuple[str, ...]
+    core_start: int = -1  # first frame of the core (module doc), −1: not known, the start
+    core_end: int = -1  # last frame of the core, −1: not known, the end
+
+    @property
+    def core(self) -> tuple[int, int]:
+        """Returns (first, last) frame of the excursion's core, where it stands at least half its amplitude above
+        its rest (start and end when not known)."""
+        return (
+            self.start if self.core_start < 0 else self.core_start,
+            self.end if self.core_end < 0 else self.core_end,
+        )
 
 
 @dataclass(frozen=True)
@@ -183,12 +202,19 @@ def detect(t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams) ->
 @dataclass(frozen=True)
 class AngleExcursions:
     """The excursions of one angle; n_cycles: duration / P of its period (0 without one); rest_low: its rest end is
-    the low one; rest_deg: that end (p2 or p98 of the smoothed angle, degrees)."""
+    the low one; rest_deg: that end (p2 or p98 of the smoothed angle, degrees); cycle_deg: A."""
 
     events: list[RepEvent]
     n_cycles: int
     rest_low: bool
     rest_deg: float
+    cycle_deg: float = 0.0  # A of step 3 (degrees): its cycle's typical amplitude, or its range when it has none
+
+
+def _found(tried: tuple[list[RepEvent], int, float], rest_low: bool, rest_deg: float) -> AngleExcursions:
+    """Returns the AngleExcursions of _excursions' (events, n_cycles, cycle_deg) at that rest end."""
+    events, n_cycles, cycle_deg = tried
+    return AngleExcursions(events, n_cycles, rest_low, rest_deg, cycle_deg)
 
 
 def detect_angle(
@@ -205,18 +231,16 @@ def detect_angle(
         return AngleExcursions([], 0, True, float(lo))
     rest_low = _rest_is_low(y, lo, hi, params.rest)
     if rest_low is not None:
-        return AngleExcursions(*_excursions(t, y, name, params, rest_low), rest_low, float(lo if rest_low else hi))
-    tries = [
-        AngleExcursions(*_excursions(t, y, name, params, low), low, float(lo if low else hi)) for low in (True, False)
-    ]
+        return _found(_excursions(t, y, name, params, rest_low), rest_low, float(lo if rest_low else hi))
+    tries = [_found(_excursions(t, y, name, params, low), low, float(lo if low else hi)) for low in (True, False)]
     return min(tries, key=lambda tried: abs(len(tried.events) - tried.n_cycles))
 
 
 def _excursions(
     t: np.ndarray, y: np.ndarray, name: str, params: RepetitionParams, rest_low: bool
-) -> tuple[list[RepEvent], int]:
+) -> tuple[list[RepEvent], int, float]:
     """Returns (the excursions of y: (T,) degrees away from its low (rest_low) or high end, the cycles its period
-    gives: duration / P, 0 without a period)."""
+    gives: duration / P, 0 without a period, the cycle amplitude A in degrees)."""
     lo, hi = np.percentile(y, [2.0, 98.0])
     R = float(hi - lo)
     e = np.clip(y - lo if rest_low else hi - y, 0.0, R)
@@ -228,17 +252,38 @@ def _excursions(
     runs = edges.reshape(-1, 2)  # [first, stop) of each excursion core
     n_cycles = cyc.n_cycles if cyc.period_s is not None else 0
     if runs.shape[0] == 0:
-        return [], n_cycles
+        return [], n_cycles, R
     start, end, base0, base1 = _widen(e, runs, inside, params.onset_frac * R)
     peak = _run_argmax(e, runs)
     keep = t[end] - t[start] >= params.min_duration_s
     amplitude = e[peak] - 0.5 * (base0 + base1)
+    core0, core1 = _cores(e, start, peak, np.minimum(end, e.shape[0] - 1), e[peak] - 0.5 * amplitude)
     side = side_of(name)
     events = [
-        RepEvent(int(a), int(p), int(b), float(amp), float(y[p]), side, (name,))
-        for a, p, b, amp in zip(start[keep], peak[keep], end[keep], amplitude[keep], strict=True)
+        RepEvent(int(a), int(p), int(b), float(amp), float(y[p]), side, (name,), int(c0), int(c1))
+        for a, p, b, amp, c0, c1 in zip(
+            start[keep], peak[keep], end[keep], amplitude[keep], core0[keep], core1[keep], strict=True
+        )
     ]
-    return events, n_cycles
+    return events, n_cycles, R
+
+
+def _cores(
+    e: np.ndarray, start: np.ndarray, peak: np.ndarray, end: np.ndarray, half: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Returns (first, last) frames, each (n,), of the core of each excursion of e: (T,) degrees: the frames around
+    its peak (start <= peak <= end, (n,) frames each) where e stays at or above half: (n,) degrees."""
+    T = e.shape[0]
+    idx = np.arange(T)
+    first = start.astype(np.int64).copy()
+    seg = _segment_ids(T, start, peak + 1)
+    low = (seg >= 0) & (e < half[np.maximum(seg, 0)])
+    np.maximum.at(first, seg[low], idx[low] + 1)
+    last = end.astype(np.int64).copy()
+    seg = _segment_ids(T, peak, end + 1)
+    low = (seg >= 0) & (e < half[np.maximum(seg, 0)])
+    np.minimum.at(last, seg[low], idx[low] - 1)
+    return np.minimum(first, peak), np.maximum(last, peak)
 
 
 def _gap_minima(e: np.ndarray, runs: np.ndarray, inside: np.ndarray) -> np.ndarray:
@@ -310,7 +355,8 @@ def _shared(a: RepEvent, b: RepEvent) -> int:
 
 
 def merge_events(events: list[RepEvent], overlap: float) -> list[RepEvent]:
-    """Joins events of different angles that overlap by more than `overlap` of the shorter one.
+    """Joins events of different angles that overlap by more than `overlap` of the shorter one and whose cores
+    meet (both sides at least half their amplitude up at one moment).
 
     When an event of a side already in the group overlaps the group's other members more than that side's member
     does (a bump just before the real excursion of one knee paired first with the other knee's excursion), the
@@ -318,16 +364,20 @@ def merge_events(events: list[RepEvent], overlap: float) -> list[RepEvent]:
     """
     merged: list[list[RepEvent]] = []
     g_start = g_end = 0  # frames spanned by the last group, merged[-1]
+    c_start = c_end = 0  # frames spanned by the cores of the last group
     for ev in sorted(events, key=lambda ev: ev.start):
+        e0, e1 = ev.core
         if merged:
             group = merged[-1]
             shared = min(g_end, ev.end) - max(g_start, ev.start)
             shorter = max(1, min(g_end - g_start, ev.end - ev.start))
-            if shared > overlap * shorter:
+            meet = min(c_end, e1) >= max(c_start, e0)
+            if shared > overlap * shorter and meet:
                 same = [x for x in group if x.side == ev.side]
                 if not same:
                     group.append(ev)
                     g_start, g_end = min(g_start, ev.start), max(g_end, ev.end)
+                    c_start, c_end = min(c_start, e0), max(c_end, e1)
                     continue
                 others = [x for x in group if x.side != ev.side]
                 rival = same[0]
@@ -336,9 +386,11 @@ def merge_events(events: list[RepEvent], overlap: float) -> list[RepEvent]:
                     group.append(ev)
                     merged.insert(len(merged) - 1, [rival])
                     g_start, g_end = min(x.start for x in group), max(x.end for x in group)
+                    c_start, c_end = min(x.core[0] for x in group), max(x.core[1] for x in group)
                     continue
         merged.append([ev])
         g_start, g_end = ev.start, ev.end
+        c_start, c_end = e0, e1
     out = []
     for group in merged:
         if len(group) == 1:
@@ -353,6 +405,8 @@ def merge_events(events: list[RepEvent], overlap: float) -> list[RepEvent]:
                 peak_deg=_mean([x.peak_deg for x in group]),
                 side="both",
                 angles=tuple(a for x in group for a in x.angles),
+                core_start=min(x.core[0] for x in group),
+                core_end=max(x.core[1] for x in group),
             )
         )
     return sorted(out, key=lambda ev: ev.start)
@@ -392,22 +446,24 @@ def _drop_bumps(merged: list[RepEvent], params: RepetitionParams) -> list[RepEve
     ]
 
 
-def _alternates(name: str, dominant: str, events: list[RepEvent], params: RepetitionParams) -> bool:
-    """True when at most alternate_shared of the excursions of angle `name` (those above min_ratio × their median
-    amplitude) overlap one of the dominant angle's by more than alternate_overlap of their own duration."""
-    own = [ev for ev in events if ev.angles == (name,)]
-    if own:  # its bumps (below min_ratio × its median amplitude) neither make nor break the alternation
-        floor = params.min_ratio * float(np.median([ev.amplitude for ev in own]))
-        own = [ev for ev in own if ev.amplitude >= floor]
+def _alternates(name: str, dominant: str, events: list[RepEvent], params: RepetitionParams, cycle_deg: float) -> bool:
+    """True when at most alternate_shared of the excursions of angle `name` (those reaching min_ratio × its cycle
+    amplitude cycle_deg, degrees) have a core that overlaps the core of one of the dominant angle's by more than
+    alternate_overlap of the shorter core."""
+    # its bumps neither make nor break the alternation; the cycle amplitude, not the median of its excursions,
+    # which a few steps and as many bumps pull down to the bumps
+    own = [ev for ev in events if ev.angles == (name,) and ev.amplitude >= params.min_ratio * cycle_deg]
     lead = [ev for ev in events if ev.angles == (dominant,)]
     if not own:
         return False
-    own_se = np.array([(ev.start, ev.end) for ev in own])  # (n, 2) frames
-    lead_se = np.array([(ev.start, ev.end) for ev in lead]).reshape(-1, 2)  # (m, 2) frames
+    own_se = np.array([ev.core for ev in own])  # (n, 2) frames
+    lead_se = np.array([ev.core for ev in lead]).reshape(-1, 2)  # (m, 2) frames
     # (n, m) frames each own excursion shares with each lead one, as _shared
     frames = np.maximum(0, np.minimum(own_se[:, 1:], lead_se[:, 1]) - np.maximum(own_se[:, :1], lead_se[:, 0]))
     own_len = np.maximum(1, own_se[:, 1] - own_se[:, 0])
-    shared = int(np.sum(np.any(frames > params.alternate_overlap * own_len[:, None], axis=1)))
+    lead_len = np.maximum(1, lead_se[:, 1] - lead_se[:, 0])
+    shorter = np.minimum(own_len[:, None], lead_len[None, :])  # (n, m) frames
+    shared = int(np.sum(np.any(frames > params.alternate_overlap * shorter, axis=1)))
     return shared <= params.alternate_shared * len(own)
 
 
@@ -436,26 +492,28 @@ def _without(merged: list[RepEvent], drop: np.ndarray) -> list[RepEvent]:
 
 
 def _drop_rebounds(merged: list[RepEvent], params: RepetitionParams) -> list[RepEvent]:
-    """Drops the excursions that peak within shallow_spacing × the median peak-to-peak spacing of a larger one and
-    last less than shallow_duration × the median duration: a rebound or a split of that one, not a repetition."""
+    """Drops the excursions that last less than shallow_duration × the median duration and peak within
+    shallow_spacing × the median peak-to-peak spacing of a larger one or of one that lasts a repetition's time: a
+    rebound, a split or a mistracked spike beside that one, not a repetition."""
     if len(merged) < 3:
         return merged
     merged, peaks, amplitude = _peak_ordered(merged)
     length = np.array([ev.end - ev.start for ev in merged])  # (n,) frames
     gap = np.diff(peaks)  # (n − 1,) frames
     room = params.shallow_spacing * float(np.median(gap))
-    close_prev = np.concatenate(([False], (gap < room) & (amplitude[:-1] > amplitude[1:])))
-    close_next = np.concatenate(((gap < room) & (amplitude[1:] > amplitude[:-1]), [False]))
     brief = length < params.shallow_duration * float(np.median(length))
+    close_prev = np.concatenate(([False], (gap < room) & ((amplitude[:-1] > amplitude[1:]) | ~brief[:-1])))
+    close_next = np.concatenate(((gap < room) & ((amplitude[1:] > amplitude[:-1]) | ~brief[1:]), [False]))
     return _without(merged, brief & (close_prev | close_next))
 
 
-def _drop_off_cadence(merged: list[RepEvent], params: RepetitionParams) -> list[RepEvent]:
-    """Drops the shallow excursions (below min_ratio × the median amplitude) that peak within shallow_spacing × the
-    full repetitions' median peak-to-peak spacing of a full repetition on both sides: squeezed between two
-    repetitions of the cadence there is no slot for one (a knee bump while standing between squats), while a
-    shallow repetition takes a slot of its own, a spacing away from at least one neighbour (UI-PRMD: a first lunge,
-    a low leg raise)."""
+def _drop_off_cadence(merged: list[RepEvent], params: RepetitionParams, n_frames: int) -> list[RepEvent]:
+    """Drops the shallow excursions (below min_ratio × the median amplitude) with no slot of the cadence of their
+    own (a knee bump while standing between squats, or before the first): with room = shallow_spacing × the full
+    repetitions' median peak-to-peak spacing, those between two full repetitions less than 2 × room apart, and
+    those that peak within room of the full repetition on their one side and of that end of the recording
+    (n_frames frames). A shallow repetition takes a slot of its own, a spacing away from at least one neighbour
+    (UI-PRMD: a first lunge, a low leg raise)."""
     if len(merged) < 3:
         return merged
     merged, peaks, amplitude = _peak_ordered(merged)
@@ -465,9 +523,12 @@ def _drop_off_cadence(merged: list[RepEvent], params: RepetitionParams) -> list[
         return sorted(merged, key=lambda ev: ev.start)
     room = params.shallow_spacing * float(np.median(np.diff(full_peaks)))
     k = np.searchsorted(full_peaks, peaks)  # the first full repetition peaking at or after each excursion
-    before = np.where(k > 0, peaks - full_peaks[np.maximum(k - 1, 0)], np.inf)
-    after = np.where(k < full_peaks.size, full_peaks[np.minimum(k, full_peaks.size - 1)] - peaks, np.inf)
-    return _without(merged, ~full & (before < room) & (after < room))
+    edge0, edge1 = peaks, n_frames - 1 - peaks  # frames to the first and the last frame
+    before = np.where(k > 0, peaks - full_peaks[np.maximum(k - 1, 0)], edge0)
+    after = np.where(k < full_peaks.size, full_peaks[np.minimum(k, full_peaks.size - 1)] - peaks, edge1)
+    inner = (k > 0) & (k < full_peaks.size)  # a full repetition on both sides, not an end of the recording
+    squeezed = ((before < room) & (after < room)) | (inner & (before + after < 2 * room))
+    return _without(merged, ~full & squeezed)
 
 
 def _add_shallow(
@@ -545,9 +606,9 @@ def count_repetitions(
     per_angle = {name: _repeating(t, smoothed, found, name, dominant) for name in moving}
     events = [ev for name in moving for ev in per_angle[name]]
     merged = merge_events(events, params.merge_overlap)
-    counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, params)}
+    counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, params, found[n].cycle_deg)}
     merged = _drop_weak_lone(_keep_counted(merged, counted), params.lone_ratio)
-    merged = _drop_off_cadence(_drop_rebounds(_drop_bumps(merged, params), params), params)
+    merged = _drop_off_cadence(_drop_rebounds(_drop_bumps(merged, params), params), params, t.shape[0])
     if dominant is not None:
         merged = _add_shallow(smoothed[dominant], dominant, found[dominant], merged, params)
     t0 = float(t[0]) if t.shape[0] else 0.0

@@ -18,8 +18,9 @@ from kinect_agent.sources.simulator import simulate
 
 SEEDS = (0, 1, 2)
 REPS = 5
-# Alternating hip abduction: the detector (not the live count) merges left and right steps into fewer
-# repetitions on Kinect-like data, offline too (3 of 5 for some seeds): issue "Signal core 2".
+# Alternating hip abduction on the online filter's output: the detector (not the live count) still miscounts some
+# sets, offline too (seeds 0-2: 7, 4, 5 of 5 counted on the whole set; after the offline pipeline 5, 5, 5):
+# issue "Signal core 2", bench/README.md "Simulated sets as a benchmark".
 DETECTOR_WEAK = {"side_step"}
 
 

@@ -6,12 +6,13 @@ import numpy as np
 import pytest
 
 from backend.exercises.library import EXERCISES
+from kinect_agent.analysis import series
 from kinect_agent.analysis.angles import counting_angles
 from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
 from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.pipeline import process
 from kinect_agent.sources.simulator import EXERCISES as SIMULATED
-from kinect_agent.sources.simulator import simulate_truth
+from kinect_agent.sources.simulator import simulate, simulate_truth
 from tests.backend.analysis._data import noisy, uiprmd
 
 
@@ -238,3 +239,61 @@ def test_a_bump_at_rest_between_two_repetitions_is_not_counted(seed: int) -> Non
     reps = count_repetitions(t, {"knee_flexion_L": y}, ("knee_flexion_L",)).repetitions
     assert len(reps) == 8, [(round(r.start_s, 1), round(r.amplitude_deg)) for r in reps]
     assert min(abs(0.5 * (r.start_s + r.end_s) - 1.5) for r in reps) < 0.5
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_alternating_steps_with_the_idle_leg_creeping_up_count_each_step(seed: int) -> None:
+    """Ten 25° steps, left and right in turn every 3.6 s, 2.4 s each; from the middle of one leg's step the other
+    leg reads 8° raised until the end of its own step (simulated side steps after the pipeline: the idle hip 5-10°
+    up), so that each step's onset reaches back over the other leg's step (5 counted before, as "both")."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, 38, 1 / 30)
+    centres = [2.0 + 3.6 * k for k in range(10)]
+    raised = [np.zeros_like(t), np.zeros_like(t)]
+    for k, c in enumerate(centres):
+        raised[k % 2] += _bumps(t, [c], [25.0], 2.4)
+        raised[1 - k % 2] += np.interp(t, [c - 0.6, c, c + 3.6, c + 4.8], [0.0, 8.0, 8.0, 0.0], left=0.0, right=0.0)
+    names = ("hip_abduction_L", "hip_abduction_R")
+    angles = {name: y + rng.normal(0, 1.0, t.shape) for name, y in zip(names, raised, strict=True)}
+    reps = count_repetitions(t, angles, names).repetitions
+    assert len(reps) == 10, [(round(r.start_s, 1), round(r.amplitude_deg), r.side) for r in reps]
+    assert [r.side for r in reps] == ["left", "right"] * 5, [r.side for r in reps]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_bump_at_rest_with_no_room_for_a_repetition_is_not_counted(seed: int) -> None:
+    """Eight 80° squats, 2 s each, every 4.4 s but once 5.8 s; 25° bumps as long as a squat 2.1 s before the first
+    and before the fifth: the first 1.2 s from the start of the recording, the second more than 0.8 spacing after
+    the fourth squat but with no room for one more slot of the cadence between the two (simulated filtered squats,
+    seed 301: 6 and 7 counted instead of 5)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, 42, 1 / 30)
+    centres = [3.3 + 4.4 * k for k in range(4)]
+    centres += [centres[-1] + 5.8 + 4.4 * k for k in range(4)]
+    y = _bumps(t, centres, [80.0] * 8, 2.0) + _bumps(t, [centres[0] - 2.1, centres[4] - 2.1], [25.0, 25.0], 2.0)
+    reps = count_repetitions(t, {"knee_flexion_L": y + rng.normal(0, 1.5, t.shape)}, ("knee_flexion_L",))
+    assert len(reps.repetitions) == 8, [(round(r.start_s, 1), round(r.amplitude_deg)) for r in reps.repetitions]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_brief_spike_between_repetitions_is_not_counted(seed: int) -> None:
+    """Ten 20° steps every 4 s, 2.4 s each; in the rest before the fourth, a 0.7 s spike to 35°, higher than the
+    steps beside it (raw simulated side steps: the hip mistracked for a few frames)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, 42, 1 / 30)
+    centres = [2.0 + 4.0 * k for k in range(10)]
+    y = _bumps(t, centres, [20.0] * 10, 2.4) + _bumps(t, [centres[3] - 2.0], [35.0], 0.7)
+    reps = count_repetitions(t, {"hip_abduction_L": y + rng.normal(0, 1.0, t.shape)}, ("hip_abduction_L",))
+    assert len(reps.repetitions) == 10, [(round(r.start_s, 1), round(r.amplitude_deg)) for r in reps.repetitions]
+
+
+@pytest.mark.parametrize("seed", [301, 302, 303])
+def test_simulated_side_steps_at_30_degrees_after_the_pipeline_give_exact_count(seed: int) -> None:
+    """Five side steps seen at 30°, as the server counts them (bench/repetitions.py --simulated; seed 301: 3 before
+    the idle leg's creep was kept out of the merge and the alternation)."""
+    measured, _, _ = simulate("side_step", 5, view_deg=30, seed=seed)
+    filtered = process(measured).filtered
+    smoothed = series.smooth_positions(filtered.t, filtered.positions)
+    names = EXERCISES["side_step"].defining_angles
+    reps = count_repetitions(filtered.t, counting_angles(smoothed, names), names).repetitions
+    assert len(reps) == 5, [(round(r.start_s, 1), round(r.amplitude_deg), r.side) for r in reps]
