@@ -84,6 +84,11 @@ class PipelineConfig(BaseModel):
         "instead of z − Σ Wm·h(σ), the sigma points' mean; off: it removes the exact-input bias but loses on Kinect "
         "data (bench/README.md, Fast arm motion)",
     )
+    fixed_innovation_at_mean: bool | None = Field(
+        None,
+        description="passes 3-4 (lengths fixed): innovation z − h(x̄) (True) or z − Σ Wm·h(σ) (False); None: as "
+        "innovation_at_mean",
+    )
     alpha: float = Field(0.5, gt=0, description="sigma-point spread (van der Merwe)")
     beta: float = Field(2.0, description="sigma-point prior-distribution weight (van der Merwe; 2 for Gaussian)")
     kappa: float = Field(0.0, description="sigma-point secondary scaling (van der Merwe)")

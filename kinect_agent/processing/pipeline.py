@@ -149,6 +149,17 @@ def _step_scales(t: np.ndarray, config: PipelineConfig) -> np.ndarray:
     return np.maximum(dt, 1e-6) * config.rate_ref_hz
 
 
+def _fixed_length_config(config: PipelineConfig) -> PipelineConfig:
+    """Returns the settings of passes 3-4: innovation_at_mean replaced by fixed_innovation_at_mean when that is set.
+
+    With the lengths fixed, the unscented offset of Σ Wm·h(σ) against h(x̄) can only be absorbed by the joint angles
+    (bench/README.md, "Per-motion accuracy (issue 13)").
+    """
+    if config.fixed_innovation_at_mean is None:
+        return config
+    return config.model_copy(update={"innovation_at_mean": config.fixed_innovation_at_mean})
+
+
 def smooth(
     clean: Recording,
     ik: IKResult,
@@ -203,16 +214,17 @@ def smooth(
     lengths[implausible] = ik.lengths[implausible]
     length_sd = np.sqrt(np.diag(kf.P)[N_ROOT : N_ROOT + N_LEN])
     # Passes 3 and 4: lengths fixed (removed from the state: zero covariance and process noise).
-    kf3 = kf.with_lengths_fixed(lengths, config)
-    xs3, Ps3, g3 = _run_pass(kf3, fwd, obs, scale, config, True, tick, restart)
+    fixed = _fixed_length_config(config)
+    kf3 = kf.with_lengths_fixed(lengths, fixed)
+    xs3, Ps3, g3 = _run_pass(kf3, fwd, obs, scale, fixed, True, tick, restart)
     if config.smoother == "urts":
         Qs = np.einsum("t,ij->tij", np.append(scale[1:], 0.0), kf3.Q)
         xs, Ps = unscented_rts(xs3, Ps3, Qs, None, kf3.points)
         tick(T)
         g4 = 0
     else:
-        kf4 = kf3.copy(config)
-        xs4, Ps4, g4 = _run_pass(kf4, bwd, obs, scale_bwd, config, True, tick, restart)
+        kf4 = kf3.copy(fixed)
+        xs4, Ps4, g4 = _run_pass(kf4, bwd, obs, scale_bwd, fixed, True, tick, restart)
         xs, Ps = (xs4, Ps4) if config.four_pass_combine == "last" else combine_information(xs3, Ps3, xs4, Ps4)
     info = {"length_sd_m": length_sd, "gated_per_pass": [g1, g2, g3, g4], "length_pass_frames": n_len}
     if covariances:

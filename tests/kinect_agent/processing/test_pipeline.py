@@ -164,6 +164,19 @@ def test_offline_process_noise_overrides_the_shared_one(rng: np.random.Generator
                                err_msg="offline_q_* must act as q_* in the offline passes")  # fmt: skip
 
 
+def test_fixed_innovation_at_mean_acts_on_passes_three_and_four_only(rng: np.random.Generator) -> None:
+    rec, _, _ = _noisy(rng, 40)
+    sigma_mean = process(rec, config=PipelineConfig(innovation_at_mean=False, fixed_innovation_at_mean=False))
+    split = process(rec, config=PipelineConfig(innovation_at_mean=False, fixed_innovation_at_mean=True))
+    np.testing.assert_array_equal(split.params.segment_lengths, sigma_mean.params.segment_lengths,
+                                  err_msg="passes 1-2 (the lengths) must keep innovation_at_mean")  # fmt: skip
+    assert np.abs(split.filtered.positions - sigma_mean.filtered.positions).max() > 1e-6, "passes 3-4 unchanged"
+    at_mean = process(rec, config=PipelineConfig(innovation_at_mean=True, fixed_innovation_at_mean=None))
+    both = process(rec, config=PipelineConfig(innovation_at_mean=True, fixed_innovation_at_mean=True))
+    np.testing.assert_array_equal(both.filtered.positions, at_mean.filtered.positions,
+                                  err_msg="None must follow innovation_at_mean")  # fmt: skip
+
+
 def test_numpy_fallback_gives_the_same_result(rng: np.random.Generator, monkeypatch: pytest.MonkeyPatch) -> None:
     from kinect_agent.processing import _fk_numba
 
