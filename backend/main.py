@@ -27,6 +27,7 @@ from backend.exceptions import AppError, DatabaseBusy
 from backend.openapi import openapi_builder
 from backend.request_limits import RequestLimits
 from backend.schemas import ErrorOut
+from backend.security_headers import SecurityHeaders
 from frontend.pages import mount as mount_pages
 from kinect_agent.blas_threads import one_blas_thread
 
@@ -198,7 +199,10 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     # a request waits for a database slot in the event loop, not in a thread holding a connection (backend/db_slots)
     app.state.db_slots = DbSlots(lambda: engine or get_engine(), wait_s=settings.DB_SLOT_WAIT_S)
     app.add_middleware(DbAdmission, slots=app.state.db_slots)
-    app.add_middleware(RequestLimits, max_json_bytes=settings.MAX_JSON_BYTES)  # outermost: before anything reads
+    app.add_middleware(RequestLimits, max_json_bytes=settings.MAX_JSON_BYTES)  # before anything reads the body
+    app.add_middleware(SecurityHeaders, hsts=settings.public_https)  # outermost: on every answer, errors too
+    # no redirect from /path/ to /path: Starlette builds its absolute Location from the request's Host header
+    app.router.redirect_slashes = False
     app.include_router(_system_router())
     for name in ROUTERS:
         app.include_router(importlib.import_module(name).router)
