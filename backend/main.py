@@ -64,11 +64,18 @@ class VersionOut(BaseModel):
     database_revision: str = Field(examples=["0001"])
 
 
+MAX_LISTED_ERRORS = 10  # a 1 MiB body of 90 000 unknown keys would otherwise be answered with 4 MB of detail
+
+
 def _validation_detail(exc: RequestValidationError) -> str:
+    """Returns the first MAX_LISTED_ERRORS problems of a request, each naming its field, and how many more there are."""
+    errors = exc.errors()
     parts = []
-    for err in exc.errors():
+    for err in errors[:MAX_LISTED_ERRORS]:
         where = ".".join(str(p) for p in err.get("loc", ()))
         parts.append(f"{where}: {err.get('msg', 'invalid')}")
+    if len(errors) > MAX_LISTED_ERRORS:
+        parts.append(f"and {len(errors) - MAX_LISTED_ERRORS} more")
     return "; ".join(parts) or "invalid request"
 
 
