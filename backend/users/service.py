@@ -28,6 +28,8 @@ from backend.security import (
 from backend.users import throttle
 from backend.users.models import ApiToken, LoginAttempt, LoginSession, User
 
+KNOWN_ADDRESS_DAYS = 30  # a successful login from an address within this long makes it the account's known address
+
 
 def get_user(*, db_session: Session, user_id: int) -> User:
     """Returns one user or raises UserNotFound."""
@@ -121,18 +123,26 @@ def login(
     """Checks a password login and returns (user, login session, cookie token). Throttled (backend.users.throttle)
     per account and address, per address and per account; commits the attempt before the password is checked."""
     email = email.strip().lower()
+    limits = [
+        throttle.Limit(settings.LOGIN_MAX_FAILURES, "for this account from this address",
+                       (LoginAttempt.email == email, LoginAttempt.ip == ip)),
+        throttle.Limit(settings.LOGIN_MAX_FAILURES_PER_IP, "from this address", (LoginAttempt.ip == ip,)),
+    ]  # fmt: skip
+    # The limit over all addresses stops a guess spread over many; it would also let anyone who knows an e-mail keep
+    # its owner out. An address the account signed in from lately is held only by the two limits above.
+    known = throttle.known_address(db_session=db_session, kind="password", email=email, ip=ip,
+                                   since=utcnow() - dt.timedelta(days=KNOWN_ADDRESS_DAYS))  # fmt: skip
+    db_session.commit()  # ends the read before claim() writes (SQLite cannot upgrade a read snapshot to a write)
+    if not known:
+        limits.append(throttle.Limit(settings.LOGIN_MAX_FAILURES_PER_ACCOUNT, "for this account",
+                                     (LoginAttempt.email == email,)))  # fmt: skip
     attempt = throttle.claim(
         db_session=db_session,
         kind="password",
         email=email,
         ip=ip,
         window=dt.timedelta(minutes=settings.LOGIN_WINDOW_MINUTES),
-        limits=[
-            throttle.Limit(settings.LOGIN_MAX_FAILURES, "for this account from this address",
-                           (LoginAttempt.email == email, LoginAttempt.ip == ip)),
-            throttle.Limit(settings.LOGIN_MAX_FAILURES_PER_IP, "from this address", (LoginAttempt.ip == ip,)),
-            throttle.Limit(settings.LOGIN_MAX_FAILURES_PER_ACCOUNT, "for this account", (LoginAttempt.email == email,)),
-        ],  # fmt: skip
+        limits=limits,
     )
     user = get_user_by_email(db_session=db_session, email=email)
     try:
