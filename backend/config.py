@@ -63,8 +63,14 @@ class Settings(BaseSettings):
 
     @property
     def public_https(self) -> bool:
-        """Returns whether people reach the app over HTTPS (PUBLIC_URL is https): HSTS is sent then."""
+        """Returns whether people reach the app over HTTPS (PUBLIC_URL is https)."""
         return urlsplit(self.PUBLIC_URL).scheme == "https"
+
+    @property
+    def hsts(self) -> bool:
+        """Returns whether answers carry Strict-Transport-Security: the public URL is https on a host name other than
+        the loopback's (a browser would keep http://localhost from every other local server for a year)."""
+        return self.public_https and urlsplit(self.PUBLIC_URL).hostname not in ("localhost", "127.0.0.1", "::1")
 
     @property
     def cookie_secure(self) -> bool:

@@ -207,7 +207,7 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     app.state.db_slots = DbSlots(lambda: engine or get_engine(), wait_s=settings.DB_SLOT_WAIT_S)
     app.add_middleware(DbAdmission, slots=app.state.db_slots)
     app.add_middleware(RequestLimits, max_json_bytes=settings.MAX_JSON_BYTES)  # before anything reads the body
-    app.add_middleware(SecurityHeaders, hsts=settings.public_https)  # outermost: on every answer, errors too
+    app.add_middleware(SecurityHeaders, hsts=settings.hsts)  # outermost: on every answer, errors too
     # no redirect from /path/ to /path: Starlette builds its absolute Location from the request's Host header
     app.router.redirect_slashes = False
     app.include_router(_system_router())

@@ -123,11 +123,12 @@ def test_api_answers_are_not_cached(client, make_patient_with_therapist, auth_he
 
 def test_hsts_only_when_the_public_url_is_https(db_session):
     https = Settings(ENVIRONMENT="production", CHECK_MIGRATIONS=False, PUBLIC_URL="https://coach.example.org")
-    plain = Settings(ENVIRONMENT="local", CHECK_MIGRATIONS=False, PUBLIC_URL="http://127.0.0.1:8000")
     with TestClient(make_test_app(db_session, https)) as client:
         assert client.get("/healthz").headers["strict-transport-security"] == "max-age=31536000"
-    with TestClient(make_test_app(db_session, plain)) as client:
-        assert "strict-transport-security" not in client.get("/healthz").headers
+    for public in ("http://127.0.0.1:8000", "https://localhost", "https://127.0.0.1:8443/clinic", ""):
+        settings = Settings(ENVIRONMENT="local", CHECK_MIGRATIONS=False, PUBLIC_URL=public)
+        with TestClient(make_test_app(db_session, settings)) as client:
+            assert "strict-transport-security" not in client.get("/healthz").headers, public
 
 
 def test_cookie_is_secure_when_the_public_url_is_https_even_in_local(db_session, make_user):
