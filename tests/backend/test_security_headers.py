@@ -144,3 +144,27 @@ def test_a_trailing_slash_never_redirects_to_the_requests_host(client, path):
     r = client.get(path, headers={"Host": "evil.example", "Accept": "text/html"}, follow_redirects=False)
     assert "evil.example" not in r.headers.get("location", ""), r.headers.get("location")
     assert r.status_code == 404
+
+
+@pytest.mark.parametrize(
+    "path",
+    ["/static/..%2Fpages.py", "/static/%2e%2e%2fpages.py", "/static/..%2F..%2Fbackend%2Fmain.py", "/static/__init__.py",
+     "/static/..%5Cpages.py", "/static/.%2E/templates/base.html", "/static/app.css%00.js"],
+)
+def test_static_files_stay_in_their_folder(client, path):
+    r = client.get(path)
+    assert r.status_code in (400, 404), f"{path}: {r.status_code}"
+    assert "import" not in r.text and "<html" not in r.text
+
+
+def test_a_symlink_in_the_static_folder_is_not_followed_out(client, tmp_path, monkeypatch):
+    import frontend.pages as pages
+
+    static, outside = tmp_path / "static", tmp_path / "secret.js"
+    static.mkdir()
+    outside.write_text("const secret = 1;")
+    (static / "app.js").write_text("ok();")
+    (static / "leak.js").symlink_to(outside)
+    monkeypatch.setattr(pages, "STATIC", static)
+    assert client.get("/static/app.js").text == "ok();"
+    assert client.get("/static/leak.js").status_code == 404
