@@ -121,7 +121,8 @@ def login(
     *, db_session: Session, settings: Settings, email: str, password: str, ip: str
 ) -> tuple[User, LoginSession, str]:
     """Checks a password login and returns (user, login session, cookie token). Throttled (backend.users.throttle)
-    per account and address, per address and per account; commits the attempt before the password is checked."""
+    per account and address, per address and per account (from addresses it did not sign in from lately); commits
+    the attempt before the password is checked."""
     email = email.strip().lower()
     limits = [
         throttle.Limit(settings.LOGIN_MAX_FAILURES, "for this account from this address",

@@ -71,10 +71,15 @@ def _first_passed(
 def known_address(*, db_session: Session, kind: str, email: str, ip: str, since: dt.datetime) -> bool:
     """Returns whether a secret of this kind was given right for email from ip since the given time."""
     found = db_session.scalar(
-        select(LoginAttempt.id).where(
-            LoginAttempt.kind == kind, LoginAttempt.email == email, LoginAttempt.ip == ip,
-            LoginAttempt.succeeded.is_(True), LoginAttempt.at >= since,
-        ).limit(1)  # fmt: skip
+        select(LoginAttempt.id)
+        .where(
+            LoginAttempt.kind == kind,
+            LoginAttempt.email == email,
+            LoginAttempt.ip == ip,
+            LoginAttempt.succeeded.is_(True),
+            LoginAttempt.at >= since,
+        )
+        .limit(1)
     )
     return found is not None
 

@@ -148,8 +148,15 @@ def test_a_trailing_slash_never_redirects_to_the_requests_host(client, path):
 
 @pytest.mark.parametrize(
     "path",
-    ["/static/..%2Fpages.py", "/static/%2e%2e%2fpages.py", "/static/..%2F..%2Fbackend%2Fmain.py", "/static/__init__.py",
-     "/static/..%5Cpages.py", "/static/.%2E/templates/base.html", "/static/app.css%00.js"],
+    [
+        "/static/..%2Fpages.py",
+        "/static/%2e%2e%2fpages.py",
+        "/static/..%2F..%2Fbackend%2Fmain.py",
+        "/static/__init__.py",
+        "/static/..%5Cpages.py",
+        "/static/.%2E/templates/base.html",
+        "/static/app.css%00.js",
+    ],
 )
 def test_static_files_stay_in_their_folder(client, path):
     r = client.get(path)
