@@ -9,6 +9,7 @@ from sqlalchemy.orm import Session
 
 from backend.config import Settings
 from backend.database import utcnow
+from backend.events.hub import ACCESS_ENDED, Event, publish
 from backend.exceptions import (
     EmailAlreadyRegistered,
     NotAuthenticated,
@@ -103,8 +104,10 @@ def update_user(
 def revoke_all_credentials(
     *, db_session: Session, user_id: int, api_tokens: bool = True, keep_login: LoginSession | None = None
 ) -> None:
-    """Revokes every login session of a user but keep_login and, unless api_tokens=False, every API token."""
+    """Revokes every login session of a user but keep_login and, unless api_tokens=False, every API token; ends the
+    user's open event streams (keep_login's reconnects)."""
     now = utcnow()
+    publish(db_session, Event(ACCESS_ENDED, 0, {"user_id": user_id}))
     kept = keep_login.id if keep_login is not None else -1
     db_session.execute(
         update(LoginSession)
@@ -170,9 +173,10 @@ def login(
 
 
 def logout(*, db_session: Session, login_session: LoginSession) -> None:
-    """Ends a browser login session."""
+    """Ends a browser login session, and the event streams it has open."""
     login_session.revoked_at = utcnow()
     db_session.flush()
+    publish(db_session, Event(ACCESS_ENDED, 0, {"login_session_id": login_session.id}))
 
 
 def create_api_token(
