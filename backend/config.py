@@ -36,7 +36,7 @@ class Settings(BaseSettings):
     SESSION_MAX_FRAMES: int = 2 * 30 * 60 * 60  # per recording: two hours at 30 Hz (analysis of the most: ~1.5 s)
     SESSION_MAX_DECODED_BYTES: int = 128 * 1024 * 1024  # all recordings of one file, after decompression (268 B/frame)
     CHECK_MIGRATIONS: bool = True
-    COOKIE_SECURE: bool | None = None  # None: secure everywhere except ENVIRONMENT=local
+    COOKIE_SECURE: bool | None = None  # None: secure when PUBLIC_URL is https, or ENVIRONMENT is not local
     # where people reach the app, e.g. https://coach.example.org/clinic behind a reverse proxy; its path is the
     # prefix of every URL the pages build (never taken from a request's Host header); empty: served at /
     PUBLIC_URL: str = ""
@@ -62,11 +62,23 @@ class Settings(BaseSettings):
         return urlsplit(self.PUBLIC_URL).path.rstrip("/") if self.PUBLIC_URL else ""
 
     @property
+    def public_https(self) -> bool:
+        """Returns whether people reach the app over HTTPS (PUBLIC_URL is https)."""
+        return urlsplit(self.PUBLIC_URL).scheme == "https"
+
+    @property
+    def hsts(self) -> bool:
+        """Returns whether answers carry Strict-Transport-Security: the public URL is https on a host name other than
+        the loopback's (a browser would keep http://localhost from every other local server for a year)."""
+        return self.public_https and urlsplit(self.PUBLIC_URL).hostname not in ("localhost", "127.0.0.1", "::1")
+
+    @property
     def cookie_secure(self) -> bool:
-        """Returns whether the login cookie carries the Secure flag."""
+        """Returns whether the login cookie carries the Secure flag (COOKIE_SECURE, else on when the public URL is
+        https or outside local development)."""
         if self.COOKIE_SECURE is not None:
             return self.COOKIE_SECURE
-        return self.ENVIRONMENT != "local"
+        return self.public_https or self.ENVIRONMENT != "local"
 
 
 @lru_cache

@@ -28,6 +28,7 @@ from backend.exceptions import AppError, DatabaseBusy
 from backend.openapi import openapi_builder
 from backend.request_limits import RequestLimits
 from backend.schemas import ErrorOut
+from backend.security_headers import SecurityHeaders
 from frontend.pages import mount as mount_pages
 from kinect_agent.blas_threads import one_blas_thread
 
@@ -64,11 +65,18 @@ class VersionOut(BaseModel):
     database_revision: str = Field(examples=["0001"])
 
 
+MAX_LISTED_ERRORS = 10  # a 1 MiB body of 90 000 unknown keys would otherwise be answered with 4 MB of detail
+
+
 def _validation_detail(exc: RequestValidationError) -> str:
+    """Returns the first MAX_LISTED_ERRORS problems of a request, each naming its field, and how many more there are."""
+    errors = exc.errors()
     parts = []
-    for err in exc.errors():
+    for err in errors[:MAX_LISTED_ERRORS]:
         where = ".".join(str(p) for p in err.get("loc", ()))
         parts.append(f"{where}: {err.get('msg', 'invalid')}")
+    if len(errors) > MAX_LISTED_ERRORS:
+        parts.append(f"and {len(errors) - MAX_LISTED_ERRORS} more")
     return "; ".join(parts) or "invalid request"
 
 
@@ -201,7 +209,10 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     # a request waits for a database slot in the event loop, not in a thread holding a connection (backend/db_slots)
     app.state.db_slots = DbSlots(lambda: engine or get_engine(), wait_s=settings.DB_SLOT_WAIT_S)
     app.add_middleware(DbAdmission, slots=app.state.db_slots)
-    app.add_middleware(RequestLimits, max_json_bytes=settings.MAX_JSON_BYTES)  # outermost: before anything reads
+    app.add_middleware(RequestLimits, max_json_bytes=settings.MAX_JSON_BYTES)  # before anything reads the body
+    app.add_middleware(SecurityHeaders, hsts=settings.hsts)  # outermost: on every answer, errors too
+    # no redirect from /path/ to /path: Starlette builds its absolute Location from the request's Host header
+    app.router.redirect_slashes = False
     app.include_router(_system_router())
     for name in ROUTERS:
         app.include_router(importlib.import_module(name).router)

@@ -8,9 +8,10 @@ page scripts.
 from __future__ import annotations
 
 import importlib.util
+import re
 from pathlib import Path
 from typing import Annotated
-from urllib.parse import quote
+from urllib.parse import parse_qsl, quote
 
 from fastapi import APIRouter, Depends, FastAPI, Request
 from fastapi.responses import FileResponse, HTMLResponse, RedirectResponse, Response
@@ -173,10 +174,25 @@ def replay_page(session_id: IdPath, request: Request, caller: OptionalCaller, db
 @router.get("/replay/viewer/", response_class=HTMLResponse)
 def replay_viewer(request: Request, caller: OptionalCaller) -> Response:
     """Returns viser's own web client (bundled in the pinned viser wheel), for signed-in users; the replay page
-    opens it with ?playbackPath= pointing to the session's recording in the API."""
+    opens it with ?playbackPath= pointing to the session's recording in the API.
+
+    Any other query is the 404 page: the client would fetch a recording from any URL in playbackPath, or connect
+    to any server in ?websocket=, and run the JavaScript a recording carries (viser's RunJavascriptMessage) on
+    this origin, with the signed-in user's cookie.
+    """
     if caller is None or caller.user is None:
         return _sign_in_first(request)
+    if not is_replay_recording(request, request.url.query):
+        return error_page(request, 404)
     return FileResponse(VISER_CLIENT, media_type="text/html; charset=utf-8", headers={"Cache-Control": "no-cache"})
+
+
+def is_replay_recording(request: Request, query: str) -> bool:
+    """Returns whether a viewer query is exactly playbackPath=<the app's path of one session's replay>."""
+    pairs = parse_qsl(query, keep_blank_values=True)
+    if len(pairs) != 1 or pairs[0][0] != "playbackPath":
+        return False
+    return re.fullmatch(re.escape(_root(request)) + r"/api/v1/sessions/[1-9][0-9]{0,9}/replay", pairs[0][1]) is not None
 
 
 def _sign_in_first(request: Request) -> HTMLResponse:

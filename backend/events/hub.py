@@ -26,6 +26,9 @@ _PENDING = "coach_events"  # key in Session.info: events waiting for the commit
 DATA_KINDS = ("session.stored", "suggestion.changed", "plan.changed")  # stored data changed
 LIVE_KINDS = ("live.agent", "live.command", "live.progress")  # a home agent's presence, its commands, its progress
 KINDS = DATA_KINDS + LIVE_KINDS
+# a login (login_session_id) or every login and token of a user (user_id) ended: its open streams end too, and their
+# reconnection checks the login again; patient_id 0 (it is about a caller, not a patient)
+ACCESS_ENDED = "access.ended"
 
 
 @dataclass(frozen=True)
@@ -44,24 +47,36 @@ class Event:
     def from_json(cls, text: str) -> Event:
         """Returns the event of a JSON text written by to_json; raises ValueError when it is not one."""
         raw = json.loads(text)
-        if not isinstance(raw, dict) or raw.get("kind") not in KINDS or not isinstance(raw.get("patient_id"), int):
+        kind_ok = raw.get("kind") in (*KINDS, ACCESS_ENDED) if isinstance(raw, dict) else False
+        if not kind_ok or not isinstance(raw.get("patient_id"), int):
             raise ValueError(f"not an event: {text[:200]!r}")
         return cls(kind=raw["kind"], patient_id=raw["patient_id"], data=dict(raw.get("data") or {}))
 
 
 class Subscriber:
-    """One event stream: events of some kinds about some patients (None = all), queued for an asyncio consumer."""
+    """One event stream: events of some kinds about some patients (None = all), queued for an asyncio consumer;
+    user_id, login_id: whose stream it is (ACCESS_ENDED events for them end it)."""
 
     def __init__(
-        self, patient_ids: frozenset[int] | None, kinds: frozenset[str] = frozenset(KINDS), maxsize: int = 100
+        self,
+        patient_ids: frozenset[int] | None,
+        kinds: frozenset[str] = frozenset(KINDS),
+        maxsize: int = 100,
+        user_id: int | None = None,
+        login_id: int | None = None,
     ) -> None:
         self.patient_ids = patient_ids
         self.kinds = kinds
+        self.user_id = user_id
+        self.login_id = login_id
         self.loop = asyncio.get_running_loop()
         self.queue: asyncio.Queue[Event] = asyncio.Queue(maxsize=maxsize)
 
     def wants(self, ev: Event) -> bool:
-        """Returns whether this stream shows ev (its kind, about one of its patients)."""
+        """Returns whether this stream shows ev (its kind, about one of its patients), or ends with it (its login)."""
+        if ev.kind == ACCESS_ENDED:
+            login, user = ev.data.get("login_session_id"), ev.data.get("user_id")
+            return (login is not None and login == self.login_id) or (user is not None and user == self.user_id)
         return ev.kind in self.kinds and (self.patient_ids is None or ev.patient_id in self.patient_ids)
 
     def offer(self, ev: Event) -> None:
@@ -77,9 +92,15 @@ class Hub:
         self._subscribers: set[Subscriber] = set()
         self._lock = threading.Lock()
 
-    def subscribe(self, patient_ids: frozenset[int] | None, kinds: frozenset[str] = frozenset(KINDS)) -> Subscriber:
+    def subscribe(
+        self,
+        patient_ids: frozenset[int] | None,
+        kinds: frozenset[str] = frozenset(KINDS),
+        user_id: int | None = None,
+        login_id: int | None = None,
+    ) -> Subscriber:
         """Returns a new subscriber (call on the event loop that will read it)."""
-        sub = Subscriber(patient_ids, kinds)
+        sub = Subscriber(patient_ids, kinds, user_id=user_id, login_id=login_id)
         with self._lock:
             self._subscribers.add(sub)
         return sub

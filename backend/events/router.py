@@ -14,7 +14,7 @@ from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
 from backend.deps import Caller, DbSession, current_caller, optional_caller, require_patient_access
-from backend.events.hub import DATA_KINDS, HUB, KINDS, Subscriber
+from backend.events.hub import ACCESS_ENDED, DATA_KINDS, HUB, KINDS, Subscriber
 from backend.exceptions import AUTH_ERRORS, PatientNotFound, error_responses
 from backend.patients.models import TherapistPatient
 from backend.schemas import IdQuery
@@ -56,8 +56,8 @@ async def stream_events(
     live: Annotated[bool, Query(description="also the live loop's events (home agent, progress)")] = False,
 ):
     """Streams server-sent events about the patients the caller may see (one patient with patient_id)."""
-    patients = await run_in_threadpool(_authorize, request, db_session, patient_id)
-    subscriber = HUB.subscribe(patients, frozenset(KINDS if live else DATA_KINDS))
+    patients, user, login = await run_in_threadpool(_authorize, request, db_session, patient_id)
+    subscriber = HUB.subscribe(patients, frozenset(KINDS if live else DATA_KINDS), user_id=user, login_id=login)
     return StreamingResponse(
         _stream(request, subscriber, request.app.state.settings.EVENTS_STREAM_MAX_S),
         media_type="text/event-stream",
@@ -65,15 +65,19 @@ async def stream_events(
     )
 
 
-def _authorize(request: Request, db_session: Session, patient_id: int | None) -> frozenset[int] | None:
-    """Returns the patients whose events the caller may receive, checking the login, in one thread from the first
-    query to the commit that gives the connection back. A reconnecting crowd of pages (every stream ends after
-    EVENTS_STREAM_MAX_S) then never holds pooled connections while it waits for a thread, which had starved the
-    pool with 200 pages open."""
+def _authorize(
+    request: Request, db_session: Session, patient_id: int | None
+) -> tuple[frozenset[int] | None, int | None, int | None]:
+    """Returns (the patients whose events the caller may receive, its user id, its login session id), checking the
+    login, in one thread from the first query to the commit that gives the connection back. A reconnecting crowd of
+    pages (every stream ends after EVENTS_STREAM_MAX_S) then never holds pooled connections while it waits for a
+    thread, which had starved the pool with 200 pages open."""
     caller = current_caller(request, optional_caller(request, db_session))
     patients = visible_patients(caller, db_session, patient_id)
+    user = caller.user.id if caller.user is not None else None
+    login = caller.login_session.id if caller.login_session is not None else None
     db_session.commit()
-    return patients
+    return patients, user, login
 
 
 async def _stream(request: Request, subscriber: Subscriber, max_s: float) -> AsyncIterator[str]:
@@ -89,6 +93,8 @@ async def _stream(request: Request, subscriber: Subscriber, max_s: float) -> Asy
             except TimeoutError:
                 yield ": keep-alive\n\n"
                 continue
+            if ev.kind == ACCESS_ENDED:  # the login ended: so does its stream (a reconnection is refused)
+                break
             yield f"event: {ev.kind}\ndata: {ev.to_json()}\n\n"
     finally:
         HUB.unsubscribe(subscriber)

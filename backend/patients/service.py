@@ -6,6 +6,7 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from backend.database import utcnow
+from backend.events.hub import ACCESS_ENDED, Event, publish
 from backend.exceptions import TherapistNotFound
 from backend.patients.models import TherapistPatient
 from backend.users.models import User
@@ -67,8 +68,10 @@ def assign(*, db_session: Session, patient: User, therapist: User) -> None:
 
 
 def unassign(*, db_session: Session, patient: User, therapist: User) -> None:
-    """Removes a therapist from a patient (idempotent)."""
+    """Removes a therapist from a patient (idempotent); the therapist's open event streams end, and reconnect to the
+    patients they still have."""
     row = db_session.get(TherapistPatient, {"therapist_id": therapist.id, "patient_id": patient.id})
     if row is not None:
         db_session.delete(row)
         db_session.flush()
+        publish(db_session, Event(ACCESS_ENDED, 0, {"user_id": therapist.id}))

@@ -9,6 +9,7 @@ from sqlalchemy.orm import Session
 
 from backend.config import Settings
 from backend.database import utcnow
+from backend.events.hub import ACCESS_ENDED, Event, publish
 from backend.exceptions import (
     EmailAlreadyRegistered,
     NotAuthenticated,
@@ -27,6 +28,8 @@ from backend.security import (
 )
 from backend.users import throttle
 from backend.users.models import ApiToken, LoginAttempt, LoginSession, User
+
+KNOWN_ADDRESS_DAYS = 30  # a successful login from an address within this long makes it the account's known address
 
 
 def get_user(*, db_session: Session, user_id: int) -> User:
@@ -101,8 +104,10 @@ def update_user(
 def revoke_all_credentials(
     *, db_session: Session, user_id: int, api_tokens: bool = True, keep_login: LoginSession | None = None
 ) -> None:
-    """Revokes every login session of a user but keep_login and, unless api_tokens=False, every API token."""
+    """Revokes every login session of a user but keep_login and, unless api_tokens=False, every API token; ends the
+    user's open event streams (keep_login's reconnects)."""
     now = utcnow()
+    publish(db_session, Event(ACCESS_ENDED, 0, {"user_id": user_id}))
     kept = keep_login.id if keep_login is not None else -1
     db_session.execute(
         update(LoginSession)
@@ -119,20 +124,29 @@ def login(
     *, db_session: Session, settings: Settings, email: str, password: str, ip: str
 ) -> tuple[User, LoginSession, str]:
     """Checks a password login and returns (user, login session, cookie token). Throttled (backend.users.throttle)
-    per account and address, per address and per account; commits the attempt before the password is checked."""
+    per account and address, per address and per account (from addresses it did not sign in from lately); commits
+    the attempt before the password is checked."""
     email = email.strip().lower()
+    limits = [
+        throttle.Limit(settings.LOGIN_MAX_FAILURES, "for this account from this address",
+                       (LoginAttempt.email == email, LoginAttempt.ip == ip)),
+        throttle.Limit(settings.LOGIN_MAX_FAILURES_PER_IP, "from this address", (LoginAttempt.ip == ip,)),
+    ]  # fmt: skip
+    # The limit over all addresses stops a guess spread over many; it would also let anyone who knows an e-mail keep
+    # its owner out. An address the account signed in from lately is held only by the two limits above.
+    known = throttle.known_address(db_session=db_session, kind="password", email=email, ip=ip,
+                                   since=utcnow() - dt.timedelta(days=KNOWN_ADDRESS_DAYS))  # fmt: skip
+    db_session.commit()  # ends the read before claim() writes (SQLite cannot upgrade a read snapshot to a write)
+    if not known:
+        limits.append(throttle.Limit(settings.LOGIN_MAX_FAILURES_PER_ACCOUNT, "for this account",
+                                     (LoginAttempt.email == email,)))  # fmt: skip
     attempt = throttle.claim(
         db_session=db_session,
         kind="password",
         email=email,
         ip=ip,
         window=dt.timedelta(minutes=settings.LOGIN_WINDOW_MINUTES),
-        limits=[
-            throttle.Limit(settings.LOGIN_MAX_FAILURES, "for this account from this address",
-                           (LoginAttempt.email == email, LoginAttempt.ip == ip)),
-            throttle.Limit(settings.LOGIN_MAX_FAILURES_PER_IP, "from this address", (LoginAttempt.ip == ip,)),
-            throttle.Limit(settings.LOGIN_MAX_FAILURES_PER_ACCOUNT, "for this account", (LoginAttempt.email == email,)),
-        ],  # fmt: skip
+        limits=limits,
     )
     user = get_user_by_email(db_session=db_session, email=email)
     try:
@@ -159,9 +173,10 @@ def login(
 
 
 def logout(*, db_session: Session, login_session: LoginSession) -> None:
-    """Ends a browser login session."""
+    """Ends a browser login session, and the event streams it has open."""
     login_session.revoked_at = utcnow()
     db_session.flush()
+    publish(db_session, Event(ACCESS_ENDED, 0, {"login_session_id": login_session.id}))
 
 
 def create_api_token(

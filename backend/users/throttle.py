@@ -68,6 +68,22 @@ def _first_passed(
     return None
 
 
+def known_address(*, db_session: Session, kind: str, email: str, ip: str, since: dt.datetime) -> bool:
+    """Returns whether a secret of this kind was given right for email from ip since the given time."""
+    found = db_session.scalar(
+        select(LoginAttempt.id)
+        .where(
+            LoginAttempt.kind == kind,
+            LoginAttempt.email == email,
+            LoginAttempt.ip == ip,
+            LoginAttempt.succeeded.is_(True),
+            LoginAttempt.at >= since,
+        )
+        .limit(1)
+    )
+    return found is not None
+
+
 def settle(*, db_session: Session, attempt: LoginAttempt, succeeded: bool) -> None:
     """Marks a checked attempt as succeeded (it stops counting) or leaves it a failure."""
     attempt.succeeded = succeeded

@@ -58,3 +58,13 @@ def test_a_json_body_larger_than_any_form_is_413_before_it_is_read(client, make_
     r = client.post("/api/v1/auth/login", content=big, headers={"Content-Type": "application/json"})
     assert r.status_code == 413 and r.json()["error"] == "RequestTooLarge", r.text
     assert "1048576" in r.json()["detail"]
+
+
+def test_a_body_of_many_unknown_fields_gets_a_short_answer(client, make_patient_with_therapist, auth_headers):
+    patient, therapist = make_patient_with_therapist()
+    body = ("{" + ",".join(f'"k{i}":1' for i in range(50_000)) + "}").encode()
+    headers = auth_headers(therapist) | {"Content-Type": "application/json"}
+    r = client.post(f"/api/v1/patients/{patient.id}/suggestions", content=body, headers=headers)
+    assert r.status_code == 422
+    assert len(r.content) < 2000, f"{len(r.content)} bytes of answer to {len(body)} bytes of request"
+    assert r.json()["detail"].startswith("body.text: Field required") and r.json()["detail"].endswith("and 49991 more")

@@ -13,7 +13,7 @@ from sqlalchemy.orm import Session
 
 from backend import security
 from backend.config import Settings
-from backend.exceptions import PasswordCheckBusy, TooManyLoginAttempts
+from backend.exceptions import NotAuthenticated, PasswordCheckBusy, TooManyLoginAttempts
 from backend.users import service
 from backend.users.models import LoginAttempt, User
 from tests.backend.conftest import PASSWORD
@@ -97,6 +97,33 @@ def test_one_account_guessed_from_many_addresses_is_throttled(make_user, db_sess
                           ip=f"10.3.0.{i}")  # fmt: skip
     with pytest.raises(TooManyLoginAttempts, match="this account"):
         service.login(db_session=db_session, settings=settings, email=user.email, password=PASSWORD, ip="10.4.0.1")
+
+
+def test_a_guess_from_many_addresses_does_not_lock_the_owner_out_at_home(make_user, db_session):
+    """Anyone who knows a therapist's e-mail could otherwise keep them out: 30 wrong passwords per 15 minutes."""
+    settings = Settings(LOGIN_MAX_FAILURES_PER_ACCOUNT=30)
+    user = make_user("therapist", password=PASSWORD)
+    service.login(db_session=db_session, settings=settings, email=user.email, password=PASSWORD, ip="10.6.0.1")
+    for i in range(31):
+        with pytest.raises((TooManyLoginAttempts, NotAuthenticated)):
+            service.login(db_session=db_session, settings=settings, email=user.email, password=WRONG,
+                          ip=f"10.7.0.{i}")  # fmt: skip
+    _, login_session, _ = service.login(db_session=db_session, settings=settings, email=user.email,
+                                        password=PASSWORD, ip="10.6.0.1")  # fmt: skip
+    assert login_session.user_id == user.id  # the address the owner signed in from before still lets them in
+    with pytest.raises(TooManyLoginAttempts, match="this account"):  # a new address is still held back
+        service.login(db_session=db_session, settings=settings, email=user.email, password=PASSWORD, ip="10.8.0.1")
+
+
+def test_a_known_address_still_has_its_own_limit(make_user, db_session):
+    settings = Settings()
+    user = make_user("therapist", password=PASSWORD)
+    service.login(db_session=db_session, settings=settings, email=user.email, password=PASSWORD, ip="10.9.0.1")
+    for _ in range(settings.LOGIN_MAX_FAILURES):
+        with pytest.raises(NotAuthenticated):
+            service.login(db_session=db_session, settings=settings, email=user.email, password=WRONG, ip="10.9.0.1")
+    with pytest.raises(TooManyLoginAttempts, match="from this address"):
+        service.login(db_session=db_session, settings=settings, email=user.email, password=WRONG, ip="10.9.0.1")
 
 
 def test_a_refused_attempt_is_not_counted_as_a_failure(make_user, db_session):

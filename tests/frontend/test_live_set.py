@@ -148,7 +148,7 @@ def test_patient_starts_a_set_and_sees_the_count_reach_the_target(patient_page, 
         # one JS turn: the panel is redrawn with every message, so an element handle may already be detached
         size = page.evaluate(f"parseFloat(getComputedStyle(document.querySelector('{COUNT}')).fontSize)")
         assert size >= 96, f"the live count is {size} px; it must be at least 96 px"
-        page.wait_for_function(f"+document.querySelector('{COUNT}').textContent >= 1", timeout=30_000)
+        page.wait_for_function(f"() => +document.querySelector('{COUNT}').textContent >= 1", timeout=30_000)
         shot(page, "live-recording")
         _axe_clean(page)
         expect(page.locator("#live-ended")).to_contain_text(f"You did all {TARGET}", timeout=60_000)
@@ -176,7 +176,7 @@ def test_agent_killed_mid_set_page_says_offline_and_the_set_is_kept(patient_page
         expect(status).to_have_attribute("data-state", "online")
         _start(page)
         # two of three repetitions (about 7 s of frames, over the 5 s the journal rule keeps), the set still running
-        page.wait_for_function(f"+(document.querySelector('{COUNT}') || {{}}).textContent >= 2", timeout=30_000)
+        page.wait_for_function(f"() => +(document.querySelector('{COUNT}') || {{}}).textContent >= 2", timeout=30_000)
         time.sleep(0.6)  # a little more than the journal's flush interval
         proc.kill()  # SIGKILL: no goodbye, the frames on disk are all that is left
         proc.wait()
@@ -203,7 +203,7 @@ def test_stop_ends_the_set_and_its_result_is_stored(patient_page, live_server, a
     with agent(home, seed=7):
         expect(page.locator("#agent-status")).to_have_attribute("data-state", "online")
         _start(page)
-        page.wait_for_function(f"+(document.querySelector('{COUNT}') || {{}}).textContent >= 1", timeout=30_000)
+        page.wait_for_function(f"() => +(document.querySelector('{COUNT}') || {{}}).textContent >= 1", timeout=30_000)
         page.get_by_role("button", name="Stop").click()
         expect(page.locator("#live-ended")).to_contain_text(f"of {TARGET}. Good effort!", timeout=15_000)
         expect(page.locator("#live")).to_contain_text("You stopped the set.")

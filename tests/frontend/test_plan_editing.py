@@ -27,7 +27,7 @@ def ines_id(live_server) -> int:
     return upload_session(live_server.url, INES, "sit_to_stand", 6, seed=40, created_at=when)["patient_id"]
 
 
-FITS = "document.documentElement.scrollWidth <= document.documentElement.clientWidth"
+FITS = "() => document.documentElement.scrollWidth <= document.documentElement.clientWidth"
 
 
 def _fits(page, width: int) -> None:

@@ -9,7 +9,7 @@ import pytest
 from sqlalchemy import create_engine, text
 from sqlalchemy.orm import Session
 
-from backend.events.hub import HUB, Event, Hub, publish
+from backend.events.hub import ACCESS_ENDED, HUB, Event, Hub, publish
 from backend.events.listener import Listener, conninfo
 
 PG_URL = os.environ.get("COACH_TEST_DATABASE_URL", "")
@@ -37,6 +37,23 @@ def test_hub_gives_each_subscriber_only_the_patients_it_may_see():
         return got_mine, got_all
 
     assert asyncio.run(run()) == ([1], [2, 1])
+
+
+def test_the_end_of_a_login_reaches_only_its_own_streams():
+    async def run():
+        hub = Hub()
+        login_7 = hub.subscribe(None, user_id=3, login_id=7)
+        login_8 = hub.subscribe(None, user_id=3, login_id=8)  # the same user in another browser
+        other = hub.subscribe(None, user_id=4, login_id=9)
+        one = hub.deliver(Event(ACCESS_ENDED, 0, {"login_session_id": 7}))  # a logout
+        every = hub.deliver(Event(ACCESS_ENDED, 0, {"user_id": 3}))  # a new password, a deactivation
+        assert hub.deliver(Event("plan.changed", 1)) == 3  # the end of a login is no filter of data events
+        await asyncio.sleep(0)
+        return one, every, login_7.queue.qsize(), login_8.queue.qsize(), other.queue.qsize()
+
+    assert asyncio.run(run()) == (1, 2, 3, 2, 1)
+    ev = Event(ACCESS_ENDED, 0, {"user_id": 3})
+    assert Event.from_json(ev.to_json()) == ev  # it travels between processes like any other event
 
 
 def _received(sub, timeout: float = 5.0) -> list[Event]:
