@@ -10,8 +10,8 @@ Three policies, chosen by path:
   (viser's RunJavascriptMessage, run with Function()), so what it may play is narrowed twice: the page answers only
   ?playbackPath=<a session's replay in this API> (frontend.pages.replay_viewer), and connect-src keeps it on this
   origin, where recordings are built by the server;
-- FastAPI's /docs and /redoc: Swagger UI and ReDoc as FastAPI ships them (scripts and styles from cdn.jsdelivr.net,
-  one inline script), still with connections to this origin only.
+- the API documentation /docs (backend.api_docs): Swagger UI's files from this origin and the one inline script that
+  starts it, connections to this origin only.
 """
 
 from __future__ import annotations
@@ -20,8 +20,7 @@ from starlette.datastructures import MutableHeaders
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 VIEWER_PATH = "/replay/viewer/"
-DOCS_PATHS = frozenset({"/docs", "/redoc", "/docs/oauth2-redirect"})
-DOCS_CDN = "https://cdn.jsdelivr.net"
+DOCS_PATHS = frozenset({"/docs", "/docs/oauth2-redirect"})
 
 _COMMON = "base-uri 'none'; object-src 'none'; form-action 'self'; frame-ancestors 'self'"
 PAGE_POLICY = (
@@ -34,9 +33,8 @@ VIEWER_POLICY = (
     f"frame-src 'none'; {_COMMON}"
 )
 DOCS_POLICY = (
-    f"default-src 'self'; script-src 'self' 'unsafe-inline' {DOCS_CDN}; style-src 'self' 'unsafe-inline' {DOCS_CDN} "
-    f"https://fonts.googleapis.com; img-src 'self' data: https://fastapi.tiangolo.com; font-src 'self' data: "
-    f"https://fonts.gstatic.com; connect-src 'self'; worker-src 'self' blob:; frame-src 'none'; {_COMMON}"
+    "default-src 'self'; script-src 'self' 'unsafe-inline'; style-src 'self' 'unsafe-inline'; img-src 'self' data:; "
+    f"font-src 'self' data:; connect-src 'self'; worker-src 'self' blob:; frame-src 'none'; {_COMMON}"
 )
 HSTS = "max-age=31536000"
 

@@ -52,6 +52,14 @@ def test_patient_page_runs_under_its_policy(page, live_server):
     shot(page, "policy-patient")
 
 
+def test_api_docs_run_under_their_policy(page, live_server):
+    page.context.add_init_script(REPORT_VIOLATIONS)
+    page.goto("/docs")
+    page.locator(".opblock-summary-path").first.wait_for()
+    assert not _violations(page), _violations(page)
+    assert not page.js_errors, page.js_errors
+
+
 @pytest.fixture(scope="module")
 def framing_site():
     """Another site on 127.0.0.1: /frame?URL is a page that shows URL in an iframe (to lay its buttons over it)."""
