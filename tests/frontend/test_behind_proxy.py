@@ -7,6 +7,7 @@ login, the pages, the session page and the 3D replay all work through it, and no
 from __future__ import annotations
 
 import re
+from contextlib import contextmanager
 
 import pytest
 from playwright.sync_api import expect
@@ -31,7 +32,10 @@ def public_url(live_server, tmp_path_factory):
             yield public
 
 
-def test_therapist_works_through_the_proxy_and_the_replay_plays(browser, public_url, live_server):
+@contextmanager
+def on_origin_only(browser, public_url: str):
+    """Yields a page of a fresh browser context; on leaving, asserts that no request or websocket left public_url
+    and that no script error happened."""
     context = browser.new_context(ignore_https_errors=True, viewport={"width": 1280, "height": 900})
     context.set_default_timeout(20_000)
     page = context.new_page()
@@ -41,6 +45,16 @@ def test_therapist_works_through_the_proxy_and_the_replay_plays(browser, public_
     errors: list[str] = []
     page.on("pageerror", lambda exc: errors.append(str(exc)))
     try:
+        yield page
+    finally:
+        context.close()
+    foreign = [u for u in requests if not (u.startswith(public_url + "/") or u.startswith(("data:", "blob:")))]
+    assert not foreign, f"requests that left {public_url}: {foreign}"
+    assert not errors, errors
+
+
+def test_therapist_works_through_the_proxy_and_the_replay_plays(browser, public_url, live_server):
+    with on_origin_only(browser, public_url) as page:
         page.goto(f"{public_url}/therapist")  # not signed in: to the login page, with the way back
         page.wait_for_url(re.compile(re.escape(public_url) + r"/\?next="))
         page.fill("#email", THERAPIST)
@@ -59,28 +73,11 @@ def test_therapist_works_through_the_proxy_and_the_replay_plays(browser, public_
         page.wait_for_url(re.compile(re.escape(public_url) + r"/therapist/sessions/\d+$"))
         expect(page.locator(".js-plotly-plot").first).to_be_visible()
         shot(page, "proxy-session")
-    finally:
-        context.close()
-    foreign = [u for u in requests if not (u.startswith(public_url + "/") or u.startswith(("data:", "blob:")))]
-    assert not foreign, f"requests that left {public_url}: {foreign}"
-    assert not errors, errors
 
 
 def test_api_docs_work_through_the_proxy_without_leaving_its_origin(browser, public_url):
-    context = browser.new_context(ignore_https_errors=True, viewport={"width": 1280, "height": 900})
-    context.set_default_timeout(20_000)
-    page = context.new_page()
-    requests: list[str] = []
-    page.on("request", lambda r: requests.append(r.url))
-    errors: list[str] = []
-    page.on("pageerror", lambda exc: errors.append(str(exc)))
-    try:
+    with on_origin_only(browser, public_url) as page:
         page.goto(f"{public_url}/docs")
         expect(page.locator(".opblock-summary-path", has_text="/api/v1/sessions").first).to_be_visible()
         expect(page.locator(".servers select option").first).to_have_text(PREFIX)  # "Try it out" goes through it
         shot(page, "proxy-api-docs")
-    finally:
-        context.close()
-    foreign = [u for u in requests if not (u.startswith(public_url + "/") or u.startswith(("data:", "blob:")))]
-    assert not foreign, f"requests that left {public_url}: {foreign}"
-    assert not errors, errors

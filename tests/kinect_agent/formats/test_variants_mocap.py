@@ -177,17 +177,23 @@ def test_bvh_frame_time_with_many_digits(cmu, tmp_path: Path) -> None:
     np.testing.assert_allclose(rec.t, np.arange(30) / 120.0, atol=1e-12)
 
 
-@pytest.mark.parametrize("unit", ["cm", "inches", "m", "mm"])
-def test_bvh_length_unit_is_found_on_each_kind(cmu, tmp_path: Path, unit: str) -> None:
-    path, joints, motion = cmu
-    clean = formats.read(path)
-    k = bvh.CMU_UNIT_M / bvh.UNITS_M[unit]
+def _scaled(joints, motion: np.ndarray, k: float):
+    """Returns (joints, motion) with every length (offsets and position channels) multiplied by k."""
     scaled, moved = _renamed(joints, lambda n: n), motion.copy()
     for joint in scaled:
         joint.offset = joint.offset * k
         for c, name in enumerate(joint.channels):
             if name.endswith("position"):
                 moved[:, joint.first_channel + c] *= k
+    return scaled, moved
+
+
+@pytest.mark.parametrize("unit", ["cm", "inches", "m", "mm"])
+def test_bvh_length_unit_is_found_on_each_kind(cmu, tmp_path: Path, unit: str) -> None:
+    path, joints, motion = cmu
+    clean = formats.read(path)
+    k = bvh.CMU_UNIT_M / bvh.UNITS_M[unit]
+    scaled, moved = _scaled(joints, motion, k)
     out = tmp_path / f"{unit}.bvh"
     _write_bvh(out, scaled, moved)
     rec = formats.read(out)
@@ -213,12 +219,7 @@ def test_bvh_child_or_tall_thigh_unit_found_when_only_one_fits(cmu, tmp_path, un
     clean = formats.read(path)
     hip, knee = (clean.positions[0, skeleton.INDEX[j]] for j in ("HIP_L", "KNE_L"))
     k = thigh_m / float(np.linalg.norm(knee - hip)) * bvh.CMU_UNIT_M / bvh.UNITS_M[unit]
-    scaled, moved = _renamed(joints, lambda n: n), motion.copy()
-    for joint in scaled:
-        joint.offset = joint.offset * k
-        for c, name in enumerate(joint.channels):
-            if name.endswith("position"):
-                moved[:, joint.first_channel + c] *= k
+    scaled, moved = _scaled(joints, motion, k)
     out = tmp_path / f"{unit}.bvh"
     _write_bvh(out, scaled, moved)
     if not found:  # 25 cm is a child's thigh in cm or an adult's (0.64 m) in inches
