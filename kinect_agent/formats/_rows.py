@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from kinect_agent.errors import FormatError
-from kinect_agent.formats._text import read_lines
+from kinect_agent.formats._text import last_content_line, read_lines
 
 
 def parse_csv_row(path: Path, line_no: int, line: str, n_columns: int, layout: str) -> list[float]:
@@ -58,7 +58,7 @@ def read_csv_table(path: Path, n_columns: int, layout: str) -> np.ndarray:
     layout: what the columns are.
     """
     lines = read_lines(path)
-    last = max((i for i, line in enumerate(lines) if line.strip()), default=-1)
+    last = last_content_line(lines)
     rows = []
     for i, line in enumerate(lines):
         if not line.strip():

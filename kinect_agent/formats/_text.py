@@ -58,6 +58,11 @@ def read_lines(path: str | Path) -> list[str]:
     return lines
 
 
+def last_content_line(lines: list[str]) -> int:
+    """Returns the index of the last line that is not blank (where a cut-short file shows), -1 when all are."""
+    return max((i for i, line in enumerate(lines) if line.strip()), default=-1)
+
+
 def cut_inside_number(lines: list[str]) -> bool:
     """True when the last line (of a file without a final line end) ends in a number with fewer decimals than every
     number of the (at least 3, at most 5) lines before it, all written with one fixed count of decimals (as %.6f

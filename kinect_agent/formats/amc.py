@@ -23,7 +23,7 @@ from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import asf, mocap_mapping
 from kinect_agent.formats._rows import is_number, number_hint
-from kinect_agent.formats._text import read_lines
+from kinect_agent.formats._text import last_content_line, read_lines
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "amc"
@@ -170,7 +170,7 @@ def parse_motion_checked(
     seen: set[str] = set()
     degrees: bool | None = None
     frame_line = 0
-    last = max((i for i, line in enumerate(lines) if line.strip()), default=-1) + 1
+    last = last_content_line(lines) + 1  # its line number
     for line_no, line in enumerate(lines, start=1):
         tok = line.split()
         if not tok or tok[0].startswith("#"):

@@ -14,7 +14,7 @@ import numpy as np
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats._rows import is_number, number_hint
-from kinect_agent.formats._text import read_lines
+from kinect_agent.formats._text import last_content_line, read_lines
 
 KINECT_V1_JOINTS: tuple[str, ...] = (
     "HipCenter", "Spine", "ShoulderCenter", "Head",
@@ -94,7 +94,7 @@ def read_numeric_rows(path: Path, n_fields: int) -> tuple[np.ndarray, list[int],
     """
     rows, line_numbers, texts = [], [], []
     lines = read_lines(path)
-    last = max((i for i, line in enumerate(lines) if line.strip()), default=-1)
+    last = last_content_line(lines)
     for i, line in enumerate(lines):
         cells = line.split()
         if not cells:
