@@ -5,7 +5,7 @@ Definitions:
                      (series.smooth_positions, Gaussian SD 0.1 s, which removes sensor jitter but not sway);
     floor plane    = the camera's x–z plane (y is up; a Kinect mounted level sees the floor horizontal);
     standing still = frames where both knees are flexed less than STANDING_KNEE_DEG (25°) and both hips less than
-                     STANDING_HIP_DEG (30°) (clinical angles of kinect_agent.processing.angles), and the body centre
+                     STANDING_HIP_DEG (30°) (clinical angles of kinect_agent.body.angles), and the body centre
                      and both ankles move slower than STILL_M_S (0.1 m/s): the legs stand still, the arms may
                      move (sway during an arm exercise counts; stepping, squatting and rising do not); only runs of
                      at least MIN_RUN_S (1 s) count, each measured on its own;

@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from kinect_agent import skeleton
+from kinect_agent.body import kinematics as km
 from kinect_agent.processing import _ukf_numba
-from kinect_agent.processing import kinematics as km
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.ukf import MerweScaledSigmaPoints, UnscentedKalmanFilter, gated_update
 

@@ -47,15 +47,15 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.blas_threads import one_blas_thread
+from kinect_agent.body.angles import joint_angles
+from kinect_agent.body.rotations import matrix_to_quat
 from kinect_agent.processing import offset_model, uncertainty
-from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.chain_filter import N_LEN, N_ROOT, ChainFilter
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.ik import IKResult, inverse_kinematics
 from kinect_agent.processing.online import run_online
 from kinect_agent.processing.params import KinematicParams
-from kinect_agent.processing.rotations import matrix_to_quat
 from kinect_agent.processing.ukf import combine_information, unscented_rts
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INFERRED, NOT_TRACKED, TRACKED

@@ -6,7 +6,7 @@ import numpy as np
 
 from backend.analysis.balance import CHI2_95_2DOF, sway
 from kinect_agent.analysis import series
-from kinect_agent.processing.angles import joint_angles
+from kinect_agent.body.angles import joint_angles
 from kinect_agent.skeleton import INDEX
 from kinect_agent.sources.simulator import simulate_truth
 
