@@ -32,6 +32,7 @@ from backend.request_limits import RequestLimits
 from backend.schemas import ErrorOut
 from backend.security_headers import SecurityHeaders
 from kinect_agent.blas_threads import one_blas_thread
+from kinect_agent.processing.errors import ProcessingError
 
 log = logging.getLogger(__name__)
 
@@ -122,6 +123,13 @@ def _install_error_handlers(app: FastAPI) -> None:
         return JSONResponse(
             {"error": type(exc).__name__, "detail": exc.message}, status_code=exc.status_code, headers=exc.headers
         )
+
+    @app.exception_handler(ProcessingError)
+    async def processing_fault(request: Request, exc: ProcessingError) -> JSONResponse:
+        # an internal fault on input the server accepted: logged with the request and the notes the layers added
+        log.error("internal fault of the signal processing in %s %s", request.method, request.url.path, exc_info=exc)
+        detail = f"internal fault of the signal processing ({exc}); the request was valid, the fault is the server's"
+        return JSONResponse({"error": type(exc).__name__, "detail": detail}, status_code=500)
 
     @app.exception_handler(RequestValidationError)
     async def validation_error(request: Request, exc: RequestValidationError) -> Response:

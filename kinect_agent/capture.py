@@ -16,6 +16,7 @@ from pathlib import Path
 from kinect_agent import formats
 from kinect_agent.formats.session_file import SessionPayload
 from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.processing.errors import ProcessingError
 from kinect_agent.processing.pipeline import VERSION, process
 from kinect_agent.queue import SessionQueue
 from kinect_agent.recording import Recording
@@ -120,8 +121,9 @@ def queue_session(
     queue.hold(raw)
     try:
         payload = make_payload(rec, session_id=raw.session_id, created_at=raw.created_at, recorded_by=recorded_by)
-    except ValueError as exc:
-        log.warning("filtering failed (%s); queuing the raw session for the server to filter", exc)
+    except (ValueError, ProcessingError) as exc:
+        log.warning("filtering failed (%s: %s); queuing the raw session for the server to filter", type(exc).__name__,
+                    exc)  # fmt: skip
         payload = raw
     path = queue.enqueue(payload)
     queue.release(raw.session_id)

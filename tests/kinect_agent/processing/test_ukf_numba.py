@@ -1,4 +1,4 @@
-"""The fused compiled UKF step (_ukf_numba) against the numpy reference (ukf.gated_update with numpy FK)."""
+"""The fused compiled UKF step (_ukf_numba) against the numpy reference (the filter's gated_update, numpy FK)."""
 
 from __future__ import annotations
 
