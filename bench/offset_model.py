@@ -309,7 +309,7 @@ def write_constants(model: om.OffsetModel, path: Path = CONSTANTS_PATH) -> None:
     """Writes the fitted offsets and their provenance as a Python module (kinect_agent.processing.offset_constants)."""
     lines = ['"""Fitted by bench/offset_model.py (generated; do not edit): Kinect minus mocap joint offsets, metres,',
              'body frame (x = subject\'s left, y = up, z = forward). See kinect_agent.processing.offset_model."""', "",
-             "# fmt: off", f"PROVENANCE: dict = {json.dumps(model.provenance, indent=4)}", "",
+             "# fmt: off", f"PROVENANCE: dict[str, object] = {json.dumps(model.provenance, indent=4)}", "",
              "OFFSETS_M: dict[str, dict[str, tuple[float, float, float]]] = {"]  # fmt: skip
     for pose, off in model.offsets_m.items():
         lines.append(f'    "{pose}": {{')

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The whole test suite: ruff, the import layers, then pytest on embedded SQLite and on PostgreSQL (127.0.0.1:5432,
+# The whole test suite: ruff, mypy, the import layers, then pytest on embedded SQLite and on PostgreSQL (127.0.0.1:5432,
 # database test).
 # Extra arguments go to pytest (e.g. -k upload). Set COACH_TEST_PG_URL for another PostgreSQL.
 set -euo pipefail
@@ -27,10 +27,12 @@ if ! pg_ready 2>/dev/null; then
   pg_ready || { echo "error: the suite runs on PostgreSQL too, and none answers at $PG_URL" >&2; exit 1; }
 fi
 
-# Fast checks first (seconds): lint, formatting, and the import layers of docs/architecture.md.
-echo "=== ruff check, ruff format --check, import layers ===" >&2
+# Fast checks first (seconds): lint, formatting, types ([tool.mypy] in pyproject.toml says which packages) and the
+# import layers of docs/architecture.md.
+echo "=== ruff check, ruff format --check, mypy, import layers ===" >&2
 ruff check .
 ruff format --check .
+mypy
 python -m pytest -q -p no:cacheprovider tests/test_layers.py
 
 # The browser tests (marker "browser") are slow and exercise the pages, not the database: they run once, on

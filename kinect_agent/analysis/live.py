@@ -22,6 +22,7 @@ LIMB_MISSING of them. The thresholds are those of the server's camera advice aft
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -126,10 +127,11 @@ class LiveCount:
         self._filtered: list[np.ndarray] = []
         self._raw: list[np.ndarray] = []
         self._state: list[np.ndarray] = []
-        self.frozen, self.cut_t = 0, None
+        self.frozen = 0
+        self.cut_t = math.nan  # s; the first frame's time until a window is frozen (NaN: no frame yet)
         self.shown = 0
-        self._next_eval = None
-        self._last_moving = None
+        self._next_eval = math.nan  # s
+        self._last_moving = math.nan  # s
         self._status = LiveStatus(0, None, None, None, 0.0)
 
     def add(self, t: float, raw_positions: np.ndarray, raw_state: np.ndarray, filtered: np.ndarray) -> LiveStatus:
@@ -142,7 +144,7 @@ class LiveCount:
         self._filtered.append(np.asarray(filtered, dtype=np.float64))
         self._raw.append(np.asarray(raw_positions, dtype=np.float64))
         self._state.append(np.asarray(raw_state))
-        if self.cut_t is None:
+        if math.isnan(self.cut_t):
             self.cut_t, self._last_moving, self._next_eval = t, t, t + self.every_s
         if t >= self._next_eval:
             self._next_eval = t + self.every_s

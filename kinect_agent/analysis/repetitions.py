@@ -114,7 +114,7 @@ class Repetition:
     peak_deg: float
     side: str
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, object]:
         """Returns the JSON-ready form (floats rounded to 1 ms and 0.1°)."""
         d = asdict(self)
         for key in ("start_s", "end_s", "duration_s"):
@@ -606,7 +606,11 @@ def count_repetitions(
     per_angle = {name: _repeating(t, smoothed, found, name, dominant) for name in moving}
     events = [ev for name in moving for ev in per_angle[name]]
     merged = merge_events(events, params.merge_overlap)
-    counted = {n for n in moving if n == dominant or _alternates(n, dominant, events, params, found[n].cycle_deg)}
+    counted = {
+        n
+        for n in moving
+        if n == dominant or (dominant is not None and _alternates(n, dominant, events, params, found[n].cycle_deg))
+    }
     merged = _drop_weak_lone(_keep_counted(merged, counted), params.lone_ratio)
     merged = _drop_off_cadence(_drop_rebounds(_drop_bumps(merged, params), params), params, t.shape[0])
     if dominant is not None:

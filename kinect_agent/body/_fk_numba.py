@@ -12,7 +12,7 @@ import numpy as np
 try:
     import numba
 except ImportError:  # pragma: no cover - exercised only where numba is absent
-    numba = None
+    numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None
 
@@ -85,4 +85,7 @@ def _fk_many(root, lengths, theta, rest, R_ref, rot_dof, rot_start, rot_parent, 
                 )
 
 
-fk_many = numba.njit(cache=True, fastmath=False, nogil=True)(_fk_many) if AVAILABLE else None
+if AVAILABLE:
+    fk_many = numba.njit(cache=True, fastmath=False, nogil=True)(_fk_many)
+else:  # pragma: no cover - callers check AVAILABLE first
+    fk_many = None  # type: ignore[assignment]

@@ -117,7 +117,7 @@ def rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return rotvec_to_matrix(axis * angle)
 
 
-def axis_rotation(axis: int, angle: np.ndarray) -> np.ndarray:
+def axis_rotation(axis: int, angle: float | np.ndarray) -> np.ndarray:
     """Returns rotation matrices (..., 3, 3) about the body axis `axis` (0 = x, 1 = y, 2 = z) by `angle` (...) rad."""
     c, s = np.cos(angle), np.sin(angle)
     R = np.zeros(np.shape(angle) + (3, 3))

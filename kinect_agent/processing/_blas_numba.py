@@ -15,7 +15,7 @@ try:
     from numba import types as _t
     from numba.extending import get_cython_function_address as _address
 except ImportError:  # pragma: no cover - exercised only where numba is absent
-    numba = None
+    numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None
 
@@ -77,5 +77,5 @@ if AVAILABLE:
         _dsyrk(chars[0:].ctypes, chars[1:].ctypes, ints[0:].ctypes, ints[1:].ctypes, ab[0:].ctypes, A.ctypes,
                ints[2:].ctypes, ab[1:].ctypes, C.ctypes, ints[3:].ctypes)  # fmt: skip
 
-else:  # pragma: no cover
-    cholesky_lower = solve_lower = gram_lower = gram_rows_lower = None
+else:  # pragma: no cover - callers check AVAILABLE first
+    cholesky_lower = solve_lower = gram_lower = gram_rows_lower = None  # type: ignore[assignment]

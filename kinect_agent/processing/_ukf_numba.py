@@ -24,7 +24,7 @@ from kinect_agent.processing import _blas_numba
 try:
     import numba
 except ImportError:  # pragma: no cover - exercised only where numba is absent
-    numba = None
+    numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None and _blas_numba.AVAILABLE
 
@@ -318,5 +318,5 @@ if AVAILABLE:
     _sigma_positions_c = _jit(_sigma_positions)
     chain_step = _jit(_chain_step)
     add_capped = _jit(_add_capped)
-else:  # pragma: no cover
-    chain_step = add_capped = None
+else:  # pragma: no cover - callers check AVAILABLE first
+    chain_step = add_capped = None  # type: ignore[assignment]

@@ -181,7 +181,7 @@ def _bone_kept(positions: np.ndarray, child: int, a: int, b: int, typical_m: np.
     bone = bone_lengths(positions[a + 1 : b])[:, child]
     if not np.any(np.isfinite(bone)) or not np.isfinite(typical_m[child]):
         return False
-    return float(np.nanmedian(np.abs(bone - typical_m[child]))) <= bone_tolerance(typical_m[child])
+    return bool(float(np.nanmedian(np.abs(bone - typical_m[child]))) <= bone_tolerance(typical_m[child]))
 
 
 def limb_kept(positions: np.ndarray, j: int, a: int, b: int, typical_m: np.ndarray) -> bool:

@@ -119,7 +119,9 @@ def _mean_direction(R: np.ndarray, vec: np.ndarray, default: np.ndarray) -> np.n
     return mean / n if np.isfinite(n) and n > 1e-6 else default
 
 
-def _limb(parent: np.ndarray, prox: np.ndarray, mid: np.ndarray, dist: np.ndarray, sign: float) -> tuple:
+def _limb(
+    parent: np.ndarray, prox: np.ndarray, mid: np.ndarray, dist: np.ndarray, sign: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Returns (U, theta_hinge): the proximal segment's world frame and the hinge angle at `mid`.
 
     parent: (T, 3, 3) world frame of the parent joint. prox, mid, dist: (T, 3) m positions (e.g. SHO, ELB, WRI).
@@ -161,7 +163,10 @@ def inverse_kinematics(positions: np.ndarray) -> IKResult:
     lengths = bone_length_estimate(positions)
     p = fill_gaps(positions)
     T = p.shape[0]
-    J = lambda name: p[:, IDX[name]]  # noqa: E731
+
+    def J(name: str) -> np.ndarray:
+        return p[:, IDX[name]]
+
     rest = km.REST_DIRECTIONS.copy()
     R = {}  # world frame of the bones leaving each rotating joint, (T, 3, 3)
     loc = {}  # local rotation of each 3-DoF joint

@@ -2,7 +2,7 @@
 body frame (x = subject's left, y = up, z = forward). See kinect_agent.processing.offset_model."""
 
 # fmt: off
-PROVENANCE: dict = {
+PROVENANCE: dict[str, object] = {
     "fitted_by": "bench/offset_model.py",
     "date": "2026-11-25",
     "on": "keraal",

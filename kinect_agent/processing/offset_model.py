@@ -36,7 +36,7 @@ class OffsetModel:
     the single pose "all" applies to every frame. provenance: which data and date fitted it."""
 
     offsets_m: dict[str, np.ndarray]
-    provenance: dict = field(default_factory=dict)
+    provenance: dict[str, object] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for pose, off in self.offsets_m.items():
@@ -112,7 +112,7 @@ def _median(d: np.ndarray) -> np.ndarray:
 
 
 def fit(
-    pairs: Sequence[tuple[np.ndarray, np.ndarray]], per_pose: bool = False, provenance: dict | None = None
+    pairs: Sequence[tuple[np.ndarray, np.ndarray]], per_pose: bool = False, provenance: dict[str, object] | None = None
 ) -> OffsetModel:
     """Fits the model: per joint (and pose), the mean over trials of each trial's median body-frame offset, so each
     trial weighs the same; joints no trial measured get 0. pairs: (estimate, truth) per trial, as trial_offsets."""

@@ -6,6 +6,7 @@ OnlineFilter.step takes one frame and returns its filtered joints; run_online ru
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -16,6 +17,7 @@ from kinect_agent.body import kinematics as km
 from kinect_agent.body.rotations import matrix_to_rotvec
 from kinect_agent.processing.chain_filter import N_LEN, N_ROOT, N_TH, ChainFilter
 from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.processing.errors import ProcessingError
 from kinect_agent.processing.excursions import LiveExcursions
 from kinect_agent.processing.ik import inverse_kinematics
 from kinect_agent.recording import Recording
@@ -62,8 +64,8 @@ class OnlineFilter:
                 raise ValueError("lengths must be finite and > 0 metres")
         self.given_lengths = lengths
         self.kf: ChainFilter | None = None
-        self.t0: float | None = None
-        self.t_last: float | None = None
+        self.t0 = math.nan  # s, the frame that started the filter (NaN before)
+        self.t_last = math.nan  # s, the last frame stepped (NaN before)
         self.last = np.full((skeleton.J, 3), np.nan)
         self.n_gated = 0
         self.gated_since = np.full(skeleton.J, np.nan)  # s, start of each joint's current run of gated frames
@@ -79,7 +81,7 @@ class OnlineFilter:
         """True once the segment lengths are constants of the filter."""
         return self.kf is not None and self.kf.lengths is not None
 
-    def _start(self, t: float, positions: np.ndarray) -> None:
+    def _start(self, t: float, positions: np.ndarray) -> ChainFilter:
         # One frame starts the filter: a joint whose bone to its parent is implausible (an outlier in this very
         # frame) is left out, so that IK places it at a typical offset instead of anchoring the state on it.
         reference = self.given_lengths if self.given_lengths is not None else km.TYPICAL_LENGTHS
@@ -92,11 +94,14 @@ class OnlineFilter:
         parts = [ik.root[0]] + ([] if lengths is not None else [ik.lengths]) + [ik.theta[0]]
         self.kf = ChainFilter(ik.model, lengths, self.config, np.concatenate(parts))
         self.t0, self.t_last = t, t
+        return self.kf
 
     def fix_lengths(self) -> None:
-        """Ends the estimation of the segment lengths: from now on they are the state's current ones (19,) m."""
-        if not self.lengths_fixed:
-            self.kf = self.kf.with_lengths_fixed(self.kf.x[N_ROOT : N_ROOT + N_LEN].copy(), self.config)
+        """Ends the estimation of the segment lengths: from now on they are the state's current ones (19,) m.
+        Nothing to do before the filter has started."""
+        kf = self.kf
+        if kf is not None and kf.lengths is None:
+            self.kf = kf.with_lengths_fixed(kf.x[N_ROOT : N_ROOT + N_LEN].copy(), self.config)
 
     def step(self, t: float, positions: np.ndarray, state: np.ndarray) -> np.ndarray:
         """Returns the filtered joint positions (J, 3) m for one frame.
@@ -111,7 +116,7 @@ class OnlineFilter:
             raise ValueError(f"state must have shape ({skeleton.J},), got {state.shape}")
         if not np.isfinite(t):
             raise ValueError(f"t must be finite, got {t!r}")
-        if self.t_last is not None and t <= self.t_last:
+        if t <= self.t_last:  # False while t_last is NaN
             raise ValueError(f"t must increase: got {t} after {self.t_last}")
         present = (state != NOT_TRACKED) & np.all(np.isfinite(positions), axis=1)
         if self.excursions is not None:
@@ -123,19 +128,20 @@ class OnlineFilter:
                 out = np.where(present[:, None], positions, self.last)
                 self.last = out
                 return out.copy()
-            self._start(t, np.where(present[:, None], positions, np.nan))
+            kf = self._start(t, np.where(present[:, None], positions, np.nan))
         else:
             if not self.lengths_fixed and t - self.t0 >= self.config.online_init_s:
                 self.fix_lengths()
-            self.kf.predict_random_walk(max(t - self.t_last, 1e-6) * self.config.rate_ref_hz)
+            kf = self.kf
+            kf.predict_random_walk(max(t - self.t_last, 1e-6) * self.config.rate_ref_hz)
         self.t_last = t
-        self._update(t, positions, state, present)
-        self.kf.model.fold_references(self.kf.theta())
-        out = self.kf.positions()
+        self._update(kf, t, positions, state, present)
+        kf.model.fold_references(kf.theta())
+        out = kf.positions()
         self.last = out
         return out
 
-    def _update(self, t: float, positions: np.ndarray, state: np.ndarray, present: np.ndarray) -> None:
+    def _update(self, kf: ChainFilter, t: float, positions: np.ndarray, state: np.ndarray, present: np.ndarray) -> None:
         """Restarts joints that lost track, then the gated update with the present joints."""
         if not present.any():
             return
@@ -145,10 +151,10 @@ class OnlineFilter:
         R_diag = np.repeat(sd**2, 3)
         lost = present & (t - self.gated_since >= (self.config.online_reacquire_s or np.inf))
         if lost.any():
-            start = _ik_state(self.kf.model, np.where(present[:, None], positions, np.nan))
-            self.kf.reacquire(np.flatnonzero(lost), start)
+            start = _ik_state(kf.model, np.where(present[:, None], positions, np.nan))
+            kf.reacquire(np.flatnonzero(lost), start)
             self.gated_since[lost] = np.nan
-        used = self.kf.update_joints(np.where(observed, z, np.nan), observed, R_diag, self.config.online_gate_chi2)
+        used = kf.update_joints(np.where(observed, z, np.nan), observed, R_diag, self.config.online_gate_chi2)
         self.n_gated += int(present.sum() - used.sum())
         since = np.where(used, np.nan, self.gated_since)  # a joint that entered ends its run
         self.gated_since = np.where(present & ~used, np.fmin(since, t), since)
@@ -182,10 +188,13 @@ def run_online(
     for k in range(first):
         refs[k] = refs[first]
     filt.fix_lengths()
+    kf = filt.kf
+    if kf.lengths is None:  # fix_lengths has just fixed them
+        raise ProcessingError("the online filter's segment lengths are still in its state after fix_lengths")
     # Re-centring changes the references over time: express every frame against the final references.
-    model = filt.kf.model
+    model = kf.model
     thetas = model.rebase(thetas, np.array(refs))
-    return roots, filt.kf.lengths, thetas, model, {"n_gated": filt.n_gated, "n_held": filt.n_held}
+    return roots, kf.lengths, thetas, model, {"n_gated": filt.n_gated, "n_held": filt.n_held}
 
 
 __all__ = ["OnlineFilter", "run_online"]

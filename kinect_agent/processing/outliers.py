@@ -237,13 +237,17 @@ def fit(rec: Recording, config: PipelineConfig | None = None) -> tuple[MixtureFi
     present = (rec.state != NOT_TRACKED)[..., None]
     e = np.where(present, rec.positions - running_median(rec.positions, w), np.nan)
     floor = config.outlier_min_sigma_m
-    kw = {"rho0": 0.95, "min_sigma": floor, "min_width": config.outlier_min_range_m, "min_rho": 0.5}
-    mix = fit_mixture(e, cls, n_classes=2, **kw)
+
+    def fit(e: np.ndarray) -> MixtureFit:
+        return fit_mixture(e, cls, n_classes=2, rho0=0.95, min_sigma=floor, min_width=config.outlier_min_range_m,
+                           min_rho=0.5)  # fmt: skip
+
+    mix = fit(e)
     prob = _posterior(mix, e, cls)
     for _ in range(config.outlier_iterations):
         pred, lev = local_quadratic(rec.t, rec.positions, 1.0 - prob, w)
         e = np.where(present, (rec.positions - pred) / np.sqrt(1.0 + lev)[..., None], np.nan)
-        mix = fit_mixture(e, cls, n_classes=2, **kw)
+        mix = fit(e)
         prob = _posterior(mix, e, cls)
     return mix, e, prob
 

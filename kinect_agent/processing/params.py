@@ -72,6 +72,10 @@ class KinematicParams:
         lengths = np.broadcast_to(self.segment_lengths, (self.n_frames, N_BONES))
         return forward_kinematics_quat(self.root, self.q_root, lengths, self.q_local)
 
+    def _outlier_prob(self) -> np.ndarray:
+        """Returns outlier_prob (T, J); __post_init__ makes it an array, zeros when none was given."""
+        return np.zeros((self.t.shape[0], skeleton.J)) if self.outlier_prob is None else self.outlier_prob
+
     def to_json(self) -> dict[str, Any]:
         """Returns JSON-ready data: lists of floats rounded to 0.1 mm, 1e-5 (quaternions), 0.01° and 1e-3."""
         return {
@@ -85,7 +89,7 @@ class KinematicParams:
             "q_root_wxyz": np.round(self.q_root, 5).tolist(),
             "q_local_wxyz": np.round(self.q_local, 5).tolist(),
             "joint_angles_deg": {k: _nan_list(np.round(v, 2)) for k, v in self.joint_angles.items()},
-            "outlier_prob": np.round(self.outlier_prob, 3).tolist(),
+            "outlier_prob": np.round(self._outlier_prob(), 3).tolist(),
         }
 
     @classmethod

@@ -41,7 +41,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal, overload
 
 import numpy as np
 
@@ -98,10 +98,27 @@ def observations(rec: Recording, config: PipelineConfig) -> tuple[np.ndarray, np
     return z, obs, np.repeat(sd**2, 3, axis=1)
 
 
+Observations = tuple[np.ndarray, np.ndarray, np.ndarray]  # z (T, 60) m, observed (T, 60) bool, R_diag (T, 60) m²
+
+
+@overload
+def _run_pass(
+    kf: ChainFilter, order: np.ndarray, obs: Observations, q_steps: np.ndarray, config: PipelineConfig,
+    store: Literal[True], tick: Callable[[int], None], restart: tuple[np.ndarray, int] | None = None,
+) -> tuple[np.ndarray, np.ndarray, int]: ...  # fmt: skip
+
+
+@overload
+def _run_pass(
+    kf: ChainFilter, order: np.ndarray, obs: Observations, q_steps: np.ndarray, config: PipelineConfig,
+    store: Literal[False], tick: Callable[[int], None], restart: tuple[np.ndarray, int] | None = None,
+) -> tuple[None, None, int]: ...  # fmt: skip
+
+
 def _run_pass(
     kf: ChainFilter,
     order: np.ndarray,
-    obs: tuple[np.ndarray, np.ndarray, np.ndarray],
+    obs: Observations,
     q_steps: np.ndarray,
     config: PipelineConfig,
     store: bool,
@@ -136,7 +153,7 @@ def _run_pass(
             used = kf.update_joints(z[k], observed[k], R_diag[k], config.gate_chi2)
             gated += int(present.sum() - used.sum())
             run = np.where(used, 0, run + (present & ~used))
-        if store:
+        if xs is not None and Ps is not None:
             xs[k] = kf.x
             Ps[k] = kf.P
         if i % 64 == 63:
@@ -198,7 +215,7 @@ def smooth(
     # of the body; a contiguous stretch keeps the frame rate the angles were tuned for, which subsampling did not).
     n_len = T if not config.length_pass_max_frames else min(T, config.length_pass_max_frames)
     sub = np.arange(n_len)
-    obs_sub = tuple(a[sub] for a in obs)
+    obs_sub = (obs[0][sub], obs[1][sub], obs[2][sub])
     scale_sub = scale[sub]
     scale_sub_bwd = np.concatenate(([0.0], scale_sub[1:][::-1]))
     n_sub = len(sub)
@@ -237,7 +254,7 @@ def smooth(
 # ----------------------------------------------------------------------------------------------------- process
 
 
-def _segment_sd_mm(positions: np.ndarray) -> dict[str, float]:
+def _segment_sd_mm(positions: np.ndarray) -> dict[str, float | None]:
     seg = skeleton.segment_lengths(positions)
     with np.errstate(all="ignore"):
         ok = np.isfinite(seg).sum(axis=0) >= 2
