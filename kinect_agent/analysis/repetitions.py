@@ -1,73 +1,46 @@
-"""Repetition counting from an exercise's defining joint angle(s).
+"""Repetition counting from an exercise's defining joint angle(s): one repetition is one excursion of a defining
+angle away from its rest level and back. Why each rule is there, with the recordings that asked for it:
+bench/README.md, "Repetition counter: why each rule".
 
-Definition. A repetition is one excursion of a defining angle away from its rest level and back. Per angle:
+Per angle:
     1. the series is conditioned (series.smooth: gaps filled, unwrapped, median then Gaussian smoothed);
-    2. its range R = p98 − p2 of the smoothed values; an angle with R < min_range_deg, or below side_ratio × the
-       largest R among the exercise's angles, does not move and yields no repetitions;
-    3. the rest level is the end (low p2 or high p98) nearer to the first and the last smoothed value; when
-       those two disagree (a recording cut mid-movement), the end the signal spends more time near; when it spends
-       as long near either (a symmetric oscillation, e.g. shoulder rotation), the end whose excursions number
-       closest to the cycles of the autocorrelation's period (duration / P); with
-       rest="start" (the live count of a set still being recorded), the end nearer to the first value.
-       The excursion e(t) = |angle − rest level|, clipped to [0, R]. Its cycle (cycles.cycle): period P from the
-       autocorrelation and typical amplitude A = median prominence of the duration/P most prominent peaks (R when
-       there is no period); e then is taken from its lower envelope over 1.5 P (cycles.baseline), so a rest level
-       that drifts (an arm held a little further back as the set goes on) does not merge or hide repetitions;
-    4. hysteresis: an excursion begins when e rises above enter_frac·A and ends when it falls below exit_frac·A
-       (noise smaller than (enter_frac − exit_frac)·A cannot split or add repetitions). A, not R: one mistracked
-       spike inflates R (a side lunge's knee read at 175° once), and the smaller repetitions of a patient who does
-       them badly then fall under thresholds drawn from the range;
-    5. each excursion is widened to its onset and return: in the stretch between the neighbouring excursions,
-       the repetition starts at the last frame (ends at the first frame) whose e is within onset_frac·A of that
-       stretch's minimum; excursions shorter than min_duration_s are dropped.
-   Amplitude = e at the peak minus the mean rest e just before and just after (degrees); peak = the smoothed
-   angle at the peak (degrees). Side = "left"/"right" from the angle's _L/_R suffix, "center" otherwise. Core =
-   the frames around the peak where e stays at least half the amplitude above the rest: the movement itself,
-   without the slow onset and return that widening adds (an idle leg that creeps up while the other one steps).
-Several angles (both sides): repetitions of different angles that overlap in time by more than merge_overlap of
-the shorter one, and whose cores meet (both sides at least half way up at one moment), are one repetition (side
-"both", amplitude and peak averaged). A repetition of one side alone counts when that side is the dominant one,
-or when that side alternates with the dominant one: at most alternate_shared of its excursions (those reaching
-min_ratio × its cycle amplitude A) have a core that overlaps the core of one of the dominant side's by more than
-alternate_overlap of the shorter of the two (simulated side steps: the idle hip reads 5-10° raised while the
-other leg steps, which widens its next step back into the other's and made the two sides look bilateral: 3 of 5
-steps counted). The dominant side is the one whose excursions add up to the most degrees (Σ amplitude): the limb that
-repeats the movement, not the one with the largest range (an idle arm mistracked through 130° three times beside
-ten 40° shoulder extensions). A side that sometimes moves together with the dominant one and sometimes alone, or
-follows it half a repetition late, is the other limb drifting or mistracked (UI-PRMD one-arm movements show the
-idle arm wandering by 40-50°), and its lone excursions are not repetitions. When at least half of the
-repetitions are "both" (a bilateral exercise), a one-sided excursion counts only if its amplitude reaches
-lone_ratio × the median amplitude of the "both" repetitions (one limb's filtered angle can bump by a third of
-the range at rest). So a bilateral exercise counts once per movement, an alternating one counts each side's
-movement, a one-sided one the moving side. Last, an excursion smaller than min_ratio (0.4) × the median amplitude
-of the counted ones is a bump, not a repetition (filtered Kinect knees can bump by 35° at rest), unless it reaches
-shallow_ratio (0.2) × that median and lasts at least shallow_duration (0.6) × the median duration: a shallow
-repetition still takes a repetition's time (UI-PRMD incorrect executions: first repetitions at a quarter to a third
-of the others' amplitude), a bump is brief (simulated filtered squats: 30° bumps of a third to half a repetition's
-duration).
-A repetition also takes its place in the cadence. With S the median peak-to-peak spacing of the counted repetitions:
-    - an excursion that lasts less than shallow_duration × the median duration and peaks within shallow_spacing
-      (0.8) × S of a larger one, or of one that lasts at least that long, is a rebound, a split or a mistracked
-      spike beside that one, and is dropped (UI-PRMD shoulder extension s04: a 0.6 s mistracked dip 1 s after a
-      repetition's peak; raw simulated side steps: 0.3-0.6 s spikes of the hip beside a 2.5 s step);
-    - a shallow excursion (below min_ratio × the median amplitude) is a bump at rest squeezed between two
-      repetitions, and is dropped, when the full repetitions around it are closer than 2 × shallow_spacing × their
-      median peak-to-peak spacing (no room for one more slot of the cadence between them), or, at an end of the
-      set, when it peaks within shallow_spacing × that spacing of both the full repetition on its one side and
-      the end of the recording (simulated filtered squats: the knee reading 25° bent for 2 s while standing, or
-      at the start of a set); a shallow repetition takes a slot of the cadence of its own;
-    - a shallow repetition the hysteresis missed (its peak under enter_frac × A) is added where the cadence has
-      room for one: in a stretch between counted repetitions, the highest point of the dominant angle's excursion at
-      least shallow_spacing × S from every counted peak, when the excursion falls by shallow_ratio × the median
-      amplitude M to both sides and to one rest level (the two sides' minima within onset_frac × M), and its onset
-      and return (within onset_frac × M of those minima) are shallow_duration × the median duration apart (UI-PRMD
-      side lunge s04: a first lunge of 38° against 80-150°; leg raise s05: 16° against 54°). A rebound right after
-      a repetition is too close to it, a bump on the rest level between repetitions has no rest to rise from
-      (simulated filtered squats).
-An angle that moves without a period of its own beside a dominant angle that has one, and whose autocorrelation at
-the dominant's period is below cycles.MIN_CORRELATION, is the idle limb drifting or mistracked: its excursions are
-dropped before the sides are merged, so that its drift neither pairs with the repetitions nor makes the exercise
-look bilateral (UI-PRMD shoulder extension s05: an idle arm wandering 34° across three repetitions).
+    2. its range R = p98 − p2; an angle with R < min_range_deg, or below side_ratio × the largest R among the
+       exercise's angles, yields no repetitions;
+    3. the rest level is the end (p2 or p98) nearer to the first and the last smoothed value; when those disagree,
+       the end the signal spends more time near; when it spends as long near either, the end whose excursions number
+       closest to duration / P (P: the autocorrelation's period); with rest="start" (a set still being recorded),
+       the end nearer to the first value. The excursion e(t) = |angle − rest level|, clipped to [0, R]; its cycle
+       (cycles.cycle): period P and typical amplitude A = median prominence of the duration/P most prominent peaks
+       (R without a period); e is then taken from its lower envelope over 1.5 P (cycles.baseline);
+    4. hysteresis: an excursion begins when e rises above enter_frac·A and ends when it falls below exit_frac·A;
+    5. each excursion is widened to its onset and return: between the neighbouring excursions, the repetition starts
+       at the last frame (ends at the first) whose e is within onset_frac·A of that stretch's minimum; excursions
+       shorter than min_duration_s are dropped.
+Amplitude = e at the peak minus the mean rest e just before and after (degrees); peak = the smoothed angle at the
+peak (degrees); side = "left"/"right" from the angle's _L/_R suffix, "center" otherwise; core = the frames around the
+peak where e stays at least half the amplitude above the rest.
+
+Several angles (both sides):
+    - repetitions of different angles that overlap by more than merge_overlap of the shorter one, and whose cores
+      meet, are one repetition (side "both", amplitude and peak averaged);
+    - the dominant side is the one whose excursions add up to the most degrees (Σ amplitude); a one-sided repetition
+      counts when its side is the dominant one, or alternates with it: at most alternate_shared of its excursions
+      (those reaching min_ratio × its A) have a core overlapping a dominant core by more than alternate_overlap;
+    - an angle without a period of its own beside a dominant angle that has one, whose autocorrelation at the
+      dominant's period is below cycles.MIN_CORRELATION, is dropped before the sides are merged;
+    - when at least half of the repetitions are "both", a one-sided excursion counts only if its amplitude reaches
+      lone_ratio × the median amplitude of the "both" ones.
+Then, with M the median amplitude, D the median duration and S the median peak-to-peak spacing of the counted ones:
+    - an excursion below min_ratio × M is dropped unless it reaches shallow_ratio × M and lasts shallow_duration × D;
+    - an excursion shorter than shallow_duration × D that peaks within shallow_spacing × S of a larger one, or of one
+      that lasts at least that long, is dropped;
+    - a shallow excursion (below min_ratio × M) is dropped when the full repetitions around it are closer than
+      2 × shallow_spacing × S, or, at an end of the set, when it peaks within shallow_spacing × S of both the full
+      repetition on its one side and the end of the recording;
+    - a shallow repetition the hysteresis missed is added where the cadence has room for one: between counted
+      repetitions, the highest point of the dominant angle's excursion at least shallow_spacing × S from every counted
+      peak, when the excursion falls by shallow_ratio × M to both sides and to one rest level (the two minima within
+      onset_frac × M), and its onset and return (within onset_frac × M of them) are shallow_duration × D apart.
 """
 
 from __future__ import annotations

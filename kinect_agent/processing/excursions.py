@@ -1,51 +1,25 @@
 """Sustained tracking loss: a joint that jumps away faster than a body moves, sits there, and jumps back.
 
-Real Kinect v2 failures (KERAAL Kinect + Vicon pairs, bench/real_pairs.py) are often plateaus, not spikes: a wrist held
-0.9 m off at head height for 1.4 s, a whole arm 0.2-0.7 m off for 1.2 s. The temporal residual of outliers.py judges
-a sample against its 0.5 s neighbourhood, so a plateau 2-3 windows long looks smooth and is kept. Here, per joint:
+Per joint, over its present samples:
 
     jump     the speed between consecutive present samples exceeds the joint's limit (JOINT_SPEED_LIMIT_M_S:
              2 m/s trunk, 3 m/s elbows and knees, 4 m/s wrists, ankles, hands, feet) and is ABRUPTNESS (5) times the
-             median speed of the surrounding steps (fast motion accelerates; tracking loss teleports); jump frames at
-             most JUMP_GAP_FRAMES apart form one event (the SDK often takes 2-3 frames to jump)
+             median speed of the surrounding steps; jump frames at most JUMP_GAP_FRAMES apart form one event
     away     an event that carries the joint at least min_dev_m (0.2 m) from the last sample before it (frame a),
              after at least min_len_s without a jump
     back     a later event, at least min_len_s (0.3 s) after it and within max_len_s (3 s) of its start, that ends at
              frame b within RETURN_FRACTION (0.3) of the jump away from where the joint left, followed by min_len_s
-             without a jump (a stretch between two stretches of garbage is not an excursion)
+             without a jump
     sits     the samples between a and b lie, in median, at least min_dev_m from the straight line p[a] -> p[b], and
-             their calm steps (below the speed limit) add up to no more than TRAVEL_FRACTION (0.5) of that distance:
-             a lost joint sits, jitters or jumps, while a limb that really moved away travelled there
-
+             their calm steps (below the speed limit) add up to no more than TRAVEL_FRACTION (0.5) of that distance
     limb     unless the joint's bone to its parent and its bones to its children all keep their typical length (in
-             median within 5 cm or 20 %) while its parent is not away itself: a limb that really moved rotated about
-             its joints (a knee raised and held in a hurdle step), a lost joint lands anywhere (KERAAL's lost elbow
-             keeps the upper arm by chance but breaks the forearm; a wrist held off breaks the forearm)
+             median within 5 cm or 20 %) while its parent is not away itself (a limb that really moved)
 
 Every sample strictly between a and b is then an outlier (probability 1), combined with the temporal mixture by max
-(combined_outliers.py). On by default (PipelineConfig.outlier_excursions). Chosen 2026-11-23 on the KERAAL pairs (the
-only real Kinect data with simultaneous truth; 3 trials, one subject, 19 s), UI-PRMD (real Kinect, no time-matched
-truth) and the tuning set of bench/accuracy.py (simulator + CMU; HDM05 held out), in this order of rules:
-    speed + return only              real RMSE 128.6 -> 85.7 mm; accuracy.py precision 0.916 -> 0.708 (fast kicks and
-                                     arm circles of HDM05/CMU, the simulator's sustained foot errors)
-    + abruptness 5, return 0.3       real 76.3 mm; precision 0.884
-    + calm before/after, travel 0.5  real 76.3 mm (elbow angle RMSE 33.5 -> 11.1 deg, outlier gain SD 3 -> 20 %);
-                                     precision 0.913, recall 0.978 (default 0.916 / 0.978), offline RMSE 119.3 mm and
-                                     elbow/knee 23.91 deg as without; UI-PRMD leg raises (m06), whose standing phase
-                                     between two glitches at the top was flagged (4.2 % of s01), 0.3 %
-    Real plateaus travel 0.07-0.48 of their distance; the UI-PRMD leg-raise stretches 0.53-0.92 (the margin is thin).
-    + limb rule (2026-11-25)         UI-PRMD hurdle steps (m02): 26 % of the raised knee's frames had been flagged, the
-                                     filtered hip angle dipped mid-step (s04: 15 repetitions for 10); now none, and
-                                     after the pipeline 49 of 50 correct s01-s05 recordings count 10 (47 before),
-                                     35 of 50 incorrect ones (32); real pairs unchanged (76.3 mm, elbow 11.1 deg);
-                                     accuracy.py --quick precision 0.688 -> 0.761 at the same recall 0.967, RMSE
-                                     118.9 -> 118.8 mm. Online (LiveExcursions: a held joint keeping its bones for
-                                     0.3 s is let go): UI-PRMD correct s01-s05 after the online filter 44 -> 48 of 50
-                                     count 10 (sit to stand s02: 5 -> 9, s05: 7 -> 10; without any hold 49); real
-                                     pairs online RMSE 92.7 -> 98.8 mm (raw 134.6), elbow 18.0 -> 17.0 deg.
-LiveExcursions is the causal form for the online filter (PipelineConfig.online_excursions, on by default): real pairs
-online RMSE 134.9 -> 92.7 mm, elbow 36.2 -> 18.0 deg; accuracy.py online 121.9 -> 123.6 mm (it cannot see the jump
-back before holding a joint out), still below every causal baseline in every setting; 0.08 ms per frame.
+(combined_outliers.py); on by default (PipelineConfig.outlier_excursions). LiveExcursions is the causal form for the
+online filter (PipelineConfig.online_excursions, on by default): a held joint that keeps its bones for LIMB_RELEASE_S
+is let go. Why these rules and what each measured: bench/README.md, "Sustained excursions: how the rules were
+chosen".
 """
 
 from __future__ import annotations
