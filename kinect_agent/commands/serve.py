@@ -163,6 +163,16 @@ class Service:
             self.thread.join(timeout=120)
 
 
+def _warm_up() -> None:
+    """Readies the live loop's compiled code (kinect_agent.live.warmup) and logs how long it took."""
+    from kinect_agent.live.warmup import warm_up
+
+    try:
+        log(f"live filter ready in {warm_up():.1f} s")
+    except Exception as exc:  # noqa: BLE001 - the first set then compiles what it needs itself
+        log(f"live filter warm-up failed: {type(exc).__name__}: {exc}")
+
+
 def run(args: argparse.Namespace) -> int:
     """Serves until interrupted; 0 on a clean stop."""
     if (args.source == "replay") != (args.file is not None):
@@ -177,6 +187,7 @@ def run(args: argparse.Namespace) -> int:
     stop = threading.Event()
     signal.signal(signal.SIGTERM, signal.default_int_handler)  # SIGTERM stops like Ctrl-C
     log(f"serving patient {config.patient_id} for {config.server_url} with source {args.source}")
+    threading.Thread(target=_warm_up, name="warm-up", daemon=True).start()  # before the first Start, not after it
     try:
         for data in stream.commands(stop):
             try:

@@ -1,0 +1,90 @@
+"""How long the live loop takes to answer the first frames of a set after Start, first set against later ones.
+
+The patient's first live set after an install showed its first count 5-11 s after Start and later sets about 1 s
+(issue 26): the online filter's numba kernels compile on the first frame. Each scenario runs in a fresh process
+(NUMBA_CACHE_DIR chooses numba's on-disk cache: an empty folder is a fresh install):
+
+    cold        empty cache, no warm-up: the first set compiles
+    cached      the cache filled by an earlier run, no warm-up: the first set loads the compiled code
+    warmed      empty cache, kinect_agent.live.warmup.warm_up() done first, as `kinect-agent serve` does at start-up
+    later set   the second set in the same process as "cold"
+
+A "set" is OnlineFilter + LiveCount fed a simulated squat frame by frame as SetRecorder does (no waiting for the
+camera's 30 Hz). Printed: Start -> first frame's status (what the first message to the page waits for), Start -> 30
+frames done (one second of camera), and the warm-up's own time. Median of --runs runs.
+
+    .venv/bin/python bench/first_count.py --runs 3
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+CHILD = r"""
+import json, sys, time
+warm = sys.argv[1] == "1"
+from kinect_agent.analysis.live import LiveCount
+from kinect_agent.live.warmup import WARMUP_ANGLES, warm_up
+from kinect_agent.processing.online import OnlineFilter
+from kinect_agent.sources.simulator import simulate
+
+def one_set(seed):
+    rec = simulate("squat", 2, seed=seed)[0]
+    start = time.perf_counter()
+    online, counter = OnlineFilter(), LiveCount(WARMUP_ANGLES)
+    first = None
+    for k in range(30):
+        t = float(rec.t[k])
+        counter.add(t, rec.positions[k], rec.state[k], online.step(t, rec.positions[k], rec.state[k]))
+        first = time.perf_counter() - start if first is None else first
+    return first, time.perf_counter() - start
+
+warm_s = warm_up() if warm else None
+first = one_set(7)
+later = one_set(8)
+print(json.dumps({"warm_up_s": warm_s, "first": first, "later": later}))
+"""
+
+
+def run(cache: Path, warm: bool) -> dict:
+    env = os.environ | {"NUMBA_CACHE_DIR": str(cache), "PYTHONPATH": str(ROOT)}
+    done = subprocess.run([sys.executable, "-c", CHILD, "1" if warm else "0"], env=env, cwd=ROOT, capture_output=True,
+                          text=True, check=True)  # fmt: skip
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", type=int, default=3)
+    args = parser.parse_args()
+    rows: dict[str, list[tuple[float, float]]] = {"cold": [], "cached": [], "warmed": [], "later set": []}
+    warm_ups: list[float] = []
+    for _ in range(args.runs):
+        with tempfile.TemporaryDirectory() as cache:
+            cold = run(Path(cache), warm=False)
+            rows["cold"].append(tuple(cold["first"]))
+            rows["later set"].append(tuple(cold["later"]))
+            rows["cached"].append(tuple(run(Path(cache), warm=False)["first"]))
+        with tempfile.TemporaryDirectory() as cache:
+            warmed = run(Path(cache), warm=True)
+            rows["warmed"].append(tuple(warmed["first"]))
+            warm_ups.append(warmed["warm_up_s"])
+    print(f"{'scenario':<10} {'Start -> first frame':>22} {'Start -> 30 frames':>20}   (median of {args.runs})")
+    for name, values in rows.items():
+        first = statistics.median(v[0] for v in values)
+        thirty = statistics.median(v[1] for v in values)
+        print(f"{name:<10} {first * 1000:>19.0f} ms {thirty * 1000:>17.0f} ms")
+    print(f"warm-up itself (empty cache, at serve's start-up): {statistics.median(warm_ups):.1f} s")
+
+
+if __name__ == "__main__":
+    main()
