@@ -61,7 +61,7 @@ def capture(
         from kinect_agent.sources.simulator import simulate
 
         rec = simulate(exercise, reps, seed=seed)[0]
-    elif kind == "replay":
+    elif file is not None:  # replay: the only kind with a FILE (checked above)
         rec = formats.read(file)
     else:
         from kinect_agent.sources import make_source, record

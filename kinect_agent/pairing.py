@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import socket
 from pathlib import Path
+from typing import Any
 
 import httpx
 
@@ -67,7 +68,7 @@ def pair(
     return config
 
 
-def _body(response: httpx.Response):
+def _body(response: httpx.Response) -> Any:
     try:
         return response.json()
     except ValueError:

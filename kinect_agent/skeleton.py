@@ -29,7 +29,7 @@ PARENT_NAME: dict[str, str | None] = {
     "HIP_R": "ROOT", "KNE_R": "HIP_R", "ANK_R": "KNE_R", "FOO_R": "ANK_R",
 }  # fmt: skip
 # PARENT[j]: index of the parent of joint j, -1 for ROOT. Parents come before children.
-PARENT: np.ndarray = np.array([-1 if PARENT_NAME[n] is None else INDEX[PARENT_NAME[n]] for n in JOINTS])
+PARENT: np.ndarray = np.array([-1 if (p := PARENT_NAME[n]) is None else INDEX[p] for n in JOINTS])
 
 # Rotational degrees of freedom of each joint (paper, section 4): the rotation of the bones that
 # leave joint j, relative to the bone that enters it. ROOT carries the global orientation (and the

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -200,7 +201,13 @@ def parse_motion_checked(
 
 
 def _bone_line(
-    path: Path, line_no: int, tok: list[str], expected: dict[str, int], seen: set[str], values: dict, in_frame: bool
+    path: Path,
+    line_no: int,
+    tok: list[str],
+    expected: dict[str, int],
+    seen: set[str],
+    values: dict[str, Any],
+    in_frame: bool,
 ) -> None:
     name = tok[0]
     if not in_frame:

@@ -28,6 +28,7 @@ which is read at 30 Hz), meta.extra["rate_assumed"] = True.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -151,7 +152,7 @@ def score_centre(
         return np.where(count > 0, np.nansum(images, axis=0) / count, np.nan)
 
 
-def joints_from_targets(p: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, dict[str, dict]]:
+def joints_from_targets(p: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, dict[str, dict[str, Any]]]:
     """Estimates the 20 joints from the 17 rigid bodies.
 
     p: (T, 17, 3) float, mm, lab frame, NaN = missing; R: (T, 17, 3, 3) R_lab_target, NaN = missing.
@@ -159,7 +160,7 @@ def joints_from_targets(p: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, dict[
     (condition, rms_mm, used: whether SCoRE was kept rather than the fallback).
     """
     out = np.full(p.shape[:1] + (skeleton.J, 3), np.nan)
-    fits: dict[str, dict] = {}
+    fits: dict[str, dict[str, Any]] = {}
     for joint, (a, b) in SCORE_PAIRS.items():
         ia, ib = _T[a], _T[b]
         c_a, c_b, cond, rms = score_fit(p[:, ia], R[:, ia], p[:, ib], R[:, ib])
@@ -178,7 +179,7 @@ def joints_from_targets(p: np.ndarray, R: np.ndarray) -> tuple[np.ndarray, dict[
     return out, fits
 
 
-def _check_hip_width(out: np.ndarray, p: np.ndarray, fits: dict[str, dict]) -> None:
+def _check_hip_width(out: np.ndarray, p: np.ndarray, fits: dict[str, dict[str, Any]]) -> None:
     """Replaces both SCoRE hips by the fallback when their median distance is outside HIP_WIDTH_MM.
 
     out: (T, 20, 3) mm lab frame, updated in place; p: (T, 17, 3) target positions, mm, lab frame.

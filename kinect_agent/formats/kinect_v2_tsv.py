@@ -91,6 +91,8 @@ def read(path: Path) -> Recording:
     if rows.clock:
         unit, t = "clock", rows.stamps
     else:
+        if time_match is None:
+            raise FormatError(path, f"the first column {names[0]!r} is not a time column", header_no)
         unit = _unit(path, header, time_match.group("unit"), rows.stamps, rows.row_lines, header_no)
         t = (rows.stamps - rows.stamps[0]) * UNITS_S[unit]
     xyz[state == 0] = np.nan
@@ -191,7 +193,9 @@ def _rows(path: Path, lines: list[tuple[int, str]], names: list[str], columns: d
     content = [(no, line) for no, line in lines if line.strip()]
     if not content:
         raise FormatError(path, "no frames after the column header", lines[0][0] if lines else None)
-    table, row_lines, dropped = [], [], 0
+    table: list[list[str]] = []
+    row_lines: list[int] = []
+    dropped = 0
     for k, (line_no, line) in enumerate(content):
         cells = _cells(path, line_no, line, len(names), last=k == len(content) - 1)
         if table and cells[0].strip() == table[-1][0].strip():
@@ -234,7 +238,7 @@ def _clock_seconds(table: list[list[str]]) -> np.ndarray | None:
         parts = [_TIMESPAN.fullmatch(row[0].strip()) for row in table]
         if not all(parts):
             return None
-        fields = (p.groups() for p in parts)
+        fields = (p.groups() for p in parts if p is not None)
         seconds = [86400 * int(d or 0) + 3600 * int(h) + 60 * int(m) + float(s) for d, h, m, s in fields]
         return np.array(seconds) - seconds[0]
     try:

@@ -91,7 +91,7 @@ class SessionPayload:
     session_id: str
     raw: Recording
     filtered: Recording | None = None
-    params: dict = field(default_factory=dict)
+    params: dict[str, Any] = field(default_factory=dict)
     created_at: str = field(default_factory=utc_now_iso)
     recorded_by: dict[str, int] | None = None
     angle_sd: dict[str, np.ndarray] | None = None
@@ -259,7 +259,9 @@ def decode(data: bytes, *, max_frames: int = 30 * 60 * 60, max_decoded_bytes: in
     )
 
 
-def _angle_sd_names(header: dict, specs: list[tuple[str, int, Metadata]], max_decoded_bytes: int) -> list[str] | None:
+def _angle_sd_names(
+    header: dict[str, Any], specs: list[tuple[str, int, Metadata]], max_decoded_bytes: int
+) -> list[str] | None:
     """Returns the angle names of the optional angle SD block, or None without one, after checking its header."""
     desc = header.get("angle_sd")
     if desc is None:
@@ -352,7 +354,9 @@ def _check_recorded_by(value: Any) -> None:
         )
 
 
-def _recording_specs(header: dict, max_frames: int, max_decoded_bytes: int) -> list[tuple[str, int, Metadata]]:
+def _recording_specs(
+    header: dict[str, Any], max_frames: int, max_decoded_bytes: int
+) -> list[tuple[str, int, Metadata]]:
     """Returns (name, n_frames, metadata) of each stored recording after checking their sizes."""
     if len(header["joints"]) != skeleton.J or tuple(header["joints"]) != skeleton.JOINTS:
         raise SessionFileError("wrong_joint_count", f"joint list has {len(header['joints'])} joints, expected the 20")

@@ -16,6 +16,7 @@ import math
 import re
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -120,7 +121,7 @@ def _read_sidecar(path: Path) -> Metadata:
     return loaded
 
 
-def _numbered_lines(lines: list[str], path: Path, meta: Metadata):
+def _numbered_lines(lines: list[str], path: Path, meta: Metadata) -> Iterator[tuple[int, list[str]]]:
     """Yields (line number, cells) for non-empty, non-comment lines; reads `# meta:` lines into meta."""
     for line_no, line in enumerate(lines, start=1):
         if line.startswith("#"):
@@ -136,7 +137,7 @@ def _numbered_lines(lines: list[str], path: Path, meta: Metadata):
             yield line_no, line.split(",")
 
 
-def _parse_header(path: Path, line_no: int, cells: list[str]) -> dict:
+def _parse_header(path: Path, line_no: int, cells: list[str]) -> dict[str, Any]:
     names = [c.strip().strip('"') for c in cells]  # spreadsheets may quote the names
     while len(names) > 1 and not names[-1]:
         names.pop()  # a trailing comma after the last column name
@@ -166,7 +167,7 @@ def _parse_header(path: Path, line_no: int, cells: list[str]) -> dict:
     return {"n": len(names), "coords": coord_index.ravel(), "state": state_index if has_state else None}
 
 
-def _fit_width(path: Path, line_no: int, cells: list[str], n: int, rest: Iterator) -> list[str]:
+def _fit_width(path: Path, line_no: int, cells: list[str], n: int, rest: Iterator[object]) -> list[str]:
     """Returns the row's n cells: empty cells after the n-th (a trailing comma) are dropped; FormatError otherwise
     (rest: the rows after this one, to tell whether it is the last)."""
     if len(cells) > n and not "".join(cells[n:]).strip():
@@ -177,7 +178,9 @@ def _fit_width(path: Path, line_no: int, cells: list[str], n: int, rest: Iterato
     return cells
 
 
-def _parse_row(path: Path, line_no: int, cells: list[str], columns: dict):
+def _parse_row(
+    path: Path, line_no: int, cells: list[str], columns: dict[str, Any]
+) -> tuple[float, list[float], list[int], int]:
     t = _number(path, line_no, 1, cells[0], "time", allow_empty=False)
     coords = [_number(path, line_no, c + 1, cells[c], "coordinate") for c in columns["coords"]]
     state = None

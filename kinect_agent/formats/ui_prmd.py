@@ -186,7 +186,10 @@ def _positions_files(folder: Path) -> list[Path]:
 
 
 def _key(path: Path) -> tuple[str, str, str]:
-    movement, subject, episode, _, _ = _NAME_RE.match(path.name).groups()
+    found = _NAME_RE.match(path.name)
+    if found is None:
+        raise FormatError(path, "not a UI-PRMD positions file name (m01_s01_e01_positions.txt)")
+    movement, subject, episode, _, _ = found.groups()
     return movement, subject, episode
 
 

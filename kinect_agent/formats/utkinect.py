@@ -66,7 +66,8 @@ def _first_of_each_frame(
 ) -> tuple[np.ndarray, int, int]:
     """Returns the row indices to keep (first line of each frame id), the exact-duplicate lines dropped and
     the conflicting repeated frames dropped. Frame ids must not go backwards."""
-    keep, exact, conflicting = [], 0, 0
+    keep: list[int] = []
+    exact, conflicting = 0, 0
     for i in range(len(frame_ids)):
         if keep and frame_ids[i] < frame_ids[keep[-1]]:
             message = f"frame id {int(frame_ids[i])} after {int(frame_ids[keep[-1]])}: ids must not decrease"
