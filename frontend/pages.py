@@ -117,6 +117,13 @@ def patient_page(request: Request, caller: OptionalCaller) -> Response:
     return _gate(request, caller, ("patient",)) or _page(request, "patient.html", caller)
 
 
+@router.get("/patient/camera", response_class=HTMLResponse)
+def camera_page(request: Request, caller: OptionalCaller) -> Response:
+    """Shows the camera set of one exercise of the patient's plan (?item=<plan item id>): consent, placement check,
+    the live count with this computer's camera, the saved result (frontend/static/camera_*.js)."""
+    return _gate(request, caller, ("patient",)) or _page(request, "camera.html", caller)
+
+
 @router.get("/therapist", response_class=HTMLResponse)
 def therapist_page(request: Request, caller: OptionalCaller) -> Response:
     """Shows the therapist's dashboard of assigned patients."""

@@ -1,17 +1,14 @@
-"""Which landmarker model a set ran: its name, version and SHA-256, from the pinned assets the app serves."""
+"""Which landmarker model a set ran: its file name, what it is, its pinned SHA-256 and source (kinect_agent.vendor's
+lock, checked when the assets are installed)."""
 
 from __future__ import annotations
 
 import functools
-import hashlib
 
 
 @functools.cache
-def model_info(name: str) -> dict[str, str | None]:
-    """Returns {"name", "version", "sha256"} of the pinned model `name` (a key of limits.MODELS); sha256 is None
-    when the assets are not installed (python -m kinect_agent.vendor.install)."""
-    from kinect_agent.vendor import install
+def model_info(name: str) -> dict[str, str]:
+    """Returns {"name", "model", "sha256", "source"} of the pinned model `name` (one of limits.MODELS)."""
+    from kinect_agent.vendor import model_info as pinned
 
-    path = install.asset_path(f"{name}.task")
-    sha = hashlib.sha256(path.read_bytes()).hexdigest() if path.is_file() else None
-    return {"name": name, "version": install.MODEL_VERSION, "sha256": sha}
+    return pinned(name.removeprefix("pose_landmarker_")).to_dict()

@@ -104,8 +104,10 @@
           el("div", {}, status),
           el("div", { class: "today" }, el("strong", {}, "Today:"), todaySets(item, mineToday).map((t) => el("span", {}, t))),
           item.notes ? el("div", { class: "muted" }, item.notes) : null),
-        startButton(lib, item, mineToday.length)));
+        el("div", { class: "starts" }, startButton(lib, item, mineToday.length),
+          CameraEntry.link(item, exerciseName(lib, item.exercise_slug), mineToday.length + 1 <= item.sets ? `set ${mineToday.length + 1} of ${item.sets}` : "extra set"))));
     }
+    CameraEntry.reveal();
   }
 
   function adviceBlock(items) {
