@@ -21,6 +21,7 @@ from sqlalchemy.orm import Session
 from backend.deps import Caller, DbSession, optional_caller, require_patient_access
 from backend.exceptions import NotFound
 from backend.schemas import IdPath
+from frontend import vendor_assets
 
 HERE = Path(__file__).resolve().parent
 STATIC = HERE / "static"
@@ -68,6 +69,7 @@ def mount(app: FastAPI) -> None:
     """Mounts the pages on the app, the one place that does: their routes, and the HTML page that answers a
     browser's error outside /api/ (app.state.error_page, which the app's error handlers call)."""
     app.include_router(router)
+    app.include_router(vendor_assets.router)  # /static/vendor/mediapipe/: the pinned pose runtime and models
     app.state.error_page = browser_error_page
 
 
