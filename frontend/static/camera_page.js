@@ -31,6 +31,7 @@
   function note(text) { $("cam-note").textContent = text || ""; }
   function problem(text, canSave) {
     show("cam-problem"); $("cam-problem-text").textContent = text; status(text, "bad");
+    if ($("cam-main-status")) $("cam-main-status").textContent = "problem";
     $("cam-problem-save").hidden = !canSave;
   }
 
@@ -131,8 +132,8 @@
 
   function placementStep(image, world, poses, rate, now) {
     const chk = CameraChecks.placement({ image, world, count: poses, luma, ex });
-    if (!chk.ok) { okSince = null; say(chk.say, "warn"); $("cam-main-status").textContent = chk.code; checkSpeed(rate, now); return; }
-    $("cam-main-status").textContent = "ok";
+    $("cam-say").dataset.code = chk.code;
+    if (!chk.ok) { okSince = null; say(chk.say, "warn"); checkSpeed(rate, now); return; }
     if (okSince === null) okSince = now;
     say(T.placementHold, "good");
     if (now - okSince >= HOLD_MS) beginCounting();
@@ -251,6 +252,7 @@
   async function endSet(reason) {
     if (!set || phase === "ending" || phase === "result") return;
     phase = "ending";
+    $("cam-main-status").textContent = "ending";
     flush();
     set.ended = reason;
     await CameraBuffer.putSet(pid, set);
