@@ -13,7 +13,6 @@ import datetime as dt
 from sqlalchemy.orm import Session
 
 from backend.camera import limits, live_count, service
-from backend.camera.batch import concat
 from backend.camera.errors import BatchOutOfOrder
 from backend.camera.models import CameraSet
 from backend.camera.skeleton import WEBCAM, pipeline_config, to_recording
@@ -36,11 +35,12 @@ def _iso(when: dt.datetime) -> str:
 
 def session_bytes(row: CameraSet, exercise: Exercise, db_session: Session) -> bytes | None:
     """Returns the session file of the set's stored batches (None when they hold fewer than MIN_END_FRAMES)."""
-    frames = concat(service.set_batches(db_session=db_session, set_id=row.id))
-    if frames.n_frames < limits.MIN_END_FRAMES:
+    batches = service.set_batches(db_session=db_session, set_id=row.id)
+    n_frames = sum(b.n_frames for b in batches)
+    if n_frames < limits.MIN_END_FRAMES:
         return None
-    span = float(frames.t[-1] - frames.t[0])
-    fps = round((frames.n_frames - 1) / span, 2) if span > 0 else None
+    span = float(batches[-1].t[-1] - batches[0].t[0])
+    fps = round((n_frames - 1) / span, 2) if span > 0 else None
     model = model_info(row.model_name)
     meta = Metadata(
         device=WEBCAM,
@@ -49,7 +49,7 @@ def session_bytes(row: CameraSet, exercise: Exercise, db_session: Session) -> by
         source="browser camera",
         extra={"camera_set_id": str(row.id), "model": model, "fps_achieved": fps},
     )
-    raw = to_recording(frames, meta)
+    raw = to_recording(batches, meta)
     config = pipeline_config()
     result = process(raw, config=config)
     q = result.quality

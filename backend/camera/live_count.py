@@ -18,7 +18,6 @@ from dataclasses import dataclass
 from sqlalchemy.orm import Session
 
 from backend.camera import service
-from backend.camera.batch import LandmarkBatch, concat
 from backend.camera.models import CameraSet
 from backend.camera.schemas import BatchOut
 from backend.camera.skeleton import WEBCAM, camera_frames, pipeline_config
@@ -26,6 +25,7 @@ from backend.events.hub import Event, publish
 from backend.exercises.models import Exercise
 from kinect_agent.analysis.live import LiveCount, LiveStatus
 from kinect_agent.processing.online import OnlineFilter
+from kinect_agent.sources.webcam.landmarks import LandmarkBatch
 
 MAX_SETS = 64
 
@@ -71,7 +71,8 @@ def _state_for(
         state.seq = seq
     elif state is None or state.seq < seq:
         state = _fresh(angles)
-        _feed(state, concat(service.set_batches(db_session=db_session, set_id=row.id, upto_seq=seq)))
+        for stored in service.set_batches(db_session=db_session, set_id=row.id, upto_seq=seq):
+            _feed(state, stored)
         state.seq = seq
     _STATES[row.id] = state
     _STATES.move_to_end(row.id)

@@ -65,6 +65,8 @@ class CameraBatch(Base):
     n_frames: Mapped[int] = mapped_column()
     t_first: Mapped[float] = mapped_column()
     t_last: Mapped[float] = mapped_column()
+    image_width: Mapped[int] = mapped_column()
+    image_height: Mapped[int] = mapped_column()
     content_hash: Mapped[str] = mapped_column(String(64))
     data: Mapped[bytes] = deferred(mapped_column(LargeBinary, nullable=False))
     received_at: Mapped[dt.datetime] = mapped_column(default=utcnow)

@@ -76,6 +76,10 @@ class BatchIn(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     seq: int = Field(ge=0, le=10**6, examples=[0])
+    version: Literal[1] = Field(description="the landmark wire contract's version (kinect_agent.sources.webcam)")
+    image_size: Annotated[list[int], Field(min_length=2, max_length=2)] = Field(
+        description="[width, height] of the analysed picture, pixels (16..8192)", examples=[[640, 480]]
+    )
     frames: list[FrameIn] = Field(min_length=1, max_length=MAX_FRAMES_PER_BATCH)
     fps: float | None = Field(default=None, ge=0, le=240, description="the page's landmarker rate now (frames/s)")
 

@@ -15,7 +15,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from backend.camera import limits
-from backend.camera.batch import LandmarkBatch, check_batch, content_hash, pack, unpack
+from backend.camera.batch import check_batch, content_hash, pack, unpack
 from backend.camera.errors import (
     BatchConflict,
     BatchOutOfOrder,
@@ -30,6 +30,7 @@ from backend.database import utcnow
 from backend.exceptions import InvalidInput, PlanNotFound
 from backend.exercises.models import Exercise
 from backend.plans.models import Plan, PlanItem
+from kinect_agent.sources.webcam.landmarks import LandmarkBatch
 
 MAX_STARTS_PER_HOUR = 60  # sets a patient may start in an hour (a page restarting in a loop is stopped here)
 
@@ -177,9 +178,9 @@ def add_batch(*, db_session: Session, row: CameraSet, body: BatchIn) -> tuple[La
     frames BatchConflict. Raises CameraSetEnded after the end, BatchOutOfOrder when batches before it are missing,
     InvalidInput naming the field of an implausible value or of a time that goes back, CameraRateLimited.
     """
-    batch = check_batch(body)
-    data = pack(batch)
+    data = pack(check_batch(body))
     digest = content_hash(data)
+    batch = unpack(data, len(body.frames), (body.image_size[0], body.image_size[1]))  # as stored: float32 values
     if body.seq <= row.last_seq:
         stored = _stored_batch(db_session, row.id, body.seq)
         if stored is None or stored.content_hash != digest:
@@ -204,6 +205,8 @@ def add_batch(*, db_session: Session, row: CameraSet, body: BatchIn) -> tuple[La
                     n_frames=batch.n_frames,
                     t_first=float(batch.t[0]),
                     t_last=float(batch.t[-1]),
+                    image_width=batch.image_size[0],
+                    image_height=batch.image_size[1],
                     content_hash=digest,
                     data=data,
                     received_at=utcnow(),
@@ -226,4 +229,4 @@ def set_batches(*, db_session: Session, set_id: uuid.UUID, upto_seq: int | None 
     query = select(CameraBatch).where(CameraBatch.set_id == set_id).order_by(CameraBatch.seq)
     if upto_seq is not None:
         query = query.where(CameraBatch.seq <= upto_seq)
-    return [unpack(b.data, b.n_frames) for b in db_session.scalars(query)]
+    return [unpack(b.data, b.n_frames, (b.image_width, b.image_height)) for b in db_session.scalars(query)]

@@ -182,7 +182,9 @@
     pending = [];
     const seq = set.next_seq++;
     const rate = stamps.length > 1 ? +((stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000)).toFixed(1) : null;
-    CameraBuffer.putSet(pid, set).then(() => CameraSender.add(seq, { seq, frames, fps: rate }));
+    const video = $("cam-video");
+    const size = [video.videoWidth || 640, video.videoHeight || 480];
+    CameraBuffer.putSet(pid, set).then(() => CameraSender.add(seq, { seq, version: 1, image_size: size, frames, fps: rate }));
     set.taken = set.taken || {};
     set.taken[seq] = [taken[0], taken[taken.length - 1]];
   }

@@ -77,6 +77,8 @@ def upgrade() -> None:
         sa.Column("n_frames", sa.Integer(), nullable=False),
         sa.Column("t_first", sa.Double(), nullable=False),
         sa.Column("t_last", sa.Double(), nullable=False),
+        sa.Column("image_width", sa.Integer(), nullable=False),
+        sa.Column("image_height", sa.Integer(), nullable=False),
         sa.Column("content_hash", sa.String(length=64), nullable=False),
         sa.Column("data", sa.LargeBinary(), nullable=False),
         sa.Column("received_at", sa.DateTime(timezone=True), nullable=False),

@@ -43,9 +43,9 @@ def _camera_start(w):
 
 
 def _camera_batch():
-    from tests.backend.camera.landmarks import frame
+    from tests.backend.camera.landmarks import batch, frame
 
-    return {"seq": 0, "frames": [frame(k / 30) for k in range(3)]}
+    return batch(0, [frame(k / 30) for k in range(3)])
 
 
 def _plan_body(w):

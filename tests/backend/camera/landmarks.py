@@ -12,7 +12,8 @@ import numpy as np
 
 THIGH_M = SHANK_M = 0.45
 DEPTH_M = 2.5  # from the camera to the hips
-FOCAL = 1.1  # focal length in image widths (about 50 degrees of view)
+FOCAL = 0.8  # focal length in image widths (about 64 degrees of view)
+IMAGE_SIZE = [640, 480]
 
 
 def body(knee_deg: float = 0.0) -> np.ndarray:
@@ -44,7 +45,7 @@ def image_of(world: np.ndarray) -> np.ndarray:
     """Returns image landmarks (33, 3) of world landmarks seen by a camera DEPTH_M in front of the hips."""
     z = DEPTH_M + world[:, 2]
     x = 0.5 + FOCAL * world[:, 0] / z
-    y = 0.55 + FOCAL * (4 / 3) * world[:, 1] / z
+    y = 0.5 + FOCAL * (4 / 3) * world[:, 1] / z
     return np.stack([x, y, world[:, 2] - world[23:25, 2].mean()], axis=1)
 
 
@@ -65,3 +66,8 @@ def squats(reps: int, *, fps: float = 30.0, period_s: float = 2.5, rest_s: float
         knee = 45.0 * (1 - math.cos(2 * math.pi * u / period_s)) if 0 <= u <= reps * period_s else 0.0
         out.append(frame(t0 + t, knee))
     return out
+
+
+def batch(seq: int, frames: list) -> dict:
+    """Returns a batch body of the frames as the page sends it."""
+    return {"seq": seq, "version": 1, "image_size": IMAGE_SIZE, "frames": frames}

@@ -10,13 +10,13 @@ from sqlalchemy import func, select
 
 from backend.camera.limits import CONSENT_VERSION, MAX_FRAMES_PER_BATCH
 from backend.camera.models import CameraBatch
-from tests.backend.camera.landmarks import frame
+from tests.backend.camera.landmarks import batch, frame
 
 LITE = "pose_landmarker_lite"
 
 
 def _batch(seq: int, t0: float = 0.0, n: int = 3) -> dict:
-    return {"seq": seq, "frames": [frame(t0 + k / 30) for k in range(n)]}
+    return batch(seq, [frame(t0 + k / 30) for k in range(n)])
 
 
 def _post(client, set_id, body, headers):
@@ -118,7 +118,7 @@ def test_hostile_values_are_refused_naming_the_field(client, db_session, camera_
     negative = json.loads(json.dumps(good))
     negative["frames"][0]["t"] = -1
     cases.append((json.dumps(negative), "frames[0].t"))
-    huge = {"seq": 0, "frames": [frame(k / 30) for k in range(MAX_FRAMES_PER_BATCH + 1)]}
+    huge = batch(0, [frame(k / 30) for k in range(MAX_FRAMES_PER_BATCH + 1)])
     cases.append((json.dumps(huge), "frames"))
     inf = json.loads(json.dumps(good))
     inf["frames"][0]["image"][5][1] = 0.123456789
@@ -162,7 +162,7 @@ def test_more_frames_than_real_time_allows_are_rate_limited(client, camera_home,
     set_id, h = started(seconds_ago=0), camera_home["headers"]
     seq, status = 0, 201
     while status == 201 and seq < 20:  # 120 frames packed in 0.04 s of set time each: 60 fps x 10 s allows 600
-        body = {"seq": seq, "frames": [frame(seq * 0.04 + k * 0.0003) for k in range(MAX_FRAMES_PER_BATCH)]}
+        body = batch(seq, [frame(seq * 0.04 + k * 0.0003) for k in range(MAX_FRAMES_PER_BATCH)])
         r = _post(client, set_id, body, h)
         status = r.status_code
         seq += 1
