@@ -124,7 +124,7 @@ const Live = (() => {
     const words = {
       online: "Your home computer is ready. Press Start next to an exercise when you are in front of the camera.",
       offline: "Your home computer is not connected right now, so you cannot start an exercise from here. Please check that it is switched on and connected to the internet. This page notices by itself when it is back.",
-      unpaired: "No home computer is set up for you yet. Your therapist can help you set one up.",
+      unpaired: "No home computer with a depth camera is set up for you. If this computer has a camera, press \"Start with this computer's camera\" next to an exercise.",
       unknown: "Checking your home computer…",
     };
     line.textContent = words[agent] || words.unknown;
