@@ -42,12 +42,12 @@ const CameraChecks = (() => {
 
   function inView(l) { return (l.visibility ?? 1) >= VISIBLE && l.x >= EDGE && l.x <= 1 - EDGE && l.y >= EDGE && l.y <= 1 - EDGE; }
 
-  /** Returns {ok, say, code} for one frame: the first problem in the order nobody, two people, light, parts out of
+  /** Returns {ok, say, code} for one frame: the first problem in the order light, nobody, two people, parts out of
    *  view, distance, view, off centre. image/world: the followed pose's landmarks; count: poses found. */
   function placement({ image, world, count, luma, ex }) {
+    if (luma !== null && luma !== undefined && luma < DARK_LUMA) return { ok: false, say: T.dark, code: "dark" };
     if (!image) return { ok: false, say: T.nobody, code: "nobody" };
     if (count > 1) return { ok: false, say: T.twoPeople, code: "two_people" };
-    if (luma !== null && luma !== undefined && luma < DARK_LUMA) return { ok: false, say: T.dark, code: "dark" };
     const needs = needsFor(ex);
     if (!needs.every((i) => inView(image[i]))) {
       const legs = needs.includes(27);

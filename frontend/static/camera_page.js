@@ -163,12 +163,12 @@
       if (t <= lastT) t = lastT + 0.001;
       const f = frameOf(+t.toFixed(3), image, world);
       if (f) { pending.push(f); lastT = f.t; f._taken = taken; }
-      if (poses > 1) say(T.keptPatient, "warn");
-      else if (luma !== null && luma < CameraChecks.DARK_LUMA) say(T.dark, "warn");
+      if (luma !== null && luma < CameraChecks.DARK_LUMA) say(T.dark, "warn");
+      else if (poses > 1) say(T.keptPatient, "warn");
       else if (CameraSender.isOffline()) say(T.offline, "warn");
       else say(set.hint || T.counting, set.hint ? "warn" : "");
     } else if (now - lastSeen > LOST_MS) {
-      say(poses > 0 ? T.keptPatient : T.leftFrame, "warn");
+      say(luma !== null && luma < CameraChecks.DARK_LUMA ? T.dark : poses > 0 ? T.keptPatient : T.leftFrame, "warn");
     }
     if (rate !== null && rate < SLOW_FPS && now - set.countingSince > 3000) note(T.slow);
     if (now - lastFlush >= FLUSH_MS) flush(now);
@@ -399,5 +399,6 @@
   async function toPlacementKeepingSet() { await toPlacement(); }
 
   init();
-  window.CameraPage = { state: () => ({ phase, count, target, set_id: set && set.set_id, model: CameraPose.info }) };
+  window.CameraPage = { state: () => ({ phase, count, target, set_id: set && set.set_id, next_seq: set && set.next_seq,
+    model: CameraPose.info, fps: stamps.length > 1 ? (stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000) : null }) };
 })();

@@ -174,7 +174,7 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         expect(page.locator("#cam-count .n")).to_be_visible()
         size = page.evaluate("parseFloat(getComputedStyle(document.querySelector('#cam-count .n')).fontSize)")
         assert size >= 96, f"the live count is {size} px; it must be at least 96 px"
-        page.wait_for_function("() => +document.querySelector('#cam-count .n').textContent >= 1", timeout=90_000)
+        page.wait_for_function("() => +document.querySelector('#cam-count .n').textContent >= 1", timeout=180_000)
         _shots(page, "counting")
         wait_phase(page, "stored", "failed", timeout=120_000)  # the target ends the set by itself
         assert phase(page) == "stored", page.locator("#cam-result-text").inner_text()
@@ -194,5 +194,158 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         off_origin = [u for u in page.requests if not u.startswith(base) and not u.startswith(("data:", "blob:"))]
         assert not off_origin, off_origin
         assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+
+
+def _to_counting(page, item_id: int, agree: bool = True) -> str:
+    page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
+    if agree:
+        page.click("#cam-agree")
+    wait_phase(page, "placement")
+    page.click("#cam-anyway")
+    wait_phase(page, "counting")
+    page.wait_for_function("() => CameraPage.state().next_seq >= 3", timeout=60_000)
+    return page.evaluate("CameraPage.state().set_id")
+
+
+def test_hidden_tab_network_loss_reload_and_unplugged_camera_mid_set_store_one_session(cam_browser, live_server):
+    base = live_server.url
+    email, pid, item_id = new_patient(base, target=50)  # a set that does not end by itself
+    context, page = open_page(cam_browser, base)
+    status = page.locator("#cam-status")
+    try:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        set_id = _to_counting(page, item_id)
+        # tab hidden (or the laptop asleep), then back
+        page.evaluate("Object.defineProperty(document, 'hidden', {value: true, configurable: true});"
+                      "document.dispatchEvent(new Event('visibilitychange'))")  # fmt: skip
+        expect(status).to_contain_text("paused because this page was hidden")
+        page.evaluate("Object.defineProperty(document, 'hidden', {value: false, configurable: true});"
+                      "document.dispatchEvent(new Event('visibilitychange'))")  # fmt: skip
+        expect(status).to_contain_text("Welcome back")
+        # the network lost mid-set, then back: batches wait in IndexedDB and go out in order
+        context.set_offline(True)
+        expect(status).to_contain_text("connection to the server is lost", timeout=20_000)
+        shot(page, "camera-offline")
+        _axe_clean(page)
+        page.wait_for_timeout(2000)
+        waiting = page.evaluate("CameraBuffer.batches(CameraPage.state().set_id).then((b) => b.length)")
+        assert waiting >= 1, "no batch was kept while offline"
+        context.set_offline(False)
+        expect(status).to_contain_text("The connection is back", timeout=30_000)
+        # the page reloaded mid-set: the set is offered to go on, with the same id
+        page.reload()
+        expect(page.locator("#cam-resume")).to_be_visible()
+        expect(page.locator("#cam-resume-text")).to_contain_text("We kept")
+        shot(page, "camera-resume")
+        _axe_clean(page)
+        page.click("#cam-continue")
+        wait_phase(page, "placement")
+        page.click("#cam-anyway")
+        wait_phase(page, "counting")
+        assert page.evaluate("CameraPage.state().set_id") == set_id
+        seq = page.evaluate("CameraPage.state().next_seq")
+        page.wait_for_function("(s) => CameraPage.state().next_seq >= s + 3", arg=seq, timeout=60_000)
+        # the camera unplugged mid-set: said in words; what was done is saved on request
+        page.evaluate(
+            "document.getElementById('cam-video').srcObject.getVideoTracks()[0].dispatchEvent(new Event('ended'))"
+        )
+        expect(page.locator("#cam-problem-text")).to_contain_text("camera was disconnected")
+        shot(page, "camera-unplugged")
+        _axe_clean(page)
+        page.click("#cam-problem-save")
+        wait_phase(page, "stored", "failed", timeout=120_000)
+        assert phase(page) == "stored", page.locator("#cam-result-text").inner_text()
+        stored = patient_sessions(base, email, pid)
+        assert len(stored) == 1 and stored[0]["client_session_id"] == set_id, stored
+        assert page.evaluate("(id) => CameraBuffer.batches(id).then((b) => b.length)", set_id) == 0
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+
+
+@pytest.mark.parametrize(
+    ("flags", "says"),
+    [
+        (["--use-fake-device-for-media-stream"], "did not allow this page to use the camera"),  # no permission
+        (["--use-fake-ui-for-media-stream"], "could not find a camera"),  # no camera at all
+    ],
+    ids=["permission-denied", "no-camera"],
+)
+def test_a_camera_that_cannot_start_is_said_in_plain_words(pw, live_server, flags, says):
+    base = live_server.url
+    email, _, item_id = new_patient(base)
+    b = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=["--no-sandbox", *flags])
+    context, page = open_page(b, base)
+    try:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        if "could not find" in says:
+            expect(page.locator("a.cam-start")).to_be_hidden()  # no camera: the patient page offers none
+        page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
+        page.click("#cam-agree")
+        expect(page.locator("#cam-problem-text")).to_contain_text(says)
+        expect(page.locator("#cam-retry")).to_be_visible()
+        shot(page, f"camera-problem-{'denied' if 'allow' in says else 'none'}")
+        _axe_clean(page)
+    finally:
+        context.close()
+        b.close()
+
+
+@pytest.mark.parametrize(("luma", "code"), [(5, "dark"), (128, "nobody")], ids=["dark", "nobody"])
+def test_a_dark_picture_and_an_empty_one_are_named_in_the_placement_check(pw, live_server, tmp_path, luma, code):
+    base = live_server.url
+    email, _, item_id = new_patient(base)
+    b = camera_browser(pw, write_constant_y4m(tmp_path / f"grey{luma}.y4m", luma))
+    context, page = open_page(b, base)
+    try:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
+        page.click("#cam-agree")
+        wait_phase(page, "placement")
+        page.wait_for_function("(c) => document.getElementById('cam-say').dataset.code === c", arg=code, timeout=60_000)
+        text = page.locator("#cam-say").inner_text()
+        assert ("too dark" in text) if code == "dark" else ("cannot see you" in text), text
+    finally:
+        context.close()
+        b.close()
+
+
+def test_two_people_and_the_patient_kept_in_the_checks(cam_browser, live_server):
+    """The placement and tracking rules on landmarks of two people (the page's own functions in Chromium)."""
+    from tests.backend.camera.landmarks import body, image_of
+
+    base = live_server.url
+    email, _, item_id = new_patient(base)
+    world = body()
+    me = [{"x": x, "y": y, "z": z, "visibility": 0.95} for x, y, z in image_of(world)]
+    other = [dict(p, x=p["x"] + 0.4) for p in me]
+    w = [{"x": x, "y": y, "z": z} for x, y, z in world]
+    context, page = open_page(cam_browser, base)
+    try:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        page.goto(f"{PAGE}?item={item_id}")
+        expect(page.locator("#cam-consent")).to_be_visible()
+        out = page.evaluate(
+            """([me, other, w]) => {
+                const ex = {plane: "frontal", defining_angles: ["shoulder_abduction_L"]};
+                const c = (image, count) => CameraChecks.placement({image, world: w, count, luma: 120, ex}).code;
+                const prev = CameraChecks.centre(me);
+                const dark = CameraChecks.placement({image: me, world: w, count: 1, luma: 10, ex}).code;
+                return {two: c(me, 2), one: c(me, 1), nobody: c(null, 0), dark,
+                        kept: CameraChecks.pick({landmarks: [other, me]}, prev),
+                        onlyOther: CameraChecks.pick({landmarks: [other]}, prev),
+                        side: CameraChecks.viewFor({plane: "sagittal", defining_angles: ["knee_flexion_L"]}),
+                        front: CameraChecks.viewFor({plane: "sagittal", defining_angles: ["elbow_flexion_L"]})};
+            }""",
+            [me, other, w],
+        )
+        assert out == {"two": "two_people", "one": "ok", "nobody": "nobody", "dark": "dark", "kept": 1,
+                       "onlyOther": -1, "side": "side", "front": "front"}, out  # fmt: skip
     finally:
         context.close()
