@@ -3,6 +3,7 @@
  *   I18n.t("Hello, {name}!", { name })              -> the translation, placeholders filled
  *   I18n.nt("{n} set", "{n} sets", n, { ... })      -> the singular or plural form for n ({n} is n)
  *   I18n.date(iso, options), I18n.number(x, digits)  -> dates and numbers the way the page's language writes them
+ *   I18n.N_("text")                                  -> marks a text that arrives from elsewhere (translated by I18n.t(text))
  * Mark every user-facing string with I18n.t / I18n.nt (python -m backend.i18n.catalogues extract finds them). */
 "use strict";
 const I18n = (() => {
@@ -49,5 +50,9 @@ const I18n = (() => {
     });
   });
 
-  return { locale, tag, t, nt, date, dateTime, number };
+  /** Marks a message for the catalogue without translating it here (a text that arrives from elsewhere, e.g. the
+   *  home computer's hints, and is translated by I18n.t(text) where it is shown). */
+  function N_(msgid) { return msgid; }
+
+  return { locale, tag, t, nt, N_, date, dateTime, number };
 })();

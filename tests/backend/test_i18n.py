@@ -186,3 +186,13 @@ def test_an_api_error_marked_for_translation_comes_in_the_asked_language(
     assert r.status_code == 409 and r.headers["content-language"] == "de"
     assert r.json() == {"error": "AgentOffline", "detail": "Ihr Computer zu Hause ist nicht verbunden: Bitte prüfen "
                         "Sie, ob er eingeschaltet und mit dem Internet verbunden ist"}  # fmt: skip
+
+
+def test_every_hint_of_the_home_computer_is_in_the_scripts_catalogue():
+    from kinect_agent.analysis import live
+
+    hints = {value for name, value in vars(live).items() if name.startswith("HINT_") and isinstance(value, str)}
+    assert len(hints) == 6
+    for locale in LOCALES[1:]:
+        messages = js_messages(locale)["messages"]
+        assert hints <= set(messages), f"{locale}: {sorted(hints - set(messages))}"
