@@ -24,7 +24,7 @@ from babel import Locale, UnknownLocaleError
 from babel.dates import format_date as _babel_format_date
 from babel.messages.mofile import write_mo
 from babel.messages.pofile import read_po
-from babel.numbers import format_decimal
+from babel.numbers import format_decimal, format_percent
 
 LOCALE_DIR = Path(__file__).resolve().parent / "locale"
 DOMAIN = "messages"
@@ -85,6 +85,10 @@ class Translator:
         """Returns a number with this locale's decimal sign, rounded to `decimals` places."""
         fmt = "#,##0" + ("." + "0" * decimals if decimals else "")
         return format_decimal(round(value, decimals), format=fmt, locale=self.locale)
+
+    def format_percent(self, fraction: float) -> str:
+        """Returns a fraction as a whole percentage the way this locale writes it (0.85: 85% / 85 %)."""
+        return format_percent(fraction, locale=self.locale)
 
 
 def translator(locale: str | None) -> Translator:

@@ -196,3 +196,67 @@ def test_every_hint_of_the_home_computer_is_in_the_scripts_catalogue():
     for locale in LOCALES[1:]:
         messages = js_messages(locale)["messages"]
         assert hints <= set(messages), f"{locale}: {sorted(hints - set(messages))}"
+
+
+def test_the_exercise_library_comes_in_the_asked_language(client, make_user, auth_headers, exercise):
+    headers = auth_headers(make_user("patient"))
+    english = client.get(f"/api/v1/exercises/{exercise.slug}", headers=headers).json()
+    german = client.get(f"/api/v1/exercises/{exercise.slug}", headers=headers | {"Accept-Language": "de"}).json()
+    assert german["name"] == translator("de").gettext(english["name"]) != english["name"]
+    assert german["instructions"] == translator("de").gettext(english["instructions"]) != english["instructions"]
+    listed = client.get("/api/v1/exercises", headers=headers | {"Accept-Language": "fr-FR"}).json()["items"]
+    assert {e["name"] for e in listed} & {"Petite flexion des genoux", "Tendre le genou assis", "Squat profond"}
+
+
+@pytest.mark.parametrize(
+    ("locale", "expected"),
+    [
+        ("en", "On Saturday you did 6 of the 10 mini squats in your plan."),
+        ("de", "Am Samstag haben Sie bei der Übung „Kleine Kniebeuge“ 6 von 10 Wiederholungen aus Ihrem Plan"),
+        ("es", "El sábado hizo 6 de las 10 repeticiones de «Media sentadilla» de su plan."),
+        ("fr", "Samedi, vous avez fait 6 des 10 répétitions de « Petite flexion des genoux » prévues."),
+    ],
+)
+def test_advice_is_written_in_the_patient_language(locale, expected):
+    from backend.suggestions.rules import evaluate
+
+    saturday = dt.datetime(2026, 11, 21, 10, tzinfo=dt.UTC)
+    doc = {"exercise": "squat", "repetitions": 6, "quality": {"ok": True}}
+    drafts = evaluate(doc, prescribed_reps=10, history=[], expected_per_week=None, now=saturday,
+                      today=dt.date(2026, 11, 23), t=translator(locale))  # fmt: skip
+    assert [d.rule for d in drafts] == ["fewer_reps"]
+    assert drafts[0].text.startswith(expected), drafts[0].text
+
+
+def test_advice_dates_and_numbers_follow_the_locale():
+    from backend.suggestions.rules import evaluate, session_day
+
+    long_ago = dt.datetime(2025, 3, 14, 10, tzinfo=dt.UTC)
+    assert session_day(long_ago, dt.date(2026, 11, 23), translator("de")) == "am 14. März 2025"
+    assert session_day(long_ago, dt.date(2026, 11, 23), translator("es")) == "el 14 de marzo de 2025"
+    assert session_day(long_ago, dt.date(2026, 11, 23), translator("en")) == "on 14 March 2025"
+    doc = {"exercise": "squat", "repetitions": 10, "tempo_s_per_rep": 1.25, "quality": {"ok": True}}
+    now = dt.datetime(2026, 11, 21, 10, tzinfo=dt.UTC)
+    fast = evaluate(doc, prescribed_reps=10, history=[], expected_per_week=None, now=now, t=translator("fr"))
+    assert "environ 1,2 secondes" in fast[0].text, fast[0].text
+
+
+def test_a_german_patient_gets_advice_in_german(db_session, make_user, exercise):
+    import uuid
+
+    from backend.sessions.models import ExerciseSession, SessionMetric
+    from backend.suggestions.service import suggest_for_session
+
+    patient = make_user("patient")
+    patient.locale = "de"
+    doc = {"exercise": exercise.slug, "repetitions": 10, "rom_deg": 80.0, "tempo_s_per_rep": 0.8,
+           "quality": {"ok": True, "tracked_fraction": 1.0, "outlier_fraction": 0.0, "reasons": []}}  # fmt: skip
+    row = ExerciseSession(client_session_id=uuid.uuid4(), patient_id=patient.id, exercise_id=exercise.id,
+                          started_at=dt.datetime.now(dt.UTC), duration_s=30.0, n_frames=900, file_bytes=b"",
+                          content_hash=uuid.uuid4().hex * 2)  # fmt: skip
+    row.metric = SessionMetric(document=doc, repetitions=10, rom_deg=80.0)
+    db_session.add(row)
+    db_session.flush()
+    made = suggest_for_session(db_session=db_session, session=row, doc=doc)
+    assert [s.rule for s in made] == ["too_fast"]
+    assert made[0].text.startswith("Am ") and "etwa 0,8 Sekunden pro Wiederholung" in made[0].text, made[0].text
