@@ -30,7 +30,7 @@ const Coach = (() => {
       if (!box || box.value.trim()) continue;
       box.value = text;
       const note = el("p", { class: "note draft-kept", role: "status" },
-        "Your sign-in had expired. What you typed is kept here: please check it and send it again.");
+        I18n.t("Your sign-in had expired. What you typed is kept here: please check it and send it again."));
       box.after(note);
       box.addEventListener("input", () => note.remove(), { once: true });
     }
@@ -44,7 +44,7 @@ const Coach = (() => {
 
   /** Calls /api/v1 + path; returns the JSON body; throws ApiError with the API's {error, detail}. */
   async function api(path, { method = "GET", body, redirect401 = true, retried = false, withCsrf = true } = {}) {
-    const headers = { Accept: "application/json" };
+    const headers = { Accept: "application/json", "Accept-Language": I18n.locale };  // errors in the page's language
     if (method !== "GET" && withCsrf) headers["X-CSRF-Token"] = await csrfToken();
     if (body !== undefined) headers["Content-Type"] = "application/json";
     let resp;
@@ -52,16 +52,20 @@ const Coach = (() => {
       resp = await fetch(url("/api/v1" + path), { method, headers, credentials: "same-origin",
         body: body === undefined ? undefined : JSON.stringify(body) });
     } catch (e) {
-      throw new ApiError(0, "NetworkError", "The server could not be reached.");
+      throw new ApiError(0, "NetworkError", I18n.t("The server could not be reached."));
     }
-    if (resp.status === 401 && redirect401) { sessionStorage.removeItem("coach_csrf"); toLogin(); throw new ApiError(401, "NotAuthenticated", "Please sign in again."); }
+    if (resp.status === 401 && redirect401) { sessionStorage.removeItem("coach_csrf"); toLogin(); throw new ApiError(401, "NotAuthenticated", I18n.t("Please sign in again.")); }
     if (resp.status === 403 && method !== "GET" && !retried) {
       const err = await resp.clone().json().catch(() => ({}));
       if (err.error === "CsrfFailed") { csrf = null; sessionStorage.removeItem("coach_csrf"); return api(path, { method, body, redirect401, retried: true }); }
     }
     if (resp.status === 204) return null;
     const data = await resp.json().catch(() => null);
-    if (!resp.ok) throw new ApiError(resp.status, (data && data.error) || "HTTPError", (data && data.detail) || resp.statusText);
+    if (!resp.ok) {
+      // a detail the server could not say in the page's language is left out of the page (kindMessage says enough)
+      const said = I18n.locale === "en" || resp.headers.get("Content-Language") === I18n.locale;
+      throw new ApiError(resp.status, (data && data.error) || "HTTPError", said ? (data && data.detail) || resp.statusText : "");
+    }
     return data;
   }
 
@@ -69,15 +73,15 @@ const Coach = (() => {
   function kindMessage(err) {
     const s = err && err.status;
     let head;
-    if (s === 0) head = "We cannot reach the server right now. Please check the internet connection and try again.";
-    else if (s === 401) head = "Your sign-in expired. Please sign in again.";
-    else if (s === 403) head = "Sorry, your account may not see or change this.";
-    else if (s === 404) head = "Sorry, we could not find this.";
-    else if (s === 409) head = "This was changed in the meantime. Please reload the page.";
-    else if (s === 422) head = "Some of the information is not right. Please check it and try again.";
-    else if (s === 429) head = "Too many tries. Please wait a few minutes and try again.";
-    else if (s >= 500) head = "Something went wrong on our side. Please try again in a moment.";
-    else head = "Something went wrong.";
+    if (s === 0) head = I18n.t("We cannot reach the server right now. Please check the internet connection and try again.");
+    else if (s === 401) head = I18n.t("Your sign-in expired. Please sign in again.");
+    else if (s === 403) head = I18n.t("Sorry, your account may not see or change this.");
+    else if (s === 404) head = I18n.t("Sorry, we could not find this.");
+    else if (s === 409) head = I18n.t("This was changed in the meantime. Please reload the page.");
+    else if (s === 422) head = I18n.t("Some of the information is not right. Please check it and try again.");
+    else if (s === 429) head = I18n.t("Too many tries. Please wait a few minutes and try again.");
+    else if (s >= 500) head = I18n.t("Something went wrong on our side. Please try again in a moment.");
+    else head = I18n.t("Something went wrong.");
     const detail = err && err.detail && s !== 0 ? ` (${err.detail})` : "";
     return head + detail;
   }
@@ -110,18 +114,18 @@ const Coach = (() => {
     return d;
   }
   function fmtDate(iso, opts) {
-    return new Date(iso).toLocaleDateString("en-GB", opts || { weekday: "short", day: "numeric", month: "short", year: "numeric" });
+    return I18n.date(iso, opts || { weekday: "short", day: "numeric", month: "short", year: "numeric" });
   }
   function fmtDateTime(iso) {
-    return new Date(iso).toLocaleString("en-GB", { day: "numeric", month: "short", year: "numeric", hour: "2-digit", minute: "2-digit" });
+    return I18n.dateTime(iso, { day: "numeric", month: "short", year: "numeric", hour: "2-digit", minute: "2-digit" });
   }
-  function fmtTime(iso) { return new Date(iso).toLocaleTimeString("en-GB", { hour: "2-digit", minute: "2-digit" }); }
+  function fmtTime(iso) { return new Date(iso).toLocaleTimeString(I18n.tag, { hour: "2-digit", minute: "2-digit" }); }
   function daysAgo(iso) { return Math.round((startOfDay(new Date()) - startOfDay(new Date(iso))) / DAY); }
   function plainDay(iso) {
     const n = daysAgo(iso);
-    if (n === 0) return "today";
-    if (n === 1) return "yesterday";
-    return "on " + fmtDate(iso, { weekday: "long", day: "numeric", month: "long" });
+    if (n === 0) return I18n.t("today");
+    if (n === 1) return I18n.t("yesterday");
+    return I18n.t("on {day}", { day: fmtDate(iso, { weekday: "long", day: "numeric", month: "long" }) });
   }
   function median(xs) {
     const s = xs.filter((x) => x !== null && x !== undefined && isFinite(x)).sort((a, b) => a - b);

@@ -10,9 +10,8 @@ const Connection = (() => {
   const PROBE_MS = 1500;  // the longest wait for the health check; while lost, how often it is asked again
   const STALE_MS = 8000;  // a stream silent this long while the server answers is reopened
   const TEXT = {
-    lost: "This page has lost its connection to the server. Please check that your internet is working. "
-      + "You do not need to do anything else: the page reconnects by itself.",
-    back: "The connection is back.",
+    lost: I18n.t("This page has lost its connection to the server. Please check that your internet is working. You do not need to do anything else: the page reconnects by itself."),
+    back: I18n.t("The connection is back."),
   };
   let state = "connecting", last = Date.now(), probing = false, stream = null;  // last: when an event came
   const listeners = [];

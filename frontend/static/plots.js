@@ -83,18 +83,18 @@ const Plots = (() => {
       const wrap = el("div", { class: "table-wrap plot-table-wrap", id: `${id}-table`, hidden: true, tabindex: 0,
         role: "region", "aria-label": tableSpec.caption || title || "chart data" },  // scrollable: keyboard reachable
         table({ caption: tableSpec.caption || title, columns: tableSpec.columns, rows: tableSpec.rows }));
-      const button = el("button", { type: "button", class: "btn btn-quiet plot-toggle", "aria-expanded": "false", "aria-controls": `${id}-table` }, "Show as table");
+      const button = el("button", { type: "button", class: "btn btn-quiet plot-toggle", "aria-expanded": "false", "aria-controls": `${id}-table` }, I18n.t("Show as table"));
       button.addEventListener("click", () => {
         const open = wrap.hidden;
         wrap.hidden = !open;
         button.setAttribute("aria-expanded", String(open));
-        button.textContent = open ? "Hide table" : "Show as table";
+        button.textContent = open ? I18n.t("Hide table") : I18n.t("Show as table");
       });
       fig.append(button, wrap);
     }
     const start = () => (fig.isConnected ? draw(fig) : requestAnimationFrame(start));
     if (window.Plotly) requestAnimationFrame(start);
-    else plot.append(el("p", { class: "muted" }, "The chart could not be drawn; use “Show as table”."));
+    else plot.append(el("p", { class: "muted" }, I18n.t("The chart could not be drawn; use “Show as table”.")));
     return fig;
   }
 

@@ -72,6 +72,7 @@ ROUTES = {
     ("GET", "/api/v1/patients"): (AUTHED, None),
     ("GET", "/api/v1/patients/{patient_id}"): (CARE_DEV, None),
     ("GET", "/api/v1/patients/{patient_id}/therapists"): (CARE_DEV, None),
+    ("PATCH", "/api/v1/patients/{patient_id}"): (CARE, lambda w: {"locale": "de"}),
     ("PUT", "/api/v1/patients/{patient_id}/therapists/{therapist_id}"): (ADMIN, None),
     ("DELETE", "/api/v1/patients/{patient_id}/therapists/{therapist_id}"): (ADMIN, None),
     ("POST", "/api/v1/patients/{patient_id}/pairing-codes"): (CARE, None),
