@@ -11,9 +11,29 @@ const Coach = (() => {
     constructor(status, error, detail) { super(detail || error); this.status = status; this.error = error; this.detail = detail; }
   }
 
+  const DRAFTS = "coach_drafts:";  // + the page's path: {textarea id: text} kept over a sign-in that expired
+  /** Goes to the login page (back here after signing in); text typed into the page's text boxes is kept. */
   function toLogin() {
     const next = location.pathname + location.search;
-    location.assign(url("/?next=") + encodeURIComponent(next));
+    const drafts = Object.fromEntries([...document.querySelectorAll("textarea[id]")].filter((t) => t.value.trim())
+      .map((t) => [t.id, t.value]));
+    if (Object.keys(drafts).length) sessionStorage.setItem(DRAFTS + next, JSON.stringify(drafts));
+    location.assign(url("/?expired=1&next=") + encodeURIComponent(next));
+  }
+  /** Puts back what was typed before the sign-in expired (toLogin); says so next to each text box. */
+  function restoreDrafts() {
+    const key = DRAFTS + location.pathname + location.search;
+    const drafts = JSON.parse(sessionStorage.getItem(key) || "{}");
+    sessionStorage.removeItem(key);
+    for (const [id, text] of Object.entries(drafts)) {
+      const box = document.getElementById(id);
+      if (!box || box.value.trim()) continue;
+      box.value = text;
+      const note = el("p", { class: "note draft-kept", role: "status" },
+        I18n.t("Your sign-in had expired. What you typed is kept here: please check it and send it again."));
+      box.after(note);
+      box.addEventListener("input", () => note.remove(), { once: true });
+    }
   }
 
   async function csrfToken() {
@@ -54,7 +74,7 @@ const Coach = (() => {
     const s = err && err.status;
     let head;
     if (s === 0) head = I18n.t("We cannot reach the server right now. Please check the internet connection and try again.");
-    else if (s === 401) head = I18n.t("Please sign in again.");
+    else if (s === 401) head = I18n.t("Your sign-in expired. Please sign in again.");
     else if (s === 403) head = I18n.t("Sorry, your account may not see or change this.");
     else if (s === 404) head = I18n.t("Sorry, we could not find this.");
     else if (s === 409) head = I18n.t("This was changed in the meantime. Please reload the page.");
@@ -99,6 +119,7 @@ const Coach = (() => {
   function fmtDateTime(iso) {
     return I18n.dateTime(iso, { day: "numeric", month: "short", year: "numeric", hour: "2-digit", minute: "2-digit" });
   }
+  function fmtTime(iso) { return new Date(iso).toLocaleTimeString(I18n.tag, { hour: "2-digit", minute: "2-digit" }); }
   function daysAgo(iso) { return Math.round((startOfDay(new Date()) - startOfDay(new Date(iso))) / DAY); }
   function plainDay(iso) {
     const n = daysAgo(iso);
@@ -140,17 +161,26 @@ const Coach = (() => {
     const query = new URLSearchParams();
     if (patientId) query.set("patient_id", patientId);
     if (live) query.set("live", "true");
-    const source = new EventSource(url("/api/v1/events" + (query.toString() ? "?" + query : "")));
-    let timer = null, opened = false;
+    let source = null, timer = null, opened = false, again = null;
     const soon = () => { clearTimeout(timer); timer = setTimeout(reload, 300); };
-    for (const kind of ["session.stored", "suggestion.changed", "plan.changed"]) source.addEventListener(kind, soon);
-    for (const [kind, handler] of Object.entries(live || {})) {
-      if (kind === "open") continue;  // called on every (re)connection, below
-      source.addEventListener(kind, (e) => { try { handler(JSON.parse(e.data).data || {}, e); } catch (err) { console.error(err); } });
+    function connect() {
+      source = new EventSource(url("/api/v1/events" + (query.toString() ? "?" + query : "")));
+      for (const kind of ["session.stored", "suggestion.changed", "plan.changed"]) source.addEventListener(kind, soon);
+      for (const [kind, handler] of Object.entries(live || {})) {
+        if (kind === "open" || kind === "error") continue;  // called on every (re)connection and failure, below
+        source.addEventListener(kind, (e) => { try { handler(JSON.parse(e.data).data || {}, e); } catch (err) { console.error(err); } });
+      }
+      source.addEventListener("open", () => { if (opened) soon(); opened = true; if (live && live.open) live.open(); });
+      source.addEventListener("error", () => {
+        if (live && live.error) live.error(source.readyState === EventSource.CLOSED);
+        // an answer other than a stream (a proxy's 502 while the server restarts, a 401) makes the browser give up:
+        // the page does not
+        if (source.readyState === EventSource.CLOSED && !again) again = setTimeout(() => { again = null; connect(); }, 3000);
+      });
     }
-    source.addEventListener("open", () => { if (opened) soon(); opened = true; if (live && live.open) live.open(); });
-    window.addEventListener("pagehide", () => source.close());
-    return source;
+    connect();
+    window.addEventListener("pagehide", () => { clearTimeout(again); source.close(); });
+    return { close: () => { clearTimeout(again); source.close(); }, reconnect: () => { clearTimeout(again); source.close(); connect(); } };
   }
 
   async function logout() {
@@ -159,10 +189,11 @@ const Coach = (() => {
     location.assign(url("/"));
   }
   document.addEventListener("DOMContentLoaded", () => {
+    restoreDrafts();
     const b = document.getElementById("logout");
     if (b) b.addEventListener("click", logout);
   });
 
-  return { root, url, api, onChange, ApiError, kindMessage, showError, el, fmtDate, fmtDateTime, plainDay, daysAgo, startOfWeekUTC, median,
+  return { root, url, api, onChange, ApiError, kindMessage, showError, el, fmtDate, fmtDateTime, fmtTime, plainDay, daysAgo, startOfWeekUTC, median,
            exercises, exerciseName, runningPlan, toLogin, DAY };
 })();

@@ -14,6 +14,9 @@
     return target.pathname + target.search;
   }
   function say(text) { box.textContent = text; box.hidden = false; }
+  if (new URLSearchParams(location.search).get("expired") === "1") {
+    say(I18n.t("Your sign-in expired. Please sign in again: you will be taken back to where you were, with what you typed."));
+  }
 
   form.addEventListener("submit", async (ev) => {
     ev.preventDefault();

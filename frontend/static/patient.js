@@ -180,6 +180,7 @@
       ]);
       const plan = runningPlan(plans.items);
       const last = latest.items[0] || null;
+      Live.uploaded(last ? last.created_at : null);
       const item = last && plan ? plan.items.find((i) => i.exercise_slug === last.exercise_slug) : null;
       lastSessionBlock(last, item, lib, last ? progress.points.filter((p) => p.exercise_slug === last.exercise_slug) : []);
       adviceBlock(suggestions.items);
@@ -190,6 +191,6 @@
   }
   load().then(() => exercises()).then((lib) => Live.init(pid, (slug) => exerciseName(lib, slug)));
   // a new result, new advice or a new plan shows without reloading the page; the home computer's set live
-  Coach.onChange(pid, load, { "live.agent": Live.onAgent, "live.command": Live.onCommand, "live.progress": Live.onProgress,
-    "session.stored": Live.onStored, open: Live.status });
+  Connection.attach(Coach.onChange(pid, load, Connection.watch({ "live.agent": Live.onAgent, "live.command": Live.onCommand,
+    "live.progress": Live.onProgress, "session.stored": Live.onStored, open: Live.status })));
 })();
