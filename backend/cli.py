@@ -169,6 +169,16 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return demo_main([])
 
 
+def cmd_storage(args: argparse.Namespace) -> int:
+    """Checks the object store against the database, or moves files between them (backend.storage.check)."""
+    from backend.storage import check
+
+    _settings()
+    if args.action != "init":
+        _require_migrated()
+    return check.run(args)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Returns the parser of every subcommand."""
     parser = argparse.ArgumentParser(prog="coach-server", description="Kinect Home Coach coaching server.")
@@ -208,6 +218,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     analyze_arguments(p)
     p.set_defaults(_run=cmd_analyze)
+
+    from backend.storage.check import add_arguments as storage_arguments
+
+    p = sub.add_parser("storage", help="check the object store of session files and replays, or move files to it")
+    storage_arguments(p)
+    p.set_defaults(_run=cmd_storage)
     return parser
 
 
