@@ -54,6 +54,8 @@ class Settings(BaseSettings):
     S3_REGION: str = "us-east-1"
     S3_ACCESS_KEY_ID: str = ""  # empty: boto3's usual chain (AWS_* variables, instance role …)
     S3_SECRET_ACCESS_KEY: str = ""
+    # session files older than this many days are removed by `coach-server retention` (metrics kept); 0: off
+    RETENTION_DAYS: int = Field(default=0, ge=0)
 
     @model_validator(mode="after")
     def _check_public_url(self) -> Settings:

@@ -47,6 +47,7 @@ ROUTERS = (
     "backend.replay.router",
     "backend.events.router",
     "backend.live.router",
+    "backend.records.router",
 )
 
 

@@ -12,7 +12,7 @@ from sqlalchemy.orm import Session
 from backend import __version__
 from backend.analysis.errors import AnalysisError
 from backend.database import utcnow
-from backend.exceptions import ExerciseNotFound, SessionConflict, SessionNotFound
+from backend.exceptions import ExerciseNotFound, SessionConflict, SessionFileRemoved, SessionNotFound
 from backend.exercises.models import Exercise
 from backend.patients.models import TherapistPatient
 from backend.patients.service import visible_patients_query
@@ -217,7 +217,7 @@ def session_patient(*, db_session: Session, session_id: int) -> int:
 
 def session_file(*, db_session: Session, session_id: int) -> bytes:
     """Returns the stored .khs bytes of a session, read from the object store and checked against its sha256;
-    raises SessionNotFound, StoredObjectMissing or StoredObjectCorrupt."""
+    raises SessionNotFound, SessionFileRemoved (retention), StoredObjectMissing or StoredObjectCorrupt."""
     row = db_session.execute(
         select(ExerciseSession.file_key, ExerciseSession.content_hash, ExerciseSession.file_bytes).where(
             ExerciseSession.id == session_id
@@ -228,7 +228,9 @@ def session_file(*, db_session: Session, session_id: int) -> bytes:
     if row.file_key:
         return get_store().get(row.file_key, row.content_hash)
     if row.file_bytes is None:
-        raise missing(session_id)
+        raise SessionFileRemoved(
+            f"the file of session {session_id} was removed by the clinic's retention period; its metrics are kept"
+        )
     return row.file_bytes
 
 
