@@ -39,6 +39,6 @@ EXPOSE 8000
 HEALTHCHECK --interval=30s --timeout=5s --start-period=20s --retries=3 \
     CMD python -c "import urllib.request,sys; sys.exit(urllib.request.urlopen('http://127.0.0.1:8000/healthz').status != 200)"
 
-# Bring the schema to head, then serve (the server itself refuses a database behind head). X-Forwarded-For is
+# Make sure the object store's bucket exists, bring the schema to head (moving any stored blobs out), then serve (the server itself refuses a database behind head). X-Forwarded-For is
 # trusted only from COACH_FORWARDED_ALLOW_IPS (docker-compose.yml: its proxy); by default from nobody else.
-CMD ["sh", "-c", "coach-server migrate && exec coach-server serve --forwarded-allow-ips \"${COACH_FORWARDED_ALLOW_IPS:-127.0.0.1}\""]
+CMD ["sh", "-c", "coach-server storage init && coach-server migrate && exec coach-server serve --forwarded-allow-ips \"${COACH_FORWARDED_ALLOW_IPS:-127.0.0.1}\""]

@@ -169,6 +169,34 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return demo_main([])
 
 
+def cmd_storage(args: argparse.Namespace) -> int:
+    """Checks the object store against the database, or moves files between them (backend.storage.check)."""
+    from backend.storage import check
+
+    _settings()
+    if args.action != "init":
+        _require_migrated()
+    return check.run(args)
+
+
+def cmd_retention(args: argparse.Namespace) -> int:
+    """Removes session files older than the retention period, keeping their metrics (backend.records.retention)."""
+    from backend.database import get_sessionmaker
+    from backend.records.retention import apply_retention
+
+    settings = _settings()
+    days = args.days if args.days is not None else settings.RETENTION_DAYS
+    if days <= 0:
+        print("retention is off (COACH_RETENTION_DAYS=0): no session file removed")
+        return 0
+    _require_migrated()
+    with get_sessionmaker()() as session:
+        report = apply_retention(db_session=session, days=days)
+        session.commit()
+    print(report.text())
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Returns the parser of every subcommand."""
     parser = argparse.ArgumentParser(prog="coach-server", description="Kinect Home Coach coaching server.")
@@ -208,6 +236,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     analyze_arguments(p)
     p.set_defaults(_run=cmd_analyze)
+
+    from backend.storage.check import add_arguments as storage_arguments
+
+    p = sub.add_parser("retention", help="remove session files older than COACH_RETENTION_DAYS (metrics are kept)")
+    p.add_argument("--days", type=int, help="this many days instead of COACH_RETENTION_DAYS")
+    p.set_defaults(_run=cmd_retention)
+
+    p = sub.add_parser("storage", help="check the object store of session files and replays, or move files to it")
+    storage_arguments(p)
+    p.set_defaults(_run=cmd_storage)
     return parser
 
 

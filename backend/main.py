@@ -49,6 +49,7 @@ ROUTERS = (
     "backend.events.router",
     "backend.live.router",
     "backend.camera.router",
+    "backend.records.router",
 )
 
 

@@ -128,6 +128,8 @@ ROUTES = {
     ("GET", "/api/v1/camera/sets/{set_id}"): ({"patient_own"}, None),  # only the set's patient
     ("POST", "/api/v1/camera/sets/{set_id}/batches"): ({"patient_own"}, lambda w: _camera_batch()),
     ("POST", "/api/v1/camera/sets/{set_id}/end"): ({"patient_own"}, lambda w: {"last_seq": -1}),
+    ("GET", "/api/v1/patients/{patient_id}/archive"): ({"patient_own", "admin"}, None),  # the patient, or an admin
+    ("POST", "/api/v1/patients/{patient_id}/erasure"): (ADMIN, lambda w: {"confirm_email": w["own_email"]}),
 }
 
 
