@@ -50,7 +50,6 @@ def swagger_ui_redirect() -> HTMLResponse:
     return get_swagger_ui_oauth2_redirect_html()
 
 
-
 @router.get(ASSET_PATH + "/{name}")
 def asset(name: str) -> Response:
     """Returns one of the documentation page's files (FILES), or 404."""

@@ -114,8 +114,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--host", default="127.0.0.1")
     parser.add_argument("--port", type=int, default=8000)
     parser.add_argument("--db", type=Path, default=Path("var/demo.db"), help="SQLite file (default var/demo.db)")
-    parser.add_argument("--fresh", action="store_true",
-                        help="start over: delete the demo database and the agents' queues (kept by default)")
+    parser.add_argument(
+        "--fresh",
+        action="store_true",
+        help="start over: delete the demo database and the agents' queues (kept by default)",
+    )
     parser.add_argument("--no-agents", action="store_true", help="do not start the simulated home agents")
     parser.add_argument("--history-weeks", type=int, default=3, help="weeks of backdated sessions (default 3)")
     parser.add_argument("--agent-interval", type=float, nargs=2, default=(30.0, 60.0), metavar=("MIN", "MAX"),

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import importlib
 import logging
+from collections.abc import Callable
 from contextlib import asynccontextmanager
+from importlib.metadata import entry_points
 
 from fastapi import APIRouter, FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -30,8 +32,8 @@ from backend.openapi import openapi_builder
 from backend.request_limits import RequestLimits
 from backend.schemas import ErrorOut
 from backend.security_headers import SecurityHeaders
-from frontend.pages import mount as mount_pages
 from kinect_agent.blas_threads import one_blas_thread
+from kinect_agent.processing.errors import ProcessingError
 
 log = logging.getLogger(__name__)
 
@@ -51,6 +53,14 @@ ROUTERS = (
     "backend.camera.router",
     "backend.records.router",
 )
+# Packages above the server (the pages, frontend.pages:mount) register a mount function in this entry-point group
+# (pyproject.toml); the server calls each on the app it builds and never imports them (docs/architecture.md).
+MOUNTS_GROUP = "kinect_home_coach.server_mounts"
+
+
+def registered_mounts() -> list[Callable[[FastAPI], None]]:
+    """Returns the mount functions installed in MOUNTS_GROUP, sorted by name."""
+    return [ep.load() for ep in sorted(entry_points(group=MOUNTS_GROUP), key=lambda ep: ep.name)]
 
 
 class HealthOut(BaseModel):
@@ -99,7 +109,7 @@ def _allowed_methods(app: FastAPI, request: Request) -> list[str]:
 
 
 def _page_for(app: FastAPI, request: Request, status_code: int) -> Response | None:
-    """Returns the HTML error page the mounted pages give a browser (frontend.pages.mount), or None: JSON."""
+    """Returns the HTML error page the mounted pages give a browser (app.state.error_page), or None: JSON."""
     render = getattr(app.state, "error_page", None)
     return render(request, status_code) if render is not None else None
 
@@ -118,6 +128,13 @@ def _install_error_handlers(app: FastAPI) -> None:
             {"error": type(exc).__name__, "detail": detail}, status_code=exc.status_code,
             headers=(exc.headers or {}) | language,
         )  # fmt: skip
+
+    @app.exception_handler(ProcessingError)
+    async def processing_fault(request: Request, exc: ProcessingError) -> JSONResponse:
+        # an internal fault on input the server accepted: logged with the request and the notes the layers added
+        log.error("internal fault of the signal processing in %s %s", request.method, request.url.path, exc_info=exc)
+        detail = f"internal fault of the signal processing ({exc}); the request was valid, the fault is the server's"
+        return JSONResponse({"error": type(exc).__name__, "detail": detail}, status_code=500)
 
     @app.exception_handler(RequestValidationError)
     async def validation_error(request: Request, exc: RequestValidationError) -> Response:
@@ -221,7 +238,8 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     app.include_router(_system_router())
     for name in ROUTERS:
         app.include_router(importlib.import_module(name).router)
-    mount_pages(app)  # the HTML pages and their error pages, not in the OpenAPI schema
+    for mount in registered_mounts():  # the HTML pages and their error pages, not in the OpenAPI schema
+        mount(app)
     mount_api_docs(app)
     app.openapi = openapi_builder(app)  # type: ignore[method-assign]
     return app

@@ -35,9 +35,14 @@ def _document_request_checks(schema: dict) -> None:
                 responses.setdefault("422", _error_answer("InvalidInput", "InvalidInput",
                                                           "body: JSON text must be UTF-8; byte 3 is not"))  # fmt: skip
             if method.upper() not in ("GET", "HEAD"):
-                responses.setdefault("503", _error_answer("DatabaseBusy (another write holds the lock) or ServerBusy "
-                                                          "(no database slot came free)", "DatabaseBusy",
-                                                          "the database is busy with another write; retry in a second"))
+                responses.setdefault(
+                    "503",
+                    _error_answer(
+                        "DatabaseBusy (another write holds the lock) or ServerBusy (no database slot came free)",
+                        "DatabaseBusy",
+                        "the database is busy with another write; retry in a second",
+                    ),
+                )
             else:  # backend.db_slots
                 responses.setdefault("503", _error_answer("ServerBusy: no database slot came free", "ServerBusy",
                                                           "no database connection came free within 30 s; retry in a "

@@ -19,7 +19,7 @@ Metrics, pooled over the recordings of a setting (summary: over all settings):
                       Kinect's offsets to mocap are largely a bias no temporal filter sees)
     segment_sd_mm     SD over time of each of the 14 table segments' lengths, mean over segments (frame-weighted
                       over recordings); the truth's is 0
-    angle_rmse_deg    elbow and knee flexion (kinect_agent.processing.angles), pooled over the four angles
+    angle_rmse_deg    elbow and knee flexion (kinect_agent.body.angles), pooled over the four angles
     precision/recall  of the joint-frames flagged as outliers against the simulated tracking-loss mask (the
                       pipeline offline only; the online filter's gate is not reported per joint-frame)
     gain              the paper's outlier-removal gain: per joint, 100·(1 − after/before) of the mean and of the
@@ -64,8 +64,8 @@ from bench.baselines import butterworth, cv_kalman_rts, holt_kinect, one_euro  #
 from bench.baselines._common import hold_last  # noqa: E402
 from bench.error_floor import oracle_estimate  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
+from kinect_agent.body.angles import joint_angles  # noqa: E402
 from kinect_agent.evaluation.error_parts import ErrorSums, error_sums  # noqa: E402
-from kinect_agent.processing.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402

@@ -35,7 +35,7 @@ if str(ROOT_DIR) not in sys.path:  # `python bench/arms.py` puts bench/ first, n
 
 from bench.accuracy import run_method  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
-from kinect_agent.processing.angles import joint_angles  # noqa: E402
+from kinect_agent.body.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.skeleton import NOT_TRACKED  # noqa: E402

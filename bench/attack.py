@@ -591,8 +591,14 @@ def _wrong_owner(rng: random.Random, data: bytes, n: int, ctx: Context) -> list[
         ("recorded by device A for patient A", *a, {"patient_id": a[1]}, ("PatientNotFound",)),
     ]
     return [
-        Case("wrong_owner", f"{what}, sent by device B" + (" with ?patient_id=A" if query else ""),
-             owned(device, patient), params=query, device="B", expect=expect)  # fmt: skip
+        Case(
+            "wrong_owner",
+            f"{what}, sent by device B" + (" with ?patient_id=A" if query else ""),
+            owned(device, patient),
+            params=query,
+            device="B",
+            expect=expect,
+        )  # fmt: skip
         for what, device, patient, query, expect in variants
     ]
 

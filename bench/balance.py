@@ -16,7 +16,7 @@ import numpy as np
 
 from backend.analysis.balance import sway
 from kinect_agent.analysis import series
-from kinect_agent.processing.angles import joint_angles
+from kinect_agent.body.angles import joint_angles
 from kinect_agent.processing.pipeline import process
 from kinect_agent.sources.simulator import simulate
 

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from kinect_agent import skeleton
-from kinect_agent.processing import kinematics as km
+from kinect_agent.body import kinematics as km
 
 N_V = km.N_BONES + 1  # bone vectors: index 0 the ROOT offset, k + 1 bone k
 

@@ -4,8 +4,8 @@
 
 Setup (not measured): a fresh database (an SQLite file in a temp folder), migrated, with one patient; the real
 server as a uvicorn subprocess on loopback (bench.dashboard_load.start_server); the agent paired through the real
-API (kinect_agent.commands.pair), its home in the temp folder. The agent runs as real subprocesses of its own code
-(commands.run.queue_session, upload.drain) where a trial kills it; otherwise in this process. A TCP proxy on
+API (kinect_agent.pairing), its home in the temp folder. The agent runs as real subprocesses of its own code
+(capture.queue_session, upload.drain) where a trial kills it; otherwise in this process. A TCP proxy on
 loopback (this file) cuts connections.
 
 Each trial records one simulated set (2-3 repetitions) and delivers it through one fault, chosen at random:
@@ -64,7 +64,7 @@ EXERCISES = ("squat", "elbow_flexion", "shoulder_abduction", "seated_knee_extens
 AGENT_SCRIPT = r"""
 import sys
 sys.path.insert(0, sys.argv[1])
-from kinect_agent.commands.run import capture, queue_session
+from kinect_agent.capture import capture, queue_session
 from kinect_agent.commands.upload import upload_queue
 from kinect_agent.config import load_config
 from kinect_agent.queue import SessionQueue
@@ -159,7 +159,7 @@ class Bench:
     def _pair(self) -> int:
         from backend.devices.service import create_pairing_code
         from backend.users.service import create_user
-        from kinect_agent.commands.pair import pair
+        from kinect_agent.pairing import pair
 
         with Session(self.engine) as s, s.begin():
             patient = create_user(db_session=s, email=f"faults-{os.getpid()}@example.org", password=None,
@@ -278,7 +278,7 @@ class Bench:
     def _record_onto_a_full_disk(self) -> None:
         """Records one set in this process whose queue write of the filtered set fails with ENOSPC."""
         import kinect_agent.queue as queue_module
-        from kinect_agent.commands.run import capture, queue_session
+        from kinect_agent.capture import capture, queue_session
         from kinect_agent.config import load_config
 
         config = load_config()
@@ -307,7 +307,7 @@ class Bench:
             lock.close()
 
     def _queue_broken_file(self) -> None:
-        from kinect_agent.commands.run import capture, make_payload
+        from kinect_agent.capture import capture, make_payload
         from kinect_agent.config import load_config
         from kinect_agent.formats.session_file import encode
         from kinect_agent.queue import SessionQueue

@@ -1,7 +1,7 @@
 """Server-side ingest of a 10-minute session: POST /api/v1/sessions end to end, with a per-stage breakdown.
 
 The session file is made the way a home agent makes it: simulated Kinect 2 squats (kinect_agent.sources.simulator,
-back to back up to 10 minutes at 30 Hz), filtered by the agent's pipeline (kinect_agent.commands.run.make_payload)
+back to back up to 10 minutes at 30 Hz), filtered by the agent's pipeline (kinect_agent.capture.make_payload)
 and encoded as .khs. It is cached in the temp folder, one file per format version (the pipeline takes ~10 s;
 delete the cache after pipeline changes). Every timed upload carries a new session id (header patched, SHA-256
 trailer recomputed), so each run is a real insert, never the idempotent replay.
@@ -54,7 +54,7 @@ _STAGE_LABELS = (
 
 def session_file(minutes: float, cache_dir: Path) -> bytes:
     """Returns the .khs bytes (raw + agent-filtered recording) of a `minutes`-minute session; cached in cache_dir."""
-    from kinect_agent.commands.run import make_payload
+    from kinect_agent.capture import make_payload
     from kinect_agent.formats import session_file as sf
     from kinect_agent.processing.config import PipelineConfig
     from kinect_agent.processing.pipeline import VERSION

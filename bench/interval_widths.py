@@ -20,8 +20,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from backend.analysis.intervals import rom_intervals  # noqa: E402
 from kinect_agent.analysis import series  # noqa: E402
+from kinect_agent.body.angles import joint_angles  # noqa: E402
 from kinect_agent.formats import ui_prmd  # noqa: E402
-from kinect_agent.processing.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "ui-prmd" / "Segmented Movements" / "Kinect"

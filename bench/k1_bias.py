@@ -39,9 +39,9 @@ from bench.baselines._common import hold_last  # noqa: E402
 from bench.bone_refit import refit_bones  # noqa: E402
 from bench.error_floor import clean_error, oracle_estimate  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
+from kinect_agent.body.angles import joint_angles  # noqa: E402
 from kinect_agent.evaluation.error_parts import JointErrorSums  # noqa: E402
 from kinect_agent.processing import chain_filter  # noqa: E402
-from kinect_agent.processing.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.combined_outliers import remove_outliers_combined  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.ik import inverse_kinematics  # noqa: E402

@@ -22,7 +22,7 @@ Metrics (per joint; pooled over the well-estimated joint-frames of all pairs), m
     rmse               sqrt(mean |estimate - Vicon|^2)
     seg SD             SD over time of each of the 14 table segments' lengths, mean over segments (Vicon's own for
                        reference; the truth's is 0 only where SCoRE fits hold)
-    elbow RMSE (deg)   elbow flexion (kinect_agent.processing.angles) against Vicon's, sides with SHO, ELB, WRI well
+    elbow RMSE (deg)   elbow flexion (kinect_agent.body.angles) against Vicon's, sides with SHO, ELB, WRI well
     gain               the paper's outlier-removal gain: raw offset mean and SD before vs after dropping the
                        joint-frames the pipeline flags (outlier_prob > threshold, kinect_agent.processing.outliers);
                        "oracle": the paper's own setting, the Gaussian + uniform mixture fitted to the offsets
@@ -51,11 +51,11 @@ if str(ROOT_DIR) not in sys.path:
 from bench.accuracy import METHODS, pipeline_config, run_method  # noqa: E402
 from bench.accuracy_tables import cell  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
+from kinect_agent.body.angles import joint_angles  # noqa: E402
 from kinect_agent.evaluation.align import Alignment, interpolate, speed_signal  # noqa: E402, F401
 from kinect_agent.evaluation.align import align as evaluation_align  # noqa: E402
 from kinect_agent.evaluation.pairs import SCORE_JOINTS, well_estimated  # noqa: E402, F401
 from kinect_agent.evaluation.register import TRIM, kabsch, robust_kabsch, rotation_deg  # noqa: E402, F401
-from kinect_agent.processing.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.outliers import fit_mixture  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402

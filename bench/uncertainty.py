@@ -30,8 +30,8 @@ import numpy as np
 from backend.analysis import intervals
 from backend.analysis.range_of_motion import range_of_motion
 from kinect_agent.analysis import series
+from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.processing import uncertainty
-from kinect_agent.processing.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.processing.pipeline import process
 from kinect_agent.sources.simulator import EXERCISES, simulate
 

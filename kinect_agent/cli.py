@@ -13,6 +13,7 @@ import sys
 from kinect_agent import __version__
 from kinect_agent.blas_threads import one_blas_thread
 from kinect_agent.errors import AgentError
+from kinect_agent.processing.errors import ProcessingError
 
 # Subcommand modules, named as their command; each defines NAME, HELP, add_arguments(parser) and run(args) -> int.
 COMMANDS = (
@@ -51,7 +52,8 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Runs one subcommand; user errors print one clear line and exit with status 2."""
+    """Runs one subcommand. Bad input prints one clear line and exits with status 2; an internal fault of the
+    processing (ProcessingError) says so and exits with status 1."""
     argv = sys.argv[1:] if argv is None else argv
     first = next((a for a in argv if not a.startswith("-")), None)  # the command: no top-level option takes a value
     known = {m.rpartition(".")[2] for m in COMMANDS}
@@ -62,6 +64,10 @@ def main(argv: list[str] | None = None) -> int:
     except (AgentError, ValueError) as exc:
         print(f"kinect-agent {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except ProcessingError as exc:
+        print(f"kinect-agent {args.command}: internal fault ({type(exc).__name__}): {exc}. The input was accepted; "
+              "this is a fault of the program, please report it with the input file.", file=sys.stderr)  # fmt: skip
+        return 1
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130

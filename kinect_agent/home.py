@@ -14,10 +14,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from kinect_agent.commands.pair import pair as _pair
-from kinect_agent.commands.run import capture, queue_session
+from kinect_agent.capture import capture, queue_session
 from kinect_agent.config import AgentConfig, ConfigError, load_config
 from kinect_agent.errors import AgentError
+from kinect_agent.pairing import pair as _pair
 from kinect_agent.queue import SessionQueue
 from kinect_agent.upload import DrainReport, RetryPolicy, Uploader, drain
 

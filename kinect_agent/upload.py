@@ -222,8 +222,10 @@ def _describe(result: UploadResult) -> str:
     if result.outcome == "gone":
         return f"{name}: {result.detail}"
     if result.outcome == "held":
-        return (f"{name}: the server failed on it in {HOLD_AFTER_SERVER_ERRORS} passes in a row (HTTP "
-                f"{result.status_code}: {result.detail}); set aside in held/ (kinect-agent upload --retry-held)")
+        return (
+            f"{name}: the server failed on it in {HOLD_AFTER_SERVER_ERRORS} passes in a row (HTTP "
+            f"{result.status_code}: {result.detail}); set aside in held/ (kinect-agent upload --retry-held)"
+        )
     if result.status_code in (404, 405):
         return f"{name}: the server has no {UPLOAD_PATH} endpoint (HTTP {result.status_code}); file kept"
     if result.status_code == 401:

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The whole test suite, on embedded SQLite and then on PostgreSQL (127.0.0.1:5432, database test).
+# The whole test suite: ruff, the import layers, then pytest on embedded SQLite and on PostgreSQL (127.0.0.1:5432,
+# database test).
 # Extra arguments go to pytest (e.g. -k upload). Set COACH_TEST_PG_URL for another PostgreSQL.
 set -euo pipefail
 source "$(dirname "$0")/_venv.sh" test
@@ -25,6 +26,12 @@ if ! pg_ready 2>/dev/null; then
   fi
   pg_ready || { echo "error: the suite runs on PostgreSQL too, and none answers at $PG_URL" >&2; exit 1; }
 fi
+
+# Fast checks first (seconds): lint, formatting, and the import layers of docs/architecture.md.
+echo "=== ruff check, ruff format --check, import layers ===" >&2
+ruff check .
+ruff format --check .
+python -m pytest -q -p no:cacheprovider tests/test_layers.py
 
 # The browser tests (marker "browser") are slow and exercise the pages, not the database: they run once, on
 # PostgreSQL, the production database.

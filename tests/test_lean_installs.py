@@ -106,7 +106,8 @@ def test_the_server_ingests_analyses_and_replays_without_numba(tmp_path: Path) -
             replay = client.get(f"/api/v1/sessions/{sid}/replay", headers=admin)  # the viser scene
             assert replay.status_code == 200 and len(replay.content) > 1000, replay.text[:500]
         print("loaded:", sorted(m for m in sys.modules if m.split(".")[0] in BLOCKED))
-        from kinect_agent.processing import _fk_numba, _ukf_numba
+        from kinect_agent.body import _fk_numba
+        from kinect_agent.processing import _ukf_numba
         print("compiled paths:", _fk_numba.AVAILABLE, _ukf_numba.AVAILABLE)
     """, tmp_path)  # fmt: skip
     assert "loaded: []" in out and "compiled paths: False False" in out

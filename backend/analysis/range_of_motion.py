@@ -1,6 +1,6 @@
 """Range of motion of every clinical joint angle over a session.
 
-Definition. For each angle of kinect_agent.processing.angles.ANGLE_NAMES, computed from smoothed positions
+Definition. For each angle of kinect_agent.body.angles.ANGLE_NAMES, computed from smoothed positions
 (series.smooth_positions: gaps filled, Gaussian of SD 0.1 s; report.py passes those angles with presmoothed=True)
 or else smoothed here (Gaussian of SD 0.1 s), and unwrapped (period 360°), then
     min_deg = 1st percentile, max_deg = 99th percentile, range_deg = max_deg − min_deg   (degrees)

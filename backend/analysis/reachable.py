@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from kinect_agent.analysis import series
-from kinect_agent.processing.angles import body_frame
+from kinect_agent.body.angles import body_frame
 from kinect_agent.skeleton import INDEX
 
 CELL_DEG = 10.0

@@ -29,8 +29,8 @@ from backend.exercises.library import EXERCISES, ExerciseSpec
 from kinect_agent.analysis import series
 from kinect_agent.analysis.angles import counting_angles
 from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
+from kinect_agent.body.angles import body_frame, joint_angles
 from kinect_agent.errors import FormatError
-from kinect_agent.processing.angles import body_frame, joint_angles
 from kinect_agent.processing.params import KinematicParams
 from kinect_agent.recording import Recording
 

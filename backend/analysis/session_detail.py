@@ -25,7 +25,7 @@ import numpy as np
 from backend.analysis.reachable import hand_path
 from kinect_agent.analysis import series
 from kinect_agent.analysis.angles import counting_angles
-from kinect_agent.processing.angles import body_frame, joint_angles
+from kinect_agent.body.angles import body_frame, joint_angles
 
 MAX_CURVE_POINTS = 1500
 MAX_PATH_POINTS = 600

@@ -44,9 +44,12 @@ def visible_patients(caller: Caller, db_session: Session, patient_id: int | None
     "/events",
     response_class=StreamingResponse,
     responses={
-        200: {"content": {"text/event-stream": {}}, "description": "events: session.stored, suggestion.changed, "
-              "plan.changed (and with live=true live.agent, live.command, live.progress); data: {kind, patient_id, "
-              "data}"},  # fmt: skip
+        200: {
+            "content": {"text/event-stream": {}},
+            "description": "events: session.stored, suggestion.changed, "
+            "plan.changed (and with live=true live.agent, live.command, live.progress); data: {kind, patient_id, "
+            "data}",
+        },  # fmt: skip
         **error_responses(*AUTH_ERRORS, PatientNotFound),
     },
 )

@@ -1,6 +1,6 @@
 """The built-in exercise library: UI-PRMD movements and common seated and standing home exercises.
 
-Each entry names the joint angle(s) (kinect_agent.processing.angles.ANGLE_NAMES) whose rise and
+Each entry names the joint angle(s) (kinect_agent.body.angles.ANGLE_NAMES) whose rise and
 fall define one repetition, the anatomical plane it moves in, and the normal adult range of that
 angle (American Academy of Orthopaedic Surgeons values, rounded) that flexibility is judged against.
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from backend.i18n import N_
-from kinect_agent.processing.angles import ANGLE_NAMES
+from kinect_agent.body.angles import ANGLE_NAMES
 
 
 @dataclass(frozen=True)

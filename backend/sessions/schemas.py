@@ -223,7 +223,7 @@ class BalanceOut(BaseModel):
 class CurveOut(BaseModel):
     """One joint-angle curve of a session, thinned by min/max decimation (backend.analysis.session_detail)."""
 
-    angle: str = Field(description="clinical angle name (kinect_agent.processing.angles)", examples=["knee_flexion_R"])
+    angle: str = Field(description="clinical angle name (kinect_agent.body.angles)", examples=["knee_flexion_R"])
     kind: str = Field(description="'raw', 'filtered', or 'smoothed' (raw smoothed: the file had no filtered one)")
     label: str = Field(description="a legend label in words", examples=["right knee flexion, filtered"])
     t_s: list[float] = Field(description="seconds from the session's first frame")

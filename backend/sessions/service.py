@@ -24,6 +24,7 @@ from backend.suggestions.context import plan_targets, session_history
 from backend.suggestions.models import Suggestion
 from backend.suggestions.service import suggest_for_session, visible_to_patient
 from backend.users.models import User
+from kinect_agent.processing.errors import ProcessingError
 
 FILE_FORMAT = "khs"
 
@@ -67,6 +68,9 @@ def _analyse(
         return metrics_document(upload.payload, spec, target_reps=target_reps, history=history), None
     except AnalysisError as exc:
         return None, f"{type(exc).__name__}: {exc}"
+    except ProcessingError as exc:  # not the upload's fault: a 500, nothing stored, the agent keeps the file
+        exc.add_note(f"analysing session {upload.client_session_id} of patient {patient_id} ({exercise.slug})")
+        raise
 
 
 def store_upload(

@@ -58,7 +58,9 @@ def _first_passed(
         times = sorted(
             db_session.scalars(
                 select(LoginAttempt.at).where(
-                    LoginAttempt.kind == kind, LoginAttempt.at > now - window, LoginAttempt.succeeded.is_(False),
+                    LoginAttempt.kind == kind,
+                    LoginAttempt.at > now - window,
+                    LoginAttempt.succeeded.is_(False),
                     *limit.where,
                 )  # fmt: skip
             )

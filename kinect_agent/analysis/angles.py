@@ -1,6 +1,6 @@
 """Angles the analysis counts repetitions on: the agent's clinical angles, with the hip's planar angles made robust.
 
-The agent's hip_flexion and hip_abduction (kinect_agent.processing.angles) project the thigh on one anatomical
+The agent's hip_flexion and hip_abduction (kinect_agent.body.angles) project the thigh on one anatomical
 plane. On real Kinect data the legs are mistracked at the top of a high knee lift (UI-PRMD hurdle step and leg
 raise: the thigh reads as pointing up and backwards for a few frames) and the projection then jumps by 150-250°,
 splitting or hiding repetitions. For the hip angles the analysis counts instead the thigh's elevation: the 3-D
@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from kinect_agent.analysis import series
-from kinect_agent.processing.angles import body_frame, joint_angles
+from kinect_agent.body.angles import body_frame, joint_angles
 from kinect_agent.skeleton import INDEX
 
 # planar angle prefix -> (proximal joint, distal joint) of the limb it measures

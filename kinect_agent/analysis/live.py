@@ -29,7 +29,7 @@ import numpy as np
 from kinect_agent.analysis import series
 from kinect_agent.analysis.angles import counting_angles
 from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
-from kinect_agent.processing.angles import body_frame, joint_angles
+from kinect_agent.body.angles import body_frame, joint_angles
 from kinect_agent.skeleton import INDEX, NOT_TRACKED
 
 CONTEXT_S = 20.0

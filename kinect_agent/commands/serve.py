@@ -15,7 +15,8 @@ import sys
 import threading
 from pathlib import Path
 
-from kinect_agent.commands.run import SOURCE_NAMES, check_exercise, queue_session, upload_now
+from kinect_agent.capture import SOURCE_NAMES, check_exercise, queue_session
+from kinect_agent.commands.run import upload_now
 from kinect_agent.config import AgentConfig, load_config
 from kinect_agent.live import journal
 from kinect_agent.live.channel import CommandStream, Publisher

@@ -2,7 +2,7 @@
 
 A Kinect's error is largely a systematic offset that moves with the body (a wrist measured 4 cm off along the
 forearm stays so while the arm moves); no temporal filter sees it. Expressed in the body frame of the truth
-(kinect_agent.processing.angles.body_frame: left, up, forward), each joint's error over one recording is
+(kinect_agent.body.angles.body_frame: left, up, forward), each joint's error over one recording is
     e_j(t) = R(t) (p̂_j(t) − p_j(t)),     m_j = mean_t e_j(t),
 and the squared error splits exactly (R(t) is a rotation):
     Σ_t,j |p̂ − p|² = Σ_t,j |e_j(t) − m_j|² (random part: what a filter can remove) + T Σ_j |m_j|² (bias part).
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from kinect_agent.processing.angles import body_frame
+from kinect_agent.body.angles import body_frame
 
 
 @dataclass

@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 
 from kinect_agent import skeleton
+from kinect_agent.body.angles import joint_angles
 from kinect_agent.errors import AgentError
 from kinect_agent.evaluation.measure import PairErrors
-from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.outliers import fit_mixture
 

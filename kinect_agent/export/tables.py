@@ -4,7 +4,7 @@ Every table is comma-separated UTF-8 with a header row, numbers with a dot, empt
     metrics.csv       metric, value, unit: duration, frames, rate, repetitions, median repetition amplitude, the
                       range of motion of every angle (min, max, range) and the four indicators (score, value).
     repetitions.csv   one row per repetition of the analysis document's repetition_list (its keys as columns).
-    angles_raw.csv, angles_filtered.csv   time_s then every clinical angle (processing.angles.ANGLE_NAMES) in
+    angles_raw.csv, angles_filtered.csv   time_s then every clinical angle (body.angles.ANGLE_NAMES) in
                       degrees, one row per frame of the raw / filtered recording.
 The metrics and repetitions come from the server's analysis document (backend.analysis.report.analyze_recording
 plus "indicators"); the angles from the session file itself.
@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from kinect_agent.processing.angles import ANGLE_NAMES, joint_angles
+from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.recording import Recording
 
 INDICATORS = ("flexibility", "endurance", "strength", "balance")

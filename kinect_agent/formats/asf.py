@@ -21,10 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
+from kinect_agent.body.rotations import euler
 from kinect_agent.errors import FormatError
 from kinect_agent.formats._rows import parse_floats
 from kinect_agent.formats._text import read_lines
-from kinect_agent.processing.rotations import euler
 
 INCH_M = 0.0254
 _AXES = "XYZ"

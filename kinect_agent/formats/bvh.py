@@ -24,11 +24,11 @@ from pathlib import Path
 import numpy as np
 
 from kinect_agent import skeleton
+from kinect_agent.body.rotations import axis_rotation
 from kinect_agent.errors import FormatError
 from kinect_agent.formats import mocap_mapping
 from kinect_agent.formats._rows import parse_floats
 from kinect_agent.formats._text import read_lines
-from kinect_agent.processing.rotations import axis_rotation
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "bvh"

@@ -21,8 +21,8 @@ import io
 import numpy as np
 
 from kinect_agent import skeleton
-from kinect_agent.processing.kinematics import REST_DIRECTIONS
-from kinect_agent.processing.rotations import frame_from_axes, rotation_between
+from kinect_agent.body.kinematics import REST_DIRECTIONS
+from kinect_agent.body.rotations import frame_from_axes, rotation_between
 
 CM_PER_M = 100.0
 BVH_NAMES: dict[str, str] = {

@@ -14,7 +14,7 @@ int8; every block is an xz stream (LZMA2, preset 6, no xz check: the SHA-256 tra
 Version 1 (still read): the same layout with a 2**-13 m grid, float32 position deltas in metres and zlib blocks.
 Angle SD block (optional, version 2; files without it read as before): uint16 (A, T) SDs in ANGLE_SD_STEP_DEG
 units, byte-shuffled, xz; ANGLE_SD_MISSING = undefined (NaN); A = len(header["angle_sd"]["names"]), a subset of
-kinect_agent.processing.angles.ANGLE_NAMES, T = the filtered recording's frames.
+kinect_agent.body.angles.ANGLE_NAMES, T = the filtered recording's frames.
 No pickle anywhere.
 """
 
@@ -33,10 +33,10 @@ from typing import Any
 import numpy as np
 
 from kinect_agent import skeleton
+from kinect_agent.body.angles import ANGLE_NAMES
 from kinect_agent.clock import utc_now_iso
 from kinect_agent.errors import FormatError
 from kinect_agent.formats._atomic import atomic_open
-from kinect_agent.processing.angles import ANGLE_NAMES
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "session"

@@ -24,9 +24,9 @@ from pathlib import Path
 import numpy as np
 
 from kinect_agent import skeleton
+from kinect_agent.body.rotations import euler
 from kinect_agent.errors import FormatError
 from kinect_agent.formats._rows import read_csv_table
-from kinect_agent.processing.rotations import euler
 from kinect_agent.recording import Metadata, Recording
 
 NAME = "ui_prmd"

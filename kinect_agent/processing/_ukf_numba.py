@@ -1,6 +1,6 @@
 """The fused, compiled UKF update of the kinematic chain: sigma points, forward kinematics, innovation statistics,
-per-joint gate and the Kalman correction in one numba kernel (same mathematics as ukf.gated_update with hx = the
-chain, which stays the reference; tests check both agree to 1e-9).
+per-joint gate and the Kalman correction in one numba kernel (same mathematics as UnscentedKalmanFilter.gated_update
+with hx = the chain, which stays the reference; tests check both agree to 1e-9).
 
 Structure used for speed (results equal the plain computation to rounding):
 - σ = x ± c·L_i with L the lower Cholesky factor of P, so σ differs from x only in state entries >= i. Joint
@@ -173,7 +173,7 @@ def _sigma_positions(x, Lc, scale, n_len, fixed_lengths, rest, R_ref, tabs, pos)
 
 
 def _chain_step(x, P, z, observed, R_diag, w, gate, fixed_lengths, n_len, rest, R_ref, tabs, used):
-    """One gated UKF update of the chain state (ukf.gated_update with hx = the chain), in place.
+    """One gated UKF update of the chain state (UnscentedKalmanFilter.gated_update, hx = the chain), in place.
 
     x (n,) = root (3) m, lengths (n_len = 19, or 0 when fixed_lengths (19,) m holds them), theta (33) rad;
     P (n, n). z (60,) m, NaN where missing; observed (60,) bool; R_diag (60,) m². w = (c, Wm0, Wm1, Wc0, Wc1) of

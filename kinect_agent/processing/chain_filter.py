@@ -3,9 +3,9 @@
 State (n,): root position (3, m), segment lengths (19, m; only while they are estimated) and the 33 joint angles
 (rad) of kinematics.ChainModel. Observation: the 20 joint positions (60 values, m, camera frame) by forward
 kinematics of every sigma point. Transition: the random walk, with the variance ceiling of predict_random_walk.
-Update: ukf.gated_update (per-joint innovation gate); when numba is installed and the model runs the compiled
-forward kinematics, one fused kernel does the same step (_ukf_numba.chain_step; numpy stays the reference and the
-fallback when the kernel finds a covariance that is not positive definite).
+Update: UnscentedKalmanFilter.gated_update (per-joint innovation gate); when numba is installed and the model runs
+the compiled forward kinematics, one fused kernel does the same step (_ukf_numba.chain_step; numpy stays the
+reference and the fallback when the kernel finds a covariance that is not positive definite).
 """
 
 from __future__ import annotations
@@ -13,10 +13,10 @@ from __future__ import annotations
 import numpy as np
 
 from kinect_agent import skeleton
+from kinect_agent.body import kinematics as km
 from kinect_agent.processing import _ukf_numba
-from kinect_agent.processing import kinematics as km
 from kinect_agent.processing.config import PipelineConfig
-from kinect_agent.processing.ukf import MerweScaledSigmaPoints, UnscentedKalmanFilter, gated_update
+from kinect_agent.processing.ukf import MerweScaledSigmaPoints, UnscentedKalmanFilter
 
 N_ROOT, N_LEN, N_TH = 3, km.N_BONES, km.N_THETA
 
@@ -152,10 +152,11 @@ class ChainFilter(UnscentedKalmanFilter):
     def update_joints(
         self, z: np.ndarray, observed: np.ndarray, R_diag: np.ndarray, gate_chi2: float | None
     ) -> np.ndarray:
-        """One gated update (ukf.gated_update); one fused compiled kernel when available.
+        """One gated update (UnscentedKalmanFilter.gated_update); one fused compiled kernel when available.
 
         z (60,) m, NaN allowed where not observed; observed (60,) bool; R_diag (60,) m². Returns (20,) bool used
-        joints.
+        joints. The kernel sets x_prior and P_prior but not y, S and log_likelihood: after a compiled step they are
+        empty and NaN (the numpy step, compiled=False, sets them).
         """
         gate = np.inf if gate_chi2 is None else float(gate_chi2)
         if self.compiled:
@@ -165,16 +166,18 @@ class ChainFilter(UnscentedKalmanFilter):
             if not (P.dtype == np.float64 and P.flags.c_contiguous and P.flags.writeable):
                 self.P = P = np.array(P, dtype=np.float64)
             used = np.empty(skeleton.J, dtype=bool)
+            self._begin_update()
             status = _ukf_numba.chain_step(
                 x, P, z, observed, R_diag, self.kernel_weights, gate, self.fixed_lengths, self.n_len,
                 self.model.rest, self.model.R_ref, km.STEP_TABLES, used,
             )  # fmt: skip
             if status == _ukf_numba.OK:
+                self.log_likelihood = float("nan")
                 return used
             # P or S not positive definite (x, P untouched): the numpy path below adds jitter.
         groups = (np.asarray(observed, dtype=bool) & np.isfinite(z)).reshape(-1, 3).all(axis=1)
-        return gated_update(
-            self, np.where(np.isfinite(z), z, 0.0), np.repeat(groups, 3), R_diag, gate, at_mean=self.innovation_at_mean
+        return self.gated_update(
+            np.where(np.isfinite(z), z, 0.0), np.repeat(groups, 3), R_diag, gate, at_mean=self.innovation_at_mean
         )
 
     def reacquire(self, joints: np.ndarray, start: np.ndarray) -> None:

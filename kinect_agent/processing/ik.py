@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from kinect_agent import skeleton
-from kinect_agent.processing import kinematics as km
-from kinect_agent.processing.rotations import (
+from kinect_agent.body import kinematics as km
+from kinect_agent.body.rotations import (
     axis_rotation,
     frame_from_axes,
     matrix_to_quat,

@@ -8,7 +8,7 @@ frame:
 
     corrected[t, j] = positions[t, j] - R_cam_body[t] @ offset[pose[t], j]
 
-Body frame (kinect_agent.processing.angles.body_frame, from the trunk of the same frame): columns of R_cam_body are
+Body frame (kinect_agent.body.angles.body_frame, from the trunk of the same frame): columns of R_cam_body are
 x = the subject's left, y = up (ROOT -> NECK), z = forward (where the chest faces); right-handed.
 Poses: "standing" or "bent" (mean knee flexion > BENT_KNEE_DEG: sitting, kneeling, deep squat).
 Offsets are defined up to the rigid registration of mocap to Kinect used to measure them (a shift common to all
@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from kinect_agent import skeleton
-from kinect_agent.processing.angles import body_frame, joint_angles
+from kinect_agent.body.angles import body_frame, joint_angles
 
 POSES: tuple[str, ...] = ("standing", "bent")
 BENT_KNEE_DEG = 60.0

@@ -12,12 +12,12 @@ from typing import Any
 import numpy as np
 
 from kinect_agent import skeleton
-from kinect_agent.processing import kinematics as km
+from kinect_agent.body import kinematics as km
+from kinect_agent.body.rotations import matrix_to_rotvec
 from kinect_agent.processing.chain_filter import N_LEN, N_ROOT, N_TH, ChainFilter
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.excursions import LiveExcursions
 from kinect_agent.processing.ik import inverse_kinematics
-from kinect_agent.processing.rotations import matrix_to_rotvec
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INFERRED, NOT_TRACKED
 

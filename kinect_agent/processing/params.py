@@ -1,6 +1,6 @@
 """KinematicParams: the filter's output in kinematic form (segment lengths, root, rotations, angles) and its JSON form.
 
-Rotations follow kinect_agent.processing.kinematics.forward_kinematics_quat with the module's REST_DIRECTIONS, so
+Rotations follow kinect_agent.body.kinematics.forward_kinematics_quat with the module's REST_DIRECTIONS, so
 `forward_kinematics_quat(root, q_root, segment_lengths, q_local)` rebuilds the filtered joint positions.
 """
 
@@ -12,8 +12,8 @@ from typing import Any
 import numpy as np
 
 from kinect_agent import skeleton
-from kinect_agent.processing.angles import ANGLE_NAMES
-from kinect_agent.processing.kinematics import N_BONES, forward_kinematics_quat
+from kinect_agent.body.angles import ANGLE_NAMES
+from kinect_agent.body.kinematics import N_BONES, forward_kinematics_quat
 
 FORMAT = "kinect-home-coach/kinematic-params"
 VERSION = 1

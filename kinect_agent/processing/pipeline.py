@@ -47,20 +47,22 @@ import numpy as np
 
 from kinect_agent import skeleton
 from kinect_agent.blas_threads import one_blas_thread
+from kinect_agent.body.angles import joint_angles
+from kinect_agent.body.rotations import matrix_to_quat
 from kinect_agent.processing import offset_model, uncertainty
-from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.chain_filter import N_LEN, N_ROOT, ChainFilter
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
 from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.processing.errors import FilterDiverged
 from kinect_agent.processing.ik import IKResult, inverse_kinematics
 from kinect_agent.processing.online import run_online
 from kinect_agent.processing.params import KinematicParams
-from kinect_agent.processing.rotations import matrix_to_quat
 from kinect_agent.processing.ukf import combine_information, unscented_rts
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INFERRED, NOT_TRACKED, TRACKED
 
 VERSION = "ukf-4pass v1"
+MAX_COORDINATE_M = 100.0  # farther from the camera than this on any axis: not metres (a Kinect sees up to ~8 m)
 Progress = Callable[[int, int], None]
 
 
@@ -250,6 +252,14 @@ def _check_input(rec: Recording) -> None:
         raise ValueError("the recording has no frames")
     if not np.any(rec.state != NOT_TRACKED):
         raise ValueError("no joint is tracked in any frame of the recording: nothing to filter")
+    tracked = rec.positions[rec.state != NOT_TRACKED]
+    with np.errstate(invalid="ignore"):
+        farthest = float(np.nanmax(np.abs(tracked))) if np.isfinite(tracked).any() else 0.0
+    if not farthest <= MAX_COORDINATE_M:
+        raise ValueError(
+            f"a tracked joint is {farthest:.3g} m from the camera on one axis (at most {MAX_COORDINATE_M:g} m "
+            "expected): the positions must be in metres"
+        )
 
 
 def process(
@@ -293,7 +303,8 @@ def _process(
         info["angle_sd_seconds"] = round(time.perf_counter() - sd_started, 3)
     positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta)
     if not np.all(np.isfinite(positions)):
-        raise ValueError("the filter diverged (non-finite estimate); check the recording's units (metres expected)")
+        bad = np.flatnonzero(~np.isfinite(positions).all(axis=(1, 2)))
+        raise FilterDiverged(f"the filter's estimate is not finite in {len(bad)} of {T} frames (first: frame {bad[0]})")
     if config.offset_model:
         positions = offset_model.correct(positions)
     observed = clean.state != NOT_TRACKED

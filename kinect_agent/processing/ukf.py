@@ -9,6 +9,9 @@ Differences from filterpy: fx and hx take all sigma points at once, `fx(sigmas (
 `hx(sigmas (S, n)) -> (S, m)`; `update(z, observed)` accepts any subset of the observation rows (missing joints),
 with R given as a full (m, m) matrix or its diagonal (m,); `fx=None` means the random walk x(t) = x(t−1) + δ(t),
 whose unscented transform is exact, so predict() is then x, P + Q without sigma points.
+
+A covariance that is not positive definite where it must be raises processing.errors.NotPositiveDefinite (an
+internal fault, not bad input); every factorisation's outcome is checked.
 """
 
 from __future__ import annotations
@@ -19,6 +22,8 @@ import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 from scipy.linalg.lapack import dpotrf as _potrf
 from scipy.linalg.lapack import dpotrs as _potrs
+
+from kinect_agent.processing.errors import LapackFailed, NotPositiveDefinite
 
 Fn = Callable[[np.ndarray], np.ndarray]
 
@@ -63,14 +68,18 @@ def safe_cholesky(P: np.ndarray) -> np.ndarray:
                 return np.linalg.cholesky(S + jitter * np.eye(len(S)))
             except np.linalg.LinAlgError:
                 jitter *= 10.0
-        raise ValueError("covariance is not positive definite, even with jitter") from None
+        raise NotPositiveDefinite(f"covariance P {P.shape}, even with jitter up to {jitter / 10.0:.1e},") from None
 
 
 class UnscentedKalmanFilter:
-    """UKF with filterpy's attributes x (n,), P (n, n), Q (n, n), R (m, m) and predict()/update(z).
+    """UKF with filterpy's attributes x (n,), P (n, n), Q (n, n), R (m, m) and predict()/update(z)/gated_update().
 
     fx: (S, n) -> (S, n) state transition on all sigma points, or None for the random walk (identity).
     hx: (S, n) -> (S, m) observation function on all sigma points.
+
+    What an update leaves, as filterpy does: x_prior (n,), P_prior (n, n) the state it started from; y (k,) the
+    innovation of the k rows it used and S (k, k) their innovation covariance (k = 0: nothing was observed or
+    everything was gated); log_likelihood, log N(y; 0, S) (0.0 when k = 0).
     """
 
     def __init__(
@@ -90,7 +99,18 @@ class UnscentedKalmanFilter:
         self.P = np.eye(dim_x)
         self.Q = np.eye(dim_x)
         self.R = np.eye(dim_z)
-        self.y = np.zeros(0)  # last innovation (observed rows only)
+        self.x_prior = self.x.copy()
+        self.P_prior = self.P.copy()
+        self.y = np.zeros(0)
+        self.S = np.zeros((0, 0))
+        self.log_likelihood = 0.0
+
+    def _begin_update(self) -> None:
+        """Keeps the state the update starts from and clears what the last update left (nothing used yet)."""
+        self.x_prior = self.x.copy()
+        self.P_prior = self.P.copy()
+        self.y = np.zeros(0)
+        self.S = np.zeros((0, 0))
         self.log_likelihood = 0.0
 
     def predict(self, Q: np.ndarray | None = None) -> None:
@@ -115,8 +135,8 @@ class UnscentedKalmanFilter:
         if z.shape != (self.dim_z,):
             raise ValueError(f"z must have shape ({self.dim_z},), got {z.shape}")
         obs = np.isfinite(z) if observed is None else np.asarray(observed, dtype=bool) & np.isfinite(z)
+        self._begin_update()
         if not obs.any():
-            self.y = np.zeros(0)
             return
         R = self.R if R is None else np.asarray(R, dtype=np.float64)
         R_obs = np.diag(R[obs]) if R.ndim == 1 else R[np.ix_(obs, obs)]
@@ -132,17 +152,97 @@ class UnscentedKalmanFilter:
         dzw = dz.T * Wc
         S = dzw @ dz + R_obs
         Pxz = (dx.T * Wc) @ dz
-        cf = cho_factor(S, lower=True, check_finite=False)
+        try:
+            cf = cho_factor(S, lower=True, check_finite=False)
+        except np.linalg.LinAlgError:
+            raise NotPositiveDefinite(f"innovation covariance S {S.shape}") from None
         K = cho_solve(cf, Pxz.T, check_finite=False).T  # (n, m)
         y = z - zp
         self.x = self.x + K @ y
         P = self.P - K @ Pxz.T
         self.P = 0.5 * (P + P.T)
-        self.y = y
-        half_logdet = np.sum(np.log(np.diag(cf[0])))
-        self.log_likelihood = float(
-            -0.5 * y @ cho_solve(cf, y, check_finite=False) - half_logdet - 0.5 * len(y) * np.log(2 * np.pi)
-        )
+        self.y, self.S = y, S
+        self.log_likelihood = _log_likelihood(y, cho_solve(cf, y, check_finite=False), np.diag(cf[0]))
+
+    def gated_update(
+        self,
+        z: np.ndarray,
+        observed: np.ndarray,
+        R_diag: np.ndarray,
+        gate_chi2: float,
+        group: int = 3,
+        at_mean: bool = False,
+    ) -> np.ndarray:
+        """Corrects x, P with z (m,), dropping whole groups of `group` rows (one joint = 3 rows) whose innovation is
+        improbable: y_gᵀ S_gg⁻¹ y_g > gate_chi2 (S_gg the group's block of the innovation covariance).
+
+        observed: (m,) bool. R_diag: (m,) variances. Returns (m // group,) bool: the groups that were used.
+        at_mean: the innovation is z − h(x̄) (the centre sigma point) instead of z − Σ Wm·h(σ) (PipelineConfig
+        .innovation_at_mean); S and Pxz are the same either way.
+        One evaluation of hx on the sigma points and one innovation covariance serve both the gate and the update.
+        Sets x_prior, P_prior, y, S, log_likelihood (of the rows used). Raises NotPositiveDefinite when P (even with
+        jitter), a group's block of S or the kept rows' S cannot be factorised; x and P are then unchanged.
+        """
+        obs = np.asarray(observed, dtype=bool) & np.isfinite(z)
+        groups = obs.reshape(-1, group).all(axis=1)
+        self._begin_update()
+        if not groups.any():
+            return groups
+        rows = np.repeat(groups, group)
+        pts = self.points
+        n = self.dim_x
+        L = safe_cholesky(self.P)
+        sig = np.empty((2 * n + 1, n))
+        sig[0] = self.x
+        np.add(self.x, pts.scale * L.T, out=sig[1 : n + 1])
+        np.subtract(self.x, pts.scale * L.T, out=sig[n + 1 :])
+        Z = self.hx(sig)[:, rows]
+        zp = pts.Wm @ Z
+        dz = Z - zp
+        # S = Σ Wc_i dz_i dz_iᵀ + R (the 2n outer points share one weight).
+        S = (dz[1:].T @ dz[1:]) * pts.Wc[1]
+        S += pts.Wc[0] * np.outer(dz[0], dz[0])
+        S[np.diag_indices_from(S)] += R_diag[rows]
+        y = z[rows] - (Z[0] if at_mean else zp)
+        g = int(groups.sum())
+        ar = np.arange(g)
+        blocks = S.reshape(g, group, g, group)[ar, :, ar, :]  # (g, group, group) diagonal blocks
+        yg = y.reshape(g, group)
+        try:
+            d2 = np.einsum("gi,gi->g", yg, np.linalg.solve(blocks, yg[..., None])[..., 0])
+        except np.linalg.LinAlgError:
+            raise NotPositiveDefinite(f"a block ({group}, {group}) of the innovation covariance S {S.shape}") from None
+        ok = d2 <= gate_chi2
+        used = groups.copy()
+        used[groups] = ok
+        if not ok.any():
+            return used
+        keep = np.repeat(ok, group)
+        if not keep.all():
+            S = S[np.ix_(keep, keep)]
+            dz, y = dz[:, keep], y[keep]
+        # Pxz = Σ Wc_i (σ_i − x) dz_iᵀ = c·Wc_1·L (dz₊ − dz₋) since σ_i − x = ±c·L_i (centre term is zero).
+        Pxz = (pts.scale * pts.Wc[1]) * (L @ (dz[1 : n + 1] - dz[n + 1 :]))
+        cf, info = _potrf(S, lower=0, clean=0)  # S = Uᵀ U
+        if info > 0:
+            raise NotPositiveDefinite(f"innovation covariance S {S.shape} of the rows kept", info)
+        if info < 0:
+            raise LapackFailed("dpotrf", info)
+        rhs, info = _potrs(cf, np.column_stack([Pxz.T, y]), lower=0)  # S⁻¹ [Pxzᵀ | y]
+        if info != 0:
+            raise LapackFailed("dpotrs", info)
+        Kt, Sinv_y = rhs[:, :n], rhs[:, n]  # Kᵀ = S⁻¹ Pxzᵀ
+        self.x = self.x + y @ Kt
+        P = self.P - Pxz @ Kt
+        self.P = 0.5 * (P + P.T)
+        self.y, self.S = y, S
+        self.log_likelihood = _log_likelihood(y, Sinv_y, np.diag(cf))
+        return used
+
+
+def _log_likelihood(y: np.ndarray, Sinv_y: np.ndarray, chol_diag: np.ndarray) -> float:
+    """Returns log N(y; 0, S) from y (k,), S⁻¹y (k,) and the diagonal (k,) of a Cholesky factor of S."""
+    return float(-0.5 * y @ Sinv_y - np.sum(np.log(chol_diag)) - 0.5 * len(y) * np.log(2 * np.pi))
 
 
 def unscented_rts(
@@ -176,7 +276,10 @@ def unscented_rts(
             df = fs - x_pred
             P_pred = (df.T * pts.Wc) @ df + Q
             D = ((sig - x).T * pts.Wc) @ df
-        cf = cho_factor(P_pred, lower=True, check_finite=False)
+        try:
+            cf = cho_factor(P_pred, lower=True, check_finite=False)
+        except np.linalg.LinAlgError:
+            raise NotPositiveDefinite(f"predicted covariance of frame {k + 1} in the smoother {P_pred.shape}") from None
         C = cho_solve(cf, D.T, check_finite=False).T
         xs_s[k] = x + C @ (xs_s[k + 1] - x_pred)
         Pk = P + C @ (Ps_s[k + 1] - P_pred) @ C.T
@@ -193,74 +296,11 @@ def combine_information(
     factorisation and no explicit inverse.
     """
     S = P_a + P_b
-    G = np.linalg.solve(S, np.swapaxes(P_a, -1, -2))  # (P_a + P_b)^-1 P_a^T
+    try:
+        G = np.linalg.solve(S, np.swapaxes(P_a, -1, -2))  # (P_a + P_b)^-1 P_a^T
+    except np.linalg.LinAlgError:
+        raise NotPositiveDefinite(f"sum of the two covariances {S.shape}") from None
     G = np.swapaxes(G, -1, -2)  # P_a (P_a + P_b)^-1
     x = x_a + np.einsum("...ij,...j->...i", G, x_b - x_a)
     P = P_a - G @ P_a
     return x, 0.5 * (P + np.swapaxes(P, -1, -2))
-
-
-def gated_update(
-    kf: UnscentedKalmanFilter,
-    z: np.ndarray,
-    observed: np.ndarray,
-    R_diag: np.ndarray,
-    gate_chi2: float,
-    group: int = 3,
-    at_mean: bool = False,
-) -> np.ndarray:
-    """Updates kf with z (m,), dropping whole groups of `group` rows (one joint = 3 rows) whose innovation is
-    improbable: y_gᵀ S_gg⁻¹ y_g > gate_chi2 (S_gg the group's block of the innovation covariance).
-
-    observed: (m,) bool. R_diag: (m,) variances. Returns (m // group,) bool: the groups that were used.
-    at_mean: the innovation is z − h(x̄) (the centre sigma point) instead of z − Σ Wm·h(σ) (PipelineConfig
-    .innovation_at_mean); S and Pxz are the same either way.
-    One evaluation of hx on the sigma points and one innovation covariance serve both the gate and the update.
-    """
-    obs = np.asarray(observed, dtype=bool) & np.isfinite(z)
-    groups = obs.reshape(-1, group).all(axis=1)
-    if not groups.any():
-        kf.y = np.zeros(0)
-        return groups
-    rows = np.repeat(groups, group)
-    pts = kf.points
-    n = kf.dim_x
-    L = safe_cholesky(kf.P)
-    sig = np.empty((2 * n + 1, n))
-    sig[0] = kf.x
-    np.add(kf.x, pts.scale * L.T, out=sig[1 : n + 1])
-    np.subtract(kf.x, pts.scale * L.T, out=sig[n + 1 :])
-    Z = kf.hx(sig)[:, rows]
-    zp = pts.Wm @ Z
-    dz = Z - zp
-    # S = Σ Wc_i dz_i dz_iᵀ + R (the 2n outer points share one weight).
-    S = (dz[1:].T @ dz[1:]) * pts.Wc[1]
-    S += pts.Wc[0] * np.outer(dz[0], dz[0])
-    S[np.diag_indices_from(S)] += R_diag[rows]
-    y = z[rows] - (Z[0] if at_mean else zp)
-    g = int(groups.sum())
-    ar = np.arange(g)
-    blocks = S.reshape(g, group, g, group)[ar, :, ar, :]  # (g, group, group) diagonal blocks
-    yg = y.reshape(g, group)
-    d2 = np.einsum("gi,gi->g", yg, np.linalg.solve(blocks, yg[..., None])[..., 0])
-    ok = d2 <= gate_chi2
-    used = groups.copy()
-    used[groups] = ok
-    if not ok.any():
-        kf.y = np.zeros(0)
-        return used
-    keep = np.repeat(ok, group)
-    if not keep.all():
-        S = S[np.ix_(keep, keep)]
-        dz, y = dz[:, keep], y[keep]
-    # Pxz = Σ Wc_i (σ_i − x) dz_iᵀ = c·Wc_1·L (dz₊ − dz₋) since σ_i − x = ±c·L_i (centre term is zero).
-    Pxz = (pts.scale * pts.Wc[1]) * (L @ (dz[1 : n + 1] - dz[n + 1 :]))
-    cf, info = _potrf(S, lower=0, clean=0)
-    if info != 0:
-        raise ValueError("innovation covariance is not positive definite")
-    Kt, info = _potrs(cf, Pxz.T, lower=0)  # Kᵀ = S⁻¹ Pxzᵀ
-    kf.x = kf.x + y @ Kt
-    P = kf.P - Pxz @ Kt
-    kf.P = 0.5 * (P + P.T)
-    kf.y = y
-    return used

@@ -23,8 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from kinect_agent.processing.angles import ANGLE_NAMES, joint_angles
-from kinect_agent.processing.kinematics import N_BONES, ChainModel
+from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
+from kinect_agent.body.kinematics import N_BONES, ChainModel
 
 DEFAULT_STRIDE = 5  # frames between two covariance propagations (6 Hz at 30 Hz)
 CHUNK_FRAMES = 256  # computed frames per block (bounds memory: 256 × 67 poses)

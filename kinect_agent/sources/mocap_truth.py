@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from kinect_agent import skeleton
+from kinect_agent.body.rotations import axis_rotation
 from kinect_agent.formats.amc import facing_deg
-from kinect_agent.processing.rotations import axis_rotation
 from kinect_agent.recording import Recording
 from kinect_agent.sources.kinect_noise import SimulationError
 from kinect_agent.sources.motions import CAMERA_HEIGHT_M, SUBJECT_DISTANCE_M

@@ -3,7 +3,7 @@
 Every motion respects the paper's degrees of freedom (kinect_agent.skeleton.DOF): elbows and knees are hinges
 about the x axis of the entering bone (Rx), wrists and ankles turn about two axes, shoulders, hips, SPINE and
 NECK about three; bones that leave one joint (NECK -> HEAD, SHO_L, SHO_R) share its rotation, and the bones
-leaving ROOT are rigid in the ROOT frame. Positions come from kinect_agent.processing.kinematics.forward_kinematics.
+leaving ROOT are rigid in the ROOT frame. Positions come from kinect_agent.body.kinematics.forward_kinematics.
 
 Body frame (kinematics module): x = the subject's left, y = up, z = forward; identity = neutral standing.
 Sign conventions used here, for a bone hanging down (0, -1, 0):
@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from kinect_agent import skeleton
-from kinect_agent.processing.kinematics import TYPICAL_LENGTHS, forward_kinematics
-from kinect_agent.processing.rotations import axis_rotation
+from kinect_agent.body.kinematics import TYPICAL_LENGTHS, forward_kinematics
+from kinect_agent.body.rotations import axis_rotation
 
 CAMERA_HEIGHT_M = 0.80  # Kinect above the floor; the floor is at y = -CAMERA_HEIGHT_M in the camera frame
 SUBJECT_DISTANCE_M = 2.4  # ankles' distance from the camera along z
@@ -69,7 +69,7 @@ class ExerciseSpec:
     rep_s: float  # typical duration of one repetition, seconds
     amplitude: float  # peak of the defining movement, degrees
     hold: float  # fraction of a repetition held at the peak
-    angles: tuple[str, ...]  # the defining angle(s) of kinect_agent.processing.angles (one per moving side)
+    angles: tuple[str, ...]  # the defining angle(s) of kinect_agent.body.angles (one per moving side)
     drive: Callable[[dict[str, np.ndarray], np.ndarray, np.ndarray, str], None]  # fills angle channels
     planted: str  # "feet" (both ankles fixed), "right"/"left"/"alternate" (stance foot fixed), "root" (seated)
 

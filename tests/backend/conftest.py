@@ -128,8 +128,13 @@ def db_session(db_connection) -> Iterator[Session]:
 def settings() -> Settings:
     """Settings of the test app (local environment, migration check off: the test DB is migrated)."""
     # event streams end at once: the test client reads a response to its end
-    return Settings(ENVIRONMENT="local", CHECK_MIGRATIONS=False, DATABASE_URL="sqlite://", EVENTS_STREAM_MAX_S=0.0,
-                    LIVE_OFFLINE_GRACE_S=0.0)
+    return Settings(
+        ENVIRONMENT="local",
+        CHECK_MIGRATIONS=False,
+        DATABASE_URL="sqlite://",
+        EVENTS_STREAM_MAX_S=0.0,
+        LIVE_OFFLINE_GRACE_S=0.0,
+    )
 
 
 def make_test_app(db_session: Session, settings: Settings):

@@ -43,7 +43,7 @@ def make_khs(
 
 def make_processed_khs(exercise: str = "squat", reps: int = 3, *, seed: int = 0) -> bytes:
     """Returns the session file the home agent makes of a simulated set: raw, filtered by the pipeline, angle SDs."""
-    from kinect_agent.commands.run import make_payload
+    from kinect_agent.capture import make_payload
 
     measured, _, _ = simulate(exercise, reps, seed=seed)
     return sf.encode(make_payload(measured, created_at="2026-11-20T10:00:00Z"))

@@ -44,8 +44,14 @@ def store_session(
             "indicators": {"flexibility": {"score": rom / 2, "value": rom, "basis": "test", "quality_ok": True}},
         }
         db_session.add(
-            SessionMetric(session_id=row.id, document=doc, repetitions=reps, rom_deg=rom, quality_ok=quality_ok,
-                          indicator_scores=indicator_scores(doc))  # fmt: skip
+            SessionMetric(
+                session_id=row.id,
+                document=doc,
+                repetitions=reps,
+                rom_deg=rom,
+                quality_ok=quality_ok,
+                indicator_scores=indicator_scores(doc),
+            )  # fmt: skip
         )
         db_session.flush()
     return row

@@ -14,8 +14,11 @@ DOC = {
     "repetitions": 8,
     "rom_deg": 71.5,
     "quality": {"ok": True},
-    "indicators": {"flexibility": {"score": 62.0, "value": 71.5}, "balance": {"score": None, "reason": "seated"},
-                   "strength": {"score": 40}},  # fmt: skip
+    "indicators": {
+        "flexibility": {"score": 62.0, "value": 71.5},
+        "balance": {"score": None, "reason": "seated"},
+        "strength": {"score": 40},
+    },  # fmt: skip
 }
 
 

@@ -78,8 +78,10 @@ def test_api_docs_load_every_file_from_the_app_under_the_public_path(prefixed):
 
 
 def test_api_docs_serve_only_their_own_files(prefixed):
-    assert prefixed.get("/static/vendor/api-docs/swagger-ui-bundle.js").headers["content-type"].startswith(
-        "text/javascript"
+    assert (
+        prefixed.get("/static/vendor/api-docs/swagger-ui-bundle.js")
+        .headers["content-type"]
+        .startswith("text/javascript")
     )
     for name in ("core.py", "..%2F__init__.py", "%2E%2E/consts.py", "nothing.js", "redoc.standalone.js"):
         assert prefixed.get(f"/static/vendor/api-docs/{name}").status_code == 404, name

@@ -5,7 +5,7 @@ import pytest
 
 from bench.bone_refit import refit_bones
 from kinect_agent import skeleton
-from kinect_agent.processing import kinematics as km
+from kinect_agent.body import kinematics as km
 
 SEEDS = (1, 2, 3)
 

@@ -8,9 +8,9 @@ import pytest
 
 from bench import offset_model as bench
 from bench import real_pairs
+from kinect_agent.body.rotations import axis_rotation
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.pipeline import process
-from kinect_agent.processing.rotations import axis_rotation
 from kinect_agent.recording import Recording
 from tests.kinect_agent.processing._data import smooth_motion
 

@@ -9,7 +9,7 @@ import pytest
 
 from bench import real_pairs
 from kinect_agent import skeleton
-from kinect_agent.processing.rotations import axis_rotation
+from kinect_agent.body.rotations import axis_rotation
 from kinect_agent.recording import Recording
 
 ARM = [skeleton.INDEX[j] for j in real_pairs.ARM_JOINTS]

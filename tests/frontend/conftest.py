@@ -20,6 +20,7 @@ from pathlib import Path
 
 import httpx
 import pytest
+from playwright.sync_api import expect
 from sqlalchemy.orm import Session
 
 from backend.database import import_all_models
@@ -29,6 +30,11 @@ from tests.backend.conftest import build_engine
 from tests.backend.khs_files import make_khs
 
 import_all_models()
+# Every wait is for a condition; these are only how long a condition may take on a machine that runs other work
+# too (two cores shared by several suites: a page that loads plotly.js took over 10 s). A passing test waits no
+# longer for them.
+expect.set_options(timeout=15_000)
+PAGE_TIMEOUT_MS = 30_000
 
 ROOT = Path(__file__).resolve().parents[2]
 SHOTS = Path(os.environ.get("COACH_SHOTS_DIR", "/tmp/shots"))
@@ -219,7 +225,7 @@ def browser():
 def page(browser, live_server):
     """A fresh browser context (no cookies) with a laptop-sized window."""
     context = browser.new_context(viewport={"width": 1280, "height": 900}, base_url=live_server.url)
-    context.set_default_timeout(10_000)
+    context.set_default_timeout(PAGE_TIMEOUT_MS)
     p = context.new_page()
     errors: list[str] = []
     p.on("pageerror", lambda exc: errors.append(str(exc)))

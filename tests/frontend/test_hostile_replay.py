@@ -83,7 +83,7 @@ def test_a_link_naming_another_sites_recording_reads_nothing(page, live_server, 
     stolen.clear()
     _signed_in(page)
     response = page.goto("/replay/viewer/?playbackPath=" + quote(f"{base}/x.viser", safe=""))
-    page.wait_for_timeout(4000)
+    page.wait_for_load_state("networkidle")  # whatever the answer loads has been asked for
     assert not stolen, f"patient data left the app: {stolen[0][:200]}"
     assert response.status == 404
 
@@ -99,7 +99,8 @@ def test_the_viewers_policy_blocks_another_sites_recording(page, live_server, at
     page.route("**/replay/viewer/?playbackPath=http*", lambda route: route.fulfill(response=route.fetch(url=own)))
     blocked: list[str] = []
     page.on("console", lambda m: blocked.append(m.text) if "Content Security Policy" in m.text else None)
-    page.goto("/replay/viewer/?playbackPath=" + quote(f"{base}/x.viser", safe=""))
-    page.wait_for_timeout(4000)
+    with page.expect_console_message(lambda m: "Content Security Policy" in m.text and base in m.text, timeout=30_000):
+        page.goto("/replay/viewer/?playbackPath=" + quote(f"{base}/x.viser", safe=""))
+    page.wait_for_load_state("networkidle")
     assert not stolen, f"patient data left the app: {stolen[0][:200]}"
     assert any(base in m for m in blocked), blocked

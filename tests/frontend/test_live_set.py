@@ -21,16 +21,21 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import httpx
+import numpy as np
 import pytest
 from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
+from kinect_agent.live.journal import MIN_KEEP_S, RECORD
 from tests.frontend.conftest import ROOT, api_client, login, run_server, shot
 
 pytestmark = pytest.mark.browser
 PASSWORD = "live-password-2026"
 EXERCISE, NAME, TARGET = "elbow_flexion", "Elbow flexion", 3
 COUNT = "#live-count .n"
+# An agent process starts (imports numpy, SciPy, the filter), connects and says hello: seconds on a loaded machine,
+# so every wait for "online" waits this long, not expect()'s 5 s default.
+AGENT_START_MS = 60_000
 
 
 @dataclass
@@ -105,6 +110,29 @@ def _sessions(base: str, home: Home) -> list[dict]:
         return c.get("/api/v1/sessions", params={"patient_id": home.patient_id, "limit": 50}).json()["items"]
 
 
+def _poll(probe, timeout_s: float, every_s: float = 0.2):
+    """Returns probe()'s first truthy answer, or its last answer after timeout_s."""
+    deadline = time.monotonic() + timeout_s
+    while not (found := probe()) and time.monotonic() < deadline:
+        time.sleep(every_s)
+    return found
+
+
+def _wait_for_journal(home: Home, seconds: float, timeout_s: float = 30) -> None:
+    """Waits until the running set's journal holds at least `seconds` of frames on disk (its .frames records)."""
+
+    def recorded_s() -> float:
+        for path in (home.agent_home / "queue" / "recording").glob("*.frames"):
+            frames = np.frombuffer(path.read_bytes()[: path.stat().st_size // RECORD.itemsize * RECORD.itemsize],
+                                   dtype=RECORD)  # fmt: skip
+            if len(frames) > 1:
+                return float(frames["t"][-1] - frames["t"][0])
+        return 0.0
+
+    found = _poll(lambda: recorded_s() >= seconds, timeout_s)
+    assert found, f"the journal holds {recorded_s():.1f} s of frames after {timeout_s} s; {seconds} s expected"
+
+
 def _axe_clean(page) -> None:
     results = Axe().run(page)
     bad = [
@@ -141,7 +169,7 @@ def test_patient_starts_a_set_and_sees_the_count_reach_the_target(patient_page, 
     shot(page, "live-offline")
     _axe_clean(page)
     with agent(home):
-        expect(status).to_have_attribute("data-state", "online", timeout=30_000)  # without reloading the page
+        expect(status).to_have_attribute("data-state", "online", timeout=AGENT_START_MS)  # without reloading
         expect(status).to_contain_text("ready")
         _start(page)
         expect(page.locator(COUNT)).to_be_visible(timeout=30_000)
@@ -173,11 +201,11 @@ def test_agent_killed_mid_set_page_says_offline_and_the_set_is_kept(patient_page
     login(page, home.email, PASSWORD)
     status = page.locator("#agent-status")
     with agent(home, seed=5) as proc:
-        expect(status).to_have_attribute("data-state", "online", timeout=30_000)
+        expect(status).to_have_attribute("data-state", "online", timeout=AGENT_START_MS)
         _start(page)
         # two of three repetitions (about 7 s of frames, over the 5 s the journal rule keeps), the set still running
         page.wait_for_function(f"() => +(document.querySelector('{COUNT}') || {{}}).textContent >= 2", timeout=30_000)
-        time.sleep(0.6)  # a little more than the journal's flush interval
+        _wait_for_journal(home, seconds=MIN_KEEP_S + 0.5)  # on disk, fsynced: what a crash keeps
         proc.kill()  # SIGKILL: no goodbye, the frames on disk are all that is left
         proc.wait()
         expect(page.locator("#live-lost")).to_be_visible(timeout=15_000)
@@ -186,10 +214,8 @@ def test_agent_killed_mid_set_page_says_offline_and_the_set_is_kept(patient_page
         _axe_clean(page)
     assert _sessions(base, home) == []
     with agent(home, seed=6):  # back on: the interrupted set is queued from its journal and uploaded
-        expect(status).to_have_attribute("data-state", "online", timeout=30_000)
-        deadline = time.monotonic() + 60
-        while not (stored := _sessions(base, home)) and time.monotonic() < deadline:
-            time.sleep(0.5)
+        expect(status).to_have_attribute("data-state", "online", timeout=AGENT_START_MS)
+        stored = _poll(lambda: _sessions(base, home), timeout_s=60)
         assert len(stored) == 1 and stored[0]["exercise_slug"] == EXERCISE, stored
         assert stored[0]["duration_s"] >= 5.0, stored[0]
         expect(page.locator("#last-sentence")).to_be_visible(timeout=15_000)  # the page shows it without reload
@@ -201,7 +227,7 @@ def test_stop_ends_the_set_and_its_result_is_stored(patient_page, live_server, a
     home = new_home(base, agent_server, tmp_path)
     login(page, home.email, PASSWORD)
     with agent(home, seed=7):
-        expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=30_000)
+        expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=AGENT_START_MS)
         _start(page)
         page.wait_for_function(f"() => +(document.querySelector('{COUNT}') || {{}}).textContent >= 1", timeout=30_000)
         page.get_by_role("button", name="Stop").click()

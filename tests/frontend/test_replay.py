@@ -4,6 +4,7 @@ request stays on the app's origin behind the login, and nobody else sees it."""
 from __future__ import annotations
 
 import re
+import time
 
 import pytest
 from playwright.sync_api import expect
@@ -16,6 +17,29 @@ OTHER_PATIENT = "george@demo.clinic"  # not Rose: may not see her sessions
 
 def _canvas_png(page) -> bytes:
     return page.locator("#viewer").screenshot()
+
+
+def _canvas_until(page, condition, timeout_s: float = 15.0) -> bool:
+    """Returns whether the viewer's picture meets condition(png) within timeout_s (checked every 100 ms)."""
+    deadline = time.monotonic() + timeout_s
+    while not condition(_canvas_png(page)):
+        if time.monotonic() > deadline:
+            return False
+        page.wait_for_timeout(100)
+    return True
+
+
+def _settled_canvas(page, timeout_s: float = 15.0) -> bytes:
+    """Returns the viewer's picture once two pictures 100 ms apart are the same (the last frame drawn)."""
+    last = _canvas_png(page)
+
+    def same(png: bytes) -> bool:
+        nonlocal last
+        same, last = png == last, png
+        return same
+
+    assert _canvas_until(page, same, timeout_s), f"the picture kept changing for {timeout_s} s"
+    return last
 
 
 def test_therapist_replays_a_session_from_the_patient_page(page, live_server):
@@ -33,23 +57,18 @@ def test_therapist_replays_a_session_from_the_patient_page(page, live_server):
     page.wait_for_function(
         "() => [...document.querySelector('#viewer').contentDocument.querySelectorAll('input')]"
         ".some(i => /\\d/.test(i.value))", timeout=30_000)  # fmt: skip
-    page.wait_for_timeout(1500)
     first = _canvas_png(page)
-    page.wait_for_timeout(1200)
-    second = _canvas_png(page)
-    assert first != second, "the picture must change while the replay plays"
+    assert _canvas_until(page, lambda png: png != first), "the picture must change while the replay plays"
     shot(page, "replay")
     viewer.locator("button:has(.tabler-icon-player-pause-filled)").click()  # pause: the picture holds still
     viewer.locator("button:has(.tabler-icon-binary-tree-2)").click()  # the scene tree: each skeleton is switched
     raw_eye = viewer.locator('[data-scene-node="/raw"] .tabler-icon-eye')
     raw_eye.wait_for()
-    page.wait_for_timeout(500)
-    paused = _canvas_png(page)
+    paused = _settled_canvas(page)
     assert paused == _canvas_png(page), "paused: the picture stays the same"
     raw_eye.click()
     viewer.locator('[data-scene-node="/raw"] .tabler-icon-eye-off').wait_for()
-    page.wait_for_timeout(500)
-    assert _canvas_png(page) != paused, "hiding the raw skeleton changes the picture"
+    assert _canvas_until(page, lambda png: png != paused), "hiding the raw skeleton changes the picture"
     shot(page, "replay-filtered-only")
     origin = live_server.url
     foreign = [u for u in requests if not u.startswith((origin + "/", "data:", "blob:"))]

@@ -37,7 +37,10 @@ def test_therapist_pages_run_under_their_policy(page, live_server):
     shot(page, "policy-session")
     page.goto(f"/therapist/sessions/{sid}/replay")
     page.frame_locator("#viewer").locator("canvas").first.wait_for(state="visible", timeout=30_000)
-    page.wait_for_timeout(1500)
+    page.wait_for_function(  # the recording is loaded and playing: its timeline shows a frame number
+        "() => [...document.querySelector('#viewer').contentDocument.querySelectorAll('input')]"
+        ".some(i => /\\d/.test(i.value))", timeout=30_000)  # fmt: skip
+    page.wait_for_load_state("networkidle")
     assert not _violations(page), _violations(page)
     assert not page.js_errors, page.js_errors
 
@@ -90,6 +93,6 @@ def test_another_site_cannot_frame_the_pages(page, live_server, framing_site, pa
     """Framed under another site's buttons, a patient could be made to press Start, or a therapist Approve."""
     login(page, PATIENT if path == "/patient" else THERAPIST)
     page.wait_for_url(re.compile(r"/(patient|therapist)$"))
-    page.goto(f"{framing_site}/frame?{live_server.url}{path}")
-    page.wait_for_timeout(1500)
+    page.goto(f"{framing_site}/frame?{live_server.url}{path}")  # waits for the load event: the frame's too
+    page.wait_for_load_state("networkidle")
     assert page.frame_locator("#victim").locator("header.top").count() == 0, f"{path} shown inside another site"

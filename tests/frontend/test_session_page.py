@@ -33,6 +33,16 @@ def _plots(page, selector: str) -> list[dict]:
     )
 
 
+def _wait_for_relayout(page) -> None:
+    """Waits until every chart has redrawn at its container's new width (Plotly's responsive relayout)."""
+    page.wait_for_function(
+        """() => [...document.querySelectorAll('.js-plotly-plot')].every(d => {
+             const svg = d.querySelector('.main-svg');
+             return svg && Math.abs(svg.getBoundingClientRect().width - d.getBoundingClientRect().width) < 2;
+           })"""
+    )
+
+
 def _no_horizontal_scroll(page) -> bool:
     return page.evaluate("document.documentElement.scrollWidth <= document.documentElement.clientWidth + 1")
 
@@ -80,7 +90,7 @@ def test_therapist_opens_a_session_and_sees_both_curves_and_the_repetitions(page
     assert page.locator("#workspace-card").is_hidden(), "a leg exercise has no reach picture"
     for width in WIDTHS:
         page.set_viewport_size({"width": width, "height": 900})
-        page.wait_for_timeout(400)  # Plotly's responsive relayout
+        _wait_for_relayout(page)
         assert _no_horizontal_scroll(page), f"horizontal scrolling at {width} px"
         assert _smallest_chart_font(page) >= 14, f"chart labels below 14 px at {width} px"
         shot(page, f"session_{width}")
@@ -124,7 +134,7 @@ def test_arm_exercise_shows_the_reach_of_each_arm(page, live_server, arm_session
     expect(page.locator("#workspace li").first).to_contain_text("Left arm: reached")
     for width in WIDTHS:
         page.set_viewport_size({"width": width, "height": 900})
-        page.wait_for_timeout(400)
+        _wait_for_relayout(page)
         assert _no_horizontal_scroll(page), f"horizontal scrolling at {width} px"
         shot(page, f"session_arm_{width}")
     assert not page.js_errors

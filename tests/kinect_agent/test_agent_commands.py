@@ -168,7 +168,7 @@ def test_config_json_holds_no_extra_secrets(home) -> None:
 
 def test_the_same_session_is_rebuilt_byte_for_byte() -> None:
     """Same recording, id and start time -> same bytes, so a rebuilt session is deduplicated by the server."""
-    from kinect_agent.commands.run import capture, make_payload
+    from kinect_agent.capture import capture, make_payload
     from kinect_agent.formats.session_file import encode
 
     def build() -> bytes:

@@ -8,7 +8,7 @@ import httpx
 import pytest
 from sqlalchemy import func, select
 
-from kinect_agent.commands.run import make_payload
+from kinect_agent.capture import make_payload
 from kinect_agent.commands.upload import upload_queue
 from kinect_agent.config import AgentConfig, save_config
 from kinect_agent.queue import SessionQueue

@@ -7,7 +7,7 @@ import pytest
 
 from backend.analysis.balance import CHI2_95_2DOF, COM_JOINTS, missing_reason, sway
 from kinect_agent.analysis import series
-from kinect_agent.processing.angles import joint_angles
+from kinect_agent.body.angles import joint_angles
 from kinect_agent.processing.pipeline import process
 from kinect_agent.skeleton import INDEX
 from kinect_agent.sources.simulator import simulate, simulate_truth

@@ -9,7 +9,7 @@ from backend.analysis import intervals
 from backend.exercises.library import EXERCISES
 from kinect_agent.analysis import series
 from kinect_agent.analysis.angles import counting_angles
-from kinect_agent.processing.angles import joint_angles
+from kinect_agent.body.angles import joint_angles
 from kinect_agent.processing.pipeline import process
 from kinect_agent.sources.simulator import simulate
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from backend.analysis.reachable import reachable_range
-from kinect_agent.processing.angles import body_frame
+from kinect_agent.body.angles import body_frame
 from kinect_agent.skeleton import INDEX
 from kinect_agent.sources.simulator import simulate_truth
 

@@ -10,7 +10,7 @@ from kinect_agent.analysis import live, series
 from kinect_agent.analysis.angles import counting_angles
 from kinect_agent.analysis.live import LiveCount, hint, limb_joints
 from kinect_agent.analysis.repetitions import count_repetitions
-from kinect_agent.processing.angles import body_frame, joint_angles
+from kinect_agent.body.angles import body_frame, joint_angles
 from kinect_agent.processing.online import OnlineFilter
 from kinect_agent.skeleton import INDEX
 from kinect_agent.sources.motions import EXERCISES as SIMULATED

@@ -8,8 +8,8 @@ import zipfile
 
 import numpy as np
 
+from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.export.files import export
-from kinect_agent.processing.angles import ANGLE_NAMES, joint_angles
 
 
 def _tables(data: bytes) -> dict[str, list[dict[str, str]]]:

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from kinect_agent import skeleton
+from kinect_agent.body.rotations import axis_rotation, rotvec_to_matrix
 from kinect_agent.formats import bvh, bvh_writer
 from kinect_agent.formats import session_file as sf
-from kinect_agent.processing.rotations import axis_rotation, rotvec_to_matrix
 from kinect_agent.sources.simulator import simulate
 
 

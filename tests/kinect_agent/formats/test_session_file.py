@@ -131,7 +131,7 @@ def test_two_minutes_simulated_and_filtered_within_a_fifth_of_2mb():
     1 703 927 bytes). Here 2 minutes, the same way (simulator + agent pipeline), to keep the test fast; the size
     grows linearly with the frames (fixed overhead < 3 kB), so a fifth of the budget is the same target."""
     from bench.sessions import squat_session
-    from kinect_agent.commands.run import make_payload
+    from kinect_agent.capture import make_payload
 
     data = sf.encode(make_payload(squat_session(2.0), created_at="2026-11-20T10:00:00Z"))
     assert len(data) <= 2_000_000 / 5, f"{len(data)} bytes"

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from kinect_agent import formats, skeleton
-from kinect_agent.processing import kinematics as km
+from kinect_agent.body import kinematics as km
 from kinect_agent.processing.ik import R_FACING
 from kinect_agent.recording import Metadata, Recording
 

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from kinect_agent import skeleton
+from kinect_agent.body.rotations import axis_rotation
 from kinect_agent.processing import offset_model as om
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.pipeline import process
-from kinect_agent.processing.rotations import axis_rotation
 from kinect_agent.recording import Recording
 
 from ._data import smooth_motion

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from kinect_agent import skeleton
+from kinect_agent.body.rotations import quat_from_rotvec
 from kinect_agent.processing.params import KinematicParams
-from kinect_agent.processing.rotations import quat_from_rotvec
 
 
 def _params(rng: np.random.Generator, T: int = 5) -> KinematicParams:

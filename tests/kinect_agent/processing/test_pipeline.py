@@ -178,7 +178,7 @@ def test_fixed_innovation_at_mean_acts_on_passes_three_and_four_only(rng: np.ran
 
 
 def test_numpy_fallback_gives_the_same_result(rng: np.random.Generator, monkeypatch: pytest.MonkeyPatch) -> None:
-    from kinect_agent.processing import _fk_numba
+    from kinect_agent.body import _fk_numba
 
     rec, _, _ = _noisy(rng, 40)
     compiled = process(rec).filtered.positions
@@ -189,8 +189,8 @@ def test_numpy_fallback_gives_the_same_result(rng: np.random.Generator, monkeypa
 
 def test_a_knee_that_outruns_the_random_walk_is_reacquired(rng: np.random.Generator) -> None:
     """A knee bending 145° in 3 frames (UI-PRMD deep squat speed) is gated once, then re-acquired by IK, not lost."""
-    from kinect_agent.processing import kinematics as km
-    from kinect_agent.processing.angles import joint_angles
+    from kinect_agent.body import kinematics as km
+    from kinect_agent.body.angles import joint_angles
     from kinect_agent.processing.ik import R_FACING
 
     T = 150

@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from kinect_agent.body.angles import joint_angles
 from kinect_agent.formats import ui_prmd
-from kinect_agent.processing.angles import joint_angles
 from kinect_agent.processing.pipeline import process
 
 KINECT = Path("ui-prmd") / "Segmented Movements" / "Kinect"

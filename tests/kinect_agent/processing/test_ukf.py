@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from kinect_agent.processing.errors import NotPositiveDefinite, ProcessingError
 from kinect_agent.processing.ukf import (
     MerweScaledSigmaPoints,
     UnscentedKalmanFilter,
     combine_information,
-    gated_update,
     unscented_rts,
 )
 
@@ -79,11 +79,14 @@ def test_gated_update_equals_update_when_nothing_is_gated(rng: np.random.Generat
     z = rng.normal(size=m)
     observed = np.array([True, True, True, False, False, False])
     R_diag = np.full(m, 0.05)
-    used = gated_update(a, z, observed, R_diag, gate_chi2=1e12)
+    used = a.gated_update(z, observed, R_diag, gate_chi2=1e12)
     b.update(z, observed, R_diag)
     np.testing.assert_array_equal(used, [True, False])
     np.testing.assert_allclose(a.x, b.x, atol=1e-12)
     np.testing.assert_allclose(a.P, b.P, atol=1e-12)
+    np.testing.assert_allclose(a.y, b.y, atol=1e-12, err_msg="innovation of the used rows")
+    np.testing.assert_allclose(a.S, b.S, atol=1e-12, err_msg="innovation covariance of the used rows")
+    assert a.log_likelihood == pytest.approx(b.log_likelihood, abs=1e-9)
 
 
 def test_gated_update_drops_an_improbable_joint(rng: np.random.Generator) -> None:
@@ -91,9 +94,57 @@ def test_gated_update_drops_an_improbable_joint(rng: np.random.Generator) -> Non
     kf.x, kf.P = np.zeros(6), np.eye(6) * 1e-4
     z = np.zeros(6)
     z[3:] = 5.0  # second joint 5 m off
-    used = gated_update(kf, z, np.ones(6, bool), np.full(6, 1e-4), gate_chi2=30.0)
+    used = kf.gated_update(z, np.ones(6, bool), np.full(6, 1e-4), gate_chi2=30.0)
     np.testing.assert_array_equal(used, [True, False])
     assert np.abs(kf.x).max() < 1e-9, "the gated joint moved the state"
+    assert kf.y.shape == (3,) and kf.S.shape == (3, 3), "y and S are those of the joint used"
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_gated_update_declares_its_state(seed: int) -> None:
+    """x_prior, P_prior: the state it started from; y, S and log_likelihood = log N(y; 0, S) of the rows used."""
+    from scipy.stats import multivariate_normal
+
+    rng = np.random.default_rng(seed)
+    n, m = 4, 6
+    H = rng.normal(size=(m, n))
+    kf = UnscentedKalmanFilter(n, m, hx=lambda s: np.tanh(s) @ H.T)
+    A = rng.normal(size=(n, n))
+    kf.x, kf.P = rng.normal(size=n) * 0.1, A @ A.T * 0.01 + np.eye(n) * 0.01
+    x0, P0 = kf.x.copy(), kf.P.copy()
+    z = np.tanh(kf.x) @ H.T + rng.normal(size=m) * 0.1
+    kf.gated_update(z, np.ones(m, bool), np.full(m, 0.02), gate_chi2=1e12)
+    np.testing.assert_array_equal(kf.x_prior, x0)
+    np.testing.assert_array_equal(kf.P_prior, P0)
+    assert kf.y.shape == (m,) and kf.S.shape == (m, m)
+    expected = multivariate_normal(mean=np.zeros(m), cov=kf.S).logpdf(kf.y)
+    assert kf.log_likelihood == pytest.approx(expected, rel=1e-10), f"seed {seed}"
+    kf.gated_update(np.full(m, np.nan), np.zeros(m, bool), np.full(m, 0.02), gate_chi2=1e12)
+    assert kf.y.shape == (0,) and kf.S.shape == (0, 0) and kf.log_likelihood == 0.0, "nothing observed: nothing used"
+
+
+def test_a_covariance_that_is_not_positive_definite_is_an_internal_fault() -> None:
+    """P with a negative eigenvalue (no jitter helps) raises NotPositiveDefinite, a ProcessingError and not a
+    ValueError (bad input); x and P stay as they were."""
+    kf = UnscentedKalmanFilter(3, 3, hx=lambda s: s)
+    kf.x, kf.P = np.zeros(3), np.diag([1.0, -1.0, 1.0])
+    with pytest.raises(NotPositiveDefinite, match="covariance P") as caught:
+        kf.gated_update(np.ones(3), np.ones(3, bool), np.full(3, 0.1), gate_chi2=30.0)
+    assert isinstance(caught.value, ProcessingError) and not isinstance(caught.value, ValueError)
+    np.testing.assert_array_equal(kf.P, np.diag([1.0, -1.0, 1.0]))
+
+
+def test_an_innovation_covariance_that_is_not_positive_definite_is_reported_with_lapacks_info() -> None:
+    """R with a negative variance makes S indefinite: potrf's info is checked, not ignored."""
+    kf = UnscentedKalmanFilter(3, 3, hx=lambda s: s)
+    kf.x, kf.P = np.zeros(3), np.eye(3) * 0.01
+    x0 = kf.x.copy()
+    with pytest.raises(NotPositiveDefinite, match="innovation covariance S") as caught:
+        kf.gated_update(np.zeros(3), np.ones(3, bool), np.array([0.1, 0.1, -1.0]), gate_chi2=np.inf, group=1)
+    assert caught.value.info == 3, "the third leading minor is the first that is not positive"
+    np.testing.assert_array_equal(kf.x, x0)
+    with pytest.raises(NotPositiveDefinite, match="innovation covariance S"):
+        kf.update(np.zeros(3), np.ones(3, bool), np.array([0.1, 0.1, -1.0]))
 
 
 def _rts(xs, Ps, F, Q):

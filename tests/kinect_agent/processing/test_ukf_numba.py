@@ -1,4 +1,4 @@
-"""The fused compiled UKF step (_ukf_numba) against the numpy reference (ukf.gated_update with numpy FK)."""
+"""The fused compiled UKF step (_ukf_numba) against the numpy reference (the filter's gated_update, numpy FK)."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from kinect_agent import skeleton
+from kinect_agent.body import kinematics as km
 from kinect_agent.processing import _blas_numba, _ukf_numba
-from kinect_agent.processing import kinematics as km
 from kinect_agent.processing.chain_filter import ChainFilter
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.ik import inverse_kinematics

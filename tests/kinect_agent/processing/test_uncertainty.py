@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.processing import uncertainty
-from kinect_agent.processing.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.ik import inverse_kinematics
 from kinect_agent.processing.pipeline import process, smooth

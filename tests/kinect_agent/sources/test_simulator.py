@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from kinect_agent import skeleton
-from kinect_agent.processing.angles import joint_angles
+from kinect_agent.body.angles import joint_angles
 from kinect_agent.sources import motions
 from kinect_agent.sources.simulator import EXERCISES, SimulationError, simulate, simulate_truth
 

@@ -43,14 +43,14 @@ def test_replay_in_real_time_takes_the_recorded_time(session_csv):
 
 
 def test_replay_of_a_real_dataset_file(data_dir):
-    files = sorted((data_dir / "utkinect").rglob("*.txt"))
-    files = [f for f in files if f.name.startswith("joints")] or files
-    try:
-        formats.detect(files[0])
-    except Exception:
-        pytest.skip("no reader for UTKinect files in this checkout yet")
-    rec = record(ReplaySource(files[0], realtime=False), seconds=2.0)
-    assert rec.n_frames > 10 and rec.duration <= 2.0
+    """A UTKinect recording replays its first 2 s: the file's own frames, times from 0, Kinect v1."""
+    path = data_dir / "utkinect" / "joints_s01_e01.txt"
+    original = formats.read(path)
+    rec = record(ReplaySource(path, realtime=False), seconds=2.0)
+    assert rec.n_frames > 10 and rec.duration <= 2.0, (rec.n_frames, rec.duration)
+    np.testing.assert_allclose(rec.t, original.t[: rec.n_frames] - original.t[0], err_msg="replayed times")
+    np.testing.assert_array_equal(rec.positions, original.positions[: rec.n_frames], err_msg="replayed positions")
+    assert rec.meta.device == "kinect1"
 
 
 def test_replay_of_a_missing_file_names_it(tmp_path):

@@ -16,8 +16,8 @@ from __future__ import annotations
 import numpy as np
 
 from kinect_agent import skeleton
-from kinect_agent.processing import _fk_numba
-from kinect_agent.processing.rotations import matrix_to_rotvec, quat_to_matrix
+from kinect_agent.body import _fk_numba
+from kinect_agent.body.rotations import matrix_to_rotvec, quat_to_matrix
 
 N_BONES = skeleton.J - 1
 
@@ -285,7 +285,7 @@ class ChainModel:
         Each bone's frame is turned so that REST_DIRECTIONS[k] maps onto this model's rest[k]; with the same root
         and lengths, forward_kinematics then gives exactly `positions`.
         """
-        from kinect_agent.processing.rotations import rotation_between
+        from kinect_agent.body.rotations import rotation_between
 
         G = self.global_rotations(self.local_rotations(theta))
         C = rotation_between(REST_DIRECTIONS, self.rest)  # (19, 3, 3)

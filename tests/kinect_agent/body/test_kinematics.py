@@ -6,11 +6,10 @@ import numpy as np
 import pytest
 
 from kinect_agent import skeleton
-from kinect_agent.processing import _fk_numba
-from kinect_agent.processing import kinematics as km
+from kinect_agent.body import _fk_numba
+from kinect_agent.body import kinematics as km
 from kinect_agent.processing.ik import fill_gaps, inverse_kinematics
-
-from ._data import smooth_motion
+from tests.kinect_agent.processing._data import smooth_motion
 
 
 def _random_model(rng: np.random.Generator) -> km.ChainModel:

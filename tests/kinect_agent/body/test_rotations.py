@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from kinect_agent.processing import rotations as rot
+from kinect_agent.body import rotations as rot
 
 finite = st.floats(-10.0, 10.0, allow_nan=False)
 

@@ -1,0 +1,130 @@
+"""Capturing one set and queueing it, as a library: the `run` and `serve` commands and the server's demo clinic
+(through kinect_agent.home) call these, none of them through another's command module.
+
+capture(source, exercise=...)  -> the raw Recording of one set (simulator | replay FILE | kinect2 | azure)
+queue_session(queue, rec)      -> held raw in queue/captured/, filtered (make_payload), queued in queue/pending/
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+import uuid
+from datetime import UTC, datetime, timedelta
+from pathlib import Path
+
+from kinect_agent import formats
+from kinect_agent.formats.session_file import SessionPayload
+from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.processing.errors import ProcessingError
+from kinect_agent.processing.pipeline import VERSION, process
+from kinect_agent.queue import SessionQueue
+from kinect_agent.recording import Recording
+
+log = logging.getLogger(__name__)
+
+SOURCE_NAMES = {
+    "simulator": "simulator",
+    "replay": "replay",
+    "kinect2": "kinect_v2",
+    "kinect_v2": "kinect_v2",
+    "azure": "azure_kinect",
+    "azure_kinect": "azure_kinect",
+}
+_SLUG = re.compile(r"^[a-z0-9][a-z0-9_]{0,63}$")
+
+
+def check_exercise(exercise: str) -> str:
+    """Returns the slug if it looks like one (lower-case letters, digits, _); else raises ValueError."""
+    if not isinstance(exercise, str) or not _SLUG.match(exercise):
+        raise ValueError(f"--exercise {exercise!r} must be an exercise slug such as shoulder_abduction")
+    return exercise
+
+
+def capture(
+    source: str,
+    *,
+    exercise: str,
+    file: Path | None = None,
+    reps: int = 10,
+    seconds: float = 60.0,
+    seed: int = 0,
+) -> Recording:
+    """Returns the raw recording of one session from `source` (a key of SOURCE_NAMES), meta.exercise set."""
+    check_exercise(exercise)
+    kind = SOURCE_NAMES.get(source)
+    if kind is None:
+        raise ValueError(f"unknown source {source!r}; known sources: {', '.join(sorted(SOURCE_NAMES))}")
+    if (kind == "replay") != (file is not None):
+        raise ValueError("a FILE is needed with --source replay, and only there")
+    if kind == "simulator":
+        from kinect_agent.sources.simulator import simulate
+
+        rec = simulate(exercise, reps, seed=seed)[0]
+    elif kind == "replay":
+        rec = formats.read(file)
+    else:
+        from kinect_agent.sources import make_source, record
+
+        if not 0 < seconds <= 3600:
+            raise ValueError(f"--seconds must be between 0 and 3600, got {seconds}")
+        rec = record(make_source(kind), seconds)
+    rec.meta.exercise = exercise
+    return rec
+
+
+def make_payload(
+    rec: Recording,
+    *,
+    session_id: str | None = None,
+    created_at: str | None = None,
+    config: PipelineConfig | None = None,
+    recorded_by: dict[str, int] | None = None,
+) -> SessionPayload:
+    """Filters the recording and returns the session (raw + filtered + the per-frame angle SDs + a small params
+    summary), saying which device and patient recorded it (recorded_by)."""
+    config = config or PipelineConfig()
+    result = process(rec, config=config)
+    q = result.quality
+    params = {
+        "pipeline": VERSION,
+        "config": config.model_dump(),
+        # no timings here: the same recording must give the same bytes (the server deduplicates on the hash)
+        "quality": {k: q[k] for k in ("n_frames", "n_outliers", "n_gated", "frames_without_observation")},
+        "segment_lengths_m": q["segment_lengths_m"],
+    }
+    payload = SessionPayload(session_id=session_id or str(uuid.uuid4()), raw=rec, filtered=result.filtered,
+                             params=params, recorded_by=recorded_by, angle_sd=result.angle_sd)  # fmt: skip
+    if created_at is not None:
+        payload.created_at = created_at
+    return payload
+
+
+def queue_session(
+    queue: SessionQueue,
+    rec: Recording,
+    *,
+    created_at: str | None = None,
+    session_id: str | None = None,
+    recorded_by: dict[str, int] | None = None,
+) -> Path:
+    """Holds the raw session durably, filters it, queues the full session; returns the pending file.
+
+    recorded_by: the pairing that recorded it (AgentConfig.recorded_by), written into the file. When the filter
+    fails the raw session is queued instead (the server can filter it), so nothing is lost.
+    """
+    if created_at is None:  # the session started when its first frame was taken
+        start = datetime.now(UTC) - timedelta(seconds=rec.duration)
+        created_at = start.isoformat(timespec="seconds").replace("+00:00", "Z")
+    raw = SessionPayload(session_id=session_id or str(uuid.uuid4()), raw=rec, created_at=created_at,
+                         recorded_by=recorded_by)  # fmt: skip
+    queue.hold(raw)
+    try:
+        payload = make_payload(rec, session_id=raw.session_id, created_at=raw.created_at, recorded_by=recorded_by)
+    except (ValueError, ProcessingError) as exc:
+        log.warning("filtering failed (%s: %s); queuing the raw session for the server to filter", type(exc).__name__,
+                    exc)  # fmt: skip
+        payload = raw
+    path = queue.enqueue(payload)
+    queue.release(raw.session_id)
+    return path
