@@ -10,6 +10,7 @@ from sqlalchemy import func, select
 
 from backend.camera import live_count
 from backend.sessions.models import ExerciseSession
+from backend.sessions.service import session_file as stored_file
 from kinect_agent.formats import session_file
 from tests.backend.camera.landmarks import batch, squats
 
@@ -47,7 +48,7 @@ def test_squats_count_live_and_the_end_stores_one_webcam_session(client, db_sess
     session_id = r.json()["session_id"]
     stored = db_session.get(ExerciseSession, session_id)
     assert stored.client_session_id == uuid.UUID(set_id) and stored.device_id is None
-    payload = session_file.decode(stored.file_bytes)
+    payload = session_file.decode(stored_file(db_session=db_session, session_id=session_id))
     assert payload.raw.meta.device == "webcam" and payload.filtered is not None
     assert payload.params["model"]["name"] == "pose_landmarker_lite.task"
     assert len(payload.params["model"]["sha256"]) == 64
