@@ -109,6 +109,7 @@ ROUTES = {
     ("GET", "/api/v1/dashboard"): (STAFF, None),  # therapists: assigned patients only
     ("GET", "/api/v1/patients/{patient_id}/archive"): ({"patient_own", "admin"}, None),  # the patient, or an admin
     ("POST", "/api/v1/patients/{patient_id}/erasure"): (ADMIN, lambda w: {"confirm_email": w["own_email"]}),
+    ("GET", "/api/v1/patients/{patient_id}/report.pdf"): (CARE, None),
 }
 
 
