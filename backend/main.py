@@ -48,6 +48,7 @@ ROUTERS = (
     "backend.events.router",
     "backend.live.router",
     "backend.records.router",
+    "backend.records.reanalysis_router",
 )
 
 
