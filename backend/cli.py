@@ -197,6 +197,48 @@ def cmd_retention(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_reanalyze(args: argparse.Namespace) -> int:
+    """Queues the re-analysis of stored sessions (backend.records.reanalysis); `coach-server worker` runs it."""
+    import datetime as dt
+    import time
+
+    from backend.database import get_sessionmaker
+    from backend.jobs.queue import progress
+    from backend.records.reanalysis import enqueue_reanalysis
+
+    _settings()
+    _require_migrated()
+    since = None
+    if args.since:
+        try:
+            since = dt.date.fromisoformat(args.since)
+        except ValueError:
+            raise CliError(f"--since must be a date like 2026-01-31, got {args.since!r}") from None
+    with get_sessionmaker()() as session:
+        batch, added = enqueue_reanalysis(db_session=session, patient_id=args.patient, since=since,
+                                          exercise=args.exercise)  # fmt: skip
+        session.commit()
+        print(f"batch {batch}: {added} session(s) queued for re-analysis (run `coach-server worker` to do them)")
+        while args.wait and added:
+            p = progress(db_session=session, batch=batch)
+            session.commit()
+            print(f"  done {p['done']}, failed {p['failed']}, running {p['running']}, queued {p['queued']} "
+                  f"of {p['total']}", file=sys.stderr)  # fmt: skip
+            if p["queued"] + p["running"] == 0:
+                break
+            time.sleep(2.0)
+    return 0
+
+
+def cmd_worker(args: argparse.Namespace) -> int:
+    """Runs queued jobs (re-analysis) until stopped (backend.jobs.worker)."""
+    from backend.jobs import worker
+
+    _settings()
+    _require_migrated()
+    return worker.main(args)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Returns the parser of every subcommand."""
     parser = argparse.ArgumentParser(prog="coach-server", description="Kinect Home Coach coaching server.")
@@ -238,6 +280,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(_run=cmd_analyze)
 
     from backend.storage.check import add_arguments as storage_arguments
+
+    p = sub.add_parser("reanalyze", help="queue stored sessions for re-analysis with today's analysis version")
+    p.add_argument("--patient", type=int, help="only this patient's sessions")
+    p.add_argument("--since", help="only sessions started on or after this date (YYYY-MM-DD)")
+    p.add_argument("--exercise", help="only sessions of this exercise (slug, e.g. squat)")
+    p.add_argument("--wait", action="store_true", help="print the progress until the batch is done")
+    p.set_defaults(_run=cmd_reanalyze)
+
+    p = sub.add_parser("worker", help="run queued jobs (re-analysis) until stopped; run several, on several machines")
+    p.add_argument("--once", action="store_true", help="stop when the queue is empty")
+    p.set_defaults(_run=cmd_worker)
 
     p = sub.add_parser("retention", help="remove session files older than COACH_RETENTION_DAYS (metrics are kept)")
     p.add_argument("--days", type=int, help="this many days instead of COACH_RETENTION_DAYS")

@@ -52,6 +52,7 @@ ROUTERS = (
     "backend.live.router",
     "backend.camera.router",
     "backend.records.router",
+    "backend.records.reanalysis_router",
 )
 # Packages above the server (the pages, frontend.pages:mount) register a mount function in this entry-point group
 # (pyproject.toml); the server calls each on the app it builds and never imports them (docs/architecture.md).

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import datetime as dt
+from typing import Annotated, Literal
 
-from fastapi import APIRouter, status
+from fastapi import APIRouter, Query, Response, status
 from fastapi.responses import StreamingResponse
 from pydantic import BaseModel, Field
 
@@ -13,6 +14,7 @@ from backend.deps import AdminCaller, CurrentCaller, DbSession, require_patient_
 from backend.exceptions import AUTH_ERRORS, Forbidden, InvalidInput, PatientNotFound, error_responses
 from backend.records.archive import build_archive
 from backend.records.erasure import erase_patient
+from backend.records.report import Period, build_report
 from backend.schemas import IdPath
 from backend.storage import StorageError
 
@@ -78,3 +80,37 @@ def erase(patient_id: IdPath, body: ErasureIn, caller: AdminCaller, db_session: 
         raise InvalidInput(f"confirm_email does not match the e-mail address of patient {patient_id}; nothing erased")
     result = erase_patient(db_session=db_session, patient=patient, caller=caller)
     return ErasureOut(rows=result.rows, objects=len(result.objects))
+
+
+@router.get(
+    "/{patient_id}/report.pdf",
+    response_class=Response,
+    responses={
+        200: {"content": {"application/pdf": {}}, "description": "the progress report, black-and-white safe"},
+        **error_responses(*AUTH_ERRORS, PatientNotFound, InvalidInput),
+    },
+)
+def progress_report(
+    patient_id: IdPath,
+    caller: CurrentCaller,
+    db_session: DbSession,
+    start: Annotated[
+        dt.date | None, Query(alias="from", description="first day (default: 12 weeks before `to`)")
+    ] = None,
+    end: Annotated[dt.date | None, Query(alias="to", description="last day (default: today, UTC)")] = None,
+    paper: Literal["a4", "letter"] = "a4",
+) -> Response:
+    """Returns the progress report of a patient over a period as a PDF (the patient, their therapists, admins)."""
+    patient = require_patient_access(patient_id, caller=caller, db_session=db_session)
+    if caller.device is not None:
+        raise Forbidden("devices do not read reports")
+    end = end or dt.datetime.now(dt.UTC).date()
+    start = start or end - dt.timedelta(weeks=12)
+    if start > end or (end - start).days > 3 * 366:
+        raise InvalidInput(f"the period from={start} to={end} must run forwards and last at most 3 years")
+    who = caller.user.full_name or caller.user.email
+    record(db_session=db_session, caller=caller, action="patient.report", object_type="patient",
+           object_id=patient_id, patient_id=patient_id, detail={"from": str(start), "to": str(end)})  # fmt: skip
+    pdf = build_report(db_session=db_session, patient=patient, period=Period(start, end), made_by=who, paper=paper)
+    name = f"progress-patient-{patient_id}-{start}-{end}.pdf"
+    return Response(pdf, media_type="application/pdf", headers={"Content-Disposition": f'inline; filename="{name}"'})

@@ -130,6 +130,10 @@ ROUTES = {
     ("POST", "/api/v1/camera/sets/{set_id}/end"): ({"patient_own"}, lambda w: {"last_seq": -1}),
     ("GET", "/api/v1/patients/{patient_id}/archive"): ({"patient_own", "admin"}, None),  # the patient, or an admin
     ("POST", "/api/v1/patients/{patient_id}/erasure"): (ADMIN, lambda w: {"confirm_email": w["own_email"]}),
+    ("GET", "/api/v1/patients/{patient_id}/report.pdf"): (CARE, None),
+    ("POST", "/api/v1/reanalysis"): (ADMIN, lambda w: {"patient_id": w["params"]["patient_id"]}),
+    ("GET", "/api/v1/reanalysis/{batch}"): (ADMIN, None),  # a batch queued in the world below
+    ("GET", "/api/v1/sessions/{session_id}/metric-versions"): (CARE, None),
 }
 
 
@@ -168,6 +172,9 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
     from backend.users.service import create_api_token
 
     admin_token, _ = create_api_token(db_session=db_session, user=admin, name="victim", scopes=["read"], days=1)
+    from backend.jobs.queue import enqueue
+
+    enqueue(db_session=db_session, kind="reanalyze", items=[("matrix", {"session_id": session.id})], batch="matrix")
     headers = {
         "anonymous": {},
         "patient_own": auth_headers(own),
@@ -189,6 +196,7 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
         "slug": exercise.slug,
         "session_id": session.id,
         "set_id": str(camera_set.id),
+        "batch": "matrix",
     }
     return {
         "headers": headers,

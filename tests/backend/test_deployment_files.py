@@ -42,3 +42,11 @@ def test_compose_keeps_session_files_in_minio_with_its_bucket_made_at_start():
     assert "mc mb --ignore-existing" in " ".join(init["entrypoint"])
     assert "miniodata:/data" in services["minio"]["volumes"]
     assert "ports" not in services["minio"], "the object store is reached by the server only"
+
+
+def test_compose_runs_a_worker_on_the_same_database_and_bucket():
+    services = _compose()["services"]
+    worker, server = services["worker"], services["server"]
+    assert worker["command"] == ["coach-server", "worker"]
+    for name in ("COACH_DATABASE_URL", "COACH_STORAGE_BACKEND", "COACH_S3_BUCKET", "COACH_S3_ENDPOINT_URL"):
+        assert worker["environment"][name] == server["environment"][name], name

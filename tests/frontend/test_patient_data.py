@@ -7,7 +7,7 @@ import uuid
 import pytest
 from axe_playwright_python.sync_playwright import Axe
 
-from tests.frontend.conftest import PATIENT, api_client, login, shot
+from tests.frontend.conftest import PATIENT, SHOTS, api_client, login, shot
 
 pytestmark = pytest.mark.browser
 ADMIN = "admin@demo.clinic"
@@ -51,4 +51,22 @@ def test_an_admin_erases_a_patient_after_two_confirmations(page, live_server):
     assert "The patient was erased" in page.inner_text("#erase-msg")
     assert client.get(f"/api/v1/patients/{pid}").status_code == 404
     client.close()
+    assert not page.js_errors
+
+
+def test_the_patient_page_prints_without_buttons_and_links_the_pdf_report(page, live_server):
+    from tests.frontend.conftest import THERAPIST
+
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    page.goto(f"/therapist/patients/{live_server.patient_id}")
+    page.wait_for_selector("#sessions tbody tr[data-session-id]")
+    link = page.get_by_role("link", name="Progress report (PDF, last 12 weeks)")
+    response = page.request.get(link.get_attribute("href"))
+    assert response.ok and response.headers["content-type"] == "application/pdf"
+    page.emulate_media(media="print")
+    assert not page.locator("#plan-new").is_visible() and not page.locator("header.top .btn").first.is_visible()
+    for paper in ("A4", "Letter"):
+        pdf = page.pdf(format=paper, print_background=False)
+        (SHOTS / f"patient-page-{paper}.pdf").write_bytes(pdf)
     assert not page.js_errors
