@@ -22,5 +22,6 @@ def upgrade() -> None:
 
 
 def downgrade() -> None:
-    with op.batch_alter_table("user", schema=None) as batch_op:
-        batch_op.drop_column("locale")
+    # plain ALTER TABLE … DROP COLUMN (SQLite >= 3.35 too): a batch copy of "user" would drop the table, and SQLite's
+    # ON DELETE CASCADE would take every session, metric and replay of every user with it
+    op.drop_column("user", "locale")
