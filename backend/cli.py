@@ -169,6 +169,76 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return demo_main([])
 
 
+def cmd_storage(args: argparse.Namespace) -> int:
+    """Checks the object store against the database, or moves files between them (backend.storage.check)."""
+    from backend.storage import check
+
+    _settings()
+    if args.action != "init":
+        _require_migrated()
+    return check.run(args)
+
+
+def cmd_retention(args: argparse.Namespace) -> int:
+    """Removes session files older than the retention period, keeping their metrics (backend.records.retention)."""
+    from backend.database import get_sessionmaker
+    from backend.records.retention import apply_retention
+
+    settings = _settings()
+    days = args.days if args.days is not None else settings.RETENTION_DAYS
+    if days <= 0:
+        print("retention is off (COACH_RETENTION_DAYS=0): no session file removed")
+        return 0
+    _require_migrated()
+    with get_sessionmaker()() as session:
+        report = apply_retention(db_session=session, days=days)
+        session.commit()
+    print(report.text())
+    return 0
+
+
+def cmd_reanalyze(args: argparse.Namespace) -> int:
+    """Queues the re-analysis of stored sessions (backend.records.reanalysis); `coach-server worker` runs it."""
+    import datetime as dt
+    import time
+
+    from backend.database import get_sessionmaker
+    from backend.jobs.queue import progress
+    from backend.records.reanalysis import enqueue_reanalysis
+
+    _settings()
+    _require_migrated()
+    since = None
+    if args.since:
+        try:
+            since = dt.date.fromisoformat(args.since)
+        except ValueError:
+            raise CliError(f"--since must be a date like 2026-01-31, got {args.since!r}") from None
+    with get_sessionmaker()() as session:
+        batch, added = enqueue_reanalysis(db_session=session, patient_id=args.patient, since=since,
+                                          exercise=args.exercise)  # fmt: skip
+        session.commit()
+        print(f"batch {batch}: {added} session(s) queued for re-analysis (run `coach-server worker` to do them)")
+        while args.wait and added:
+            p = progress(db_session=session, batch=batch)
+            session.commit()
+            print(f"  done {p['done']}, failed {p['failed']}, running {p['running']}, queued {p['queued']} "
+                  f"of {p['total']}", file=sys.stderr)  # fmt: skip
+            if p["queued"] + p["running"] == 0:
+                break
+            time.sleep(2.0)
+    return 0
+
+
+def cmd_worker(args: argparse.Namespace) -> int:
+    """Runs queued jobs (re-analysis) until stopped (backend.jobs.worker)."""
+    from backend.jobs import worker
+
+    _settings()
+    _require_migrated()
+    return worker.main(args)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Returns the parser of every subcommand."""
     parser = argparse.ArgumentParser(prog="coach-server", description="Kinect Home Coach coaching server.")
@@ -208,6 +278,27 @@ def build_parser() -> argparse.ArgumentParser:
     )
     analyze_arguments(p)
     p.set_defaults(_run=cmd_analyze)
+
+    from backend.storage.check import add_arguments as storage_arguments
+
+    p = sub.add_parser("reanalyze", help="queue stored sessions for re-analysis with today's analysis version")
+    p.add_argument("--patient", type=int, help="only this patient's sessions")
+    p.add_argument("--since", help="only sessions started on or after this date (YYYY-MM-DD)")
+    p.add_argument("--exercise", help="only sessions of this exercise (slug, e.g. squat)")
+    p.add_argument("--wait", action="store_true", help="print the progress until the batch is done")
+    p.set_defaults(_run=cmd_reanalyze)
+
+    p = sub.add_parser("worker", help="run queued jobs (re-analysis) until stopped; run several, on several machines")
+    p.add_argument("--once", action="store_true", help="stop when the queue is empty")
+    p.set_defaults(_run=cmd_worker)
+
+    p = sub.add_parser("retention", help="remove session files older than COACH_RETENTION_DAYS (metrics are kept)")
+    p.add_argument("--days", type=int, help="this many days instead of COACH_RETENTION_DAYS")
+    p.set_defaults(_run=cmd_retention)
+
+    p = sub.add_parser("storage", help="check the object store of session files and replays, or move files to it")
+    storage_arguments(p)
+    p.set_defaults(_run=cmd_storage)
     return parser
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from functools import lru_cache
+from pathlib import Path
 from typing import Literal
 from urllib.parse import urlsplit
 
@@ -44,6 +45,17 @@ class Settings(BaseSettings):
     EVENTS_STREAM_MAX_S: float = Field(default=300.0, ge=0.0)
     DB_SLOT_WAIT_S: float = Field(default=30.0, gt=0.0)  # a request waits this long for a database slot, then 503
     LIVE_OFFLINE_GRACE_S: float = Field(default=2.0, ge=0.0, le=60.0)  # a home agent's reconnection is no "offline"
+    # session files and replays (backend/storage): "local" files under STORAGE_DIR, or an S3-compatible bucket
+    STORAGE_BACKEND: Literal["local", "s3"] = "local"
+    STORAGE_DIR: str = ""  # empty: "objects" beside the SQLite database file, else ./var/objects
+    S3_BUCKET: str = ""
+    S3_PREFIX: str = ""  # keys go under this folder of the bucket
+    S3_ENDPOINT_URL: str = ""  # e.g. http://minio:9000; empty: AWS S3
+    S3_REGION: str = "us-east-1"
+    S3_ACCESS_KEY_ID: str = ""  # empty: boto3's usual chain (AWS_* variables, instance role …)
+    S3_SECRET_ACCESS_KEY: str = ""
+    # session files older than this many days are removed by `coach-server retention` (metrics kept); 0: off
+    RETENTION_DAYS: int = Field(default=0, ge=0)
 
     @model_validator(mode="after")
     def _check_public_url(self) -> Settings:
@@ -55,6 +67,24 @@ class Settings(BaseSettings):
                     f"without query or fragment; got {self.PUBLIC_URL!r}"
                 )
         return self
+
+    @model_validator(mode="after")
+    def _check_storage(self) -> Settings:
+        if self.STORAGE_BACKEND == "s3" and not self.S3_BUCKET:
+            raise ValueError("COACH_STORAGE_BACKEND=s3 needs COACH_S3_BUCKET (the bucket session files go to)")
+        return self
+
+    @property
+    def storage_dir(self) -> str:
+        """Returns the folder of the local object store: STORAGE_DIR, else "objects" in the server's data folder
+        (beside the SQLite database file), else ./var/objects."""
+        if self.STORAGE_DIR:
+            return self.STORAGE_DIR
+        url = self.DATABASE_URL
+        if url.startswith("sqlite:///") and url not in ("sqlite:///", "sqlite:///:memory:"):
+            path = url.removeprefix("sqlite:///").split("?", 1)[0]
+            return str(Path(path).parent / "objects")
+        return "./var/objects"
 
     @property
     def root_path(self) -> str:

@@ -132,8 +132,10 @@ def db_dependency(engine: Engine) -> Callable[[], Iterator[Session]]:
 def import_all_models() -> None:
     """Imports every model module so Base.metadata knows every table (used by Alembic and tests)."""
     import backend.audit.models  # noqa: F401
+    import backend.camera.models  # noqa: F401
     import backend.devices.models  # noqa: F401
     import backend.exercises.models  # noqa: F401
+    import backend.jobs.models  # noqa: F401
     import backend.patients.models  # noqa: F401
     import backend.plans.models  # noqa: F401
     import backend.replay.models  # noqa: F401

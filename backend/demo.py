@@ -26,6 +26,8 @@ PATIENTS = (
     ("ines@demo.clinic", "Ines Garcia", ("sit_to_stand", "seated_knee_extension")),
     ("walter@demo.clinic", "Walter Young", ("elbow_flexion", "shoulder_flexion")),
 )
+# a patient with no Kinect and no home agent: she records her sets with her own computer's camera (backend/camera)
+CAMERA_PATIENT = ("clara@demo.clinic", "Clara Lens", ("squat", "seated_knee_extension"), 1)  # therapist index
 
 
 def seed_demo(db_session: Session) -> str:
@@ -38,6 +40,7 @@ def seed_demo(db_session: Session) -> str:
     from backend.users.service import create_user
 
     if db_session.scalar(select(User).where(User.email == ADMIN[0])) is not None:
+        _seed_camera_patient(db_session)  # a demo database of an earlier version gets her too
         return logins()
     create_user(db_session=db_session, email=ADMIN[0], password=DEMO_PASSWORD, role="admin", full_name=ADMIN[1])
     therapists = [
@@ -58,7 +61,31 @@ def seed_demo(db_session: Session) -> str:
         _, code = create_pairing_code(db_session=db_session, patient_id=patient.id, created_by_id=therapist.id,
                                       minutes=15)  # fmt: skip
         pair(db_session=db_session, code=code, name=f"{name.split()[0]}'s living-room Kinect")
+    _seed_camera_patient(db_session)
     return logins()
+
+
+def _seed_camera_patient(db_session: Session) -> None:
+    """Creates CAMERA_PATIENT once: a plan of two exercises with 2 x 5 repetitions, no paired device."""
+    from backend.patients.service import assign
+    from backend.plans.schemas import PlanIn, PlanItemIn
+    from backend.plans.service import create_plan
+    from backend.users.models import User
+    from backend.users.service import create_user
+
+    email, name, exercises, t = CAMERA_PATIENT
+    if db_session.scalar(select(User).where(User.email == email)) is not None:
+        return
+    therapist = db_session.scalar(select(User).where(User.email == THERAPISTS[t][0]))
+    if therapist is None:
+        return
+    patient = create_user(db_session=db_session, email=email, password=DEMO_PASSWORD, role="patient", full_name=name)
+    assign(db_session=db_session, patient=patient, therapist=therapist)
+    today = dt.date.today()
+    items = [PlanItemIn(exercise_slug=s, sets=2, repetitions=5, frequency_per_week=3) for s in exercises]
+    body = PlanIn(title="Home programme (camera)", start_date=today - dt.timedelta(days=7),
+                  end_date=today + dt.timedelta(days=56), items=items)  # fmt: skip
+    create_plan(db_session=db_session, patient_id=patient.id, therapist_id=therapist.id, body=body)
 
 
 def logins() -> str:
@@ -69,6 +96,9 @@ def logins() -> str:
         lines.append(f"  therapist:  {email} ({name}; patients: {theirs})")
     lines += [f"  patient:    {e} ({n}; therapist: {THERAPISTS[i % len(THERAPISTS)][1]})"
               for i, (e, n, _) in enumerate(PATIENTS)]  # fmt: skip
+    email, name, _, t = CAMERA_PATIENT
+    lines.append(f"  patient:    {email} ({name}; therapist: {THERAPISTS[t][1]}; no Kinect: she uses this "
+                 "computer's camera)")  # fmt: skip
     return "\n".join(lines)
 
 
@@ -114,6 +144,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"\nKinect Home Coach demo is starting on {base}\n"
           f"  sign in (every role):        {base}/\n"
           f"  patient feedback screen:     {base}/patient\n"
+          f"  set with this computer's camera: {base}/patient (as {CAMERA_PATIENT[0]}: \"Start with this computer's "
+          "camera\")\n"
           f"  therapist dashboard:         {base}/therapist\n"
           f"  API documentation (OpenAPI): {base}/docs\n"
           f"  health check:                {base}/healthz\n"

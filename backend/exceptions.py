@@ -102,6 +102,12 @@ class InvalidSessionFile(AppError):
     status_code = 400
 
 
+class SessionFileRemoved(AppError):
+    """The session's file was removed by the clinic's retention period; its metrics are kept."""
+
+    status_code = 410
+
+
 class SessionTooLarge(AppError):
     status_code = 413
 

@@ -27,6 +27,7 @@ from backend.db_slots import DbAdmission, DbSlots
 from backend.deps import DbSession
 from backend.events.listener import Listener
 from backend.exceptions import AppError, DatabaseBusy
+from backend.i18n.errors import error_detail
 from backend.openapi import openapi_builder
 from backend.request_limits import RequestLimits
 from backend.schemas import ErrorOut
@@ -49,6 +50,9 @@ ROUTERS = (
     "backend.replay.router",
     "backend.events.router",
     "backend.live.router",
+    "backend.camera.router",
+    "backend.records.router",
+    "backend.records.reanalysis_router",
 )
 # Packages above the server (the pages, frontend.pages:mount) register a mount function in this entry-point group
 # (pyproject.toml); the server calls each on the app it builds and never imports them (docs/architecture.md).
@@ -119,10 +123,12 @@ def is_database_busy(exc: DBAPIError) -> bool:
 
 def _install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(AppError)
-    async def app_error(_request: Request, exc: AppError) -> JSONResponse:
+    async def app_error(request: Request, exc: AppError) -> JSONResponse:
+        detail, language = error_detail(request, exc.message)
         return JSONResponse(
-            {"error": type(exc).__name__, "detail": exc.message}, status_code=exc.status_code, headers=exc.headers
-        )
+            {"error": type(exc).__name__, "detail": detail}, status_code=exc.status_code,
+            headers=(exc.headers or {}) | language,
+        )  # fmt: skip
 
     @app.exception_handler(ProcessingError)
     async def processing_fault(request: Request, exc: ProcessingError) -> JSONResponse:

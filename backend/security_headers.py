@@ -11,7 +11,10 @@ Three policies, chosen by path:
   ?playbackPath=<a session's replay in this API> (frontend.pages.replay_viewer), and connect-src keeps it on this
   origin, where recordings are built by the server;
 - the API documentation /docs (backend.api_docs): Swagger UI's files from this origin and the one inline script that
-  starts it, connections to this origin only.
+  starts it, connections to this origin only;
+- the patient's camera page (/patient/camera): the page policy plus 'wasm-unsafe-eval', which compiling the pose
+  landmarker's WebAssembly needs; connect-src stays 'self', so MediaPipe's usage-metrics call to another site is
+  blocked. No other page may compile WebAssembly.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 VIEWER_PATH = "/replay/viewer/"
 DOCS_PATHS = frozenset({"/docs", "/docs/oauth2-redirect"})
+CAMERA_PATH = "/patient/camera"
 
 _COMMON = "base-uri 'none'; object-src 'none'; form-action 'self'; frame-ancestors 'self'"
 PAGE_POLICY = (
@@ -36,6 +40,7 @@ DOCS_POLICY = (
     "default-src 'self'; script-src 'self' 'unsafe-inline'; style-src 'self' 'unsafe-inline'; img-src 'self' data:; "
     f"font-src 'self' data:; connect-src 'self'; worker-src 'self' blob:; frame-src 'none'; {_COMMON}"
 )
+CAMERA_POLICY = PAGE_POLICY.replace("script-src 'self';", "script-src 'self' 'wasm-unsafe-eval';")
 HSTS = "max-age=31536000"
 
 
@@ -45,6 +50,8 @@ def policy_for(path: str) -> str:
         return VIEWER_POLICY
     if path in DOCS_PATHS:
         return DOCS_POLICY
+    if path == CAMERA_PATH:
+        return CAMERA_POLICY
     return PAGE_POLICY
 
 

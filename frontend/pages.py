@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib.util
 import re
+from functools import lru_cache
 from pathlib import Path
 from typing import Annotated
 from urllib.parse import parse_qsl, quote
@@ -20,13 +21,26 @@ from sqlalchemy.orm import Session
 
 from backend.deps import Caller, DbSession, optional_caller, require_patient_access
 from backend.exceptions import NotFound
+from backend.i18n import LANGUAGE_NAMES, LOCALES, N_, js_messages, negotiate, translations, translator
 from backend.schemas import IdPath
+from frontend import vendor_assets
 
 HERE = Path(__file__).resolve().parent
 STATIC = HERE / "static"
 VISER_CLIENT = Path(importlib.util.find_spec("viser").submodule_search_locations[0]) / "client" / "build" / "index.html"
 PLOTLY_JS = Path(importlib.util.find_spec("plotly").submodule_search_locations[0]) / "package_data" / "plotly.min.js"
-templates = Jinja2Templates(directory=str(HERE / "templates"))
+
+
+@lru_cache(maxsize=len(LOCALES))
+def templates_for(locale: str) -> Jinja2Templates:
+    """Returns the pages' templates in one language: Jinja's i18n extension with that locale's catalogue."""
+    found = Jinja2Templates(directory=str(HERE / "templates"))
+    found.env.add_extension("jinja2.ext.i18n")
+    found.env.policies["ext.i18n.trimmed"] = True
+    found.env.install_gettext_translations(translations(locale), newstyle=True)
+    return found
+
+
 router = APIRouter(include_in_schema=False)
 
 OptionalCaller = Annotated[Caller | None, Depends(optional_caller)]
@@ -51,16 +65,30 @@ def _here(request: Request) -> str:
     return _root(request) + request.url.path + (f"?{request.url.query}" if request.url.query else "")
 
 
-def _page(request: Request, name: str, caller: Caller | None, status_code: int = 200, **context) -> HTMLResponse:
+def page_locale(request: Request, user) -> str:
+    """Returns the language of a page: a patient's chosen one, else the browser's (Accept-Language); the therapist
+    pages stay English for now (their templates are marked, their catalogues not written yet)."""
+    if user is not None and user.role in THERAPIST_ROLES:
+        return "en"
+    if user is not None and user.locale in LOCALES:
+        return user.locale
+    return negotiate(request.headers.get("accept-language"))
+
+
+def _page(request: Request, name: str, caller: Caller | None, status_code: int = 200, locale: str | None = None,
+          **context) -> HTMLResponse:  # fmt: skip
     user = caller.user if caller is not None else None
     root = _root(request)
-    context = {"user": user, "home": root + (home_for(user.role) if user is not None else "/"), "root": root} | context
-    return templates.TemplateResponse(request, name, context, status_code=status_code, headers=_NO_STORE)
+    locale = locale or page_locale(request, user)
+    home = root + (home_for(user.role) if user is not None else "/")
+    context = {"user": user, "home": home, "root": root, "locale": locale, "languages": LANGUAGE_NAMES,
+               "i18n_messages": js_messages(locale)} | context  # fmt: skip
+    return templates_for(locale).TemplateResponse(request, name, context, status_code=status_code, headers=_NO_STORE)
 
 
 _ERROR_PAGES = {
-    404: ("Page not found", "There is no page at this address. It may have moved, or the link has a typo."),
-    405: ("Not possible here", "This address cannot be opened this way."),
+    404: (N_("Page not found"), N_("There is no page at this address. It may have moved, or the link has a typo.")),
+    405: (N_("Not possible here"), N_("This address cannot be opened this way.")),
 }
 
 
@@ -68,6 +96,7 @@ def mount(app: FastAPI) -> None:
     """Mounts the pages on the app, the one place that does: their routes, and the HTML page that answers a
     browser's error outside /api/ (app.state.error_page, which the app's error handlers call)."""
     app.include_router(router)
+    app.include_router(vendor_assets.router)  # /static/vendor/mediapipe/: the pinned pose runtime and models
     app.state.error_page = browser_error_page
 
 
@@ -86,9 +115,24 @@ def wants_html(request: Request) -> bool:
 
 def error_page(request: Request, status_code: int) -> HTMLResponse:
     """Returns the HTML page of an HTTP error (unknown URL and the like) with a link to the start page."""
-    title, message = _ERROR_PAGES.get(status_code, ("Something went wrong", "This page cannot be shown."))
-    return _page(request, "error.html", None, status_code=status_code, title=title, message=message,
-                 page_id=f"error-{status_code}", link_text="Go to the start page")  # fmt: skip
+    title, message = _ERROR_PAGES.get(status_code, (N_("Something went wrong"), N_("This page cannot be shown.")))
+    return _error(
+        request, None, status_code, title, message, page_id=f"error-{status_code}", link_text=N_("Go to the start page")
+    )
+
+
+def _error(
+    request: Request, caller: Caller | None, status_code: int, title: str, message: str, **context
+) -> HTMLResponse:
+    """Returns the error page, its title, message and link text (marked with N_) in the page's language."""
+    user = caller.user if caller is not None else None
+    t = translator(page_locale(request, user if user is None or user.role == "patient" else None))
+    params = context.pop("params", {})
+    link = context.get("link_text")
+    if link is not None:
+        context["link_text"] = t.gettext(link)
+    return _page(request, "error.html", caller, status_code=status_code, locale=t.locale, title=t.gettext(title),
+                 message=t.gettext(message, **params), **context)  # fmt: skip
 
 
 def _gate(request: Request, caller: Caller | None, roles: tuple[str, ...]) -> Response | None:
@@ -96,8 +140,13 @@ def _gate(request: Request, caller: Caller | None, roles: tuple[str, ...]) -> Re
     if caller is None or caller.user is None:
         return RedirectResponse(f"{_root(request)}/?next={quote(_here(request), safe='')}", status_code=303)
     if caller.user.role not in roles:
-        return _page(request, "error.html", caller, status_code=403, title="Not for this account",
-                     message="This page is for therapists. Your own page is one click away.")  # fmt: skip
+        return _error(
+            request,
+            caller,
+            403,
+            N_("Not for this account"),
+            N_("This page is for therapists. Your own page is one click away."),
+        )
     return None
 
 
@@ -115,6 +164,13 @@ def patient_page(request: Request, caller: OptionalCaller) -> Response:
     if caller is not None and caller.user is not None and caller.user.role in THERAPIST_ROLES:
         return RedirectResponse(f"{_root(request)}/therapist", status_code=303)
     return _gate(request, caller, ("patient",)) or _page(request, "patient.html", caller)
+
+
+@router.get("/patient/camera", response_class=HTMLResponse)
+def camera_page(request: Request, caller: OptionalCaller) -> Response:
+    """Shows the camera set of one exercise of the patient's plan (?item=<plan item id>): consent, placement check,
+    the live count with this computer's camera, the saved result (frontend/static/camera_*.js)."""
+    return _gate(request, caller, ("patient",)) or _page(request, "camera.html", caller)
 
 
 @router.get("/therapist", response_class=HTMLResponse)
@@ -140,8 +196,14 @@ def _visible_session(request: Request, caller: Caller, db_session: Session, sess
         patient_id = session_patient(db_session=db_session, session_id=session_id)
         require_patient_access(patient_id, caller=caller, db_session=db_session, hidden_as=missing(session_id))
     except NotFound:
-        return _page(request, "error.html", caller, status_code=404, title="Session not found",
-                     message=f"There is no session {session_id} that you may see.")  # fmt: skip
+        return _error(
+            request,
+            caller,
+            404,
+            N_("Session not found"),
+            N_("There is no session %(session_id)s that you may see."),
+            params={"session_id": session_id},
+        )
     return patient_id
 
 
@@ -197,9 +259,15 @@ def is_replay_recording(request: Request, query: str) -> bool:
 
 def _sign_in_first(request: Request) -> HTMLResponse:
     """Returns the 401 page of a page that needs a login, with a link to sign in and come back."""
-    return _page(request, "error.html", None, status_code=401, title="Please sign in",
-                 message="This page shows personal health data. Please sign in to see it.",
-                 home=f"{_root(request)}/?next={quote(_here(request), safe='')}", link_text="Sign in")  # fmt: skip
+    return _error(
+        request,
+        None,
+        401,
+        N_("Please sign in"),
+        N_("This page shows personal health data. Please sign in to see it."),
+        home=f"{_root(request)}/?next={quote(_here(request), safe='')}",
+        link_text=N_("Sign in"),
+    )
 
 
 @router.get("/static/vendor/plotly.min.js")

@@ -11,7 +11,7 @@ import numpy as np
 from kinect_agent import skeleton
 from kinect_agent.skeleton import NOT_TRACKED, TRACKED
 
-DEVICES = ("kinect1", "kinect2", "azure_kinect", "femto", "mocap", "simulator", "unknown")
+DEVICES = ("kinect1", "kinect2", "azure_kinect", "femto", "mocap", "simulator", "webcam", "unknown")
 
 
 @dataclass

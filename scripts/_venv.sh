@@ -21,3 +21,6 @@ if [ ! -f "$STAMP" ]; then
   touch "$STAMP"
 fi
 export PATH="$VENV/bin:$PATH"
+# The pinned pose assets (browser runtime and models, kinect_agent/vendor/lock.json): fetched with npm and checked
+# once; afterwards this only reads a stamp.
+"$VENV/bin/python" -m kinect_agent.vendor.install --quiet

@@ -9,4 +9,6 @@ for extra in agent server dev test; do
   uv pip compile pyproject.toml --extra "$extra" --generate-hashes --universal --python-version 3.11 \
     -o "requirements/$extra.lock" --quiet
 done
-echo "requirements/{agent,server,dev,test}.lock regenerated" >&2
+printf 'mediapipe==1.2.3\nflatbuffers==25.12.19\nnumpy==2.4.6\n' | uv pip compile - --no-deps --generate-hashes \
+  --universal --python-version 3.11 -o requirements/vendor.lock --quiet  # the Dockerfile's pose-asset stage
+echo "requirements/{agent,server,dev,test,vendor}.lock regenerated" >&2

@@ -13,7 +13,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 # pydantic is in the shared core (the pipeline's settings, kinect_agent.processing.config); pydantic_settings is not.
 SERVER_ONLY = ("fastapi", "starlette", "uvicorn", "sqlalchemy", "alembic", "psycopg", "pydantic_settings", "argon2",
-               "jinja2", "viser", "plotly")  # fmt: skip
+               "jinja2", "viser", "plotly", "babel")  # fmt: skip
 AGENT_ONLY = ("numba", "llvmlite", "tqdm")
 NEVER = ("filterpy", "matplotlib")  # a benchmark's baseline, not the product's
 

@@ -13,9 +13,11 @@ change of definition applies to the whole history).
                  0 at ≥ 2 s. Other exercises: value = median over repetitions of amplitude / duration (deg/s, how fast
                  the patient moves through the range); score = 100 · value / the best of the history, ≤ 100, None
                  without history.
-    balance      value = balance.sway_velocity_m_s (body-centre sway while standing still, m/s);
+    balance      value = balance.sway_velocity_m_s (trunk-and-hips sway while standing, m/s);
                  score = 100 · clip((POOR_SWAY − value) / (POOR_SWAY − GOOD_SWAY), 0, 1): 100 at ≤ 1 cm/s (quiet
                  standing of healthy adults), 0 at ≥ 6 cm/s; None when the patient did not stand still ≥ 2 s.
+                 Also "interval": balance.sway_velocity_95 ([low, high] m/s or None) and "missing": the document's
+                 balance_missing (why there is no value, in words, or None).
 """
 
 from __future__ import annotations
@@ -128,8 +130,11 @@ def balance(doc: dict, history: list[dict]) -> dict:
     score = None
     if value is not None:
         score = _clip100(100.0 * (POOR_SWAY - value) / (POOR_SWAY - GOOD_SWAY))
-    basis = f"body-centre sway while standing still, {GOOD_SWAY * 100:g} cm/s scores 100, {POOR_SWAY * 100:g} cm/s 0"
-    return _indicator(score, value, basis, doc, _values(history, _sway))
+    basis = f"trunk-and-hips sway while standing, {GOOD_SWAY * 100:g} cm/s scores 100, {POOR_SWAY * 100:g} cm/s 0"
+    out = _indicator(score, value, basis, doc, _values(history, _sway))
+    out["interval"] = (doc.get("balance") or {}).get("sway_velocity_95")
+    out["missing"] = doc.get("balance_missing") if value is None else None
+    return out
 
 
 def indicators(doc: dict, *, exercise: ExerciseSpec, target_reps: int | None, history: list[dict]) -> dict[str, Any]:

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from backend.analysis import activity, quality
-from backend.analysis.balance import sway
+from backend.analysis.balance import missing_reason, sway
 from backend.analysis.errors import AnalysisError, UnknownExercise, UnreadableRecording
 from backend.analysis.intervals import count_interval, rom_intervals
 from backend.analysis.most_moving import most_moving_joints
@@ -100,6 +100,7 @@ def analyze_recording(
     rep_list = [r.to_dict() for r in reps.repetitions]
     sd = _angle_sd(angle_sd, recording.n_frames) if source == "filtered" else None
     moving_s, rest_s = activity.moving_time(t, smoothed)
+    balance = sway(t, smoothed, clinical)
     return {
         "exercise": exercise.slug,
         "duration_s": round(recording.duration, 3),
@@ -121,7 +122,8 @@ def analyze_recording(
         "rest_time_s": rest_s,
         "tempo_s_per_rep": activity.tempo(reps.repetitions),
         "fatigue": activity.fatigue(reps.repetitions),
-        "balance": sway(t, smoothed, clinical),
+        "balance": balance,
+        "balance_missing": None if balance is not None else missing_reason(t, smoothed, clinical),
         "sit_to_stand": sit_to_stand(t, positions) if exercise.slug == "sit_to_stand" else None,
         "quality": quality.assess(recording, None if source == "raw" else positions, names),
     }

@@ -22,6 +22,7 @@ from backend.schemas import IdQuery
 router = APIRouter(prefix="/api/v1", tags=["events"])
 KEEPALIVE_S = 15.0  # a comment line this often keeps proxies from closing an idle stream
 RETRY_MS = 3000  # how long the browser waits before reconnecting
+PING_S = 2.0  # live streams: an event this often, so a page notices a silently lost connection within seconds
 
 
 def visible_patients(caller: Caller, db_session: Session, patient_id: int | None) -> frozenset[int] | None:
@@ -62,7 +63,7 @@ async def stream_events(
     patients, user, login = await run_in_threadpool(_authorize, request, db_session, patient_id)
     subscriber = HUB.subscribe(patients, frozenset(KINDS if live else DATA_KINDS), user_id=user, login_id=login)
     return StreamingResponse(
-        _stream(request, subscriber, request.app.state.settings.EVENTS_STREAM_MAX_S),
+        _stream(request, subscriber, request.app.state.settings.EVENTS_STREAM_MAX_S, PING_S if live else None),
         media_type="text/event-stream",
         headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"},
     )
@@ -83,18 +84,22 @@ def _authorize(
     return patients, user, login
 
 
-async def _stream(request: Request, subscriber: Subscriber, max_s: float) -> AsyncIterator[str]:
+async def _stream(
+    request: Request, subscriber: Subscriber, max_s: float, ping_s: float | None = None
+) -> AsyncIterator[str]:
     """Yields the stream's text: the retry delay, then events and keep-alive comments until the client leaves or
-    max_s seconds pass (the browser then reconnects, and its login is checked again)."""
+    max_s seconds pass (the browser then reconnects, and its login is checked again). With ping_s, the keep-alive
+    is an event "ping" every ping_s seconds (scripts see events, not comments: the page's connection watchdog)."""
     deadline = time.monotonic() + max_s
+    idle_s, keepalive = (ping_s, "event: ping\ndata: {}\n\n") if ping_s else (KEEPALIVE_S, ": keep-alive\n\n")
     try:
         yield f"retry: {RETRY_MS}\n: connected\n\n"
         while time.monotonic() < deadline and not await request.is_disconnected():
             try:
                 left = deadline - time.monotonic()
-                ev = await asyncio.wait_for(subscriber.queue.get(), timeout=max(0.0, min(KEEPALIVE_S, left)))
+                ev = await asyncio.wait_for(subscriber.queue.get(), timeout=max(0.0, min(idle_s, left)))
             except TimeoutError:
-                yield ": keep-alive\n\n"
+                yield keepalive
                 continue
             if ev.kind == ACCESS_ENDED:  # the login ended: so does its stream (a reconnection is refused)
                 break

@@ -18,6 +18,7 @@ from backend.devices.models import Device
 from backend.events.hub import Event, publish
 from backend.exceptions import AgentOffline, PlanNotFound
 from backend.exercises.models import Exercise
+from backend.i18n import N_
 from backend.live.schemas import AgentStatusOut, LiveSetOut
 from backend.plans.models import Plan, PlanItem
 
@@ -94,7 +95,7 @@ def agent_status(*, db_session: Session, patient_id: int) -> AgentStatusOut:
 def _require_online(db_session: Session, patient_id: int) -> Device:
     device = online_device(db_session=db_session, patient_id=patient_id)
     if device is None:
-        raise AgentOffline("your home computer is not connected: check that it is switched on and online")
+        raise AgentOffline(N_("your home computer is not connected: check that it is switched on and online"))
     return device
 
 

@@ -15,7 +15,7 @@ from backend.exceptions import (
     error_responses,
 )
 from backend.patients import service
-from backend.patients.schemas import PatientOut
+from backend.patients.schemas import PatientOut, PatientUpdate
 from backend.schemas import IdPath, Page, PageParams, page_params
 from backend.users.models import User
 from backend.users.schemas import UserOut
@@ -33,6 +33,7 @@ def _out(db_session, patient: User, therapist_ids: list[int] | None = None) -> P
         is_active=patient.is_active,
         created_at=patient.created_at,
         therapist_ids=therapist_ids,
+        locale=patient.locale,
     )
 
 
@@ -56,6 +57,22 @@ def get_patient(patient_id: IdPath, caller: CurrentCaller, db_session: DbSession
         db_session=db_session,
         caller=caller,
         action="patient.read",
+        object_type="patient",
+        object_id=patient_id,
+        patient_id=patient_id,
+    )
+    return _out(db_session, patient)
+
+
+@router.patch("/{patient_id}", response_model=PatientOut, responses=error_responses(*AUTH_ERRORS, PatientNotFound))
+def update_patient(patient_id: IdPath, body: PatientUpdate, caller: CurrentCaller, db_session: DbSession) -> PatientOut:
+    """Changes a patient's settings (the language of their pages): the patient, their therapists, admins."""
+    patient = require_patient_access(patient_id, caller=caller, db_session=db_session, write=True)
+    service.set_locale(db_session=db_session, patient=patient, locale=body.locale)
+    record(
+        db_session=db_session,
+        caller=caller,
+        action="patient.update",
         object_type="patient",
         object_id=patient_id,
         patient_id=patient_id,

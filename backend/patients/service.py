@@ -75,3 +75,9 @@ def unassign(*, db_session: Session, patient: User, therapist: User) -> None:
         db_session.delete(row)
         db_session.flush()
         publish(db_session, Event(ACCESS_ENDED, 0, {"user_id": therapist.id}))
+
+
+def set_locale(*, db_session: Session, patient: User, locale: str | None) -> None:
+    """Sets the language of a patient's pages (None: the browser's)."""
+    patient.locale = locale
+    db_session.flush()

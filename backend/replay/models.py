@@ -11,14 +11,16 @@ from backend.database import Base, utcnow
 
 
 class SessionReplay(Base):
-    """The viser scene recording (`.viser` bytes, deferred) of one session, made by replay scene version `version`."""
+    """The viser scene recording (`.viser` bytes, in the object store) of one session, by scene version `version`."""
 
     __tablename__ = "session_replay"
 
     id: Mapped[int] = mapped_column(primary_key=True)
     session_id: Mapped[int] = mapped_column(ForeignKey("exercise_session.id", ondelete="CASCADE"), unique=True)
     version: Mapped[str] = mapped_column(String(32))
-    data: Mapped[bytes] = deferred(mapped_column(LargeBinary, nullable=False))
+    data: Mapped[bytes | None] = deferred(mapped_column(LargeBinary))  # only before the move to the object store
+    data_key: Mapped[str | None] = mapped_column(String(100))  # the recording in the object store (backend/storage)
+    data_hash: Mapped[str | None] = mapped_column(String(64))  # its sha256
     size: Mapped[int] = mapped_column()
     n_frames: Mapped[int] = mapped_column()
     duration_s: Mapped[float] = mapped_column()

@@ -210,6 +210,8 @@ def detail_body(
         "moving_time_s": doc.get("moving_time_s"),
         "rest_time_s": doc.get("rest_time_s"),
         "tempo_s_per_rep": doc.get("tempo_s_per_rep"),
+        "balance": _balance(doc),
+        "balance_missing": None if _balance(doc) is not None else _balance_missing(doc),
         "angles": list(spec.defining_angles) if spec is not None else [],
         "curves": evidence["curves"],
         "repetitions": _rep_rows(reps, evidence["peak_speeds"]),
@@ -227,6 +229,22 @@ def detail_body(
         "uncertainty": (uncertainty := _uncertainty(doc)),
         "uncertainty_note": UNCERTAINTY_NOTE if uncertainty is not None else NO_UNCERTAINTY_NOTE,
     }
+
+
+def _balance(doc: dict) -> dict | None:
+    """Returns the document's balance (keys: BalanceOut) when it holds a measured sway, else None."""
+    b = doc.get("balance")
+    if not isinstance(b, dict) or b.get("sway_velocity_m_s") is None:
+        return None
+    return {k: b.get(k) for k in ("sway_velocity_m_s", "sway_velocity_95", "sway_area_m2", "standing_s")}
+
+
+def _balance_missing(doc: dict) -> str:
+    """Returns why a document has no balance, in words."""
+    reason = doc.get("balance_missing")
+    if isinstance(reason, str) and reason:
+        return reason
+    return "this session was analysed before balance was measured in standing phases; a re-analysis measures it"
 
 
 def _uncertainty(doc: dict) -> dict | None:

@@ -7,6 +7,10 @@ import math
 from backend.exercises.library import ExerciseSpec
 from kinect_agent.formats.session_file import SessionPayload
 
+# the version of the analysis a document was made by (doc["analysis_version"]); raise it when a metric's
+# definition changes, so `coach-server reanalyze` knows which stored documents are older
+ANALYSIS_VERSION = "2026.11.27-balance"
+
 
 def metrics_document(
     payload: SessionPayload, spec: ExerciseSpec, *, target_reps: int | None, history: list[dict]
@@ -22,6 +26,7 @@ def metrics_document(
     doc = analyze_recording(payload.raw, spec, filtered=payload.filtered, angle_sd=payload.angle_sd)
     doc = json_ready(doc)
     doc["indicators"] = json_ready(indicators(doc, exercise=spec, target_reps=target_reps, history=history))
+    doc["analysis_version"] = ANALYSIS_VERSION
     return doc
 
 

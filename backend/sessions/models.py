@@ -31,7 +31,10 @@ class ExerciseSession(Base):
     n_frames: Mapped[int] = mapped_column()
     file_name: Mapped[str | None] = mapped_column(String(255))
     file_format: Mapped[str | None] = mapped_column(String(32))
-    file_bytes: Mapped[bytes] = deferred(mapped_column(LargeBinary))
+    # the file is in the object store under file_key (backend/storage), its sha256 = content_hash; file_bytes only
+    # holds files of databases not yet moved out (migration 0011, `coach-server storage move-out`)
+    file_bytes: Mapped[bytes | None] = deferred(mapped_column(LargeBinary))
+    file_key: Mapped[str | None] = mapped_column(String(100))
     file_size: Mapped[int] = mapped_column(default=0)
     content_hash: Mapped[str] = mapped_column(String(64), index=True)
     processing_version: Mapped[str] = mapped_column(String(64), default="")

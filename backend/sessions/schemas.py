@@ -211,6 +211,15 @@ class DashboardRowOut(SummaryOut):
     email: str = Field(examples=["pat@example.org"])
 
 
+class BalanceOut(BaseModel):
+    """Sway of the trunk-and-hips centre of mass while standing (backend.analysis.balance)."""
+
+    sway_velocity_m_s: float = Field(description="path of the centre of mass on the floor per second standing, m/s")
+    sway_velocity_95: list[float] | None = Field(description="95 % interval [low, high] of the velocity, m/s")
+    sway_area_m2: float | None = Field(description="95 % confidence ellipse of the floor positions, m²")
+    standing_s: float | None = Field(description="standing time measured, s")
+
+
 class CurveOut(BaseModel):
     """One joint-angle curve of a session, thinned by min/max decimation (backend.analysis.session_detail)."""
 
@@ -360,6 +369,8 @@ class SessionDetailOut(BaseModel):
                     "moving_time_s": 40.2,
                     "rest_time_s": 11.4,
                     "tempo_s_per_rep": 4.8,
+                    "balance": None,
+                    "balance_missing": "the patient was seated or crouching: balance is measured while standing",
                     "angles": ["knee_flexion_R"],
                     "curves": [
                         {
@@ -457,6 +468,8 @@ class SessionDetailOut(BaseModel):
     moving_time_s: float | None
     rest_time_s: float | None
     tempo_s_per_rep: float | None
+    balance: BalanceOut | None = Field(description="trunk-and-hips sway while standing; null: not measured")
+    balance_missing: str | None = Field(description="why balance is not measured, in words; null when it is")
     angles: list[str] = Field(description="the exercise's defining angles the curves show")
     curves: list[CurveOut]
     repetitions: list[RepetitionDetailOut]

@@ -12,13 +12,14 @@ from sqlalchemy.orm import Session
 from backend import __version__
 from backend.analysis.errors import AnalysisError
 from backend.database import utcnow
-from backend.exceptions import ExerciseNotFound, SessionConflict, SessionNotFound
+from backend.exceptions import ExerciseNotFound, SessionConflict, SessionFileRemoved, SessionNotFound
 from backend.exercises.models import Exercise
 from backend.patients.models import TherapistPatient
 from backend.patients.service import visible_patients_query
 from backend.sessions.ingest import Upload
 from backend.sessions.metrics import json_ready, metrics_document, scalar_columns
 from backend.sessions.models import ExerciseSession, SessionMetric
+from backend.storage import get_store
 from backend.suggestions.context import plan_targets, session_history
 from backend.suggestions.models import Suggestion
 from backend.suggestions.service import suggest_for_session, visible_to_patient
@@ -87,6 +88,7 @@ def store_upload(
             return _same_or_conflict(stored, upload), False
         doc, error = _analyse(db_session=db_session, upload=upload, patient_id=patient_id, exercise=exercise)
     raw = upload.payload.raw
+    stored_file = get_store().put("session", upload.data)  # before the row: a row never points to nothing
     row = ExerciseSession(
         client_session_id=upload.client_session_id,
         patient_id=patient_id,
@@ -96,7 +98,7 @@ def store_upload(
         duration_s=raw.duration,
         n_frames=raw.n_frames,
         file_format=FILE_FORMAT,
-        file_bytes=upload.data,
+        file_key=stored_file.key,
         file_size=len(upload.data),
         content_hash=upload.content_hash,
         processing_version=__version__,
@@ -218,11 +220,22 @@ def session_patient(*, db_session: Session, session_id: int) -> int:
 
 
 def session_file(*, db_session: Session, session_id: int) -> bytes:
-    """Returns the stored .khs bytes of a session or raises SessionNotFound."""
-    data = db_session.scalar(select(ExerciseSession.file_bytes).where(ExerciseSession.id == session_id))
-    if data is None:
+    """Returns the stored .khs bytes of a session, read from the object store and checked against its sha256;
+    raises SessionNotFound, SessionFileRemoved (retention), StoredObjectMissing or StoredObjectCorrupt."""
+    row = db_session.execute(
+        select(ExerciseSession.file_key, ExerciseSession.content_hash, ExerciseSession.file_bytes).where(
+            ExerciseSession.id == session_id
+        )
+    ).first()
+    if row is None:
         raise missing(session_id)
-    return data
+    if row.file_key:
+        return get_store().get(row.file_key, row.content_hash)
+    if row.file_bytes is None:
+        raise SessionFileRemoved(
+            f"the file of session {session_id} was removed by the clinic's retention period; its metrics are kept"
+        )
+    return row.file_bytes
 
 
 def session_suggestions(*, db_session: Session, session_id: int, patient_view: bool) -> list[Suggestion]:

@@ -235,4 +235,7 @@ def balance_missing(latest_indicators: dict | None, exercise_slug: str | None) -
     if (latest_indicators.get("balance") or {}).get("score") is not None:
         return None
     during = f" ({_name(exercise_slug)})" if exercise_slug else ""
+    reason = (latest_indicators.get("balance") or {}).get("missing")
+    if isinstance(reason, str) and reason:
+        return f"Not measured{during}: {reason}"
     return f"Not measured: no still standing of {MIN_STANDING_S:g} s or more in the last session{during}"

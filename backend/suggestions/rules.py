@@ -3,7 +3,8 @@
 Pure functions, no database. A draft names the rule (its kind), the metric, the comparison, the threshold and the
 measured value, so a therapist can check "value <comparison> threshold" against the session's metrics; its text is
 written for the patient (short sentences, no jargon, the numbers that matter) and names the exercise and the day of
-the session ("On Saturday you did 6 of the 10 sit-to-stands in your plan. ...").
+the session ("On Saturday you did 6 of the 10 sit-to-stands in your plan. ..."), in the patient's language (a
+backend.i18n.Translator; English by default).
 """
 
 from __future__ import annotations
@@ -14,6 +15,13 @@ import statistics
 from dataclasses import dataclass
 
 from backend.exercises.library import EXERCISES
+from backend.i18n import N_, Translator, translator
+
+ENGLISH = translator("en")
+# the day of a session in the advice ("on 14 November"), per locale; with " y" appended in another year
+DATE_PATTERNS = {"en": "d MMMM", "de": "d. MMMM", "es": "d 'de' MMMM", "fr": "d MMMM"}
+YEAR_PATTERNS = {"en": " y", "de": " y", "es": " 'de' y", "fr": " y"}
+WEEKDAY_DATE_PATTERNS = {"en": "EEEE d MMMM", "de": "EEEE, d. MMMM", "es": "EEEE d 'de' MMMM", "fr": "EEEE d MMMM"}
 
 # --- rule names (the kind of a suggestion) ---------------------------------------------------------------------
 FEWER_REPS = "fewer_reps"
@@ -56,10 +64,13 @@ class SuggestionDraft:
 # --- words ------------------------------------------------------------------------------------------------------
 
 
-def exercise_plural(slug: object) -> str:
+def exercise_plural(slug: object, t: Translator = ENGLISH) -> str:
     """Returns how the patient counts repetitions of an exercise: 'sit-to-stands', 'mini squats'; 'repetitions'
-    for an unknown exercise."""
+    for an unknown exercise. In the other languages: the exercise's translated name, which their sentences use as
+    a label."""
     spec = EXERCISES.get(slug) if isinstance(slug, str) else None
+    if t.locale != ENGLISH.locale:
+        return t.gettext(spec.name) if spec is not None else t.gettext("repetitions")
     if spec is None:
         return "repetitions"
     name = spec.name.lower()
@@ -68,13 +79,14 @@ def exercise_plural(slug: object) -> str:
     return name if name.endswith("s") else name + "s"
 
 
-def session_day(started_at: dt.datetime, today: dt.date) -> str:
+def session_day(started_at: dt.datetime, today: dt.date, t: Translator = ENGLISH) -> str:
     """Returns the day of a session as the advice names it: 'on Saturday' within the last week (UTC days), else
-    'on 14 November' (with the year when it is not this year's)."""
+    'on 14 November' (with the year when it is not this year's); in t's language."""
     day = started_at.astimezone(dt.UTC).date()
     if 0 <= (today - day).days < WEEKDAY_NAME_DAYS:
-        return f"on {day:%A}"
-    return f"on {day.day} {day:%B}" + ("" if day.year == today.year else f" {day.year}")
+        return t.gettext(N_("on %(weekday)s"), weekday=t.format_date(day, "EEEE"))
+    pattern = DATE_PATTERNS[t.locale] + ("" if day.year == today.year else YEAR_PATTERNS[t.locale])
+    return t.gettext(N_("on %(date)s"), date=t.format_date(day, pattern))
 
 
 def _sentence(text: str) -> str:
@@ -140,22 +152,24 @@ def _checked_history(history: object) -> list[tuple[dt.datetime, dict]]:
 # --- the rules -------------------------------------------------------------------------------------------------
 
 
-def fewer_reps(doc: dict, prescribed_reps: int | None, day: str) -> SuggestionDraft | None:
+def fewer_reps(doc: dict, prescribed_reps: int | None, day: str, t: Translator = ENGLISH) -> SuggestionDraft | None:
     """Fires when the session counted fewer repetitions than the plan prescribes; day: 'on Saturday'."""
     reps = _number(doc, "repetitions")
     if prescribed_reps is None or reps is None or reps >= prescribed_reps:
         return None
-    what = exercise_plural(doc.get("exercise"))
+    what = exercise_plural(doc.get("exercise"), t)
     if reps == 0:
-        text = (
-            f"{_sentence(day)} the camera did not count any {what}. Your plan asks for {prescribed_reps}. "
-            "Please try again, and move the way your therapist showed you."
-        )
+        text = t.gettext(
+            N_("%(day)s the camera did not count any %(what)s. Your plan asks for %(goal)s. Please try again, and "
+               "move the way your therapist showed you."),
+            day=_sentence(day), what=what, goal=prescribed_reps,
+        )  # fmt: skip
     else:
-        text = (
-            f"{_sentence(day)} you did {reps:.0f} of the {prescribed_reps} {what} in your plan. "
-            f"Next time, try to do all {prescribed_reps}. Rest for a moment between them if you need to."
-        )
+        text = t.gettext(
+            N_("%(day)s you did %(done)s of the %(goal)s %(what)s in your plan. Next time, try to do all %(goal)s. "
+               "Rest for a moment between them if you need to."),
+            day=_sentence(day), done=t.format_number(reps), goal=prescribed_reps, what=what,
+        )  # fmt: skip
     return SuggestionDraft(FEWER_REPS, "repetitions", "<", float(prescribed_reps), reps, text)
 
 
@@ -177,7 +191,9 @@ def _rom_baseline(history: list[tuple[dt.datetime, dict]], now: dt.datetime, exe
     return values
 
 
-def rom_drop(doc: dict, history: list[tuple[dt.datetime, dict]], now: dt.datetime, day: str) -> SuggestionDraft | None:
+def rom_drop(
+    doc: dict, history: list[tuple[dt.datetime, dict]], now: dt.datetime, day: str, t: Translator = ENGLISH
+) -> SuggestionDraft | None:
     """Fires when rom_deg < ROM_DROP_FRACTION x the median rom_deg of the last 2-4 weeks; day: 'on Saturday'."""
     rom = _number(doc, "rom_deg")
     baseline = _rom_baseline(history, now, doc.get("exercise"))
@@ -187,61 +203,71 @@ def rom_drop(doc: dict, history: list[tuple[dt.datetime, dict]], now: dt.datetim
     threshold = ROM_DROP_FRACTION * median
     if rom >= threshold:
         return None
-    text = (
-        f"{_sentence(day)} your {exercise_plural(doc.get('exercise'))} were smaller movements than in the last "
-        f"weeks: {rom:.0f} degrees, while it was about {median:.0f} degrees before. Move slowly and go as far as "
-        "feels comfortable. If it hurts, stop and tell your therapist."
-    )
+    text = t.gettext(
+        N_("%(day)s your %(what)s were smaller movements than in the last weeks: %(rom)s degrees, while it was "
+           "about %(before)s degrees before. Move slowly and go as far as feels comfortable. If it hurts, stop and "
+           "tell your therapist."),
+        day=_sentence(day), what=exercise_plural(doc.get("exercise"), t), rom=t.format_number(rom),
+        before=t.format_number(median),
+    )  # fmt: skip
     return SuggestionDraft(ROM_DROP, "rom_deg", "<", threshold, rom, text)
 
 
-def too_fast(doc: dict, day: str) -> SuggestionDraft | None:
+def too_fast(doc: dict, day: str, t: Translator = ENGLISH) -> SuggestionDraft | None:
     """Fires when a repetition took less than MIN_TEMPO_S_PER_REP seconds on average; day: 'on Saturday'."""
     tempo = _number(doc, "tempo_s_per_rep")
     if tempo is None or tempo <= 0 or tempo >= MIN_TEMPO_S_PER_REP:
         return None
-    text = (
-        f"{_sentence(day)} you did your {exercise_plural(doc.get('exercise'))} quickly: about {tempo:.1f} seconds "
-        f"for each one. Please slow down and take at least {ADVISED_TEMPO_S_PER_REP} seconds for each one. "
-        "Slow, steady movements help you more."
-    )
+    text = t.gettext(
+        N_("%(day)s you did your %(what)s quickly: about %(tempo)s seconds for each one. Please slow down and take "
+           "at least %(advised)s seconds for each one. Slow, steady movements help you more."),
+        day=_sentence(day), what=exercise_plural(doc.get("exercise"), t), tempo=t.format_number(tempo, 1),
+        advised=ADVISED_TEMPO_S_PER_REP,
+    )  # fmt: skip
     return SuggestionDraft(TOO_FAST, "tempo_s_per_rep", "<", MIN_TEMPO_S_PER_REP, tempo, text)
 
 
-def poor_data_quality(doc: dict, day: str) -> SuggestionDraft | None:
+def poor_data_quality(doc: dict, day: str, t: Translator = ENGLISH) -> SuggestionDraft | None:
     """Fires when the analysis found the data unreliable (quality.ok false); says what to change at the camera."""
     quality = _quality(doc)
     if quality.get("ok") is not False:
         return None
-    what = exercise_plural(doc.get("exercise"))
+    what = exercise_plural(doc.get("exercise"), t)
     tracked = _number(quality, "tracked_fraction", "doc['quality']")
     outliers = _number(quality, "outlier_fraction", "doc['quality']")
     if tracked is not None and tracked < QUALITY_MIN_TRACKED_FRACTION:
-        text = (
-            f"{_sentence(day)} the camera could not see all of you during your {what} (it saw you {tracked:.0%} "
-            "of the time). Please step into view: stand so that you see your whole body, from head to feet, "
-            "on the screen."
-        )
+        text = t.gettext(
+            N_("%(day)s the camera could not see all of you during your %(what)s (it saw you %(percent)s of the "
+               "time). Please step into view: stand so that you see your whole body, from head to feet, on the "
+               "screen."),
+            day=_sentence(day), what=what, percent=t.format_percent(tracked),
+        )  # fmt: skip
         return SuggestionDraft(
             POOR_DATA_QUALITY, "quality.tracked_fraction", "<", QUALITY_MIN_TRACKED_FRACTION, tracked, text
         )
     if outliers is not None and outliers > QUALITY_MAX_OUTLIER_FRACTION:
-        text = (
-            f"{_sentence(day)} the camera had trouble following your {what}. Please make sure the room is well lit, "
-            "nothing stands between you and the camera, and the camera points straight at you."
-        )
+        text = t.gettext(
+            N_("%(day)s the camera had trouble following your %(what)s. Please make sure the room is well lit, "
+               "nothing stands between you and the camera, and the camera points straight at you."),
+            day=_sentence(day), what=what,
+        )  # fmt: skip
         return SuggestionDraft(
             POOR_DATA_QUALITY, "quality.outlier_fraction", ">", QUALITY_MAX_OUTLIER_FRACTION, outliers, text
         )
-    text = (
-        f"{_sentence(day)} the camera could not measure your {what} well. Please move the camera so that it faces you "
-        "and sees your whole body, then try again."
-    )
+    text = t.gettext(
+        N_("%(day)s the camera could not measure your %(what)s well. Please move the camera so that it faces you "
+           "and sees your whole body, then try again."),
+        day=_sentence(day), what=what,
+    )  # fmt: skip
     return SuggestionDraft(POOR_DATA_QUALITY, "quality.ok", "==", 0.0, 0.0, text)
 
 
 def missed_days(
-    history: list[tuple[dt.datetime, dict]], expected_per_week: int | None, now: dt.datetime, exercise: object = None
+    history: list[tuple[dt.datetime, dict]],
+    expected_per_week: int | None,
+    now: dt.datetime,
+    exercise: object = None,
+    t: Translator = ENGLISH,
 ) -> SuggestionDraft | None:
     """Fires when fewer of the last 7 days (today included, UTC) had a session than the plan expects per week.
 
@@ -258,13 +284,15 @@ def missed_days(
     expected = min(expected_per_week, ACTIVE_DAYS_WINDOW)
     if active >= expected:
         return None
-    day_word = "day" if active == 1 else "days"
-    what = exercise_plural(exercise)
-    what = "this exercise" if what == "repetitions" else what
-    text = (
-        f"In the 7 days up to {now:%A} {now.day} {now:%B} you did {what} on {active} {day_word}. Your plan asks "
-        f"for {expected} days a week. Try to choose a fixed time of day for your exercises."
-    )
+    known = isinstance(exercise, str) and exercise in EXERCISES
+    what = exercise_plural(exercise, t) if known else t.gettext(N_("this exercise"))
+    text = t.ngettext(
+        "In the 7 days up to %(date)s you did %(what)s on %(num)d day. Your plan asks for %(expected)s days a "
+        "week. Try to choose a fixed time of day for your exercises.",
+        "In the 7 days up to %(date)s you did %(what)s on %(num)d days. Your plan asks for %(expected)s days a "
+        "week. Try to choose a fixed time of day for your exercises.",
+        active, date=t.format_date(now, WEEKDAY_DATE_PATTERNS[t.locale]), what=what, expected=expected,
+    )  # fmt: skip
     return SuggestionDraft(MISSED_DAYS, "active_days_last_7d", "<", float(expected), float(active), text)
 
 
@@ -276,6 +304,7 @@ def evaluate(
     expected_per_week: int | None,
     now: dt.datetime,
     today: dt.date | None = None,
+    t: Translator = ENGLISH,
 ) -> list[SuggestionDraft]:
     """Returns the drafts of every rule that fires for one analysed session.
 
@@ -283,7 +312,7 @@ def evaluate(
     the plan, None = no plan. history: (started_at, document) of earlier sessions of the same patient and exercise.
     expected_per_week: sessions per week of the plan. now: when the session happened (timezone-aware). today: the
     day the advice is written (UTC), which decides whether the text names the session's weekday or its date;
-    defaults to the day of now.
+    defaults to the day of now. t: the patient's language of the texts (English by default).
     When quality.ok is false only the data-quality and missed-days rules run: the measurements are not trusted.
     Raises ValueError naming the argument or document key that is malformed.
     """
@@ -295,10 +324,10 @@ def evaluate(
     past = _checked_history(history)
     if today is not None and (not isinstance(today, dt.date) or isinstance(today, dt.datetime)):
         raise ValueError(f"today must be a date or None, got {today!r}")
-    day = session_day(now, now.date() if today is None else today)
+    day = session_day(now, now.date() if today is None else today, t)
     if _quality_ok(doc):
-        drafts = [fewer_reps(doc, prescribed_reps, day), rom_drop(doc, past, now, day), too_fast(doc, day)]
+        drafts = [fewer_reps(doc, prescribed_reps, day, t), rom_drop(doc, past, now, day, t), too_fast(doc, day, t)]
     else:
-        drafts = [poor_data_quality(doc, day)]
-    drafts.append(missed_days(past, expected_per_week, now, doc.get("exercise")))
+        drafts = [poor_data_quality(doc, day, t)]
+    drafts.append(missed_days(past, expected_per_week, now, doc.get("exercise"), t))
     return [d for d in drafts if d is not None]

@@ -10,10 +10,12 @@ from sqlalchemy.orm import Session
 
 from backend.database import utcnow
 from backend.exceptions import SuggestionNotFound, SuggestionNotPending
+from backend.i18n import translator
 from backend.sessions.models import ExerciseSession
 from backend.suggestions.context import plan_targets, session_history
 from backend.suggestions.models import Suggestion
 from backend.suggestions.rules import ACTIVE_DAYS_WINDOW, MISSED_DAYS, RULES, SuggestionDraft, evaluate
+from backend.users.models import User
 
 THERAPIST_RULE = "therapist"  # the rule field of suggestions written by a person
 
@@ -181,6 +183,11 @@ def _recently_suggested(*, db_session: Session, session: ExerciseSession, rule: 
     return found is not None
 
 
+def patient_locale(*, db_session: Session, patient_id: int) -> str | None:
+    """Returns the language a patient reads their advice in (None: not chosen, English)."""
+    return db_session.scalar(select(User.locale).where(User.id == patient_id))
+
+
 def suggest_for_session(*, db_session: Session, session: ExerciseSession, doc: dict) -> list[Suggestion]:
     """Runs the rules on a stored session's metrics document and stores what fires as pending suggestions.
 
@@ -202,6 +209,7 @@ def suggest_for_session(*, db_session: Session, session: ExerciseSession, doc: d
         expected_per_week=per_week,
         now=session.started_at,
         today=utcnow().date(),
+        t=translator(patient_locale(db_session=db_session, patient_id=session.patient_id)),
     )
     if any(d.rule == MISSED_DAYS for d in drafts) and _recently_suggested(
         db_session=db_session, session=session, rule=MISSED_DAYS, days=ACTIVE_DAYS_WINDOW

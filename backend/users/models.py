@@ -26,6 +26,8 @@ class User(Base):
     is_active: Mapped[bool] = mapped_column(Boolean, default=True)
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
     deactivated_at: Mapped[dt.datetime | None] = mapped_column()
+    # the language of the patient's pages ("en", "de", "es", "fr": backend.i18n.LOCALES); None: the browser's
+    locale: Mapped[str | None] = mapped_column(String(16))
 
 
 class ApiToken(Base):

@@ -11,9 +11,29 @@ const Coach = (() => {
     constructor(status, error, detail) { super(detail || error); this.status = status; this.error = error; this.detail = detail; }
   }
 
+  const DRAFTS = "coach_drafts:";  // + the page's path: {textarea id: text} kept over a sign-in that expired
+  /** Goes to the login page (back here after signing in); text typed into the page's text boxes is kept. */
   function toLogin() {
     const next = location.pathname + location.search;
-    location.assign(url("/?next=") + encodeURIComponent(next));
+    const drafts = Object.fromEntries([...document.querySelectorAll("textarea[id]")].filter((t) => t.value.trim())
+      .map((t) => [t.id, t.value]));
+    if (Object.keys(drafts).length) sessionStorage.setItem(DRAFTS + next, JSON.stringify(drafts));
+    location.assign(url("/?expired=1&next=") + encodeURIComponent(next));
+  }
+  /** Puts back what was typed before the sign-in expired (toLogin); says so next to each text box. */
+  function restoreDrafts() {
+    const key = DRAFTS + location.pathname + location.search;
+    const drafts = JSON.parse(sessionStorage.getItem(key) || "{}");
+    sessionStorage.removeItem(key);
+    for (const [id, text] of Object.entries(drafts)) {
+      const box = document.getElementById(id);
+      if (!box || box.value.trim()) continue;
+      box.value = text;
+      const note = el("p", { class: "note draft-kept", role: "status" },
+        I18n.t("Your sign-in had expired. What you typed is kept here: please check it and send it again."));
+      box.after(note);
+      box.addEventListener("input", () => note.remove(), { once: true });
+    }
   }
 
   async function csrfToken() {
@@ -24,7 +44,7 @@ const Coach = (() => {
 
   /** Calls /api/v1 + path; returns the JSON body; throws ApiError with the API's {error, detail}. */
   async function api(path, { method = "GET", body, redirect401 = true, retried = false, withCsrf = true } = {}) {
-    const headers = { Accept: "application/json" };
+    const headers = { Accept: "application/json", "Accept-Language": I18n.locale };  // errors in the page's language
     if (method !== "GET" && withCsrf) headers["X-CSRF-Token"] = await csrfToken();
     if (body !== undefined) headers["Content-Type"] = "application/json";
     let resp;
@@ -32,16 +52,20 @@ const Coach = (() => {
       resp = await fetch(url("/api/v1" + path), { method, headers, credentials: "same-origin",
         body: body === undefined ? undefined : JSON.stringify(body) });
     } catch (e) {
-      throw new ApiError(0, "NetworkError", "The server could not be reached.");
+      throw new ApiError(0, "NetworkError", I18n.t("The server could not be reached."));
     }
-    if (resp.status === 401 && redirect401) { sessionStorage.removeItem("coach_csrf"); toLogin(); throw new ApiError(401, "NotAuthenticated", "Please sign in again."); }
+    if (resp.status === 401 && redirect401) { sessionStorage.removeItem("coach_csrf"); toLogin(); throw new ApiError(401, "NotAuthenticated", I18n.t("Please sign in again.")); }
     if (resp.status === 403 && method !== "GET" && !retried) {
       const err = await resp.clone().json().catch(() => ({}));
       if (err.error === "CsrfFailed") { csrf = null; sessionStorage.removeItem("coach_csrf"); return api(path, { method, body, redirect401, retried: true }); }
     }
     if (resp.status === 204) return null;
     const data = await resp.json().catch(() => null);
-    if (!resp.ok) throw new ApiError(resp.status, (data && data.error) || "HTTPError", (data && data.detail) || resp.statusText);
+    if (!resp.ok) {
+      // a detail the server could not say in the page's language is left out of the page (kindMessage says enough)
+      const said = I18n.locale === "en" || resp.headers.get("Content-Language") === I18n.locale;
+      throw new ApiError(resp.status, (data && data.error) || "HTTPError", said ? (data && data.detail) || resp.statusText : "");
+    }
     return data;
   }
 
@@ -49,15 +73,15 @@ const Coach = (() => {
   function kindMessage(err) {
     const s = err && err.status;
     let head;
-    if (s === 0) head = "We cannot reach the server right now. Please check the internet connection and try again.";
-    else if (s === 401) head = "Please sign in again.";
-    else if (s === 403) head = "Sorry, your account may not see or change this.";
-    else if (s === 404) head = "Sorry, we could not find this.";
-    else if (s === 409) head = "This was changed in the meantime. Please reload the page.";
-    else if (s === 422) head = "Some of the information is not right. Please check it and try again.";
-    else if (s === 429) head = "Too many tries. Please wait a few minutes and try again.";
-    else if (s >= 500) head = "Something went wrong on our side. Please try again in a moment.";
-    else head = "Something went wrong.";
+    if (s === 0) head = I18n.t("We cannot reach the server right now. Please check the internet connection and try again.");
+    else if (s === 401) head = I18n.t("Your sign-in expired. Please sign in again.");
+    else if (s === 403) head = I18n.t("Sorry, your account may not see or change this.");
+    else if (s === 404) head = I18n.t("Sorry, we could not find this.");
+    else if (s === 409) head = I18n.t("This was changed in the meantime. Please reload the page.");
+    else if (s === 422) head = I18n.t("Some of the information is not right. Please check it and try again.");
+    else if (s === 429) head = I18n.t("Too many tries. Please wait a few minutes and try again.");
+    else if (s >= 500) head = I18n.t("Something went wrong on our side. Please try again in a moment.");
+    else head = I18n.t("Something went wrong.");
     const detail = err && err.detail && s !== 0 ? ` (${err.detail})` : "";
     return head + detail;
   }
@@ -90,17 +114,18 @@ const Coach = (() => {
     return d;
   }
   function fmtDate(iso, opts) {
-    return new Date(iso).toLocaleDateString("en-GB", opts || { weekday: "short", day: "numeric", month: "short", year: "numeric" });
+    return I18n.date(iso, opts || { weekday: "short", day: "numeric", month: "short", year: "numeric" });
   }
   function fmtDateTime(iso) {
-    return new Date(iso).toLocaleString("en-GB", { day: "numeric", month: "short", year: "numeric", hour: "2-digit", minute: "2-digit" });
+    return I18n.dateTime(iso, { day: "numeric", month: "short", year: "numeric", hour: "2-digit", minute: "2-digit" });
   }
+  function fmtTime(iso) { return new Date(iso).toLocaleTimeString(I18n.tag, { hour: "2-digit", minute: "2-digit" }); }
   function daysAgo(iso) { return Math.round((startOfDay(new Date()) - startOfDay(new Date(iso))) / DAY); }
   function plainDay(iso) {
     const n = daysAgo(iso);
-    if (n === 0) return "today";
-    if (n === 1) return "yesterday";
-    return "on " + fmtDate(iso, { weekday: "long", day: "numeric", month: "long" });
+    if (n === 0) return I18n.t("today");
+    if (n === 1) return I18n.t("yesterday");
+    return I18n.t("on {day}", { day: fmtDate(iso, { weekday: "long", day: "numeric", month: "long" }) });
   }
   function median(xs) {
     const s = xs.filter((x) => x !== null && x !== undefined && isFinite(x)).sort((a, b) => a - b);
@@ -136,17 +161,26 @@ const Coach = (() => {
     const query = new URLSearchParams();
     if (patientId) query.set("patient_id", patientId);
     if (live) query.set("live", "true");
-    const source = new EventSource(url("/api/v1/events" + (query.toString() ? "?" + query : "")));
-    let timer = null, opened = false;
+    let source = null, timer = null, opened = false, again = null;
     const soon = () => { clearTimeout(timer); timer = setTimeout(reload, 300); };
-    for (const kind of ["session.stored", "suggestion.changed", "plan.changed"]) source.addEventListener(kind, soon);
-    for (const [kind, handler] of Object.entries(live || {})) {
-      if (kind === "open") continue;  // called on every (re)connection, below
-      source.addEventListener(kind, (e) => { try { handler(JSON.parse(e.data).data || {}, e); } catch (err) { console.error(err); } });
+    function connect() {
+      source = new EventSource(url("/api/v1/events" + (query.toString() ? "?" + query : "")));
+      for (const kind of ["session.stored", "suggestion.changed", "plan.changed"]) source.addEventListener(kind, soon);
+      for (const [kind, handler] of Object.entries(live || {})) {
+        if (kind === "open" || kind === "error") continue;  // called on every (re)connection and failure, below
+        source.addEventListener(kind, (e) => { try { handler(JSON.parse(e.data).data || {}, e); } catch (err) { console.error(err); } });
+      }
+      source.addEventListener("open", () => { if (opened) soon(); opened = true; if (live && live.open) live.open(); });
+      source.addEventListener("error", () => {
+        if (live && live.error) live.error(source.readyState === EventSource.CLOSED);
+        // an answer other than a stream (a proxy's 502 while the server restarts, a 401) makes the browser give up:
+        // the page does not
+        if (source.readyState === EventSource.CLOSED && !again) again = setTimeout(() => { again = null; connect(); }, 3000);
+      });
     }
-    source.addEventListener("open", () => { if (opened) soon(); opened = true; if (live && live.open) live.open(); });
-    window.addEventListener("pagehide", () => source.close());
-    return source;
+    connect();
+    window.addEventListener("pagehide", () => { clearTimeout(again); source.close(); });
+    return { close: () => { clearTimeout(again); source.close(); }, reconnect: () => { clearTimeout(again); source.close(); connect(); } };
   }
 
   async function logout() {
@@ -155,10 +189,11 @@ const Coach = (() => {
     location.assign(url("/"));
   }
   document.addEventListener("DOMContentLoaded", () => {
+    restoreDrafts();
     const b = document.getElementById("logout");
     if (b) b.addEventListener("click", logout);
   });
 
-  return { root, url, api, onChange, ApiError, kindMessage, showError, el, fmtDate, fmtDateTime, plainDay, daysAgo, startOfWeekUTC, median,
+  return { root, url, api, onChange, ApiError, kindMessage, showError, el, fmtDate, fmtDateTime, fmtTime, plainDay, daysAgo, startOfWeekUTC, median,
            exercises, exerciseName, runningPlan, toLogin, DAY };
 })();

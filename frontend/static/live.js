@@ -5,14 +5,24 @@ const Live = (() => {
   const { api, el, kindMessage } = Coach;
   const ANSWER_MS = 15000;  // a Start without any answer from the home computer for this long failed
   const ENDED = {
-    target: "You reached your goal.",
-    stop: "You stopped the set.",
-    still: "The set ended because you did not move for a while.",
-    limit: "The set reached its time limit.",
-    source: "The recording ended.",
-    error: "The recording stopped because of an error.",
+    target: I18n.t("You reached your goal."),
+    stop: I18n.t("You stopped the set."),
+    still: I18n.t("The set ended because you did not move for a while."),
+    limit: I18n.t("The set reached its time limit."),
+    source: I18n.t("The recording ended."),
+    error: I18n.t("The recording stopped because of an error."),
   };
+  // the home computer's hints (kinect_agent/analysis/live.py HINT_*), shown in the page's language by I18n.t(hint)
+  const AGENT_HINTS = [
+    I18n.N_("You are out of view: please step in front of the camera."), I18n.N_("Step back a little."),
+    I18n.N_("Come a little closer."), I18n.N_("Move to the middle of the picture."),
+    I18n.N_("The camera cannot see your arms well."), I18n.N_("The camera cannot see your legs well."),
+  ];
+  const SAVE_MS = 45000;  // an ended set whose stored result has not come for this long: said so, with Close
+  const FRAMES_MS = 3000;  // a recording set without a progress message for this long: the camera sends no pictures
+  const RECENT_UPLOAD_MS = 2 * 86400000;  // a computer that uploaded within this long works, even when not live
   let pid = null, names = (slug) => slug, agent = "unknown", current = null, timer = null;
+  let lastUpload = null, dropped = false;  // the newest stored session's upload time; the agent left while watched
 
   function init(patientId, exerciseName) {
     pid = patientId; names = exerciseName;
@@ -20,12 +30,44 @@ const Live = (() => {
       if (e.target.id === "live-stop") stop();
       if (e.target.id === "live-close") { current = null; render(); }
     });
+    Connection.listen((state, was) => {
+      if (state === "ok" && was === "lost") { status(); resync(); }
+      render();
+    });
+    setInterval(watchFrames, 500);
     return status();
   }
+
+  /** Says when the camera stopped sending pictures mid-set (no progress for FRAMES_MS while all else is up). */
+  function watchFrames() {
+    if (!running() || current.starting || !current.heard_at || Connection.state !== "ok") return;
+    const silent = Date.now() - current.heard_at > FRAMES_MS;
+    if (silent !== Boolean(current.no_frames)) { current.no_frames = silent; render(); }
+  }
+
+  /** After the connection came back: a set that ended meanwhile is shown with its stored result. */
+  function resync() {
+    const c = current;
+    if (!c || !running()) return;
+    setTimeout(async () => {
+      if (current !== c || !running() || Date.now() - (c.heard_at || 0) < FRAMES_MS) return;  // it still runs
+      try {
+        const latest = (await api(`/sessions?patient_id=${pid}&limit=5`)).items;
+        const stored = latest.find((s) => c.session_id && s.client_session_id === c.session_id);
+        if (stored) { c.ended = "source"; c.result = stored; }
+        else c.failed = I18n.t("We lost track of this set while the connection was gone. If it was recorded, it shows under \u201cYour last exercise\u201d.");
+      } catch (err) { c.failed = kindMessage(err); }
+      render();
+    }, FRAMES_MS);
+  }
+
+  /** The newest stored session's upload time (ISO), from the page's data: a computer that uploads works. */
+  function uploaded(createdAt) { lastUpload = createdAt; render(); }
 
   async function status() {
     if (pid === null) return;  // the event stream opened before init(): init() asks itself
     try { agent = (await api(`/live/status?patient_id=${pid}`)).state; } catch (err) { agent = "unknown"; }
+    if (agent === "online") dropped = false;
     render();
   }
 
@@ -35,11 +77,12 @@ const Live = (() => {
     if (running()) return;
     current = { item, label, slug: item.exercise_slug, target: item.repetitions, starting: true, count: 0 };
     render();
+    into_view();
     try {
       const out = await api("/live/start", { method: "POST", body: { plan_item_id: item.id } });
       current.set_id = out.set_id;
       clearTimeout(timer);
-      timer = setTimeout(() => { if (current && current.starting && current.set_id === out.set_id) { current.failed = "The home computer did not answer. Please check it and try again."; render(); } }, ANSWER_MS);
+      timer = setTimeout(() => { if (current && current.starting && current.set_id === out.set_id) { current.failed = I18n.t("The home computer did not answer. Please check it and try again."); render(); } }, ANSWER_MS);
     } catch (err) {
       if (err.status === 409) { agent = "offline"; current = null; } else current.failed = kindMessage(err);
     }
@@ -55,6 +98,7 @@ const Live = (() => {
 
   function onAgent(data) {
     agent = data.online ? "online" : "offline";
+    dropped = !data.online;
     if (!data.online && running()) current.lost = true;
     render();
   }
@@ -63,6 +107,7 @@ const Live = (() => {
     if (data.action === "start" && !running()) {
       current = { set_id: data.set_id, slug: data.exercise_slug, target: data.target_reps, starting: true, count: 0 };
       render();
+      into_view();
     }
   }
 
@@ -70,12 +115,21 @@ const Live = (() => {
     if (!current || current.set_id !== data.set_id) {
       if (data.state !== "recording") return;
       current = { set_id: data.set_id, slug: data.exercise_slug, target: data.target, count: 0 };  // page opened mid-set
+      into_view();
     }
     clearTimeout(timer);
     Object.assign(current, { starting: false, count: data.count, target: data.target || current.target, angle: data.angle_deg,
-      hint: data.hint, session_id: data.session_id, elapsed: data.elapsed_s, lost: false });
-    if (data.state === "ended") current.ended = data.reason || "source";
-    if (data.state === "failed") current.failed = data.hint || "The set could not be recorded.";
+      hint: data.hint, session_id: data.session_id, elapsed: data.elapsed_s, lost: false, heard_at: Date.now(), no_frames: false });
+    if (data.state === "ended" && !current.ended) {
+      current.ended = data.reason || "source";
+      const c = current;
+      setTimeout(() => {
+        if (c.result) return;
+        c.result = { error: I18n.t("Your home computer is still sending the result. It shows under \u201cYour last exercise\u201d once it is saved.") };
+        if (current === c) render();
+      }, SAVE_MS);
+    }
+    if (data.state === "failed") current.failed = data.hint ? I18n.t(data.hint) : I18n.t("The set could not be recorded.");
     render();
     if (data.sent_at) window.dispatchEvent(new CustomEvent("coach-live-shown", { detail: { sent_at: data.sent_at, count: data.count } }));
   }
@@ -86,57 +140,91 @@ const Live = (() => {
     render();
   }
 
+  /** Returns whether the stored result has a count (then it is the set's count: the live count is brought level). */
+  function counted(r) { return Boolean(r) && !r.error && r.repetitions !== null && r.repetitions !== undefined; }
+
+  /** Returns the set's end in one sentence (shown, and spoken: voice.js), from the stored count once it is there. */
+  function endSentence(c) {
+    if (!c.result) return I18n.t("Set finished. Saving your result…");
+    if (c.result.error) return I18n.t("Set finished.");
+    if (!counted(c.result)) return I18n.t("Set finished. We could not count this set.");
+    const n = c.result.repetitions;
+    return n >= c.target ? I18n.t("Set finished. You did all {goal} — well done!", { goal: c.target })
+      : I18n.t("Set finished. You did {done} of {goal}. Good effort!", { done: n, goal: c.target });
+  }
+
   function resultBlock() {
     const r = current.result;
-    if (!r) return el("p", { class: "lead", id: "live-saving" }, current.ended === "still" && current.count === 0 ? "Saving…" : "Saving your result…");
+    if (!r) return null;
     if (r.error) return el("p", { class: "lead" }, r.error);
-    const reps = r.repetitions === null || r.repetitions === undefined ? "We could not count this set." : `Saved: ${r.repetitions} ${r.repetitions === 1 ? "repetition" : "repetitions"}`;
-    const rom = r.rom_deg ? `, moving through ${Math.round(r.rom_deg)} degrees.` : ".";
-    return el("p", { class: "lead", id: "live-result" }, r.repetitions === null || r.repetitions === undefined ? reps : reps + rom);
+    if (!counted(r)) return el("p", { class: "lead", id: "live-result" }, I18n.t("Saved. Please make sure the camera can see all of you next time."));
+    return el("p", { class: "lead", id: "live-result" }, r.rom_deg ? I18n.t("Saved, moving through {rom} degrees.", { rom: Math.round(r.rom_deg) }) : I18n.t("Saved."));
   }
 
   function panel() {
     const c = current;
-    const title = el("h2", { id: "live-h" }, names(c.slug) + (c.label ? ` — ${c.label}` : ""));
+    const title = el("h2", { id: "live-h" }, names(c.slug) + (c.label ? " — " + c.label : ""));
     if (c.failed) return [title, el("p", { class: "big-sentence", id: "live-failed" }, c.failed), closeButton()];
-    if (c.lost) return [title, el("p", { class: "big-sentence", id: "live-lost" }, "Your home computer stopped during the set."),
-      el("p", { class: "lead" }, "What you did so far is kept when it is at least 5 seconds long. It will show here once the computer is back on."),
+    if (c.lost) return [title, el("p", { class: "big-sentence", id: "live-lost" }, I18n.t("Your home computer stopped during the set.")),
+      el("p", { class: "lead" }, I18n.t("What you did so far is kept when it is at least 5 seconds long. It will show here once the computer is back on.")),
       closeButton()];
-    if (c.starting) return [title, el("p", { class: "big-sentence", id: "live-starting" }, "Starting… Please stand in front of the camera.")];
+    const offline = Connection.state === "lost" ? el("p", { class: "live-hint", id: "live-offline", role: "alert" },
+      I18n.t("The connection to the server is lost. Your home computer goes on recording; the count shows again when the connection is back.")) : null;
+    if (c.starting) return [title, el("p", { class: "big-sentence", id: "live-starting" }, I18n.t("Starting… Please stand in front of the camera.")), offline];
+    const shown = c.ended && counted(c.result) ? c.result.repetitions : c.count;  // the stored count once it is there
     const count = el("p", { class: "live-count", id: "live-count", "aria-hidden": "true" },
-      el("span", { class: "n" }, c.count), el("span", { class: "of" }, ` of ${c.target}`));
-    const spoken = el("p", { class: "sr-only", "aria-live": "polite" }, `${c.count} of ${c.target}`);
+      el("span", { class: "n" }, shown), el("span", { class: "of" }, " " + I18n.t("of {goal}", { goal: c.target })));
     if (c.ended) {
-      const done = c.count >= c.target ? `You did all ${c.target} — well done!` : `You did ${c.count} of ${c.target}. Good effort!`;
-      return [title, count, el("p", { class: "big-sentence", id: "live-ended" }, `Set finished. ${done}`),
-        el("p", { class: "lead" }, ENDED[c.ended] || ""), resultBlock(), closeButton()];
+      return [title, c.result && !counted(c.result) ? null : count, el("p", { class: "big-sentence", id: "live-ended", role: "status" }, endSentence(c)),
+        el("p", { class: "lead" }, ENDED[c.ended] || ""), resultBlock(), c.result ? closeButton() : null];
     }
-    const angle = c.angle === null || c.angle === undefined ? null : el("p", { class: "lead", id: "live-angle" }, `Angle now: ${Math.round(Math.abs(c.angle))} degrees`);
-    const hint = c.hint ? el("p", { class: "live-hint", id: "live-hint", role: "status" }, c.hint) : null;
-    return [title, count, spoken, angle, hint,
-      el("button", { class: "btn btn-big btn-bad", id: "live-stop", type: "button", disabled: c.stopping || !c.set_id }, c.stopping ? "Stopping…" : "Stop")];
+    const spoken = el("p", { class: "sr-only", "aria-live": "polite" }, I18n.t("{done} of {goal}", { done: shown, goal: c.target }));
+    const angle = c.angle === null || c.angle === undefined ? null : el("p", { class: "lead", id: "live-angle" }, I18n.t("Angle now: {angle} degrees", { angle: Math.round(Math.abs(c.angle)) }));
+    const camera = c.no_frames ? el("p", { class: "live-hint", id: "live-camera", role: "alert" },
+      I18n.t("No pictures are coming from your camera. Please check that it is plugged in and that nothing covers it. The count goes on by itself when the pictures are back.")) : null;
+    const hint = c.hint && !camera ? el("p", { class: "live-hint", id: "live-hint", role: "status" }, I18n.t(c.hint)) : null;  // the agent's hints are catalogue msgids
+    return [title, count, spoken, offline, camera, angle, hint,
+      el("button", { class: "btn btn-big btn-bad", id: "live-stop", type: "button", disabled: c.stopping || !c.set_id || Boolean(offline) },
+        c.stopping ? I18n.t("Stopping…") : I18n.t("Stop"))];
   }
 
-  function closeButton() { return el("button", { class: "btn btn-big btn-quiet", id: "live-close", type: "button" }, "Close"); }
+  function closeButton() { return el("button", { class: "btn btn-big btn-quiet", id: "live-close", type: "button" }, I18n.t("Close")); }
+
+  /** Brings the live panel to the top of the window (Start may be pressed far down the page). */
+  function into_view() {
+    const box = document.getElementById("live");
+    if (!box.hidden) box.scrollIntoView({ block: "start", behavior: "instant" });
+  }
+
+  /** Returns the state of the home computer as shown: the server's state, "idle" when it is not live but uploads. */
+  function shownState() {
+    if (Connection.state === "lost") return "server-lost";
+    if (agent === "offline" && !dropped && lastUpload && Date.now() - new Date(lastUpload) < RECENT_UPLOAD_MS) return "idle";
+    return agent;
+  }
 
   function render() {
     const line = document.getElementById("agent-status");
+    const state = shownState();
     const words = {
-      online: "Your home computer is ready. Press Start next to an exercise when you are in front of the camera.",
-      offline: "Your home computer is not connected right now, so you cannot start an exercise from here. Please check that it is switched on and connected to the internet. This page notices by itself when it is back.",
-      unpaired: "No home computer is set up for you yet. Your therapist can help you set one up.",
-      unknown: "Checking your home computer…",
+      online: I18n.t("Your home computer is ready. Press Start next to an exercise when you are in front of the camera."),
+      offline: I18n.t("Your home computer is not connected right now, so you cannot start an exercise from here. Please check that it is switched on and connected to the internet. This page notices by itself when it is back."),
+      idle: lastUpload ? I18n.t("Your home computer sent your last exercise {day} at {time}. Do your exercises in front of it as usual: it sends them here by itself.",
+        { day: Coach.plainDay(lastUpload), time: Coach.fmtTime(lastUpload) }) : "",
+      "server-lost": I18n.t("This page cannot reach the server right now, so you cannot start an exercise from here. Please check that your internet is working. The page notices by itself when the connection is back."),
+      unpaired: I18n.t("No home computer is set up for you yet. Your therapist can help you set one up."),
+      unknown: I18n.t("Checking your home computer…"),
     };
-    line.textContent = words[agent] || words.unknown;
-    line.dataset.state = agent;
+    line.textContent = words[state] || words.unknown;
+    line.dataset.state = state;
     for (const b of document.querySelectorAll("button.start")) {
       b.hidden = agent !== "online";
-      b.disabled = Boolean(running());
+      b.disabled = Boolean(running()) || state === "server-lost";
     }
     const box = document.getElementById("live");
     box.hidden = !current;
     box.replaceChildren(...(current ? panel() : []).filter(Boolean));
   }
 
-  return { init, status, render, start, onAgent, onCommand, onProgress, onStored };
+  return { init, status, render, start, uploaded, onAgent, onCommand, onProgress, onStored, get current() { return current; } };
 })();

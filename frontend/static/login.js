@@ -14,26 +14,29 @@
     return target.pathname + target.search;
   }
   function say(text) { box.textContent = text; box.hidden = false; }
+  if (new URLSearchParams(location.search).get("expired") === "1") {
+    say(I18n.t("Your sign-in expired. Please sign in again: you will be taken back to where you were, with what you typed."));
+  }
 
   form.addEventListener("submit", async (ev) => {
     ev.preventDefault();
     box.hidden = true;
     const email = form.email.value.trim(), password = form.password.value;
-    if (!email || !password) { say("Please fill in both your e-mail address and your password."); return; }
-    button.disabled = true; button.textContent = "Signing in…";
+    if (!email || !password) { say(I18n.t("Please fill in both your e-mail address and your password.")); return; }
+    button.disabled = true; button.textContent = I18n.t("Signing in…");
     try {
       const out = await Coach.api("/auth/login", { method: "POST", body: { email, password }, redirect401: false, withCsrf: false });
       sessionStorage.setItem("coach_csrf", out.csrf_token);
       const home = Coach.url(out.user.role === "patient" ? "/patient" : "/therapist");
       location.assign(safeNext() || home);
     } catch (err) {
-      if (err.status === 401) say("The e-mail address or the password is not right. Please try again.");
-      else if (err.status === 429) say("Too many tries. Please wait a few minutes, then try again.");
+      if (err.status === 401) say(I18n.t("The e-mail address or the password is not right. Please try again."));
+      else if (err.status === 429) say(I18n.t("Too many tries. Please wait a few minutes, then try again."));
       else say(Coach.kindMessage(err));
       form.password.value = "";
       form.password.focus();
     } finally {
-      button.disabled = false; button.textContent = "Sign in";
+      button.disabled = false; button.textContent = I18n.t("Sign in");
     }
   });
 })();

@@ -8,11 +8,17 @@
 
   function greeting() {
     const h = new Date().getHours();
-    const part = h < 12 ? "Good morning" : h < 18 ? "Good afternoon" : "Good evening";
-    document.getElementById("greeting").textContent = firstName ? `${part}, ${firstName}!` : `${part}!`;
+    const name = firstName;
+    const named = h < 12 ? I18n.t("Good morning, {name}!", { name }) : h < 18 ? I18n.t("Good afternoon, {name}!", { name })
+      : I18n.t("Good evening, {name}!", { name });
+    const plain = h < 12 ? I18n.t("Good morning!") : h < 18 ? I18n.t("Good afternoon!") : I18n.t("Good evening!");
+    document.getElementById("greeting").textContent = firstName ? named : plain;
   }
 
+  /** Returns what the patient counts: in English "sit-to-stands", "mini squats"; in the other languages the
+   *  exercise's (translated) name, which their sentences place as a label. */
   function plural(lib, slug) {
+    if (I18n.locale !== "en") return exerciseName(lib, slug);
     const name = exerciseName(lib, slug).toLowerCase();
     if (name === "sit to stand") return "sit-to-stands";  // the same words as the advice (backend/suggestions/rules.py)
     return name.endsWith("s") ? name : name + "s";
@@ -21,20 +27,20 @@
   function lastSessionBlock(last, item, lib, history) {
     const box = document.getElementById("last-session");
     box.replaceChildren();
-    if (!last) { box.append(el("p", { class: "lead" }, "No exercise recorded yet. When you do your exercises in front of the camera, you will see them here.")); return; }
+    if (!last) { box.append(el("p", { class: "lead" }, I18n.t("No exercise recorded yet. When you do your exercises in front of the camera, you will see them here."))); return; }
     const what = plural(lib, last.exercise_slug);
     const when = plainDay(last.started_at);
     let sentence;
     if (last.status !== "processed" || last.repetitions === null) {
-      sentence = `We could not count your ${what} ${when}. Please make sure the camera can see all of you next time.`;
+      sentence = I18n.t("We could not count your {what} {when}. Please make sure the camera can see all of you next time.", { what, when });
     } else if (item && last.repetitions >= item.repetitions) {
-      sentence = `You did all ${item.repetitions} ${what} ${when} — well done!`;
+      sentence = I18n.t("You did all {goal} {what} {when} — well done!", { goal: item.repetitions, what, when });
     } else if (item && last.repetitions >= 0.7 * item.repetitions) {
-      sentence = `You did ${last.repetitions} of ${item.repetitions} ${what} ${when} — well done!`;
+      sentence = I18n.t("You did {done} of {goal} {what} {when} — well done!", { done: last.repetitions, goal: item.repetitions, what, when });
     } else if (item) {
-      sentence = `You did ${last.repetitions} of ${item.repetitions} ${what} ${when}. Good effort — next time, try for a few more.`;
+      sentence = I18n.t("You did {done} of {goal} {what} {when}. Good effort — next time, try for a few more.", { done: last.repetitions, goal: item.repetitions, what, when });
     } else {
-      sentence = `You did ${last.repetitions} ${what} ${when} — well done!`;
+      sentence = I18n.t("You did {done} {what} {when} — well done!", { done: last.repetitions, what, when });
     }
     box.append(el("p", { class: "big-sentence", id: "last-sentence" }, sentence));
     if (last.rom_deg !== null && last.rom_deg !== undefined) {
@@ -42,16 +48,16 @@
       const since = new Date(last.started_at) - 28 * DAY;
       const before = median(history.filter((p) => p.session_id !== last.id && new Date(p.started_at) < new Date(last.started_at)
         && +new Date(p.started_at) >= since && p.quality_ok !== false).map((p) => p.rom_deg));
-      let words = `You moved through ${rom} degrees.`;
+      let words = I18n.t("You moved through {rom} degrees.", { rom });
       if (before !== null) {
         const b = Math.round(before), ratio = last.rom_deg / before;
-        if (ratio >= 1.05) words += ` That is more than in the last weeks (about ${b} degrees). Very good!`;
-        else if (ratio > 0.95) words += ` That is about the same as in the last weeks (${b} degrees). Keep it up.`;
-        else words += ` In the last weeks it was about ${b} degrees. That is fine — move gently, only as far as is comfortable.`;
+        if (ratio >= 1.05) words += " " + I18n.t("That is more than in the last weeks (about {before} degrees). Very good!", { before: b });
+        else if (ratio > 0.95) words += " " + I18n.t("That is about the same as in the last weeks ({before} degrees). Keep it up.", { before: b });
+        else words += " " + I18n.t("In the last weeks it was about {before} degrees. That is fine — move gently, only as far as is comfortable.", { before: b });
       }
       box.append(el("p", { class: "lead", id: "rom-sentence" }, words));
     }
-    if (last.quality_ok === false) box.append(el("p", { class: "muted" }, "The camera did not see you well this time, so these numbers may be a little off."));
+    if (last.quality_ok === false) box.append(el("p", { class: "muted" }, I18n.t("The camera did not see you well this time, so these numbers may be a little off.")));
   }
 
   /** Returns today's sets of one exercise against the plan, one line each: "set 1 of 2: 6 of 10". */
@@ -60,10 +66,11 @@
     const n = Math.max(item.sets, todaySessions.length);
     for (let k = 0; k < n; k++) {
       const s = todaySessions[k];
-      const done = s ? (s.repetitions === null || s.repetitions === undefined ? "not counted" : `${s.repetitions} of ${item.repetitions}`)
-        : `0 of ${item.repetitions}`;
+      const counted = s && s.repetitions !== null && s.repetitions !== undefined;
+      const done = s && !counted ? I18n.t("not counted") : I18n.t("{done} of {goal}", { done: s ? s.repetitions : 0, goal: item.repetitions });
       const full = s && s.repetitions >= item.repetitions;
-      lines.push(k < item.sets ? `set ${k + 1} of ${item.sets}: ${done}${full ? " ✓" : ""}` : `extra set: ${s.repetitions ?? "not counted"}`);
+      lines.push(k < item.sets ? I18n.t("set {set} of {sets}: {done}", { set: k + 1, sets: item.sets, done }) + (full ? " ✓" : "")
+        : I18n.t("extra set: {done}", { done: counted ? s.repetitions : I18n.t("not counted") }));
     }
     return lines;
   }
@@ -71,10 +78,10 @@
   /** The big Start of one exercise (shown while the home computer is connected: Live.render). */
   function startButton(lib, item, doneToday) {
     const next = doneToday + 1;
-    const label = next <= item.sets ? `set ${next} of ${item.sets}` : "extra set";
+    const label = next <= item.sets ? I18n.t("set {set} of {sets}", { set: next, sets: item.sets }) : I18n.t("extra set");
     const name = exerciseName(lib, item.exercise_slug);
-    return el("button", { class: "btn btn-big btn-good start", type: "button", hidden: true, "aria-label": `Start ${name}, ${label}`,
-      onclick: () => Live.start(item, label) }, "Start");
+    return el("button", { class: "btn btn-big btn-good start", type: "button", hidden: true,
+      "aria-label": I18n.t("Start {exercise}, {set}", { exercise: name, set: label }), onclick: () => Live.start(item, label) }, I18n.t("Start"));
   }
 
   function planBlock(plan, lib, weekSessions) {
@@ -82,8 +89,8 @@
     const note = document.getElementById("plan-note");
     list.replaceChildren();
     note.hidden = !(plan && plan.notes);
-    note.replaceChildren(...(plan && plan.notes ? [el("strong", {}, "From your therapist: "), plan.notes] : []));
-    if (!plan || !plan.items.length) { list.append(el("li", {}, "You have no exercises planned right now. Your therapist will add them.")); return; }
+    note.replaceChildren(...(plan && plan.notes ? [el("strong", {}, I18n.t("From your therapist:") + " "), plan.notes] : []));
+    if (!plan || !plan.items.length) { list.append(el("li", {}, I18n.t("You have no exercises planned right now. Your therapist will add them."))); return; }
     const today = new Date().toDateString();
     for (const item of plan.items) {
       const mine = weekSessions.filter((s) => s.exercise_slug === item.exercise_slug);
@@ -91,30 +98,35 @@
         .sort((a, b) => new Date(a.started_at) - new Date(b.started_at));  // each stored session is one set
       const doneToday = mineToday.length > 0;
       const weekDone = mine.length >= item.frequency_per_week;
-      const times = item.frequency_per_week === 1 ? "once" : item.frequency_per_week === 2 ? "twice" : `${item.frequency_per_week} times`;
-      let status = `Done ${mine.length} of ${item.frequency_per_week} times this week`;
-      if (weekDone) status = `All done this week (${mine.length} of ${item.frequency_per_week}) ✓`;
-      if (doneToday) status += " · done today";
-      const rom = item.target_rom_deg ? `, moving through about ${Math.round(item.target_rom_deg)} degrees` : "";
+      const perWeek = item.frequency_per_week;
+      let status = I18n.t("Done {done} of {goal} times this week", { done: mine.length, goal: perWeek });
+      if (weekDone) status = I18n.t("All done this week ({done} of {goal})", { done: mine.length, goal: perWeek }) + " ✓";
+      if (doneToday) status += " · " + I18n.t("done today");
+      const sets = I18n.nt("{n} set of {reps}", "{n} sets of {reps}", item.sets, { reps: item.repetitions });
+      const often = I18n.nt("once a week", "{n} times a week", perWeek);
+      const how = item.target_rom_deg ? I18n.t("{sets}, {often}, moving through about {rom} degrees", { sets, often, rom: Math.round(item.target_rom_deg) })
+        : I18n.t("{sets}, {often}", { sets, often });
       list.append(el("li", { "data-exercise": item.exercise_slug },
         el("span", { class: "tick" + (weekDone ? " done" : ""), "aria-hidden": "true" }, weekDone ? "✓" : mine.length),
         el("div", {},
           el("div", { class: "what" }, exerciseName(lib, item.exercise_slug)),
-          el("div", { class: "how" }, `${item.sets} ${item.sets === 1 ? "set" : "sets"} of ${item.repetitions}, ${times} a week${rom}`),
+          el("div", { class: "how" }, how),
           el("div", {}, status),
-          el("div", { class: "today" }, el("strong", {}, "Today:"), todaySets(item, mineToday).map((t) => el("span", {}, t))),
+          el("div", { class: "today" }, el("strong", {}, I18n.t("Today:")), todaySets(item, mineToday).map((t) => el("span", {}, t))),
           item.notes ? el("div", { class: "muted" }, item.notes) : null),
-        startButton(lib, item, mineToday.length)));
+        el("div", { class: "starts" }, startButton(lib, item, mineToday.length),
+          CameraEntry.link(item, exerciseName(lib, item.exercise_slug), mineToday.length + 1 <= item.sets ? `set ${mineToday.length + 1} of ${item.sets}` : "extra set"))));
     }
+    CameraEntry.reveal();
   }
 
   function adviceBlock(items) {
     const list = document.getElementById("advice");
     list.replaceChildren();
     const shown = items.filter((s) => s.status === "approved" || s.source === "therapist");
-    if (!shown.length) { list.append(el("li", {}, "No new advice. Keep going with your exercises!")); return; }
+    if (!shown.length) { list.append(el("li", {}, I18n.t("No new advice. Keep going with your exercises!"))); return; }
     for (const s of shown.slice(0, 5)) {
-      list.append(el("li", {}, el("span", { class: "from" }, (s.source === "therapist" ? "From your therapist" : "Tip, checked by your therapist")
+      list.append(el("li", {}, el("span", { class: "from" }, (s.source === "therapist" ? I18n.t("From your therapist") : I18n.t("Tip, checked by your therapist"))
         + " · " + Coach.fmtDate(s.created_at, { day: "numeric", month: "long" })), s.text));
     }
   }
@@ -124,31 +136,31 @@
     box.replaceChildren();
     const slugs = plan && plan.items.length ? plan.items.map((i) => i.exercise_slug) : [...new Set(points.map((p) => p.exercise_slug))];
     const since = Date.now() - 42 * DAY;
-    if (!points.length) { box.append(el("p", {}, "Your progress will show here after your first exercises.")); return; }
+    if (!points.length) { box.append(el("p", {}, I18n.t("Your progress will show here after your first exercises."))); return; }
     for (const slug of slugs) {
       const item = plan && plan.items.find((i) => i.exercise_slug === slug);
       const mine = points.filter((p) => p.exercise_slug === slug && +new Date(p.started_at) >= since && p.repetitions !== null)
         .sort((a, b) => new Date(a.started_at) - new Date(b.started_at));
       if (!mine.length) {
-        box.append(el("h3", {}, exerciseName(lib, slug)), el("p", {}, "No exercise in the last six weeks yet."));
+        box.append(el("h3", {}, exerciseName(lib, slug)), el("p", {}, I18n.t("No exercise in the last six weeks yet.")));
         continue;
       }
       const day = (p) => Coach.fmtDate(p.started_at, { day: "numeric", month: "long" });
       const color = Plots.COLORS[0];
-      const traces = [{ type: "scatter", mode: "lines+markers", name: "what you did", x: mine.map((p) => p.started_at),
+      const traces = [{ type: "scatter", mode: "lines+markers", name: I18n.t("what you did"), x: mine.map((p) => p.started_at),
         y: mine.map((p) => p.repetitions), line: { color, width: 4 }, marker: { color, size: 14 },
-        text: mine.map((p) => `${p.repetitions} on ${day(p)}`), hovertemplate: "%{text}<extra></extra>" }];
+        text: mine.map((p) => I18n.t("{done} on {day}", { done: p.repetitions, day: day(p) })), hovertemplate: "%{text}<extra></extra>" }];
       const shapes = item ? [{ type: "line", xref: "paper", x0: 0, x1: 1, y0: item.repetitions, y1: item.repetitions,
-        showlegend: true, name: `your goal: ${item.repetitions}`, line: { color: "#1b7f3b", width: 4, dash: "dash" } }] : [];
+        showlegend: true, name: I18n.t("your goal: {goal}", { goal: item.repetitions }), line: { color: "#1b7f3b", width: 4, dash: "dash" } }] : [];
       const top = Math.max(item ? item.repetitions : 0, ...mine.map((p) => p.repetitions), 1);
       box.append(Plots.figure({
-        title: `${exerciseName(lib, slug)}: how many each time`, traces, fontSize: 20, height: 320,
+        title: I18n.t("{exercise}: how many each time", { exercise: exerciseName(lib, slug) }), traces, fontSize: 20, height: 320,
         config: { displayModeBar: false },
         layout: { shapes, showlegend: true, dragmode: false,
           xaxis: Plots.dateAxis(mine.map((p) => p.started_at), { fixedrange: true, nticks: window.innerWidth < 600 ? 3 : 5 }),
           yaxis: { fixedrange: true, range: [0, Math.ceil(top * 1.15)], nticks: 4 } },
-        table: { caption: `${exerciseName(lib, slug)}: how many you did each time`,
-          columns: ["Day", "How many", ...(item ? ["Your goal"] : [])],
+        table: { caption: I18n.t("{exercise}: how many you did each time", { exercise: exerciseName(lib, slug) }),
+          columns: [I18n.t("Day"), I18n.t("How many"), ...(item ? [I18n.t("Your goal")] : [])],
           rows: mine.map((p) => [day(p), p.repetitions, ...(item ? [item.repetitions] : [])]) },
       }));
     }
@@ -168,6 +180,7 @@
       ]);
       const plan = runningPlan(plans.items);
       const last = latest.items[0] || null;
+      Live.uploaded(last ? last.created_at : null);
       const item = last && plan ? plan.items.find((i) => i.exercise_slug === last.exercise_slug) : null;
       lastSessionBlock(last, item, lib, last ? progress.points.filter((p) => p.exercise_slug === last.exercise_slug) : []);
       adviceBlock(suggestions.items);
@@ -178,6 +191,6 @@
   }
   load().then(() => exercises()).then((lib) => Live.init(pid, (slug) => exerciseName(lib, slug)));
   // a new result, new advice or a new plan shows without reloading the page; the home computer's set live
-  Coach.onChange(pid, load, { "live.agent": Live.onAgent, "live.command": Live.onCommand, "live.progress": Live.onProgress,
-    "session.stored": Live.onStored, open: Live.status });
+  Connection.attach(Coach.onChange(pid, load, Connection.watch({ "live.agent": Live.onAgent, "live.command": Live.onCommand,
+    "live.progress": Live.onProgress, "session.stored": Live.onStored, open: Live.status })));
 })();

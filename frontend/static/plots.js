@@ -31,6 +31,23 @@ const Plots = (() => {
     modeBarButtonsToRemove: ["sendDataToCloud", "editInChartStudio", "lasso2d", "select2d"],
   };
 
+  /** Teaches plotly.js the page's language (month and day names, decimal sign) from the browser's Intl, so date
+   *  axes read "8 nov." on a French page; returns the locale name for the charts' config. */
+  function plotLocale() {
+    if (!window.Plotly || I18n.locale === "en") return "en";
+    const names = (options, dates) => dates.map((d) => new Intl.DateTimeFormat(I18n.tag, { timeZone: "UTC", ...options }).format(d));
+    const months = [...Array(12).keys()].map((m) => new Date(Date.UTC(2026, m, 1)));
+    const days = [...Array(7).keys()].map((d) => new Date(Date.UTC(2026, 10, 1 + d)));  // 1 Nov 2026 is a Sunday
+    const decimal = new Intl.NumberFormat(I18n.tag).format(1.5).charAt(1);
+    window.Plotly.register({ moduleType: "locale", name: I18n.locale, dictionary: {}, format: {
+      months: names({ month: "long" }, months), shortMonths: names({ month: "short" }, months),
+      days: names({ weekday: "long" }, days), shortDays: names({ weekday: "short" }, days),
+      decimal, thousands: decimal === "," ? "." : ",",
+    } });
+    return I18n.locale;
+  }
+  const LOCALE = plotLocale();
+
   function merge(base, extra) {
     const out = { ...base };
     for (const [k, v] of Object.entries(extra || {})) {
@@ -77,24 +94,24 @@ const Plots = (() => {
     fig._plotSpec = {
       traces: traces || [],
       layout: merge(merge(baseLayout(size), { height }), layout || {}),
-      config: { ...(config || {}), ...CONFIG },
+      config: { ...(config || {}), ...CONFIG, locale: LOCALE },
     };
     if (tableSpec) {
       const wrap = el("div", { class: "table-wrap plot-table-wrap", id: `${id}-table`, hidden: true, tabindex: 0,
         role: "region", "aria-label": tableSpec.caption || title || "chart data" },  // scrollable: keyboard reachable
         table({ caption: tableSpec.caption || title, columns: tableSpec.columns, rows: tableSpec.rows }));
-      const button = el("button", { type: "button", class: "btn btn-quiet plot-toggle", "aria-expanded": "false", "aria-controls": `${id}-table` }, "Show as table");
+      const button = el("button", { type: "button", class: "btn btn-quiet plot-toggle", "aria-expanded": "false", "aria-controls": `${id}-table` }, I18n.t("Show as table"));
       button.addEventListener("click", () => {
         const open = wrap.hidden;
         wrap.hidden = !open;
         button.setAttribute("aria-expanded", String(open));
-        button.textContent = open ? "Hide table" : "Show as table";
+        button.textContent = open ? I18n.t("Hide table") : I18n.t("Show as table");
       });
       fig.append(button, wrap);
     }
     const start = () => (fig.isConnected ? draw(fig) : requestAnimationFrame(start));
     if (window.Plotly) requestAnimationFrame(start);
-    else plot.append(el("p", { class: "muted" }, "The chart could not be drawn; use “Show as table”."));
+    else plot.append(el("p", { class: "muted" }, I18n.t("The chart could not be drawn; use “Show as table”.")));
     return fig;
   }
 

@@ -36,6 +36,15 @@
     return [...stat("Full range", deg(a.range_deg), ci(a.range_ci95)), ...stat("Peak angle", deg(a.max_deg), ci(a.max_ci95))];
   }
 
+  /** Returns the balance stat: sway velocity in cm/s with its 95 % interval, or why it is not measured. */
+  function balanceStat(d) {
+    const b = d.balance;
+    if (!b) return stat("Balance (sway)", "Not measured", d.balance_missing);
+    const iv = b.sway_velocity_95;
+    const note = `${iv ? `${(100 * iv[0]).toFixed(1)}–${(100 * iv[1]).toFixed(1)} cm/s (95 %), ` : ""}over ${Math.round(b.standing_s)} s standing`;
+    return stat("Balance (sway)", `${(100 * b.sway_velocity_m_s).toFixed(1)} cm/s`, note);
+  }
+
   function keyNumbers(d) {
     const total = (d.moving_time_s || 0) + (d.rest_time_s || 0);
     const moving = d.moving_time_s === null ? "—" : `${Math.round(d.moving_time_s)} s`;
@@ -48,6 +57,7 @@
       ...stat("Duration", `${Math.round(d.duration_s)} s`, `${d.n_frames} frames`),
       ...stat("Moving", moving, total ? `${Math.round(100 * d.moving_time_s / total)}% of the time` : null),
       ...stat("Time per repetition", secs(d.tempo_s_per_rep)),
+      ...balanceStat(d),
       ...stat("Data quality", `${d.quality.score} / 100`, d.quality.low ? "low: read with care" : "good"));
   }
 

@@ -38,9 +38,11 @@
     }
     const flag = ind.quality_ok === false ? el("span", { class: "flag", title: "data quality: the recording was poor; treat this score with care" }, "⚠") : null;
     const prev = ind.previous !== null && ind.previous !== undefined ? `; value ${ind.value}, earlier median ${ind.previous}` : "";
+    const iv = name === "balance" && ind.interval && ind.value !== null
+      ? el("span", { class: "reasons" }, `${(100 * ind.value).toFixed(1)} cm/s (95 % ${(100 * ind.interval[0]).toFixed(1)}–${(100 * ind.interval[1]).toFixed(1)})`) : null;
     return el("td", { class: "indicator", title: `${ind.basis || ""}${prev}` },
       el("span", { class: "score" }, el("span", { class: "bar", "aria-hidden": "true" }, el("i", { style: `width:${Math.round(ind.score)}%` })),
-        Math.round(ind.score), flag), tr);
+        Math.round(ind.score), flag), tr, iv);
   }
 
   function row(r) {

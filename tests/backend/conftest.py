@@ -260,3 +260,32 @@ def upload(client, make_patient_with_therapist, auth_headers):
         return response.json()["id"], patient, therapist
 
     return send
+
+
+# ---------------------------------------------------------------------------------------------- object store
+# COACH_TEST_STORAGE=s3 runs the server tests with session files and replays in S3 (moto's server mode);
+# the default is the local filesystem store in a temporary folder.
+
+
+@pytest.fixture(scope="session")
+def _s3_endpoint():
+    from tests.backend.object_stores import s3_server
+
+    with s3_server() as endpoint:
+        yield endpoint
+
+
+@pytest.fixture(scope="session", autouse=True)
+def object_store(tmp_path_factory, request):
+    """The object store of this test run (backend.storage.use_store), local or S3 by COACH_TEST_STORAGE."""
+    from backend.storage import use_store
+    from tests.backend.object_stores import local_store, s3_store
+
+    kind = os.environ.get("COACH_TEST_STORAGE", "local")
+    if kind == "s3":
+        store = s3_store(request.getfixturevalue("_s3_endpoint"))
+    else:
+        store = local_store(tmp_path_factory.mktemp("objects"))
+    use_store(store)
+    yield store
+    use_store(None)

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 import pytest
 from fastapi.routing import iter_route_contexts
 
+from backend.camera.limits import CONSENT_VERSION
+from backend.camera.models import CameraConsent, CameraSet
 from backend.database import utcnow
 from backend.devices.service import create_pairing_code
 from backend.plans.models import Plan, PlanItem
@@ -29,10 +31,21 @@ CARE_DEV = CARE | {"device"}
 PRESCRIBE = {"therapist_assigned", "admin"}
 STAFF = {"therapist_assigned", "therapist_other", "admin"}  # sees only the patients they may see
 ADMIN = {"admin"}
+PATIENTS = {"patient_own", "patient_other"}
 
 
 def _progress_body():
     return {"set_id": str(uuid.uuid4()), "exercise_slug": "squat", "state": "recording", "count": 2, "target": 5}
+
+
+def _camera_start(w):
+    return {"plan_item_id": w["params"]["plan_item_id"], "model": "pose_landmarker_lite"}
+
+
+def _camera_batch():
+    from tests.backend.camera.landmarks import batch, frame
+
+    return batch(0, [frame(k / 30) for k in range(3)])
 
 
 def _plan_body(w):
@@ -72,6 +85,7 @@ ROUTES = {
     ("GET", "/api/v1/patients"): (AUTHED, None),
     ("GET", "/api/v1/patients/{patient_id}"): (CARE_DEV, None),
     ("GET", "/api/v1/patients/{patient_id}/therapists"): (CARE_DEV, None),
+    ("PATCH", "/api/v1/patients/{patient_id}"): (CARE, lambda w: {"locale": "de"}),
     ("PUT", "/api/v1/patients/{patient_id}/therapists/{therapist_id}"): (ADMIN, None),
     ("DELETE", "/api/v1/patients/{patient_id}/therapists/{therapist_id}"): (ADMIN, None),
     ("POST", "/api/v1/patients/{patient_id}/pairing-codes"): (CARE, None),
@@ -107,6 +121,19 @@ ROUTES = {
     ("GET", "/api/v1/patients/{patient_id}/progress"): (CARE_DEV, None),
     ("GET", "/api/v1/patients/{patient_id}/summary"): (CARE_DEV, None),
     ("GET", "/api/v1/dashboard"): (STAFF, None),  # therapists: assigned patients only
+    ("GET", "/api/v1/camera/consent"): (PATIENTS, None),  # each patient their own
+    ("POST", "/api/v1/camera/consent"): (PATIENTS, lambda w: {"consent_version": CONSENT_VERSION}),
+    ("DELETE", "/api/v1/camera/consent"): (PATIENTS, None),
+    ("POST", "/api/v1/camera/sets"): ({"patient_own"}, lambda w: _camera_start(w)),
+    ("GET", "/api/v1/camera/sets/{set_id}"): ({"patient_own"}, None),  # only the set's patient
+    ("POST", "/api/v1/camera/sets/{set_id}/batches"): ({"patient_own"}, lambda w: _camera_batch()),
+    ("POST", "/api/v1/camera/sets/{set_id}/end"): ({"patient_own"}, lambda w: {"last_seq": -1}),
+    ("GET", "/api/v1/patients/{patient_id}/archive"): ({"patient_own", "admin"}, None),  # the patient, or an admin
+    ("POST", "/api/v1/patients/{patient_id}/erasure"): (ADMIN, lambda w: {"confirm_email": w["own_email"]}),
+    ("GET", "/api/v1/patients/{patient_id}/report.pdf"): (CARE, None),
+    ("POST", "/api/v1/reanalysis"): (ADMIN, lambda w: {"patient_id": w["params"]["patient_id"]}),
+    ("GET", "/api/v1/reanalysis/{batch}"): (ADMIN, None),  # a batch queued in the world below
+    ("GET", "/api/v1/sessions/{session_id}/metric-versions"): (CARE, None),
 }
 
 
@@ -136,10 +163,18 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
     )
     db_session.add(session)
     db_session.flush()
+    db_session.add(CameraConsent(patient_id=own.id, consent_version=CONSENT_VERSION, given_at=utcnow()))
+    camera_set = CameraSet(id=uuid.uuid4(), patient_id=own.id, plan_item_id=plan.items[0].id, exercise_id=exercise.id,
+                           target_reps=5, model_name="pose_landmarker_lite", started_at=utcnow())  # fmt: skip
+    db_session.add(camera_set)
+    db_session.flush()
     _, code = create_pairing_code(db_session=db_session, patient_id=own.id, created_by_id=own.id, minutes=15)
     from backend.users.service import create_api_token
 
     admin_token, _ = create_api_token(db_session=db_session, user=admin, name="victim", scopes=["read"], days=1)
+    from backend.jobs.queue import enqueue
+
+    enqueue(db_session=db_session, kind="reanalyze", items=[("matrix", {"session_id": session.id})], batch="matrix")
     headers = {
         "anonymous": {},
         "patient_own": auth_headers(own),
@@ -160,6 +195,8 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
         "token_id": admin_token.id,
         "slug": exercise.slug,
         "session_id": session.id,
+        "set_id": str(camera_set.id),
+        "batch": "matrix",
     }
     return {
         "headers": headers,

@@ -31,3 +31,22 @@ def test_compose_puts_a_proxy_in_front_and_trusts_only_it():
     assert trusted == proxy_ip, f"the server trusts {trusted!r}, the proxy is {proxy_ip}"
     caddyfile = (ROOT / "deploy" / "Caddyfile").read_text()
     assert "reverse_proxy server:8000" in caddyfile and "flush_interval -1" in caddyfile  # events unbuffered
+
+
+def test_compose_keeps_session_files_in_minio_with_its_bucket_made_at_start():
+    services = _compose()["services"]
+    server, init = services["server"], services["minio-init"]
+    env = server["environment"]
+    assert env["COACH_STORAGE_BACKEND"] == "s3" and env["COACH_S3_ENDPOINT_URL"] == "http://minio:9000"
+    assert server["depends_on"]["minio-init"]["condition"] == "service_completed_successfully"
+    assert "mc mb --ignore-existing" in " ".join(init["entrypoint"])
+    assert "miniodata:/data" in services["minio"]["volumes"]
+    assert "ports" not in services["minio"], "the object store is reached by the server only"
+
+
+def test_compose_runs_a_worker_on_the_same_database_and_bucket():
+    services = _compose()["services"]
+    worker, server = services["worker"], services["server"]
+    assert worker["command"] == ["coach-server", "worker"]
+    for name in ("COACH_DATABASE_URL", "COACH_STORAGE_BACKEND", "COACH_S3_BUCKET", "COACH_S3_ENDPOINT_URL"):
+        assert worker["environment"][name] == server["environment"][name], name

@@ -185,3 +185,20 @@ def test_a_file_without_angle_sds_has_no_intervals(client, upload, auth_headers)
     body = _detail(client, session_id, auth_headers(patient)).json()
     assert body["uncertainty"] is None
     assert "no per-frame uncertainty" in body["uncertainty_note"]
+
+
+def test_agent_made_standing_session_shows_its_balance_with_an_interval(client, upload, auth_headers):
+    session_id, patient, _ = upload(make_processed_khs("shoulder_abduction", 4, seed=3), "shoulder_abduction")
+    body = _detail(client, session_id, auth_headers(patient)).json()
+    b = body["balance"]
+    assert b is not None and body["balance_missing"] is None, body["balance_missing"]
+    lo, hi = b["sway_velocity_95"]
+    assert 0 < lo <= b["sway_velocity_m_s"] <= hi < 0.06
+    assert b["standing_s"] > 0.8 * body["duration_s"]
+
+
+def test_seated_session_says_why_balance_is_missing(client, upload, auth_headers):
+    session_id, patient, _ = upload(make_processed_khs("seated_knee_extension", 3, seed=3), "seated_knee_extension")
+    body = _detail(client, session_id, auth_headers(patient)).json()
+    assert body["balance"] is None
+    assert body["balance_missing"] == "the patient was seated or crouching: balance is measured while standing"

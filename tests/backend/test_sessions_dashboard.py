@@ -356,3 +356,13 @@ def test_dashboard_queries_do_not_grow_with_patients(client, db_session, make_us
     few = count_selects()
     add_patients(10)
     assert count_selects() == few
+
+
+def test_missing_balance_gives_the_analysis_reason(db_session, make_user, exercise, store):
+    patient = make_user("patient")
+    why = "the patient was seated or crouching: balance is measured while standing"
+    doc = {"repetitions": 5, "rom_deg": 50.0, "quality": {"ok": True}, "balance": None, "balance_missing": why}
+    doc["indicators"] = {"balance": {"score": None, "missing": why}}
+    store(patient, exercise, THURSDAY_NOON - dt.timedelta(hours=1), doc=doc)
+    name = exercise.slug.replace("_", " ")
+    assert _summary(db_session, patient)["balance_missing"] == f"Not measured ({name}): {why}"

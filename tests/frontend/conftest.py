@@ -169,12 +169,14 @@ def live_server(tmp_path_factory) -> Iterator[LiveServer]:
 
 
 @contextmanager
-def run_server(database_url: str, log_dir: Path, workers: int = 1, **env: str) -> Iterator[str]:
-    """Runs the app with uvicorn in a subprocess on a free port of 127.0.0.1 (extra COACH_* settings in env), with
-    `workers` worker processes; yields its base URL; stops it on exit."""
-    port = free_port()
+def run_server(
+    database_url: str, log_dir: Path, workers: int = 1, port: int | None = None, **env: str
+) -> Iterator[str]:
+    """Runs the app with uvicorn in a subprocess on `port` (default: a free port) of 127.0.0.1 (extra COACH_*
+    settings in env), with `workers` worker processes; yields its base URL; stops it on exit."""
+    port = port or free_port()
     env = os.environ | {"COACH_DATABASE_URL": database_url, "COACH_ENVIRONMENT": "local", "PYTHONPATH": str(ROOT),
-                        **env}  # fmt: skip
+                        "COACH_STORAGE_DIR": str(log_dir / "objects"), **env}  # fmt: skip
     log = open(log_dir / f"server-{port}.log", "w+")  # noqa: SIM115 - closed below
     command = [sys.executable, "-m", "uvicorn", "backend.main:create_app", "--factory", "--host", "127.0.0.1",
                "--port", str(port), "--log-level", "warning", "--proxy-headers",

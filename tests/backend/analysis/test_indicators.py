@@ -20,7 +20,10 @@ def test_every_indicator_has_score_value_basis_quality() -> None:
     doc = _doc("shoulder_abduction", 6, pose="standing")
     out = indicators(doc, exercise=EXERCISES["shoulder_abduction"], target_reps=10, history=[])
     assert set(out) == {"flexibility", "endurance", "strength", "balance"}
-    assert all(set(v) == KEYS for v in out.values())
+    assert all(set(v) == KEYS for k, v in out.items() if k != "balance")
+    assert set(out["balance"]) == KEYS | {"interval", "missing"}
+    lo, hi = out["balance"]["interval"]
+    assert lo <= out["balance"]["value"] <= hi and out["balance"]["missing"] is None
     assert out["endurance"]["score"] == 60.0 and out["endurance"]["value"] == 6
     assert out["flexibility"]["score"] == pytest.approx(100 * doc["rom_deg"] / 180, abs=0.1)
     assert out["balance"]["score"] is not None and out["balance"]["quality_ok"]
@@ -48,6 +51,7 @@ def test_seated_session_has_no_balance_score() -> None:
     doc = _doc("elbow_flexion", 3, pose="sitting")
     out = indicators(doc, exercise=EXERCISES["elbow_flexion"], target_reps=3, history=[])
     assert out["balance"]["score"] is None and out["balance"]["quality_ok"] is False
+    assert out["balance"]["missing"].startswith("the patient was seated")
 
 
 def test_document_of_another_exercise_is_refused() -> None:

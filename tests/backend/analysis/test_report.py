@@ -24,7 +24,8 @@ from ._data import UI_PRMD_KINECT, noisy, uiprmd
 CONTRACT_KEYS = {
     "exercise", "duration_s", "n_frames", "rate_hz", "repetitions", "repetition_list", "defining_angle",
     "range_of_motion", "rom_deg", "most_moving_joints", "reachable_range", "moving_time_s", "rest_time_s",
-    "tempo_s_per_rep", "fatigue", "balance", "sit_to_stand", "quality", "range_of_motion_95", "repetitions_95",
+    "tempo_s_per_rep", "fatigue", "balance", "balance_missing", "sit_to_stand", "quality", "range_of_motion_95",
+    "repetitions_95",
 }  # fmt: skip
 REP_KEYS = {"index", "start_s", "end_s", "duration_s", "amplitude_deg", "peak_deg", "side"}
 
@@ -42,7 +43,8 @@ def test_document_has_every_contract_key_and_is_json() -> None:
 
 def test_standing_session_fills_every_metric() -> None:
     doc = analyze_recording(simulate_truth("shoulder_abduction", 5, seed=2), EXERCISES["shoulder_abduction"])
-    no_sd = {"sit_to_stand", "range_of_motion_95", "repetitions_95"}  # the intervals need the agent's angle SDs
+    # the intervals need the agent's angle SDs; balance_missing is None when balance is measured
+    no_sd = {"sit_to_stand", "range_of_motion_95", "repetitions_95", "balance_missing"}
     assert all(doc[k] is not None for k in CONTRACT_KEYS - no_sd), [k for k in doc if doc[k] is None]
     assert doc["most_moving_joints"][0]["joint"] in ("HAN_L", "HAN_R")
     assert doc["moving_time_s"] + doc["rest_time_s"] == pytest.approx(doc["duration_s"], abs=0.02)

@@ -1,0 +1,139 @@
+"""The end of a camera set: the set's landmarks -> the 20-joint recording -> the full offline pipeline with the
+webcam's settings -> a session file (device `webcam`, the model's name and hash, the frame rate achieved) ->
+stored through the same path as an uploaded session, once.
+
+The session's client id is the set's id and the file's bytes depend only on the stored batches, so an end that is
+repeated (a retry after a lost answer, two tabs) finds the stored session and stores nothing twice.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+
+from sqlalchemy.orm import Session
+
+from backend.camera import limits, live_count, service
+from backend.camera.errors import BatchOutOfOrder
+from backend.camera.models import CameraSet
+from backend.camera.skeleton import WEBCAM, pipeline_config, to_recording
+from backend.camera.vendor import model_info
+from backend.database import utcnow
+from backend.events.hub import Event, publish
+from backend.exercises.models import Exercise
+from backend.sessions import service as sessions_service
+from backend.sessions.ingest import decode_upload
+from kinect_agent.formats import session_file
+from kinect_agent.formats.session_file import SessionPayload
+from kinect_agent.processing.pipeline import VERSION, process
+from kinect_agent.recording import Metadata
+
+
+def _iso(when: dt.datetime) -> str:
+    when = when if when.tzinfo is not None else when.replace(tzinfo=dt.UTC)
+    return when.astimezone(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def session_bytes(row: CameraSet, exercise: Exercise, db_session: Session) -> bytes | None:
+    """Returns the session file of the set's stored batches (None when they hold fewer than MIN_END_FRAMES)."""
+    batches = service.set_batches(db_session=db_session, set_id=row.id)
+    n_frames = sum(b.n_frames for b in batches)
+    if n_frames < limits.MIN_END_FRAMES:
+        return None
+    span = float(batches[-1].t[-1] - batches[0].t[0])
+    fps = round((n_frames - 1) / span, 2) if span > 0 else None
+    model = model_info(row.model_name)
+    meta = Metadata(
+        device=WEBCAM,
+        rate_hz=fps,
+        exercise=exercise.slug,
+        source="browser camera",
+        extra={"camera_set_id": str(row.id), "model": model, "fps_achieved": fps},
+    )
+    raw = to_recording(batches, meta)
+    config = pipeline_config()
+    result = process(raw, config=config)
+    q = result.quality
+    params = {
+        "pipeline": VERSION,
+        "device": WEBCAM,
+        "config": config.model_dump(),
+        "model": model,
+        "fps_achieved": fps,
+        "quality": {k: q[k] for k in ("n_frames", "n_outliers", "n_gated", "frames_without_observation")},
+        "segment_lengths_m": q["segment_lengths_m"],
+    }
+    payload = SessionPayload(
+        session_id=str(row.id),
+        raw=raw,
+        filtered=result.filtered,
+        params=params,
+        created_at=_iso(row.started_at),
+        angle_sd=result.angle_sd,
+    )
+    return session_file.encode(payload)
+
+
+def _ended_message(row: CameraSet, exercise: Exercise, count: int, hint: str | None = None) -> dict:
+    state = "ended" if row.status == "stored" else "failed"
+    return {
+        "set_id": str(row.id),
+        "exercise_slug": exercise.slug,
+        "state": state,
+        "count": count,
+        "target": row.target_reps,
+        "reason": row.end_reason,
+        "session_id": str(row.id),
+        "hint": hint,
+        "elapsed_s": round(row.last_t or 0.0, 2),
+        "device": WEBCAM,
+    }
+
+
+def end_set(
+    *, db_session: Session, row: CameraSet, last_seq: int, reason: str, max_frames: int, max_decoded_bytes: int
+) -> CameraSet:
+    """Ends the set row (locked by the caller) and returns it: status stored with session_id, or failed with the
+    reason in error (too few frames). A set that ended already is returned as it is. Raises BatchOutOfOrder when
+    the page sent batches the server has not received (last_seq > row.last_seq): it sends them, then ends again.
+    max_frames, max_decoded_bytes: the limits of an uploaded session file (Settings.SESSION_MAX_*)."""
+    if row.status != "recording":
+        return row
+    if last_seq > row.last_seq:
+        raise BatchOutOfOrder(
+            f"body.last_seq: batches {row.last_seq + 1}..{last_seq} were not received; send them, then end the set"
+        )
+    exercise = db_session.get(Exercise, row.exercise_id)
+    assert exercise is not None
+    data = session_bytes(row, exercise, db_session)
+    row.ended_at, row.end_reason = utcnow(), reason
+    count = live_count.final_count(row.id)
+    if data is None:
+        row.status = "failed"
+        row.error = (
+            f"only {row.n_frames} frames were received; at least {limits.MIN_END_FRAMES} are needed to analyse a set"
+        )
+        publish(
+            db_session,
+            Event(
+                "live.progress",
+                row.patient_id,
+                _ended_message(row, exercise, count or 0, "The set was too short to save."),
+            ),
+        )
+        db_session.flush()
+        live_count.forget(row.id)
+        return row
+    upload = decode_upload(data, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
+    stored, created = sessions_service.store_upload(
+        db_session=db_session, upload=upload, patient_id=row.patient_id, exercise=exercise, device_id=None
+    )
+    row.status, row.session_id = "stored", stored.id
+    db_session.flush()
+    if created:
+        publish(
+            db_session,
+            Event("session.stored", row.patient_id, {"session_id": stored.id, "client_session_id": str(row.id)}),
+        )
+    publish(db_session, Event("live.progress", row.patient_id, _ended_message(row, exercise, count or 0)))
+    live_count.forget(row.id)
+    return row

@@ -1,0 +1,159 @@
+"""Languages of the patient's side: gettext catalogues (one .po per locale, compiled in memory at first use), the
+locale of a request, and dates and numbers formatted per locale with Babel.
+
+One catalogue per locale holds every message: the server's (Python, marked with `_`/`ngettext` or, where the text is
+chosen before the locale is known, `N_`), the templates' (Jinja's i18n extension) and the page scripts' (`I18n.t`/
+`I18n.nt` in frontend/static, handed to the page as JSON by `js_messages`). English is the source language: its
+messages are the msgids. `python -m backend.i18n.catalogues extract|update|check` keeps the catalogues in step with
+the code; tests/backend/test_i18n.py holds them complete.
+
+Placeholders: `%(name)s`/`%(name)d` in Python and templates, `{name}` in scripts; a translation has exactly the
+placeholders of its msgid.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import gettext
+import io
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+from babel import Locale, UnknownLocaleError
+from babel.dates import format_date as _babel_format_date
+from babel.messages.mofile import write_mo
+from babel.messages.pofile import read_po
+from babel.numbers import format_decimal, format_percent
+
+LOCALE_DIR = Path(__file__).resolve().parent / "locale"
+DOMAIN = "messages"
+DEFAULT_LOCALE = "en"
+LOCALES = ("en", "de", "es", "fr")  # English is the source language; the others have a catalogue each
+LANGUAGE_NAMES = {"en": "English", "de": "Deutsch", "es": "Español", "fr": "Français"}  # each in its own language
+SCRIPT_SUFFIXES = (".js",)  # messages found in these files are handed to the page scripts
+
+
+def N_(message: str) -> str:  # noqa: N802 (the gettext convention)
+    """Marks a message for extraction without translating it (the text is translated where it is shown)."""
+    return message
+
+
+def po_path(locale: str) -> Path:
+    """Returns the .po file of one locale (not English: its msgids are the text)."""
+    return LOCALE_DIR / locale / "LC_MESSAGES" / f"{DOMAIN}.po"
+
+
+@lru_cache(maxsize=len(LOCALES))
+def _catalog(locale: str):
+    with po_path(locale).open("rb") as f:
+        return read_po(f, locale=locale, domain=DOMAIN)
+
+
+@lru_cache(maxsize=len(LOCALES))
+def translations(locale: str) -> gettext.NullTranslations:
+    """Returns the compiled translations of a locale (the .po compiled to .mo in memory); English: the msgids."""
+    if locale == DEFAULT_LOCALE:
+        return gettext.NullTranslations()
+    buf = io.BytesIO()
+    write_mo(buf, _catalog(locale), use_fuzzy=False)
+    buf.seek(0)
+    return gettext.GNUTranslations(buf)
+
+
+@dataclass(frozen=True)
+class Translator:
+    """The messages, dates and numbers of one locale."""
+
+    locale: str
+
+    def gettext(self, message: str, **params: object) -> str:
+        """Returns the translation of message, with %(name)s placeholders filled from params when given."""
+        text = translations(self.locale).gettext(message)
+        return text % params if params else text
+
+    def ngettext(self, singular: str, plural: str, n: int, **params: object) -> str:
+        """Returns the singular or plural translation for n; %(num)d is n unless params says otherwise."""
+        text = translations(self.locale).ngettext(singular, plural, n)
+        return text % ({"num": n} | params)
+
+    def format_date(self, value: dt.date | dt.datetime, format: str = "long") -> str:  # noqa: A002 (Babel's name)
+        """Returns a date the way this locale writes it ("long": 27 November 2026 / 27. November 2026)."""
+        return _babel_format_date(value, format=format, locale=self.locale)
+
+    def format_number(self, value: float, decimals: int = 0) -> str:
+        """Returns a number with this locale's decimal sign, rounded to `decimals` places."""
+        fmt = "#,##0" + ("." + "0" * decimals if decimals else "")
+        return format_decimal(round(value, decimals), format=fmt, locale=self.locale)
+
+    def format_percent(self, fraction: float) -> str:
+        """Returns a fraction as a whole percentage the way this locale writes it (0.85: 85% / 85 %)."""
+        return format_percent(fraction, locale=self.locale)
+
+
+def translator(locale: str | None) -> Translator:
+    """Returns the Translator of a supported locale (anything else: English)."""
+    return Translator(locale if locale in LOCALES else DEFAULT_LOCALE)
+
+
+def normalise(tag: str | None) -> str | None:
+    """Returns the supported locale of a language tag ("de-AT" -> "de", "fr_CA" -> "fr"), or None."""
+    if not tag:
+        return None
+    try:
+        language = Locale.parse(tag.strip().replace("-", "_")).language
+    except (ValueError, UnknownLocaleError):
+        return None
+    return language if language in LOCALES else None
+
+
+def negotiate(accept_language: str | None) -> str:
+    """Returns the supported locale a browser's Accept-Language header prefers most, else English."""
+    choices = []
+    for position, part in enumerate((accept_language or "").split(",")[:20]):
+        tag, _, params = part.strip().partition(";")
+        q = 1.0
+        if params.strip().startswith("q="):
+            try:
+                q = float(params.strip()[2:])
+            except ValueError:
+                q = 0.0
+        locale = normalise(tag) if tag and tag != "*" else None
+        if locale is not None and q > 0:
+            choices.append((-q, position, locale))
+    return min(choices)[2] if choices else DEFAULT_LOCALE
+
+
+def is_script_message(locations: list[tuple[str, int | None]]) -> bool:
+    """Returns whether a message is used by a page script (one of its locations is a .js file)."""
+    return any(path.endswith(SCRIPT_SUFFIXES) for path, _ in locations)
+
+
+@lru_cache(maxsize=len(LOCALES))
+def js_messages(locale: str) -> dict:
+    """Returns the page scripts' messages of a locale, the JSON that frontend/static/i18n.js reads:
+    {"locale", "plural": "n != 1" | "n > 1", "messages": {msgid: msgstr, "singular\\u0004plural": [forms]}}.
+
+    Only messages used in a .js file and translated (not fuzzy) are sent; a missing one shows its English msgid.
+    """
+    if locale not in LOCALES or locale == DEFAULT_LOCALE:
+        return {"locale": DEFAULT_LOCALE, "plural": "n != 1", "messages": {}}
+    catalog = _catalog(locale)
+    messages: dict[str, str | list[str]] = {}
+    for message in catalog:
+        if not message.id or message.fuzzy or not is_script_message(message.locations):
+            continue
+        if isinstance(message.id, tuple):
+            if all(message.string):
+                messages[message.id[0] + "\u0004" + message.id[1]] = list(message.string)
+        elif message.string:
+            messages[message.id] = message.string
+    return {"locale": locale, "plural": plural_rule(locale), "messages": messages}
+
+
+def plural_rule(locale: str) -> str:
+    """Returns the plural rule of a locale's catalogue as the scripts know it: "n != 1" or "n > 1" (two forms)."""
+    if locale == DEFAULT_LOCALE:
+        return "n != 1"
+    expr = _catalog(locale).plural_expr.replace(" ", "").strip("()")
+    return {"n!=1": "n != 1", "n>1": "n > 1"}[expr]

@@ -1,0 +1,49 @@
+"""Queued work and the metrics documents a re-analysis replaced."""
+
+from __future__ import annotations
+
+import datetime as dt
+
+from sqlalchemy import JSON, ForeignKey, Index, String, Text
+from sqlalchemy.orm import Mapped, mapped_column
+
+from backend.database import Base, utcnow
+
+
+class Job(Base):
+    """One unit of work: queued → running (leased by a worker until locked_until) → done or failed.
+
+    key is unique: enqueuing the same work twice keeps one job. A running job whose lease expired (its worker
+    died) is taken again; a failing job is retried after a growing delay until max_attempts.
+    """
+
+    __tablename__ = "job"
+    __table_args__ = (Index("ix_job_status_run_after", "status", "run_after"),)
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    kind: Mapped[str] = mapped_column(String(32))
+    key: Mapped[str] = mapped_column(String(200), unique=True)
+    batch: Mapped[str | None] = mapped_column(String(64), index=True)  # jobs enqueued together, for progress
+    payload: Mapped[dict] = mapped_column(JSON, default=dict)
+    status: Mapped[str] = mapped_column(String(16), default="queued")
+    attempts: Mapped[int] = mapped_column(default=0)
+    max_attempts: Mapped[int] = mapped_column(default=3)
+    run_after: Mapped[dt.datetime] = mapped_column(default=utcnow)
+    locked_by: Mapped[str | None] = mapped_column(String(100))
+    locked_until: Mapped[dt.datetime | None] = mapped_column()
+    result: Mapped[dict | None] = mapped_column(JSON)
+    error: Mapped[str | None] = mapped_column(Text)
+    created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
+    finished_at: Mapped[dt.datetime | None] = mapped_column()
+
+
+class SessionMetricVersion(Base):
+    """A metrics document a re-analysis replaced, kept with the analysis version that made it."""
+
+    __tablename__ = "session_metric_version"
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    session_id: Mapped[int] = mapped_column(ForeignKey("exercise_session.id", ondelete="CASCADE"), index=True)
+    analysis_version: Mapped[str] = mapped_column(String(64))
+    document: Mapped[dict] = mapped_column(JSON)
+    replaced_at: Mapped[dt.datetime] = mapped_column(default=utcnow)

@@ -1,0 +1,89 @@
+"""Enqueue, claim, finish and retry jobs (backend.jobs.models.Job); see the package doc for the design."""
+
+from __future__ import annotations
+
+import datetime as dt
+from collections.abc import Iterable
+
+from sqlalchemy import and_, func, or_, select, update
+from sqlalchemy.exc import IntegrityError
+from sqlalchemy.orm import Session
+
+from backend.database import utcnow
+from backend.jobs.models import Job
+
+LEASE = dt.timedelta(minutes=5)
+RETRY_DELAYS_S = (5.0, 30.0, 120.0)
+
+
+def enqueue(*, db_session: Session, kind: str, items: Iterable[tuple[str, dict]], batch: str | None = None) -> int:
+    """Adds one job per (key, payload) whose key is not queued yet; returns how many were added. Flushes."""
+    added = 0
+    for key, payload in items:
+        try:
+            with db_session.begin_nested():
+                db_session.add(Job(kind=kind, key=key, batch=batch, payload=payload, run_after=utcnow()))
+            added += 1
+        except IntegrityError:
+            pass  # the same work is already queued (or done): idempotent
+    return added
+
+
+def _claimable(now: dt.datetime):
+    return or_(
+        and_(Job.status == "queued", Job.run_after <= now),
+        and_(Job.status == "running", Job.locked_until < now),  # its worker died: the lease expired
+    )
+
+
+def claim(*, db_session: Session, worker: str, kinds: tuple[str, ...], now: dt.datetime | None = None) -> Job | None:
+    """Takes the oldest job that is due (or whose lease expired) for `worker` and commits; None when none is."""
+    for _ in range(5):  # another worker may take the candidate first
+        now = now or utcnow()
+        query = select(Job.id).where(Job.kind.in_(kinds), _claimable(now)).order_by(Job.id).limit(1)
+        if db_session.get_bind().dialect.name == "postgresql":
+            query = query.with_for_update(skip_locked=True)
+        job_id = db_session.scalar(query)
+        if job_id is None:
+            db_session.commit()
+            return None
+        taken = db_session.execute(
+            update(Job)
+            .where(Job.id == job_id, _claimable(now))
+            .values(status="running", locked_by=worker, locked_until=now + LEASE, attempts=Job.attempts + 1)
+        ).rowcount
+        db_session.commit()
+        if taken:
+            return db_session.get(Job, job_id)
+        now = None
+    return None
+
+
+def finish(*, db_session: Session, job: Job, result: dict) -> None:
+    """Marks a job done with its result and commits."""
+    job.status, job.result, job.error = "done", result, None
+    job.locked_by = job.locked_until = None
+    job.finished_at = utcnow()
+    db_session.commit()
+
+
+def fail(*, db_session: Session, job: Job, error: str) -> None:
+    """Queues the job again after a delay, or marks it failed after max_attempts; commits."""
+    job.error = error[:4000]
+    job.locked_by = job.locked_until = None
+    if job.attempts >= job.max_attempts:
+        job.status, job.finished_at = "failed", utcnow()
+    else:
+        job.status = "queued"
+        job.run_after = utcnow() + dt.timedelta(seconds=RETRY_DELAYS_S[min(job.attempts, len(RETRY_DELAYS_S)) - 1])
+    db_session.commit()
+
+
+def progress(*, db_session: Session, batch: str) -> dict[str, int]:
+    """Returns {"queued", "running", "done", "failed", "total"} counts of a batch."""
+    counts = dict(
+        db_session.execute(select(Job.status, func.count()).where(Job.batch == batch).group_by(Job.status)).all()
+    )
+    out = {s: int(counts.get(s, 0)) for s in ("queued", "running", "done", "failed")}
+    out["total"] = sum(out.values())
+    return out

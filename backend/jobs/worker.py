@@ -1,0 +1,66 @@
+"""`coach-server worker`: takes jobs from the queue and runs them, one at a time, until stopped (or --once)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import socket
+import sys
+import time
+import traceback
+
+from backend.jobs import queue
+
+KINDS = ("reanalyze",)
+
+
+def run_job(db_session, job, settings) -> dict:
+    """Runs one job and returns its result (raises on failure)."""
+    if job.kind == "reanalyze":
+        from backend.records.reanalysis import reanalyze_session
+
+        return reanalyze_session(db_session=db_session, session_id=int(job.payload["session_id"]),
+                                 max_frames=settings.SESSION_MAX_FRAMES,
+                                 max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
+    raise ValueError(f"unknown job kind {job.kind!r}")
+
+
+def work(*, sessionmaker, settings, name: str, once: bool = False, idle_s: float = 1.0, stop=lambda: False) -> int:
+    """Runs jobs until stop() (or, once=True, until the queue is empty); returns how many it ran."""
+    ran = 0
+    while not stop():
+        with sessionmaker() as db_session:
+            job = queue.claim(db_session=db_session, worker=name, kinds=KINDS)
+            if job is None:
+                if once:
+                    return ran
+                time.sleep(idle_s)
+                continue
+            try:
+                result = run_job(db_session, job, settings)
+            except Exception as exc:  # noqa: BLE001 - any failure is retried, then recorded on the job
+                db_session.rollback()
+                job = db_session.merge(job)
+                queue.fail(db_session=db_session, job=job, error=f"{type(exc).__name__}: {exc}\n"
+                           f"{traceback.format_exc(limit=3)}")  # fmt: skip
+            else:
+                queue.finish(db_session=db_session, job=job, result=result)  # commits the work with the job
+            ran += 1
+    return ran
+
+
+def main(args: argparse.Namespace) -> int:
+    """Runs the worker until SIGTERM/SIGINT (the job in hand is finished first)."""
+    from backend.config import get_settings
+    from backend.database import get_sessionmaker
+
+    stopping = []
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(sig, lambda *_: stopping.append(True))
+    name = f"{socket.gethostname()}:{os.getpid()}"
+    print(f"worker {name} started", file=sys.stderr)
+    ran = work(sessionmaker=get_sessionmaker(), settings=get_settings(), name=name, once=args.once,
+               stop=lambda: bool(stopping))  # fmt: skip
+    print(f"worker {name} stopped after {ran} job(s)", file=sys.stderr)
+    return 0

@@ -1,0 +1,125 @@
+"""Everything the clinic holds about one patient, in one zip archive with a README inside."""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import tempfile
+import zipfile
+from typing import IO
+
+from sqlalchemy import or_, select
+from sqlalchemy.orm import Session
+
+from backend.audit.models import AuditEvent
+from backend.devices.models import Device
+from backend.exercises.models import Exercise
+from backend.patients.models import TherapistPatient
+from backend.plans.models import Plan, PlanItem
+from backend.sessions import service as sessions
+from backend.sessions.models import ExerciseSession, SessionMetric
+from backend.storage import StorageError
+from backend.suggestions.models import Suggestion
+from backend.users.models import User
+
+FORMAT_VERSION = "1"
+README = """Kinect Home Coach: all data held about patient {patient_id} ({email})
+Made {made} (UTC) at the request of {who}. Archive format version {version}.
+
+account.json      your account: e-mail, name, role, when it was made (no password: only its hash is kept,
+                  and it is not given out)
+therapists.json   the therapists assigned to you
+plans.json        your exercise plans, each with its exercises, sets, repetitions and weekly frequency
+sessions.json     every exercise session: when, which exercise, how long, the file's SHA-256, and the
+                  metrics computed from it (repetitions, range of motion, balance, data quality ...) with the
+                  version of the analysis that made them
+sessions/         the session files themselves (.khs: raw and filtered skeleton, readable with the open-source
+                  kinect-agent tool, docs/session-file.md); a file removed by the clinic's retention period, or
+                  that could not be read, is listed in sessions.json with "file": null and the reason
+advice.json       suggestions and messages from your therapists and from the system's rules
+devices.json      the home computers paired to your account
+audit.json        every recorded access to or change of your data: who, what, when, from which address
+
+All times are UTC, ISO 8601. JSON files are UTF-8.
+"""
+
+
+def _iso(t: dt.datetime | None) -> str | None:
+    return None if t is None else t.isoformat()
+
+
+def _row(obj, names: tuple[str, ...]) -> dict:
+    out = {}
+    for n in names:
+        v = getattr(obj, n)
+        out[n] = _iso(v) if isinstance(v, dt.datetime) else v.isoformat() if isinstance(v, dt.date) else v
+    return out
+
+
+def _json(z: zipfile.ZipFile, name: str, data) -> None:
+    z.writestr(name, json.dumps(data, indent=2, ensure_ascii=False, default=str))
+
+
+def build_archive(*, db_session: Session, patient: User, requested_by: str) -> IO[bytes]:
+    """Returns a file (positioned at 0) holding the zip archive of everything about `patient` (README.txt inside).
+
+    Session files are read from the object store, checked; one that cannot be read is listed with the reason.
+    """
+    pid = patient.id
+    out = tempfile.SpooledTemporaryFile(max_size=64 * 1024 * 1024)
+    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED) as z:
+        z.writestr("README.txt", README.format(patient_id=pid, email=patient.email, who=requested_by,
+                                               made=_iso(dt.datetime.now(dt.UTC)), version=FORMAT_VERSION))  # fmt: skip
+        _json(z, "account.json", _row(patient, ("id", "email", "full_name", "role", "is_active", "created_at",
+                                                "deactivated_at")))  # fmt: skip
+        links = db_session.scalars(select(TherapistPatient).where(TherapistPatient.patient_id == pid)).all()
+        therapists = []
+        for link in links:
+            t = db_session.get(User, link.therapist_id)
+            therapists.append({"id": link.therapist_id, "full_name": t.full_name if t else None,
+                               "email": t.email if t else None})  # fmt: skip
+        _json(z, "therapists.json", therapists)
+        plans = []
+        for plan in db_session.scalars(select(Plan).where(Plan.patient_id == pid).order_by(Plan.id)):
+            items = db_session.scalars(select(PlanItem).where(PlanItem.plan_id == plan.id).order_by(PlanItem.position))
+            plans.append({
+                **_row(plan, tuple(c.key for c in Plan.__table__.columns)),
+                "items": [_row(i, tuple(c.key for c in PlanItem.__table__.columns)) for i in items],
+            })  # fmt: skip
+        _json(z, "plans.json", plans)
+        listed = []
+        rows = db_session.execute(
+            select(ExerciseSession, Exercise.slug, SessionMetric.document)
+            .outerjoin(Exercise, Exercise.id == ExerciseSession.exercise_id)
+            .outerjoin(SessionMetric, SessionMetric.session_id == ExerciseSession.id)
+            .where(ExerciseSession.patient_id == pid)
+            .order_by(ExerciseSession.started_at, ExerciseSession.id)
+        ).all()
+        for s, slug, doc in rows:
+            entry = _row(s, ("id", "client_session_id", "started_at", "duration_s", "n_frames", "file_format",
+                             "file_size", "content_hash", "processing_version", "processing_params", "status",
+                             "error", "created_at"))  # fmt: skip
+            entry["client_session_id"] = str(s.client_session_id)
+            entry["exercise"] = slug
+            entry["metrics"] = doc
+            try:
+                data = sessions.session_file(db_session=db_session, session_id=s.id)
+                name = f"sessions/session-{s.id}.khs"
+                z.writestr(name, data)
+                entry["file"], entry["file_missing_reason"] = name, None
+            except (StorageError, sessions.SessionFileRemoved) as exc:
+                entry["file"], entry["file_missing_reason"] = None, exc.message
+            listed.append(entry)
+        _json(z, "sessions.json", listed)
+        advice = db_session.scalars(select(Suggestion).where(Suggestion.patient_id == pid).order_by(Suggestion.id))
+        _json(z, "advice.json", [_row(a, tuple(c.key for c in Suggestion.__table__.columns)) for a in advice])
+        devices = db_session.scalars(select(Device).where(Device.patient_id == pid).order_by(Device.id))
+        _json(z, "devices.json", [_row(d, ("id", "name", "created_at")) for d in devices])
+        audit = db_session.scalars(
+            select(AuditEvent)
+            .where(or_(AuditEvent.patient_id == pid, AuditEvent.actor_user_id == pid))
+            .order_by(AuditEvent.at, AuditEvent.id)
+        )
+        _json(z, "audit.json", [_row(a, tuple(c.key for c in AuditEvent.__table__.columns)) for a in audit])
+    out.seek(0)
+    return out

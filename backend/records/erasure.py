@@ -1,0 +1,100 @@
+"""Erasing a patient: every row about them and every stored object of theirs goes; the audit log keeps only that
+an erasure happened, by whom and when."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from sqlalchemy import delete, event, func, or_, select, update
+from sqlalchemy.orm import Session
+
+from backend.audit.models import AuditEvent
+from backend.audit.service import record
+from backend.devices.models import Device, PairingCode
+from backend.patients.models import TherapistPatient
+from backend.plans.models import Plan, PlanItem
+from backend.replay.models import SessionReplay
+from backend.sessions.models import ExerciseSession, SessionMetric
+from backend.storage import get_store
+from backend.suggestions.models import Suggestion
+from backend.users.models import ApiToken, LoginAttempt, LoginSession, User
+
+
+@dataclass
+class Erasure:
+    """What an erasure removed: rows per table and the stored objects to delete once the transaction commits."""
+
+    rows: dict[str, int]
+    objects: list[str]
+
+
+def _count(db_session: Session, stmt) -> int:
+    return int(db_session.execute(stmt).rowcount or 0)
+
+
+def erase_patient(*, db_session: Session, patient: User, caller) -> Erasure:
+    """Deletes every row about `patient` (sessions, metrics, replays, plans, advice, devices, links, logins,
+    tokens, audit entries about or by them, the account) and records one audit row "patient.erase" with no
+    patient id, name or e-mail. The stored objects are deleted after the transaction commits (a rollback keeps
+    them); an object another patient's row still points to is kept. Flushes, never commits."""
+    pid, email = patient.id, patient.email
+    session_ids = select(ExerciseSession.id).where(ExerciseSession.patient_id == pid)
+    own_files = select(ExerciseSession.file_key).where(ExerciseSession.patient_id == pid)
+    own_replays = select(SessionReplay.data_key).where(SessionReplay.session_id.in_(session_ids))
+    keys = {k for k in db_session.scalars(own_files) if k} | {k for k in db_session.scalars(own_replays) if k}
+    rows = {
+        "session_replay": _count(db_session, delete(SessionReplay).where(SessionReplay.session_id.in_(session_ids))),
+        "session_metric": _count(db_session, delete(SessionMetric).where(SessionMetric.session_id.in_(session_ids))),
+        "suggestion": _count(db_session, delete(Suggestion).where(Suggestion.patient_id == pid)),
+    }
+    rows["exercise_session"] = _count(db_session, delete(ExerciseSession).where(ExerciseSession.patient_id == pid))
+    plan_ids = select(Plan.id).where(Plan.patient_id == pid)
+    rows["plan_item"] = _count(db_session, delete(PlanItem).where(PlanItem.plan_id.in_(plan_ids)))
+    rows["plan"] = _count(db_session, delete(Plan).where(Plan.patient_id == pid))
+    rows["pairing_code"] = _count(db_session, delete(PairingCode).where(PairingCode.patient_id == pid))
+    rows["device"] = _count(db_session, delete(Device).where(Device.patient_id == pid))
+    rows["therapist_patient"] = _count(db_session, delete(TherapistPatient).where(TherapistPatient.patient_id == pid))
+    rows["api_token"] = _count(db_session, delete(ApiToken).where(ApiToken.user_id == pid))
+    rows["login_session"] = _count(db_session, delete(LoginSession).where(LoginSession.user_id == pid))
+    rows["login_attempt"] = _count(
+        db_session, delete(LoginAttempt).where(func.lower(LoginAttempt.email) == email.lower())
+    )
+    about = or_(AuditEvent.patient_id == pid, AuditEvent.actor_user_id == pid,
+                (AuditEvent.object_type.in_(("user", "patient"))) & (AuditEvent.object_id == str(pid)))  # fmt: skip
+    rows["audit_event"] = _count(db_session, delete(AuditEvent).where(about))
+    # rows of others that named the patient as author or decider (a patient never is, but the schema allows it)
+    db_session.execute(update(Suggestion).where(Suggestion.author_id == pid).values(author_id=None))
+    db_session.execute(update(Suggestion).where(Suggestion.decided_by_id == pid).values(decided_by_id=None))
+    db_session.execute(update(PairingCode).where(PairingCode.created_by_id == pid).values(created_by_id=None))
+    db_session.expunge(patient)
+    rows["user"] = _count(db_session, delete(User).where(User.id == pid))
+    still_used = set(db_session.scalars(select(ExerciseSession.file_key).where(ExerciseSession.file_key.in_(keys))))
+    still_used |= set(db_session.scalars(select(SessionReplay.data_key).where(SessionReplay.data_key.in_(keys))))
+    objects = sorted(keys - still_used)
+    record(db_session=db_session, caller=caller, action="patient.erase", object_type="patient",
+           detail={"rows_deleted": sum(rows.values()), "objects_deleted": len(objects)})  # fmt: skip
+    delete_after_commit(db_session, objects)
+    return Erasure(rows=rows, objects=objects)
+
+
+_PENDING = "records.objects_to_delete"
+
+
+def delete_after_commit(db_session: Session, keys: list[str]) -> None:
+    """Deletes the objects once the session's transaction commits; nothing when it rolls back."""
+    if keys:
+        db_session.info.setdefault(_PENDING, []).extend(keys)
+
+
+@event.listens_for(Session, "after_commit")
+def _on_commit(session: Session) -> None:
+    keys = session.info.pop(_PENDING, None)
+    if keys:
+        store = get_store()
+        for key in keys:
+            store.delete(key)
+
+
+@event.listens_for(Session, "after_rollback")
+def _on_rollback(session: Session) -> None:
+    session.info.pop(_PENDING, None)

@@ -1,0 +1,86 @@
+"""Re-analysis of stored sessions with today's analysis: enqueue (CLI, admin API) and the job a worker runs.
+
+The job of a session: read its file from the object store (checked), decode it, compute the metrics document with
+today's analysis (backend.sessions.metrics.ANALYSIS_VERSION), move the current document to
+session_metric_version with its version, and store the new one. A session whose document is already of today's
+version is left as it is, so a job run twice (a worker died after the work, before marking it done) changes
+nothing the second time. Suggestions are not made again (the patient saw them already).
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import uuid
+
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from backend.database import utcnow
+from backend.exercises.library import EXERCISES
+from backend.exercises.models import Exercise
+from backend.jobs.models import SessionMetricVersion
+from backend.jobs.queue import enqueue
+from backend.sessions.metrics import ANALYSIS_VERSION, metrics_document, scalar_columns
+from backend.sessions.models import ExerciseSession, SessionMetric
+from backend.sessions.service import session_file
+from backend.suggestions.context import plan_targets, session_history
+from kinect_agent.formats import session_file as khs
+
+KIND = "reanalyze"
+OLDER = "before 2026.11.27"  # the version of documents made before analysis versions were recorded
+
+
+def enqueue_reanalysis(
+    *,
+    db_session: Session,
+    patient_id: int | None = None,
+    since: dt.date | None = None,
+    exercise: str | None = None,
+) -> tuple[str, int]:
+    """Queues one job per stored session matching the filters whose document is not of today's version; returns
+    (batch id, jobs added). Flushes."""
+    query = select(ExerciseSession.id).where(
+        (ExerciseSession.file_key.is_not(None)) | (ExerciseSession.file_bytes.is_not(None))
+    )
+    if patient_id is not None:
+        query = query.where(ExerciseSession.patient_id == patient_id)
+    if since is not None:
+        query = query.where(ExerciseSession.started_at >= dt.datetime.combine(since, dt.time(), tzinfo=dt.UTC))
+    if exercise is not None:
+        query = query.join(Exercise, Exercise.id == ExerciseSession.exercise_id).where(Exercise.slug == exercise)
+    batch = f"reanalyze-{uuid.uuid4().hex[:12]}"
+    ids = db_session.scalars(query.order_by(ExerciseSession.id)).all()
+    items = ((f"{KIND}:{sid}:{ANALYSIS_VERSION}", {"session_id": sid}) for sid in ids)
+    return batch, enqueue(db_session=db_session, kind=KIND, items=items, batch=batch)
+
+
+def reanalyze_session(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int) -> dict:
+    """Runs the job of one session (module doc); returns {"session_id", "changed", "from", "to"}. Flushes."""
+    session = db_session.get(ExerciseSession, session_id)
+    if session is None:
+        return {"session_id": session_id, "changed": False, "skipped": "the session no longer exists"}
+    metric = db_session.scalar(select(SessionMetric).where(SessionMetric.session_id == session_id))
+    old_version = (metric.document or {}).get("analysis_version", OLDER) if metric else None
+    if old_version == ANALYSIS_VERSION:
+        return {"session_id": session_id, "changed": False, "from": old_version, "to": ANALYSIS_VERSION}
+    slug = db_session.scalar(select(Exercise.slug).where(Exercise.id == session.exercise_id))
+    spec = EXERCISES.get(slug) if slug else None
+    if spec is None:
+        return {"session_id": session_id, "changed": False, "skipped": f"exercise {slug!r} is not in the library"}
+    payload = khs.decode(session_file(db_session=db_session, session_id=session_id), max_frames=max_frames,
+                         max_decoded_bytes=max_decoded_bytes)  # fmt: skip
+    target_reps, _ = plan_targets(db_session=db_session, patient_id=session.patient_id,
+                                  exercise_id=session.exercise_id, on=session.started_at.date())  # fmt: skip
+    history = [doc for _, doc in session_history(db_session=db_session, session=session)]
+    doc = metrics_document(payload, spec, target_reps=target_reps, history=history)
+    if metric is None:
+        db_session.add(SessionMetric(session_id=session_id, document=doc, created_at=utcnow(), **scalar_columns(doc)))
+    else:
+        db_session.add(SessionMetricVersion(session_id=session_id, analysis_version=old_version,
+                                            document=metric.document, replaced_at=utcnow()))  # fmt: skip
+        metric.document = doc
+        for name, value in scalar_columns(doc).items():
+            setattr(metric, name, value)
+    session.status, session.error = "processed", None
+    db_session.flush()
+    return {"session_id": session_id, "changed": True, "from": old_version, "to": ANALYSIS_VERSION}

@@ -1,0 +1,209 @@
+"""The progress report of one patient over a period, as a PDF a referring doctor reads (reportlab).
+
+Black-and-white safe: every series has its own marker and dash, every chart has its table beside it. Paper A4 or
+Letter. Sections: plan and adherence, repetitions and range of motion over time with the exercise's MDC95,
+balance, data quality, the therapist's notes, pain/effort (not recorded by this system: said so), who and when.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import io
+from collections import defaultdict
+from dataclasses import dataclass
+
+from reportlab.graphics.charts.lineplots import LinePlot
+from reportlab.graphics.shapes import Drawing, String
+from reportlab.graphics.widgets.markers import makeMarker
+from reportlab.lib import colors
+from reportlab.lib.pagesizes import A4, LETTER
+from reportlab.lib.styles import getSampleStyleSheet
+from reportlab.lib.units import mm
+from reportlab.platypus import KeepTogether, Paragraph, SimpleDocTemplate, Spacer, Table, TableStyle
+from sqlalchemy import select
+from sqlalchemy.orm import Session
+
+from backend.analysis.mdc import rom_mdc95
+from backend.exercises.models import Exercise
+from backend.plans.models import Plan, PlanItem
+from backend.sessions.models import ExerciseSession, SessionMetric
+from backend.suggestions.models import Suggestion
+from backend.users.models import User
+
+PAPERS = {"a4": A4, "letter": LETTER}
+MARKERS = ("FilledCircle", "FilledSquare", "FilledTriangle", "Cross", "FilledDiamond", "Circle")
+DASHES = (None, (4, 2), (1, 2), (6, 2, 1, 2), (2, 2), (8, 3))
+
+
+@dataclass(frozen=True)
+class Period:
+    """The report's days, first and last included (dates, UTC)."""
+
+    start: dt.date
+    end: dt.date
+
+    @property
+    def weeks(self) -> float:
+        """Returns the length in weeks (days / 7)."""
+        return ((self.end - self.start).days + 1) / 7.0
+
+
+def _p(text: str, style) -> Paragraph:
+    return Paragraph(text.replace("&", "&amp;").replace("<", "&lt;"), style)
+
+
+def _table(rows: list[list], widths=None) -> Table:
+    t = Table(rows, colWidths=widths, repeatRows=1)
+    t.setStyle(TableStyle([
+        ("FONT", (0, 0), (-1, 0), "Helvetica-Bold", 8.5), ("FONT", (0, 1), (-1, -1), "Helvetica", 8.5),
+        ("LINEBELOW", (0, 0), (-1, 0), 0.8, colors.black), ("LINEBELOW", (0, -1), (-1, -1), 0.4, colors.black),
+        ("ROWBACKGROUNDS", (0, 1), (-1, -1), [colors.white, colors.Color(0.93, 0.93, 0.93)]),
+        ("VALIGN", (0, 0), (-1, -1), "TOP"),
+    ]))  # fmt: skip
+    return t
+
+
+def _chart(title: str, series: dict[str, list[tuple[float, float]]], y_label: str, width: float) -> Drawing:
+    """Returns a line chart of {label: [(day number, value)]}, one marker and dash per series, in black."""
+    d = Drawing(width, 60 * mm)
+    plot = LinePlot()
+    plot.x, plot.y, plot.width, plot.height = 12 * mm, 10 * mm, width - 16 * mm, 40 * mm
+    plot.data = [pts for pts in series.values()]
+    for i, _ in enumerate(series):
+        line = plot.lines[i]
+        line.strokeColor = colors.black
+        line.strokeWidth = 1
+        line.symbol = makeMarker(MARKERS[i % len(MARKERS)], size=4)
+        if DASHES[i % len(DASHES)]:
+            line.strokeDashArray = DASHES[i % len(DASHES)]
+    plot.xValueAxis.labelTextFormat = "day %d"
+    plot.xValueAxis.labels.fontSize = plot.yValueAxis.labels.fontSize = 7
+    d.add(plot)
+    d.add(String(0, 55 * mm, title, fontName="Helvetica-Bold", fontSize=9))
+    d.add(String(0, 51 * mm, y_label, fontName="Helvetica", fontSize=7))
+    legend = "   ".join(f"{MARKERS[i % len(MARKERS)].replace('Filled', 'filled ').lower()}: {k}"
+                       for i, k in enumerate(series))  # fmt: skip
+    d.add(String(0, 0, legend, fontName="Helvetica", fontSize=7))
+    return d
+
+
+def build_report(*, db_session: Session, patient: User, period: Period, made_by: str, paper: str = "a4") -> bytes:
+    """Returns the PDF bytes of the progress report of `patient` over `period`, made by `made_by` (words)."""
+    styles = getSampleStyleSheet()
+    body, h1, h2 = styles["BodyText"], styles["Title"], styles["Heading2"]
+    body.fontSize, body.leading = 9.5, 12.5
+    page_w, page_h = PAPERS[paper]
+    margin = 18 * mm
+    width = page_w - 2 * margin
+    start = dt.datetime.combine(period.start, dt.time(), tzinfo=dt.UTC)
+    end = dt.datetime.combine(period.end + dt.timedelta(days=1), dt.time(), tzinfo=dt.UTC)
+    rows = db_session.execute(
+        select(ExerciseSession.started_at, Exercise.slug, Exercise.name, SessionMetric.repetitions,
+               SessionMetric.rom_deg, SessionMetric.quality_ok, SessionMetric.document)
+        .join(Exercise, Exercise.id == ExerciseSession.exercise_id)
+        .outerjoin(SessionMetric, SessionMetric.session_id == ExerciseSession.id)
+        .where(ExerciseSession.patient_id == patient.id, ExerciseSession.started_at >= start,
+               ExerciseSession.started_at < end)
+        .order_by(ExerciseSession.started_at)
+    ).all()  # fmt: skip
+    made = dt.datetime.now(dt.UTC)
+    story = [
+        _p(f"Progress report: {patient.full_name or patient.email}", h1),
+        _p(
+            f"Patient {patient.id}, {patient.email}. Period {period.start:%d %b %Y} to {period.end:%d %b %Y} "
+            f"({period.weeks:.1f} weeks). Made {made:%d %b %Y %H:%M} UTC by {made_by}.",
+            body,
+        ),  # fmt: skip
+        Spacer(1, 4 * mm),
+        _p("Plan and adherence", h2),
+    ]
+    plans = db_session.scalars(select(Plan).where(Plan.patient_id == patient.id, Plan.start_date <= period.end)
+                               .order_by(Plan.start_date)).all()  # fmt: skip
+    plans = [p for p in plans if p.end_date is None or p.end_date >= period.start]
+    done = defaultdict(int)
+    for r in rows:
+        done[r.slug] += 1
+    adherence = [["Plan", "Exercise", "Prescribed", "Planned", "Done", "Adherence"]]
+    for plan in plans:
+        first = max(plan.start_date, period.start)
+        last = min(plan.end_date or period.end, period.end)
+        weeks = max(((last - first).days + 1) / 7.0, 0.0)
+        items = db_session.execute(select(PlanItem, Exercise.slug, Exercise.name).join(Exercise)
+                                   .where(PlanItem.plan_id == plan.id).order_by(PlanItem.position)).all()  # fmt: skip
+        for item, slug, name in items:
+            planned = round(item.frequency_per_week * weeks)
+            share = f"{100 * done[slug] / planned:.0f} %" if planned else "–"
+            adherence.append([plan.title, name, f"{item.sets} × {item.repetitions}, {item.frequency_per_week}/week",
+                              str(planned), str(done[slug]), share])  # fmt: skip
+    if len(adherence) == 1:
+        story.append(_p("No plan was running in this period.", body))
+    else:
+        story.append(_table(adherence, [32 * mm, 38 * mm, 36 * mm, 24 * mm, 22 * mm, 20 * mm]))
+    story += [Spacer(1, 3 * mm), _p("Repetitions and range of motion", h2)]
+    by_ex: dict[str, list] = defaultdict(list)
+    for r in rows:
+        by_ex[r.name].append(r)
+    if not rows:
+        story.append(_p("No session was recorded in this period.", body))
+    for name, rs in by_ex.items():
+        slug = rs[0].slug
+        mdc = rom_mdc95(slug)
+        roms = [(float((r.started_at.date() - period.start).days), r.rom_deg) for r in rs if r.rom_deg is not None]
+        reps = [(float((r.started_at.date() - period.start).days), float(r.repetitions)) for r in rs
+                if r.repetitions is not None]  # fmt: skip
+        text = f"{name}: {len(rs)} session(s)."
+        if len(roms) >= 2:
+            change = roms[-1][1] - roms[0][1]
+            text += f" Range of motion {roms[0][1]:.0f}° → {roms[-1][1]:.0f}° ({change:+.0f}°"
+            if mdc:
+                verdict = "a real change" if abs(change) > mdc else "within the measurement's noise"
+                text += f"; MDC95 {mdc:.0f}°: {verdict})."
+            else:
+                text += "; no MDC measured for this exercise)."
+        block = [_p(text, body)]
+        if len(roms) >= 2 or len(reps) >= 2:
+            block.append(_chart(name, {"range of motion, degrees": roms, "repetitions": reps}, "value", width))
+        table = [["Date", "Repetitions", "Range of motion", "Balance sway", "Data quality"]]
+        for r in rs:
+            sway = ((r.document or {}).get("balance") or {}).get("sway_velocity_m_s")
+            table.append([f"{r.started_at:%d %b %Y %H:%M}", "–" if r.repetitions is None else str(r.repetitions),
+                          "–" if r.rom_deg is None else f"{r.rom_deg:.0f}°",
+                          "not measured" if sway is None else f"{100 * sway:.1f} cm/s",
+                          {True: "good", False: "poor", None: "–"}[r.quality_ok]])  # fmt: skip
+        block.append(_table(table, [40 * mm, 26 * mm, 32 * mm, 32 * mm, 28 * mm]))
+        story += [KeepTogether(block[:2]), block[-1], Spacer(1, 3 * mm)]
+    ok = sum(1 for r in rows if r.quality_ok)
+    story += [_p("Data quality", h2),
+              _p(f"{ok} of {len(rows)} session(s) had good tracking (the camera saw the body well enough for the "
+                 "numbers above to be trusted); read the others with care." if rows else "No session.", body),
+              _p("Pain and effort", h2),
+              _p("Not recorded: this system does not ask the patient for pain or effort ratings.", body),
+              _p("Therapist's notes", h2)]  # fmt: skip
+    notes = db_session.execute(
+        select(Suggestion.created_at, Suggestion.text, User.full_name).outerjoin(User, User.id == Suggestion.author_id)
+        .where(Suggestion.patient_id == patient.id, Suggestion.source == "therapist",
+               Suggestion.created_at >= start, Suggestion.created_at < end)
+        .order_by(Suggestion.created_at)
+    ).all()  # fmt: skip
+    plan_notes = [(p.title, p.notes) for p in plans if p.notes]
+    for title, note in plan_notes:
+        story.append(_p(f"Plan “{title}”: {note}", body))
+    for n in notes:
+        story.append(_p(f"{n.created_at:%d %b %Y}, {n.full_name or 'therapist'}: {n.text}", body))
+    if not notes and not plan_notes:
+        story.append(_p("No note in this period.", body))
+
+    def footer(canvas, doc) -> None:
+        canvas.saveState()
+        canvas.setFont("Helvetica", 7.5)
+        canvas.drawString(margin, 10 * mm, f"Kinect Home Coach · patient {patient.id} · {period.start} to "
+                                           f"{period.end} · made {made:%Y-%m-%d %H:%M} UTC by {made_by}")  # fmt: skip
+        canvas.drawRightString(page_w - margin, 10 * mm, f"page {doc.page}")
+        canvas.restoreState()
+
+    out = io.BytesIO()
+    doc = SimpleDocTemplate(out, pagesize=PAPERS[paper], leftMargin=margin, rightMargin=margin, topMargin=margin,
+                            bottomMargin=20 * mm, title=f"Progress report, patient {patient.id}",
+                            author="Kinect Home Coach")  # fmt: skip
+    doc.build(story, onFirstPage=footer, onLaterPages=footer)
+    return out.getvalue()

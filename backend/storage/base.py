@@ -1,0 +1,98 @@
+"""The object store interface: put bytes under their sha256, read them back checked, list and delete keys."""
+
+from __future__ import annotations
+
+import hashlib
+import re
+from abc import ABC, abstractmethod
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+from backend.storage.errors import StoredObjectCorrupt
+
+KINDS = ("session", "replay")
+_KEY = re.compile(r"^(session|replay)/[0-9a-f]{2}/[0-9a-f]{64}$")
+
+
+def sha256_hex(data: bytes) -> str:
+    """Returns the SHA-256 of data as 64 lowercase hex digits."""
+    return hashlib.sha256(data).hexdigest()
+
+
+def object_key(kind: str, sha256: str) -> str:
+    """Returns the key of an object of `kind` ("session" file or "replay") with this sha256: kind/ab/abcd…."""
+    if kind not in KINDS:
+        raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
+    return f"{kind}/{sha256[:2]}/{sha256}"
+
+
+def is_object_key(key: str) -> bool:
+    """Returns whether key has the form object_key makes (no path traversal, nothing else)."""
+    return bool(_KEY.match(key))
+
+
+@dataclass(frozen=True)
+class StoredObject:
+    """Where an object went: its key, the sha256 of its bytes (64 hex digits) and its size in bytes."""
+
+    key: str
+    sha256: str
+    size: int
+
+
+class ObjectStore(ABC):
+    """A content-addressed store: the same bytes always get the same key, so writing twice is harmless."""
+
+    name: str  # "local" or "s3", shown by `coach-server storage check`
+
+    def put(self, kind: str, data: bytes) -> StoredObject:
+        """Stores data atomically (a reader sees all of it or nothing) and returns its key and hash."""
+        digest = sha256_hex(data)
+        key = object_key(kind, digest)
+        self._put(key, data, digest)
+        return StoredObject(key=key, sha256=digest, size=len(data))
+
+    def get(self, key: str, sha256: str) -> bytes:
+        """Returns the bytes of key; raises StoredObjectMissing, or StoredObjectCorrupt when their sha256 differs."""
+        data = self._get(key)
+        actual = sha256_hex(data)
+        if actual != sha256:
+            raise StoredObjectCorrupt(
+                f"stored object {key} is corrupt: its sha256 is {actual[:16]}…, the database recorded {sha256[:16]}…"
+            )
+        return data
+
+    def check(self, key: str, sha256: str) -> str | None:
+        """Returns None when key holds bytes of this sha256, else "missing" or "corrupt"."""
+        from backend.storage.errors import StoredObjectMissing
+
+        try:
+            self.get(key, sha256)
+        except StoredObjectMissing:
+            return "missing"
+        except StoredObjectCorrupt:
+            return "corrupt"
+        return None
+
+    @abstractmethod
+    def _put(self, key: str, data: bytes, sha256: str) -> None: ...
+
+    @abstractmethod
+    def _get(self, key: str) -> bytes:
+        """Returns the bytes of key or raises StoredObjectMissing."""
+
+    @abstractmethod
+    def exists(self, key: str) -> bool:
+        """Returns whether key is in the store."""
+
+    @abstractmethod
+    def delete(self, key: str) -> None:
+        """Removes key (nothing happens when it is absent)."""
+
+    @abstractmethod
+    def keys(self) -> Iterator[str]:
+        """Yields every object key in the store (any order)."""
+
+    @abstractmethod
+    def describe(self) -> str:
+        """Returns where the objects are, in words (a folder, or a bucket and endpoint)."""

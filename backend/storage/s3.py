@@ -1,0 +1,120 @@
+"""The S3 store: any S3-compatible service (MinIO, AWS S3, Ceph RGW …) through boto3."""
+
+from __future__ import annotations
+
+import base64
+import binascii
+from collections.abc import Iterator
+
+from backend.storage.base import ObjectStore, is_object_key
+from backend.storage.errors import StorageError, StoredObjectMissing
+
+_MISSING = ("NoSuchKey", "404", "NotFound")
+
+
+class S3Store(ObjectStore):
+    """Objects as bucket/prefix + key; a PUT is atomic in S3 (readers see the old object or the whole new one)."""
+
+    name = "s3"
+
+    def __init__(self, client, bucket: str, prefix: str = "", endpoint: str = "") -> None:
+        self.client = client
+        self.bucket = bucket
+        self.prefix = prefix.strip("/") + "/" if prefix.strip("/") else ""
+        self.endpoint = endpoint
+
+    @classmethod
+    def connect(
+        cls,
+        *,
+        bucket: str,
+        prefix: str = "",
+        endpoint_url: str = "",
+        region: str = "us-east-1",
+        access_key_id: str = "",
+        secret_access_key: str = "",
+    ) -> S3Store:
+        """Returns a store on `bucket` (credentials: the given keys, else boto3's usual chain)."""
+        import boto3
+        from botocore.config import Config
+
+        client = boto3.client(
+            "s3",
+            endpoint_url=endpoint_url or None,
+            region_name=region,
+            aws_access_key_id=access_key_id or None,
+            aws_secret_access_key=secret_access_key or None,
+            config=Config(retries={"max_attempts": 5, "mode": "standard"}, s3={"addressing_style": "path"}),
+        )
+        return cls(client, bucket, prefix, endpoint_url or "AWS")
+
+    def _name(self, key: str) -> str:
+        if not is_object_key(key):
+            raise StorageError(f"invalid object key {key!r}")
+        return self.prefix + key
+
+    def _call(self, what: str, key: str, fn, **kw):
+        from botocore.exceptions import BotoCoreError, ClientError
+
+        try:
+            return fn(Bucket=self.bucket, **kw)
+        except ClientError as exc:
+            code = str(exc.response.get("Error", {}).get("Code", ""))
+            if code in _MISSING:
+                raise StoredObjectMissing(f"stored object {key} is missing from bucket {self.bucket}") from None
+            raise StorageError(f"cannot {what} {key} in bucket {self.bucket}: {code} {exc}") from None
+        except BotoCoreError as exc:
+            raise StorageError(f"cannot {what} {key} in bucket {self.bucket} at {self.endpoint}: {exc}") from None
+
+    def _put(self, key: str, data: bytes, sha256: str) -> None:
+        name = self._name(key)
+        try:
+            head = self._call("check", key, self.client.head_object, Key=name)
+            if head.get("Metadata", {}).get("sha256") == sha256 and head.get("ContentLength") == len(data):
+                return  # already there: content-addressed
+        except StoredObjectMissing:
+            pass
+        checksum = base64.b64encode(binascii.unhexlify(sha256)).decode()
+        self._call("write", key, self.client.put_object, Key=name, Body=data, ChecksumSHA256=checksum,
+                   Metadata={"sha256": sha256})  # fmt: skip
+
+    def _get(self, key: str) -> bytes:
+        body = self._call("read", key, self.client.get_object, Key=self._name(key))["Body"]
+        try:
+            return body.read()
+        finally:
+            body.close()
+
+    def exists(self, key: str) -> bool:
+        """Returns whether key is in the bucket."""
+        try:
+            self._call("check", key, self.client.head_object, Key=self._name(key))
+        except StoredObjectMissing:
+            return False
+        return True
+
+    def delete(self, key: str) -> None:
+        """Removes key (nothing happens when it is absent)."""
+        self._call("delete", key, self.client.delete_object, Key=self._name(key))
+
+    def keys(self) -> Iterator[str]:
+        """Yields every object key under the prefix."""
+        pages = self.client.get_paginator("list_objects_v2").paginate(Bucket=self.bucket, Prefix=self.prefix)
+        for page in pages:
+            for item in page.get("Contents", []):
+                key = item["Key"][len(self.prefix) :]
+                if is_object_key(key):
+                    yield key
+
+    def ensure_bucket(self) -> None:
+        """Creates the bucket when it does not exist."""
+        from botocore.exceptions import ClientError
+
+        try:
+            self.client.head_bucket(Bucket=self.bucket)
+        except ClientError:
+            self._call("create bucket for", self.bucket, self.client.create_bucket)
+
+    def describe(self) -> str:
+        """Returns the bucket, prefix and endpoint."""
+        return f"S3 bucket {self.bucket}{'/' + self.prefix if self.prefix else ''} at {self.endpoint}"

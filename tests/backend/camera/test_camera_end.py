@@ -1,0 +1,93 @@
+"""A camera set from batches to the stored session: the live count rises with squats (the online filter on the
+mapped landmarks), the end stores one session of device `webcam` through the offline pipeline, and a repeated end,
+re-sent batches or a rebuilt live state never count or store twice."""
+
+from __future__ import annotations
+
+import uuid
+
+from sqlalchemy import func, select
+
+from backend.camera import live_count
+from backend.sessions.models import ExerciseSession
+from backend.sessions.service import session_file as stored_file
+from kinect_agent.formats import session_file
+from tests.backend.camera.landmarks import batch, squats
+
+PER_BATCH = 6  # frames per batch: 0.2 s at 30 fps
+
+
+def _send_all(client, set_id, frames, headers) -> list[dict]:
+    answers = []
+    for seq, k in enumerate(range(0, len(frames), PER_BATCH)):
+        r = client.post(f"/api/v1/camera/sets/{set_id}/batches", json=batch(seq, frames[k : k + PER_BATCH]),
+                        headers=headers)  # fmt: skip
+        assert r.status_code == 201, r.text
+        answers.append(r.json())
+    return answers
+
+
+def _sessions(db_session, patient_id) -> int:
+    return db_session.scalar(
+        select(func.count()).select_from(ExerciseSession).where(ExerciseSession.patient_id == patient_id)
+    )
+
+
+def test_squats_count_live_and_the_end_stores_one_webcam_session(client, db_session, camera_home, started, monkeypatch):
+    events = []
+    monkeypatch.setattr("backend.camera.live_count.publish", lambda _s, ev: events.append(ev))
+    set_id, h = started(seconds_ago=120), camera_home["headers"]
+    answers = _send_all(client, set_id, squats(3), h)
+    counts = [a["count"] for a in answers]
+    assert counts == sorted(counts) and counts[-1] == 3, counts
+    assert [e.kind for e in events] == ["live.progress"] * len(answers)
+    assert events[-1].data["count"] == 3 and events[-1].data["device"] == "webcam"
+    r = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": len(answers) - 1, "reason": "target"},
+                    headers=h)  # fmt: skip
+    assert r.status_code == 200 and r.json()["status"] == "stored", r.text
+    session_id = r.json()["session_id"]
+    stored = db_session.get(ExerciseSession, session_id)
+    assert stored.client_session_id == uuid.UUID(set_id) and stored.device_id is None
+    payload = session_file.decode(stored_file(db_session=db_session, session_id=session_id))
+    assert payload.raw.meta.device == "webcam" and payload.filtered is not None
+    assert payload.params["model"]["name"] == "pose_landmarker_lite.task"
+    assert len(payload.params["model"]["sha256"]) == 64
+    assert 29 <= payload.params["fps_achieved"] <= 31, payload.params["fps_achieved"]
+    detail = client.get(f"/api/v1/sessions/{session_id}", headers=h).json()
+    assert detail["repetitions"] == 3, detail
+    # the same end again (a lost answer), and a batch sent again after the end: nothing new
+    again = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": len(answers) - 1}, headers=h)
+    assert again.status_code == 200 and again.json()["session_id"] == session_id, again.text
+    resent = client.post(f"/api/v1/camera/sets/{set_id}/batches", json=batch(0, squats(3)[:PER_BATCH]), headers=h)
+    assert resent.status_code == 200 and resent.json()["repeated"] is True, resent.text
+    late = client.post(f"/api/v1/camera/sets/{set_id}/batches", json=batch(len(answers), squats(1, t0=200)[:3]),
+                       headers=h)  # fmt: skip
+    assert late.status_code == 409 and late.json()["error"] == "CameraSetEnded", late.text
+    assert _sessions(db_session, camera_home["patient"].id) == 1
+
+
+def test_a_lost_live_state_is_rebuilt_from_the_stored_batches_with_the_same_count(client, camera_home, started):
+    set_id, h = started(seconds_ago=120), camera_home["headers"]
+    frames = squats(2)
+    half = len(frames) // 2 // PER_BATCH * PER_BATCH
+    _send_all(client, set_id, frames[:half], h)
+    live_count.forget(uuid.UUID(set_id))  # another worker, or a restart
+    seq = half // PER_BATCH
+    last = None
+    for k in range(half, len(frames), PER_BATCH):
+        r = client.post(f"/api/v1/camera/sets/{set_id}/batches", json=batch(seq, frames[k : k + PER_BATCH]), headers=h)
+        assert r.status_code == 201, r.text
+        last, seq = r.json(), seq + 1
+    assert last["count"] == 2, last
+
+
+def test_the_end_waits_for_batches_the_page_sent_and_a_too_short_set_stores_nothing(client, db_session, camera_home,
+                                                                                    started):  # fmt: skip
+    set_id, h = started(), camera_home["headers"]
+    r = client.post(f"/api/v1/camera/sets/{set_id}/batches", json=batch(0, squats(1)[:5]), headers=h)
+    assert r.status_code == 201, r.text
+    r = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": 3}, headers=h)
+    assert r.status_code == 409 and "batches 1..3" in r.json()["detail"], r.text
+    r = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": 0}, headers=h)
+    assert r.status_code == 200 and r.json()["status"] == "failed" and "frames" in r.json()["error"], r.text
+    assert _sessions(db_session, camera_home["patient"].id) == 0

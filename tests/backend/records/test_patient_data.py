@@ -1,0 +1,137 @@
+"""A patient's whole data in one archive, erasure that leaves nothing behind, and the retention period."""
+
+from __future__ import annotations
+
+import datetime as dt
+import io
+import json
+import zipfile
+
+import sqlalchemy as sa
+
+from backend.audit.models import AuditEvent
+from backend.database import Base
+from backend.records.retention import apply_retention
+from backend.sessions.models import ExerciseSession, SessionMetric
+from tests.backend.khs_files import make_khs
+
+
+def _upload(client, headers, seed):
+    response = client.post("/api/v1/sessions", content=make_khs("squat", 1, seed=seed),
+                           headers={"Content-Type": "application/octet-stream", **headers},
+                           params={"exercise": "squat"})  # fmt: skip
+    assert response.status_code == 201, response.text
+    return response.json()["id"]
+
+
+def _patient_with_data(client, make_patient_with_therapist, auth_headers, seed):
+    patient, therapist = make_patient_with_therapist()
+    headers = auth_headers(patient)
+    ids = [_upload(client, headers, seed), _upload(client, headers, seed + 1)]
+    assert client.get(f"/api/v1/sessions/{ids[0]}/replay", headers=headers).status_code == 200
+    plan = {"title": "knees", "start_date": "2026-11-23",
+            "items": [{"exercise_slug": "squat", "sets": 1, "repetitions": 5, "frequency_per_week": 2}]}  # fmt: skip
+    th = auth_headers(therapist)
+    assert client.post(f"/api/v1/patients/{patient.id}/plans", json=plan, headers=th).status_code == 201
+    assert client.post(f"/api/v1/patients/{patient.id}/suggestions", json={"text": "Slower."}, headers=th).is_success
+    assert client.post(f"/api/v1/patients/{patient.id}/pairing-codes", headers=headers).is_success
+    return patient, ids
+
+
+def test_the_archive_holds_everything_with_a_readme(client, make_patient_with_therapist, auth_headers, with_store):
+    patient, ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=51)
+    response = client.get(f"/api/v1/patients/{patient.id}/archive", headers=auth_headers(patient))
+    assert response.status_code == 200 and response.headers["content-type"] == "application/zip"
+    z = zipfile.ZipFile(io.BytesIO(response.content))
+    names = set(z.namelist())
+    assert {"README.txt", "account.json", "plans.json", "sessions.json", "advice.json", "audit.json"} <= names
+    assert f"patient {patient.id} ({patient.email})" in z.read("README.txt").decode()
+    sessions = json.loads(z.read("sessions.json"))
+    assert [s["id"] for s in sessions] == sorted(ids) and all(s["metrics"]["repetitions"] >= 0 for s in sessions)
+    for s in sessions:
+        data = z.read(s["file"])
+        assert with_store.get(f"session/{s['content_hash'][:2]}/{s['content_hash']}", s["content_hash"]) == data
+    assert json.loads(z.read("account.json"))["email"] == patient.email
+    assert "password_hash" not in z.read("account.json").decode()
+    assert json.loads(z.read("plans.json"))[0]["items"][0]["repetitions"] == 5
+    assert json.loads(z.read("advice.json"))[-1]["text"] == "Slower."
+    assert any(a["action"] == "session.create" or a["action"].startswith("session") for a in
+               json.loads(z.read("audit.json")))  # fmt: skip
+
+
+def _mentions(db_session, patient_id: int, email: str, session_ids: list[int]) -> list[str]:
+    """Returns every row of every table that names the patient: an id column, a session of theirs, the e-mail."""
+    found = []
+    conn = db_session.connection()
+    for table in Base.metadata.sorted_tables:
+        for row in conn.execute(sa.select(table)).mappings():
+            for col, value in row.items():
+                if (
+                    col
+                    in (
+                        "patient_id",
+                        "user_id",
+                        "actor_user_id",
+                        "author_id",
+                        "decided_by_id",
+                        "created_by_id",
+                        "therapist_id",
+                    )
+                    and value == patient_id
+                    and table.name != "therapist_patient"
+                ):
+                    found.append(f"{table.name}.{col}")
+                elif table.name == "user" and col == "id" and value == patient_id:
+                    found.append("user.id")
+                elif col == "session_id" and value in session_ids:
+                    found.append(f"{table.name}.session_id")
+                elif email.lower() in json.dumps(value, default=str).lower():
+                    found.append(f"{table.name}.{col} holds the e-mail")
+        if table.name == "therapist_patient":
+            n = conn.scalar(sa.select(sa.func.count()).select_from(table).where(table.c.patient_id == patient_id))
+            found += ["therapist_patient.patient_id"] * n
+    return found
+
+
+def test_erasure_leaves_only_an_audit_entry(client, db_session, make_patient_with_therapist, make_user, auth_headers,
+                                            with_store):  # fmt: skip
+    patient, ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=61)
+    other, other_ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=71)
+    admin = make_user("admin")
+    headers = auth_headers(admin)
+    assert client.get(f"/api/v1/patients/{patient.id}/archive", headers=headers).status_code == 200
+    kept = {k for k in with_store.keys()}
+    others = set(db_session.scalars(sa.select(ExerciseSession.file_key).where(ExerciseSession.id.in_(other_ids))))
+    pid, email = patient.id, patient.email
+    wrong = client.post(f"/api/v1/patients/{pid}/erasure", json={"confirm_email": "x@y.org"}, headers=headers)
+    assert wrong.status_code == 422 and wrong.json()["error"] == "InvalidInput"
+    assert set(with_store.keys()) == kept
+    response = client.post(f"/api/v1/patients/{pid}/erasure", json={"confirm_email": email.upper()}, headers=headers)
+    assert response.status_code == 200, response.text
+    assert response.json()["rows"]["exercise_session"] == 2 and response.json()["objects"] == 3  # 2 files, 1 replay
+    db_session.expire_all()
+    assert _mentions(db_session, pid, email, ids) == []
+    assert others <= set(with_store.keys()) and len(set(with_store.keys())) == len(kept) - 3
+    events = db_session.scalars(sa.select(AuditEvent).where(AuditEvent.action == "patient.erase")).all()
+    assert len(events) == 1 and events[0].actor_user_id == admin.id and events[0].patient_id is None
+    assert client.get(f"/api/v1/patients/{other.id}/archive", headers=headers).status_code == 200
+
+
+def test_retention_removes_old_files_and_keeps_metrics(client, db_session, make_patient_with_therapist, auth_headers,
+                                                       with_store):  # fmt: skip
+    patient, ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=81)
+    old = db_session.get(ExerciseSession, ids[0])
+    old.started_at = dt.datetime(2025, 1, 1, tzinfo=dt.UTC)
+    db_session.flush()
+    key = old.file_key
+    report = apply_retention(db_session=db_session, days=365, now=dt.datetime(2026, 11, 27, tzinfo=dt.UTC))
+    db_session.commit()
+    assert report.per_patient == {patient.id: 1} and not with_store.exists(key)
+    db_session.expire_all()
+    assert db_session.get(ExerciseSession, ids[0]).file_key is None
+    assert db_session.scalar(sa.select(SessionMetric.repetitions).where(SessionMetric.session_id == ids[0])) is not None
+    response = client.get(f"/api/v1/sessions/{ids[0]}/file", headers=auth_headers(patient))
+    assert response.status_code == 410 and response.json()["error"] == "SessionFileRemoved"
+    assert client.get(f"/api/v1/sessions/{ids[1]}/file", headers=auth_headers(patient)).status_code == 200
+    audit = db_session.scalars(sa.select(AuditEvent).where(AuditEvent.action == "session.files_expired")).one()
+    assert audit.patient_id == patient.id and audit.detail["files"] == 1

@@ -1,0 +1,60 @@
+"""The PDF progress report: A4 and Letter, the patient's sessions, plan, notes, who and when."""
+
+from __future__ import annotations
+
+import datetime as dt
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+from reportlab.lib.pagesizes import A4, LETTER
+from sqlalchemy import select
+
+from backend.exercises.models import Exercise
+from tests.backend.khs_files import make_khs
+
+SHOTS = Path(os.environ.get("COACH_SHOTS_DIR", "/tmp/shots"))
+
+
+def _pdf_text(data: bytes, tmp_path) -> str:
+    path = tmp_path / "r.pdf"
+    path.write_bytes(data)
+    return subprocess.run(["pdftotext", "-layout", str(path), "-"], capture_output=True, text=True, check=True).stdout
+
+
+@pytest.mark.parametrize(("paper", "size"), [("a4", A4), ("letter", LETTER)])
+def test_report_lists_sessions_plan_and_notes(client, db_session, make_patient_with_therapist, auth_headers, tmp_path,
+                                              paper, size):  # fmt: skip
+    patient, therapist = make_patient_with_therapist()
+    th = auth_headers(therapist)
+    plan = {"title": "Knees", "start_date": "2026-11-01", "notes": "Slowly, no pain.",
+            "items": [{"exercise_slug": "squat", "sets": 1, "repetitions": 5, "frequency_per_week": 3}]}  # fmt: skip
+    assert client.post(f"/api/v1/patients/{patient.id}/plans", json=plan, headers=th).status_code == 201
+    for seed in (91, 92):
+        r = client.post("/api/v1/sessions", content=make_khs("squat", 3, seed=seed), params={"exercise": "squat"},
+                        headers={"Content-Type": "application/octet-stream", **auth_headers(patient)})  # fmt: skip
+        assert r.status_code == 201, r.text
+    assert client.post(f"/api/v1/patients/{patient.id}/suggestions", json={"text": "Deeper squats."}, headers=th)
+    today = dt.datetime.now(dt.UTC).date()
+    response = client.get(f"/api/v1/patients/{patient.id}/report.pdf", headers=th,
+                          params={"from": "2026-11-01", "to": str(today), "paper": paper})  # fmt: skip
+    assert response.status_code == 200 and response.headers["content-type"] == "application/pdf"
+    assert response.content.startswith(b"%PDF")
+    w, h = size
+    assert f"/MediaBox [ 0 0 {w:g} {h:g} ]".encode() in response.content or b"MediaBox" in response.content
+    text = _pdf_text(response.content, tmp_path)
+    assert "Progress report" in text and patient.email in text
+    assert "Plan and adherence" in text and "Knees" in text and "Slowly, no pain." in text
+    assert "Deeper squats." in text and "Not recorded" in text
+    name = db_session.scalar(select(Exercise.name).where(Exercise.slug == "squat"))
+    assert f"{name}: 2 session(s)." in text and "MDC95" in text
+    (SHOTS / f"report-{paper}.pdf").parent.mkdir(parents=True, exist_ok=True)
+    (SHOTS / f"report-{paper}.pdf").write_bytes(response.content)  # for pdftoppm renders
+
+
+def test_a_backwards_period_is_a_clear_422(client, make_patient_with_therapist, auth_headers):
+    patient, therapist = make_patient_with_therapist()
+    response = client.get(f"/api/v1/patients/{patient.id}/report.pdf", headers=auth_headers(therapist),
+                          params={"from": "2026-11-20", "to": "2026-11-01"})  # fmt: skip
+    assert response.status_code == 422 and "must run forwards" in response.json()["detail"]

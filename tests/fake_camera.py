@@ -1,0 +1,78 @@
+"""A video file as Chromium's fake camera: writes a YUV4MPEG2 (.y4m) clip that
+`--use-fake-device-for-media-stream --use-file-for-fake-video-capture=FILE.y4m` plays as the webcam.
+
+    from tests.fake_camera import sports2d_y4m
+    path = sports2d_y4m(tmp_path / "camera.y4m")          # Sports2D's demo (BSD-3-Clause), see tests/media.py
+
+The clip is made at test time from a public video shipped in a registry package (tests/media.py); OpenCV (from the
+`webcam` extra's mediapipe dependencies) decodes it, no ffmpeg is needed. Frames are scaled to fit width x height,
+letterboxed with black, converted to I420 (BT.601, full range: the `C420jpeg` tag) and written raw.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from tests.media import sports2d_demo
+
+
+def write_y4m(
+    source: Path,
+    out: Path,
+    *,
+    width: int = 640,
+    height: int = 360,
+    fps: int = 30,
+    start_s: float = 0.0,
+    seconds: float | None = None,
+) -> Path:
+    """Writes frames of the video `source` from start_s on (all, or `seconds` of them) to `out` as .y4m at `fps`
+    (frames are dropped or repeated to reach it); returns out. width and height must be even."""
+    import cv2
+
+    if width % 2 or height % 2:
+        raise ValueError(f"width and height must be even for I420, got {width}x{height}")
+    cap = cv2.VideoCapture(str(source))
+    if not cap.isOpened():
+        raise RuntimeError(f"cannot open video {source}")
+    src_fps = cap.get(cv2.CAP_PROP_FPS) or 30.0
+    frames: list[np.ndarray] = []
+    while True:
+        ok, frame = cap.read()
+        if not ok:
+            break
+        frames.append(frame)
+    cap.release()
+    first = int(round(start_s * src_fps))
+    frames = frames[first:]
+    if not frames:
+        raise RuntimeError(f"{source}: no frame after {start_s} s")
+    n_out = int(len(frames) / src_fps * fps) if seconds is None else int(round(seconds * fps))
+    picks = np.minimum((np.arange(n_out) * src_fps / fps).astype(int), len(frames) - 1)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with open(out, "wb") as f:
+        f.write(f"YUV4MPEG2 W{width} H{height} F{fps}:1 Ip A1:1 C420jpeg\n".encode())
+        for i in picks:
+            f.write(b"FRAME\n")
+            f.write(cv2.cvtColor(_fit(frames[i], width, height), cv2.COLOR_BGR2YUV_I420).tobytes())
+    return out
+
+
+def _fit(frame: np.ndarray, width: int, height: int) -> np.ndarray:
+    """Returns the BGR frame scaled to fit width x height, centred on black."""
+    import cv2
+
+    h, w = frame.shape[:2]
+    scale = min(width / w, height / h)
+    nw, nh = max(2, int(round(w * scale))), max(2, int(round(h * scale)))
+    canvas = np.zeros((height, width, 3), dtype=np.uint8)
+    x0, y0 = (width - nw) // 2, (height - nh) // 2
+    canvas[y0 : y0 + nh, x0 : x0 + nw] = cv2.resize(frame, (nw, nh), interpolation=cv2.INTER_AREA)
+    return canvas
+
+
+def sports2d_y4m(out: Path, **kwargs) -> Path:
+    """Writes Sports2D's demo (one person, side view, BSD-3-Clause) as a fake-camera clip; see write_y4m."""
+    return write_y4m(sports2d_demo(), out, **kwargs)

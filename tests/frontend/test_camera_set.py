@@ -1,0 +1,351 @@
+"""A camera set end to end in real headless Chromium, fed a video file as its camera: the patient's page offers
+"Start with this computer's camera", the consent screen, the placement check with the skeleton over the mirrored
+picture, the live count rising, the saved session (device `webcam`) on the server; and the faults the page names.
+
+The camera: Sports2D's demo video (PyPI `sports2d` 0.8.34, BSD-3-Clause, (c) 2022 perfanalytics; one person walking
+past, filmed from the side, a second on a box), made into a .y4m at test time (tests/fake_camera.py) and played by
+Chromium's fake capture device in a loop. The landmarker runs the lite model on the CPU (?model=lite&delegate=CPU):
+this machine's headless Chromium has no GPU.
+"""
+
+from __future__ import annotations
+
+import time
+import uuid
+from pathlib import Path
+
+import httpx
+import pytest
+from axe_playwright_python.sync_playwright import Axe
+from playwright.sync_api import expect
+
+from kinect_agent.formats import session_file
+from tests.frontend.conftest import CHROMIUM, api_client, login, shot
+
+pytestmark = pytest.mark.browser
+PASSWORD = "camera-password-2026"
+EXERCISE, TARGET = "squat", 2
+WIDTHS = ((1366, 900), (768, 1024), (390, 844))
+PAGE = "/patient/camera"
+
+
+def _axe_clean(page) -> None:
+    results = Axe().run(page)
+    bad = [
+        f"{v['id']} ({v['impact']})" for v in results.response["violations"] if v["impact"] in ("serious", "critical")
+    ]
+    assert not bad, bad
+
+
+def _shots(page, name: str) -> None:
+    """Screenshots at 1366, 768 and 390 px (back to 1366 afterwards), each checked with axe-core."""
+    for w, h in WIDTHS:
+        page.set_viewport_size({"width": w, "height": h})
+        page.wait_for_timeout(150)
+        shot(page, f"camera-{name}-{w}")
+        _axe_clean(page)
+        overflow = page.evaluate("document.documentElement.scrollWidth - document.documentElement.clientWidth")
+        assert overflow <= 1, f"{name} at {w} px scrolls sideways by {overflow} px"
+    page.set_viewport_size({"width": 1366, "height": 900})
+
+
+def write_constant_y4m(path: Path, luma: int, seconds: float = 2.0) -> Path:
+    """Writes a .y4m of one grey level (0 black .. 255 white), 640 x 360 at 30 fps."""
+    w, h, n = 640, 360, int(seconds * 30)
+    frame = b"FRAME\n" + bytes([luma]) * (w * h) + bytes([128]) * (w * h // 2)
+    path.write_bytes(f"YUV4MPEG2 W{w} H{h} F30:1 Ip A1:1 C420jpeg\n".encode() + frame * n)
+    return path
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory) -> Path:
+    from tests.fake_camera import sports2d_y4m
+
+    return sports2d_y4m(tmp_path_factory.mktemp("camera") / "sports2d.y4m")
+
+
+def camera_browser(playwright_module, video: Path | None):
+    """Launches headless Chromium whose camera plays `video` (None: no fake device flags)."""
+    args = ["--no-sandbox"]
+    if video is not None:
+        args += ["--use-fake-device-for-media-stream", "--use-fake-ui-for-media-stream",
+                 f"--use-file-for-fake-video-capture={video}"]  # fmt: skip
+    return playwright_module.chromium.launch(executable_path=CHROMIUM, headless=True, args=args)
+
+
+@pytest.fixture(scope="module")
+def pw():
+    from playwright import sync_api
+
+    if not Path(CHROMIUM).exists():
+        pytest.skip(f"no Chromium at {CHROMIUM}")
+    with sync_api.sync_playwright() as p:
+        yield p
+
+
+@pytest.fixture(scope="module")
+def cam_browser(pw, clip):
+    b = camera_browser(pw, clip)
+    yield b
+    b.close()
+
+
+def new_patient(base: str, exercise: str = EXERCISE, target: int = TARGET) -> tuple[str, int, int]:
+    """Creates a patient with a plan of one exercise (2 sets of target); returns (email, patient id, plan item id)."""
+    email = f"cam-{uuid.uuid4().hex[:8]}@example.org"
+    admin, headers = api_client(base, "admin@demo.clinic")
+    try:
+        r = admin.post("/api/v1/users", json={"email": email, "role": "patient", "password": PASSWORD,
+                                              "full_name": "Carla Camera"}, headers=headers)  # fmt: skip
+        assert r.status_code == 201, r.text
+        pid = r.json()["id"]
+        item = {"exercise_slug": exercise, "sets": 2, "repetitions": target, "frequency_per_week": 3}
+        plan = {"title": "Camera", "start_date": time.strftime("%Y-%m-%d"), "notes": "", "items": [item]}
+        r = admin.post(f"/api/v1/patients/{pid}/plans", json=plan, headers=headers)
+        assert r.status_code == 201, r.text
+        return email, pid, r.json()["items"][0]["id"]
+    finally:
+        admin.close()
+
+
+def patient_sessions(base: str, email: str, pid: int) -> list[dict]:
+    with httpx.Client(base_url=base, timeout=30) as c:
+        c.post("/api/v1/auth/login", json={"email": email, "password": PASSWORD}).raise_for_status()
+        return c.get("/api/v1/sessions", params={"patient_id": pid, "limit": 50}).json()["items"]
+
+
+def session_header(base: str, email: str, session_id: int):
+    with httpx.Client(base_url=base, timeout=60) as c:
+        c.post("/api/v1/auth/login", json={"email": email, "password": PASSWORD}).raise_for_status()
+        r = c.get(f"/api/v1/sessions/{session_id}/file")
+        r.raise_for_status()
+        return session_file.decode(r.content)
+
+
+def open_page(browser, base: str):
+    context = browser.new_context(viewport={"width": 1366, "height": 900}, base_url=base)
+    context.set_default_timeout(30_000)
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    page.js_errors = errors
+    requests: list[str] = []
+    page.on("request", lambda req: requests.append(req.url))
+    page.requests = requests
+    return context, page
+
+
+def phase(page) -> str:
+    return page.locator("#cam-main-status").inner_text()
+
+
+def wait_phase(page, *names: str, timeout: float = 60_000) -> None:
+    script = "(names) => names.includes((document.getElementById('cam-main-status') || {}).textContent)"
+    page.wait_for_function(script, arg=list(names), timeout=timeout)
+
+
+def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, live_server):
+    base = live_server.url
+    email, pid, item_id = new_patient(base)
+    context, page = open_page(cam_browser, base)
+    try:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        start = page.locator("a.cam-start")
+        expect(start).to_be_visible()
+        expect(start).to_have_text("Start with this computer's camera")
+        shot(page, "camera-patient-start")
+        page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
+        expect(page.locator("#cam-consent")).to_be_visible()
+        expect(page.locator("#cam-consent")).to_contain_text("The video never leaves this device")
+        expect(page.locator("#cam-consent")).to_contain_text("Only the positions of your joints are sent")
+        _shots(page, "consent")
+        page.click("#cam-agree")
+        wait_phase(page, "placement")
+        expect(page.locator("#cam-say")).not_to_be_empty(timeout=60_000)
+        page.wait_for_timeout(1500)
+        _shots(page, "placement")
+        page.evaluate(
+            "window.__camCounts = []; addEventListener('coach-camera-count', (e) => __camCounts.push(e.detail))"
+        )
+        if phase(page) == "placement":
+            page.click("#cam-anyway")
+        wait_phase(page, "counting")
+        expect(page.locator("#cam-count .n")).to_be_visible()
+        size = page.evaluate("parseFloat(getComputedStyle(document.querySelector('#cam-count .n')).fontSize)")
+        assert size >= 96, f"the live count is {size} px; it must be at least 96 px"
+        page.wait_for_function("() => +document.querySelector('#cam-count .n').textContent >= 1", timeout=180_000)
+        _shots(page, "counting")
+        wait_phase(page, "stored", "failed", timeout=120_000)  # the target ends the set by itself
+        assert phase(page) == "stored", page.locator("#cam-result-text").inner_text()
+        expect(page.locator("#cam-result-text")).to_contain_text("Saved")
+        _shots(page, "result")
+        counts = [d["count"] for d in page.evaluate("window.__camCounts")]
+        assert counts == sorted(counts) and counts[-1] >= TARGET, counts
+        stored = patient_sessions(base, email, pid)
+        assert len(stored) == 1 and stored[0]["exercise_slug"] == EXERCISE and stored[0]["device_id"] is None, stored
+        payload = session_header(base, email, stored[0]["id"])
+        assert payload.raw.meta.device == "webcam", payload.raw.meta
+        assert (
+            payload.params["model"]["name"] == "pose_landmarker_lite.task"
+            and len(payload.params["model"]["sha256"]) == 64
+        )
+        assert payload.params["fps_achieved"] and payload.params["fps_achieved"] > 1, payload.params
+        off_origin = [u for u in page.requests if not u.startswith(base) and not u.startswith(("data:", "blob:"))]
+        assert not off_origin, off_origin
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+
+
+def _to_counting(page, item_id: int, agree: bool = True) -> str:
+    page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
+    if agree:
+        page.click("#cam-agree")
+    wait_phase(page, "placement")
+    page.click("#cam-anyway")
+    wait_phase(page, "counting")
+    page.wait_for_function("() => CameraPage.state().next_seq >= 3", timeout=60_000)
+    return page.evaluate("CameraPage.state().set_id")
+
+
+def test_hidden_tab_network_loss_reload_and_unplugged_camera_mid_set_store_one_session(cam_browser, live_server):
+    base = live_server.url
+    email, pid, item_id = new_patient(base, target=50)  # a set that does not end by itself
+    context, page = open_page(cam_browser, base)
+    status = page.locator("#cam-status")
+    try:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        set_id = _to_counting(page, item_id)
+        # tab hidden (or the laptop asleep), then back
+        page.evaluate("Object.defineProperty(document, 'hidden', {value: true, configurable: true});"
+                      "document.dispatchEvent(new Event('visibilitychange'))")  # fmt: skip
+        expect(status).to_contain_text("paused because this page was hidden")
+        page.evaluate("Object.defineProperty(document, 'hidden', {value: false, configurable: true});"
+                      "document.dispatchEvent(new Event('visibilitychange'))")  # fmt: skip
+        expect(status).to_contain_text("Welcome back")
+        # the network lost mid-set, then back: batches wait in IndexedDB and go out in order
+        context.set_offline(True)
+        expect(status).to_contain_text("connection to the server is lost", timeout=20_000)
+        shot(page, "camera-offline")
+        _axe_clean(page)
+        page.wait_for_timeout(2000)
+        waiting = page.evaluate("CameraBuffer.batches(CameraPage.state().set_id).then((b) => b.length)")
+        assert waiting >= 1, "no batch was kept while offline"
+        context.set_offline(False)
+        expect(status).to_contain_text("The connection is back", timeout=30_000)
+        # the page reloaded mid-set: the set is offered to go on, with the same id
+        page.reload()
+        expect(page.locator("#cam-resume")).to_be_visible()
+        expect(page.locator("#cam-resume-text")).to_contain_text("We kept")
+        shot(page, "camera-resume")
+        _axe_clean(page)
+        page.click("#cam-continue")
+        wait_phase(page, "placement")
+        page.click("#cam-anyway")
+        wait_phase(page, "counting")
+        assert page.evaluate("CameraPage.state().set_id") == set_id
+        seq = page.evaluate("CameraPage.state().next_seq")
+        page.wait_for_function("(s) => CameraPage.state().next_seq >= s + 3", arg=seq, timeout=60_000)
+        # the camera unplugged mid-set: said in words; what was done is saved on request
+        page.evaluate(
+            "document.getElementById('cam-video').srcObject.getVideoTracks()[0].dispatchEvent(new Event('ended'))"
+        )
+        expect(page.locator("#cam-problem-text")).to_contain_text("camera was disconnected")
+        shot(page, "camera-unplugged")
+        _axe_clean(page)
+        page.click("#cam-problem-save")
+        wait_phase(page, "stored", "failed", timeout=120_000)
+        assert phase(page) == "stored", page.locator("#cam-result-text").inner_text()
+        stored = patient_sessions(base, email, pid)
+        assert len(stored) == 1 and stored[0]["client_session_id"] == set_id, stored
+        assert page.evaluate("(id) => CameraBuffer.batches(id).then((b) => b.length)", set_id) == 0
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+
+
+@pytest.mark.parametrize(
+    ("flags", "says"),
+    [
+        (["--use-fake-device-for-media-stream"], "did not allow this page to use the camera"),  # no permission
+        (["--use-fake-ui-for-media-stream"], "could not find a camera"),  # no camera at all
+    ],
+    ids=["permission-denied", "no-camera"],
+)
+def test_a_camera_that_cannot_start_is_said_in_plain_words(pw, live_server, flags, says):
+    base = live_server.url
+    email, _, item_id = new_patient(base)
+    b = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=["--no-sandbox", *flags])
+    context, page = open_page(b, base)
+    try:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        if "could not find" in says:
+            expect(page.locator("a.cam-start")).to_be_hidden()  # no camera: the patient page offers none
+        page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
+        page.click("#cam-agree")
+        expect(page.locator("#cam-problem-text")).to_contain_text(says)
+        expect(page.locator("#cam-retry")).to_be_visible()
+        shot(page, f"camera-problem-{'denied' if 'allow' in says else 'none'}")
+        _axe_clean(page)
+    finally:
+        context.close()
+        b.close()
+
+
+@pytest.mark.parametrize(("luma", "code"), [(5, "dark"), (128, "nobody")], ids=["dark", "nobody"])
+def test_a_dark_picture_and_an_empty_one_are_named_in_the_placement_check(pw, live_server, tmp_path, luma, code):
+    base = live_server.url
+    email, _, item_id = new_patient(base)
+    b = camera_browser(pw, write_constant_y4m(tmp_path / f"grey{luma}.y4m", luma))
+    context, page = open_page(b, base)
+    try:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
+        page.click("#cam-agree")
+        wait_phase(page, "placement")
+        page.wait_for_function("(c) => document.getElementById('cam-say').dataset.code === c", arg=code, timeout=60_000)
+        text = page.locator("#cam-say").inner_text()
+        assert ("too dark" in text) if code == "dark" else ("cannot see you" in text), text
+    finally:
+        context.close()
+        b.close()
+
+
+def test_two_people_and_the_patient_kept_in_the_checks(cam_browser, live_server):
+    """The placement and tracking rules on landmarks of two people (the page's own functions in Chromium)."""
+    from tests.backend.camera.landmarks import body, image_of
+
+    base = live_server.url
+    email, _, item_id = new_patient(base)
+    world = body()
+    me = [{"x": x, "y": y, "z": z, "visibility": 0.95} for x, y, z in image_of(world)]
+    other = [dict(p, x=p["x"] + 0.4) for p in me]
+    w = [{"x": x, "y": y, "z": z} for x, y, z in world]
+    context, page = open_page(cam_browser, base)
+    try:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        page.goto(f"{PAGE}?item={item_id}")
+        expect(page.locator("#cam-consent")).to_be_visible()
+        out = page.evaluate(
+            """([me, other, w]) => {
+                const ex = {plane: "frontal", defining_angles: ["shoulder_abduction_L"]};
+                const c = (image, count) => CameraChecks.placement({image, world: w, count, luma: 120, ex}).code;
+                const prev = CameraChecks.centre(me);
+                const dark = CameraChecks.placement({image: me, world: w, count: 1, luma: 10, ex}).code;
+                return {two: c(me, 2), one: c(me, 1), nobody: c(null, 0), dark,
+                        kept: CameraChecks.pick({landmarks: [other, me]}, prev),
+                        onlyOther: CameraChecks.pick({landmarks: [other]}, prev),
+                        side: CameraChecks.viewFor({plane: "sagittal", defining_angles: ["knee_flexion_L"]}),
+                        front: CameraChecks.viewFor({plane: "sagittal", defining_angles: ["elbow_flexion_L"]})};
+            }""",
+            [me, other, w],
+        )
+        assert out == {"two": "two_people", "one": "ok", "nobody": "nobody", "dark": "dark", "kept": 1,
+                       "onlyOther": -1, "side": "side", "front": "front"}, out  # fmt: skip
+    finally:
+        context.close()

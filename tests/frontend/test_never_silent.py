@@ -1,0 +1,249 @@
+"""The patient page never fails silently (issue 23, point 7): a lost server, home agent or camera is said in plain
+words within 5 s, what cannot work is disabled, and the page recovers by itself; the live count is in view after
+Start and ends level with the stored count; a computer that uploads but is not live is not called broken; an
+expired sign-in keeps the advice being typed.
+
+The server tests stop and restart a real server (same port, same database) and a real `kinect-agent serve` under
+the page. The count and camera tests drive the live loop through a paired device speaking the agent's HTTP protocol
+from the test (AgentLink): its progress messages and the session file it uploads are chosen, so the page's handling
+of them is checked exactly."""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+import queue
+import re
+import threading
+import time
+import uuid
+
+import httpx
+import pytest
+from playwright.sync_api import expect
+
+from backend.demo import DEMO_PASSWORD
+from tests.backend.khs_files import make_khs
+from tests.frontend.conftest import THERAPIST, api_client, free_port, login, run_server, shot
+from tests.frontend.test_live_set import NAME, PASSWORD, agent, new_home
+
+pytestmark = pytest.mark.browser
+EXERCISE, TARGET = "elbow_flexion", 3
+WITHIN_MS = 5_000  # the issue's limit: a failure is said within 5 s
+LOAD_MS = 30_000  # a page's first load on a busy test machine
+
+
+def _now_iso() -> str:
+    return dt.datetime.now(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+class AgentLink:
+    """A paired device speaking the home agent's HTTP protocol from the test: it holds the command stream (so the
+    patient's agent is online), hears the commands, posts progress messages and uploads session files."""
+
+    def __init__(self, base: str, token: str) -> None:
+        self.client = httpx.Client(base_url=base, headers={"Authorization": f"Bearer {token}"}, timeout=30)
+        self.commands: queue.Queue[dict] = queue.Queue()
+        self._thread: threading.Thread | None = None
+        self._closing = threading.Event()
+
+    def connect(self) -> AgentLink:
+        """Opens the command stream in a thread (the agent is online from then on)."""
+        self._thread = threading.Thread(target=self._listen, daemon=True)
+        self._thread.start()
+        return self
+
+    def _listen(self) -> None:
+        try:
+            with self.client.stream("GET", "/api/v1/live/agent", timeout=httpx.Timeout(30, read=None)) as r:
+                for line in r.iter_lines():
+                    if line.startswith("data: "):
+                        self.commands.put(json.loads(line[6:])["data"])
+                    if self._closing.is_set():
+                        break
+        except httpx.HTTPError:
+            if not self._closing.is_set():
+                raise
+
+    def command(self, timeout: float = 15) -> dict:
+        """Returns the next command the server sent (start or stop)."""
+        return self.commands.get(timeout=timeout)
+
+    def progress(self, start: dict, state: str, count: int, session_id: str, **extra) -> None:
+        """Posts one progress message of the set `start` (a start command)."""
+        body = {"set_id": start["set_id"], "exercise_slug": start["exercise_slug"], "state": state, "count": count,
+                "target": start["target_reps"], "session_id": session_id, "sent_at": time.time()} | extra  # fmt: skip
+        r = self.client.post("/api/v1/live/progress", json=body)
+        assert r.status_code == 204, r.text
+
+    def upload(self, data: bytes) -> dict:
+        """Uploads a session file; returns the stored session."""
+        r = self.client.post(f"/api/v1/sessions?exercise={EXERCISE}", content=data,
+                             headers={"Content-Type": "application/octet-stream"})  # fmt: skip
+        assert r.status_code == 201, r.text
+        return r.json()
+
+    def close(self) -> None:
+        self._closing.set()
+        self.client.close()
+
+
+def _patient_with_device(base: str) -> tuple[str, int, str]:
+    """Creates a patient with a plan of TARGET elbow flexions and a device paired through the API; returns (e-mail,
+    patient id, device token)."""
+    email = f"silent-{uuid.uuid4().hex[:8]}@example.org"
+    admin, headers = api_client(base, "admin@demo.clinic")
+    try:
+        r = admin.post("/api/v1/users", json={"email": email, "role": "patient", "password": PASSWORD,
+                                              "full_name": "Sam Silent"}, headers=headers)  # fmt: skip
+        assert r.status_code == 201, r.text
+        pid = r.json()["id"]
+        item = {"exercise_slug": EXERCISE, "sets": 2, "repetitions": TARGET, "frequency_per_week": 3}
+        plan = {"title": "Arms", "start_date": time.strftime("%Y-%m-%d"), "notes": "", "items": [item]}
+        assert admin.post(f"/api/v1/patients/{pid}/plans", json=plan, headers=headers).status_code == 201
+        code = admin.post(f"/api/v1/patients/{pid}/pairing-codes", headers=headers).json()["code"]
+    finally:
+        admin.close()
+    r = httpx.post(f"{base}/api/v1/devices/pair", json={"code": code, "name": "test link"}, timeout=30)
+    assert r.status_code == 201, r.text
+    return email, pid, r.json()["token"]
+
+
+def _context(browser, base: str, width: int, height: int):
+    context = browser.new_context(viewport={"width": width, "height": height}, base_url=base)
+    context.set_default_timeout(20_000)
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    page.js_errors = errors
+    return context, page
+
+
+def _in_view(page, selector: str) -> bool:
+    return page.evaluate(
+        """(sel) => { const r = document.querySelector(sel).getBoundingClientRect();
+                      return r.top >= 0 && r.bottom <= innerHeight && r.height > 0; }""",
+        selector,
+    )
+
+
+def test_server_and_agent_stopped_and_restarted_under_the_page(browser, live_server, tmp_path):
+    port = free_port()
+    server = run_server(live_server.database_url, tmp_path, port=port)
+    base = server.__enter__()
+    context, page = _context(browser, base, 1366, 900)
+    try:
+        home = new_home(base, base, tmp_path)
+        login(page, home.email, PASSWORD)
+        status, banner = page.locator("#agent-status"), page.locator("#conn-banner")
+        start = page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2"))
+        with agent(home):
+            expect(status).to_have_attribute("data-state", "online", timeout=LOAD_MS)
+            expect(start).to_be_enabled()
+            server.__exit__(None, None, None)  # the server stops under the page
+            server = None
+            expect(banner).to_contain_text("lost its connection to the server", timeout=WITHIN_MS)
+            expect(status).to_have_attribute("data-state", "server-lost", timeout=WITHIN_MS)
+            expect(status).to_contain_text("check that your internet is working")
+            expect(start).to_be_disabled()
+            shot(page, "never-silent-server-lost")
+            server = run_server(live_server.database_url, tmp_path, port=port)  # back on the same address
+            server.__enter__()
+            expect(banner).to_contain_text("The connection is back", timeout=15_000)
+            expect(status).to_have_attribute("data-state", "online", timeout=40_000)  # the agent reconnects too
+            expect(start).to_be_enabled()
+            expect(banner).to_be_hidden(timeout=10_000)
+        expect(status).to_have_attribute("data-state", "offline", timeout=WITHIN_MS)  # the agent stopped
+        expect(status).to_contain_text("not connected right now")
+        expect(start).to_be_hidden()
+        with agent(home):
+            expect(status).to_have_attribute("data-state", "online", timeout=30_000)
+            expect(start).to_be_visible()
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+        if server is not None:
+            server.__exit__(None, None, None)
+
+
+@pytest.mark.parametrize("width,height", [(1366, 900), (390, 844)])
+def test_count_in_view_camera_silence_said_and_the_end_level_with_the_stored_count(browser, live_server, width, height):
+    base = live_server.url
+    email, _, token = _patient_with_device(base)
+    link = AgentLink(base, token)
+    link.upload(make_khs(EXERCISE, TARGET, seed=3, created_at=_now_iso()))  # a first set: the page has a chart
+    context, page = _context(browser, base, width, height)
+    try:
+        login(page, email, PASSWORD)
+        link.connect()
+        expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
+        page.evaluate("window.scrollTo(0, document.body.scrollHeight)")
+        page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 2 of 2")).click()
+        start = link.command()
+        assert start["action"] == "start", start
+        sid = str(uuid.uuid4())
+        link.progress(start, "recording", 1, sid, elapsed_s=2.0)
+        expect(page.locator("#live-count .n")).to_have_text("1")
+        assert _in_view(page, "#live-count"), "the live count is out of view after Start"
+        assert _in_view(page, "#live-stop"), "Stop is out of view after Start"
+        shot(page, f"never-silent-count-{width}")
+        # the camera stops sending pictures: no progress message any more
+        camera = page.locator("#live-camera")
+        expect(camera).to_contain_text("No pictures are coming from your camera", timeout=WITHIN_MS)
+        link.progress(start, "recording", 2, sid, elapsed_s=6.0)  # the pictures are back
+        expect(camera).to_be_hidden()
+        expect(page.locator("#live-count .n")).to_have_text("2")
+        # the live count ends at 2, the stored analysis counts the file's repetitions
+        link.progress(start, "ended", 2, sid, elapsed_s=7.0, reason="stop")
+        stored = link.upload(make_khs(EXERCISE, TARGET, seed=4, session_id=sid, created_at=_now_iso()))
+        assert stored["repetitions"] not in (None, 2), stored
+        n = stored["repetitions"]
+        expect(page.locator("#live-result")).to_contain_text("Saved", timeout=30_000)
+        expect(page.locator("#live-count .n")).to_have_text(str(n))
+        panel = page.locator("#live").inner_text().split("\n", 1)[1]  # below the title ("... set 2 of 2")
+        assert "2 of" not in panel, panel  # never "You did 2 of 3" beside a stored 3
+        expect(page.locator("#live-ended")).to_contain_text(f"You did all {TARGET}" if n >= TARGET else f"{n} of")
+        shot(page, f"never-silent-ended-{width}")
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+        link.close()
+
+
+def test_a_computer_that_uploads_but_is_not_live_is_not_called_broken(browser, live_server):
+    base = live_server.url
+    email, _, token = _patient_with_device(base)
+    link = AgentLink(base, token)
+    link.upload(make_khs(EXERCISE, TARGET, seed=5, created_at=_now_iso()))  # uploaded minutes ago, never live
+    link.close()
+    context, page = _context(browser, base, 1366, 900)
+    try:
+        login(page, email, PASSWORD)
+        status = page.locator("#agent-status")
+        expect(status).to_have_attribute("data-state", "idle", timeout=LOAD_MS)
+        expect(status).to_contain_text("sent your last exercise today")
+        text = status.inner_text()
+        assert "not connected" not in text and "switched on" not in text, text
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+
+
+def test_an_expired_sign_in_keeps_the_advice_being_typed(page, live_server):
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    page.goto(f"/therapist/patients/{live_server.patient_id}")
+    advice = "Please do your knee exercises slowly this week, and rest on Sunday."
+    page.fill("#suggestion-text", advice)
+    page.context.clear_cookies()  # the sign-in ends (expired) while the therapist types
+    send = page.get_by_role("button", name="Send to patient")
+    if "/therapist/patients/" in page.url and send.is_visible():  # the page's own refresh may have found out first
+        send.click()
+    expect(page.locator("#login-error")).to_contain_text("Your sign-in expired")
+    page.fill("#email", THERAPIST)
+    page.fill("#password", DEMO_PASSWORD)
+    page.click("#login-submit")
+    expect(page).to_have_url(re.compile(f"/therapist/patients/{live_server.patient_id}$"))
+    expect(page.locator("#suggestion-text")).to_have_value(advice)
+    expect(page.locator(".draft-kept")).to_contain_text("What you typed is kept here")
+    assert not page.js_errors, page.js_errors
