@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from backend.analysis import data_quality
+from backend.analysis import data_quality, work_budget
 from kinect_agent import skeleton
 from kinect_agent.formats.session_file import SessionPayload
 from kinect_agent.processing.config import PipelineConfig
@@ -112,13 +112,18 @@ def build(payload: SessionPayload, plane: str) -> Replay:
     """Returns the replay recording of a decoded session file.
 
     plane: the exercise's plane of movement ("sagittal", "frontal", "transverse"); picks the default camera.
+    The outlier marks come from the server's own settings on the frames work_budget.thinned keeps (the file's
+    params["config"] is not obeyed), so the build's work is bounded by the recording's duration.
     """
+    duration_s = payload.raw.duration if payload.raw.n_frames else 0.0
+    payload = work_budget.thinned(payload)
     raw = payload.raw
     filtered = payload.filtered
     if filtered is not None and filtered.n_frames != raw.n_frames:
         filtered = None  # a file whose recordings disagree shows its raw skeleton only
-    config = data_quality.pipeline_config(payload.params.get("config") if isinstance(payload.params, dict) else None)
-    flags = outlier_flags(raw, config) if raw.n_frames >= 3 else np.zeros((raw.n_frames, skeleton.J), dtype=bool)
+    flags = np.zeros((raw.n_frames, skeleton.J), dtype=bool)
+    if raw.n_frames >= 3:
+        flags = outlier_flags(raw, work_budget.SERVER_PIPELINE)
     reference = filtered.positions if filtered is not None else raw.positions
     shift = ground_frame(reference)
     raw_pos = raw.positions - shift
@@ -128,7 +133,7 @@ def build(payload: SessionPayload, plane: str) -> Replay:
     keep = frame_indices(t)
     with _BUILD_LOCK:
         data = _record(t, keep, raw_pos, filt_pos, flags, camera, look_at)
-    return Replay(data=data, n_frames=len(keep), duration_s=float(t[-1]) if len(t) else 0.0, view=view)
+    return Replay(data=data, n_frames=len(keep), duration_s=float(duration_s), view=view)
 
 
 def _record(
