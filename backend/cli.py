@@ -40,22 +40,28 @@ def cmd_serve(args: argparse.Namespace) -> int:
         check_at_head(get_engine())
     except DatabaseNotMigrated as exc:
         raise CliError(str(exc)) from None
+    options = serve_options(args, settings)
+    # one process: this app; several: each worker builds its own from the same environment
+    uvicorn.run(create_app(settings) if options["workers"] == 1 else "backend.main:create_app", **options)
+    return 0
+
+
+def serve_options(args: argparse.Namespace, settings) -> dict:
+    """Returns uvicorn's options for `serve`: the command line's, else the settings' (COACH_HOST, COACH_PORT,
+    COACH_WORKERS, COACH_FORWARDED_ALLOW_IPS)."""
     workers = args.workers or settings.WORKERS
-    uvicorn.run(
-        # one process: this app; several: each worker builds its own from the same environment
-        create_app(settings) if workers == 1 else "backend.main:create_app",
-        factory=workers > 1,
-        workers=workers,
-        host=args.host or settings.HOST,
-        port=args.port or settings.PORT,
-        proxy_headers=True,
-        forwarded_allow_ips=args.forwarded_allow_ips,
+    return {
+        "factory": workers > 1,
+        "workers": workers,
+        "host": args.host or settings.HOST,
+        "port": args.port or settings.PORT,
+        "proxy_headers": True,
+        "forwarded_allow_ips": args.forwarded_allow_ips or settings.FORWARDED_ALLOW_IPS,
         # longer than a therapist's pause between clicks and than load balancers' idle timeouts (60 s), so a
         # client never reuses a connection the server is closing
-        timeout_keep_alive=75,
-        timeout_graceful_shutdown=5,  # open event streams (/api/v1/events) must not hold a restart; browsers reconnect
-    )
-    return 0
+        "timeout_keep_alive": 75,
+        "timeout_graceful_shutdown": 5,  # open event streams must not hold a restart; browsers reconnect
+    }
 
 
 def cmd_migrate(args: argparse.Namespace) -> int:
@@ -248,7 +254,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("serve", help="run the HTTP server (refuses a database behind head)")
     p.add_argument("--host", help="bind address (default COACH_HOST)")
     p.add_argument("--port", type=int, help="port (default COACH_PORT)")
-    p.add_argument("--forwarded-allow-ips", default="127.0.0.1", help="proxies trusted for X-Forwarded-For")
+    p.add_argument("--forwarded-allow-ips", help="proxies believed in X-Forwarded-For (COACH_FORWARDED_ALLOW_IPS)")
     p.add_argument("--workers", type=int, help="worker processes, about one per core (default COACH_WORKERS)")
     p.set_defaults(_run=cmd_serve)
 

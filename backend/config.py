@@ -22,6 +22,8 @@ class Settings(BaseSettings):
     HOST: str = "127.0.0.1"
     PORT: int = 8000
     WORKERS: int = Field(default=1, ge=1, le=64)  # uvicorn worker processes of `coach-server serve`
+    # proxies whose X-Forwarded-For `coach-server serve` believes (comma-separated addresses or networks): only yours
+    FORWARDED_ALLOW_IPS: str = "127.0.0.1"
     LOGIN_SESSION_HOURS: float = 12.0
     # failed logins within LOGIN_WINDOW_MINUTES before the next is refused (429): per account from one address, per
     # address over all accounts (one password tried on many), per account over all addresses (a spread-out guess)

@@ -62,9 +62,16 @@ def _bearer(request: Request) -> str | None:
 def _from_bearer(token: str, db_session: Session, ip: str) -> Caller:
     now = utcnow()
     if token.startswith(DEVICE_TOKEN_PREFIX):
-        device = db_session.scalar(select(Device).where(Device.token_hash == token_hash(token)))
+        found = db_session.execute(  # one round trip for the device and whether its patient is active
+            select(Device, User.is_active)
+            .join(User, User.id == Device.patient_id)
+            .where(Device.token_hash == token_hash(token))
+        ).first()
+        device = found[0] if found is not None else None
         if device is None or device.revoked_at is not None:
             raise NotAuthenticated("device token is unknown or revoked")
+        if not found[1]:
+            raise NotAuthenticated("the patient of this device is deactivated")
         if device.last_seen_at is None or now - device.last_seen_at > LAST_SEEN_RESOLUTION:
             device.last_seen_at = now  # not on every live message: a write per message would be 5 a second
         return Caller(via="device", device=device, scopes=frozenset({"read", "write"}), ip=ip)

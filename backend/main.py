@@ -28,6 +28,7 @@ from backend.deps import DbSession
 from backend.events.listener import Listener
 from backend.exceptions import AppError, DatabaseBusy
 from backend.i18n.errors import error_detail
+from backend.live.progress_gate import ProgressGate
 from backend.openapi import openapi_builder
 from backend.request_limits import RequestLimits
 from backend.schemas import ErrorOut
@@ -226,6 +227,7 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
         redoc_url=None,
     )
     app.state.settings = settings
+    app.state.live_progress = ProgressGate()  # live progress: per-device rate limit and deduplication
     _install_error_handlers(app)
     # plotly.js (4.8 MB), viser's client and JSON compress 3-5x; the replay recording is already zstd (identity)
     app.add_middleware(GZipMiddleware, minimum_size=1024)

@@ -6,9 +6,12 @@ bodies, compression bombs, wrong JSON types, garbage, a file recorded for anothe
 POST /api/v1/sessions with FastAPI's TestClient, on a migrated empty database holding two patients, each with a
 paired device. After every case the exercise_session rows of both patients are counted (must stay 0; a case that
 stored something is a failure and its rows are deleted so the next case starts clean). At the end one valid file
-is uploaded: it must be 201 and stored, which shows that the harness can store.
+is uploaded: it must be 201 and stored, which shows that the harness can store. Then the family "file chooses the
+work" (bench/attack_work.py): accepted files whose params["config"], frame rate or duration would set the server's
+work; each request (upload, detail, replay) is measured against the CPU and memory budget of
+backend.analysis.work_budget and fails above it or on a 5xx.
 
-    python bench/attack.py [--quick] [--json OUT] [--db URL ...] [--seeds N] [--first-seed S]
+    python bench/attack.py [--quick] [--json OUT] [--db URL ...] [--seeds N] [--first-seed S] [--families F]
 
 --db: may be given several times; default an embedded SQLite file in a temp folder, plus PostgreSQL at
 DEFAULT_PG (in a schema of its own, dropped at the end) if it answers. Case generation is deterministic per seed
@@ -40,6 +43,7 @@ ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/attack.py` puts bench/ first, not the repository
     sys.path.insert(0, str(ROOT_DIR))
 
+from bench.attack_work import print_work, run_work_case, work_cases  # noqa: E402
 from bench.ingest import db_label, make_app, open_engine  # noqa: E402
 from kinect_agent.formats import session_file as sf  # noqa: E402
 from tests.backend import khs_files  # noqa: E402
@@ -710,6 +714,19 @@ def _patients_with_devices(engine) -> dict[str, tuple[int, int, dict[str, str]]]
     return made
 
 
+def _reader_headers(engine, patient_id: int) -> dict[str, str]:
+    """Returns the headers of a read token of the patient (the family "file chooses the work" reads with it)."""
+    from sqlalchemy.orm import Session
+
+    from backend.users.models import User
+    from backend.users.service import create_api_token
+
+    with Session(engine) as session, session.begin():
+        user = session.get(User, patient_id)
+        _, token = create_api_token(db_session=session, user=user, name="bench attack", scopes=["read"], days=1)
+    return {"Authorization": f"Bearer {token}"}
+
+
 def _stored(engine, patient_ids: list[int], purge: bool = False) -> int:
     """Returns the number of exercise_session rows of the patients; purge: then deletes them (and their metrics)."""
     from sqlalchemy import func, select
@@ -796,8 +813,11 @@ def _valid_upload(client, engine, users: dict, patient_ids: list[int]) -> dict:
     }
 
 
-def run_database(url: str, seeds: list[int], quick: bool, cache_dir: Path) -> dict:
-    """Runs every case against the real app on a fresh database at `url`; returns the database's report."""
+def run_database(url: str, seeds: list[int], quick: bool, cache_dir: Path, families: str = "all") -> dict:
+    """Runs every case against the real app on a fresh database at `url`; returns the database's report.
+
+    families: "all", "uploads" (the 4xx families only) or "work" (family "file chooses the work" only).
+    """
     from fastapi.testclient import TestClient
 
     engine, cleanup = open_engine(url)
@@ -812,12 +832,18 @@ def run_database(url: str, seeds: list[int], quick: bool, cache_dir: Path) -> di
         with TestClient(app, raise_server_exceptions=False) as client:
             client.post(URL, content=b"warm-up", headers=users["A"][2])  # first request: lazy imports, connection
             groups = [defect_cases(ctx)] + [attack_cases(seed, ctx, quick=quick) for seed in seeds]
-            for cases in groups:
+            for cases in groups if families != "work" else []:
                 records += [run_case(client, engine, case, users, patient_ids) for case in cases]
             valid = _valid_upload(client, engine, users, patient_ids)
+            work = []
+            if families != "uploads":
+                reader = _reader_headers(engine, users["A"][1])
+                for case in work_cases(settings.SESSION_MAX_FRAMES, cache_dir, quick=quick):
+                    work.append(run_work_case(client, case, users["A"][2], reader))
+                    _stored(engine, patient_ids, purge=True)
     finally:
         cleanup()
-    return summarise(db_label(url), records, valid)
+    return summarise(db_label(url), records, valid) | {"work": work}
 
 
 def summarise(db: str, records: list[dict], valid: dict) -> dict:
@@ -912,6 +938,8 @@ def main(argv: list[str] | None = None) -> int:
         help=f"database URL, may be repeated (default: SQLite in a temp folder, plus {DEFAULT_PG} if it answers)",
     )
     parser.add_argument("--seeds", type=int, help="number of seeds (default 3, --quick 1)")
+    parser.add_argument("--families", choices=("all", "uploads", "work"), default="all",
+                        help='"uploads": the 4xx families only; "work": "file chooses the work" only')  # fmt: skip
     parser.add_argument("--first-seed", type=int, default=0, help="first seed (default 0)")
     args = parser.parse_args(argv)
     count = args.seeds if args.seeds is not None else (1 if args.quick else 3)
@@ -929,11 +957,14 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"note: PostgreSQL at {DEFAULT_PG} does not answer; SQLite only", file=sys.stderr)
         for url in urls:
             db_started = time.perf_counter()
-            report = run_database(url, seeds, args.quick, cache_dir)
+            report = run_database(url, seeds, args.quick, cache_dir, args.families)
             report["run_s"] = time.perf_counter() - db_started
             print_report(report, seeds)
+            print_work(report["db"], report["work"])
             reports.append(report)
-    failed = sum(len(r["failed"]) + (not r["valid_upload"]["ok"]) for r in reports)
+    failed = sum(
+        len(r["failed"]) + (not r["valid_upload"]["ok"]) + sum(bool(w["failures"]) for w in r["work"]) for r in reports
+    )
     total = time.perf_counter() - started
     print(
         f"\n{sum(r['cases'] for r in reports)} cases on {len(reports)} database(s) in {total:.1f} s: "

@@ -13,7 +13,7 @@ score = Σ weight × part score, rounded; LOW_SCORE (70) and below is low (the p
 
 The outlier probabilities come from the agent's outlier model on the raw recording
 (kinect_agent.processing.combined_outliers: the temporal Gaussian + uniform mixture of Wang et al., section 3.2,
-plus sustained excursions), with the pipeline configuration the session was filtered with when it is known.
+plus sustained excursions), with the server's own settings (work_budget.SERVER_PIPELINE), never a file's.
 The heat strip max-pools them over time into at most MAX_COLUMNS columns per joint; untracked samples carry no
 probability (null), so a column where the joint was never seen is null.
 """
@@ -38,20 +38,6 @@ PARTS = {
     "outlier_fraction": (0.01, 0.15, 0.3, "Tracking errors"),
     "segment_spread_mm": (10.0, 50.0, 0.3, "Steadiness of measured bone lengths"),
 }
-
-
-def pipeline_config(stored: dict | None) -> PipelineConfig:
-    """Returns the PipelineConfig described by a session file's params["config"], or the default one.
-
-    Unknown keys are ignored; a description the pipeline refuses (a value out of range) gives the default.
-    """
-    if not isinstance(stored, dict):
-        return PipelineConfig()
-    names = PipelineConfig.model_fields
-    try:
-        return PipelineConfig(**{k: v for k, v in stored.items() if k in names})
-    except ValueError:  # pydantic.ValidationError
-        return PipelineConfig()
 
 
 def outlier_probabilities(raw: Recording, config: PipelineConfig | None = None) -> np.ndarray:

@@ -15,7 +15,6 @@ from backend.devices.schemas import DeviceOut, PairIn, PairingCodeOut, PairOut
 from backend.exceptions import (
     AUTH_ERRORS,
     DeviceNotFound,
-    Forbidden,
     PairingCodeInvalid,
     PatientNotFound,
     TooManyLoginAttempts,
@@ -121,10 +120,11 @@ def list_devices(
     responses=error_responses(*AUTH_ERRORS, DeviceNotFound),
 )
 def revoke_device(device_id: IdPath, caller: CurrentCaller, db_session: DbSession) -> None:
-    """Revokes a device (its patient, an assigned therapist, an admin, or the device itself)."""
+    """Revokes a device (its patient, an assigned therapist, an admin, or the device itself); any other device id is
+    404 to a device, as a missing one is, so device ids cannot be probed."""
+    if caller.device is not None and caller.device.id != device_id:
+        raise service.missing(device_id)
     device = service.get_device(db_session=db_session, device_id=device_id)
-    if caller.device is not None and caller.device.id != device.id:
-        raise Forbidden("a device may only revoke itself")
     if caller.device is None:
         require_patient_access(device.patient_id, caller=caller, db_session=db_session, write=True,
                                hidden_as=service.missing(device_id))  # fmt: skip

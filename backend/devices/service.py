@@ -9,6 +9,7 @@ from sqlalchemy.orm import Session
 
 from backend.database import utcnow
 from backend.devices.models import Device, PairingCode
+from backend.events.hub import ACCESS_ENDED, Event, publish
 from backend.exceptions import DeviceNotFound, PairingCodeInvalid
 from backend.security import DEVICE_TOKEN_PREFIX, new_pairing_code, new_token, normalize_pairing_code, token_hash
 
@@ -70,8 +71,9 @@ def get_device(*, db_session: Session, device_id: int) -> Device:
 
 
 def revoke(*, db_session: Session, device: Device) -> Device:
-    """Revokes a device token (idempotent)."""
+    """Revokes a device token (idempotent) and ends its open event streams."""
     if device.revoked_at is None:
         device.revoked_at = utcnow()
+    publish(db_session, Event(ACCESS_ENDED, 0, {"device_id": device.id}))
     db_session.flush()
     return device

@@ -26,8 +26,9 @@ _PENDING = "coach_events"  # key in Session.info: events waiting for the commit
 DATA_KINDS = ("session.stored", "suggestion.changed", "plan.changed")  # stored data changed
 LIVE_KINDS = ("live.agent", "live.command", "live.progress")  # a home agent's presence, its commands, its progress
 KINDS = DATA_KINDS + LIVE_KINDS
-# a login (login_session_id) or every login and token of a user (user_id) ended: its open streams end too, and their
-# reconnection checks the login again; patient_id 0 (it is about a caller, not a patient)
+# a login (login_session_id), API tokens (api_token_ids), a device (device_id) or every login and token of a user
+# (user_id; also the devices of a patient who is deactivated) ended: its open streams end too, and their reconnection
+# checks the credential again; patient_id 0 (it is about a caller, not a patient)
 ACCESS_ENDED = "access.ended"
 
 
@@ -55,7 +56,8 @@ class Event:
 
 class Subscriber:
     """One event stream: events of some kinds about some patients (None = all), queued for an asyncio consumer;
-    user_id, login_id: whose stream it is (ACCESS_ENDED events for them end it)."""
+    user_id, login_id, token_id, device_id: the credential it was opened with (ACCESS_ENDED events for them end it);
+    a device's stream has the device's patient as user_id (a deactivated patient's devices stop too)."""
 
     def __init__(
         self,
@@ -64,19 +66,29 @@ class Subscriber:
         maxsize: int = 100,
         user_id: int | None = None,
         login_id: int | None = None,
+        token_id: int | None = None,
+        device_id: int | None = None,
     ) -> None:
         self.patient_ids = patient_ids
         self.kinds = kinds
         self.user_id = user_id
         self.login_id = login_id
+        self.token_id = token_id
+        self.device_id = device_id
         self.loop = asyncio.get_running_loop()
         self.queue: asyncio.Queue[Event] = asyncio.Queue(maxsize=maxsize)
 
     def wants(self, ev: Event) -> bool:
         """Returns whether this stream shows ev (its kind, about one of its patients), or ends with it (its login)."""
         if ev.kind == ACCESS_ENDED:
-            login, user = ev.data.get("login_session_id"), ev.data.get("user_id")
-            return (login is not None and login == self.login_id) or (user is not None and user == self.user_id)
+            login, user, device = ev.data.get("login_session_id"), ev.data.get("user_id"), ev.data.get("device_id")
+            tokens = ev.data.get("api_token_ids") or ()
+            return (
+                (login is not None and login == self.login_id)
+                or (user is not None and user == self.user_id)
+                or (device is not None and device == self.device_id)
+                or (self.token_id is not None and self.token_id in tokens)
+            )
         return ev.kind in self.kinds and (self.patient_ids is None or ev.patient_id in self.patient_ids)
 
     def offer(self, ev: Event) -> None:
@@ -98,9 +110,11 @@ class Hub:
         kinds: frozenset[str] = frozenset(KINDS),
         user_id: int | None = None,
         login_id: int | None = None,
+        token_id: int | None = None,
+        device_id: int | None = None,
     ) -> Subscriber:
         """Returns a new subscriber (call on the event loop that will read it)."""
-        sub = Subscriber(patient_ids, kinds, user_id=user_id, login_id=login_id)
+        sub = Subscriber(patient_ids, kinds, user_id=user_id, login_id=login_id, token_id=token_id, device_id=device_id)
         with self._lock:
             self._subscribers.add(sub)
         return sub
@@ -133,6 +147,11 @@ HUB = Hub()
 def publish(db_session: Session, ev: Event) -> None:
     """Sends ev when db_session's transaction commits (never when it rolls back)."""
     db_session.info.setdefault(_PENDING, []).append(ev)
+
+
+def pending(db_session: Session) -> list[Event]:
+    """Returns the events waiting for db_session's commit (in the order published)."""
+    return list(db_session.info.get(_PENDING, []))
 
 
 @event.listens_for(Session, "before_commit")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import time
 from collections.abc import AsyncIterator
+from dataclasses import dataclass
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Request
@@ -60,8 +61,8 @@ async def stream_events(
     live: Annotated[bool, Query(description="also the live loop's events (home agent, progress)")] = False,
 ):
     """Streams server-sent events about the patients the caller may see (one patient with patient_id)."""
-    patients, user, login = await run_in_threadpool(_authorize, request, db_session, patient_id)
-    subscriber = HUB.subscribe(patients, frozenset(KINDS if live else DATA_KINDS), user_id=user, login_id=login)
+    patients, owner = await run_in_threadpool(_authorize, request, db_session, patient_id)
+    subscriber = HUB.subscribe(patients, frozenset(KINDS if live else DATA_KINDS), **owner.__dict__)
     return StreamingResponse(
         _stream(request, subscriber, request.app.state.settings.EVENTS_STREAM_MAX_S, PING_S if live else None),
         media_type="text/event-stream",
@@ -69,19 +70,33 @@ async def stream_events(
     )
 
 
+@dataclass(frozen=True)
+class StreamOwner:
+    """The credential a stream was opened with (Subscriber's keywords): its end (ACCESS_ENDED) ends the stream."""
+
+    user_id: int | None
+    login_id: int | None
+    token_id: int | None
+    device_id: int | None
+
+
 def _authorize(
     request: Request, db_session: Session, patient_id: int | None
-) -> tuple[frozenset[int] | None, int | None, int | None]:
-    """Returns (the patients whose events the caller may receive, its user id, its login session id), checking the
-    login, in one thread from the first query to the commit that gives the connection back. A reconnecting crowd of
-    pages (every stream ends after EVENTS_STREAM_MAX_S) then never holds pooled connections while it waits for a
-    thread, which had starved the pool with 200 pages open."""
+) -> tuple[frozenset[int] | None, StreamOwner]:
+    """Returns (the patients whose events the caller may receive, its credential), checking the login, in one thread
+    from the first query to the commit that gives the connection back. A reconnecting crowd of pages (every stream
+    ends after EVENTS_STREAM_MAX_S) then never holds pooled connections while it waits for a thread, which had
+    starved the pool with 200 pages open."""
     caller = current_caller(request, optional_caller(request, db_session))
     patients = visible_patients(caller, db_session, patient_id)
-    user = caller.user.id if caller.user is not None else None
-    login = caller.login_session.id if caller.login_session is not None else None
+    owner = StreamOwner(
+        user_id=caller.user.id if caller.user is not None else caller.device.patient_id,  # type: ignore[union-attr]
+        login_id=caller.login_session.id if caller.login_session is not None else None,
+        token_id=caller.api_token.id if caller.api_token is not None else None,
+        device_id=caller.device.id if caller.device is not None else None,
+    )
     db_session.commit()
-    return patients, user, login
+    return patients, owner
 
 
 async def _stream(
@@ -101,7 +116,7 @@ async def _stream(
             except TimeoutError:
                 yield keepalive
                 continue
-            if ev.kind == ACCESS_ENDED:  # the login ended: so does its stream (a reconnection is refused)
+            if ev.kind == ACCESS_ENDED:  # its credential ended: so does the stream (a reconnection is refused)
                 break
             yield f"event: {ev.kind}\ndata: {ev.to_json()}\n\n"
     finally:

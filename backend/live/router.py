@@ -20,6 +20,7 @@ from backend.events.hub import HUB, Event, Subscriber, publish
 from backend.events.router import RETRY_MS
 from backend.exceptions import AUTH_ERRORS, AgentOffline, Forbidden, PatientNotFound, PlanNotFound, error_responses
 from backend.live import service
+from backend.live.progress_gate import LiveProgressTooFast
 from backend.live.schemas import AgentStatusOut, LiveSetOut, ProgressIn, StartIn, StopIn
 from backend.schemas import IdQuery
 
@@ -99,10 +100,17 @@ async def _agent_events(
                                         stream_id=stream_id)  # fmt: skip
 
 
-@router.post("/progress", status_code=status.HTTP_204_NO_CONTENT, responses=error_responses(*AUTH_ERRORS))
-def post_progress(body: ProgressIn, device: CurrentDevice, db_session: DbSession) -> None:
-    """Passes one live message of the calling agent to its patient's pages (nothing is stored)."""
-    publish(db_session, Event("live.progress", device.patient_id, body.model_dump() | {"device_id": device.id}))
+@router.post(
+    "/progress",
+    status_code=status.HTTP_204_NO_CONTENT,
+    responses=error_responses(*AUTH_ERRORS, LiveProgressTooFast),
+)
+def post_progress(body: ProgressIn, request: Request, device: CurrentDevice, db_session: DbSession) -> None:
+    """Passes one live message of the calling agent to its patient's pages (nothing is stored); a message repeating
+    the device's last one is not passed on, and "recording" messages are limited (progress_gate.py: 429)."""
+    message = body.model_dump()
+    if request.app.state.live_progress.admit(device.id, message):
+        publish(db_session, Event("live.progress", device.patient_id, message | {"device_id": device.id}))
 
 
 def _patient_of(caller: Caller, patient_id: int | None) -> int:

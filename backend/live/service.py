@@ -21,6 +21,7 @@ from backend.exercises.models import Exercise
 from backend.i18n import N_
 from backend.live.schemas import AgentStatusOut, LiveSetOut
 from backend.plans.models import Plan, PlanItem
+from backend.users.models import User
 
 HEARTBEAT_S = 15.0
 STALE_S = 3 * HEARTBEAT_S
@@ -41,9 +42,13 @@ def connect(*, db_session: Session, device: Device) -> str:
 
 
 def heartbeat(*, db_session: Session, device_id: int, stream_id: str) -> bool:
-    """Refreshes the device's last_seen_at; returns False when the stream should end (revoked or replaced)."""
+    """Refreshes the device's last_seen_at; returns False when the stream should end (revoked, replaced, or its
+    patient deactivated)."""
     device = db_session.get(Device, device_id, populate_existing=True)
     if device is None or device.revoked_at is not None or device.live_stream_id != stream_id:
+        return False
+    patient = db_session.get(User, device.patient_id, populate_existing=True)
+    if patient is None or not patient.is_active:
         return False
     device.last_seen_at = utcnow()
     db_session.flush()

@@ -12,14 +12,13 @@ camera) shifted so that the session's median ROOT sits above the origin and the 
 
 from __future__ import annotations
 
-import contextlib
-import io
 import threading
 from dataclasses import dataclass
 
 import numpy as np
 
-from backend.analysis import data_quality
+from backend.analysis import data_quality, work_budget
+from backend.replay import socketless
 from kinect_agent import skeleton
 from kinect_agent.formats.session_file import SessionPayload
 from kinect_agent.processing.config import PipelineConfig
@@ -31,7 +30,7 @@ FILTERED_COLOR = (11, 79, 156)  # the pages' accent blue
 OUTLIER_COLOR = (200, 0, 0)
 MAX_RATE_HZ = 30.0  # frames played per second at most (a faster recording is thinned)
 _BONES = np.asarray(skeleton.BONES)  # (19, 2) parent, child
-# viser 1.1.1 records a scene only through a running ViserServer; this lock keeps one build at a time per process
+# one build at a time per process (each holds a whole recording in memory)
 _BUILD_LOCK = threading.Lock()
 
 
@@ -112,13 +111,18 @@ def build(payload: SessionPayload, plane: str) -> Replay:
     """Returns the replay recording of a decoded session file.
 
     plane: the exercise's plane of movement ("sagittal", "frontal", "transverse"); picks the default camera.
+    The outlier marks come from the server's own settings on the frames work_budget.thinned keeps (the file's
+    params["config"] is not obeyed), so the build's work is bounded by the recording's duration.
     """
+    duration_s = payload.raw.duration if payload.raw.n_frames else 0.0
+    payload = work_budget.thinned(payload)
     raw = payload.raw
     filtered = payload.filtered
     if filtered is not None and filtered.n_frames != raw.n_frames:
         filtered = None  # a file whose recordings disagree shows its raw skeleton only
-    config = data_quality.pipeline_config(payload.params.get("config") if isinstance(payload.params, dict) else None)
-    flags = outlier_flags(raw, config) if raw.n_frames >= 3 else np.zeros((raw.n_frames, skeleton.J), dtype=bool)
+    flags = np.zeros((raw.n_frames, skeleton.J), dtype=bool)
+    if raw.n_frames >= 3:
+        flags = outlier_flags(raw, work_budget.SERVER_PIPELINE)
     reference = filtered.positions if filtered is not None else raw.positions
     shift = ground_frame(reference)
     raw_pos = raw.positions - shift
@@ -128,7 +132,7 @@ def build(payload: SessionPayload, plane: str) -> Replay:
     keep = frame_indices(t)
     with _BUILD_LOCK:
         data = _record(t, keep, raw_pos, filt_pos, flags, camera, look_at)
-    return Replay(data=data, n_frames=len(keep), duration_s=float(t[-1]) if len(t) else 0.0, view=view)
+    return Replay(data=data, n_frames=len(keep), duration_s=float(duration_s), view=view)
 
 
 def _record(
@@ -144,13 +148,8 @@ def _record(
 
     t: (T,) s from the start. raw, filtered: (T, 20, 3) metres, ground frame, NaN = untracked. flags: (T, 20) bool.
     """
-    import viser
-
-    # viser 1.1.1 has no scene API without a server: this one binds an ephemeral port on the loopback interface for
-    # the few seconds of the build, serves nobody (its address is never given out) and is stopped before returning
-    with contextlib.redirect_stdout(io.StringIO()):  # viser prints a banner with that (unused) address
-        server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
-    try:
+    # viser 1.1.1 has no scene API without a server: this one listens on no socket (socketless.py)
+    with socketless.recording_server() as server:
         serializer = server.get_scene_serializer()
         scene = server.scene
         scene.set_up_direction("+y")
@@ -166,9 +165,6 @@ def _record(
             if n + 1 < len(keep):
                 serializer.insert_sleep(float(t[keep[n + 1]] - t[i]))
         return serializer.serialize()
-    finally:
-        with contextlib.redirect_stdout(io.StringIO()):
-            server.stop()
 
 
 class _Skeleton:

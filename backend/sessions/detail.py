@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from sqlalchemy.orm import Session
 
-from backend.analysis import data_quality
+from backend.analysis import data_quality, work_budget
 from backend.analysis.camera_advice import camera_advice
 from backend.analysis.errors import AnalysisError
 from backend.analysis.session_detail import (
@@ -113,13 +113,15 @@ def _repetitions(doc: dict) -> list[dict]:
 
 
 def file_evidence(payload: SessionPayload, names: tuple[str, ...], reps: list[dict]) -> dict:
-    """Returns the file-derived part of the detail: curves, repetition speeds, hand paths, quality and advice."""
+    """Returns the file-derived part of the detail: curves, repetition speeds, hand paths, quality and advice.
+
+    payload: as analysed (work_budget.thinned: at most MAX_ANALYSIS_RATE_HZ frames per second).
+    """
     raw, filtered = payload.raw, payload.filtered
     measured = filtered.positions if filtered is not None else raw.positions
     angles = measured_angles(raw.t, measured, names) if names else {}
     kind = "filtered" if filtered is not None else "smoothed"
-    params = payload.params if isinstance(payload.params, dict) else {}
-    config = data_quality.pipeline_config(params.get("config"))
+    config = work_budget.SERVER_PIPELINE  # the file's params["config"] is shown, not obeyed (work_budget)
     prob = data_quality.outlier_probabilities(raw, config)
     quality = data_quality.assess(raw, prob, names, config.outlier_threshold)
     strip = data_quality.outlier_strip(raw.t, prob) | {"threshold": config.outlier_threshold}
@@ -187,9 +189,10 @@ def detail_body(
     """Returns the detail body of a session row, its exercise slug, stored metrics document and file bytes."""
     payload = decode_stored(data, session_id=session.id, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
     spec = EXERCISES.get(slug) if slug else None
-    doc, source = analysis_document(payload, spec, stored)
+    analysed = work_budget.thinned(payload)  # the work is bounded by the duration, whatever the frame rate
+    doc, source = analysis_document(analysed, spec, stored)
     reps = _repetitions(doc)
-    evidence = _cached_evidence(data, payload, spec, reps)
+    evidence = _cached_evidence(data, analysed, spec, reps)
     quality = doc.get("quality") if isinstance(doc.get("quality"), dict) else {}
     raw, filtered = payload.raw, payload.filtered
     return {

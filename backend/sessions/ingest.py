@@ -65,6 +65,7 @@ def decode_upload(data: bytes, *, max_frames: int, max_decoded_bytes: int) -> Up
         payload = session_file.decode(data, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
     except SessionFileError as exc:
         raise InvalidSessionFile(f"{exc.code}: {exc.detail}") from None
+    check_showable(payload)
     return Upload(
         data=data,
         content_hash=session_file.content_hash(data),
@@ -72,6 +73,18 @@ def decode_upload(data: bytes, *, max_frames: int, max_decoded_bytes: int) -> Up
         client_session_id=_session_uuid(payload.session_id),
         started_at=_started_at(payload.created_at),
     )
+
+
+def check_showable(payload: SessionPayload) -> None:
+    """Raises InvalidSessionFile for a file the session page, replay and exports could not show: fewer than 2 raw
+    frames, or a filtered recording of another length than the raw one (refused at upload, not stored)."""
+    raw, filtered = payload.raw, payload.filtered
+    if raw.n_frames < 2:
+        raise InvalidSessionFile(f"too_short: the raw recording has {raw.n_frames} frame(s); at least 2 are needed")
+    if filtered is not None and filtered.n_frames != raw.n_frames:
+        raise InvalidSessionFile(
+            f"recordings_disagree: the filtered recording has {filtered.n_frames} frames, the raw one {raw.n_frames}"
+        )
 
 
 def check_owner(upload: Upload, *, patient_id: int, device_id: int | None) -> None:

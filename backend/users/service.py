@@ -210,17 +210,19 @@ def list_api_tokens(*, db_session: Session, user: User, limit: int, offset: int)
 
 
 def revoke_api_token(*, db_session: Session, user: User, token_id: int) -> ApiToken:
-    """Revokes one of the user's API tokens and every token made with it; raises TokenNotFound for tokens of
-    others."""
+    """Revokes one of the user's API tokens and every token made with it, and ends their open event streams; raises
+    TokenNotFound for tokens of others."""
     row = db_session.get(ApiToken, token_id)
     if row is None or row.user_id != user.id:
         raise TokenNotFound(f"API token {token_id} does not exist")
-    now, ids = utcnow(), [row.id]
+    now, ids, revoked = utcnow(), [row.id], []
     while ids:  # down the tree of tokens made with tokens, one generation a query
         db_session.execute(
             update(ApiToken).where(ApiToken.id.in_(ids), ApiToken.revoked_at.is_(None)).values(revoked_at=now)
         )
+        revoked += ids
         ids = list(db_session.scalars(select(ApiToken.id).where(ApiToken.parent_id.in_(ids))))
+    publish(db_session, Event(ACCESS_ENDED, 0, {"api_token_ids": revoked}))  # their open event streams end
     db_session.flush()
     db_session.refresh(row)
     return row

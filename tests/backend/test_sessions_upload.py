@@ -324,16 +324,20 @@ def test_a_failure_after_the_session_row_stores_nothing(post, db_session, patien
     assert _stored(db_session, patient.id) == (0, 0, 0)
 
 
-def test_a_recording_the_analysis_cannot_use_is_stored_as_failed(post, db_session, patient_device):
+def test_a_recording_that_could_not_be_shown_is_refused(post, db_session, patient_device):
     patient, headers = patient_device
-    measured, _, _ = simulate("squat", 1, seed=8)
-    data = sf.encode(sf.SessionPayload(str(uuid.uuid4()), measured.slice(0, 1), created_at="2026-11-20T10:00:00Z"))
-    response = post(data, headers)
-    assert response.status_code == 201, response.text
-    body = response.json()
-    assert (body["status"], body["metrics"], body["n_frames"]) == ("failed", None, 1)
-    assert body["error"].startswith("AnalysisError: the recording has 1 frame(s)")
-    assert _stored(db_session, patient.id) == (1, 0, 0)
+    measured, truth, _ = simulate("squat", 1, seed=8)
+    one_frame = sf.SessionPayload(str(uuid.uuid4()), measured.slice(0, 1), created_at="2026-11-20T10:00:00Z")
+    short_filtered = sf.SessionPayload(str(uuid.uuid4()), measured, filtered=truth.slice(0, 100),
+                                       created_at="2026-11-20T10:00:00Z")  # fmt: skip
+    cases = [(one_frame, "too_short: the raw recording has 1 frame(s)"),
+             (short_filtered, "recordings_disagree: the filtered recording has 100 frames")]  # fmt: skip
+    for payload, detail in cases:
+        response = post(sf.encode(payload), headers)
+        assert response.status_code == 400, response.text
+        assert response.json()["error"] == "InvalidSessionFile"
+        assert response.json()["detail"].startswith(detail), response.json()
+    assert _stored(db_session, patient.id) == (0, 0, 0)
 
 
 def test_recording_without_exercise_needs_the_query(post, db_session, patient_device, khs):

@@ -14,12 +14,10 @@ from backend.analysis.data_quality import (
     outlier_probabilities,
     outlier_strip,
     part_score,
-    pipeline_config,
     quality_score,
     segment_spread_mm,
 )
 from backend.exercises.library import EXERCISES
-from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.skeleton import INDEX, NOT_TRACKED
 from tests.backend.analysis._data import noisy, uiprmd
 
@@ -74,14 +72,6 @@ def test_strip_max_pools_into_at_most_400_columns() -> None:
 def test_strip_refuses_times_of_another_length() -> None:
     with pytest.raises(ValueError, match=r"t must have shape \(5,\)"):
         outlier_strip(np.arange(4.0), np.zeros((5, 20)))
-
-
-def test_pipeline_config_reads_known_keys_and_falls_back_on_bad_ones() -> None:
-    assert pipeline_config({"outlier_threshold": 0.9, "unknown": 1}).outlier_threshold == 0.9
-    assert pipeline_config({"outlier_threshold": 7.0}) == PipelineConfig()
-    assert pipeline_config(None) == PipelineConfig()
-    # Files written before the settings became a pydantic model also stored "extra": {}; it is ignored.
-    assert pipeline_config({"extra": {}, "smoother": "four_pass"}) == PipelineConfig(smoother="four_pass")
 
 
 @pytest.mark.parametrize("seed", SEEDS)

@@ -8,7 +8,7 @@ import uuid
 import pytest
 
 from backend.database import utcnow
-from backend.live import service
+from backend.live import progress_gate, service
 from backend.plans.models import Plan, PlanItem
 
 
@@ -187,3 +187,17 @@ def test_users_may_not_post_progress(client, home):
 def test_devices_may_not_start(client, home):
     r = client.post("/api/v1/live/start", json={"plan_item_id": home["item"].id}, headers=home["device_hdr"])
     assert r.status_code == 403
+
+
+def test_a_flood_of_progress_is_answered_429_and_a_repeat_is_not_published(client, home, events):
+    set_id = str(uuid.uuid4())
+    statuses = []
+    for i in range(3 * progress_gate.MAX_PER_WINDOW):
+        msg = {"set_id": set_id, "exercise_slug": "squat", "state": "recording", "count": i}
+        statuses.append(client.post("/api/v1/live/progress", json=msg, headers=home["device_hdr"]).status_code)
+    assert statuses.count(204) <= 2 * progress_gate.MAX_PER_WINDOW and 429 in statuses, statuses
+    before = len(events)
+    end = {"set_id": set_id, "exercise_slug": "squat", "state": "ended", "count": 5}
+    assert client.post("/api/v1/live/progress", json=end, headers=home["device_hdr"]).status_code == 204
+    assert client.post("/api/v1/live/progress", json=end, headers=home["device_hdr"]).status_code == 204
+    assert len(events) == before + 1, "the identical message twice is passed on once"

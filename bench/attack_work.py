@@ -1,0 +1,199 @@
+"""bench/attack.py's family "file chooses the work": accepted files whose content would set the server's work.
+
+Each case is a valid session file that asks for more work than its recording is worth: a params["config"] with
+large outlier_iterations or outlier_window_s, a high frame rate (1 kHz), the most frames the server accepts, or a
+long duration. It is uploaded by a paired device, then GET /sessions/{id}/detail and GET /sessions/{id}/replay are
+sent once each. For every request the CPU time of the process (time.process_time: the app and the test client
+run in it, nothing else) and its peak resident memory above the request's start (/proc/self/statm sampled every
+2 ms) are measured and compared with the budget of backend.analysis.work_budget: BUDGETS[request] per started
+10 minutes of recording. A case fails when a request answers 5xx or exceeds its budget; a file the
+server refuses at upload (4xx) passes, its refusal is the bound.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+import uuid
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from backend.analysis import work_budget
+from kinect_agent.formats import session_file as sf
+from kinect_agent.recording import Recording
+from kinect_agent.sources.simulator import simulate
+
+FAMILY = "file_chooses_work"
+CREATED_AT = "2025-06-01T10:00:00Z"
+_PAGE = 4096
+
+
+@dataclass(frozen=True)
+class WorkCase:
+    """One accepted-looking file: a name saying what it asks for, and a callable making its bytes."""
+
+    name: str
+    make: Callable[[], bytes]
+
+
+def _payload(raw: Recording, filtered: Recording | None, params: dict) -> bytes:
+    return sf.encode(sf.SessionPayload(session_id=str(uuid.uuid4()), raw=raw, filtered=filtered, params=params,
+                                       created_at=CREATED_AT))  # fmt: skip
+
+
+def _tiled(rec: Recording, n: int, period_s: float) -> Recording:
+    """Returns rec's frames repeated to n frames, period_s apart."""
+    reps = -(-n // rec.n_frames)
+    positions = np.tile(rec.positions, (reps, 1, 1))[:n]
+    state = np.tile(rec.state, (reps, 1))[:n]
+    return rec.replace(t=np.arange(n) * period_s, positions=positions, state=state)
+
+
+def config_file(config: dict, reps: int = 10) -> bytes:
+    """Returns a simulated 30 Hz squat set of `reps` repetitions whose params["config"] is `config`."""
+    measured, truth, _ = simulate("squat", reps, seed=11)
+    return _payload(measured, truth, {"config": config})
+
+
+def rate_file(n_frames: int, period_s: float) -> bytes:
+    """Returns a squat recording of n_frames frames period_s apart (the simulator's frames repeated)."""
+    measured, truth, _ = simulate("squat", 5, seed=12)
+    return _payload(_tiled(measured, n_frames, period_s), _tiled(truth, n_frames, period_s), {})
+
+
+def work_cases(max_frames: int, cache_dir: Path, quick: bool = False) -> list[WorkCase]:
+    """Returns the family's cases (the largest files are cached in cache_dir)."""
+
+    def cached(name: str, make: Callable[[], bytes]) -> Callable[[], bytes]:
+        def load() -> bytes:
+            path = cache_dir / f"coach-attack-work-{name}.khs"
+            if not path.exists():
+                path.write_bytes(make())
+            return path.read_bytes()
+
+        return load
+
+    cases = [
+        WorkCase("config outlier_iterations=200", lambda: config_file({"outlier_iterations": 200})),
+        WorkCase("config outlier_window_s=100", lambda: config_file({"outlier_window_s": 100.0})),
+        WorkCase(
+            "config segment+excursions 1000 s",
+            lambda: config_file({"outlier_segment": "or", "excursion_min_len_s": 0.01, "excursion_max_len_s": 1000.0}),
+        ),  # fmt: skip
+        WorkCase("rate 1 kHz, 3000 frames", lambda: rate_file(3000, 0.0010001)),
+        WorkCase("rate 30 Hz, 10 min", cached("30hz-10min", lambda: rate_file(18_000, 1 / 30))),
+    ]
+    if not quick:
+        cases += [
+            WorkCase("config outlier_iterations=600", lambda: config_file({"outlier_iterations": 600})),
+            WorkCase(
+                f"rate 1 kHz, {max_frames} frames",
+                cached(f"1khz-{max_frames}", lambda: rate_file(max_frames, 0.0010001)),
+            ),  # fmt: skip
+            WorkCase(
+                f"duration 1 Hz, {max_frames} frames", cached(f"1hz-{max_frames}", lambda: rate_file(max_frames, 1.0))
+            ),  # fmt: skip
+        ]
+    return cases
+
+
+class PeakRss:
+    """Samples this process's resident memory every 2 ms while active; peak_bytes: the peak above the start."""
+
+    def __init__(self) -> None:
+        self.start = self.peak = 0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    @staticmethod
+    def rss() -> int:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * _PAGE
+
+    def __enter__(self) -> PeakRss:
+        self.start = self.peak = self.rss()
+        self._thread = threading.Thread(target=self._sample, daemon=True)
+        self._thread.start()
+        return self
+
+    def _sample(self) -> None:
+        while not self._stop.wait(0.002):
+            self.peak = max(self.peak, self.rss())
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        self.peak = max(self.peak, self.rss())
+
+    @property
+    def peak_bytes(self) -> int:
+        return self.peak - self.start
+
+
+def _measured(send: Callable[[], object]) -> tuple[object, float, float, int]:
+    """Returns (response, wall s, CPU s, peak bytes) of one request."""
+    wall, cpu = time.perf_counter(), time.process_time()
+    with PeakRss() as rss:
+        response = send()
+    return response, time.perf_counter() - wall, time.process_time() - cpu, rss.peak_bytes
+
+
+def run_work_case(client, case: WorkCase, headers: dict, reader: dict) -> dict:
+    """Uploads the case's file with a device's headers, reads its detail and replay with the patient's (reader)
+    headers; returns the record: each request's status, wall and CPU seconds, peak bytes, budget and failures."""
+    data = case.make()
+    payload = sf.decode(data, max_frames=10**7, max_decoded_bytes=2**31)
+    duration = payload.raw.duration
+    record = {"family": FAMILY, "name": case.name, "file_bytes": len(data), "n_frames": payload.raw.n_frames,
+              "duration_s": round(duration, 1), "requests": [], "failures": []}  # fmt: skip
+    session_id = None
+    for name in ("upload", "detail", "replay"):
+        if name == "upload":
+            send = lambda: client.post("/api/v1/sessions", content=data, headers=headers,  # noqa: E731
+                                       params={"exercise": "squat"})  # fmt: skip
+        else:
+            send = lambda url=f"/api/v1/sessions/{session_id}/{name}": client.get(url, headers=reader)  # noqa: E731
+        response, wall, cpu, peak = _measured(send)
+        cpu_budget, bytes_budget = work_budget.budget(duration, name)
+        record["requests"].append(_request(name, response, wall, cpu, peak) | {"budget_cpu_s": cpu_budget,
+                                  "budget_mib": bytes_budget / 2**20})  # fmt: skip
+        if response.status_code >= 500:
+            record["failures"].append(f"{name} {response.status_code}")
+        if cpu > cpu_budget:
+            record["failures"].append(f"{name} {cpu:.2f} s CPU > {cpu_budget:g} s")
+        if peak > bytes_budget:
+            record["failures"].append(f"{name} {peak / 2**20:.0f} MiB > {bytes_budget / 2**20:.0f} MiB")
+        if name == "upload":
+            if response.status_code != 201:
+                break
+            session_id = response.json()["id"]
+    return record
+
+
+def _request(name: str, response, wall: float, cpu: float, peak: int) -> dict:
+    error = ""
+    if response.status_code >= 400:
+        try:
+            error = f"{response.json().get('error')}: {str(response.json().get('detail'))[:120]}"
+        except ValueError:
+            error = response.text[:120]
+    return {"request": name, "status": response.status_code, "wall_s": round(wall, 3), "cpu_s": round(cpu, 3),
+            "peak_mib": round(peak / 2**20, 1), "error": error}  # fmt: skip
+
+
+def print_work(db: str, records: list[dict]) -> None:
+    """Prints the family's table for one database."""
+    budgets = ", ".join(f"{k} {c:g} s, {m / 2**20:.0f} MiB" for k, (c, m) in work_budget.BUDGETS.items())
+    print(f"\nFile chooses the work, db {db}: budget per started 10 min of recording: {budgets}")
+    print(f"{'case':<38}{'frames':>8}{'dur s':>9}  {'request':<8}{'status':>7}{'wall s':>8}{'CPU s':>8}{'MiB':>7}")
+    for r in records:
+        for i, q in enumerate(r["requests"]):
+            head = f"{r['name']:<38}{r['n_frames']:>8}{r['duration_s']:>9}" if i == 0 else " " * 55
+            print(f"{head}  {q['request']:<8}{q['status']:>7}{q['wall_s']:>8.2f}{q['cpu_s']:>8.2f}{q['peak_mib']:>7.0f}"
+                  f"  {q['error']}")  # fmt: skip
+        if r["failures"]:
+            print(f"  FAILED: {'; '.join(r['failures'])}")
