@@ -219,6 +219,11 @@ class WebcamSource(SourceBase):
                             self._image_size)  # fmt: skip
 
     @property
+    def images(self) -> int:
+        """Images read and analysed so far."""
+        return self._images
+
+    @property
     def fps_achieved(self) -> float | None:
         """Images read and analysed per second of wall time (None before the first)."""
         return self._images / self._wall_s if self._images and self._wall_s > 0 else None
