@@ -18,7 +18,7 @@ from pathlib import Path
 from kinect_agent import formats
 from kinect_agent.config import load_config
 from kinect_agent.formats.session_file import SessionPayload
-from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.processing.config import PipelineConfig, config_for_device
 from kinect_agent.processing.pipeline import VERSION, process
 from kinect_agent.queue import SessionQueue
 from kinect_agent.recording import Recording
@@ -109,8 +109,9 @@ def make_payload(
     recorded_by: dict[str, int] | None = None,
 ) -> SessionPayload:
     """Filters the recording and returns the session (raw + filtered + the per-frame angle SDs + a small params
-    summary), saying which device and patient recorded it (recorded_by)."""
-    config = config or PipelineConfig()
+    summary), saying which device and patient recorded it (recorded_by). The settings default to the recording
+    device's (config_for_device)."""
+    config = config or config_for_device(rec.meta.device)
     result = process(rec, config=config)
     q = result.quality
     params = {
