@@ -1,7 +1,8 @@
 """Capturing one set and queueing it, as a library: the `run` and `serve` commands and the server's demo clinic
 (through kinect_agent.home) call these, none of them through another's command module.
 
-capture(source, exercise=...)  -> the raw Recording of one set (simulator | replay FILE | kinect2 | azure)
+capture(source, exercise=...)  -> the raw Recording of one set (simulator | replay FILE | kinect2 | azure |
+                                   webcam [camera N] [VIDEO])
 queue_session(queue, rec)      -> held raw in queue/captured/, filtered (make_payload), queued in queue/pending/
 """
 
@@ -15,7 +16,7 @@ from pathlib import Path
 
 from kinect_agent import formats
 from kinect_agent.formats.session_file import SessionPayload
-from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.processing.config import PipelineConfig, config_for_device
 from kinect_agent.processing.errors import ProcessingError
 from kinect_agent.processing.pipeline import VERSION, process
 from kinect_agent.queue import SessionQueue
@@ -30,6 +31,7 @@ SOURCE_NAMES = {
     "kinect_v2": "kinect_v2",
     "azure": "azure_kinect",
     "azure_kinect": "azure_kinect",
+    "webcam": "webcam",
 }
 _SLUG = re.compile(r"^[a-z0-9][a-z0-9_]{0,63}$")
 
@@ -41,6 +43,14 @@ def check_exercise(exercise: str) -> str:
     return exercise
 
 
+def check_source_file(kind: str, file: Path | None) -> None:
+    """Raises ValueError unless a FILE is given exactly where needed (replay), or allowed (a webcam's video)."""
+    if kind == "replay" and file is None:
+        raise ValueError("a FILE is needed with --source replay")
+    if kind not in ("replay", "webcam") and file is not None:
+        raise ValueError("a FILE is only for --source replay (a recording) or --source webcam (a video)")
+
+
 def capture(
     source: str,
     *,
@@ -49,26 +59,28 @@ def capture(
     reps: int = 10,
     seconds: float = 60.0,
     seed: int = 0,
+    camera: int | None = None,
+    model: str | None = None,
 ) -> Recording:
     """Returns the raw recording of one session from `source` (a key of SOURCE_NAMES), meta.exercise set."""
     check_exercise(exercise)
     kind = SOURCE_NAMES.get(source)
     if kind is None:
         raise ValueError(f"unknown source {source!r}; known sources: {', '.join(sorted(SOURCE_NAMES))}")
-    if (kind == "replay") != (file is not None):
-        raise ValueError("a FILE is needed with --source replay, and only there")
+    check_source_file(kind, file)
     if kind == "simulator":
         from kinect_agent.sources.simulator import simulate
 
         rec = simulate(exercise, reps, seed=seed)[0]
-    elif file is not None:  # replay: the only kind with a FILE (checked above)
+    elif kind == "replay":
+        assert file is not None  # checked above
         rec = formats.read(file)
     else:
         from kinect_agent.sources import make_source, record
 
         if not 0 < seconds <= 3600:
             raise ValueError(f"--seconds must be between 0 and 3600, got {seconds}")
-        rec = record(make_source(kind), seconds)
+        rec = record(make_source(kind, file=file, camera=camera, model=model), seconds)
     rec.meta.exercise = exercise
     return rec
 
@@ -82,8 +94,9 @@ def make_payload(
     recorded_by: dict[str, int] | None = None,
 ) -> SessionPayload:
     """Filters the recording and returns the session (raw + filtered + the per-frame angle SDs + a small params
-    summary), saying which device and patient recorded it (recorded_by)."""
-    config = config or PipelineConfig()
+    summary), saying which device and patient recorded it (recorded_by). The settings default to the recording
+    device's (config_for_device)."""
+    config = config or config_for_device(rec.meta.device)
     result = process(rec, config=config)
     q = result.quality
     params = {

@@ -1,7 +1,7 @@
 """`kinect-agent run --source SOURCE [FILE] --exercise NAME [--reps N]`: capture, filter, queue, upload
 (kinect_agent.capture does the first four).
 
-capture (simulator | replay FILE | kinect2 | azure)
+capture (simulator | replay FILE | kinect2 | azure | webcam [--camera N] [VIDEO])
   -> the raw session is held durably in queue/captured/ (a crash in the filter loses nothing)
   -> pipeline (outlier removal + kinematic UKF) -> session file with raw + filtered recordings
   -> queue/pending/ (atomic, fsynced) -> upload (the file stays queued when the server is down)
@@ -25,7 +25,10 @@ HELP = "Record one exercise session, filter it, queue it on disk and upload it (
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declares the run options."""
     parser.add_argument("--source", required=True, choices=sorted(SOURCE_NAMES), help="where frames come from")
-    parser.add_argument("file", nargs="?", type=Path, help="recording to replay (--source replay FILE)")
+    parser.add_argument("file", nargs="?", type=Path,
+                        help="recording to replay (--source replay) or video to analyse (--source webcam)")  # fmt: skip
+    parser.add_argument("--camera", type=int, help="camera index (--source webcam; default 0)")
+    parser.add_argument("--model", choices=("lite", "full"), help="pose model (--source webcam; default lite)")
     parser.add_argument("--exercise", required=True, help="exercise slug, e.g. shoulder_abduction")
     parser.add_argument("--reps", type=int, default=10, help="repetitions to simulate (simulator; default 10)")
     parser.add_argument("--seconds", type=float, default=60.0, help="recording length for cameras (default 60 s)")
@@ -45,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     queue = SessionQueue(config.queue_dir)
     queue.recover_held()
     rec = capture(args.source, exercise=args.exercise, file=args.file, reps=args.reps, seconds=args.seconds,
-                  seed=args.seed)  # fmt: skip
+                  seed=args.seed, camera=args.camera, model=args.model)  # fmt: skip
     path = queue_session(queue, rec, recorded_by=config.recorded_by)
     print(f"{args.source}: {rec.n_frames} frames, {rec.duration:.1f} s of {args.exercise} -> {path}", file=sys.stderr)
     if not args.no_upload:

@@ -10,6 +10,9 @@ When the model sees more than one person, the patient is the one whose hips are 
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -20,6 +23,7 @@ import numpy as np
 from kinect_agent.errors import DeviceUnavailable
 from kinect_agent.recording import Metadata
 from kinect_agent.sources.base import Frame, Pacer, SourceBase
+from kinect_agent.sources.webcam.header import webcam_header
 from kinect_agent.sources.webcam.landmarks import N_LANDMARKS, LandmarkBatch, check_arrays
 from kinect_agent.sources.webcam.mapping import DEFAULT_FOV_DEG, to_skeletons
 from kinect_agent.vendor import VendorError, model_info, task_path
@@ -31,6 +35,7 @@ FIRST_FRAME_TIMEOUT_S = 5.0
 
 def _import_runtime() -> tuple[Any, Any, Any]:
     """Returns (cv2, mediapipe, mediapipe.tasks.python.vision); raises DeviceUnavailable."""
+    os.environ.setdefault("GLOG_minloglevel", "2")  # MediaPipe's per-frame native warnings: errors only
     try:
         import cv2
         import mediapipe
@@ -38,6 +43,26 @@ def _import_runtime() -> tuple[Any, Any, Any]:
     except ImportError as exc:
         raise DeviceUnavailable(f"{INSTALL_HINT}; importing {exc.name or 'it'} failed") from exc
     return cv2, mediapipe, vision
+
+
+@contextlib.contextmanager
+def _native_stderr_silenced() -> Iterator[None]:
+    """Sends file descriptor 2 to /dev/null for a moment: TFLite prints ~50 lines when it loads the models (one per
+    sparse tensor, and its accelerator set-up), which would bury the agent's own lines. Python errors still carry
+    their message."""
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):  # no real stderr (a test's capture, a service without one)
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 2)
+            yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 class LandmarkFrame:
@@ -127,7 +152,8 @@ class WebcamSource(SourceBase):
             num_poses=MAX_PEOPLE,
         )
         try:
-            self._landmarker = vision.PoseLandmarker.create_from_options(options)
+            with _native_stderr_silenced():
+                self._landmarker = vision.PoseLandmarker.create_from_options(options)
         except (RuntimeError, ValueError) as exc:
             capture.release()
             raise DeviceUnavailable(f"the pose model {model_path.name} did not load: {exc}") from exc
@@ -194,6 +220,11 @@ class WebcamSource(SourceBase):
                             self._image_size)  # fmt: skip
 
     @property
+    def images(self) -> int:
+        """Images read and analysed so far."""
+        return self._images
+
+    @property
     def fps_achieved(self) -> float | None:
         """Images read and analysed per second of wall time (None before the first)."""
         return self._images / self._wall_s if self._images and self._wall_s > 0 else None
@@ -209,14 +240,9 @@ class WebcamSource(SourceBase):
 
     def metadata(self) -> Metadata:
         """Returns the device `webcam` with the model's name, version and SHA-256, and the frame rates."""
-        webcam: dict[str, Any] = {
-            "model": self.info.to_dict(),
-            "runtime": f"mediapipe {getattr(self._mp, '__version__', '?')} (Python)",
-            "fov_deg": self.fov_deg,
-            "image_size": list(self._image_size) if self._image_size else None,
-            "fps_achieved": round(self.fps_achieved, 2) if self.fps_achieved else None,
-            "images": self._images,
-        }
+        webcam = webcam_header(model=self.model, runtime=f"mediapipe {getattr(self._mp, '__version__', '?')} (Python)",
+                               fps_achieved=self.fps_achieved, image_size=self._image_size, fov_deg=self.fov_deg,
+                               images=self._images)  # fmt: skip
         rate = self._video_fps
         if rate is None and len(self.landmark_frames) > 1:
             rate = (len(self.landmark_frames) - 1) / (self.landmark_frames[-1].t - self.landmark_frames[0].t)
