@@ -125,6 +125,8 @@ def session_header(base: str, email: str, session_id: int):
 def open_page(browser, base: str):
     context = browser.new_context(viewport={"width": 1366, "height": 900}, base_url=base)
     context.set_default_timeout(30_000)
+    context.add_init_script("window.__csp = []; document.addEventListener('securitypolicyviolation', "
+                            "(e) => __csp.push([e.effectiveDirective, e.blockedURI]))")  # fmt: skip
     page = context.new_page()
     errors: list[str] = []
     page.on("pageerror", lambda exc: errors.append(str(exc)))
@@ -193,6 +195,10 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         assert payload.params["fps_achieved"] and payload.params["fps_achieved"] > 1, payload.params
         off_origin = [u for u in page.requests if not u.startswith(base) and not u.startswith(("data:", "blob:"))]
         assert not off_origin, off_origin
+        # the WebAssembly compiled under the page's CSP; only connections off the origin (MediaPipe's metrics) may be
+        # refused by it
+        violations = page.evaluate("window.__csp")
+        assert all(d == "connect-src" and not u.startswith(base) for d, u in violations), violations
         assert not page.js_errors, page.js_errors
     finally:
         context.close()
