@@ -135,6 +135,7 @@ def load(path: str | Path) -> tuple[Recording, Recording, dict[str, np.ndarray] 
     """
     from kinect_agent import formats
     from kinect_agent.formats import session_file
+    from kinect_agent.processing.config import config_for_device
     from kinect_agent.processing.pipeline import process
 
     path = Path(path)
@@ -153,7 +154,7 @@ def load(path: str | Path) -> tuple[Recording, Recording, dict[str, np.ndarray] 
         raise UnreadableRecording(f"{path}: {raw.n_frames} frame(s); at least 2 are needed")
     if filtered is None:
         try:
-            result = process(raw)
+            result = process(raw, config=config_for_device(raw.meta.device))
         except ValueError as exc:
             raise UnreadableRecording(f"{path}: the pipeline cannot filter this recording: {exc}") from None
         filtered, angle_sd = result.filtered, result.angle_sd

@@ -1,4 +1,4 @@
-"""`kinect-agent capture`: record skeletons from a source (simulator, file replay, Kinect v2, Azure Kinect)."""
+"""`kinect-agent capture`: record skeletons from a source (simulator, file replay, Kinect v2, Azure Kinect, webcam)."""
 
 from __future__ import annotations
 
@@ -17,6 +17,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declares the capture options."""
     parser.add_argument("--source", required=True, choices=SOURCES, help="where frames come from")
     parser.add_argument("--file", type=Path, help="recording to replay (--source replay)")
+    parser.add_argument(
+        "video", nargs="?", type=Path, help="video file to analyse instead of a camera (--source webcam)"
+    )
+    parser.add_argument("--camera", type=int, help="camera index (--source webcam; default 0)")
+    parser.add_argument("--model", choices=("lite", "full"), help="pose model (--source webcam; default lite)")
     parser.add_argument("--exercise", help="exercise to simulate (--source simulator)")
     parser.add_argument("--device", help="simulated device kinect1|kinect2, or azure_kinect|femto")
     parser.add_argument("--seed", type=int, default=0, help="simulator seed (default 0)")
@@ -31,9 +36,11 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--seconds must be a positive number, got {args.seconds}")
     if args.output.suffix.lower() not in (".csv", ".khs"):
         raise ValueError(f"{args.output}: cannot tell the output format from the extension; use .csv or .khs")
+    if args.video is not None and args.source != "webcam":
+        raise ValueError(f"a VIDEO file is only for --source webcam, not {args.source}")
     source = make_source(
-        args.source, file=args.file, exercise=args.exercise, realtime=not args.fast, seed=args.seed,
-        device=args.device,
+        args.source, file=args.video if args.source == "webcam" else args.file, exercise=args.exercise,
+        realtime=not args.fast, seed=args.seed, device=args.device, camera=args.camera, model=args.model,
     )  # fmt: skip
     rec = record(source, args.seconds)
     formats.write(rec, args.output)

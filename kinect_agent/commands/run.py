@@ -1,6 +1,6 @@
 """`kinect-agent run --source SOURCE [FILE] --exercise NAME [--reps N]`: capture, filter, queue, upload.
 
-capture (simulator | replay FILE | kinect2 | azure)
+capture (simulator | replay FILE | kinect2 | azure | webcam [--camera N] [VIDEO])
   -> the raw session is held durably in queue/captured/ (a crash in the filter loses nothing)
   -> pipeline (outlier removal + kinematic UKF) -> session file with raw + filtered recordings
   -> queue/pending/ (atomic, fsynced) -> upload (the file stays queued when the server is down)
@@ -18,7 +18,7 @@ from pathlib import Path
 from kinect_agent import formats
 from kinect_agent.config import load_config
 from kinect_agent.formats.session_file import SessionPayload
-from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.processing.config import PipelineConfig, config_for_device
 from kinect_agent.processing.pipeline import VERSION, process
 from kinect_agent.queue import SessionQueue
 from kinect_agent.recording import Recording
@@ -33,6 +33,7 @@ SOURCE_NAMES = {
     "kinect_v2": "kinect_v2",
     "azure": "azure_kinect",
     "azure_kinect": "azure_kinect",
+    "webcam": "webcam",
 }
 _SLUG = re.compile(r"^[a-z0-9][a-z0-9_]{0,63}$")
 
@@ -40,7 +41,10 @@ _SLUG = re.compile(r"^[a-z0-9][a-z0-9_]{0,63}$")
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declares the run options."""
     parser.add_argument("--source", required=True, choices=sorted(SOURCE_NAMES), help="where frames come from")
-    parser.add_argument("file", nargs="?", type=Path, help="recording to replay (--source replay FILE)")
+    parser.add_argument("file", nargs="?", type=Path,
+                        help="recording to replay (--source replay) or video to analyse (--source webcam)")  # fmt: skip
+    parser.add_argument("--camera", type=int, help="camera index (--source webcam; default 0)")
+    parser.add_argument("--model", choices=("lite", "full"), help="pose model (--source webcam; default lite)")
     parser.add_argument("--exercise", required=True, help="exercise slug, e.g. shoulder_abduction")
     parser.add_argument("--reps", type=int, default=10, help="repetitions to simulate (simulator; default 10)")
     parser.add_argument("--seconds", type=float, default=60.0, help="recording length for cameras (default 60 s)")
@@ -55,6 +59,14 @@ def check_exercise(exercise: str) -> str:
     return exercise
 
 
+def check_source_file(kind: str, file: Path | None) -> None:
+    """Raises ValueError unless a FILE is given exactly where needed (replay), or allowed (a webcam's video)."""
+    if kind == "replay" and file is None:
+        raise ValueError("a FILE is needed with --source replay")
+    if kind not in ("replay", "webcam") and file is not None:
+        raise ValueError("a FILE is only for --source replay (a recording) or --source webcam (a video)")
+
+
 def capture(
     source: str,
     *,
@@ -63,14 +75,15 @@ def capture(
     reps: int = 10,
     seconds: float = 60.0,
     seed: int = 0,
+    camera: int | None = None,
+    model: str | None = None,
 ) -> Recording:
     """Returns the raw recording of one session from `source` (a key of SOURCE_NAMES), meta.exercise set."""
     check_exercise(exercise)
     kind = SOURCE_NAMES.get(source)
     if kind is None:
         raise ValueError(f"unknown source {source!r}; known sources: {', '.join(sorted(SOURCE_NAMES))}")
-    if (kind == "replay") != (file is not None):
-        raise ValueError("a FILE is needed with --source replay, and only there")
+    check_source_file(kind, file)
     if kind == "simulator":
         from kinect_agent.sources.simulator import simulate
 
@@ -82,7 +95,7 @@ def capture(
 
         if not 0 < seconds <= 3600:
             raise ValueError(f"--seconds must be between 0 and 3600, got {seconds}")
-        rec = record(make_source(kind), seconds)
+        rec = record(make_source(kind, file=file, camera=camera, model=model), seconds)
     rec.meta.exercise = exercise
     return rec
 
@@ -96,8 +109,9 @@ def make_payload(
     recorded_by: dict[str, int] | None = None,
 ) -> SessionPayload:
     """Filters the recording and returns the session (raw + filtered + the per-frame angle SDs + a small params
-    summary), saying which device and patient recorded it (recorded_by)."""
-    config = config or PipelineConfig()
+    summary), saying which device and patient recorded it (recorded_by). The settings default to the recording
+    device's (config_for_device)."""
+    config = config or config_for_device(rec.meta.device)
     result = process(rec, config=config)
     q = result.quality
     params = {
@@ -155,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
     queue = SessionQueue(config.queue_dir)
     queue.recover_held()
     rec = capture(args.source, exercise=args.exercise, file=args.file, reps=args.reps, seconds=args.seconds,
-                  seed=args.seed)  # fmt: skip
+                  seed=args.seed, camera=args.camera, model=args.model)  # fmt: skip
     path = queue_session(queue, rec, recorded_by=config.recorded_by)
     print(f"{args.source}: {rec.n_frames} frames, {rec.duration:.1f} s of {args.exercise} -> {path}", file=sys.stderr)
     if not args.no_upload:

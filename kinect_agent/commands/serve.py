@@ -15,8 +15,9 @@ import sys
 import threading
 from pathlib import Path
 
-from kinect_agent.commands.run import SOURCE_NAMES, check_exercise, queue_session, upload_now
+from kinect_agent.commands.run import SOURCE_NAMES, check_exercise, check_source_file, queue_session, upload_now
 from kinect_agent.config import AgentConfig, load_config
+from kinect_agent.errors import DeviceUnavailable
 from kinect_agent.live import journal
 from kinect_agent.live.channel import CommandStream, Publisher
 from kinect_agent.live.set_recorder import SetCommand, SetLimits, SetRecorder, failed_message
@@ -30,7 +31,10 @@ HELP = "Run as the home computer's background service: record a set whenever the
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declares the serve options."""
     parser.add_argument("--source", required=True, choices=sorted(SOURCE_NAMES), help="where frames come from")
-    parser.add_argument("file", nargs="?", type=Path, help="recording to replay for every set (--source replay)")
+    parser.add_argument("file", nargs="?", type=Path,
+                        help="recording (--source replay) or video (--source webcam) for every set")  # fmt: skip
+    parser.add_argument("--camera", type=int, help="camera index (--source webcam; default 0)")
+    parser.add_argument("--model", choices=("lite", "full"), help="pose model (--source webcam; default lite)")
     parser.add_argument("--home", type=Path, help="agent folder (default $KINECT_AGENT_HOME)")
     parser.add_argument("--seed", type=int, default=0, help="simulator seed of the first set (default 0)")
     parser.add_argument("--still-end", type=float, default=20.0, metavar="S",
@@ -113,6 +117,8 @@ class Service:
 
             return SimulatorSource(command.exercise, reps_per_block=command.target_reps,
                                    seed=self.args.seed + self.n_sets)  # fmt: skip
+        if kind == "webcam":
+            return make_source(kind, file=self.args.file, camera=self.args.camera, model=self.args.model)
         return make_source(kind, file=self.args.file)
 
     def start(self, data: dict, publisher: Publisher, uploads: Uploads) -> None:
@@ -138,6 +144,11 @@ class Service:
     def _record(self, recorder: SetRecorder, uploads: Uploads) -> None:
         try:
             result = recorder.run()
+        except DeviceUnavailable as exc:
+            log(f"set {recorder.command.set_id} failed: {exc}")
+            recorder.publish(failed_message(recorder.command, "The camera stopped working. Check that it is "
+                                                              "plugged in, then press Start again."), True)  # fmt: skip
+            return
         except Exception as exc:  # noqa: BLE001 - a failed set must not stop the service; its journal stays
             log(f"set {recorder.command.set_id} failed: {exc}")
             recorder.publish(failed_message(recorder.command, "Recording stopped because of an error."), True)
@@ -164,8 +175,11 @@ class Service:
 
 def run(args: argparse.Namespace) -> int:
     """Serves until interrupted; 0 on a clean stop."""
-    if (args.source == "replay") != (args.file is not None):
-        raise ValueError("a FILE is needed with --source replay, and only there")
+    check_source_file(SOURCE_NAMES[args.source], args.file)
+    if SOURCE_NAMES[args.source] == "webcam":  # a missing camera, package or model is said now, not at the first set
+        probe = make_source("webcam", file=args.file, camera=args.camera, model=args.model)
+        probe.open()
+        probe.close()
     config = load_config(args.home)
     service = Service(args, config)
     service.queue.recover_held(older_than_s=0.0)  # this is the only agent of this queue: nothing is in progress

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from kinect_agent.analysis.live import LiveCount, LiveStatus
 from kinect_agent.clock import utc_now_iso
 from kinect_agent.live.journal import Journal
+from kinect_agent.processing.config import config_for_device
 from kinect_agent.processing.online import OnlineFilter
 from kinect_agent.recording import Recording
 from kinect_agent.sources.base import Source
@@ -136,7 +137,7 @@ class SetRecorder:
             meta.exercise = self.command.exercise
             meta.extra["live_set_id"] = self.command.set_id
             journal = Journal(self.journal_dir, self.session_id, meta, created_at)
-            online, counter = OnlineFilter(), LiveCount(self.command.angles)
+            online, counter = OnlineFilter(config_for_device(meta.device)), LiveCount(self.command.angles)
             status, reason, t0, target_since, last_sent = None, "source", None, None, -1e9
             for frame in self.source.frames():
                 taken_at = time.time()

@@ -109,4 +109,18 @@ class PipelineConfig(BaseModel):
         return value
 
 
-__all__ = ["SMOOTHERS", "PipelineConfig"]
+# The measurement noise of each device where it differs from the defaults (Kinect v2, measured on KERAAL/UI-PRMD):
+# webcam = BlazePose landmarks mapped by kinect_agent.sources.webcam.mapping; jitter and accuracy measured by
+# bench/webcam_noise.py and bench/webcam_accuracy.py (bench/README.md, "Webcam").
+DEVICE_SETTINGS: dict[str, dict[str, float]] = {
+    "webcam": {"sigma_tracked_m": 0.1, "sigma_inferred_m": 0.2, "online_sigma_tracked_m": 0.15},
+}
+
+
+def config_for_device(device: str | None) -> PipelineConfig:
+    """Returns the pipeline settings for recordings of `device` (kinect_agent.recording.DEVICES; unknown or None:
+    the defaults, which were measured on Kinect v2)."""
+    return PipelineConfig(**DEVICE_SETTINGS.get(device or "", {}))
+
+
+__all__ = ["DEVICE_SETTINGS", "SMOOTHERS", "PipelineConfig", "config_for_device"]

@@ -10,6 +10,9 @@ When the model sees more than one person, the patient is the one whose hips are 
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -31,6 +34,7 @@ FIRST_FRAME_TIMEOUT_S = 5.0
 
 def _import_runtime() -> tuple[Any, Any, Any]:
     """Returns (cv2, mediapipe, mediapipe.tasks.python.vision); raises DeviceUnavailable."""
+    os.environ.setdefault("GLOG_minloglevel", "2")  # MediaPipe's per-frame native warnings: errors only
     try:
         import cv2
         import mediapipe
@@ -38,6 +42,26 @@ def _import_runtime() -> tuple[Any, Any, Any]:
     except ImportError as exc:
         raise DeviceUnavailable(f"{INSTALL_HINT}; importing {exc.name or 'it'} failed") from exc
     return cv2, mediapipe, vision
+
+
+@contextlib.contextmanager
+def _native_stderr_silenced() -> Iterator[None]:
+    """Sends file descriptor 2 to /dev/null for a moment: TFLite prints ~50 lines when it loads the models (one per
+    sparse tensor, and its accelerator set-up), which would bury the agent's own lines. Python errors still carry
+    their message."""
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):  # no real stderr (a test's capture, a service without one)
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 2)
+            yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 class LandmarkFrame:
@@ -127,7 +151,8 @@ class WebcamSource(SourceBase):
             num_poses=MAX_PEOPLE,
         )
         try:
-            self._landmarker = vision.PoseLandmarker.create_from_options(options)
+            with _native_stderr_silenced():
+                self._landmarker = vision.PoseLandmarker.create_from_options(options)
         except (RuntimeError, ValueError) as exc:
             capture.release()
             raise DeviceUnavailable(f"the pose model {model_path.name} did not load: {exc}") from exc
@@ -192,6 +217,11 @@ class WebcamSource(SourceBase):
         return check_arrays(np.array([f.t for f in fr]), np.stack([f.world for f in fr]),
                             np.stack([f.image for f in fr]), np.stack([f.visibility for f in fr]),
                             self._image_size)  # fmt: skip
+
+    @property
+    def images(self) -> int:
+        """Images read and analysed so far."""
+        return self._images
 
     @property
     def fps_achieved(self) -> float | None:

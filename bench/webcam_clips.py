@@ -1,0 +1,57 @@
+"""Landmarks of the public demo clips used by the webcam benchmarks, computed once and cached.
+
+Clips (fetched and hash-checked by tests/media.py, BSD-3-Clause, perfanalytics): Sports2D's demo (one person, side
+view, 30 fps) and the four calibrated views of Pose2Sim's single-person demo (60 fps). Each clip is run through the
+agent's WebcamSource (MediaPipe's Python runtime, the pinned lite or full .task) and its LandmarkBatch kept in
+var/bench-cache/webcam/<clip>-<model>.npz, so the benchmarks after the first run cost seconds.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from kinect_agent.sources.webcam.landmarks import LandmarkBatch  # noqa: E402
+from tests.media import pose2sim_view, sports2d_demo  # noqa: E402
+
+CACHE = REPO / "var" / "bench-cache" / "webcam"
+CLIPS = {"sports2d": sports2d_demo, **{f"pose2sim_cam{c}": (lambda c=c: pose2sim_view(c)) for c in (1, 2, 3, 4)}}
+RATES = {"sports2d": 30.0, **{f"pose2sim_cam{c}": 60.0 for c in (1, 2, 3, 4)}}
+
+
+def landmarks(clip: str, model: str = "lite") -> tuple[LandmarkBatch, float]:
+    """Returns (the clip's landmark batch, images analysed per second when it was computed)."""
+    path = CACHE / f"{clip}-{model}.npz"
+    if path.is_file():
+        z = np.load(path)
+        batch = LandmarkBatch(z["t"], z["world"], z["image"], z["visibility"], tuple(int(v) for v in z["size"]))
+        return batch, float(z["fps"])
+    from kinect_agent.sources.webcam.source import WebcamSource
+
+    source = WebcamSource(video=CLIPS[clip](), model=model, realtime=False)
+    source.open()
+    try:
+        began = time.perf_counter()
+        for _ in source.frames():
+            pass
+        fps = source.images / (time.perf_counter() - began)
+    finally:
+        source.close()
+    batch = source.landmark_batch()
+    CACHE.mkdir(parents=True, exist_ok=True)
+    np.savez(path, t=batch.t, world=batch.world, image=batch.image, visibility=batch.visibility,
+             size=np.array(batch.image_size), fps=fps)  # fmt: skip
+    return batch, fps
+
+
+if __name__ == "__main__":
+    for name in CLIPS:
+        for model in ("lite", "full"):
+            b, f = landmarks(name, model)
+            print(f"{name:16s} {model}: {b.n_frames} frames with the person, {f:.1f} images/s", flush=True)
