@@ -9,8 +9,10 @@ import uuid
 from sqlalchemy import func, select
 
 from backend.camera import live_count
+from backend.sessions.metrics import json_ready
 from backend.sessions.models import ExerciseSession
 from kinect_agent.formats import session_file
+from kinect_agent.processing.config import config_for_device
 from tests.backend.camera.landmarks import batch, squats
 
 PER_BATCH = 6  # frames per batch: 0.2 s at 30 fps
@@ -49,6 +51,7 @@ def test_squats_count_live_and_the_end_stores_one_webcam_session(client, db_sess
     assert stored.client_session_id == uuid.UUID(set_id) and stored.device_id is None
     payload = session_file.decode(stored.file_bytes)
     assert payload.raw.meta.device == "webcam" and payload.filtered is not None
+    assert payload.params["config"] == json_ready(config_for_device("webcam").model_dump())  # the webcam's settings
     assert payload.params["model"]["name"] == "pose_landmarker_lite.task"
     assert len(payload.params["model"]["sha256"]) == 64
     assert 29 <= payload.params["fps_achieved"] <= 31, payload.params["fps_achieved"]
