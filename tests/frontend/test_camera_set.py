@@ -177,6 +177,9 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         size = page.evaluate("parseFloat(getComputedStyle(document.querySelector('#cam-count .n')).fontSize)")
         assert size >= 96, f"the live count is {size} px; it must be at least 96 px"
         page.wait_for_function("() => +document.querySelector('#cam-count .n').textContent >= 1", timeout=180_000)
+        fps = page.evaluate("CameraPage.state().fps")
+        if fps is not None and fps < 10:  # this machine: the page says so
+            expect(page.locator("#cam-note")).to_contain_text("This computer is slow")
         _shots(page, "counting")
         wait_phase(page, "stored", "failed", timeout=120_000)  # the target ends the set by itself
         assert phase(page) == "stored", page.locator("#cam-result-text").inner_text()

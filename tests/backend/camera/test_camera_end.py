@@ -93,3 +93,13 @@ def test_the_end_waits_for_batches_the_page_sent_and_a_too_short_set_stores_noth
     r = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": 0}, headers=h)
     assert r.status_code == 200 and r.json()["status"] == "failed" and "frames" in r.json()["error"], r.text
     assert _sessions(db_session, camera_home["patient"].id) == 0
+
+
+def test_a_failing_live_count_does_not_lose_the_batch(client, db_session, camera_home, started, monkeypatch):
+    def broken(*_args, **_kw):
+        raise ValueError("the live count broke")
+
+    monkeypatch.setattr("kinect_agent.analysis.live.LiveCount.add", broken)
+    set_id, h = started(), camera_home["headers"]
+    r = client.post(f"/api/v1/camera/sets/{set_id}/batches", json=batch(0, squats(1)[:PER_BATCH]), headers=h)
+    assert r.status_code == 201 and r.json()["count"] == 0 and r.json()["n_frames"] == PER_BATCH, r.text
