@@ -106,6 +106,8 @@ def main() -> None:
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="pipeline setting")
     parser.add_argument("--json", type=Path)
     parser.add_argument("--true-fov", action="store_true", help="place the hips with each camera's calibrated FOV")
+    parser.add_argument("--leave-out", action=argparse.BooleanOptionalAction, default=False,
+                        help="triangulate each view's reference from the other views only")  # fmt: skip
     args = parser.parse_args()
     config = config_for_device("webcam")
     if args.set:
@@ -118,9 +120,13 @@ def main() -> None:
     pixels = np.stack([b.image[:n, :, :2] * np.array(b.image_size) for b in batches])
     vis = np.stack([b.visibility[:n] for b in batches])
     world, used = triangulate(cams, pixels, vis)
-    joints_world = np.einsum("jl,nlc->njc", MIX, world)  # (N, 20, 3)
     results = {}
-    for cam, batch in zip(cams, batches, strict=True):
+    for v, (cam, batch) in enumerate(zip(cams, batches, strict=True)):
+        # the reference of view v leaves view v out: the other three views' landmarks only, so that the view's own
+        # 2D errors are not in its reference (they would favour the unfiltered estimate)
+        others = [k for k in range(len(cams)) if k != v] if args.leave_out else list(range(len(cams)))
+        ref_world, _ = triangulate([cams[k] for k in others], pixels[others], vis[others])
+        joints_world = np.einsum("jl,nlc->njc", MIX, ref_world)  # (N, 20, 3)
         ref_cam = (joints_world @ cam["R"].T + cam["t"]) * CV_TO_KINECT
         ref = joint_angles(ref_cam)
         fov = float(np.degrees(2 * np.arctan(batch.image_size[0] / 2 / cam["K"][0, 0]))) if args.true_fov else 65.0

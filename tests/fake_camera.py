@@ -38,15 +38,18 @@ def write_y4m(
     if not cap.isOpened():
         raise RuntimeError(f"cannot open video {source}")
     src_fps = cap.get(cv2.CAP_PROP_FPS) or 30.0
+    first = int(round(start_s * src_fps))
+    wanted = None if seconds is None else int(np.ceil(seconds * src_fps)) + 1
     frames: list[np.ndarray] = []
-    while True:
+    for _ in range(first):  # skipped without decoding into arrays
+        if not cap.grab():
+            break
+    while wanted is None or len(frames) < wanted:
         ok, frame = cap.read()
         if not ok:
             break
         frames.append(frame)
     cap.release()
-    first = int(round(start_s * src_fps))
-    frames = frames[first:]
     if not frames:
         raise RuntimeError(f"{source}: no frame after {start_s} s")
     n_out = int(len(frames) / src_fps * fps) if seconds is None else int(round(seconds * fps))

@@ -31,10 +31,11 @@ from backend.exercises.library import EXERCISES, ExerciseSpec
 from backend.sessions import service
 from backend.sessions.metrics import json_ready
 from backend.sessions.models import ExerciseSession
+from kinect_agent.analysis.validity import recorded_with, session_validity
 from kinect_agent.formats import session_file
 from kinect_agent.formats.session_file import SessionFileError, SessionPayload
 
-DETAIL_VERSION = 1  # part of the cache key: bump when the file-derived output changes
+DETAIL_VERSION = 2  # part of the cache key: bump when the file-derived output changes
 CACHE_SIZE = 8
 UNCERTAINTY_NOTE = (
     "95 % intervals from the per-frame angle SDs the home agent stored (the filter's covariance, calibrated on "
@@ -128,6 +129,7 @@ def file_evidence(payload: SessionPayload, names: tuple[str, ...], reps: list[di
         "peak_speeds": peak_speeds(raw.t, angular_speeds(raw.t, angles), reps),
         "hand_paths": hand_paths(measured, raw.t) if is_arm_exercise(names) else None,
         "quality": quality | {"outlier_strip": strip, "advice": camera_advice(raw)},
+        "validity": session_validity(raw.meta.device, measured, names, names[0] if names else None).to_dict(),
     }
 
 
@@ -226,6 +228,8 @@ def detail_body(
         },
         "uncertainty": (uncertainty := _uncertainty(doc)),
         "uncertainty_note": UNCERTAINTY_NOTE if uncertainty is not None else NO_UNCERTAINTY_NOTE,
+        "recorded_with": recorded_with(raw.meta.device, raw.meta.extra),
+        "validity": evidence["validity"],
     }
 
 

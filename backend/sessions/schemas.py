@@ -336,6 +336,36 @@ class UncertaintyOut(BaseModel):
     repetitions: CountIntervalOut | None = Field(description="interval of the repetition count")
 
 
+class RecordedWithOut(BaseModel):
+    """What recorded the session: the device, and for an ordinary camera the pose model and the frame rate."""
+
+    device: str = Field(description="kinect_agent.recording.DEVICES code", examples=["webcam"])
+    label: str = Field(description="the device in words", examples=["ordinary camera (webcam)"])
+    model: str | None = Field(description="pose model file (webcam only)", examples=["pose_landmarker_lite.task"])
+    model_sha256: str | None = Field(description="SHA-256 of the pose model file (webcam only)")
+    runtime: str | None = Field(description="the pose runtime and its version (webcam only)")
+    fps_achieved: float | None = Field(description="images analysed per second during the recording (webcam)")
+
+
+class MetricValidityOut(BaseModel):
+    """Whether one metric is valid for the device and view (kinect_agent.analysis.validity)."""
+
+    name: str = Field(description="an angle name, 'rom', 'repetitions', 'workspace', 'balance', ...")
+    valid: bool
+    code: str | None = Field(description="'out_of_plane' or 'metric_scale' when not valid")
+    reason: str | None = Field(description="why not, in plain words")
+
+
+class ValidityOut(BaseModel):
+    """Which of the session's metrics its device and view support."""
+
+    device: str
+    view: str = Field(description="'front', 'side', 'oblique' or 'unknown'")
+    view_deg: float | None = Field(description="the trunk's angle to the camera axis, degrees (0 facing it)")
+    limited: bool = Field(description="some metric is not valid for this device and view")
+    metrics: list[MetricValidityOut]
+
+
 class SessionDetailOut(BaseModel):
     """What the therapist's session page shows: the evidence behind the session's numbers."""
 
@@ -436,6 +466,21 @@ class SessionDetailOut(BaseModel):
                         "repetitions": {"low": 10, "high": 10, "ambiguous": False},
                     },
                     "uncertainty_note": "95 % intervals from the per-frame angle SDs the home agent stored",
+                    "recorded_with": {
+                        "device": "kinect2",
+                        "label": "Kinect v2",
+                        "model": None,
+                        "model_sha256": None,
+                        "runtime": None,
+                        "fps_achieved": None,
+                    },
+                    "validity": {
+                        "device": "kinect2",
+                        "view": "front",
+                        "view_deg": 4.5,
+                        "limited": False,
+                        "metrics": [{"name": "rom", "valid": True, "code": None, "reason": None}],
+                    },
                 }
             ]
         }
@@ -468,3 +513,5 @@ class SessionDetailOut(BaseModel):
         description="95 % intervals of the figures; null: the session file stores no angle SDs (older agents)"
     )
     uncertainty_note: str
+    recorded_with: RecordedWithOut
+    validity: ValidityOut

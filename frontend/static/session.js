@@ -36,6 +36,8 @@
     return [...stat("Full range", deg(a.range_deg), ci(a.range_ci95)), ...stat("Peak angle", deg(a.max_deg), ci(a.max_ci95))];
   }
 
+  const romValid = (d) => !d.validity.metrics.some((m) => m.name === "rom" && !m.valid);
+
   function keyNumbers(d) {
     const total = (d.moving_time_s || 0) + (d.rest_time_s || 0);
     const moving = d.moving_time_s === null ? "—" : `${Math.round(d.moving_time_s)} s`;
@@ -43,12 +45,13 @@
     const repNote = reps && reps.ambiguous ? `uncertain: ${reps.low}–${reps.high}` : null;
     document.getElementById("numbers").replaceChildren(
       ...stat("Repetitions", String(d.repetition_count), repNote),
-      ...stat("Range of motion", deg(d.rom_deg), "median of the repetitions"),
+      ...stat("Range of motion", deg(d.rom_deg), romValid(d) ? "median of the repetitions" : "median of the repetitions; not reliable from this view: see the limits above"),
       ...intervalStats(d),
       ...stat("Duration", `${Math.round(d.duration_s)} s`, `${d.n_frames} frames`),
       ...stat("Moving", moving, total ? `${Math.round(100 * d.moving_time_s / total)}% of the time` : null),
       ...stat("Time per repetition", secs(d.tempo_s_per_rep)),
-      ...stat("Data quality", `${d.quality.score} / 100`, d.quality.low ? "low: read with care" : "good"));
+      ...stat("Data quality", `${d.quality.score} / 100`, d.quality.low ? "low: read with care" : "good"),
+      ...stat("Recorded with", d.recorded_with.label, deviceText(d.recorded_with) === d.recorded_with.label ? null : deviceText(d.recorded_with).slice(d.recorded_with.label.length + 2)));
   }
 
   /** Returns the repetitions an angle's chart marks: those of its side, and those of both sides. */
@@ -206,6 +209,36 @@
       el("h3", {}, "Parameters in the session file"), pre(p.file_params));
   }
 
+  const METRIC_WORDS = {
+    rom: "Range of motion", repetitions: "Repetitions", moving_time: "Moving time", tempo: "Time per repetition",
+    workspace: "Reach of each arm", balance: "Balance and sway", joint_paths: "Distance joints travelled",
+  };
+  const metricName = (name) => METRIC_WORDS[name] || `${name.replace(/_/g, " ").replace(/ L$/, " (left)").replace(/ R$/, " (right)")}`;
+  const VIEW_WORDS = { front: "from the front", side: "from the side", oblique: "at an angle", unknown: "from an unknown angle" };
+
+  /** Returns the device in words, with the pose model and its frame rate for an ordinary camera. */
+  function deviceText(r) {
+    const parts = [r.label];
+    if (r.model) parts.push(`model ${r.model.replace(/\.task$/, "")}`);
+    if (r.fps_achieved) parts.push(`${r.fps_achieved.toFixed(0)} images/s`);
+    return parts.join(", ");
+  }
+
+  /** Shows the box of metrics this device and view cannot support, with the reasons (hidden when none). */
+  function limits(d) {
+    const v = d.validity;
+    const box = document.getElementById("limits");
+    const flagged = v.metrics.filter((m) => !m.valid);
+    box.hidden = !flagged.length;
+    if (!flagged.length) return;
+    document.getElementById("limits-intro").textContent =
+      `Recorded with: ${deviceText(d.recorded_with)}, filmed ${VIEW_WORDS[v.view] || v.view}. ` +
+      "One camera sees movements across the image well and movements towards it poorly. " +
+      "Repetitions and the angles marked valid can be used; read these with care:";
+    document.getElementById("limits-list").replaceChildren(...flagged.map((m) =>
+      el("li", { "data-metric": m.name }, el("strong", {}, `${metricName(m.name)}: `), m.reason)));
+  }
+
   async function load() {
     try {
       const d = await api(`/sessions/${sid}/detail`);
@@ -213,6 +246,7 @@
       document.getElementById("session-title").textContent = `${name} · ${fmtDateTime(d.started_at)}`;
       document.title = `${name}, ${fmtDateTime(d.started_at)} · Kinect Home Coach`;
       document.getElementById("session-sub").textContent = d.status === "processed" ? "" : `The analysis could not use this recording: ${d.error || "unknown reason"}.`;
+      limits(d);
       keyNumbers(d);
       curves(d);
       repTable(d);

@@ -50,6 +50,40 @@ REASONS = {
 }
 
 
+DEVICE_LABELS = {
+    "kinect1": "Kinect v1", "kinect2": "Kinect v2", "azure_kinect": "Azure Kinect", "femto": "Orbbec Femto",
+    "mocap": "motion capture", "simulator": "simulated camera", "webcam": "ordinary camera (webcam)",
+    "unknown": "unknown device",
+}  # fmt: skip
+
+
+def device_label(device: str) -> str:
+    """Returns the device's name in words (the code itself when unknown)."""
+    return DEVICE_LABELS.get(device, device)
+
+
+def recorded_with(device: str, extra: dict | None) -> dict:
+    """Returns what recorded a session, for pages and exports: {"device", "label", "model", "model_sha256",
+    "runtime", "fps_achieved"} (None where the recording does not say; the model fields come from the webcam's
+    header, kinect_agent.sources.webcam)."""
+    webcam = (extra or {}).get("webcam") if isinstance(extra, dict) else None
+    webcam = webcam if isinstance(webcam, dict) else {}
+    model = webcam.get("model") if isinstance(webcam.get("model"), dict) else {}
+    fps = webcam.get("fps_achieved")
+
+    def text(value: object) -> str | None:
+        return value[:200] if isinstance(value, str) else None
+
+    return {
+        "device": device,
+        "label": device_label(device),
+        "model": text(model.get("name")),
+        "model_sha256": text(model.get("sha256")),
+        "runtime": text(webcam.get("runtime")),
+        "fps_achieved": float(fps) if isinstance(fps, int | float) and not isinstance(fps, bool) else None,
+    }
+
+
 @dataclass(frozen=True)
 class MetricValidity:
     """Whether one metric is valid for the device and view; code and reason (plain words) when it is not."""

@@ -1,6 +1,7 @@
 """FHIR R4 Bundle (type collection) of one session's Observations, as JSON-ready dicts (stdlib only).
 
-Entries: the Device that recorded the session (when known), then Observations, each with status final, the patient
+Entries: the Device that recorded the session (when known: the paired agent's id, the recording device, e.g. a
+Kinect or an ordinary camera with its pose model and hash), then Observations, each with status final, the patient
 as subject (`Patient/<id>`, a reference to the clinic's server), the Device as device, the session's period as
 effectivePeriod:
     exercise duration      LOINC 55411-3 "Exercise duration", s
@@ -24,6 +25,7 @@ from typing import Any
 
 CODE_SYSTEM = "https://kinect-home-coach.example/fhir/CodeSystem/metrics"
 DEVICE_ID_SYSTEM = "https://kinect-home-coach.example/fhir/NamingSystem/device-id"
+DEVICE_CODE_SYSTEM = "https://kinect-home-coach.example/fhir/CodeSystem/recording-device"  # recording.DEVICES
 SESSION_ID_SYSTEM = "https://kinect-home-coach.example/fhir/NamingSystem/session-id"
 LOINC = "http://loinc.org"
 SNOMED = "http://snomed.info/sct"
@@ -51,6 +53,7 @@ class SessionContext:
     start: str
     patient_id: int | None = None
     device_id: int | None = None
+    recorded_with: dict[str, Any] | None = None  # kinect_agent.analysis.validity.recorded_with of the recording
 
 
 def _urn() -> str:
@@ -150,13 +153,28 @@ def _indicator_observations(document: dict[str, Any], common: dict[str, Any]) ->
     return out
 
 
+DEVICE_TYPES = {"webcam": "Ordinary camera (webcam) with BlazePose landmark model",
+                "simulator": "Simulated depth camera"}  # fmt: skip
+
+
 def _device(context: SessionContext) -> dict[str, Any]:
+    recorded = context.recorded_with or {}
+    code = recorded.get("device")
+    names = [{"name": "Kinect Home Coach home agent", "type": "user-friendly-name"}]
+    if recorded.get("label"):
+        names.append({"name": recorded["label"], "type": "model-name"})
     device: dict[str, Any] = {
         "resourceType": "Device",
-        "identifier": [{"system": DEVICE_ID_SYSTEM, "value": str(context.device_id)}],
-        "deviceName": [{"name": "Kinect Home Coach home agent", "type": "user-friendly-name"}],
-        "type": {"text": "Depth camera (Kinect) with skeleton tracking"},
+        "deviceName": names,
+        "type": {"text": DEVICE_TYPES.get(code, "Depth camera (Kinect) with skeleton tracking")},
     }
+    if code is not None:
+        device["type"]["coding"] = [{"system": DEVICE_CODE_SYSTEM, "code": code, "display": recorded.get("label")}]
+    if context.device_id is not None:
+        device["identifier"] = [{"system": DEVICE_ID_SYSTEM, "value": str(context.device_id)}]
+    if recorded.get("model"):
+        version = f"{recorded['model']} sha256:{recorded.get('model_sha256') or '?'}"
+        device["version"] = [{"type": {"text": "pose model"}, "value": version}]
     if context.patient_id is not None:
         device["patient"] = {"reference": f"Patient/{context.patient_id}"}
     return device
@@ -173,7 +191,7 @@ def bundle(document: dict[str, Any], context: SessionContext) -> dict[str, Any]:
         common["method"] = {"text": f"Kinect Home Coach exercise {document['exercise']}"}
     if context.patient_id is not None:
         common["subject"] = {"reference": f"Patient/{context.patient_id}"}
-    if context.device_id is not None:
+    if context.device_id is not None or context.recorded_with is not None:
         device_url = _urn()
         entries.append({"fullUrl": device_url, "resource": _device(context)})
         common["device"] = {"reference": device_url}

@@ -10,12 +10,14 @@ The filtered recording is used where one is stored; a session without one falls 
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import zipfile
 from dataclasses import dataclass
 from typing import Any
 
+from kinect_agent.analysis.validity import recorded_with
 from kinect_agent.errors import AgentError
 from kinect_agent.export import fhir, tables, trc
 from kinect_agent.formats import bvh_writer
@@ -54,11 +56,14 @@ def _zip(members: dict[str, str]) -> bytes:
 
 
 def csv_zip(payload: SessionPayload, document: dict[str, Any] | None) -> bytes:
-    """Returns the zip of metrics.csv, repetitions.csv (with a document) and angles_raw/angles_filtered.csv."""
+    """Returns the zip of metrics.csv, repetitions.csv (with a document), recording.csv (the device) and
+    angles_raw/angles_filtered.csv."""
     members: dict[str, str] = {}
+    meta = payload.raw.meta
     if document is not None:
-        members["metrics.csv"] = tables.metrics_csv(document)
+        members["metrics.csv"] = tables.metrics_csv(document, device=meta.device)
         members["repetitions.csv"] = tables.repetitions_csv(document)
+    members["recording.csv"] = tables.recording_csv(recorded_with(meta.device, meta.extra), meta.rate_hz)
     members["angles_raw.csv"] = tables.angles_csv(payload.raw)
     if payload.filtered is not None:
         members["angles_filtered.csv"] = tables.angles_csv(payload.filtered)
@@ -95,5 +100,8 @@ def export(
         if document is None:
             raise ExportError("fhir needs the session's analysis document (the metrics the server computed)")
         context = context or fhir.SessionContext(session_id=payload.session_id, start=payload.created_at)
+        if context.recorded_with is None:
+            meta = payload.raw.meta
+            context = dataclasses.replace(context, recorded_with=recorded_with(meta.device, meta.extra))
         data = json.dumps(fhir.bundle(document, context), indent=1, allow_nan=False).encode("utf-8")
     return ExportFile(data=data, media_type=MEDIA_TYPES[fmt], file_name=file_name)

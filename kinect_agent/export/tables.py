@@ -66,9 +66,18 @@ def metric_rows(document: dict[str, Any]) -> list[tuple[str, Any, str]]:
     return rows
 
 
-def metrics_csv(document: dict[str, Any]) -> str:
-    """Returns metrics.csv: columns metric, value, unit."""
-    return _text([["metric", "value", "unit"], *[list(r) for r in metric_rows(document)]])
+def metrics_csv(document: dict[str, Any], device: str | None = None) -> str:
+    """Returns metrics.csv: columns metric, value, unit; a first row names the recording device when given."""
+    rows = ([("device", device, "")] if device is not None else []) + metric_rows(document)
+    return _text([["metric", "value", "unit"], *[list(r) for r in rows]])
+
+
+def recording_csv(recorded: dict[str, Any], rate_hz: float | None) -> str:
+    """Returns recording.csv: what recorded the session (kinect_agent.analysis.validity.recorded_with), one
+    field, value row each."""
+    rows = [["field", "value"], *[[k, recorded.get(k)] for k in ("device", "label", "model", "model_sha256",
+                                                                 "runtime", "fps_achieved")]]  # fmt: skip
+    return _text([*rows, ["rate_hz", rate_hz]])
 
 
 def repetitions_csv(document: dict[str, Any]) -> str:

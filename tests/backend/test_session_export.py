@@ -45,7 +45,7 @@ def test_csv_zip_holds_the_stored_metrics(client, upload, auth_headers):
     with zipfile.ZipFile(io.BytesIO(_export(client, session_id, "csv", headers).content)) as z:
         names = sorted(z.namelist())
         reps = z.read("repetitions.csv").decode().strip().splitlines()
-    assert names == ["angles_filtered.csv", "angles_raw.csv", "metrics.csv", "repetitions.csv"]
+    assert names == ["angles_filtered.csv", "angles_raw.csv", "metrics.csv", "recording.csv", "repetitions.csv"]
     assert len(reps) - 1 == stored["repetitions"] == 3
 
 
@@ -119,7 +119,8 @@ def test_a_session_without_stored_metrics_is_analysed_again(client, db_session, 
     squat = db_session.scalar(select(Exercise).where(Exercise.slug == "squat"))
     row = store(patient, squat, T0, data=make_khs("squat", 3, seed=11), metrics=False)
     body = _export(client, row.id, "fhir", auth_headers(therapist)).json()
-    reps = [e["resource"] for e in body["entry"] if e["resource"]["code"]["coding"][0]["code"] == "repetitions"]
+    observations = [e["resource"] for e in body["entry"] if e["resource"]["resourceType"] == "Observation"]
+    reps = [o for o in observations if o["code"]["coding"][0]["code"] == "repetitions"]
     assert reps[0]["valueQuantity"]["value"] == 3
 
 

@@ -23,6 +23,7 @@ import numpy as np
 from kinect_agent.errors import DeviceUnavailable
 from kinect_agent.recording import Metadata
 from kinect_agent.sources.base import Frame, Pacer, SourceBase
+from kinect_agent.sources.webcam.header import webcam_header
 from kinect_agent.sources.webcam.landmarks import N_LANDMARKS, LandmarkBatch, check_arrays
 from kinect_agent.sources.webcam.mapping import DEFAULT_FOV_DEG, to_skeletons
 from kinect_agent.vendor import VendorError, model_info, task_path
@@ -239,14 +240,9 @@ class WebcamSource(SourceBase):
 
     def metadata(self) -> Metadata:
         """Returns the device `webcam` with the model's name, version and SHA-256, and the frame rates."""
-        webcam: dict[str, Any] = {
-            "model": self.info.to_dict(),
-            "runtime": f"mediapipe {getattr(self._mp, '__version__', '?')} (Python)",
-            "fov_deg": self.fov_deg,
-            "image_size": list(self._image_size) if self._image_size else None,
-            "fps_achieved": round(self.fps_achieved, 2) if self.fps_achieved else None,
-            "images": self._images,
-        }
+        webcam = webcam_header(model=self.model, runtime=f"mediapipe {getattr(self._mp, '__version__', '?')} (Python)",
+                               fps_achieved=self.fps_achieved, image_size=self._image_size, fov_deg=self.fov_deg,
+                               images=self._images)  # fmt: skip
         rate = self._video_fps
         if rate is None and len(self.landmark_frames) > 1:
             rate = (len(self.landmark_frames) - 1) / (self.landmark_frames[-1].t - self.landmark_frames[0].t)

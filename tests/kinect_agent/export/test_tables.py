@@ -20,7 +20,13 @@ def _tables(data: bytes) -> dict[str, list[dict[str, str]]]:
 def test_zip_holds_metrics_repetitions_and_both_angle_tables(squat_session):
     payload, doc = squat_session
     tables = _tables(export("csv", payload, document=doc).data)
-    assert sorted(tables) == ["angles_filtered.csv", "angles_raw.csv", "metrics.csv", "repetitions.csv"]
+    assert sorted(tables) == [
+        "angles_filtered.csv",
+        "angles_raw.csv",
+        "metrics.csv",
+        "recording.csv",
+        "repetitions.csv",
+    ]
     metrics = {r["metric"]: (r["value"], r["unit"]) for r in tables["metrics.csv"]}
     assert metrics["repetitions"] == ("3", "")
     assert float(metrics["duration"][0]) == doc["duration_s"] and metrics["duration"][1] == "s"
@@ -42,9 +48,9 @@ def test_angle_tables_match_the_angles_of_each_recording(squat_session):
         np.testing.assert_allclose(got, expected, atol=0.006, err_msg=name)
 
 
-def test_without_a_document_only_the_angle_tables_are_written(squat_session):
+def test_without_a_document_only_the_angle_tables_and_the_device_are_written(squat_session):
     payload, _ = squat_session
-    assert sorted(_tables(export("csv", payload).data)) == ["angles_filtered.csv", "angles_raw.csv"]
+    assert sorted(_tables(export("csv", payload).data)) == ["angles_filtered.csv", "angles_raw.csv", "recording.csv"]
 
 
 def test_the_same_session_gives_the_same_bytes(squat_session):

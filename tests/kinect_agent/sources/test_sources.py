@@ -82,7 +82,11 @@ def test_make_source_refuses_wrong_combinations():
     with pytest.raises(ValueError, match="only for the replay"):
         make_source("simulator", file="x.csv")
     with pytest.raises(ValueError, match="known sources"):
-        make_source("webcam")
+        make_source("thermal_camera")
+    with pytest.raises(ValueError, match="not both"):
+        make_source("webcam", file="x.mp4", camera=1)
+    with pytest.raises(ValueError, match="only for the webcam"):
+        make_source("replay", file="x.csv", camera=1)
 
 
 def test_record_refuses_nonpositive_seconds(session_csv):

@@ -1,0 +1,79 @@
+"""Frames per second of the pose landmarker in MediaPipe's Python runtime (the agent's webcam source), lite and full.
+
+    .venv/bin/python bench/webcam_fps.py [--frames 90] [--runs 3] [--size 640x360] [--people 1 2]
+
+Frames: Sports2D's demo (tests/media.py, BSD-3-Clause) scaled to --size, decoded once beforehand (the decoding is
+not timed); each run creates the landmarker (VIDEO mode, XNNPACK on the CPU) and times detect_for_video over the
+frames. Prints the median of the runs and the per-frame p95, for the lite and full models and each number of
+people searched (the agent searches 2 to keep the patient when another person is in view; the browser page 1).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from kinect_agent.vendor import task_path  # noqa: E402
+from tests.media import sports2d_demo  # noqa: E402
+
+
+def frames(size: tuple[int, int], n: int) -> list[np.ndarray]:
+    """Returns n RGB frames of the demo from 1 s on, scaled to size (width, height)."""
+    import cv2
+
+    cap = cv2.VideoCapture(str(sports2d_demo()))
+    cap.set(cv2.CAP_PROP_POS_FRAMES, 30)
+    out = []
+    while len(out) < n:
+        ok, bgr = cap.read()
+        if not ok:
+            cap.set(cv2.CAP_PROP_POS_FRAMES, 30)
+            continue
+        out.append(cv2.cvtColor(cv2.resize(bgr, size, interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2RGB))
+    return out
+
+
+def run(model: str, people: int, images: list[np.ndarray]) -> tuple[float, float]:
+    """Returns (images per second, p95 ms per image) of one pass over the images."""
+    import mediapipe as mp
+    from mediapipe.tasks.python import BaseOptions, vision
+
+    options = vision.PoseLandmarkerOptions(base_options=BaseOptions(model_asset_path=str(task_path(model))),
+                                           running_mode=vision.RunningMode.VIDEO, num_poses=people)  # fmt: skip
+    with vision.PoseLandmarker.create_from_options(options) as landmarker:
+        times = []
+        for i, rgb in enumerate(images):
+            image = mp.Image(image_format=mp.ImageFormat.SRGB, data=rgb)
+            began = time.perf_counter()
+            landmarker.detect_for_video(image, i * 33)
+            times.append(time.perf_counter() - began)
+    return len(times) / sum(times), float(np.percentile(times, 95) * 1000)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, default=90)
+    parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--size", default="640x360")
+    parser.add_argument("--people", type=int, nargs="+", default=[1, 2])
+    args = parser.parse_args()
+    size = tuple(int(v) for v in args.size.split("x"))
+    images = frames(size, args.frames)
+    print(f"MediaPipe Python runtime, {args.frames} frames of {args.size}, median of {args.runs} runs")
+    for model in ("lite", "full"):
+        for people in args.people:
+            results = [run(model, people, images) for _ in range(args.runs)]
+            fps = statistics.median(r[0] for r in results)
+            p95 = statistics.median(r[1] for r in results)
+            print(f"  {model:4s} num_poses={people}: {fps:5.1f} images/s, p95 {p95:5.1f} ms per image", flush=True)
+
+
+if __name__ == "__main__":
+    main()
