@@ -169,7 +169,10 @@ def patient_page(request: Request, caller: OptionalCaller) -> Response:
 @router.get("/patient/camera", response_class=HTMLResponse)
 def camera_page(request: Request, caller: OptionalCaller) -> Response:
     """Shows the camera set of one exercise of the patient's plan (?item=<plan item id>): consent, placement check,
-    the live count with this computer's camera, the saved result (frontend/static/camera_*.js)."""
+    the live count with this computer's camera, the saved result (frontend/static/camera_*.js); therapists are sent
+    to their dashboard."""
+    if caller is not None and caller.user is not None and caller.user.role in THERAPIST_ROLES:
+        return RedirectResponse(f"{_root(request)}/therapist", status_code=303)
     return _gate(request, caller, ("patient",)) or _page(request, "camera.html", caller)
 
 

@@ -10,11 +10,13 @@ rolled back) rebuilds the state from the set's stored batches: the count is the 
 from __future__ import annotations
 
 import collections
+import logging
 import threading
 import time
 import uuid
 from dataclasses import dataclass
 
+import numpy as np
 from sqlalchemy.orm import Session
 
 from backend.camera import service
@@ -28,6 +30,7 @@ from kinect_agent.processing.online import OnlineFilter
 from kinect_agent.sources.webcam.landmarks import LandmarkBatch
 
 MAX_SETS = 64
+log = logging.getLogger(__name__)
 
 
 @dataclass
@@ -91,7 +94,12 @@ def advance(
     assert exercise is not None
     angles = tuple(exercise.defining_angles)
     with _LOCK:
-        state = _state_for(db_session, row, seq, batch, angles)
+        try:
+            state = _state_for(db_session, row, seq, batch, angles)
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError):
+            # the live count is a courtesy: the batch is stored whatever happens here, the end analyses it all
+            log.exception("live count of camera set %s failed at batch %s", row.id, seq)
+            state = _STATES.pop(row.id, None) or _fresh(angles)
         status, t_last = state.status, state.t_last
     out = BatchOut(
         set_id=str(row.id),

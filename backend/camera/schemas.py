@@ -87,13 +87,13 @@ class BatchIn(BaseModel):
 class BatchOut(BaseModel):
     """What the server made of the frames so far: the live count and plain-words advice."""
 
-    set_id: str
-    seq: int = Field(description="the batch this answers")
+    set_id: str = Field(examples=["3f2b8c1e-4d5a-4e6f-8a9b-0c1d2e3f4a5b"])
+    seq: int = Field(description="the batch this answers", examples=[12])
     repeated: bool = Field(description="this batch had been received before (nothing new stored)")
     last_seq: int
     n_frames: int
-    count: int = Field(description="repetitions so far (the online filter's live count)")
-    target: int
+    count: int = Field(description="repetitions so far (the online filter's live count)", examples=[3])
+    target: int = Field(examples=[10])
     angle_name: str | None = None
     angle_deg: float | None = None
     hint: str | None = None
@@ -105,5 +105,5 @@ class EndIn(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    last_seq: int = Field(ge=-1, le=10**6, description="the newest batch the page sent (-1: none)")
-    reason: Literal["target", "stop", "still", "limit", "error"] = "stop"
+    last_seq: int = Field(ge=-1, le=10**6, description="the newest batch the page sent (-1: none)", examples=[41])
+    reason: Literal["target", "stop", "still", "limit", "error"] = Field(default="stop", examples=["target"])

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.processing.config import PipelineConfig, config_for_device
 from kinect_agent.recording import Metadata, Recording
 from kinect_agent.sources.webcam import mapping
 from kinect_agent.sources.webcam.landmarks import LandmarkBatch
@@ -15,10 +15,6 @@ WEBCAM = "webcam"  # the device name of sessions recorded with the browser's cam
 
 def pipeline_config() -> PipelineConfig:
     """Returns the pipeline settings of the webcam (its noise model and filter settings)."""
-    try:
-        from kinect_agent.processing.config import config_for_device
-    except ImportError:  # cam-core's per-device settings are not merged yet: the default settings
-        return PipelineConfig()
     return config_for_device(WEBCAM)
 
 

@@ -10,6 +10,7 @@
   const pid = main.dataset.patientId;
   const query = new URLSearchParams(location.search);
   const FLUSH_MS = 100;        // a batch every 0.1 s: the count follows within a few tenths of a second
+  const MAX_WAIT_MS = 1000;    // frames wait at most this long in memory before they go to the buffer
   const HOLD_MS = 1500;        // the placement must hold this long before counting starts
   const SETTLE_MS = 1500;      // after the target is reached, the return to rest is recorded too
   const STILL_END_S = 20;      // no movement for this long ends the set
@@ -171,7 +172,9 @@
       say(luma !== null && luma < CameraChecks.DARK_LUMA ? T.dark : poses > 0 ? T.keptPatient : T.leftFrame, "warn");
     }
     if (rate !== null && rate < SLOW_FPS && now - set.countingSince > 3000) note(T.slow);
-    if (now - lastFlush >= FLUSH_MS) flush(now);
+    // a batch every FLUSH_MS while the server keeps up; when it is slower, the frames wait for the answer in flight
+    // and go together (at most MAX_WAIT_MS), so the count never trails a queue of batches
+    if (now - lastFlush >= FLUSH_MS && (CameraSender.idle() || now - lastFlush >= MAX_WAIT_MS)) flush(now);
   }
 
   function flush(now) {
@@ -223,7 +226,8 @@
   }
 
   function senderFor(s) {
-    CameraSender.init(s.set_id, { answer: onAnswer, network: onNetwork, refused: onRefused });
+    CameraSender.init(s.set_id, { answer: onAnswer, network: onNetwork, refused: onRefused,
+      trouble: () => status(T.serverTrouble, "warn") });
   }
 
   async function beginCounting() {

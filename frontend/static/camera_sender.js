@@ -5,7 +5,7 @@
 const CameraSender = (() => {
   const { api } = Coach;
   const RETRY_MS = 2000;
-  let setId = null, running = false, offline = false, stopped = null, handlers = {};
+  let setId = null, running = false, offline = false, stopped = null, handlers = {}, failures = 0;
 
   function init(id, on) { setId = id; handlers = on; stopped = null; }
 
@@ -33,11 +33,14 @@ const CameraSender = (() => {
         try {
           const out = await api(`/camera/sets/${setId}/batches`, { method: "POST", body: b.body });
           await CameraBuffer.dropBatch(setId, b.seq);
+          failures = 0;
           say(false);
           if (handlers.answer) handlers.answer(out, b.body);
         } catch (err) {
           if (err.status === 0 || err.status >= 500 || err.status === 429) {
             say(err.status === 0 ? true : offline);
+            failures = err.status >= 500 ? failures + 1 : 0;
+            if (failures === 3 && handlers.trouble) handlers.trouble();  // said once; sending goes on
             await new Promise((r) => setTimeout(r, err.status === 429 ? 1000 : RETRY_MS));
             continue;
           }
@@ -61,5 +64,5 @@ const CameraSender = (() => {
 
   window.addEventListener("online", () => pump());
   window.addEventListener("offline", () => say(true));
-  return { init, add, pump, drain, isOffline: () => offline };
+  return { init, add, pump, drain, isOffline: () => offline, idle: () => !running };
 })();

@@ -34,6 +34,7 @@ const CameraText = Object.freeze({
   lighter: "This computer is slow, so we switched to a lighter movement tracker.",
   offline: "The connection to the server is lost. Keep going: your movements are kept on this computer and sent when the connection is back.",
   online: "The connection is back. Everything is sent.",
+  serverTrouble: "Something went wrong on our side. Keep going: your movements are kept on this computer and we keep trying to send them.",
   saving: "Saving your set…",
   savingOffline: "Your set is kept on this computer. It will be saved as soon as the connection is back.",
   tooShort: "The set was too short to save. Please try again and do at least one repetition.",

@@ -187,7 +187,7 @@ class LiveCount:
             if now - self.cut_t > self.window_s:
                 self._freeze(ends[after_cut], now)
         self.shown = max(self.shown, count)
-        k = max(0, len(self._t) - int(round(HINT_S * self._rate())))
+        k = min(max(0, len(self._t) - int(round(HINT_S * self._rate()))), len(self._t) - 1)  # < 1 fps: the newest
         raw, state = np.stack(self._raw[k:]), np.stack(self._state[k:])
         self._status = LiveStatus(self.shown, angle_name, angle_deg, hint(raw, state, self.limbs, self.limb_kind),
                                   now - self._last_moving)  # fmt: skip

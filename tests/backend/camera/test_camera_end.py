@@ -9,9 +9,11 @@ import uuid
 from sqlalchemy import func, select
 
 from backend.camera import live_count
+from backend.sessions.metrics import json_ready
 from backend.sessions.models import ExerciseSession
 from backend.sessions.service import session_file as stored_file
 from kinect_agent.formats import session_file
+from kinect_agent.processing.config import config_for_device
 from tests.backend.camera.landmarks import batch, squats
 
 PER_BATCH = 6  # frames per batch: 0.2 s at 30 fps
@@ -50,6 +52,7 @@ def test_squats_count_live_and_the_end_stores_one_webcam_session(client, db_sess
     assert stored.client_session_id == uuid.UUID(set_id) and stored.device_id is None
     payload = session_file.decode(stored_file(db_session=db_session, session_id=session_id))
     assert payload.raw.meta.device == "webcam" and payload.filtered is not None
+    assert payload.params["config"] == json_ready(config_for_device("webcam").model_dump())  # the webcam's settings
     assert payload.params["model"]["name"] == "pose_landmarker_lite.task"
     assert len(payload.params["model"]["sha256"]) == 64
     assert 29 <= payload.params["fps_achieved"] <= 31, payload.params["fps_achieved"]
@@ -91,3 +94,13 @@ def test_the_end_waits_for_batches_the_page_sent_and_a_too_short_set_stores_noth
     r = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": 0}, headers=h)
     assert r.status_code == 200 and r.json()["status"] == "failed" and "frames" in r.json()["error"], r.text
     assert _sessions(db_session, camera_home["patient"].id) == 0
+
+
+def test_a_failing_live_count_does_not_lose_the_batch(client, db_session, camera_home, started, monkeypatch):
+    def broken(*_args, **_kw):
+        raise ValueError("the live count broke")
+
+    monkeypatch.setattr("kinect_agent.analysis.live.LiveCount.add", broken)
+    set_id, h = started(), camera_home["headers"]
+    r = client.post(f"/api/v1/camera/sets/{set_id}/batches", json=batch(0, squats(1)[:PER_BATCH]), headers=h)
+    assert r.status_code == 201 and r.json()["count"] == 0 and r.json()["n_frames"] == PER_BATCH, r.text

@@ -100,3 +100,13 @@ def test_leg_exercises_hint_about_legs():
     pos, state = _frames(untracked=("KNE_R", "ANK_R"))
     limbs, kind = limb_joints(EXERCISES["squat"].defining_angles)
     assert kind == "legs" and hint(pos, state, limbs, kind) == live.HINT_LEGS
+
+
+def test_a_camera_slower_than_one_frame_a_second_still_gets_a_status():
+    """A browser landmarker on a slow computer can give under 1 frame/s: the hint uses the newest frame."""
+    frame = simulate("squat", 1, seed=0)[0]
+    counter = LiveCount(EXERCISES["squat"].defining_angles)
+    pos, state = frame.positions[0], frame.state[0]
+    for k in range(12):  # one frame every 2.5 s
+        status = counter.add(2.5 * k, pos, state, pos)
+    assert status.count == 0 and status.hint is None and status.still_s >= 20.0, status
