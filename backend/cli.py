@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import getpass
 import sys
+from collections.abc import Callable
 
 from backend import __version__
 
@@ -26,6 +27,9 @@ def _settings():
         raise CliError(f"bad configuration ({where}): {first.get('msg')}") from None
 
 
+ON_STOP: list[Callable[[], None]] = []  # called when the server is told to stop (the demo ends its agents then)
+
+
 def cmd_serve(args: argparse.Namespace) -> int:
     """Checks the schema is at head, then runs uvicorn."""
     import uvicorn
@@ -41,11 +45,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     except DatabaseNotMigrated as exc:
         raise CliError(str(exc)) from None
     workers = args.workers or settings.WORKERS
-    uvicorn.run(
-        # one process: this app; several: each worker builds its own from the same environment
-        create_app(settings) if workers == 1 else "backend.main:create_app",
-        factory=workers > 1,
-        workers=workers,
+    options = dict(
         host=args.host or settings.HOST,
         port=args.port or settings.PORT,
         proxy_headers=True,
@@ -53,8 +53,25 @@ def cmd_serve(args: argparse.Namespace) -> int:
         # longer than a therapist's pause between clicks and than load balancers' idle timeouts (60 s), so a
         # client never reuses a connection the server is closing
         timeout_keep_alive=75,
-        timeout_graceful_shutdown=5,  # open event streams (/api/v1/events) must not hold a restart; browsers reconnect
+        timeout_graceful_shutdown=args.shutdown_timeout,  # open event streams must not hold a stop; browsers reconnect
     )
+    if workers > 1:  # each worker builds its own app from the same environment
+        uvicorn.run("backend.main:create_app", factory=True, workers=workers, **options)
+        return 0
+    from backend.events.hub import HUB
+
+    class StoppingServer(uvicorn.Server):
+        """uvicorn's server that, on Ctrl-C or SIGTERM, first ends this process's open event streams (pages, home
+        agents) and calls ON_STOP: the stop then waits for none of them, and no stream is cancelled mid-response
+        (a traceback)."""
+
+        def handle_exit(self, sig, frame) -> None:
+            HUB.stop_all()
+            for callback in ON_STOP:
+                callback()
+            super().handle_exit(sig, frame)
+
+    StoppingServer(uvicorn.Config(create_app(settings), **options)).run()
     return 0
 
 
@@ -180,6 +197,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--port", type=int, help="port (default COACH_PORT)")
     p.add_argument("--forwarded-allow-ips", default="127.0.0.1", help="proxies trusted for X-Forwarded-For")
     p.add_argument("--workers", type=int, help="worker processes, about one per core (default COACH_WORKERS)")
+    p.add_argument("--shutdown-timeout", type=float, default=5.0,
+                   help="seconds open connections (event streams) get to close on stop (default 5)")  # fmt: skip
     p.set_defaults(_run=cmd_serve)
 
     p = sub.add_parser("migrate", help="bring the database to head (or --revision / --down)")

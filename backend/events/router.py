@@ -14,7 +14,7 @@ from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
 from backend.deps import Caller, DbSession, current_caller, optional_caller, require_patient_access
-from backend.events.hub import ACCESS_ENDED, DATA_KINDS, HUB, KINDS, Subscriber
+from backend.events.hub import ACCESS_ENDED, DATA_KINDS, HUB, KINDS, SERVER_STOPPING, Subscriber
 from backend.exceptions import AUTH_ERRORS, PatientNotFound, error_responses
 from backend.patients.models import TherapistPatient
 from backend.schemas import IdQuery
@@ -43,9 +43,12 @@ def visible_patients(caller: Caller, db_session: Session, patient_id: int | None
     "/events",
     response_class=StreamingResponse,
     responses={
-        200: {"content": {"text/event-stream": {}}, "description": "events: session.stored, suggestion.changed, "
-              "plan.changed (and with live=true live.agent, live.command, live.progress); data: {kind, patient_id, "
-              "data}"},  # fmt: skip
+        200: {
+            "content": {"text/event-stream": {}},
+            "description": "events: session.stored, suggestion.changed, "
+            "plan.changed (and with live=true live.agent, live.command, live.progress); data: {kind, patient_id, "
+            "data}",
+        },  # fmt: skip
         **error_responses(*AUTH_ERRORS, PatientNotFound),
     },
 )
@@ -93,7 +96,7 @@ async def _stream(request: Request, subscriber: Subscriber, max_s: float) -> Asy
             except TimeoutError:
                 yield ": keep-alive\n\n"
                 continue
-            if ev.kind == ACCESS_ENDED:  # the login ended: so does its stream (a reconnection is refused)
+            if ev.kind in (ACCESS_ENDED, SERVER_STOPPING):  # the login ended (a reconnection is refused), or the server
                 break
             yield f"event: {ev.kind}\ndata: {ev.to_json()}\n\n"
     finally:
