@@ -393,6 +393,13 @@
     return running;
   }
 
+  document.getElementById("patient-locale").addEventListener("change", async (ev) => {
+    const said = document.getElementById("patient-locale-saved");
+    try {
+      const out = await api(`/patients/${pid}`, { method: "PATCH", body: { locale: ev.target.value || null } });
+      said.textContent = out.locale ? "Saved: the patient's pages and new advice are in this language now." : "Saved: the patient's browser decides.";
+    } catch (err) { said.textContent = ""; showError(err); }
+  });
   document.getElementById("plan-edit").addEventListener("click", () => openForm(running));
   document.getElementById("plan-new").addEventListener("click", () => openForm(null));
   document.getElementById("plan-add").addEventListener("click", () => addRow(null).querySelector("select").focus());
@@ -405,6 +412,7 @@
       api(`/patients/${pid}`), api(`/patients/${pid}/summary`), api(`/patients/${pid}/progress`),
     ]);
     document.getElementById("patient-name").textContent = patient.full_name || patient.email;
+    document.getElementById("patient-locale").value = patient.locale || "";
     document.title = `${patient.full_name || patient.email} · Kinect Home Coach`;
     const plan = running;
     const parts = [patient.email];

@@ -104,3 +104,22 @@ def test_processing_boxes_scroll_with_the_keyboard(page, live_server):
     assert box.evaluate("(b) => b.scrollTop") > 0
     found = Axe().run(page, options={"runOnly": ["scrollable-region-focusable"]}).response["violations"]
     assert not found, found
+
+
+def test_therapist_sets_the_patients_language(page, live_server):
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    page.goto(f"/therapist/patients/{live_server.patient_id}")
+    select = page.locator("#patient-locale")
+    expect(select).to_have_value("")
+    try:
+        select.select_option("fr")
+        expect(page.locator("#patient-locale-saved")).to_contain_text("Saved")
+        found = page.evaluate(
+            f"async () => (await (await fetch(Coach.url('/api/v1/patients/{live_server.patient_id}'))).json()).locale"
+        )
+        assert found == "fr"
+    finally:
+        select.select_option("")
+        expect(page.locator("#patient-locale-saved")).to_contain_text("browser decides")
+    assert not page.js_errors, page.js_errors
