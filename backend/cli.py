@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import getpass
 import sys
+from collections.abc import Callable
 
 from backend import __version__
 
@@ -26,6 +27,9 @@ def _settings():
         raise CliError(f"bad configuration ({where}): {first.get('msg')}") from None
 
 
+ON_STOP: list[Callable[[], None]] = []  # called when the server is told to stop (the demo ends its agents then)
+
+
 def cmd_serve(args: argparse.Namespace) -> int:
     """Checks the schema is at head, then runs uvicorn."""
     import uvicorn
@@ -41,8 +45,24 @@ def cmd_serve(args: argparse.Namespace) -> int:
     except DatabaseNotMigrated as exc:
         raise CliError(str(exc)) from None
     options = serve_options(args, settings)
-    # one process: this app; several: each worker builds its own from the same environment
-    uvicorn.run(create_app(settings) if options["workers"] == 1 else "backend.main:create_app", **options)
+    if options["workers"] > 1:  # each worker builds its own app from the same environment
+        uvicorn.run("backend.main:create_app", **options)
+        return 0
+    from backend.events.hub import HUB
+
+    class StoppingServer(uvicorn.Server):
+        """uvicorn's server that, on Ctrl-C or SIGTERM, first ends this process's open event streams (pages, home
+        agents) and calls ON_STOP: the stop then waits for none of them, and no stream is cancelled mid-response
+        (a traceback)."""
+
+        def handle_exit(self, sig, frame) -> None:
+            HUB.stop_all()
+            for callback in ON_STOP:
+                callback()
+            super().handle_exit(sig, frame)
+
+    one = {k: v for k, v in options.items() if k not in ("factory", "workers")}
+    StoppingServer(uvicorn.Config(create_app(settings), **one)).run()
     return 0
 
 
@@ -60,7 +80,8 @@ def serve_options(args: argparse.Namespace, settings) -> dict:
         # longer than a therapist's pause between clicks and than load balancers' idle timeouts (60 s), so a
         # client never reuses a connection the server is closing
         "timeout_keep_alive": 75,
-        "timeout_graceful_shutdown": 5,  # open event streams must not hold a restart; browsers reconnect
+        # open event streams must not hold a stop; browsers reconnect
+        "timeout_graceful_shutdown": getattr(args, "shutdown_timeout", None) or 5.0,
     }
 
 
@@ -256,6 +277,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--port", type=int, help="port (default COACH_PORT)")
     p.add_argument("--forwarded-allow-ips", help="proxies believed in X-Forwarded-For (COACH_FORWARDED_ALLOW_IPS)")
     p.add_argument("--workers", type=int, help="worker processes, about one per core (default COACH_WORKERS)")
+    p.add_argument("--shutdown-timeout", type=float, default=5.0,
+                   help="seconds open connections (event streams) get to close on stop (default 5)")  # fmt: skip
     p.set_defaults(_run=cmd_serve)
 
     p = sub.add_parser("migrate", help="bring the database to head (or --revision / --down)")

@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
+import errno
 import os
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 from pathlib import Path
@@ -16,6 +18,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 DEMO_PASSWORD = "demo-password-2026"
+SHUTDOWN_S = 0.5  # seconds the demo server gives open connections on Ctrl-C
 ADMIN = ("admin@demo.clinic", "Alex Admin")
 THERAPISTS = (("therapist@demo.clinic", "Tara Therapist"), ("physio@demo.clinic", "Paul Physio"))
 PATIENTS = (
@@ -124,6 +127,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--agent-interval", type=float, nargs=2, default=(30.0, 60.0), metavar=("MIN", "MAX"),
                         help="seconds between live sessions of the simulated agents (default 30 60)")  # fmt: skip
     args = parser.parse_args(argv)
+    busy = port_in_use(args.host, args.port)
+    if busy:
+        print(f"error: cannot serve on {args.host}:{args.port}: {busy}; stop what uses it or choose another port "
+              f"with --port, e.g. coach-server demo --port {args.port + 1}", file=sys.stderr)  # fmt: skip
+        return 2
 
     args.db.parent.mkdir(parents=True, exist_ok=True)
     agents_home = args.db.parent / f"{args.db.stem}-agents"
@@ -154,12 +162,37 @@ def main(argv: list[str] | None = None) -> int:
           f"{_agents_line(args, agents_home)}"
           "Press Ctrl-C to stop.\n", flush=True)  # fmt: skip
     agents = None if args.no_agents else start_agents(base, agents_home, args)
+    if agents is not None:
+        cli.ON_STOP.append(lambda: signal_agents(agents, signal.SIGTERM))  # they stop while the server does
     # uvicorn re-raises a SIGTERM after its graceful shutdown: make it an exception so `finally` stops the agents.
     signal.signal(signal.SIGTERM, _exit_on_sigterm)
-    try:
-        return cli.main(["serve", "--host", args.host, "--port", str(args.port)])
+    try:  # Ctrl-C: the server ends its streams and signals the agents (cli.ON_STOP), both stop at once
+        serve = ["serve", "--host", args.host, "--port", str(args.port), "--shutdown-timeout", str(SHUTDOWN_S)]
+        status = cli.main(serve)
     finally:
         stop_agents(agents)
+    # Everything the demo keeps is on disk now (SQLite, the agents' queues): leave without the interpreter's clean-up,
+    # which spends seconds collecting numpy, scipy and numba objects on a busy machine, so that Ctrl-C ends the demo
+    # within 2 s (tests/backend/test_demo_start.py).
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)
+
+
+def port_in_use(host: str, port: int) -> str | None:
+    """Returns why the server could not listen on host:port (e.g. "the port is in use"), or None when it can."""
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except socket.gaierror as exc:
+        return f"unknown host ({exc.strerror})"
+    family, kind, proto, _, address = infos[0]
+    with socket.socket(family, kind, proto) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as uvicorn does: a TIME_WAIT port is free
+        try:
+            probe.bind(address)
+        except OSError as exc:
+            return "the port is in use" if exc.errno == errno.EADDRINUSE else exc.strerror or str(exc)
+    return None
 
 
 def _exit_on_sigterm(*_: object) -> None:
@@ -181,16 +214,27 @@ def start_agents(base: str, home: Path, args: argparse.Namespace) -> subprocess.
     command = [sys.executable, "-m", "backend.demo_agents", "--server", host, "--home", str(home.resolve()),
                "--history-weeks", str(args.history_weeks), "--min-interval", str(low), "--max-interval", str(high),
                "--parent-pid", str(os.getpid())]  # fmt: skip
-    return subprocess.Popen(command)
+    # a session of its own: the terminal's Ctrl-C reaches the demo only, which then stops the agents with SIGTERM
+    # (a Ctrl-C in the agents' middle of a filter or an upload would print tracebacks)
+    return subprocess.Popen(command, start_new_session=True)
+
+
+def signal_agents(agents: subprocess.Popen, sig: int) -> None:
+    """Sends sig to the agents' process group (the agents and the live agent they started)."""
+    try:
+        os.killpg(agents.pid, sig)
+    except ProcessLookupError:
+        pass
 
 
 def stop_agents(agents: subprocess.Popen | None) -> None:
-    """Stops the agents (SIGTERM, then SIGKILL after 10 s); their queues keep whatever was not sent."""
-    if agents is None or agents.poll() is not None:
+    """Stops the agents (SIGTERM to their group, then SIGKILL after 10 s); their queues keep whatever was not sent
+    (atomic writes: any moment is safe)."""
+    if agents is None:
         return
-    agents.terminate()
+    signal_agents(agents, signal.SIGTERM)
     try:
         agents.wait(timeout=10)
     except subprocess.TimeoutExpired:
-        agents.kill()
+        signal_agents(agents, signal.SIGKILL)
         agents.wait()

@@ -49,6 +49,7 @@ class Agent:
     home: Path
     agent: HomeAgent | None = None
     sessions: int = 0
+    retry_at: float = 0.0  # time.monotonic() before which a refused sign-in is not tried again
 
     @property
     def config(self) -> AgentConfig:
@@ -78,16 +79,32 @@ def wait_for_server(server: str, timeout_s: float = 60.0) -> None:
 
 
 def _token_works(config: AgentConfig, server: str) -> bool:
-    if config.server_url != server:
-        return False
+    """Returns whether the server at this address accepts the agent's device token (it may have moved: the demo
+    restarted on another --port)."""
     r = httpx.get(f"{server}/api/v1/devices/me", headers={"Authorization": f"Bearer {config.device_token}"}, timeout=10)
     return r.status_code == 200
 
 
+class SignInRefused(AgentError):
+    """The server refuses the patient's sign-in for now (too many failed sign-ins: HTTP 429); retry_s from its
+    Retry-After."""
+
+    def __init__(self, message: str, retry_s: float) -> None:
+        super().__init__(message)
+        self.retry_s = retry_s
+
+
 def _pairing_code(server: str, email: str) -> str:
-    """Logs in as the patient (cookie + CSRF token) and creates a pairing code, as the patient page does."""
+    """Logs in as the patient (cookie + CSRF token) and creates a pairing code, as the patient page does; raises
+    SignInRefused while the server throttles the sign-in."""
     with httpx.Client(base_url=server, timeout=30) as client:
         login = client.post("/api/v1/auth/login", json={"email": email, "password": DEMO_PASSWORD})
+        if login.status_code == 429:
+            try:
+                retry = float(login.headers.get("Retry-After", "60"))
+            except ValueError:
+                retry = 60.0
+            raise SignInRefused(login.json().get("detail", "too many failed sign-ins"), max(1.0, retry))
         if login.status_code != 200:
             raise AgentError(f"{email}: login failed (HTTP {login.status_code}: {login.text[:200]})")
         body = login.json()
@@ -100,16 +117,37 @@ def _pairing_code(server: str, email: str) -> str:
 
 
 def connect(agent: Agent, server: str) -> None:
-    """Reuses the agent's device token when the server accepts it, else pairs the agent anew."""
+    """Reuses the agent's device token when the server accepts it (saving the server's new address if it moved, so
+    the sets kept in its queue, bound to this pairing, are still accepted), else pairs the agent anew."""
     try:
         home = HomeAgent.load(agent.home)
     except ConfigError:
         home = None
-    if home is None or not _token_works(home.config, server):
+    if home is not None and _token_works(home.config, server):
+        if home.config.server_url != server:
+            home = home.moved(server, agent.home)
+    else:
         code = _pairing_code(server, agent.email)
         home = HomeAgent.pair(server, code, name=f"{agent.name.split()[0]}'s home agent (simulated)", home=agent.home)
     agent.agent = home
     home.recover()  # sessions interrupted while filtered (demo stopped): queued as recorded
+
+
+def ensure_connected(agent: Agent, server: str) -> bool:
+    """Connects the agent unless it is connected; a throttled sign-in is said in one line and tried again after the
+    server's Retry-After (the other agents go on meanwhile). Returns whether the agent is connected."""
+    if agent.agent is not None:
+        return True
+    if time.monotonic() < agent.retry_at:
+        return False
+    try:
+        connect(agent, server)
+    except SignInRefused as exc:
+        agent.retry_at = time.monotonic() + exc.retry_s
+        _say(f"{agent.label}: the server refuses this patient's sign-in for now ({exc}); this home agent pairs in "
+             f"{exc.retry_s:.0f} s, the other agents go on")  # fmt: skip
+        return False
+    return True
 
 
 def record_one(
@@ -172,23 +210,23 @@ def _save_state(agent: Agent, state: dict) -> None:
 
 
 class _Stop:
-    """SIGTERM stops the agents at once; so does the end of the parent (checked twice a second by a thread)."""
+    """SIGTERM ends the agents at once, even inside a filter or an upload (its default action: the queue's atomic
+    writes make any moment safe, and a Python handler would wait for a long numeric call to return); so does the
+    end of the parent (checked twice a second by a thread), which ends the agents' whole process group (the live
+    agent too: `coach-server demo` starts them in a session of their own)."""
 
     def __init__(self, parent_pid: int | None) -> None:
         self.parent_pid, self.flag = parent_pid, False
-        signal.signal(signal.SIGTERM, self._handler)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
         if parent_pid is not None:
             threading.Thread(target=self._watch_parent, daemon=True).start()
 
     def _watch_parent(self) -> None:
         while os.getppid() == self.parent_pid:
             time.sleep(0.5)
-        os.kill(os.getpid(), signal.SIGTERM)  # the handler runs in the main thread
-
-    def _handler(self, *_: object) -> None:
-        # Stop at once, even inside a session: the queue's atomic writes make any interruption safe.
-        self.flag = True
-        raise SystemExit(0)
+        if os.getpgid(0) == os.getpid():  # the leader of its own group (started by the demo): the live agent too
+            os.killpg(os.getpid(), signal.SIGTERM)
+        os.kill(os.getpid(), signal.SIGTERM)
 
     def __bool__(self) -> bool:
         return self.flag or (self.parent_pid is not None and os.getppid() != self.parent_pid)
@@ -218,10 +256,10 @@ def run_agents(args: argparse.Namespace) -> int:
     wait_for_server(args.server)
     agents = [Agent(email=e, name=n, exercises=ex, index=i, home=args.home / e.split("@")[0])
               for i, (e, n, ex) in enumerate(PATIENTS)]  # fmt: skip
-    for agent in agents:
-        connect(agent, args.server)
-    _say(f"{len(agents)} home agents ready (paired, or their device tokens still valid); queues in {args.home}")
-    live = start_live_agent(agents[0], args.server) if args.live else None
+    ready = sum(ensure_connected(agent, args.server) for agent in agents)
+    _say(f"{ready} of {len(agents)} home agents ready (paired, or their device tokens still valid); queues in "
+         f"{args.home}")  # fmt: skip
+    live = start_live_agent(agents[0], args.server) if args.live and agents[0].agent is not None else None
     try:
         return _upload_sessions(args, agents, stop)
     finally:
@@ -233,10 +271,12 @@ def run_agents(args: argparse.Namespace) -> int:
 def _upload_sessions(args: argparse.Namespace, agents: list[Agent], stop: _Stop) -> int:
     """Uploads the backdated history, then a new session every min..max interval seconds until stopped."""
     rng = random.Random(args.seed)
-    todo = [a for a in agents if not _state(a).get("backfilled")]
+    todo = [a for a in agents if a.agent is not None and not _state(a).get("backfilled")]
     plan = backfill_plan(todo, args.history_weeks, dt.date.today(), args.seed)
+    started = time.monotonic()
     if plan:
-        _say(f"uploading {len(plan)} backdated sessions ({args.history_weeks} weeks of history)")
+        _say(f"uploading {len(plan)} backdated sessions ({args.history_weeks} weeks of history); "
+             "\"history ready\" follows when all are in")  # fmt: skip
     for done, (when, agent, exercise) in enumerate(plan, start=1):
         if stop:
             return 0
@@ -249,9 +289,19 @@ def _upload_sessions(args: argparse.Namespace, agents: list[Agent], stop: _Stop)
         record_one(agent, exercise, when=when, seed=seed, reps=6 + seed % 5, session_id=session_id, progress=progress)
     for agent in todo:
         _save_state(agent, {**_state(agent), "backfilled": True})
-    live = 0
+    if plan:
+        _say(f"history ready: {len(plan)} backdated sessions uploaded in {time.monotonic() - started:.0f} s; the "
+             "charts and the dashboard are complete")  # fmt: skip
+    else:
+        _say("history ready (uploaded in an earlier run)" if args.history_weeks else "history ready (none asked for)")
+    live = turn = 0
     while not stop and (args.max_sessions is None or live < args.max_sessions):
-        agent = agents[live % len(agents)]
+        agent = agents[turn % len(agents)]
+        turn += 1
+        if not ensure_connected(agent, args.server):  # its turn passes to the next agent
+            if not any(a.agent is not None for a in agents):
+                stop.sleep(1.0)
+            continue
         exercise = agent.exercises[(live // len(agents)) % len(agent.exercises)]
         record_one(agent, exercise, when=dt.datetime.now(dt.UTC), seed=10**6 + live, reps=rng.randint(6, 10))
         live += 1

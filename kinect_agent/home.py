@@ -11,11 +11,11 @@ Errors: ConfigError (not paired, or a broken configuration) and AgentError (pair
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from kinect_agent.capture import capture, queue_session
-from kinect_agent.config import AgentConfig, ConfigError, load_config
+from kinect_agent.config import AgentConfig, ConfigError, load_config, normalize_server_url, save_config
 from kinect_agent.errors import AgentError
 from kinect_agent.pairing import pair as _pair
 from kinect_agent.queue import SessionQueue
@@ -39,6 +39,13 @@ class HomeAgent:
     def pair(cls, server_url: str, code: str, *, name: str, home: str | Path) -> HomeAgent:
         """Pairs a new agent in the home folder with a pairing code (replacing an earlier pairing there)."""
         return cls(_pair(server_url, code, name=name, home=home, force=True))
+
+    def moved(self, server_url: str, home: str | Path) -> HomeAgent:
+        """Returns this agent with its server's new address saved in the home folder (the same server, reached at
+        another port or name): its pairing, and so the sets in its queue, stay valid there."""
+        config = replace(self.config, server_url=normalize_server_url(server_url))
+        save_config(config, home)
+        return HomeAgent(config)
 
     @property
     def queue(self) -> SessionQueue:

@@ -30,6 +30,8 @@ KINDS = DATA_KINDS + LIVE_KINDS
 # (user_id; also the devices of a patient who is deactivated) ended: its open streams end too, and their reconnection
 # checks the credential again; patient_id 0 (it is about a caller, not a patient)
 ACCESS_ENDED = "access.ended"
+# the server is stopping (Ctrl-C, SIGTERM): every open stream ends at once, so the stop waits for none of them
+SERVER_STOPPING = "server.stopping"
 
 
 @dataclass(frozen=True)
@@ -80,6 +82,8 @@ class Subscriber:
 
     def wants(self, ev: Event) -> bool:
         """Returns whether this stream shows ev (its kind, about one of its patients), or ends with it (its login)."""
+        if ev.kind == SERVER_STOPPING:
+            return True
         if ev.kind == ACCESS_ENDED:
             login, user, device = ev.data.get("login_session_id"), ev.data.get("user_id"), ev.data.get("device_id")
             tokens = ev.data.get("api_token_ids") or ()
@@ -103,6 +107,7 @@ class Hub:
     def __init__(self) -> None:
         self._subscribers: set[Subscriber] = set()
         self._lock = threading.Lock()
+        self.stopping = False  # set by stop_all(): streams end without their usual grace periods
 
     def subscribe(
         self,
@@ -134,6 +139,11 @@ class Hub:
             except RuntimeError:  # its loop is closed: the stream ended
                 self.unsubscribe(sub)
         return len(targets)
+
+    def stop_all(self) -> int:
+        """Ends every open stream of this process (the server is stopping); returns how many there were."""
+        self.stopping = True
+        return self.deliver(Event(SERVER_STOPPING, 0, {}))
 
     def count(self) -> int:
         """Returns the number of subscribers."""

@@ -15,7 +15,7 @@ from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
 from backend.deps import Caller, DbSession, current_caller, optional_caller, require_patient_access
-from backend.events.hub import ACCESS_ENDED, DATA_KINDS, HUB, KINDS, Subscriber
+from backend.events.hub import ACCESS_ENDED, DATA_KINDS, HUB, KINDS, SERVER_STOPPING, Subscriber
 from backend.exceptions import AUTH_ERRORS, PatientNotFound, error_responses
 from backend.patients.models import TherapistPatient
 from backend.schemas import IdQuery
@@ -116,7 +116,7 @@ async def _stream(
             except TimeoutError:
                 yield keepalive
                 continue
-            if ev.kind == ACCESS_ENDED:  # its credential ended: so does the stream (a reconnection is refused)
+            if ev.kind in (ACCESS_ENDED, SERVER_STOPPING):  # the login ended (a reconnection is refused), or the server
                 break
             yield f"event: {ev.kind}\ndata: {ev.to_json()}\n\n"
     finally:

@@ -16,7 +16,7 @@ from starlette.concurrency import run_in_threadpool
 from backend.audit.service import record
 from backend.config import Settings
 from backend.deps import Caller, CurrentCaller, CurrentDevice, DbSession, UserCaller, require_patient_access
-from backend.events.hub import HUB, Event, Subscriber, publish
+from backend.events.hub import HUB, SERVER_STOPPING, Event, Subscriber, publish
 from backend.events.router import RETRY_MS
 from backend.exceptions import AUTH_ERRORS, AgentOffline, Forbidden, PatientNotFound, PlanNotFound, error_responses
 from backend.live import service
@@ -89,12 +89,15 @@ async def _agent_events(
                 ev = await asyncio.wait_for(subscriber.queue.get(), timeout=POLL_S)
             except TimeoutError:
                 continue
+            if ev.kind == SERVER_STOPPING:
+                break
             if ev.data.get("device_id") in (device_id, None):  # None: any device of the patient
                 yield f"event: {ev.kind}\ndata: {ev.to_json()}\n\n"
     finally:
         HUB.unsubscribe(subscriber)
         with anyio.CancelScope(shield=True):
-            await anyio.sleep(settings.LIVE_OFFLINE_GRACE_S)
+            if not HUB.stopping:  # a stopping server does not wait for a reconnection
+                await anyio.sleep(settings.LIVE_OFFLINE_GRACE_S)
             async with slots.held():
                 await run_in_threadpool(_committed, service.disconnect, db_session, device_id=device_id,
                                         stream_id=stream_id)  # fmt: skip
