@@ -140,3 +140,4 @@ def import_all_models() -> None:
     import backend.sessions.models  # noqa: F401
     import backend.suggestions.models  # noqa: F401
     import backend.users.models  # noqa: F401
+    import backend.voice.models  # noqa: F401

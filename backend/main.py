@@ -48,6 +48,7 @@ ROUTERS = (
     "backend.replay.router",
     "backend.events.router",
     "backend.live.router",
+    "backend.voice.router",
 )
 
 

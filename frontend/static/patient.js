@@ -187,7 +187,8 @@
       Live.render();  // the new Start buttons follow the home computer's state
     } catch (err) { showError(err); }
   }
-  load().then(() => exercises()).then((lib) => Live.init(pid, (slug) => exerciseName(lib, slug)));
+  load().then(() => exercises()).then((lib) => Live.init(pid, (slug) => exerciseName(lib, slug), (slug) => (lib[slug] || {}).instructions));
+  Voice.init(pid);
   // a new result, new advice or a new plan shows without reloading the page; the home computer's set live
   Connection.attach(Coach.onChange(pid, load, Connection.watch({ "live.agent": Live.onAgent, "live.command": Live.onCommand,
     "live.progress": Live.onProgress, "session.stored": Live.onStored, open: Live.status })));

@@ -73,6 +73,8 @@ ROUTES = {
     ("GET", "/api/v1/patients/{patient_id}"): (CARE_DEV, None),
     ("GET", "/api/v1/patients/{patient_id}/therapists"): (CARE_DEV, None),
     ("PATCH", "/api/v1/patients/{patient_id}"): (CARE, lambda w: {"locale": "de"}),
+    ("GET", "/api/v1/patients/{patient_id}/voice"): (CARE_DEV, None),
+    ("PUT", "/api/v1/patients/{patient_id}/voice"): (CARE, lambda w: {"enabled": False, "volume": 0.5}),
     ("PUT", "/api/v1/patients/{patient_id}/therapists/{therapist_id}"): (ADMIN, None),
     ("DELETE", "/api/v1/patients/{patient_id}/therapists/{therapist_id}"): (ADMIN, None),
     ("POST", "/api/v1/patients/{patient_id}/pairing-codes"): (CARE, None),
