@@ -49,6 +49,7 @@ ROUTERS = (
     "backend.events.router",
     "backend.live.router",
     "backend.voice.router",
+    "backend.exercises.demo_router",
 )
 
 

@@ -107,13 +107,15 @@
       const how = item.target_rom_deg ? I18n.t("{sets}, {often}, moving through about {rom} degrees", { sets, often, rom: Math.round(item.target_rom_deg) })
         : I18n.t("{sets}, {often}", { sets, often });
       list.append(el("li", { "data-exercise": item.exercise_slug },
-        el("span", { class: "tick" + (weekDone ? " done" : ""), "aria-hidden": "true" }, weekDone ? "✓" : mine.length),
+        el("span", { class: "week-badge", "aria-hidden": "true" },  // "done N times this week" (the status line says it in words)
+          el("span", { class: "tick" + (weekDone ? " done" : "") }, weekDone ? "✓" : I18n.t("{n}×", { n: mine.length })),
+          el("span", { class: "week-label" }, I18n.t("this week"))),
         el("div", {},
           el("div", { class: "what" }, exerciseName(lib, item.exercise_slug)),
           el("div", { class: "how" }, how),
           el("div", {}, status),
           el("div", { class: "today" }, el("strong", {}, I18n.t("Today:")), todaySets(item, mineToday).map((t) => el("span", {}, t))),
-          item.notes ? el("div", { class: "muted" }, item.notes) : null),
+          Demo.block(item, lib[item.exercise_slug], exerciseName(lib, item.exercise_slug))),
         startButton(lib, item, mineToday.length)));
     }
   }

@@ -84,6 +84,7 @@ ROUTES = {
     ("DELETE", "/api/v1/devices/{device_id}"): (CARE, None),  # device_id is ANOTHER device of the own patient
     ("GET", "/api/v1/exercises"): (AUTHED, None),
     ("GET", "/api/v1/exercises/{slug}"): (AUTHED, None),
+    ("GET", "/api/v1/exercises/{slug}/demonstration"): (AUTHED, None),
     ("GET", "/api/v1/patients/{patient_id}/plans"): (CARE_DEV, None),
     ("POST", "/api/v1/patients/{patient_id}/plans"): (PRESCRIBE, _plan_body),
     ("GET", "/api/v1/plans/{plan_id}"): (CARE_DEV, None),
