@@ -235,10 +235,10 @@ def test_an_expired_sign_in_keeps_the_advice_being_typed(page, live_server):
     page.goto(f"/therapist/patients/{live_server.patient_id}")
     advice = "Please do your knee exercises slowly this week, and rest on Sunday."
     page.fill("#suggestion-text", advice)
+    expect(page.locator("#pending")).not_to_contain_text("Loading", timeout=LOAD_MS)  # the page's data is in
+    expect(page.locator("#decided li").first).to_be_visible(timeout=LOAD_MS)
     page.context.clear_cookies()  # the sign-in ends (expired) while the therapist types
-    send = page.get_by_role("button", name="Send to patient")
-    if "/therapist/patients/" in page.url and send.is_visible():  # the page's own refresh may have found out first
-        send.click()
+    page.get_by_role("button", name="Send to patient").click()
     expect(page.locator("#login-error")).to_contain_text("Your sign-in expired")
     page.fill("#email", THERAPIST)
     page.fill("#password", DEMO_PASSWORD)
