@@ -171,11 +171,26 @@ def therapist_page(request: Request, caller: OptionalCaller) -> Response:
 
 
 @router.get("/therapist/patients/{patient_id}", response_class=HTMLResponse)
-def patient_detail_page(patient_id: IdPath, request: Request, caller: OptionalCaller) -> Response:
-    """Shows one patient for a therapist: progress plots, sessions, suggestions to review, a note form."""
-    return _gate(request, caller, THERAPIST_ROLES) or _page(
-        request, "patient_detail.html", caller, patient_id=patient_id
-    )
+def patient_detail_page(
+    patient_id: IdPath, request: Request, caller: OptionalCaller, db_session: DbSession
+) -> Response:
+    """Shows one patient for a therapist: progress plots, sessions, suggestions to review, a note form; the 404 page
+    for a patient they may not see (another therapist's, or none: which of the two is not theirs to know)."""
+    gate = _gate(request, caller, THERAPIST_ROLES)
+    if gate is not None:
+        return gate
+    try:
+        require_patient_access(patient_id, caller=caller, db_session=db_session)
+    except NotFound:
+        return _error(
+            request,
+            caller,
+            404,
+            N_("Patient not found"),
+            N_("There is no patient %(patient_id)s that you may see."),
+            params={"patient_id": patient_id},
+        )
+    return _page(request, "patient_detail.html", caller, patient_id=patient_id)
 
 
 def _visible_session(request: Request, caller: Caller, db_session: Session, session_id: int) -> int | Response:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 
 class PlanItemIn(BaseModel):
@@ -33,6 +33,20 @@ class PlanIn(BaseModel):
     start_date: dt.date = Field(examples=["2026-11-23"])
     end_date: dt.date | None = Field(default=None, examples=["2026-12-21"])
     items: list[PlanItemIn] = Field(default_factory=list, max_length=50)
+
+    @field_validator("items")
+    @classmethod
+    def _each_exercise_once(cls, items: list[PlanItemIn]) -> list[PlanItemIn]:
+        first: dict[str, int] = {}
+        for i, item in enumerate(items):
+            slug = item.exercise_slug
+            if slug in first:
+                raise ValueError(
+                    f"exercise {slug!r} is in the plan twice (items {first[slug]} and {i}): give each exercise once, "
+                    "with more sets if needed"
+                )
+            first[slug] = i
+        return items
 
     @model_validator(mode="after")
     def _dates_in_order(self) -> PlanIn:

@@ -16,7 +16,8 @@ starts Monday 00:00 UTC. The attention score is the sum of five parts, clipped t
                   sessions of good data quality only; needs ≥ 1 recent and ≥ 2 baseline sessions. A drop up to
                   10 % is noise; 40 % or more scores the full 35.
     data quality  Q = 15 · poor / n over the last n ≤ 5 analysed sessions of the window (quality_ok false).
-    advice        P = min(20, 8 · pending system suggestions).
+    advice        P = min(10, 4 · pending system suggestions): advice waiting for the therapist is the
+                  therapist's own to-do, not a sign about the patient, so alone it never makes a patient "soon".
 
     score = clip(A + N + D + Q + P, 0, 100); a patient whose running plan started less than 7 days ago (a new
     patient) is capped at NOW_AT − 1. Level: "now" at score ≥ NOW_AT (50), "soon" at ≥ SOON_AT (20), else "ok".
@@ -37,6 +38,7 @@ from dataclasses import dataclass, field
 from statistics import median
 
 from backend.analysis.balance import MIN_STANDING_S
+from backend.exercises.library import EXERCISES
 
 INDICATORS = ("flexibility", "endurance", "strength", "balance")
 NOW_AT, SOON_AT = 50, 20
@@ -44,6 +46,7 @@ RECENT_DAYS, BASELINE_DAYS = 7, 28
 TREND_WEEKS, TREND_STEP = 6, 5.0
 QUALITY_LAST = 5
 NEW_PLAN_DAYS = 7
+ADVICE_PER_SUGGESTION, ADVICE_MAX = 4.0, 10.0  # advice to review alone stays below SOON_AT
 WEEK = dt.timedelta(days=7)
 
 
@@ -89,7 +92,19 @@ def window_start(now: dt.datetime) -> dt.datetime:
 
 
 def _name(slug: str) -> str:
-    return slug.replace("_", " ")
+    """Returns the exercise's name as the library and the pages write it ("squat" -> "Mini squat")."""
+    spec = EXERCISES.get(slug)
+    return spec.name if spec is not None else slug.replace("_", " ")
+
+
+def _shown(before: float, after: float, unit: str) -> tuple[str, str]:
+    """Returns two values as a sentence shows them: whole numbers, or one decimal when whole numbers would read
+    the same ("fell from 8.5 to 7.5", never "from 8 to 8")."""
+    for digits in (0, 1, 2):
+        b, a = f"{before:.{digits}f}", f"{after:.{digits}f}"
+        if b != a:
+            return b + unit, a + unit
+    return b + unit, a + unit
 
 
 def _plural(n: int, word: str) -> str:
@@ -144,11 +159,12 @@ def _falling(now: dt.datetime, sessions: Sequence[RecentSession]) -> list[tuple[
                 continue
             points = 35.0 * min(max(((b - r) / b - 0.10) / 0.30, 0.0), 1.0)
             if points > 0:
+                was, now_ = _shown(b, r, unit)
                 found.append(
                     (
                         points,
-                        f"{label} of {_name(slug)} fell from {b:.0f}{unit} to {r:.0f}{unit} "
-                        f"(last {RECENT_DAYS} days vs the {BASELINE_DAYS // 7} weeks before)",
+                        f"{label} of {_name(slug)} fell from {was} to {now_} "
+                        f"(median of the last {RECENT_DAYS} days against the {BASELINE_DAYS // 7} weeks before)",
                     )
                 )
     return found
@@ -182,7 +198,8 @@ def attention(
             parts.append(_inactive(now, plan, last_session_at))
     parts.append(_poor_quality(sessions))
     if pending_suggestions:
-        parts.append((min(20.0, 8.0 * pending_suggestions), f"{_plural(pending_suggestions, 'suggestion')} to review"))
+        points = min(ADVICE_MAX, ADVICE_PER_SUGGESTION * pending_suggestions)
+        parts.append((points, f"{_plural(pending_suggestions, 'suggestion')} to review"))
     falling = _falling(now, sessions)
     total = sum(p for p, _ in parts) + max((p for p, _ in falling), default=0.0)
     total = min(100.0, total)

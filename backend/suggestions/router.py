@@ -38,6 +38,15 @@ def _audit(db_session, caller: Caller, action: str, suggestion_id, patient_id: i
     )
 
 
+def _outs(db_session, rows) -> list[SuggestionOut]:
+    """Returns suggestions as the API shows them, each with the start of the session it is about."""
+    started = service.session_dates(db_session=db_session, session_ids={r.session_id for r in rows if r.session_id})
+    return [
+        SuggestionOut.model_validate(r).model_copy(update={"session_started_at": started.get(r.session_id)})
+        for r in rows
+    ]
+
+
 def _sees_everything(caller: Caller) -> bool:
     return caller.user is not None and caller.user.role in ("therapist", "admin")
 
@@ -56,6 +65,9 @@ def list_suggestions(
         Status | None, Query(alias="status", description="only this status (patients only ever see 'approved')")
     ] = None,
     session_id: Annotated[int | None, Query(ge=1, le=MAX_ID, description="only suggestions about this session")] = None,
+    decided: Annotated[
+        bool | None, Query(description="true: only decided ones (approved, dismissed, superseded, therapists' own)")
+    ] = None,
 ):
     """Lists a patient's suggestions, newest first: patients and devices see approved ones, therapists all."""
     require_patient_access(patient_id, caller=caller, db_session=db_session)
@@ -65,13 +77,12 @@ def list_suggestions(
         patient_view=not _sees_everything(caller),
         status=status_filter,
         session_id=session_id,
+        decided=decided,
         limit=page.limit,
         offset=page.offset,
     )
     _audit(db_session, caller, "suggestion.list", None, patient_id)
-    return Page[SuggestionOut](
-        items=[SuggestionOut.model_validate(r) for r in rows], total=total, limit=page.limit, offset=page.offset
-    )
+    return Page[SuggestionOut](items=_outs(db_session, rows), total=total, limit=page.limit, offset=page.offset)
 
 
 @router.post(
@@ -98,7 +109,7 @@ def create_suggestion(
     )
     _audit(db_session, caller, "suggestion.create", row.id, patient_id)
     publish(db_session, Event("suggestion.changed", patient_id, {"suggestion_id": row.id}))
-    return SuggestionOut.model_validate(row)
+    return _outs(db_session, [row])[0]
 
 
 def _decide(suggestion_id: int, new_status: str, caller: Caller, db_session) -> SuggestionOut:
@@ -114,7 +125,7 @@ def _decide(suggestion_id: int, new_status: str, caller: Caller, db_session) -> 
     action = "suggestion.approve" if new_status == "approved" else "suggestion.dismiss"
     _audit(db_session, caller, action, row.id, row.patient_id, {"rule": row.rule})
     publish(db_session, Event("suggestion.changed", row.patient_id, {"suggestion_id": row.id}))
-    return SuggestionOut.model_validate(row)
+    return _outs(db_session, [row])[0]
 
 
 DECIDE_ERRORS = error_responses(*AUTH_ERRORS, SuggestionNotFound, SuggestionNotPending)

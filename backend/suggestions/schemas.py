@@ -44,6 +44,7 @@ class SuggestionOut(BaseModel):
                     "id": 7,
                     "patient_id": 12,
                     "session_id": 31,
+                    "session_started_at": "2026-11-21T09:30:00Z",
                     "source": "system",
                     "author_id": None,
                     "rule": "fewer_reps",
@@ -64,6 +65,9 @@ class SuggestionOut(BaseModel):
     id: int
     patient_id: int
     session_id: int | None
+    session_started_at: dt.datetime | None = Field(
+        default=None, description="when the session the advice is about started (null: not about one session)"
+    )
     source: Source
     author_id: int | None = Field(description="the therapist or admin who wrote it (therapist suggestions)")
     rule: str = Field(description="the rule that fired (system), 'therapist' otherwise")

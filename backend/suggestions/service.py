@@ -112,6 +112,7 @@ def list_suggestions(
     session_id: int | None,
     limit: int,
     offset: int,
+    decided: bool | None = None,
 ) -> tuple[list[Suggestion], int]:
     """Returns one page of a patient's suggestions (newest first) and the total; patient_view hides undecided ones."""
     query = select(Suggestion).where(Suggestion.patient_id == patient_id)
@@ -121,11 +122,23 @@ def list_suggestions(
         query = query.where(Suggestion.status == status)
     if session_id is not None:
         query = query.where(Suggestion.session_id == session_id)
+    if decided is not None:
+        query = query.where((Suggestion.status != "pending") if decided else (Suggestion.status == "pending"))
     total = db_session.scalar(select(func.count()).select_from(query.subquery())) or 0
     rows = db_session.scalars(
         query.order_by(Suggestion.created_at.desc(), Suggestion.id.desc()).limit(limit).offset(offset)
     )
     return list(rows), total
+
+
+def session_dates(*, db_session: Session, session_ids: set[int]) -> dict[int, dt.datetime]:
+    """Returns when each of these sessions started (the sessions advice is about)."""
+    if not session_ids:
+        return {}
+    rows = db_session.execute(
+        select(ExerciseSession.id, ExerciseSession.started_at).where(ExerciseSession.id.in_(session_ids))
+    )
+    return {sid: started for sid, started in rows}
 
 
 def get_suggestion(*, db_session: Session, suggestion_id: int) -> Suggestion:

@@ -34,10 +34,12 @@
     return el("span", { class: "why" }, why);
   }
 
+  /** Returns the suggestion's why, a link to its session named by the session's date, and when it was written. */
   function meta(s) {
-    return el("div", { class: "small muted" }, ruleText(s), " ",
-      s.session_id ? el("a", { href: url(`/therapist/sessions/${s.session_id}`) }, "see the session") : null,
-      ` · ${fmtDateTime(s.created_at)}`);
+    const session = s.session_id ? el("a", { href: url(`/therapist/sessions/${s.session_id}`), class: "session-link" },
+      s.session_started_at ? `session of ${fmtDateTime(s.session_started_at)}` : "see the session") : null;
+    return el("div", { class: "small muted" }, ruleText(s), " ", session, session ? " · " : "",
+      `written ${fmtDateTime(s.created_at)}`);
   }
 
   async function decide(s, action, li) {
@@ -70,14 +72,24 @@
     } catch (err) { showError(err); }
   }
 
+  const DECIDED_PAGE = 5;
+  let decidedOffset = 0;
+  /** Shows one page of the sent and decided suggestions, newest first, with Newer/Older buttons. */
   async function loadDecided() {
     const list = document.getElementById("decided");
-    const page = await api(`/patients/${pid}/suggestions?limit=30`);
-    const done = page.items.filter((s) => s.status !== "pending").slice(0, 8);
-    list.replaceChildren(...done.map((s) => el("li", {},
+    const page = await api(`/patients/${pid}/suggestions?decided=true&limit=${DECIDED_PAGE}&offset=${decidedOffset}`);
+    if (!page.items.length && decidedOffset > 0) { decidedOffset = Math.max(0, decidedOffset - DECIDED_PAGE); return loadDecided(); }
+    list.replaceChildren(...page.items.map((s) => el("li", {},
       el("strong", {}, s.source === "therapist" ? "You wrote" : { approved: "Approved", dismissed: "Dismissed", superseded: "Replaced by newer advice" }[s.status]), ": ", s.text, meta(s))));
-    if (!done.length) list.append(el("li", { class: "muted" }, "None yet."));
+    if (!page.items.length) list.append(el("li", { class: "muted" }, "None yet."));
+    const pages = Math.max(1, Math.ceil(page.total / DECIDED_PAGE));
+    document.getElementById("decided-info").textContent = `page ${Math.floor(decidedOffset / DECIDED_PAGE) + 1} of ${pages} (${page.total} in all)`;
+    document.getElementById("decided-prev").disabled = decidedOffset === 0;
+    document.getElementById("decided-next").disabled = decidedOffset + DECIDED_PAGE >= page.total;
+    document.getElementById("decided-pager").hidden = page.total <= DECIDED_PAGE;
   }
+  document.getElementById("decided-prev").addEventListener("click", () => { decidedOffset = Math.max(0, decidedOffset - DECIDED_PAGE); loadDecided().catch(showError); });
+  document.getElementById("decided-next").addEventListener("click", () => { decidedOffset += DECIDED_PAGE; loadDecided().catch(showError); });
 
   const FONT = 15;  // chart labels on therapist pages, px (at least 14)
   const POOR = "poor data quality";
@@ -294,10 +306,13 @@
     const rows = [...document.querySelectorAll("#plan-rows .plan-row")];
     fieldError(null, document.getElementById("plan-rows-err"), rows.length ? "" : "Please add at least one exercise.");
     if (!rows.length) ok = false;
-    for (const row of rows) {
+    const chosen = new Map();  // exercise slug -> its row's number: each exercise once in a plan
+    for (const [k, row] of rows.entries()) {
       const select = row.querySelector("select");
       clear(select);
       if (!select.value) fail(select, "Please choose an exercise.");
+      else if (chosen.has(select.value)) fail(select, `${exerciseName(lib, select.value)} is already exercise ${chosen.get(select.value)} of this plan. Give each exercise once; change its sets there instead.`);
+      else chosen.set(select.value, k + 1);
       const item = { exercise_slug: select.value, notes: row.querySelector('input[name="notes"]').value.trim() };
       for (const [name, spec] of Object.entries(NUMBERS)) {
         const input = row.querySelector(`input[name="${name}"]`);

@@ -31,6 +31,23 @@ const Plots = (() => {
     modeBarButtonsToRemove: ["sendDataToCloud", "editInChartStudio", "lasso2d", "select2d"],
   };
 
+  /** Teaches plotly.js the page's language (month and day names, decimal sign) from the browser's Intl, so date
+   *  axes read "8 nov." on a French page; returns the locale name for the charts' config. */
+  function plotLocale() {
+    if (!window.Plotly || I18n.locale === "en") return "en";
+    const names = (options, dates) => dates.map((d) => new Intl.DateTimeFormat(I18n.tag, { timeZone: "UTC", ...options }).format(d));
+    const months = [...Array(12).keys()].map((m) => new Date(Date.UTC(2026, m, 1)));
+    const days = [...Array(7).keys()].map((d) => new Date(Date.UTC(2026, 10, 1 + d)));  // 1 Nov 2026 is a Sunday
+    const decimal = new Intl.NumberFormat(I18n.tag).format(1.5).charAt(1);
+    window.Plotly.register({ moduleType: "locale", name: I18n.locale, dictionary: {}, format: {
+      months: names({ month: "long" }, months), shortMonths: names({ month: "short" }, months),
+      days: names({ weekday: "long" }, days), shortDays: names({ weekday: "short" }, days),
+      decimal, thousands: decimal === "," ? "." : ",",
+    } });
+    return I18n.locale;
+  }
+  const LOCALE = plotLocale();
+
   function merge(base, extra) {
     const out = { ...base };
     for (const [k, v] of Object.entries(extra || {})) {
@@ -77,7 +94,7 @@ const Plots = (() => {
     fig._plotSpec = {
       traces: traces || [],
       layout: merge(merge(baseLayout(size), { height }), layout || {}),
-      config: { ...(config || {}), ...CONFIG },
+      config: { ...(config || {}), ...CONFIG, locale: LOCALE },
     };
     if (tableSpec) {
       const wrap = el("div", { class: "table-wrap plot-table-wrap", id: `${id}-table`, hidden: true, tabindex: 0,

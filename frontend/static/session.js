@@ -194,7 +194,8 @@
 
   function processing(d) {
     const p = d.processing;
-    const pre = (obj) => el("pre", { class: "params" }, JSON.stringify(obj, null, 2));
+    // a box that scrolls: reachable and scrollable with the keyboard, named for screen readers
+    const pre = (obj, name) => el("pre", { class: "params", tabindex: 0, role: "region", "aria-label": name }, JSON.stringify(obj, null, 2));
     document.getElementById("processing-body").replaceChildren(
       el("dl", { class: "kv" },
         el("dt", {}, "Server version"), el("dd", {}, p.version || "—"),
@@ -202,8 +203,8 @@
         el("dt", {}, "Measured on"), el("dd", {}, d.measured_on === "filtered" ? "the filtered recording" : "the raw recording"),
         el("dt", {}, "Uncertainty"), el("dd", {}, d.uncertainty_note)),
       el("h3", {}, "Filter steps"), el("ol", {}, ...(p.filter_history.length ? p.filter_history.map((h) => el("li", {}, h)) : [el("li", {}, "none recorded")])),
-      el("h3", {}, "Parameters stored with the session"), pre(p.params),
-      el("h3", {}, "Parameters in the session file"), pre(p.file_params));
+      el("h3", {}, "Parameters stored with the session"), pre(p.params, "Parameters stored with the session"),
+      el("h3", {}, "Parameters in the session file"), pre(p.file_params, "Parameters in the session file"));
   }
 
   async function load() {

@@ -1,7 +1,10 @@
 /* Therapist dashboard: assigned patients in the server's attention order, with reasons, indicator trends and advice. */
 "use strict";
 (() => {
-  const { api, url, el, fmtDate, showError } = Coach;
+  const { api, url, el, fmtDate, showError, exercises, exerciseName } = Coach;
+  // column names, repeated on each cell for narrow screens, where the rows stack as cards (app.css)
+  const COLUMNS = ["Patient", "Attention", "Latest session", "This week", "Flexibility", "Endurance", "Strength", "Balance",
+    "To review"];
   const INDICATORS = ["flexibility", "endurance", "strength", "balance"];
   const LEVELS = { now: ["high", "Now"], soon: ["mid", "Soon"], ok: ["low", "OK"] };
   const ARROWS = { up: "↑", down: "↓", flat: "→" };
@@ -32,18 +35,19 @@
 
   function indicatorCell(name, ind, t, missing) {
     const tr = trend(t);
+    const label = name.charAt(0).toUpperCase() + name.slice(1);
     if (!ind || ind.score === null || ind.score === undefined) {
       const why = name === "balance" && missing ? el("span", { class: "reasons why-missing" }, missing) : null;
-      return el("td", { class: "indicator" }, el("span", { class: "muted", title: ind ? ind.basis : "no data" }, "—"), tr, why);
+      return el("td", { class: "indicator", "data-label": label }, el("span", { class: "muted", title: ind ? ind.basis : "no data" }, "—"), tr, why);
     }
     const flag = ind.quality_ok === false ? el("span", { class: "flag", title: "data quality: the recording was poor; treat this score with care" }, "⚠") : null;
     const prev = ind.previous !== null && ind.previous !== undefined ? `; value ${ind.value}, earlier median ${ind.previous}` : "";
-    return el("td", { class: "indicator", title: `${ind.basis || ""}${prev}` },
+    return el("td", { class: "indicator", "data-label": label, title: `${ind.basis || ""}${prev}` },
       el("span", { class: "score" }, el("span", { class: "bar", "aria-hidden": "true" }, el("i", { style: `width:${Math.round(ind.score)}%` })),
         Math.round(ind.score), flag), tr);
   }
 
-  function row(r) {
+  function row(r, lib) {
     const href = url(`/therapist/patients/${r.patient_id}`);
     const last = r.last_session;
     const week = r.planned_this_week ? `${r.sessions_this_week} of ${r.planned_this_week} (${Math.round(100 * r.sessions_this_week / r.planned_this_week)}%)`
@@ -52,28 +56,30 @@
     const trends = r.indicator_trends || {};
     const [cls, label] = LEVELS[r.attention_level] || LEVELS.ok;
     return el("tr", { "data-patient-id": r.patient_id, "data-attention-score": r.attention_score, "data-attention-level": r.attention_level },
-      el("td", {}, el("a", { href, class: "patient-link" }, r.full_name || r.email), el("span", { class: "reasons" }, r.email)),
-      el("td", { class: "attention" }, el("span", { class: `pill ${cls}` }, label), " ",
+      el("td", { "data-label": COLUMNS[0] }, el("a", { href, class: "patient-link" }, r.full_name || r.email), el("span", { class: "reasons" }, r.email)),
+      el("td", { class: "attention", "data-label": COLUMNS[1] }, el("span", { class: `pill ${cls}` }, label), " ",
         el("span", { class: "attention-score", title: "attention score, 0–100" }, `score ${r.attention_score}`),
         r.attention_reasons.length ? el("ul", { class: "reasons" }, ...r.attention_reasons.map((t) => el("li", {}, t)))
           : el("span", { class: "reasons" }, "on track")),
-      el("td", {}, last ? el("a", { href: url(`/therapist/sessions/${last.id}`), class: "session-link" }, fmtDate(last.started_at)) : "never",
-        last ? el("span", { class: "reasons" }, `${(last.exercise_slug || "").replace(/_/g, " ")}${last.repetitions !== null ? ", " + last.repetitions + " reps" : ""}`) : null),
-      el("td", {}, week),
+      el("td", { "data-label": COLUMNS[2] }, last ? el("a", { href: url(`/therapist/sessions/${last.id}`), class: "session-link" }, fmtDate(last.started_at)) : "never",
+        last ? el("span", { class: "reasons" }, `${exerciseName(lib, last.exercise_slug)}${last.repetitions !== null ? ", " + last.repetitions + " reps" : ""}`) : null),
+      el("td", { "data-label": COLUMNS[3] }, week),
       ...INDICATORS.map((k) => indicatorCell(k, ind[k], trends[k], r.balance_missing)),
-      el("td", {}, r.pending_suggestions ? el("a", { href: href + "#pending-h" }, String(r.pending_suggestions)) : "0"));
+      el("td", { class: "pending", "data-label": COLUMNS[8] },
+        r.pending_suggestions ? el("a", { href: href + "#pending-h", "aria-label": `${r.pending_suggestions} suggestions to review` }, String(r.pending_suggestions)) : "0"));
   }
 
   async function load() {
     const body = document.querySelector("#patients tbody");
     try {
+      const lib = await exercises().catch(() => ({}));
       const rows = [];
       for (let offset = 0; ; offset += 200) {
         const page = await api(`/dashboard?limit=200&offset=${offset}`);
         rows.push(...page.items);
         if (rows.length >= page.total || !page.items.length) break;
       }
-      body.replaceChildren(...rows.map(row));  // the server's order: attention score, highest first, then name
+      body.replaceChildren(...rows.map((r) => row(r, lib)));  // the server's order: attention score, highest first, then name
       if (!rows.length) body.append(el("tr", {}, el("td", { colspan: 9 }, "No patients are assigned to you yet.")));
     } catch (err) { body.replaceChildren(); showError(err); }
   }

@@ -47,3 +47,13 @@ def test_wrong_method_on_a_page_keeps_the_allow_header(client):
     r = client.post("/therapist", headers=HTML)
     assert r.status_code == 405
     assert "text/html" in r.headers["content-type"] and r.headers["allow"] == "GET"
+
+
+def test_another_therapists_patient_page_is_the_404_page(client, make_patient_with_therapist, make_user, auth_headers):
+    patient, mine = make_patient_with_therapist()
+    other = make_user("therapist")
+    r = client.get(f"/therapist/patients/{patient.id}", headers=HTML | auth_headers(other))
+    assert r.status_code == 404 and "<h1>Patient not found</h1>" in r.text and "Loading" not in r.text
+    missing = client.get("/therapist/patients/999999", headers=HTML | auth_headers(other))
+    assert missing.status_code == 404 and "<h1>Patient not found</h1>" in missing.text  # the same page: no hint
+    assert client.get(f"/therapist/patients/{patient.id}", headers=HTML | auth_headers(mine)).status_code == 200

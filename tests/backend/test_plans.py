@@ -130,3 +130,15 @@ def test_another_therapist_cannot_edit_the_plan(client, make_patient_with_therap
     assert r.status_code == 404 and r.json()["error"] == "PatientNotFound"
     r = client.get(f"/api/v1/plans/{plan['id']}", headers=auth_headers(therapist))
     assert r.json()["notes"] == ""
+
+
+def test_the_same_exercise_twice_in_a_plan_is_refused_naming_both_items(
+    client, make_patient_with_therapist, auth_headers, exercise
+):
+    patient, therapist = make_patient_with_therapist()
+    item = {"exercise_slug": exercise.slug, "sets": 1, "repetitions": 5, "frequency_per_week": 2}
+    body = _body(exercise.slug, items=[item, item | {"sets": 2}])
+    r = client.post(f"/api/v1/patients/{patient.id}/plans", json=body, headers=auth_headers(therapist))
+    assert r.status_code == 422 and r.json()["error"] == "ValidationError", r.text
+    detail = r.json()["detail"]
+    assert f"body.items: Value error, exercise '{exercise.slug}' is in the plan twice (items 0 and 1)" in detail

@@ -8,6 +8,7 @@ import pytest
 from sqlalchemy import event
 
 from backend.database import utcnow
+from backend.exercises.library import EXERCISES
 from backend.plans.models import Plan, PlanItem
 from backend.sessions import dashboard
 from backend.suggestions.models import Suggestion
@@ -237,11 +238,11 @@ def test_a_falling_range_of_motion_scores_higher_with_the_reason_in_words(
     _plan(db_session, patient, therapist, exercise, THURSDAY_NOON.date() - dt.timedelta(days=40))
     _on_plan_history(store, patient, exercise, recent_rom=60.0)
     row = _summary(db_session, patient)
-    name = exercise.slug.replace("_", " ")
+    name = EXERCISES[exercise.slug].name  # the library's name, as the pages show it
     expected = round(35 * ((90 - 60) / 90 - 0.10) / 0.30)
     assert row["attention_score"] == expected and row["attention_level"] == "soon", row
     assert row["attention_reasons"] == [
-        f"Range of motion of {name} fell from 90° to 60° (last 7 days vs the 4 weeks before)"
+        f"Range of motion of {name} fell from 90° to 60° (median of the last 7 days against the 4 weeks before)"
     ]
     assert row["indicator_trends"]["flexibility"]["direction"] == "down"
     assert row["indicator_trends"]["flexibility"]["text"] == "Flexibility fell from 45 to 30 over 5 weeks"
@@ -255,9 +256,9 @@ def test_falling_repetitions_are_a_reason_and_poor_quality_sessions_do_not_count
     _on_plan_history(store, patient, exercise, recent_reps=5)
     store(patient, exercise, THURSDAY_NOON - dt.timedelta(hours=1), rom=20.0, reps=1, quality_ok=False)
     row = _summary(db_session, patient)
-    name = exercise.slug.replace("_", " ")
+    name = EXERCISES[exercise.slug].name
     assert row["attention_reasons"] == [
-        f"Repetitions of {name} fell from 10 to 5 (last 7 days vs the 4 weeks before)",
+        f"Repetitions of {name} fell from 10 to 5 (median of the last 7 days against the 4 weeks before)",
         "1 of the last 5 sessions recorded with poor tracking quality",
     ]
     assert row["attention_score"] == round(35 + 15 / 5)
@@ -299,7 +300,7 @@ def test_missing_balance_is_explained_in_words(db_session, make_user, exercise, 
     patient = make_user("patient")
     store(patient, exercise, THURSDAY_NOON - dt.timedelta(days=1))
     row = _summary(db_session, patient)
-    name = exercise.slug.replace("_", " ")
+    name = EXERCISES[exercise.slug].name
     assert row["balance_missing"] == (f"Not measured: no still standing of 2 s or more in the last session ({name})")
     doc = {"repetitions": 5, "rom_deg": 50.0, "quality": {"ok": True}, "indicators": {"balance": {"score": 80.0}}}
     store(patient, exercise, THURSDAY_NOON - dt.timedelta(hours=1), doc=doc)
@@ -321,7 +322,7 @@ def test_dashboard_is_sorted_by_attention_then_name_and_pages(client, db_session
     items = client.get("/api/v1/dashboard", headers=headers).json()["items"]
     assert [r["patient_id"] for r in items] == [absent.id, pending.id, calm.id]
     scores = [r["attention_score"] for r in items]
-    assert scores == sorted(scores, reverse=True) and scores[-1] == 0 and scores[1] == 20, scores
+    assert scores == sorted(scores, reverse=True) and scores[-1] == 0 and scores[1] == 10, scores
     page = client.get("/api/v1/dashboard", headers=headers, params={"limit": 1, "offset": 1}).json()
     assert ([r["patient_id"] for r in page["items"]], page["total"]) == ([pending.id], 3)
 
@@ -356,3 +357,30 @@ def test_dashboard_queries_do_not_grow_with_patients(client, db_session, make_us
     few = count_selects()
     add_patients(10)
     assert count_selects() == few
+
+
+def test_advice_to_review_alone_does_not_make_a_patient_soon(db_session, make_patient_with_therapist, exercise, store):
+    patient, therapist = make_patient_with_therapist()
+    _plan(db_session, patient, therapist, exercise, THURSDAY_NOON.date() - dt.timedelta(days=40))
+    _on_plan_history(store, patient, exercise)
+    db_session.add_all(
+        [Suggestion(patient_id=patient.id, source="system", rule="r", text="t", status="pending") for _ in range(4)]
+    )
+    db_session.flush()
+    row = _summary(db_session, patient)
+    assert row["attention_level"] == "ok" and row["attention_reasons"] == ["4 suggestions to review"], row
+
+
+def test_a_fall_is_never_worded_as_from_a_number_to_the_same_number():
+    from backend.sessions.triage import RecentSession, attention
+
+    def at(days_ago: float, reps: int) -> RecentSession:
+        return RecentSession(THURSDAY_NOON - dt.timedelta(days=days_ago), "squat", reps, None, True, None)
+
+    # baseline median 8.5, recent median 7.5: a 12 % drop, whole numbers would both read 8
+    sessions = [at(20, 8), at(18, 9), at(3, 7), at(2, 8)]
+    found = attention(now=THURSDAY_NOON, plan=None, sessions_this_week=2, last_session_at=THURSDAY_NOON,
+                      sessions=sessions, pending_suggestions=0)  # fmt: skip
+    assert found.reasons == [
+        "Repetitions of Mini squat fell from 8.5 to 7.5 (median of the last 7 days against the 4 weeks before)"
+    ], found.reasons

@@ -113,6 +113,7 @@ def test_therapist_filters_by_status(client, care, make_suggestion):
         "id": rows["pending"].id,
         "patient_id": care["patient"].id,
         "session_id": None,
+        "session_started_at": None,
         "source": "system",
         "author_id": None,
         "rule": "too_fast",
@@ -359,3 +360,35 @@ def test_is_visible_to_patient_matches_the_list_filter(client, care, make_sugges
 def test_add_system_suggestions_rejects_bad_drafts(db_session, care, draft):
     with pytest.raises(ValueError, match=r"drafts\[0\] must be a SuggestionDraft of a known rule"):
         add_system_suggestions([draft], patient_id=care["patient"].id, session_id=None, db_session=db_session)
+
+
+def test_decided_pages_and_each_suggestion_names_its_sessions_start(
+    client, db_session, make_patient_with_therapist, auth_headers, exercise
+):
+    import datetime as dt
+    import uuid
+
+    from backend.sessions.models import ExerciseSession
+    from backend.suggestions.models import Suggestion
+
+    patient, therapist = make_patient_with_therapist()
+    headers = auth_headers(therapist)
+    started = dt.datetime(2026, 11, 2, 9, 30, tzinfo=dt.UTC)
+    session = ExerciseSession(client_session_id=uuid.uuid4(), patient_id=patient.id, exercise_id=exercise.id,
+                              started_at=started, duration_s=30.0, n_frames=900, file_bytes=b"",
+                              content_hash=uuid.uuid4().hex * 2)  # fmt: skip
+    db_session.add(session)
+    db_session.flush()
+    for k in range(7):
+        db_session.add(Suggestion(patient_id=patient.id, source="system", rule="r", text=f"t{k}", status="approved",
+                                  session_id=session.id if k == 6 else None))  # fmt: skip
+    db_session.add(Suggestion(patient_id=patient.id, source="system", rule="r", text="waiting", status="pending"))
+    db_session.flush()
+    url = f"/api/v1/patients/{patient.id}/suggestions?decided=true&limit=5"
+    first = client.get(url, headers=headers).json()
+    rest = client.get(url + "&offset=5", headers=headers).json()
+    assert (first["total"], len(first["items"]), len(rest["items"])) == (7, 5, 2)
+    assert all(s["status"] != "pending" for s in first["items"] + rest["items"])
+    about = [s for s in first["items"] + rest["items"] if s["session_id"] == session.id]
+    assert len(about) == 1 and about[0]["session_started_at"].startswith("2026-11-02T09:30"), about
+    assert all(s["session_started_at"] is None for s in first["items"] + rest["items"] if s["session_id"] is None)
