@@ -16,7 +16,7 @@ from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
 from tests.backend.khs_files import make_khs
-from tests.frontend.conftest import login, shot
+from tests.frontend.conftest import THERAPIST, api_client, login, shot
 from tests.frontend.test_live_set import NAME, PASSWORD
 from tests.frontend.test_never_silent import EXERCISE, LOAD_MS, AgentLink, _now_iso, patient_with_device
 
@@ -133,3 +133,30 @@ def test_the_set_is_spoken_as_shown_and_the_setting_is_kept(voice_page, live_ser
         assert not page.js_errors, page.js_errors
     finally:
         link.close()
+
+
+def test_the_therapist_sets_the_patients_voice_beside_the_plan(page, live_server):
+    email, pid, _ = patient_with_device(live_server.url)
+    tara, _ = api_client(live_server.url, THERAPIST)
+    admin, headers = api_client(live_server.url, "admin@demo.clinic")
+    try:
+        tid = tara.get("/api/v1/users/me").json()["id"]
+        r = admin.put(f"/api/v1/patients/{pid}/therapists/{tid}", headers=headers)
+    finally:
+        admin.close()
+        tara.close()
+    assert r.status_code == 204, r.text
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    page.goto(f"/therapist/patients/{pid}")
+    form = page.locator("#voice-setting")
+    expect(form).to_be_visible(timeout=LOAD_MS)
+    expect(page.locator("#voice-setting-on")).to_be_checked()
+    page.locator("#voice-setting-volume").fill("60")
+    page.locator("#voice-setting-on").uncheck()
+    page.get_by_role("button", name="Save voice").click()
+    expect(page.locator("#voice-setting-msg")).to_contain_text("Saved")
+    assert _voice(live_server.url, email, pid) | {"updated_at": None} == {
+        "patient_id": pid, "enabled": False, "volume": 0.6, "updated_at": None}  # fmt: skip
+    bad = [v["id"] for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
+    assert not bad, bad
