@@ -50,6 +50,7 @@ ROUTERS = (
     "backend.live.router",
     "backend.voice.router",
     "backend.exercises.demo_router",
+    "backend.feeling.router",
 )
 
 

@@ -30,6 +30,7 @@ const Live = (() => {
       if (e.target.id === "live-stop") stop();
       if (e.target.id === "live-close") { current = null; render(); }
     });
+    if (typeof Feeling !== "undefined") Feeling.onChange = render;
     Connection.listen((state, was) => {
       if (state === "ok" && was === "lost") { status(); resync(); }
       if (state === "lost" && running()) speak(SERVER_LOST);
@@ -218,7 +219,8 @@ const Live = (() => {
       el("span", { class: "n" }, shown), el("span", { class: "of" }, " " + I18n.t("of {goal}", { goal: c.target })));
     if (c.ended) {
       return [title, c.result && !counted(c.result) ? null : count, el("p", { class: "big-sentence", id: "live-ended", role: "status" }, endSentence(c)),
-        el("p", { class: "lead" }, ENDED[c.ended] || ""), resultBlock(), c.result ? closeButton() : null];
+        el("p", { class: "lead" }, ENDED[c.ended] || ""), resultBlock(),
+        c.result && c.result.id && typeof Feeling !== "undefined" ? Feeling.block(c.result.id) : null, c.result ? closeButton() : null];
     }
     const spoken = el("p", { class: "sr-only", "aria-live": "polite" }, I18n.t("{done} of {goal}", { done: shown, goal: c.target }));
     const angle = c.angle === null || c.angle === undefined ? null : el("p", { class: "lead", id: "live-angle" }, I18n.t("Angle now: {angle} degrees", { angle: Math.round(Math.abs(c.angle)) }));

@@ -99,6 +99,8 @@ ROUTES = {
     ("GET", "/api/v1/sessions"): (AUTHED, None),  # lists only what the caller may see
     ("GET", "/api/v1/sessions/{session_id}"): (CARE_DEV, None),
     ("GET", "/api/v1/sessions/{session_id}/file"): (CARE_DEV, None),
+    ("GET", "/api/v1/sessions/{session_id}/feeling"): (CARE_DEV, None),
+    ("PUT", "/api/v1/sessions/{session_id}/feeling"): ({"patient_own"}, lambda w: {"pain": 2, "effort": 3.5}),
     ("GET", "/api/v1/sessions/{session_id}/detail"): (CARE, None),  # people only: devices do not read it
     ("GET", "/api/v1/sessions/{session_id}/export"): (CARE, lambda w: Raw(b"", {"format": "trc"})),  # as detail
     ("GET", "/api/v1/sessions/{session_id}/replay"): (CARE_DEV, None),
