@@ -52,3 +52,38 @@ def test_each_exercise_shows_a_moving_figure_its_instructions_and_the_week_badge
         assert not errors, errors
     finally:
         context.close()
+
+
+LANGUAGES = [
+    ("de", "Stimme an", "So geht es", "Von der Seite gesehen"),
+    ("es", "Voz activada", "Cómo se hace", "Visto de lado"),
+    ("fr", "Voix activée", "Comment faire", "Vu de côté"),
+]
+
+
+@pytest.mark.parametrize(("locale", "voice", "how", "view"), LANGUAGES)
+def test_the_voice_control_and_the_demonstration_speak_the_patients_language(
+    browser, live_server, locale, voice, how, view
+):
+    from tests.frontend.test_live_set import PASSWORD
+    from tests.frontend.test_never_silent import AgentLink, patient_with_device
+
+    email, pid, token = patient_with_device(live_server.url)
+    AgentLink(live_server.url, token).close()
+    patient, headers = api_client(live_server.url, "admin@demo.clinic")
+    try:
+        assert patient.patch(f"/api/v1/patients/{pid}", json={"locale": locale}, headers=headers).status_code == 200
+    finally:
+        patient.close()
+    context = browser.new_context(viewport={"width": 768, "height": 1024}, base_url=live_server.url)
+    context.set_default_timeout(30_000)
+    page = context.new_page()
+    try:
+        login(page, email, PASSWORD)
+        expect(page.locator("#voice-toggle")).to_have_text(voice)
+        expect(page.locator(".demo-h")).to_have_text(how)
+        expect(page.locator(".demo-view")).to_have_text(view)
+        assert page.evaluate("I18n.tag") == locale
+        shot(page, f"patient-{locale}")
+    finally:
+        context.close()
