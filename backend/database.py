@@ -136,9 +136,11 @@ def import_all_models() -> None:
     import backend.devices.models  # noqa: F401
     import backend.exercises.models  # noqa: F401
     import backend.jobs.models  # noqa: F401
+    import backend.feeling.models  # noqa: F401
     import backend.patients.models  # noqa: F401
     import backend.plans.models  # noqa: F401
     import backend.replay.models  # noqa: F401
     import backend.sessions.models  # noqa: F401
     import backend.suggestions.models  # noqa: F401
     import backend.users.models  # noqa: F401
+    import backend.voice.models  # noqa: F401

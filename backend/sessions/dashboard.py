@@ -14,6 +14,7 @@ from sqlalchemy import func, or_, select
 from sqlalchemy.orm import Session, aliased
 
 from backend.exercises.models import Exercise
+from backend.feeling.models import SessionFeeling
 from backend.plans.models import Plan, PlanItem
 from backend.sessions import triage
 from backend.sessions.models import ExerciseSession, SessionMetric
@@ -167,15 +168,17 @@ def _recent_sessions(
             SessionMetric.rom_deg,
             SessionMetric.quality_ok,
             SessionMetric.indicator_scores,
+            SessionFeeling.pain_nrs,
         )
         .select_from(ExerciseSession)
         .join(SessionMetric, SessionMetric.session_id == ExerciseSession.id)
         .outerjoin(Exercise, Exercise.id == ExerciseSession.exercise_id)
+        .outerjoin(SessionFeeling, SessionFeeling.session_id == ExerciseSession.id)
         .where(ExerciseSession.patient_id.in_(patient_ids), ExerciseSession.started_at >= since)
         .order_by(ExerciseSession.patient_id, ExerciseSession.started_at, ExerciseSession.id)
     ).all()
     out: dict[int, list[triage.RecentSession]] = {}
-    for pid, started_at, slug, reps, rom, quality_ok, indicators in rows:
+    for pid, started_at, slug, reps, rom, quality_ok, indicators, pain in rows:
         out.setdefault(pid, []).append(
             triage.RecentSession(
                 started_at=started_at,
@@ -184,6 +187,7 @@ def _recent_sessions(
                 rom_deg=rom,
                 quality_ok=quality_ok,
                 indicator_scores=indicators if isinstance(indicators, dict) else None,
+                pain_nrs=pain,
             )
         )
     return out

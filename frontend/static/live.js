@@ -21,17 +21,19 @@ const Live = (() => {
   const SAVE_MS = 45000;  // an ended set whose stored result has not come for this long: said so, with Close
   const FRAMES_MS = 3000;  // a recording set without a progress message for this long: the camera sends no pictures
   const RECENT_UPLOAD_MS = 2 * 86400000;  // a computer that uploaded within this long works, even when not live
-  let pid = null, names = (slug) => slug, agent = "unknown", current = null, timer = null;
+  let pid = null, names = (slug) => slug, agent = "unknown", current = null, timer = null, howTo = (slug) => "";
   let lastUpload = null, dropped = false;  // the newest stored session's upload time; the agent left while watched
 
-  function init(patientId, exerciseName) {
-    pid = patientId; names = exerciseName;
+  function init(patientId, exerciseName, instructions) {
+    pid = patientId; names = exerciseName; howTo = instructions || howTo;
     document.getElementById("live").addEventListener("click", (e) => {
       if (e.target.id === "live-stop") stop();
       if (e.target.id === "live-close") { current = null; render(); }
     });
+    if (typeof Feeling !== "undefined") Feeling.onChange = render;
     Connection.listen((state, was) => {
       if (state === "ok" && was === "lost") { status(); resync(); }
+      if (state === "lost" && running()) speak(SERVER_LOST);
       render();
     });
     setInterval(watchFrames, 500);
@@ -42,7 +44,7 @@ const Live = (() => {
   function watchFrames() {
     if (!running() || current.starting || !current.heard_at || Connection.state !== "ok") return;
     const silent = Date.now() - current.heard_at > FRAMES_MS;
-    if (silent !== Boolean(current.no_frames)) { current.no_frames = silent; render(); }
+    if (silent !== Boolean(current.no_frames)) { current.no_frames = silent; render(); if (silent) speak(CAMERA_SILENT); }
   }
 
   /** After the connection came back: a set that ended meanwhile is shown with its stored result. */
@@ -78,6 +80,7 @@ const Live = (() => {
     current = { item, label, slug: item.exercise_slug, target: item.repetitions, starting: true, count: 0 };
     render();
     into_view();
+    speak([names(current.slug) + " — " + label, firstInstruction(current.slug)].filter(Boolean).join(". "));
     try {
       const out = await api("/live/start", { method: "POST", body: { plan_item_id: item.id } });
       current.set_id = out.set_id;
@@ -99,7 +102,7 @@ const Live = (() => {
   function onAgent(data) {
     agent = data.online ? "online" : "offline";
     dropped = !data.online;
-    if (!data.online && running()) current.lost = true;
+    if (!data.online && running()) { current.lost = true; speak(I18n.t("Your home computer stopped during the set.")); }
     render();
   }
 
@@ -118,6 +121,7 @@ const Live = (() => {
       into_view();
     }
     clearTimeout(timer);
+    const before = current.starting ? 0 : current.count;
     Object.assign(current, { starting: false, count: data.count, target: data.target || current.target, angle: data.angle_deg,
       hint: data.hint, session_id: data.session_id, elapsed: data.elapsed_s, lost: false, heard_at: Date.now(), no_frames: false });
     if (data.state === "ended" && !current.ended) {
@@ -129,8 +133,9 @@ const Live = (() => {
         if (current === c) render();
       }, SAVE_MS);
     }
-    if (data.state === "failed") current.failed = data.hint ? I18n.t(data.hint) : I18n.t("The set could not be recorded.");
+    if (data.state === "failed") { current.failed = data.hint ? I18n.t(data.hint) : I18n.t("The set could not be recorded."); speak(current.failed); }
     render();
+    speakChanges(current, before);
     if (data.sent_at) window.dispatchEvent(new CustomEvent("coach-live-shown", { detail: { sent_at: data.sent_at, count: data.count } }));
   }
 
@@ -138,6 +143,7 @@ const Live = (() => {
     if (!current || !current.session_id || data.client_session_id !== current.session_id) return;
     try { current.result = await api(`/sessions/${data.session_id}`); } catch (err) { current.result = { error: kindMessage(err) }; }
     render();
+    speakChanges(current, current.count);
   }
 
   /** Returns whether the stored result has a count (then it is the set's count: the live count is brought level). */
@@ -151,6 +157,41 @@ const Live = (() => {
     const n = c.result.repetitions;
     return n >= c.target ? I18n.t("Set finished. You did all {goal} — well done!", { goal: c.target })
       : I18n.t("Set finished. You did {done} of {goal}. Good effort!", { done: n, goal: c.target });
+  }
+
+  const CAMERA_SILENT = I18n.t("No pictures are coming from your camera. Please check that it is plugged in and that nothing covers it. The count goes on by itself when the pictures are back.");
+  const SERVER_LOST = I18n.t("The connection to the server is lost. Your home computer goes on recording; the count shows again when the connection is back.");
+
+  /** Speaks a text the panel shows (voice.js; nothing when the voice is off or the page has no Voice). */
+  function speak(text) { if (typeof Voice !== "undefined" && text) Voice.say(text); }
+
+  /** Returns the first sentence of the exercise's instructions (the library's, in the page's language). */
+  function firstInstruction(slug) {
+    const text = (howTo(slug) || "").trim();
+    const m = text.match(/^.*?[.!?](\s|$)/);
+    return (m ? m[0] : text).trim();
+  }
+
+  /** Returns the encouragement for a count: halfway, and before the last repetition ("" for none). */
+  function cheer(count, target) {
+    const half = Math.floor(target / 2);
+    if (count === target - 1 && target >= 2) return I18n.t("One more — the last one!");
+    if (count === half && half >= 2 && half < target - 1) return I18n.t("Halfway there — keep going!");
+    return "";
+  }
+
+  /** Says what changed in the set: the counts as they rise, the encouragement, the end sentence once. */
+  function speakChanges(c, before) {
+    if (c.ended) {
+      const words = endSentence(c);
+      if (c.result && c.said_end !== words) { c.said_end = words; speak(words); }
+      return;
+    }
+    if (c.count > before && !c.starting) {
+      speak(String(c.count));
+      const more = cheer(c.count, c.target);
+      if (more) speak(more);
+    }
   }
 
   function resultBlock() {
@@ -170,20 +211,25 @@ const Live = (() => {
       closeButton()];
     const offline = Connection.state === "lost" ? el("p", { class: "live-hint", id: "live-offline", role: "alert" },
       I18n.t("The connection to the server is lost. Your home computer goes on recording; the count shows again when the connection is back.")) : null;
-    if (c.starting) return [title, el("p", { class: "big-sentence", id: "live-starting" }, I18n.t("Starting… Please stand in front of the camera.")), offline];
+    const first = firstInstruction(c.slug);
+    const how = first ? el("p", { class: "lead", id: "live-instruction" }, first) : null;
+    if (c.starting) return [title, el("p", { class: "big-sentence", id: "live-starting" }, I18n.t("Starting… Please stand in front of the camera.")), how, offline];
     const shown = c.ended && counted(c.result) ? c.result.repetitions : c.count;  // the stored count once it is there
     const count = el("p", { class: "live-count", id: "live-count", "aria-hidden": "true" },
       el("span", { class: "n" }, shown), el("span", { class: "of" }, " " + I18n.t("of {goal}", { goal: c.target })));
     if (c.ended) {
       return [title, c.result && !counted(c.result) ? null : count, el("p", { class: "big-sentence", id: "live-ended", role: "status" }, endSentence(c)),
-        el("p", { class: "lead" }, ENDED[c.ended] || ""), resultBlock(), c.result ? closeButton() : null];
+        el("p", { class: "lead" }, ENDED[c.ended] || ""), resultBlock(),
+        c.result && c.result.id && typeof Feeling !== "undefined" ? Feeling.block(c.result.id) : null, c.result ? closeButton() : null];
     }
     const spoken = el("p", { class: "sr-only", "aria-live": "polite" }, I18n.t("{done} of {goal}", { done: shown, goal: c.target }));
     const angle = c.angle === null || c.angle === undefined ? null : el("p", { class: "lead", id: "live-angle" }, I18n.t("Angle now: {angle} degrees", { angle: Math.round(Math.abs(c.angle)) }));
     const camera = c.no_frames ? el("p", { class: "live-hint", id: "live-camera", role: "alert" },
       I18n.t("No pictures are coming from your camera. Please check that it is plugged in and that nothing covers it. The count goes on by itself when the pictures are back.")) : null;
     const hint = c.hint && !camera ? el("p", { class: "live-hint", id: "live-hint", role: "status" }, I18n.t(c.hint)) : null;  // the agent's hints are catalogue msgids
-    return [title, count, spoken, offline, camera, angle, hint,
+    const more = cheer(c.count, c.target);
+    const encourage = more ? el("p", { class: "big-sentence", id: "live-cheer" }, more) : null;
+    return [title, count, spoken, encourage, offline, camera, how, angle, hint,
       el("button", { class: "btn btn-big btn-bad", id: "live-stop", type: "button", disabled: c.stopping || !c.set_id || Boolean(offline) },
         c.stopping ? I18n.t("Stopping…") : I18n.t("Stop"))];
   }

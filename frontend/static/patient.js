@@ -107,13 +107,15 @@
       const how = item.target_rom_deg ? I18n.t("{sets}, {often}, moving through about {rom} degrees", { sets, often, rom: Math.round(item.target_rom_deg) })
         : I18n.t("{sets}, {often}", { sets, often });
       list.append(el("li", { "data-exercise": item.exercise_slug },
-        el("span", { class: "tick" + (weekDone ? " done" : ""), "aria-hidden": "true" }, weekDone ? "✓" : mine.length),
+        el("span", { class: "week-badge", "aria-hidden": "true" },  // "done N times this week" (the status line says it in words)
+          el("span", { class: "tick" + (weekDone ? " done" : "") }, weekDone ? "✓" : I18n.t("{n}×", { n: mine.length })),
+          el("span", { class: "week-label" }, I18n.t("this week"))),
         el("div", {},
           el("div", { class: "what" }, exerciseName(lib, item.exercise_slug)),
           el("div", { class: "how" }, how),
           el("div", {}, status),
           el("div", { class: "today" }, el("strong", {}, I18n.t("Today:")), todaySets(item, mineToday).map((t) => el("span", {}, t))),
-          item.notes ? el("div", { class: "muted" }, item.notes) : null),
+          Demo.block(item, lib[item.exercise_slug], exerciseName(lib, item.exercise_slug))),
         el("div", { class: "starts" }, startButton(lib, item, mineToday.length),
           CameraEntry.link(item, exerciseName(lib, item.exercise_slug), mineToday.length + 1 <= item.sets ? `set ${mineToday.length + 1} of ${item.sets}` : "extra set"))));
     }
@@ -189,7 +191,8 @@
       Live.render();  // the new Start buttons follow the home computer's state
     } catch (err) { showError(err); }
   }
-  load().then(() => exercises()).then((lib) => Live.init(pid, (slug) => exerciseName(lib, slug)));
+  load().then(() => exercises()).then((lib) => Live.init(pid, (slug) => exerciseName(lib, slug), (slug) => (lib[slug] || {}).instructions));
+  Voice.init(pid);
   // a new result, new advice or a new plan shows without reloading the page; the home computer's set live
   Connection.attach(Coach.onChange(pid, load, Connection.watch({ "live.agent": Live.onAgent, "live.command": Live.onCommand,
     "live.progress": Live.onProgress, "session.stored": Live.onStored, open: Live.status })));

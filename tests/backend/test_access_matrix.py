@@ -86,6 +86,8 @@ ROUTES = {
     ("GET", "/api/v1/patients/{patient_id}"): (CARE_DEV, None),
     ("GET", "/api/v1/patients/{patient_id}/therapists"): (CARE_DEV, None),
     ("PATCH", "/api/v1/patients/{patient_id}"): (CARE, lambda w: {"locale": "de"}),
+    ("GET", "/api/v1/patients/{patient_id}/voice"): (CARE_DEV, None),
+    ("PUT", "/api/v1/patients/{patient_id}/voice"): (CARE, lambda w: {"enabled": False, "volume": 0.5}),
     ("PUT", "/api/v1/patients/{patient_id}/therapists/{therapist_id}"): (ADMIN, None),
     ("DELETE", "/api/v1/patients/{patient_id}/therapists/{therapist_id}"): (ADMIN, None),
     ("POST", "/api/v1/patients/{patient_id}/pairing-codes"): (CARE, None),
@@ -95,6 +97,7 @@ ROUTES = {
     ("DELETE", "/api/v1/devices/{device_id}"): (CARE, None),  # device_id is ANOTHER device of the own patient
     ("GET", "/api/v1/exercises"): (AUTHED, None),
     ("GET", "/api/v1/exercises/{slug}"): (AUTHED, None),
+    ("GET", "/api/v1/exercises/{slug}/demonstration"): (AUTHED, None),
     ("GET", "/api/v1/patients/{patient_id}/plans"): (CARE_DEV, None),
     ("POST", "/api/v1/patients/{patient_id}/plans"): (PRESCRIBE, _plan_body),
     ("GET", "/api/v1/plans/{plan_id}"): (CARE_DEV, None),
@@ -109,6 +112,8 @@ ROUTES = {
     ("GET", "/api/v1/sessions"): (AUTHED, None),  # lists only what the caller may see
     ("GET", "/api/v1/sessions/{session_id}"): (CARE_DEV, None),
     ("GET", "/api/v1/sessions/{session_id}/file"): (CARE_DEV, None),
+    ("GET", "/api/v1/sessions/{session_id}/feeling"): (CARE_DEV, None),
+    ("PUT", "/api/v1/sessions/{session_id}/feeling"): ({"patient_own"}, lambda w: {"pain": 2, "effort": 3.5}),
     ("GET", "/api/v1/sessions/{session_id}/detail"): (CARE, None),  # people only: devices do not read it
     ("GET", "/api/v1/sessions/{session_id}/export"): (CARE, lambda w: Raw(b"", {"format": "trc"})),  # as detail
     ("GET", "/api/v1/sessions/{session_id}/replay"): (CARE_DEV, None),

@@ -88,9 +88,9 @@ class AgentLink:
         self.client.close()
 
 
-def _patient_with_device(base: str) -> tuple[str, int, str]:
-    """Creates a patient with a plan of TARGET elbow flexions and a device paired through the API; returns (e-mail,
-    patient id, device token)."""
+def patient_with_device(base: str, target: int = TARGET) -> tuple[str, int, str]:
+    """Creates a patient with a plan of `target` elbow flexions (2 sets) and a device paired through the API; returns
+    (e-mail, patient id, device token)."""
     email = f"silent-{uuid.uuid4().hex[:8]}@example.org"
     admin, headers = api_client(base, "admin@demo.clinic")
     try:
@@ -98,7 +98,7 @@ def _patient_with_device(base: str) -> tuple[str, int, str]:
                                               "full_name": "Sam Silent"}, headers=headers)  # fmt: skip
         assert r.status_code == 201, r.text
         pid = r.json()["id"]
-        item = {"exercise_slug": EXERCISE, "sets": 2, "repetitions": TARGET, "frequency_per_week": 3}
+        item = {"exercise_slug": EXERCISE, "sets": 2, "repetitions": target, "frequency_per_week": 3}
         plan = {"title": "Arms", "start_date": time.strftime("%Y-%m-%d"), "notes": "", "items": [item]}
         assert admin.post(f"/api/v1/patients/{pid}/plans", json=plan, headers=headers).status_code == 201
         code = admin.post(f"/api/v1/patients/{pid}/pairing-codes", headers=headers).json()["code"]
@@ -169,7 +169,7 @@ def test_server_and_agent_stopped_and_restarted_under_the_page(browser, live_ser
 @pytest.mark.parametrize("width,height", [(1366, 900), (390, 844)])
 def test_count_in_view_camera_silence_said_and_the_end_level_with_the_stored_count(browser, live_server, width, height):
     base = live_server.url
-    email, _, token = _patient_with_device(base)
+    email, _, token = patient_with_device(base)
     link = AgentLink(base, token)
     link.upload(make_khs(EXERCISE, TARGET, seed=3, created_at=_now_iso()))  # a first set: the page has a chart
     context, page = _context(browser, base, width, height)
@@ -212,7 +212,7 @@ def test_count_in_view_camera_silence_said_and_the_end_level_with_the_stored_cou
 
 def test_a_computer_that_uploads_but_is_not_live_is_not_called_broken(browser, live_server):
     base = live_server.url
-    email, _, token = _patient_with_device(base)
+    email, _, token = patient_with_device(base)
     link = AgentLink(base, token)
     link.upload(make_khs(EXERCISE, TARGET, seed=5, created_at=_now_iso()))  # uploaded minutes ago, never live
     link.close()
@@ -235,10 +235,10 @@ def test_an_expired_sign_in_keeps_the_advice_being_typed(page, live_server):
     page.goto(f"/therapist/patients/{live_server.patient_id}")
     advice = "Please do your knee exercises slowly this week, and rest on Sunday."
     page.fill("#suggestion-text", advice)
+    expect(page.locator("#pending")).not_to_contain_text("Loading", timeout=LOAD_MS)  # the page's data is in
+    expect(page.locator("#decided li").first).to_be_visible(timeout=LOAD_MS)
     page.context.clear_cookies()  # the sign-in ends (expired) while the therapist types
-    send = page.get_by_role("button", name="Send to patient")
-    if "/therapist/patients/" in page.url and send.is_visible():  # the page's own refresh may have found out first
-        send.click()
+    page.get_by_role("button", name="Send to patient").click()
     expect(page.locator("#login-error")).to_contain_text("Your sign-in expired")
     page.fill("#email", THERAPIST)
     page.fill("#password", DEMO_PASSWORD)

@@ -1,0 +1,15 @@
+/* The therapist's session page: how the set felt to the patient (pain 0-10 NRS, effort Borg CR10), from
+ * GET /sessions/{id}/feeling, as a line under the session's title. */
+"use strict";
+(() => {
+  const main = document.getElementById("main"), sub = document.getElementById("session-sub");
+  if (!main || !sub) return;
+  Coach.api(`/sessions/${main.dataset.sessionId}/feeling`).then((f) => {
+    const parts = [];
+    if (f.pain !== null) parts.push(`pain ${f.pain} of 10 (numeric rating scale)`);
+    if (f.effort !== null) parts.push(`effort ${f.effort} of 10 (Borg CR10)`);
+    const text = f.answered_at === null ? "The patient has not said how this set felt."
+      : parts.length ? `How it felt, said by the patient: ${parts.join(", ")}.` : "The patient skipped the questions on how it felt.";
+    sub.after(Coach.el("p", { id: "session-feeling", class: f.pain !== null && f.pain >= 5 ? "alert" : "lead" }, text));
+  }).catch((err) => Coach.showError(err));
+})();

@@ -1,0 +1,89 @@
+"""Before Start, each exercise of the plan shows how it is done (issue 23, point 3): a looping figure of one
+repetition from the motion library (side view for these sagittal exercises), the library's instructions, the
+therapist's note, and a badge that reads "N× this week". No camera or home computer is needed (Rose has none)."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+from axe_playwright_python.sync_playwright import Axe
+from playwright.sync_api import expect
+
+from tests.frontend.conftest import PATIENT, api_client, login, shot
+
+pytestmark = pytest.mark.browser
+
+
+@pytest.mark.parametrize("width,height", [(1366, 900), (768, 1024), (390, 844)])
+def test_each_exercise_shows_a_moving_figure_its_instructions_and_the_week_badge(browser, live_server, width, height):
+    context = browser.new_context(viewport={"width": width, "height": height}, base_url=live_server.url)
+    context.set_default_timeout(30_000)
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    try:
+        client, _ = api_client(live_server.url, PATIENT)
+        try:
+            library = {e["slug"]: e for e in client.get("/api/v1/exercises?limit=200").json()["items"]}
+        finally:
+            client.close()
+        login(page, PATIENT)
+        page.wait_for_url("**/patient")
+        items = page.locator("#plan li[data-exercise]")
+        expect(items.first).to_be_visible()
+        assert items.count() == 2
+        for i in range(items.count()):
+            li = items.nth(i)
+            slug = li.get_attribute("data-exercise")
+            canvas = li.locator("canvas.demo-figure")
+            expect(canvas).to_have_attribute("data-view", "side")
+            assert int(canvas.get_attribute("data-frames")) >= 30
+            expect(li.locator(".demo-instructions")).to_have_text(library[slug]["instructions"])
+            expect(li.locator(".week-label")).to_have_text("this week")
+            expect(li.locator(".tick")).to_have_text(re.compile(r"^(\d+×|✓)$"))
+            expect(canvas).to_have_attribute("aria-label", re.compile(f"^How to do {library[slug]['name']}"))
+            first = canvas.evaluate("(c) => c.toDataURL()")
+            page.wait_for_timeout(700)
+            assert canvas.evaluate("(c) => c.toDataURL()") != first, f"the figure of {slug} does not move"
+        shot(page, f"demonstration-{width}")
+        bad = [v["id"] for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
+        assert not bad, bad
+        assert not errors, errors
+    finally:
+        context.close()
+
+
+LANGUAGES = [
+    ("de", "Stimme an", "So geht es", "Von der Seite gesehen"),
+    ("es", "Voz activada", "Cómo se hace", "Visto de lado"),
+    ("fr", "Voix activée", "Comment faire", "Vu de côté"),
+]
+
+
+@pytest.mark.parametrize(("locale", "voice", "how", "view"), LANGUAGES)
+def test_the_voice_control_and_the_demonstration_speak_the_patients_language(
+    browser, live_server, locale, voice, how, view
+):
+    from tests.frontend.test_live_set import PASSWORD
+    from tests.frontend.test_never_silent import AgentLink, patient_with_device
+
+    email, pid, token = patient_with_device(live_server.url)
+    AgentLink(live_server.url, token).close()
+    patient, headers = api_client(live_server.url, "admin@demo.clinic")
+    try:
+        assert patient.patch(f"/api/v1/patients/{pid}", json={"locale": locale}, headers=headers).status_code == 200
+    finally:
+        patient.close()
+    context = browser.new_context(viewport={"width": 768, "height": 1024}, base_url=live_server.url)
+    context.set_default_timeout(30_000)
+    page = context.new_page()
+    try:
+        login(page, email, PASSWORD)
+        expect(page.locator("#voice-toggle")).to_have_text(voice)
+        expect(page.locator(".demo-h")).to_have_text(how)
+        expect(page.locator(".demo-view")).to_have_text(view)
+        assert page.evaluate("I18n.tag") == locale
+        shot(page, f"patient-{locale}")
+    finally:
+        context.close()

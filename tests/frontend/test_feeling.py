@@ -1,0 +1,80 @@
+"""After a set, the patient says how it felt (issue 23, point 4): pain 0-10 and effort (Borg CR10) as large buttons,
+with Skip; the answer is stored with the session and the therapist reads it on the session page."""
+
+from __future__ import annotations
+
+import re
+import uuid
+
+import pytest
+from axe_playwright_python.sync_playwright import Axe
+from playwright.sync_api import expect
+
+from tests.backend.khs_files import make_khs
+from tests.frontend.conftest import THERAPIST, api_client, login, shot
+from tests.frontend.test_live_set import NAME, PASSWORD
+from tests.frontend.test_never_silent import (
+    EXERCISE,
+    LOAD_MS,
+    TARGET,
+    AgentLink,
+    _context,
+    _now_iso,
+    patient_with_device,
+)
+
+pytestmark = pytest.mark.browser
+
+
+def _assign_to_tara(base: str, pid: int) -> None:
+    tara, _ = api_client(base, THERAPIST)
+    admin, headers = api_client(base, "admin@demo.clinic")
+    try:
+        r = admin.put(f"/api/v1/patients/{pid}/therapists/{tara.get('/api/v1/users/me').json()['id']}", headers=headers)
+    finally:
+        admin.close()
+        tara.close()
+    assert r.status_code == 204, r.text
+
+
+@pytest.mark.parametrize("width,height", [(1366, 900), (390, 844)])
+def test_the_patient_says_how_the_set_felt_and_the_therapist_sees_it(browser, live_server, width, height):
+    base = live_server.url
+    email, pid, token = patient_with_device(base)
+    _assign_to_tara(base, pid)
+    link = AgentLink(base, token)
+    context, page = _context(browser, base, width, height)
+    try:
+        login(page, email, PASSWORD)
+        link.connect()
+        expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
+        page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2")).click()
+        start, sid = link.command(), str(uuid.uuid4())
+        link.progress(start, "ended", TARGET, sid, elapsed_s=9.0, reason="target")
+        stored = link.upload(make_khs(EXERCISE, TARGET, seed=21, session_id=sid, created_at=_now_iso()))
+        feeling = page.locator("#feeling")
+        expect(feeling).to_be_visible(timeout=30_000)
+        expect(page.locator("#feeling-save")).to_be_disabled()  # nothing chosen yet
+        page.locator("#feeling-pain").get_by_role("button", name="3", exact=True).click()
+        page.locator("#feeling-effort").get_by_role("button", name="4", exact=True).click()
+        expect(page.locator("#feeling-pain button[aria-pressed=true]")).to_have_text("3")
+        shot(page, f"feeling-{width}")
+        bad = [v["id"] for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
+        assert not bad, bad
+        page.locator("#feeling-save").click()
+        expect(page.locator("#feeling-thanks")).to_contain_text("Thank you")
+        r = link.client.get(f"/api/v1/sessions/{stored['id']}/feeling")
+        assert (r.json()["pain"], r.json()["effort"]) == (3, 4.0), r.text
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+        link.close()
+    context, page = _context(browser, base, width, height)
+    try:
+        login(page, THERAPIST)
+        page.wait_for_url("**/therapist")
+        page.goto(f"/therapist/sessions/{stored['id']}")
+        expect(page.locator("#session-feeling")).to_contain_text("pain 3 of 10", timeout=LOAD_MS)
+        expect(page.locator("#session-feeling")).to_contain_text("effort 4 of 10 (Borg CR10)")
+    finally:
+        context.close()
