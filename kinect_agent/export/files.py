@@ -61,7 +61,7 @@ def csv_zip(payload: SessionPayload, document: dict[str, Any] | None) -> bytes:
         members["repetitions.csv"] = tables.repetitions_csv(document)
     members["angles_raw.csv"] = tables.angles_csv(payload.raw)
     if payload.filtered is not None:
-        members["angles_filtered.csv"] = tables.angles_csv(payload.filtered)
+        members["angles_filtered.csv"] = tables.angles_csv(payload.filtered, measured=True)
     return _zip(members)
 
 
