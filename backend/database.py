@@ -135,8 +135,8 @@ def import_all_models() -> None:
     import backend.camera.models  # noqa: F401
     import backend.devices.models  # noqa: F401
     import backend.exercises.models  # noqa: F401
-    import backend.jobs.models  # noqa: F401
     import backend.feeling.models  # noqa: F401
+    import backend.jobs.models  # noqa: F401
     import backend.patients.models  # noqa: F401
     import backend.plans.models  # noqa: F401
     import backend.replay.models  # noqa: F401

@@ -29,7 +29,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.webcam_clips import landmarks  # noqa: E402
-from kinect_agent.processing.angles import joint_angles  # noqa: E402
+from kinect_agent.body.angles import joint_angles  # noqa: E402
 from kinect_agent.processing.config import config_for_device  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402
 from kinect_agent.recording import Metadata  # noqa: E402

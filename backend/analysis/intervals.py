@@ -24,7 +24,9 @@ Error model of one metric m (degrees), measured on simulated sessions with known
                       2.15, fitted on its own training sessions, views 0° and 60°, seeds 501-505, so that 95.5 % of
                       them cover: its errors are larger)
                YAW_GAIN, TAIL_GAIN (one per metric) and B are fitted on training sessions (every simulated
-               exercise at views 0° and 60°, seeds 101-110): the gains, on a grid, give the narrowest intervals
+               exercise at views 0° and 60°, seeds 101-110; a refit on the angles with domains (issue 24) was
+               narrower but let one held-out family fall to 0.897, so these stay): the gains, on a grid, give the
+               narrowest intervals
                among those whose per-(motion, view) coverage deviates from 95 % (RMS) at most 10 % more than the
                least deviation on the grid; B is one quantile (the same for every angle and metric)
                of the B each training interval needs, set so that 95.5 % of the training intervals cover the
@@ -33,8 +35,11 @@ Error model of one metric m (degrees), measured on simulated sessions with known
                median, so B is 0 for all angles but trunk lateral flexion: a bias that holds still (no tail) is
                not widened for; fitted on Kinect 2 (Kinect 1 held out: 0.87 pooled without its gain, 0.956 with
                it).
-    interval   m̂ ± 1.96 · sqrt(σ_frames² + b²); a range never below 0. None for NO_INTERVAL angles and for ranges
-               of a full turn or more.
+    interval   m̂ ± 1.96 · sqrt(σ_frames² + b²), then kept to what the angle can be (angle_intervals: inside
+               its domain, the ends consistent, a range never below 0 nor above the ends allow). None for
+               NO_INTERVAL angles and for ranges of a full turn or more; withheld, with the reason in words
+               (withheld_reason), when wider than MAX_WIDTH_DEG, when the angle is defined in too few frames or
+               its joints were tracked in too few.
 
 Repetition count: counted again on perturbed angles (each defining angle + its SD × unit-variance noise smoothed
 like the filtered angles' error, NOISE_SMOOTH_S; n_draws draws, a fixed seed); the interval is [min, max] of the
@@ -52,6 +57,7 @@ from backend.analysis.range_of_motion import HIGH_PCT, LOW_PCT
 from kinect_agent import skeleton
 from kinect_agent.analysis import series
 from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
+from kinect_agent.body.angles import DOMAIN_DEG
 
 Z95 = 1.959964
 EDGE_FRACTION = 0.02  # frames within this fraction of the range from a percentile set that end's SD
@@ -62,6 +68,12 @@ COUNT_DRAWS = 20
 # and a range of a full turn or more means the angle spun through its ±180° seam (an ill-defined range).
 NO_INTERVAL = ("shoulder_rotation_L", "shoulder_rotation_R")
 MAX_RANGE_DEG = 360.0
+KINDS = ("min_deg", "max_deg", "range_deg")
+# Withheld intervals (withheld_reason): wider than this says nothing a therapist can act on; an angle defined in
+# too few frames, or whose joints were tracked in too few, has no edge the data can place.
+MAX_WIDTH_DEG = 60.0
+MIN_DEFINED_FRACTION = 0.5
+MIN_TRACKED_FRACTION = 0.8
 # The systematic part b = (1 + YAW_GAIN · sin ψ) · sqrt(B² + (TAIL_GAIN · τ)²), fitted by bench/uncertainty.py
 # (bench/README.md, "Uncertainty"); B (degrees) per angle: (min_deg, max_deg, range_deg), both sides pooled; the
 # shoulder rotations have none (NO_INTERVAL). The fitted quantile of B is about the median: the tail term alone
@@ -127,17 +139,20 @@ def _edge_sd(y: np.ndarray, sd: np.ndarray, level: float, span: float, upper: bo
 
 
 def edges(t: np.ndarray, x: np.ndarray, sd: np.ndarray) -> Edges | None:
-    """Returns the Edges of one angle, or None when x or sd has no finite value.
+    """Returns the Edges of one angle over the frames where it is defined, or None when x or sd has no finite value.
 
-    t: (T,) s. x: (T,) degrees, the angle as range_of_motion measures it (presmoothed). sd: (T,) degrees.
+    t: (T,) s. x: (T,) degrees, the angle as range_of_motion measures it (presmoothed; NaN = undefined). sd: (T,)
+    degrees.
     """
     t = np.asarray(t, dtype=np.float64)
     if np.shape(x) != t.shape or np.shape(sd) != t.shape:
         raise ValueError(f"t, x and sd must share the shape (T,), got {t.shape}, {np.shape(x)}, {np.shape(sd)}")
-    y = series.smooth(t, np.asarray(x, dtype=np.float64), median_s=0.0, smooth_s=0.0)
+    x = np.asarray(x, dtype=np.float64)
     sd = np.asarray(sd, dtype=np.float64)
-    if not (y.size and np.all(np.isfinite(y)) and np.isfinite(sd).any()):
+    defined = np.isfinite(x)
+    if not (defined.any() and np.isfinite(sd[defined]).any()):
         return None
+    y, sd = x[defined], sd[defined]
     lo, hi, in_lo, in_hi = np.percentile(y, [LOW_PCT, HIGH_PCT, *TAIL_PCT])
     span = max(float(hi - lo), 1e-9)
     return Edges(
@@ -191,25 +206,66 @@ def _interval(centre: float, sd: float, floor: float | None = None) -> list[floa
     return [round(lo, 1), round(hi, 1)]
 
 
+def _clip(interval: list[float], lo: float, hi: float) -> list[float]:
+    """Returns [a, b] clipped into [lo, hi]."""
+    a, b = interval
+    return [min(max(a, lo), hi), max(min(b, hi), lo)]
+
+
 def angle_intervals(
     t: np.ndarray, x: np.ndarray, sd: np.ndarray, name: str, *, yaw_deg: float, device: str = "kinect2"
 ) -> dict[str, list[float]] | None:
     """Returns {"min_deg": [lo, hi], "max_deg": [lo, hi], "range_deg": [lo, hi]} (95 %, degrees) of one angle.
 
     t: (T,) s. x: (T,) degrees, the angle as range_of_motion measures it (presmoothed). sd: (T,) degrees, its
-    per-frame SD. name: the angle (for its systematic part). yaw_deg: the body's yaw to the camera, degrees
-    (camera_yaw). device: the session's meta.device (DEVICE_GAIN). None when x or sd has no finite value, for the
-    angles of NO_INTERVAL and for a range of MAX_RANGE_DEG or more.
+    per-frame SD. name: the angle (for its systematic part and its domain). yaw_deg: the body's yaw to the camera,
+    degrees (camera_yaw). device: the session's meta.device (DEVICE_GAIN). None when x or sd has no finite value,
+    for the angles of NO_INTERVAL and for a range of MAX_RANGE_DEG or more.
+
+    The intervals never leave what the angle can be: the ends of the range lie in its domain (angles.DOMAIN_DEG),
+    the smallest value is at most the largest one's upper end (and the largest at least the smallest's lower
+    end), and the range is at most the largest's upper end minus the smallest's lower end.
     """
     e = edges(t, x, sd)
     if e is None or name in NO_INTERVAL or e.high - e.low >= MAX_RANGE_DEG:
         return None
     b_min, b_max, b_range = systematic(name, e, yaw_deg, device)
-    return {
-        "min_deg": _interval(e.low, float(np.hypot(e.sd_low, b_min))),
-        "max_deg": _interval(e.high, float(np.hypot(e.sd_high, b_max))),
-        "range_deg": _interval(e.high - e.low, float(np.sqrt(e.sd_high**2 + e.sd_low**2 + b_range**2)), floor=0.0),
-    }
+    d_lo, d_hi = DOMAIN_DEG.get(name, (-np.inf, np.inf))
+    low = _clip(_interval(e.low, float(np.hypot(e.sd_low, b_min))), d_lo, d_hi)
+    high = _clip(_interval(e.high, float(np.hypot(e.sd_high, b_max))), d_lo, d_hi)
+    low[1], high[0] = min(low[1], high[1]), max(high[0], low[0])
+    span = _interval(e.high - e.low, float(np.sqrt(e.sd_high**2 + e.sd_low**2 + b_range**2)), floor=0.0)
+    span = _clip(span, 0.0, high[1] - low[0])
+    return {key: [round(a, 1), round(b, 1)] for key, (a, b) in zip(KINDS, (low, high, span), strict=True)}
+
+
+def withheld_reason(
+    name: str, x: np.ndarray, interval: dict[str, list[float]] | None, tracked_fraction: float = 1.0
+) -> str | None:
+    """Returns why the 95 % intervals of angle `name` are not shown, in words, or None when they are shown.
+
+    x: (T,) degrees, the measured angle (NaN where undefined). interval: angle_intervals' answer. tracked_fraction:
+    the fraction of the angle's joint samples the camera tracked (quality.angle_joints). Withheld: the angles of
+    NO_INTERVAL, an angle defined in under MIN_DEFINED_FRACTION of the frames (its limb left its plane), one whose
+    joints were tracked in under MIN_TRACKED_FRACTION of the samples, and an interval wider than MAX_WIDTH_DEG.
+    """
+    if name in NO_INTERVAL:
+        return "shoulder rotation is undefined while the elbow is straight, so it has no interval"
+    x = np.asarray(x, dtype=np.float64)
+    defined = float(np.isfinite(x).mean()) if x.size else 0.0
+    if defined < MIN_DEFINED_FRACTION:
+        return f"the angle is defined in only {defined:.0%} of the frames (the limb was out of its plane)"
+    if tracked_fraction < MIN_TRACKED_FRACTION:
+        return f"the joints of this angle were tracked in only {tracked_fraction:.0%} of the frames"
+    if interval is None:
+        return "the angle or its uncertainty is unknown in every frame, or it spun through a full turn"
+    widest = max(b - a for a, b in interval.values())
+    if widest > MAX_WIDTH_DEG:
+        return (
+            f"the tracking is too uncertain: a 95 % interval would span {widest:.0f}° "
+            f"(at most {MAX_WIDTH_DEG:.0f}° is shown)"
+        )
+    return None
 
 
 def covers(interval: list[float], true: float, kind: str) -> bool:
@@ -222,26 +278,42 @@ def covers(interval: list[float], true: float, kind: str) -> bool:
     return abs(off) <= 0.5 * (hi - lo) + 0.05
 
 
+@dataclass(frozen=True)
+class RomIntervals:
+    """The 95 % intervals of every angle's range of motion: shown ({angle: {"min_deg", "max_deg", "range_deg":
+    [lo, hi]}} or None when withheld) and, for each withheld one, why (withheld_reason)."""
+
+    intervals: dict[str, dict[str, list[float]] | None]
+    withheld: dict[str, str]
+
+
 def rom_intervals(
     t: np.ndarray,
     angles: dict[str, np.ndarray],
     sd: dict[str, np.ndarray],
     positions: np.ndarray,
     device: str = "kinect2",
-) -> dict[str, dict[str, list[float]] | None]:
-    """Returns {angle: angle_intervals(...)} for every angle present in both angles and sd ({name: (T,) degrees}).
+    tracked: dict[str, float] | None = None,
+) -> RomIntervals:
+    """Returns the RomIntervals of every angle present in both angles and sd ({name: (T,) degrees}).
 
     positions: (T, J, 3) metres, camera frame, the positions the angles were measured on (for camera_yaw; a
     session without both shoulders in any frame is taken as side on, 90°, the widest intervals). device: the
-    session's meta.device.
+    session's meta.device. tracked: {angle: fraction of its joint samples tracked} (1 when not given).
     """
     yaw = camera_yaw(positions)
     yaw = 90.0 if yaw is None else yaw
-    return {
-        name: angle_intervals(t, angles[name], sd[name], name, yaw_deg=yaw, device=device)
-        for name in angles
-        if name in sd
-    }
+    shown: dict[str, dict[str, list[float]] | None] = {}
+    withheld: dict[str, str] = {}
+    for name in angles:
+        if name not in sd:
+            continue
+        iv = angle_intervals(t, angles[name], sd[name], name, yaw_deg=yaw, device=device)
+        reason = withheld_reason(name, angles[name], iv, (tracked or {}).get(name, 1.0))
+        shown[name] = None if reason else iv
+        if reason:
+            withheld[name] = reason
+    return RomIntervals(shown, withheld)
 
 
 def _smooth_noise(rng: np.random.Generator, T: int, n: int, dt: float) -> np.ndarray:
@@ -283,4 +355,14 @@ def count_interval(
     return CountInterval(min(counts), max(counts))
 
 
-__all__ = ["SYSTEMATIC_DEG", "CountInterval", "Edges", "angle_intervals", "edges", "count_interval", "rom_intervals"]
+__all__ = [
+    "SYSTEMATIC_DEG",
+    "CountInterval",
+    "Edges",
+    "RomIntervals",
+    "angle_intervals",
+    "count_interval",
+    "edges",
+    "rom_intervals",
+    "withheld_reason",
+]

@@ -50,6 +50,13 @@ def angle_joints(names: tuple[str, ...]) -> list[int]:
     return sorted(INDEX[j] for j in joints)
 
 
+def tracked_fraction(raw: Recording, angle_names: tuple[str, ...] = ()) -> float:
+    """Returns the fraction of the (frame, joint) samples of the joints of angle_names (angle_joints) that the
+    camera tracked (state 1 or 2), in [0, 1]; 0 for an empty recording."""
+    present = raw.state[:, angle_joints(angle_names)] != NOT_TRACKED
+    return float(present.mean()) if present.size else 0.0
+
+
 def assess(raw: Recording, measured: np.ndarray | None, angle_names: tuple[str, ...] = ()) -> dict:
     """Returns {"ok", "tracked_fraction", "outlier_fraction", "reasons"} for a session.
 
@@ -58,7 +65,7 @@ def assess(raw: Recording, measured: np.ndarray | None, angle_names: tuple[str, 
     """
     joints = angle_joints(angle_names)
     present = raw.state[:, joints] != NOT_TRACKED
-    tracked = float(present.mean()) if present.size else 0.0
+    tracked = tracked_fraction(raw, angle_names)
     outliers = 0.0
     finite = True
     if measured is not None:

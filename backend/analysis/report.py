@@ -26,10 +26,9 @@ from backend.analysis.range_of_motion import range_of_motion
 from backend.analysis.reachable import reachable_range
 from backend.analysis.sit_to_stand import sit_to_stand
 from backend.exercises.library import EXERCISES, ExerciseSpec
-from kinect_agent.analysis import series
-from kinect_agent.analysis.angles import counting_angles
-from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
-from kinect_agent.body.angles import body_frame, joint_angles
+from kinect_agent.analysis.angles import counting_angles, measured_angles
+from kinect_agent.analysis.repetitions import Repetition, RepetitionParams, count_repetitions
+from kinect_agent.body.angles import body_frame
 from kinect_agent.errors import FormatError
 from kinect_agent.processing.params import KinematicParams
 from kinect_agent.recording import Recording
@@ -70,6 +69,30 @@ def _median(values: list[float]) -> float | None:
     return round(float(np.median(values)), 1) if values else None
 
 
+def measured_peak(t: np.ndarray, angles: dict[str, np.ndarray], names: tuple[str, ...], rep: Repetition) -> float:
+    """Returns the repetition's peak angle, degrees (0.1): the measured angles (angles: {name: (T,) degrees}) of
+    its side among `names` at its peak frame (t: (T,) s), averaged over both sides for "both" or "center"; the
+    counter's own peak where they are undefined. The counter reads hip flexion as the thigh's elevation: its peak
+    is reported on the measured angle, like the range of motion and the curves."""
+    k = int(np.clip(np.searchsorted(t - t[0], rep.peak_s - 1e-9), 0, t.shape[0] - 1))
+    suffix = {"left": "_L", "right": "_R"}.get(rep.side)
+    own = [n for n in names if suffix is not None and n.endswith(suffix)] or list(names)
+    values = [float(angles[n][k]) for n in own if n in angles and np.isfinite(angles[n][k])]
+    return round(float(np.mean(values)) if values else rep.peak_deg, 1)
+
+
+def peak_end(rom: dict[str, float | None] | None, repetitions: list[dict]) -> str:
+    """Returns "max" or "min": the end of the defining angle's range that its repetitions reach (the median
+    repetition peak is nearer to it), so that the session's "peak angle" and the repetitions' peaks are one
+    quantity (a seated knee extension rests bent and peaks near 0°: its peak is the range's minimum). "max"
+    without repetitions or a range."""
+    peaks = [r["peak_deg"] for r in repetitions if r.get("peak_deg") is not None]
+    if not rom or rom.get("min_deg") is None or rom.get("max_deg") is None or not peaks:
+        return "max"
+    mid = 0.5 * (rom["min_deg"] + rom["max_deg"])
+    return "min" if float(np.median(peaks)) < mid else "max"
+
+
 def analyze_recording(
     recording: Recording,
     exercise: ExerciseSpec,
@@ -92,13 +115,16 @@ def analyze_recording(
     positions, source = _measured_positions(recording, params, filtered)
     t = recording.t
     names = tuple(exercise.defining_angles)
-    smoothed = series.smooth_positions(t, positions)
-    clinical = joint_angles(smoothed)
+    measured = measured_angles(t, positions)
+    smoothed, clinical = measured.positions, measured.angles
     frame = body_frame(smoothed)
-    counted = counting_angles(smoothed, names, clinical, frame[0])
+    counted = counting_angles(smoothed, names, clinical, measured.up)
     reps = count_repetitions(t, counted, names, repetition_params)
-    rep_list = [r.to_dict() for r in reps.repetitions]
+    rep_list = [r.to_dict() | {"peak_deg": measured_peak(t, clinical, names, r)} for r in reps.repetitions]
     sd = _angle_sd(angle_sd, recording.n_frames) if source == "filtered" else None
+    rom = range_of_motion(t, clinical, presmoothed=True)
+    tracked = {name: quality.tracked_fraction(recording, (name,)) for name in clinical}
+    ivs = None if sd is None else rom_intervals(t, clinical, sd, smoothed, recording.meta.device, tracked)
     moving_s, rest_s = activity.moving_time(t, smoothed)
     balance = sway(t, smoothed, clinical)
     return {
@@ -110,8 +136,10 @@ def analyze_recording(
         "repetitions": len(rep_list),
         "repetition_list": rep_list,
         "defining_angle": reps.defining_angle,
-        "range_of_motion": range_of_motion(t, clinical, presmoothed=True),
-        "range_of_motion_95": None if sd is None else rom_intervals(t, clinical, sd, smoothed, recording.meta.device),
+        "peak_end": peak_end(rom.get(reps.defining_angle or ""), rep_list),
+        "range_of_motion": rom,
+        "range_of_motion_95": None if ivs is None else ivs.intervals,
+        "range_of_motion_95_withheld": None if ivs is None else ivs.withheld,
         "repetitions_95": None
         if sd is None
         else count_interval(t, counted, sd, names, repetition_params, count=len(rep_list)).to_dict(),

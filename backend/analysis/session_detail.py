@@ -2,13 +2,13 @@
 hand paths.
 
 Definitions:
-    angle curves  = the exercise's defining angles (angles.counting_angles, the same code the repetition counter
-                    uses), degrees, over time in seconds from the first frame. "raw": computed from the raw
-                    recording frame by frame (NaN where a joint is untracked); "filtered": from the positions the
-                    analysis measures (report.analyze_recording: the filtered recording, gap-filled and smoothed by
-                    series.smooth_positions). The measured curve is unwrapped (no 360° jumps where atan2
-                    passes ±180°, e.g. an arm raised overhead) and each raw sample is shifted by whole turns to lie
-                    within ±180° of it. Each curve is thinned by min/max decimation to at most
+    angle curves  = the exercise's defining angles (body.angles.joint_angles: the one definition the range
+                    of motion, its intervals and the exported tables use), degrees, over time in seconds from the
+                    first frame. "raw": computed from the raw recording frame by frame (NaN where a joint is
+                    untracked); "filtered": the measured angles (angles.measured_angles: the filtered recording,
+                    gap-filled and smoothed, as report.analyze_recording measures it). Both lie in the angle's
+                    domain (angles.DOMAIN_DEG; nothing is unwrapped) and are NaN (a gap) where the angle is
+                    undefined. Each curve is thinned by min/max decimation to at most
                     MAX_CURVE_POINTS points: the samples are cut into MAX_CURVE_POINTS / 2 equal runs and each
                     run keeps its lowest and its highest sample, in time order, so peaks and troughs stay exact;
     peak speed    = the largest |dθ/dt| (deg/s, central differences of the conditioned series series.smooth) of
@@ -23,8 +23,8 @@ from __future__ import annotations
 import numpy as np
 
 from backend.analysis.reachable import hand_path
+from kinect_agent.analysis import angles as analysis_angles
 from kinect_agent.analysis import series
-from kinect_agent.analysis.angles import counting_angles
 from kinect_agent.body.angles import body_frame, joint_angles
 
 MAX_CURVE_POINTS = 1500
@@ -65,27 +65,6 @@ def _rounded(values: np.ndarray, digits: int) -> list[float | None]:
     return [None if not np.isfinite(v) else float(v) for v in out]
 
 
-def unwrap_finite(deg: np.ndarray) -> np.ndarray:
-    """Returns deg: (T,) degrees without 360° jumps between consecutive finite samples (NaN kept), shifted by whole
-    turns so its median lies in (−180, 180], as series.unwrap_deg does for a series without gaps."""
-    out = np.array(deg, dtype=np.float64)
-    ok = np.isfinite(out)
-    if ok.sum() < 2:
-        return out
-    u = np.unwrap(out[ok], period=360.0)
-    out[ok] = u - 360.0 * np.ceil((np.median(u) - 180.0) / 360.0)
-    return out
-
-
-def wrap_near(deg: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """Returns deg: (T,) degrees shifted by whole turns to lie within ±180° of reference: (T,) degrees, frame by
-    frame (deg as is where reference is NaN); a noisy series keeps no false turn, unlike np.unwrap."""
-    deg = np.asarray(deg, dtype=np.float64)
-    reference = np.asarray(reference, dtype=np.float64)
-    near = reference + np.mod(deg - reference + 180.0, 360.0) - 180.0
-    return np.where(np.isfinite(reference), near, deg)
-
-
 def curve(t_s: np.ndarray, deg: np.ndarray, max_points: int = MAX_CURVE_POINTS) -> dict[str, list]:
     """Returns {"t_s", "deg"}: one angle series thinned by min/max decimation (module doc).
 
@@ -99,10 +78,10 @@ def measured_angles(t: np.ndarray, positions: np.ndarray, names: tuple[str, ...]
     """Returns {name: (T,) degrees} of the angles `names` as the analysis measures them.
 
     t: (T,) s. positions: (T, J, 3) m, camera frame, the measured (filtered) positions; they are gap-filled and
-    smoothed first (series.smooth_positions), as report.analyze_recording does.
+    smoothed first (angles.measured_angles), as report.analyze_recording does.
     """
-    smoothed = series.smooth_positions(t, positions)
-    return counting_angles(smoothed, names, joint_angles(smoothed), body_frame(smoothed)[0])
+    angles = analysis_angles.measured_angles(t, positions).angles
+    return {name: angles[name] for name in names}
 
 
 def angle_label(name: str) -> str:
@@ -126,11 +105,10 @@ def angle_curves(
     filtered recording and the raw one was measured).
     """
     t_s = np.asarray(t, dtype=np.float64) - float(t[0])
-    raw_angles = counting_angles(raw, names)
+    raw_angles = joint_angles(raw)
     out = []
     for name in names:
-        smooth_deg = unwrap_finite(measured_deg[name])
-        for kind, deg in (("raw", wrap_near(raw_angles[name], smooth_deg)), (measured_kind, smooth_deg)):
+        for kind, deg in (("raw", raw_angles[name]), (measured_kind, measured_deg[name])):
             label = f"{angle_label(name)}, {kind}"
             out.append({"angle": name, "kind": kind, "label": label, **curve(t_s, deg)})
     return out

@@ -46,7 +46,7 @@ def rise_times(t: np.ndarray, height: np.ndarray) -> list[float]:
 
 def sit_to_stand(t: np.ndarray, positions: np.ndarray) -> dict[str, float | int] | None:
     """Returns {"mean_s", "count"} of the sit-to-stand transitions in positions (T, J, 3) m, or None."""
-    height = series.smooth(t, positions[:, INDEX["ROOT"], 1], angle=False)
+    height = series.smooth(t, positions[:, INDEX["ROOT"], 1])
     times = rise_times(np.asarray(t, dtype=np.float64), height)
     if not times:
         return None

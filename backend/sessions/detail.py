@@ -255,16 +255,25 @@ def _balance_missing(doc: dict) -> str:
 
 
 def _uncertainty(doc: dict) -> dict | None:
-    """Returns the detail's uncertainty (keys: UncertaintyOut) from a document's 95 % intervals, or None."""
+    """Returns the detail's uncertainty (keys: UncertaintyOut) from a document's 95 % intervals, or None.
+
+    An angle whose intervals the analysis withheld is listed with null intervals and the reason."""
     intervals, rom = doc.get("range_of_motion_95"), doc.get("range_of_motion")
     if not isinstance(intervals, dict) or not isinstance(rom, dict):
         return None
+    withheld = doc.get("range_of_motion_95_withheld")
+    withheld = withheld if isinstance(withheld, dict) else {}
     angles = {}
     for name, iv in intervals.items():
         value = rom.get(name)
-        if isinstance(iv, dict) and isinstance(value, dict):
-            angles[name] = {key: value.get(key) for key in ("min_deg", "max_deg", "range_deg")} | {
-                f"{key[:-4]}_ci95": iv.get(key) for key in ("min_deg", "max_deg", "range_deg")
-            }
+        if not isinstance(value, dict) or not (isinstance(iv, dict) or name in withheld):
+            continue
+        iv = iv if isinstance(iv, dict) else {}
+        angles[name] = (
+            {key: value.get(key) for key in ("min_deg", "max_deg", "range_deg")}
+            | {f"{key[:-4]}_ci95": iv.get(key) for key in ("min_deg", "max_deg", "range_deg")}
+            | {"withheld": withheld.get(name)}
+        )
     reps = doc.get("repetitions_95")
-    return {"angles": angles, "repetitions": reps if isinstance(reps, dict) else None}
+    end = doc.get("peak_end") if doc.get("peak_end") in ("min", "max") else "max"
+    return {"angles": angles, "repetitions": reps if isinstance(reps, dict) else None, "peak_end": end}

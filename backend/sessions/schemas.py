@@ -328,6 +328,10 @@ class AngleUncertaintyOut(BaseModel):
     min_ci95: list[float] | None = Field(description="95 % interval [low, high] of min_deg; null: none")
     max_ci95: list[float] | None = Field(description="95 % interval of max_deg", examples=[[108.3, 154.1]])
     range_ci95: list[float] | None = Field(description="95 % interval of range_deg", examples=[[96.0, 140.8]])
+    withheld: str | None = Field(
+        default=None,
+        description="why the intervals are not shown (poor tracking, undefined, too wide); null: shown",
+    )
 
 
 class CountIntervalOut(BaseModel):
@@ -343,6 +347,10 @@ class UncertaintyOut(BaseModel):
 
     angles: dict[str, AngleUncertaintyOut] = Field(description="by angle name (every angle with an interval)")
     repetitions: CountIntervalOut | None = Field(description="interval of the repetition count")
+    peak_end: str = Field(
+        default="max",
+        description="'max' or 'min': the end of the defining angle's range its repetitions peak at (the peak angle)",
+    )
 
 
 class RecordedWithOut(BaseModel):

@@ -29,11 +29,15 @@
   /** Returns "a–b° (95 %)" for an interval [a, b], or null. */
   const ci = (iv) => (iv ? `${iv[0].toFixed(0)}–${iv[1].toFixed(0)}° (95 %)` : null);
 
-  /** Returns the stats of the defining angle's full range and peak with their 95 % intervals (none without). */
+  /** Returns the stats of the defining angle's full range and peak (the end its repetitions reach, as in the
+      repetition table) with their 95 % intervals, or the reason they are withheld. */
   function intervalStats(d) {
     const a = d.uncertainty && d.defining_angle ? d.uncertainty.angles[d.defining_angle] : null;
     if (!a) return [];
-    return [...stat("Full range", deg(a.range_deg), ci(a.range_ci95)), ...stat("Peak angle", deg(a.max_deg), ci(a.max_ci95))];
+    const low = d.uncertainty.peak_end === "min";
+    const peak = low ? a.min_deg : a.max_deg, peakCi = low ? a.min_ci95 : a.max_ci95;
+    const note = (iv) => (a.withheld ? `no interval: ${a.withheld}` : ci(iv));
+    return [...stat("Full range", deg(a.range_deg), note(a.range_ci95)), ...stat("Peak angle", deg(peak), note(peakCi))];
   }
 
   /** Returns the balance stat: sway velocity in cm/s with its 95 % interval, or why it is not measured. */

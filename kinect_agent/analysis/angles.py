@@ -1,16 +1,26 @@
-"""Angles the analysis counts repetitions on: the agent's clinical angles, with the hip's planar angles made robust.
+"""The angles the analysis measures, and those it counts repetitions on.
 
-The agent's hip_flexion and hip_abduction (kinect_agent.body.angles) project the thigh on one anatomical
-plane. On real Kinect data the legs are mistracked at the top of a high knee lift (UI-PRMD hurdle step and leg
-raise: the thigh reads as pointing up and backwards for a few frames) and the projection then jumps by 150-250°,
-splitting or hiding repetitions. For the hip angles the analysis counts instead the thigh's elevation: the 3-D
-angle between the thigh HIP→KNE and the trunk's down direction (−up of angles.body_frame), in [0, 180] degrees and
-continuous; it equals |planar angle| while the thigh moves in its plane. Its sign is the sign of the planar
-angle's median over the frames where the thigh is raised more than 20°. The shoulder angles stay planar: there
-the elevation would count the idle arm's sideways drift (UI-PRMD shoulder extension), the plane does not.
+Measured angles (measured_angles): the agent's clinical angles (kinect_agent.body.angles.joint_angles, each
+in its DOMAIN_DEG) of the positions gap-filled and smoothed by series.smooth_positions. They are the one
+definition behind every number of a session: range of motion and its intervals, the key numbers, the curves of
+the session page and the exported angle tables.
+
+Counting angles (counting_angles): the measured angles, except the hip angles, which the counter reads as the thigh's
+elevation (signed). On real Kinect data the legs are mistracked at the top of a high knee lift (UI-PRMD hurdle step
+and leg raise: the thigh reads as pointing up and backwards for a few frames) and the sagittal projection then jumps,
+splitting or hiding repetitions. The elevation is the 3-D angle between the thigh HIP→KNE and the trunk's down
+direction (−up of angles.body_frame), in [0, 180] degrees and continuous; it equals |hip flexion| (|hip abduction|)
+while the thigh moves in the sagittal (frontal) plane. Its sign is the sign of the measured angle's median over the
+frames where the thigh is raised more than 20°. The counter's signal only: the repetitions' peaks are reported on the
+measured angles (backend.analysis.report.measured_peak). The shoulder angles stay planar: there the elevation would
+count the idle arm's sideways drift (UI-PRMD shoulder extension), the plane does not; they are counted also where the
+arm is out of their plane (joint_angles(mask_off_plane=False)), where the measured angle is undefined: filling those
+frames by interpolation changed the idle arm's drift and the count (UI-PRMD m08 s01 raw: 17 instead of 10).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -24,6 +34,26 @@ _PLANAR_LIMBS = {
     "hip_abduction": ("HIP", "KNE"),
 }
 RAISED_DEG = 20.0
+_CONTINUOUS = ("shoulder_flexion", "shoulder_abduction")  # counted on their planar angle, unmasked
+
+
+@dataclass(frozen=True)
+class Measured:
+    """The positions a session is measured on and their clinical angles.
+
+    positions: (T, J, 3) float, metres, camera frame, gap-filled and smoothed (series.smooth_positions); angles:
+    {name: (T,) degrees} for every name of ANGLE_NAMES (joint_angles of those positions); up: (T, 3) the trunk's
+    up direction (angles.body_frame)."""
+
+    positions: np.ndarray
+    angles: dict[str, np.ndarray]
+    up: np.ndarray
+
+
+def measured_angles(t: np.ndarray, positions: np.ndarray) -> Measured:
+    """Returns the Measured angles of positions: (T, J, 3) m, camera frame, NaN = untracked, at times t: (T,) s."""
+    smoothed = series.smooth_positions(t, positions)
+    return Measured(smoothed, joint_angles(smoothed), body_frame(smoothed)[0])
 
 
 def elevation(positions: np.ndarray, proximal: str, distal: str, up: np.ndarray | None = None) -> np.ndarray:
@@ -55,13 +85,16 @@ def counting_angles(
     if positions.ndim != 3 or positions.shape[1:] != (len(INDEX), 3):
         raise ValueError(f"positions must have shape (T, {len(INDEX)}, 3), got {positions.shape}")
     clinical = joint_angles(positions) if clinical is None else clinical
+    unknown = [name for name in names if name not in clinical]
+    if unknown:
+        raise ValueError(f"unknown angle {unknown[0]!r}; known angles: {', '.join(clinical)}")
+    shoulders = [name for name in names if name.startswith(_CONTINUOUS)]
+    continuous = joint_angles(positions, mask_off_plane=False) if shoulders else {}
     out: dict[str, np.ndarray] = {}
     for name in names:
-        if name not in clinical:
-            raise ValueError(f"unknown angle {name!r}; known angles: {', '.join(clinical)}")
         prefix, side = name[:-2], name[-1]
         if prefix not in _PLANAR_LIMBS:
-            out[name] = clinical[name]
+            out[name] = continuous.get(name, clinical[name])
             continue
         proximal, distal = (f"{j}_{side}" for j in _PLANAR_LIMBS[prefix])
         elev = elevation(positions, proximal, distal, up)

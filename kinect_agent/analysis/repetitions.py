@@ -86,11 +86,12 @@ class Repetition:
     amplitude_deg: float
     peak_deg: float
     side: str
+    peak_s: float = 0.0  # time of the peak, seconds from the recording's first frame
 
     def to_dict(self) -> dict[str, object]:
         """Returns the JSON-ready form (floats rounded to 1 ms and 0.1°)."""
         d = asdict(self)
-        for key in ("start_s", "end_s", "duration_s"):
+        for key in ("start_s", "end_s", "duration_s", "peak_s"):
             d[key] = round(d[key], 3)
         for key in ("amplitude_deg", "peak_deg"):
             d[key] = round(d[key], 1)
@@ -598,6 +599,7 @@ def count_repetitions(
             amplitude_deg=ev.amplitude,
             peak_deg=ev.peak_deg,
             side=ev.side,
+            peak_s=float(t[ev.peak] - t0),
         )
         for i, ev in enumerate(merged)
     ]

@@ -1,12 +1,13 @@
-"""Conditioning of one angle series before it is measured: gap filling, unwrapping, spike removal, smoothing.
+"""Conditioning of one angle series before it is measured: gap filling, spike removal, smoothing.
 
 A series x: (T,) float, degrees, NaN where untracked, sampled at times t: (T,) s (strictly increasing, nearly
 uniform; kernel widths use the median frame interval). Steps, in order:
     1. gaps (NaN) are filled by linear interpolation in time (edges hold the nearest value);
-    2. the series is unwrapped with period 360° (angles from atan2 jump from +180 to −180) and shifted by a whole
-       number of turns so that its median lies in (−180, 180];
-    3. a running median over median_s seconds removes spikes shorter than half that window;
-    4. a Gaussian of SD smooth_s seconds removes jitter (zero phase, so peaks stay in place).
+    2. a running median over median_s seconds removes spikes shorter than half that window;
+    3. a Gaussian of SD smooth_s seconds removes jitter (zero phase, so peaks stay in place).
+Angles are not unwrapped: each comes in its domain (kinect_agent.body.angles.DOMAIN_DEG), whose seam lies
+where no limb goes, and every step above keeps a series inside the interval its samples span. Unwrapping turned a
+mistracked jump across a seam into whole extra turns (a UI-PRMD sit-to-stand's shoulder flexion read 1319°).
 """
 
 from __future__ import annotations
@@ -34,21 +35,10 @@ def fill_gaps(t: np.ndarray, x: np.ndarray) -> np.ndarray:
     return np.interp(t, t[finite], x[finite])
 
 
-def unwrap_deg(x: np.ndarray) -> np.ndarray:
-    """Returns x: (T,) degrees, without 360° jumps, shifted by whole turns so its median is in (−180, 180]."""
-    if x.shape[0] == 0 or not np.all(np.isfinite(x)):
-        return x
-    u = np.unwrap(x, period=360.0)
-    turns = np.ceil((np.median(u) - 180.0) / 360.0)
-    return u - 360.0 * turns
+def smooth(t: np.ndarray, x: np.ndarray, *, median_s: float = MEDIAN_S, smooth_s: float = SMOOTH_S) -> np.ndarray:
+    """Returns the conditioned series (steps 1-3 above) of x: (T,) degrees at times t: (T,) s; NaN if x is all NaN.
 
-
-def smooth(
-    t: np.ndarray, x: np.ndarray, *, median_s: float = MEDIAN_S, smooth_s: float = SMOOTH_S, angle: bool = True
-) -> np.ndarray:
-    """Returns the conditioned series (steps 1-4 above) of x: (T,) degrees at times t: (T,) s; NaN if x is all NaN.
-
-    angle=False skips step 2 (for series that are not angles, e.g. heights in metres).
+    Series that are not angles (heights in metres) are conditioned alike.
     Raises ValueError when t and x differ in shape.
     """
     t = np.asarray(t, dtype=np.float64)
@@ -56,7 +46,6 @@ def smooth(
     if t.ndim != 1 or x.shape != t.shape:
         raise ValueError(f"t and x must both have shape (T,), got {t.shape} and {x.shape}")
     y = fill_gaps(t, x)
-    y = unwrap_deg(y) if angle else y
     if y.shape[0] < 3 or not np.all(np.isfinite(y)):
         return y
     dt = frame_interval(t)
@@ -103,7 +92,7 @@ def norm3(v: np.ndarray) -> np.ndarray:
 
 
 def smooth_columns(
-    t: np.ndarray, x: np.ndarray, *, angle: bool = True, median_s: float = MEDIAN_S, smooth_s: float = SMOOTH_S
+    t: np.ndarray, x: np.ndarray, *, median_s: float = MEDIAN_S, smooth_s: float = SMOOTH_S
 ) -> np.ndarray:
     """Returns smooth() applied to every column of x: (T, K) at times t: (T,) s, in one pass per step.
 
@@ -119,9 +108,6 @@ def smooth_columns(
     if y.shape[0] < 3 or not ok.any():
         return y
     z = y[:, ok]
-    if angle:
-        z = np.unwrap(z, period=360.0, axis=0)
-        z -= 360.0 * np.ceil((np.median(z, axis=0) - 180.0) / 360.0)
     dt = frame_interval(t)
     size = max(1, int(round(median_s / dt)) | 1) if median_s > 0 else 1
     if size > 1:

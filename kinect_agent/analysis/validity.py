@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from kinect_agent.processing.angles import ANGLE_NAMES, body_frame
+from kinect_agent.body.angles import ANGLE_NAMES, body_frame
 
 MONOCULAR_DEVICES = ("webcam",)
 VIEWS = ("front", "side", "oblique", "unknown")

@@ -20,7 +20,19 @@ Conventions (0 = anatomical neutral, standing with arms hanging and legs straigh
                            up (external rotation with abducted arm), -90 down; NaN-free only when
                            the elbow is bent
     hip_flexion_L/R     thigh KNE-HIP in the sagittal plane: atan2(fwd, -up); 90 seated
-    hip_abduction_L/R   thigh in the frontal plane: atan2(out, -up)
+    hip_abduction_L/R   thigh out of the sagittal plane: arcsin(thigh (unit) . out); the frontal-plane angle
+                        atan2(out, -up) while the thigh moves in that plane, but, unlike it, blind to hip flexion
+                        (a thigh pointing forward in a squat projects to a point on the frontal plane and read
+                        90-150° there)
+
+Domains (DOMAIN_DEG). Every angle lies in the interval its definition allows, and the planar angles, which come
+from atan2, are wrapped into [PLANAR_SEAM_DEG, PLANAR_SEAM_DEG + 360) with the seam at −120°: a limb pointing
+backwards and 30° above the horizontal, a direction no shoulder or hip reaches (extension ends near −60° and
+−30°), so an arm raised overhead reads 180° ± its sway and never jumps to −180°. Nothing downstream unwraps
+(series), so a smoothed or percentile value stays in the domain too. A planar angle is NaN (undefined) in a
+frame where its limb lies more than 60° out of the angle's plane (the in-plane part below PLANE_MIN_FRACTION of
+the limb's length): there the projection is dominated by noise and read anything (shoulder flexion during a
+shoulder abduction swept 700°).
     trunk_flexion       angle between NECK-ROOT and the world vertical +y; 0 upright
     trunk_lateral_flexion  tilt of the trunk towards the subject's left hip (+) or right hip (−):
                            arcsin of NECK-ROOT (unit) along the HIP_R->HIP_L direction
@@ -39,6 +51,27 @@ ANGLE_NAMES: tuple[str, ...] = (
     "hip_flexion_L", "hip_flexion_R", "hip_abduction_L", "hip_abduction_R",
     "trunk_flexion", "trunk_lateral_flexion",
 )  # fmt: skip
+
+
+PLANAR_SEAM_DEG = -120.0
+PLANE_MIN_FRACTION = 0.5  # a planar angle needs this much of its limb in its plane (within 60° of it)
+_PLANAR = (PLANAR_SEAM_DEG, PLANAR_SEAM_DEG + 360.0)
+# (low, high) degrees each angle can take by its definition (high excluded for the planar angles).
+DOMAIN_DEG: dict[str, tuple[float, float]] = {
+    **{f"{n}_{s}": (0.0, 180.0) for n in ("elbow_flexion", "knee_flexion") for s in "LR"},
+    **{f"{n}_{s}": _PLANAR for n in ("shoulder_flexion", "shoulder_abduction", "hip_flexion") for s in "LR"},
+    **{f"shoulder_rotation_{s}": (-180.0, 180.0) for s in "LR"},
+    **{f"hip_abduction_{s}": (-90.0, 90.0) for s in "LR"},
+    "trunk_flexion": (0.0, 180.0),
+    "trunk_lateral_flexion": (-90.0, 90.0),
+}
+
+
+def in_domain(name: str, deg: np.ndarray, tol: float = 1e-6) -> np.ndarray:
+    """Returns (...,) bool: where deg (degrees) lies in DOMAIN_DEG[name] (NaN counts as inside: undefined)."""
+    lo, hi = DOMAIN_DEG[name]
+    deg = np.asarray(deg, dtype=np.float64)
+    return ~((deg < lo - tol) | (deg > hi + tol))
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -67,19 +100,34 @@ def _inner_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
-def _plane_angle(v: np.ndarray, up: np.ndarray, axis: np.ndarray) -> np.ndarray:
-    """Angle in degrees of v projected on the plane (−up, axis): 0 along −up, +90 along axis.
-
-    Meaningful when v moves near that plane (the plane of the exercise); a limb pointing straight
-    along the third axis projects to a point and reads 0.
-    """
+def _plane_angle(v: np.ndarray, up: np.ndarray, axis: np.ndarray, mask: bool = True) -> np.ndarray:
+    """Angle in degrees of v projected on the plane (−up, axis): 0 along −up, +90 along axis, wrapped into
+    [PLANAR_SEAM_DEG, PLANAR_SEAM_DEG + 360); with mask, NaN where less than PLANE_MIN_FRACTION of v lies in that
+    plane."""
     down = -np.sum(v * up, axis=-1) + 0.0  # + 0.0 turns -0.0 into 0.0 so atan2(0, 0) reads 0, not 180
-    return np.degrees(np.arctan2(np.sum(v * axis, axis=-1), down))
+    along = np.sum(v * axis, axis=-1)
+    deg = np.degrees(np.arctan2(along, down))
+    deg = PLANAR_SEAM_DEG + np.mod(deg - PLANAR_SEAM_DEG, 360.0)
+    if not mask:
+        return deg
+    with np.errstate(invalid="ignore"):
+        off_plane = np.hypot(down, along) < PLANE_MIN_FRACTION * np.linalg.norm(v, axis=-1)
+    return np.where(off_plane, np.nan, deg)
 
 
-def joint_angles(positions: np.ndarray) -> dict[str, np.ndarray]:
-    """Returns every angle of ANGLE_NAMES, each (...,) degrees, for positions (..., J, 3) m."""
+def _out_of_plane(v: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """Angle in degrees between v and the plane whose unit normal is `normal`, signed towards it: [−90, 90]."""
+    return np.degrees(np.arcsin(np.clip(np.sum(_unit(v) * normal, axis=-1), -1.0, 1.0)))
+
+
+def joint_angles(positions: np.ndarray, *, mask_off_plane: bool = True) -> dict[str, np.ndarray]:
+    """Returns every angle of ANGLE_NAMES, each (...,) degrees in its DOMAIN_DEG (NaN: undefined or untracked),
+    for positions (..., J, 3) m.
+
+    mask_off_plane=False keeps the planar angles where their limb is out of their plane (the repetition counter's
+    continuous signal, analysis.angles.counting_angles; not a clinical number)."""
     p = np.asarray(positions, dtype=np.float64)
+    m = mask_off_plane
     up, left, forward = body_frame(p)
     out: dict[str, np.ndarray] = {}
     for side, outward in (("L", left), ("R", -left)):
@@ -88,11 +136,11 @@ def joint_angles(positions: np.ndarray) -> dict[str, np.ndarray]:
         upper, fore, thigh = elb - sho, wri - elb, kne - hip
         out[f"elbow_flexion_{side}"] = 180.0 - _inner_angle(sho - elb, wri - elb)
         out[f"knee_flexion_{side}"] = 180.0 - _inner_angle(hip - kne, ank - kne)
-        out[f"shoulder_flexion_{side}"] = _plane_angle(upper, up, forward)
-        out[f"shoulder_abduction_{side}"] = _plane_angle(upper, up, outward)
+        out[f"shoulder_flexion_{side}"] = _plane_angle(upper, up, forward, m)
+        out[f"shoulder_abduction_{side}"] = _plane_angle(upper, up, outward, m)
         out[f"shoulder_rotation_{side}"] = _rotation_about(upper, fore, forward, up)
-        out[f"hip_flexion_{side}"] = _plane_angle(thigh, up, forward)
-        out[f"hip_abduction_{side}"] = _plane_angle(thigh, up, outward)
+        out[f"hip_flexion_{side}"] = _plane_angle(thigh, up, forward, m)
+        out[f"hip_abduction_{side}"] = _out_of_plane(thigh, outward)
     trunk = _unit(_joint(p, "NECK") - _joint(p, "ROOT"))
     vertical = np.array([0.0, 1.0, 0.0])
     out["trunk_flexion"] = _inner_angle(trunk, np.broadcast_to(vertical, trunk.shape))

@@ -66,7 +66,7 @@ def csv_zip(payload: SessionPayload, document: dict[str, Any] | None) -> bytes:
     members["recording.csv"] = tables.recording_csv(recorded_with(meta.device, meta.extra), meta.rate_hz)
     members["angles_raw.csv"] = tables.angles_csv(payload.raw)
     if payload.filtered is not None:
-        members["angles_filtered.csv"] = tables.angles_csv(payload.filtered)
+        members["angles_filtered.csv"] = tables.angles_csv(payload.filtered, measured=True)
     return _zip(members)
 
 

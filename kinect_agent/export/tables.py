@@ -5,7 +5,10 @@ Every table is comma-separated UTF-8 with a header row, numbers with a dot, empt
                       range of motion of every angle (min, max, range) and the four indicators (score, value).
     repetitions.csv   one row per repetition of the analysis document's repetition_list (its keys as columns).
     angles_raw.csv, angles_filtered.csv   time_s then every clinical angle (body.angles.ANGLE_NAMES) in
-                      degrees, one row per frame of the raw / filtered recording.
+                      degrees, one row per frame: of the raw recording frame by frame (the session page's raw
+                      curves), and of the filtered recording as the analysis measures it (analysis.angles.
+                      measured_angles, the session page's filtered curves and the range of motion); empty where
+                      an angle is undefined.
 The metrics and repetitions come from the server's analysis document (backend.analysis.report.analyze_recording
 plus "indicators"); the angles from the session file itself.
 """
@@ -18,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from kinect_agent.analysis.angles import measured_angles
 from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.recording import Recording
 
@@ -89,9 +93,11 @@ def repetitions_csv(document: dict[str, Any]) -> str:
     return _text([["repetition", *keys], *[[i + 1, *[rep.get(k) for k in keys]] for i, rep in enumerate(reps)]])
 
 
-def angles_csv(recording: Recording) -> str:
-    """Returns time_s and every clinical angle (degrees, 0.01°) per frame of a recording; time from the first frame."""
-    angles = joint_angles(recording.positions)
+def angles_csv(recording: Recording, *, measured: bool = False) -> str:
+    """Returns time_s and every clinical angle (degrees, 0.01°) per frame of a recording; time from the first frame.
+
+    measured: the angles as the analysis measures them (gap-filled, smoothed positions), else frame by frame."""
+    angles = measured_angles(recording.t, recording.positions).angles if measured else joint_angles(recording.positions)
     t = recording.t - recording.t[0]
     columns = [np.round(t, 6)] + [np.round(angles[name], 2) for name in ANGLE_NAMES]
     header = ["time_s", *[f"{name}_deg" for name in ANGLE_NAMES]]

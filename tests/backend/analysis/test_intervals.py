@@ -35,6 +35,7 @@ def _expected_b(x: np.ndarray, name: str, yaw_deg: float) -> tuple[float, float,
 @pytest.mark.parametrize("yaw", (0.0, 30.0, 60.0))
 def test_widths_follow_the_per_frame_sd_and_the_systematic_part(seed, yaw):
     t, x = _sine(seed)
+    x = x - 60.0  # ±40°, inside the angle's domain (±90°)
     sd = np.full_like(t, 2.0)
     name = "trunk_lateral_flexion"  # B = (6.2, 2.5, 0.0)
     iv = intervals.angle_intervals(t, x, sd, name, yaw_deg=yaw)
@@ -114,7 +115,8 @@ def test_camera_yaw_without_shoulders_and_bad_shapes():
     angles = {"knee_flexion_L": 20 + 10 * np.sin(t)}
     sd = {"knee_flexion_L": np.ones_like(t)}
     side_on = intervals.angle_intervals(t, angles["knee_flexion_L"], sd["knee_flexion_L"], "knee_flexion_L", yaw_deg=90)
-    assert intervals.rom_intervals(t, angles, sd, p) == {"knee_flexion_L": side_on}  # unknown yaw: side on, widest
+    shown = intervals.rom_intervals(t, angles, sd, p)
+    assert shown.intervals == {"knee_flexion_L": side_on} and shown.withheld == {}  # unknown yaw: side on, widest
     with pytest.raises(ValueError, match="positions"):
         intervals.camera_yaw(p[:, :10])
 
@@ -156,3 +158,32 @@ def test_the_count_interval_holds_the_true_count_of_a_clean_session(seed):
     assert ci.low <= 6 <= ci.high, f"seed {seed}: {ci}"
     assert ci.high - ci.low <= 2, f"seed {seed}: {ci}"
     assert ci.to_dict()["ambiguous"] == (ci.low != ci.high)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_intervals_stay_in_the_domain_and_consistent(seed):
+    """A knee that straightens fully and bends to 175°, with SDs of 15°: no end leaves 0-180°, the range stays
+    below what its ends allow."""
+    t = np.arange(600) / 30.0
+    rng = np.random.default_rng(seed)
+    x = np.clip(87.5 + 90.0 * np.sin(2 * np.pi * t / 4.0 + rng.uniform(0, 6)), 0.0, 175.0)
+    iv = intervals.angle_intervals(t, x, np.full_like(t, 15.0), "knee_flexion_L", yaw_deg=30.0)
+    (a, b), (c, d), (e, f) = iv["min_deg"], iv["max_deg"], iv["range_deg"]
+    assert 0.0 <= a <= b <= d <= 180.0 and a <= c <= d, f"seed {seed}: {iv}"
+    assert 0.0 <= e <= f <= d - a, f"seed {seed}: {iv}"
+
+
+def test_withheld_intervals_say_why():
+    t, x = _sine(1)
+    sd = np.ones_like(t)
+    name = "knee_flexion_L"
+    iv = intervals.angle_intervals(t, x, sd, name, yaw_deg=0.0)
+    assert intervals.withheld_reason(name, x, iv) is None
+    wide = intervals.angle_intervals(t, x, np.full_like(t, 30.0), name, yaw_deg=0.0)
+    assert "too uncertain" in intervals.withheld_reason(name, x, wide)
+    assert "tracked in only 50%" in intervals.withheld_reason(name, x, iv, tracked_fraction=0.5)
+    gappy = np.where(np.arange(t.size) % 3 == 0, x, np.nan)
+    assert "defined in only 33%" in intervals.withheld_reason(name, gappy, iv)
+    assert "undefined while the elbow is straight" in intervals.withheld_reason("shoulder_rotation_L", x, None)
+    shown = intervals.rom_intervals(t, {name: x}, {name: np.full_like(t, 30.0)}, np.full((t.size, 20, 3), np.nan))
+    assert shown.intervals == {name: None} and "too uncertain" in shown.withheld[name]

@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from backend.analysis.range_of_motion import range_of_motion
+from kinect_agent.body.angles import joint_angles
+from kinect_agent.skeleton import INDEX
 
 
 def test_known_sine_range(rng: np.random.Generator) -> None:
@@ -14,12 +16,20 @@ def test_known_sine_range(rng: np.random.Generator) -> None:
     assert abs(rom["min_deg"] - 10) < 3 and abs(rom["max_deg"] - 90) < 3 and abs(rom["range_deg"] - 80) < 5
 
 
-def test_angle_wrapping_at_180_is_not_a_360_degree_range() -> None:
+def test_an_arm_swinging_overhead_through_180_has_its_true_range() -> None:
+    """The arm swings 150-190° in the frontal plane (atan2 passes ±180°): the angle stays in its domain."""
     t = np.arange(300) / 30.0
-    x = 170 + 20 * np.sin(2 * np.pi * t / 5.0)  # crosses +180 -> reads -170..-180
-    wrapped = (x + 180) % 360 - 180
-    rom = range_of_motion(t, {"shoulder_abduction_L": wrapped})["shoulder_abduction_L"]
-    assert abs(rom["range_deg"] - 40) < 2
+    theta = np.radians(170 + 20 * np.sin(2 * np.pi * t / 5.0))
+    p = np.zeros((t.size, len(INDEX), 3))
+    p[:, INDEX["NECK"]] = [0.0, 0.5, 0.0]
+    p[:, INDEX["SHO_L"]], p[:, INDEX["SHO_R"]] = [0.2, 0.45, 0.0], [-0.2, 0.45, 0.0]
+    p[:, INDEX["ELB_L"]] = np.array([0.2, 0.45, 0.0]) + 0.3 * np.stack(
+        [np.sin(theta), -np.cos(theta), np.zeros_like(theta)], axis=1
+    )
+    angle = joint_angles(p)["shoulder_abduction_L"]
+    assert np.all((angle >= 145) & (angle <= 195))
+    rom = range_of_motion(t, {"shoulder_abduction_L": angle})["shoulder_abduction_L"]
+    assert abs(rom["range_deg"] - 40) < 2 and 185 < rom["max_deg"] < 191
 
 
 def test_untracked_angle_reads_none() -> None:

@@ -25,9 +25,9 @@ CONTRACT_KEYS = {
     "exercise", "duration_s", "n_frames", "rate_hz", "repetitions", "repetition_list", "defining_angle",
     "range_of_motion", "rom_deg", "most_moving_joints", "reachable_range", "moving_time_s", "rest_time_s",
     "tempo_s_per_rep", "fatigue", "balance", "balance_missing", "sit_to_stand", "quality", "range_of_motion_95",
-    "repetitions_95",
+    "repetitions_95", "range_of_motion_95_withheld", "peak_end",
 }  # fmt: skip
-REP_KEYS = {"index", "start_s", "end_s", "duration_s", "amplitude_deg", "peak_deg", "side"}
+REP_KEYS = {"index", "start_s", "end_s", "duration_s", "amplitude_deg", "peak_deg", "side", "peak_s"}
 
 
 def test_document_has_every_contract_key_and_is_json() -> None:
@@ -44,7 +44,7 @@ def test_document_has_every_contract_key_and_is_json() -> None:
 def test_standing_session_fills_every_metric() -> None:
     doc = analyze_recording(simulate_truth("shoulder_abduction", 5, seed=2), EXERCISES["shoulder_abduction"])
     # the intervals need the agent's angle SDs; balance_missing is None when balance is measured
-    no_sd = {"sit_to_stand", "range_of_motion_95", "repetitions_95", "balance_missing"}
+    no_sd = {"sit_to_stand", "range_of_motion_95", "range_of_motion_95_withheld", "repetitions_95", "balance_missing"}
     assert all(doc[k] is not None for k in CONTRACT_KEYS - no_sd), [k for k in doc if doc[k] is None]
     assert doc["most_moving_joints"][0]["joint"] in ("HAN_L", "HAN_R")
     assert doc["moving_time_s"] + doc["rest_time_s"] == pytest.approx(doc["duration_s"], abs=0.02)

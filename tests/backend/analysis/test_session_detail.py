@@ -19,10 +19,9 @@ from backend.analysis.session_detail import (
     measured_angles,
     minmax_indices,
     peak_speeds,
-    unwrap_finite,
-    wrap_near,
 )
 from backend.exercises.library import EXERCISES
+from kinect_agent.body.angles import DOMAIN_DEG
 from tests.backend.analysis._data import noisy, uiprmd
 
 SEEDS = (1, 2, 3)
@@ -57,15 +56,19 @@ def test_curve_rounds_and_sends_nan_as_none() -> None:
     assert out == {"t_s": [0.0, 0.033, 0.067], "deg": [1.2, None, 3.0]}
 
 
-def test_unwrap_removes_turns_across_gaps_and_keeps_them() -> None:
-    x = np.array([170.0, 179.0, -178.0, np.nan, -170.0, 175.0])
-    np.testing.assert_allclose(unwrap_finite(x), [170.0, 179.0, 182.0, np.nan, 190.0, 175.0])
-
-
-def test_wrap_near_puts_a_noisy_raw_sample_next_to_the_smooth_curve() -> None:
-    reference = np.array([170.0, 185.0, 200.0, np.nan])
-    raw = np.array([-175.0, 170.0, -150.0, -150.0])  # -175 = 185, -150 = 210
-    np.testing.assert_allclose(wrap_near(raw, reference), [185.0, 170.0, 210.0, -150.0])
+@pytest.mark.parametrize("seed", SEEDS)
+def test_curves_of_an_arm_held_overhead_stay_in_the_domain_without_a_turn(seed: int) -> None:
+    measured, truth = noisy("shoulder_flexion", 3, seed)
+    names = ("shoulder_flexion_L", "shoulder_flexion_R")
+    measured_deg = measured_angles(truth.t, truth.positions, names)
+    curves = angle_curves(measured.t, measured.positions, measured_deg, names)
+    for c in curves:
+        deg = np.array(c["deg"], dtype=float)
+        deg = deg[np.isfinite(deg)]
+        lo, hi = DOMAIN_DEG[c["angle"]]
+        assert deg.size and np.all((deg >= lo) & (deg < hi)), f"seed {seed}: {c['label']} leaves [{lo}, {hi})"
+    moving = np.array(curves[1]["deg"], dtype=float)  # the filtered curve of the moving (left) arm
+    assert np.nanmax(moving) > 150 and np.nanmax(np.abs(np.diff(moving))) < 30, f"seed {seed}: no jump overhead"
 
 
 def test_angle_label_is_in_words() -> None:

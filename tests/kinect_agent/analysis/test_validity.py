@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from kinect_agent.analysis.validity import angle_validity, session_validity, view_of
-from kinect_agent.processing.angles import ANGLE_NAMES
+from kinect_agent.body.angles import ANGLE_NAMES
 from kinect_agent.sources.simulator import simulate
 
 

@@ -8,6 +8,7 @@ import zipfile
 
 import numpy as np
 
+from kinect_agent.analysis.angles import measured_angles
 from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.export.files import export
 
@@ -40,10 +41,15 @@ def test_zip_holds_metrics_repetitions_and_both_angle_tables(squat_session):
 def test_angle_tables_match_the_angles_of_each_recording(squat_session):
     payload, doc = squat_session
     tables = _tables(export("csv", payload, document=doc).data)
-    for name, rec in (("angles_raw.csv", payload.raw), ("angles_filtered.csv", payload.filtered)):
+    filtered = payload.filtered
+    expected_of = {  # raw: frame by frame; filtered: as the analysis measures it (the range of motion's series)
+        "angles_raw.csv": joint_angles(payload.raw.positions),
+        "angles_filtered.csv": measured_angles(filtered.t, filtered.positions).angles,
+    }
+    for name, rec in (("angles_raw.csv", payload.raw), ("angles_filtered.csv", filtered)):
         rows = tables[name]
         assert len(rows) == rec.n_frames and list(rows[0]) == ["time_s", *[f"{a}_deg" for a in ANGLE_NAMES]]
-        expected = joint_angles(rec.positions)["knee_flexion_R"]
+        expected = expected_of[name]["knee_flexion_R"]
         got = np.array([float(r["knee_flexion_R_deg"]) if r["knee_flexion_R_deg"] else np.nan for r in rows])
         np.testing.assert_allclose(got, expected, atol=0.006, err_msg=name)
 
