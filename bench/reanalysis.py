@@ -3,7 +3,7 @@
     .venv/bin/python -m bench.reanalysis --database-url postgresql+psycopg://postgres@127.0.0.1:5432/bench_x \
         [--sessions 200] [--workers 1 2]
 
-Makes 4 distinct agent-made session files of 5 minutes (simulated shoulder abduction through the pipeline, raw +
+Makes --files (4) distinct agent-made 5-minute session files (simulated shoulder abduction through the pipeline, raw +
 filtered + angle SDs, as uploads hold), stores them in a local object store, and inserts N session rows pointing to
 them (round robin) with metrics documents of an older analysis version. Then, per worker count: queue every
 session (coach-server reanalyze) and time until the queue is empty; prints sessions per second and the peak RSS of
@@ -46,7 +46,7 @@ def _setup(url: str, store_dir: str, n: int, files: list[bytes]) -> None:
     from backend.exercises.models import Exercise
     from backend.exercises.service import sync_exercise_library
     from backend.jobs.models import Job
-    from backend.migrate import downgrade, upgrade
+    from backend.migrate import upgrade
     from backend.sessions.models import ExerciseSession, SessionMetric
     from backend.storage.local import LocalStore
     from backend.users.models import User
@@ -54,8 +54,12 @@ def _setup(url: str, store_dir: str, n: int, files: list[bytes]) -> None:
     store = LocalStore(store_dir)
     objs = [store.put("session", f) for f in files]
     engine = make_engine(url)
-    with engine.begin() as conn:
-        downgrade(conn, "base")
+    with engine.begin() as conn:  # a clean database each run (a downgrade would first move the files back)
+        if conn.dialect.name == "postgresql":
+            conn.exec_driver_sql("DROP SCHEMA public CASCADE")
+            conn.exec_driver_sql("CREATE SCHEMA public")
+        else:
+            raise SystemExit("use a PostgreSQL database (the bench empties its public schema)")
         upgrade(conn, "head")
     now = dt.datetime.now(dt.UTC)
     with Session(engine) as s, s.begin():
@@ -97,8 +101,9 @@ def main() -> None:
     ap.add_argument("--database-url", required=True)
     ap.add_argument("--sessions", type=int, default=200)
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--files", type=int, default=4, help="distinct session files the rows point to")
     args = ap.parse_args()
-    files = _files(4)
+    files = _files(args.files)
     print(f"session file: {len(files[0]) / 1e6:.2f} MB, {args.sessions} sessions", flush=True)
     with tempfile.TemporaryDirectory() as store_dir:
         for w in args.workers:
