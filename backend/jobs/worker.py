@@ -53,8 +53,9 @@ def work(*, sessionmaker, settings, name: str, once: bool = False, idle_s: float
 def main(args: argparse.Namespace) -> int:
     """Runs the worker until SIGTERM/SIGINT (the job in hand is finished first)."""
     from backend.config import get_settings
-    from backend.database import get_sessionmaker
+    from backend.database import get_sessionmaker, import_all_models
 
+    import_all_models()  # the job's queries join across every table's foreign keys
     stopping = []
     for sig in (signal.SIGTERM, signal.SIGINT):
         signal.signal(sig, lambda *_: stopping.append(True))
