@@ -11,7 +11,7 @@ import sqlalchemy as sa
 from alembic import op
 
 revision: str = "0011_voice_preference"
-down_revision: str | None = "0011_lang_user_locale"  # this branch merged lang; the integrator re-chains
+down_revision: str | None = "0012_records_jobs"
 branch_labels: str | Sequence[str] | None = None
 depends_on: str | Sequence[str] | None = None
 
