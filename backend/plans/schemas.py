@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 
 class PlanItemIn(BaseModel):
@@ -33,6 +33,14 @@ class PlanIn(BaseModel):
     start_date: dt.date = Field(examples=["2026-11-23"])
     end_date: dt.date | None = Field(default=None, examples=["2026-12-21"])
     items: list[PlanItemIn] = Field(default_factory=list, max_length=50)
+
+    @field_validator("start_date", "end_date", mode="before")
+    @classmethod
+    def _a_date_text(cls, value):
+        """Refuses numbers (pydantic would read 0 as 1970-01-01): a date is written as text, YYYY-MM-DD."""
+        if isinstance(value, int | float):
+            raise ValueError("must be a date written as text, YYYY-MM-DD (not a number)")
+        return value
 
     @model_validator(mode="after")
     def _dates_in_order(self) -> PlanIn:
