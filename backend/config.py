@@ -38,6 +38,8 @@ class Settings(BaseSettings):
     MAX_JSON_BYTES: int = Field(default=1024 * 1024, ge=1024)  # any other request body (JSON): 413 above it
     SESSION_MAX_FRAMES: int = 2 * 30 * 60 * 60  # per recording: two hours at 30 Hz (analysis of the most: ~1.5 s)
     SESSION_MAX_DECODED_BYTES: int = 128 * 1024 * 1024  # all recordings of one file, after decompression (268 B/frame)
+    # per recording: no home session lasts longer; with the frame limit it bounds the work one upload can cause
+    SESSION_MAX_DURATION_S: float = Field(default=2 * 60 * 60.0, gt=0)
     CHECK_MIGRATIONS: bool = True
     COOKIE_SECURE: bool | None = None  # None: secure when PUBLIC_URL is https, or ENVIRONMENT is not local
     # where people reach the app, e.g. https://coach.example.org/clinic behind a reverse proxy; its path is the

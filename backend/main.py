@@ -100,16 +100,19 @@ def _validation_detail(exc: RequestValidationError) -> str:
 
 def _allowed_methods(app: FastAPI, request: Request) -> list[str]:
     """Returns the methods the OpenAPI document gives the request's path (Starlette's Allow names only the first
-    matching route's), with OPTIONS, which the app answers for every path; empty for paths it does not list."""
+    matching route's), with OPTIONS, which the app answers for every path; empty for paths it does not list. A path
+    spelled out in the document (/devices/me) has its own methods only, not those of a template that would also
+    match it (/devices/{device_id})."""
     if not hasattr(app.state, "path_methods"):
         app.state.path_methods = [
-            (compile_path(path)[0], {method.upper() for method in operations})
+            (compile_path(path)[0], {method.upper() for method in operations}, "{" not in path)
             for path, operations in app.openapi().get("paths", {}).items()
         ]
-    methods = set()
-    for regex, found in app.state.path_methods:
-        if regex.match(request.url.path.removeprefix(request.scope.get("root_path", ""))):
-            methods |= found
+    path = request.url.path.removeprefix(request.scope.get("root_path", ""))
+    matches = [(found, literal) for regex, found, literal in app.state.path_methods if regex.match(path)]
+    if any(literal for _, literal in matches):
+        matches = [(found, literal) for found, literal in matches if literal]
+    methods = set().union(*(found for found, _ in matches))
     return sorted(methods | {"OPTIONS"}) if methods else []
 
 
@@ -143,6 +146,9 @@ def _install_error_handlers(app: FastAPI) -> None:
 
     @app.exception_handler(RequestValidationError)
     async def validation_error(request: Request, exc: RequestValidationError) -> Response:
+        allowed = _allowed_methods(app, request)
+        if allowed and request.method not in allowed:  # PATCH /users/me: a template's route took "me" for an id
+            return await http_error(request, StarletteHTTPException(405, "Method Not Allowed"))
         page = _page_for(app, request, 404) if request.method == "GET" else None
         if page is not None:  # a page address with a malformed id: no such page
             return page

@@ -96,6 +96,10 @@ def load_config(home: str | Path | None = None) -> AgentConfig:
         data = json.loads(text)
     except ValueError as exc:
         raise ConfigError(f"{path}: corrupt agent configuration (not JSON: {exc}); pair again to rewrite it") from None
+    except RecursionError:
+        raise ConfigError(
+            f"{path}: corrupt agent configuration (JSON nested too deeply); pair again to rewrite it"
+        ) from None
     return _from_dict(data, path)
 
 

@@ -21,6 +21,8 @@ from sqlalchemy import event, select
 from sqlalchemy import func as sa_func
 from sqlalchemy.orm import Session
 
+from backend.exceptions import AppError
+
 CHANNEL = "coach_events"
 _PENDING = "coach_events"  # key in Session.info: events waiting for the commit
 DATA_KINDS = ("session.stored", "suggestion.changed", "plan.changed")  # stored data changed
@@ -101,6 +103,15 @@ class Subscriber:
             self.queue.put_nowait(ev)
 
 
+MAX_STREAMS_PER_USER = 50  # open event streams of one user per server process (a closed page may linger 15 s)
+
+
+class TooManyStreams(AppError):
+    """The caller already has MAX_STREAMS_PER_USER event streams open on this server process."""
+
+    status_code = 429
+
+
 class Hub:
     """This process's fan-out of events to its subscribers; deliver() may be called from any thread."""
 
@@ -118,9 +129,13 @@ class Hub:
         token_id: int | None = None,
         device_id: int | None = None,
     ) -> Subscriber:
-        """Returns a new subscriber (call on the event loop that will read it)."""
+        """Returns a new subscriber (call on the event loop that will read it); raises TooManyStreams when user_id
+        already has MAX_STREAMS_PER_USER open here."""
         sub = Subscriber(patient_ids, kinds, user_id=user_id, login_id=login_id, token_id=token_id, device_id=device_id)
         with self._lock:
+            if user_id is not None and sum(s.user_id == user_id for s in self._subscribers) >= MAX_STREAMS_PER_USER:
+                raise TooManyStreams(f"at most {MAX_STREAMS_PER_USER} event streams may be open at once per user",
+                                     headers={"Retry-After": "5"})  # fmt: skip
             self._subscribers.add(sub)
         return sub
 

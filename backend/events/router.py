@@ -15,7 +15,7 @@ from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
 from backend.deps import Caller, DbSession, current_caller, optional_caller, require_patient_access
-from backend.events.hub import ACCESS_ENDED, DATA_KINDS, HUB, KINDS, SERVER_STOPPING, Subscriber
+from backend.events.hub import ACCESS_ENDED, DATA_KINDS, HUB, KINDS, SERVER_STOPPING, Subscriber, TooManyStreams
 from backend.exceptions import AUTH_ERRORS, PatientNotFound, error_responses
 from backend.patients.models import TherapistPatient
 from backend.schemas import IdQuery
@@ -51,7 +51,7 @@ def visible_patients(caller: Caller, db_session: Session, patient_id: int | None
             "plan.changed (and with live=true live.agent, live.command, live.progress); data: {kind, patient_id, "
             "data}",
         },  # fmt: skip
-        **error_responses(*AUTH_ERRORS, PatientNotFound),
+        **error_responses(*AUTH_ERRORS, PatientNotFound, TooManyStreams),
     },
 )
 async def stream_events(

@@ -48,6 +48,14 @@ class PlanIn(BaseModel):
             first[slug] = i
         return items
 
+    @field_validator("start_date", "end_date", mode="before")
+    @classmethod
+    def _a_date_text(cls, value):
+        """Refuses numbers (pydantic would read 0 as 1970-01-01): a date is written as text, YYYY-MM-DD."""
+        if isinstance(value, int | float):
+            raise ValueError("must be a date written as text, YYYY-MM-DD (not a number)")
+        return value
+
     @model_validator(mode="after")
     def _dates_in_order(self) -> PlanIn:
         if self.end_date is not None and self.end_date < self.start_date:

@@ -59,13 +59,19 @@ async def read_limited(chunks: AsyncIterator[bytes], limit: int) -> bytes:
     return b"".join(parts)
 
 
-def decode_upload(data: bytes, *, max_frames: int, max_decoded_bytes: int) -> Upload:
-    """Decodes and checks session file bytes; raises InvalidSessionFile '<code>: <message>' on any defect."""
+def decode_upload(
+    data: bytes, *, max_frames: int, max_decoded_bytes: int, max_duration_s: float | None = None
+) -> Upload:
+    """Decodes and checks session file bytes; raises InvalidSessionFile '<code>: <message>' on any defect, and for a
+    recording longer than max_duration_s seconds (None: no limit)."""
     try:
         payload = session_file.decode(data, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
     except SessionFileError as exc:
         raise InvalidSessionFile(f"{exc.code}: {exc.detail}") from None
     check_showable(payload)
+    if max_duration_s is not None and payload.raw.duration > max_duration_s:
+        raise InvalidSessionFile(f"too_long: the recording lasts {payload.raw.duration:.0f} s; a session lasts at "
+                                 f"most {max_duration_s:g} s (COACH_SESSION_MAX_DURATION_S)")  # fmt: skip
     return Upload(
         data=data,
         content_hash=session_file.content_hash(data),

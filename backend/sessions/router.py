@@ -151,7 +151,10 @@ def _ingest(
     data: bytes, *, caller: Caller, db_session: Session, patient_id: int, slug: str | None, settings
 ) -> tuple[SessionOut, bool]:
     upload = decode_upload(
-        data, max_frames=settings.SESSION_MAX_FRAMES, max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES
+        data,
+        max_frames=settings.SESSION_MAX_FRAMES,
+        max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES,
+        max_duration_s=settings.SESSION_MAX_DURATION_S,
     )
     slug = slug or upload.exercise_slug
     if not slug:

@@ -52,6 +52,7 @@ def test_missing_config_says_to_pair_first(home) -> None:
         ("[1, 2]", "expected a JSON object"),
         ('{"server_url": "http://h"}', "'device_token' must be"),
         ('{"server_url": "x", "device_token": "t", "queue_dir": "/q"}', "must look like https://"),
+        ("[" * 100_000 + "]" * 100_000, "nested too deeply"),  # was a RecursionError traceback
     ],
 )
 def test_corrupt_config_is_named(home, text, message) -> None:
