@@ -268,11 +268,13 @@ def replay_viewer(request: Request, caller: OptionalCaller) -> Response:
 
 
 def is_replay_recording(request: Request, query: str) -> bool:
-    """Returns whether a viewer query is exactly playbackPath=<the app's path of one session's replay>."""
+    """Returns whether a viewer query is exactly playbackPath=<the app's path of one session's replay>, optionally
+    of one of its skeletons (?layer=raw or ?layer=filtered: the replay page's checkboxes)."""
     pairs = parse_qsl(query, keep_blank_values=True)
     if len(pairs) != 1 or pairs[0][0] != "playbackPath":
         return False
-    return re.fullmatch(re.escape(_root(request)) + r"/api/v1/sessions/[1-9][0-9]{0,9}/replay", pairs[0][1]) is not None
+    path = re.escape(_root(request)) + r"/api/v1/sessions/[1-9][0-9]{0,9}/replay(\?layer=(raw|filtered))?"
+    return re.fullmatch(path, pairs[0][1]) is not None
 
 
 def _sign_in_first(request: Request) -> HTMLResponse:

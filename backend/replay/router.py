@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter, Request, Response
+from typing import Annotated, Literal
+
+from fastapi import APIRouter, Query, Request, Response
 
 from backend.audit.service import record
 from backend.deps import CurrentCaller, DbSession, require_patient_access
@@ -23,13 +25,22 @@ MEDIA_TYPE = "application/octet-stream"
         **error_responses(*AUTH_ERRORS, SessionNotFound, InvalidSessionFile),
     },
 )
-def read_replay(session_id: IdPath, request: Request, caller: CurrentCaller, db_session: DbSession):
-    """Returns the 3D replay of a session as a viser scene recording (built on first use, then kept)."""
+def read_replay(
+    session_id: IdPath,
+    request: Request,
+    caller: CurrentCaller,
+    db_session: DbSession,
+    layer: Annotated[
+        Literal["raw", "filtered"] | None, Query(description="one skeleton alone (default: both, raw and filtered)")
+    ] = None,
+):
+    """Returns the 3D replay of a session as a viser scene recording (built on first use, then kept; one skeleton
+    alone is built each time)."""
     patient_id = session_patient(db_session=db_session, session_id=session_id)
     require_patient_access(patient_id, caller=caller, db_session=db_session, hidden_as=missing(session_id))
     settings = request.app.state.settings
     data = service.replay_data(db_session=db_session, session_id=session_id, max_frames=settings.SESSION_MAX_FRAMES,
-                               max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
+                               max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES, layer=layer)  # fmt: skip
     record(db_session=db_session, caller=caller, action="session.replay.read", object_type="exercise_session",
            object_id=session_id, patient_id=patient_id)  # fmt: skip
     # identity: the recording is zstd inside already, so the gzip middleware leaves it alone

@@ -107,12 +107,16 @@ def frame_indices(t: np.ndarray, max_rate_hz: float = MAX_RATE_HZ) -> np.ndarray
     return np.arange(0, len(t), step)
 
 
-def build(payload: SessionPayload, plane: str) -> Replay:
+LAYERS = ("raw", "filtered")  # the skeletons a recording can hold
+
+
+def build(payload: SessionPayload, plane: str, layers: tuple[str, ...] = LAYERS) -> Replay:
     """Returns the replay recording of a decoded session file.
 
     plane: the exercise's plane of movement ("sagittal", "frontal", "transverse"); picks the default camera.
     The outlier marks come from the server's own settings on the frames work_budget.thinned keeps (the file's
     params["config"] is not obeyed), so the build's work is bounded by the recording's duration.
+    layers: the skeletons to show, of LAYERS (the replay page's two checkboxes); the camera is the same either way.
     """
     duration_s = payload.raw.duration if payload.raw.n_frames else 0.0
     payload = work_budget.thinned(payload)
@@ -131,14 +135,15 @@ def build(payload: SessionPayload, plane: str) -> Replay:
     t = raw.t - raw.t[0]
     keep = frame_indices(t)
     with _BUILD_LOCK:
-        data = _record(t, keep, raw_pos, filt_pos, flags, camera, look_at)
+        data = _record(t, keep, raw_pos if "raw" in layers else None,
+                       filt_pos if "filtered" in layers else None, flags, camera, look_at)  # fmt: skip
     return Replay(data=data, n_frames=len(keep), duration_s=float(duration_s), view=view)
 
 
 def _record(
     t: np.ndarray,
     keep: np.ndarray,
-    raw: np.ndarray,
+    raw: np.ndarray | None,
     filtered: np.ndarray | None,
     flags: np.ndarray,
     camera: tuple[float, ...],
@@ -146,7 +151,8 @@ def _record(
 ) -> bytes:
     """Plays the frames `keep` into a viser scene recording and returns its bytes.
 
-    t: (T,) s from the start. raw, filtered: (T, 20, 3) metres, ground frame, NaN = untracked. flags: (T, 20) bool.
+    t: (T,) s from the start. raw, filtered: (T, 20, 3) metres, ground frame, NaN = untracked; None: not shown.
+    flags: (T, 20) bool.
     """
     # viser 1.1.1 has no scene API without a server: this one listens on no socket (socketless.py)
     with socketless.recording_server() as server:
@@ -156,7 +162,7 @@ def _record(
         server.initial_camera.position = camera
         server.initial_camera.look_at = look_at
         scene.add_grid("/floor", width=4.0, height=4.0, plane="xz", cell_size=0.25, cell_color=(200, 200, 200))
-        skeletons = [_Skeleton(scene, "/raw", RAW_COLOR, raw, flags)]
+        skeletons = [_Skeleton(scene, "/raw", RAW_COLOR, raw, flags)] if raw is not None else []
         if filtered is not None:
             skeletons.append(_Skeleton(scene, "/filtered", FILTERED_COLOR, filtered, None))
         for n, i in enumerate(keep):

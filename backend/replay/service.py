@@ -20,9 +20,14 @@ from backend.storage import get_store
 from kinect_agent.formats.session_file import SessionFileError, decode
 
 
-def replay_data(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int) -> bytes:
+def replay_data(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int,
+                layer: str | None = None) -> bytes:  # fmt: skip
     """Returns the `.viser` recording of a session, building and storing it when missing or of an older version;
-    the stored file is read with the server's upload limits (max_frames, max_decoded_bytes)."""
+    the stored file is read with the server's upload limits (max_frames, max_decoded_bytes). layer: one skeleton
+    alone ("raw" or "filtered"; built each time, not stored), None: both."""
+    if layer is not None:
+        return _build(db_session=db_session, session_id=session_id, max_frames=max_frames,
+                      max_decoded_bytes=max_decoded_bytes, layers=(layer,)).data  # fmt: skip
     row = db_session.execute(
         select(SessionReplay.data_key, SessionReplay.data_hash, SessionReplay.data).where(
             SessionReplay.session_id == session_id, SessionReplay.version == scene.VERSION
@@ -37,6 +42,14 @@ def replay_data(*, db_session: Session, session_id: int, max_frames: int, max_de
 
 
 def _build_and_store(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int) -> bytes:
+    replay = _build(db_session=db_session, session_id=session_id, max_frames=max_frames,
+                    max_decoded_bytes=max_decoded_bytes, layers=scene.LAYERS)  # fmt: skip
+    _store(db_session=db_session, session_id=session_id, replay=replay)
+    return replay.data
+
+
+def _build(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int,
+           layers: tuple[str, ...]) -> scene.Replay:  # fmt: skip
     plane = db_session.scalar(
         select(Exercise.plane).join(ExerciseSession, Exercise.id == ExerciseSession.exercise_id)
         .where(ExerciseSession.id == session_id)
@@ -44,11 +57,9 @@ def _build_and_store(*, db_session: Session, session_id: int, max_frames: int, m
     data = session_file(db_session=db_session, session_id=session_id)
     try:
         payload = decode(data, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
-        replay = scene.build(payload, plane or "frontal")
+        return scene.build(payload, plane or "frontal", layers)
     except (SessionFileError, ValueError) as exc:
         raise InvalidSessionFile(f"the stored file of session {session_id} cannot be replayed: {exc}") from None
-    _store(db_session=db_session, session_id=session_id, replay=replay)
-    return replay.data
 
 
 def _store(*, db_session: Session, session_id: int, replay: scene.Replay) -> None:

@@ -16,4 +16,18 @@
     } catch (err) { info.textContent = ""; showError(err); }
   }
   load();
+
+  // the two checkboxes: both skeletons (the stored recording), or one alone (?layer=); at least one stays shown
+  const viewer = document.getElementById("viewer");
+  const boxes = [document.getElementById("show-filtered"), document.getElementById("show-raw")];
+  const note = document.getElementById("layers-note");
+  for (const box of boxes) {
+    box.addEventListener("change", () => {
+      const shown = boxes.filter((b) => b.checked).map((b) => b.value);
+      if (!shown.length) { box.checked = true; note.textContent = "At least one skeleton stays shown."; return; }
+      note.textContent = "";
+      const recording = viewer.dataset.recording + (shown.length === 1 ? `?layer=${shown[0]}` : "");
+      viewer.src = Coach.url(`/replay/viewer/?playbackPath=${encodeURIComponent(recording)}`);
+    });
+  }
 })();

@@ -74,3 +74,18 @@ def test_a_stored_file_that_cannot_be_read_is_400_and_nothing_is_stored(
     body = response.json()
     assert body["error"] == "InvalidSessionFile" and f"session {row.id}" in body["detail"]
     assert db_session.scalar(select(func.count()).select_from(SessionReplay)) == 0
+
+
+def test_one_skeleton_alone_is_built_without_the_other_and_not_stored(
+    client, make_patient_with_therapist, auth_headers, exercise, store, db_session
+):
+    patient, therapist = make_patient_with_therapist()
+    row = store(patient, exercise, T0, data=make_khs("squat", 2, seed=22))
+    headers = auth_headers(therapist)
+    raw = read_viser(client.get(f"/api/v1/sessions/{row.id}/replay?layer=raw", headers=headers).content)
+    assert node_points(raw, "/raw/joints") and not node_points(raw, "/filtered/joints")
+    filtered = read_viser(client.get(f"/api/v1/sessions/{row.id}/replay?layer=filtered", headers=headers).content)
+    assert node_points(filtered, "/filtered/joints") and not node_points(filtered, "/raw/joints")
+    assert db_session.scalar(select(func.count()).select_from(SessionReplay)) == 0
+    bad = client.get(f"/api/v1/sessions/{row.id}/replay?layer=both", headers=headers)
+    assert bad.status_code == 422 and "layer" in bad.json()["detail"]

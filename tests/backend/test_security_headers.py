@@ -175,3 +175,17 @@ def test_a_symlink_in_the_static_folder_is_not_followed_out(client, tmp_path, mo
     monkeypatch.setattr(pages, "STATIC", static)
     assert client.get("/static/app.js").text == "ok();"
     assert client.get("/static/leak.js").status_code == 404
+
+
+@pytest.mark.parametrize("layer", ["raw", "filtered"])
+def test_replay_viewer_serves_one_skeleton_of_a_session_replay(client, therapist_headers, layer):
+    r = _viewer(
+        client, therapist_headers, "playbackPath=" + quote(f"/api/v1/sessions/12/replay?layer={layer}", safe="")
+    )
+    assert r.status_code == 200 and "<title>Viser</title>" in r.text
+
+
+@pytest.mark.parametrize("tail", ["?layer=both", "?layer=raw&x=1", "?layer=raw#", "?other=raw", "?layer="])
+def test_replay_viewer_refuses_any_other_query_of_the_recording(client, therapist_headers, tail):
+    r = _viewer(client, therapist_headers, "playbackPath=" + quote(f"/api/v1/sessions/12/replay{tail}", safe=""))
+    assert r.status_code == 404, tail

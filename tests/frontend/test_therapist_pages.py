@@ -5,6 +5,8 @@ the keyboard."""
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
@@ -122,4 +124,26 @@ def test_therapist_sets_the_patients_language(page, live_server):
     finally:
         select.select_option("")
         expect(page.locator("#patient-locale-saved")).to_contain_text("browser decides")
+    assert not page.js_errors, page.js_errors
+
+
+def test_replay_shows_raw_and_filtered_through_two_plain_checkboxes(page, live_server):
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    session_id = newest_session_id(live_server.url, THERAPIST, live_server.patient_id)
+    page.goto(f"/therapist/sessions/{session_id}/replay")
+    raw, filtered = page.get_by_label("Raw skeleton"), page.get_by_label("Filtered skeleton")
+    expect(raw).to_be_checked()
+    expect(filtered).to_be_checked()
+    raw.uncheck()
+    expect(page.locator("#viewer")).to_have_attribute("src", re.compile(r"replay%3Flayer%3Dfiltered$"))
+    page.frame_locator("#viewer").locator("canvas").first.wait_for(state="visible", timeout=30_000)
+    filtered.click()  # the last one shown stays shown
+    expect(filtered).to_be_checked()
+    expect(page.locator("#layers-note")).to_contain_text("At least one skeleton")
+    raw.check()
+    expect(page.locator("#viewer")).to_have_attribute("src", re.compile(r"replay$"))
+    shot(page, "replay_checkboxes")
+    violations = [v for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
+    assert not violations, [(v["id"], [n["target"] for n in v["nodes"][:3]]) for v in violations]
     assert not page.js_errors, page.js_errors
