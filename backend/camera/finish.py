@@ -26,11 +26,19 @@ from kinect_agent.formats import session_file
 from kinect_agent.formats.session_file import SessionPayload
 from kinect_agent.processing.pipeline import VERSION, process
 from kinect_agent.recording import Metadata
+from kinect_agent.sources.webcam.header import webcam_header
+from kinect_agent.vendor import load_lock
 
 
 def _iso(when: dt.datetime) -> str:
     when = when if when.tzinfo is not None else when.replace(tzinfo=dt.UTC)
     return when.astimezone(dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def browser_runtime() -> str:
+    """Returns the page's pose runtime as the header names it ("@mediapipe/tasks-vision 1.1.0 (browser)")."""
+    package = next(p for p in load_lock()["npm"] if p["name"] == "@mediapipe/tasks-vision")
+    return f"{package['name']} {package['version']} (browser)"
 
 
 def session_bytes(row: CameraSet, exercise: Exercise, db_session: Session) -> bytes | None:
@@ -42,13 +50,10 @@ def session_bytes(row: CameraSet, exercise: Exercise, db_session: Session) -> by
     span = float(batches[-1].t[-1] - batches[0].t[0])
     fps = round((n_frames - 1) / span, 2) if span > 0 else None
     model = model_info(row.model_name)
-    meta = Metadata(
-        device=WEBCAM,
-        rate_hz=fps,
-        exercise=exercise.slug,
-        source="browser camera",
-        extra={"camera_set_id": str(row.id), "model": model, "fps_achieved": fps},
-    )
+    header = webcam_header(model=row.model_name.removeprefix("pose_landmarker_"), runtime=browser_runtime(),
+                           fps_achieved=fps, image_size=batches[-1].image_size, images=n_frames)  # fmt: skip
+    meta = Metadata(device=WEBCAM, rate_hz=fps, exercise=exercise.slug, source="browser camera",
+                    extra={"webcam": header, "camera_set_id": str(row.id)})  # fmt: skip
     raw = to_recording(batches, meta)
     config = pipeline_config()
     result = process(raw, config=config)

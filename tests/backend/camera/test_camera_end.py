@@ -54,6 +54,9 @@ def test_squats_count_live_and_the_end_stores_one_webcam_session(client, db_sess
     assert payload.raw.meta.device == "webcam" and payload.filtered is not None
     assert payload.params["config"] == json_ready(config_for_device("webcam").model_dump())  # the webcam's settings
     assert payload.params["model"]["name"] == "pose_landmarker_lite.task"
+    webcam = payload.raw.meta.extra["webcam"]  # the header the agent's webcam source writes too
+    assert webcam["model"] == payload.params["model"] and webcam["runtime"].startswith("@mediapipe/tasks-vision")
+    assert webcam["image_size"] == [640, 480] and webcam["images"] == payload.raw.n_frames
     assert len(payload.params["model"]["sha256"]) == 64
     assert 29 <= payload.params["fps_achieved"] <= 31, payload.params["fps_achieved"]
     detail = client.get(f"/api/v1/sessions/{session_id}", headers=h).json()
