@@ -30,4 +30,4 @@ def get_demonstration(
     for the exercise."""
     exercise = service.get_exercise(db_session=db_session, slug=slug)
     response.headers["Cache-Control"] = "private, max-age=3600"
-    return demonstration(exercise.slug, view_for(exercise.plane))
+    return demonstration(exercise.slug, view_for(exercise.plane), exercise.pose)

@@ -42,13 +42,14 @@ def view_for(plane: str) -> str:
 
 
 @lru_cache(maxsize=32)
-def demonstration(slug: str, view: str) -> DemonstrationOut:
-    """Returns one repetition of the exercise `slug` seen from `view` (no frames when the motion library has no
-    movement for it)."""
+def demonstration(slug: str, view: str, pose: str | None = None) -> DemonstrationOut:
+    """Returns one repetition of the exercise `slug` seen from `view`, done in `pose` ("standing", "sitting") when
+    the motion allows it (no frames when the motion library has no movement for the exercise)."""
     joints, bones = list(skeleton.JOINTS), [(int(a), int(b)) for a, b in skeleton.BONES]
     if slug not in SPECS:
         return DemonstrationOut(slug=slug, view=view, rate_hz=RATE_HZ, joints=joints, bones=bones, frames=[])
-    rec = simulate_truth(slug, 1, seed=0, rate_hz=RATE_HZ)
+    pose = pose if pose in SPECS[slug].poses else None  # the library's pose (sitting), else the motion's own
+    rec = simulate_truth(slug, 1, pose=pose, seed=0, rate_hz=RATE_HZ)
     p = rec.positions  # (T, J, 3) metres, camera frame, subject facing the camera
     horizontal = p[:, :, 0] if view == "front" else -p[:, :, 2]
     xy = np.stack([horizontal, p[:, :, 1]], axis=-1)  # (T, J, 2)

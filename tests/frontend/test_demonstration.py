@@ -80,9 +80,9 @@ def test_the_voice_control_and_the_demonstration_speak_the_patients_language(
     page = context.new_page()
     try:
         login(page, email, PASSWORD)
-        expect(page.locator("#voice-toggle")).to_have_text(voice)
-        expect(page.locator(".demo-h")).to_have_text(how)
-        expect(page.locator(".demo-view")).to_have_text(view)
+        expect(page.locator("#voice-toggle")).to_have_text(voice, timeout=30_000)
+        expect(page.locator(".demo-h")).to_have_text(how, timeout=30_000)
+        expect(page.locator(".demo-view")).to_have_text(view, timeout=30_000)
         assert page.evaluate("I18n.tag") == locale
         shot(page, f"patient-{locale}")
     finally:
