@@ -140,26 +140,36 @@ def test_arm_exercise_shows_the_reach_of_each_arm(page, live_server, arm_session
     assert not page.js_errors
 
 
-def test_a_session_filtered_at_home_shows_its_95_percent_intervals(page, live_server):
+@pytest.mark.parametrize(("exercise", "seed"), [("shoulder_abduction", 23), ("standing_leg_raise", 0)])
+def test_a_session_filtered_at_home_shows_its_95_percent_intervals_or_why_not(page, live_server, exercise, seed):
     """A file the home agent made (pipeline output with angle SDs) shows the full range and the peak angle of the
-    defining angle with their 95 % intervals, the interval around the number shown."""
+    defining angle with their 95 % intervals, the interval around the number shown, or, where the analysis
+    withheld them (too wide, too little tracking), the reason in words; the peak is the end the repetitions reach,
+    as in the repetition table."""
     from tests.backend.khs_files import make_processed_khs
 
-    data = make_processed_khs("shoulder_abduction", 4, seed=23)
-    sid = upload_session(live_server.url, GEORGE, "shoulder_abduction", 4, seed=23, data=data)["id"]
+    data = make_processed_khs(exercise, 4, seed=seed)
+    sid = upload_session(live_server.url, GEORGE, exercise, 4, seed=seed, data=data)["id"]
     login(page, PAUL)
     page.wait_for_url("**/therapist")
+    body = page.request.get(f"/api/v1/sessions/{sid}/detail").json()
+    angle = body["uncertainty"]["angles"][body["defining_angle"]]
     page.goto(f"/therapist/sessions/{sid}")
     stats = page.locator("#numbers .stat")
     expect(stats.filter(has_text="Full range")).to_have_count(1)
     for label in ("Full range", "Peak angle"):
         text = stats.filter(has_text=label).inner_text()
+        if angle["withheld"]:
+            assert f"no interval: {angle['withheld']}" in text and "(95 %)" not in text, f"{label}: {text!r}"
+            continue
         found = re.search(r"(-?[\d.]+)°.*?(-?[\d.]+)–(-?[\d.]+)° \(95 %\)", text, re.S)
         assert found, f"{label}: no value and interval in {text!r}"
         value, low, high = (float(x) for x in found.groups())
         assert low - 0.5 <= value <= high + 0.5 and high > low, f"{label}: {text!r}"  # the interval is rounded
-        assert "(95 %)" in text, text
-    shot(page, "session_intervals_1366")
+    peak = float(re.search(r"(-?[\d.]+)°", stats.filter(has_text="Peak angle").inner_text()).group(1))
+    end = body["uncertainty"]["peak_end"]
+    assert peak == pytest.approx(angle[f"{end}_deg"], abs=0.05), f"peak {peak}, {end} of {angle}"
+    shot(page, f"session_intervals_{exercise}_1366")
     assert not page.js_errors
 
 
