@@ -19,6 +19,7 @@ const Live = (() => {
     I18n.N_("The camera cannot see your arms well."), I18n.N_("The camera cannot see your legs well."),
   ];
   const SAVE_MS = 45000;  // an ended set whose stored result has not come for this long: said so, with Close
+  const CONFIRM_MS = 3000;  // after the server came back: how often the agent's presence is asked until it is heard
   const FRAMES_MS = 3000;  // a recording set without a progress message for this long: the camera sends no pictures
   const RECENT_UPLOAD_MS = 2 * 86400000;  // a computer that uploaded within this long works, even when not live
   let pid = null, names = (slug) => slug, agent = "unknown", current = null, timer = null, howTo = (slug) => "";
@@ -32,7 +33,7 @@ const Live = (() => {
     });
     if (typeof Feeling !== "undefined") Feeling.onChange = render;
     Connection.listen((state, was) => {
-      if (state === "ok" && was === "lost") { status(); resync(); }
+      if (state === "ok" && was === "lost") { confirm = {}; status(); resync(); }
       if (state === "lost" && running()) speak(SERVER_LOST);
       render();
     });
@@ -66,9 +67,21 @@ const Live = (() => {
   /** The newest stored session's upload time (ISO), from the page's data: a computer that uploads works. */
   function uploaded(createdAt) { lastUpload = createdAt; render(); }
 
+  /** After the server came back, "online" is believed only once the agent is heard anew (a live.agent event, or
+   *  its last_seen_at moving on): a server that stopped leaves its agents' streams recorded as open for a while. */
+  let confirm = null, confirmTimer = null;
+
   async function status() {
     if (pid === null) return;  // the event stream opened before init(): init() asks itself
-    try { agent = (await api(`/live/status?patient_id=${pid}`)).state; } catch (err) { agent = "unknown"; }
+    let out = null;
+    try { out = await api(`/live/status?patient_id=${pid}`); } catch (err) { out = { state: "unknown" }; }
+    clearTimeout(confirmTimer);
+    agent = out.state;
+    if (confirm && agent === "online") {
+      if (confirm.seen === undefined) confirm.seen = out.last_seen_at;
+      if (out.last_seen_at === confirm.seen) { agent = "unknown"; confirmTimer = setTimeout(status, CONFIRM_MS); }
+      else confirm = null;
+    } else confirm = null;
     if (agent === "online") dropped = false;
     render();
   }
@@ -100,6 +113,7 @@ const Live = (() => {
   }
 
   function onAgent(data) {
+    confirm = null; clearTimeout(confirmTimer);
     agent = data.online ? "online" : "offline";
     dropped = !data.online;
     if (!data.online && running()) { current.lost = true; speak(I18n.t("Your home computer stopped during the set.")); }

@@ -150,7 +150,9 @@ def test_server_and_agent_stopped_and_restarted_under_the_page(browser, live_ser
             server = run_server(live_server.database_url, tmp_path, port=port)  # back on the same address
             server.__enter__()
             expect(banner).to_contain_text("The connection is back", timeout=15_000)
-            expect(status).to_have_attribute("data-state", "online", timeout=40_000)  # the agent reconnects too
+            # the agent reconnects by itself (backoff up to 30 s); until it is heard the page does not say "ready"
+            expect(status).not_to_have_attribute("data-state", "online", timeout=WITHIN_MS)
+            expect(status).to_have_attribute("data-state", "online", timeout=60_000)
             expect(start).to_be_enabled()
             expect(banner).to_be_hidden(timeout=10_000)
         expect(status).to_have_attribute("data-state", "offline", timeout=WITHIN_MS)  # the agent stopped
