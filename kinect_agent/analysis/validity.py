@@ -15,6 +15,7 @@ The view comes from the recording itself (view_of): the trunk's forward directio
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -62,13 +63,13 @@ def device_label(device: str) -> str:
     return DEVICE_LABELS.get(device, device)
 
 
-def recorded_with(device: str, extra: dict | None) -> dict:
+def recorded_with(device: str, extra: dict[str, Any] | None) -> dict[str, Any]:
     """Returns what recorded a session, for pages and exports: {"device", "label", "model", "model_sha256",
     "runtime", "fps_achieved"} (None where the recording does not say; the model fields come from the webcam's
     header, kinect_agent.sources.webcam)."""
-    webcam = (extra or {}).get("webcam") if isinstance(extra, dict) else None
-    webcam = webcam if isinstance(webcam, dict) else {}
-    model = webcam.get("model") if isinstance(webcam.get("model"), dict) else {}
+    found = extra.get("webcam") if isinstance(extra, dict) else None
+    webcam: dict[str, Any] = found if isinstance(found, dict) else {}
+    model: dict[str, Any] = webcam["model"] if isinstance(webcam.get("model"), dict) else {}
     fps = webcam.get("fps_achieved")
 
     def text(value: object) -> str | None:
@@ -93,7 +94,7 @@ class MetricValidity:
     code: str | None = None
     reason: str | None = None
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """Returns the fields as JSON-ready data."""
         return {"name": self.name, "valid": self.valid, "code": self.code, "reason": self.reason}
 
@@ -112,7 +113,7 @@ class SessionValidity:
         """Whether any metric is flagged."""
         return any(not m.valid for m in self.metrics.values())
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """Returns {"device", "view", "view_deg", "limited", "metrics": [...]} (JSON-ready)."""
         return {"device": self.device, "view": self.view, "view_deg": self.view_deg, "limited": self.limited,
                 "metrics": [m.to_dict() for m in self.metrics.values()]}  # fmt: skip
