@@ -30,7 +30,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _files(n: int) -> list[bytes]:
-    from kinect_agent.commands.run import make_payload
+    from kinect_agent.capture import make_payload
     from kinect_agent.formats import session_file as sf
     from kinect_agent.sources.simulator import simulate
 

@@ -34,7 +34,7 @@ from backend.sessions.detail import detail_body
 from backend.sessions.models import ExerciseSession
 from kinect_agent import formats
 from kinect_agent.body.angles import ANGLE_NAMES, DOMAIN_DEG, joint_angles
-from kinect_agent.commands.run import capture, make_payload
+from kinect_agent.capture import capture, make_payload
 from kinect_agent.export import tables
 from kinect_agent.formats import session_file, ui_prmd
 from kinect_agent.recording import Recording

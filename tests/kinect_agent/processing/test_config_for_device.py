@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from kinect_agent.commands.run import make_payload
+from kinect_agent.capture import make_payload
 from kinect_agent.processing.config import DEVICE_SETTINGS, PipelineConfig, config_for_device
 from kinect_agent.recording import DEVICES
 from kinect_agent.sources.simulator import simulate
