@@ -36,8 +36,18 @@ mypy
 python -m pytest -q -p no:cacheprovider tests/test_layers.py
 
 # The browser tests (marker "browser") are slow and exercise the pages, not the database: they run once, on
-# PostgreSQL, the production database.
-echo "=== tests on SQLite (browser tests run on PostgreSQL only) ===" >&2
-COACH_TEST_DATABASE_URL="" python -m pytest -m "not browser" "$@"
-echo "=== tests on PostgreSQL ($PG_URL) ===" >&2
-COACH_TEST_DATABASE_URL="$PG_URL" python -m pytest "$@"
+# PostgreSQL, the production database. The two passes run side by side (each waits on servers, browsers and the
+# database much of the time, so two cores serve both); the SQLite pass's output follows the PostgreSQL pass's.
+echo "=== tests on PostgreSQL ($PG_URL), and on SQLite beside it (browser tests on PostgreSQL only) ===" >&2
+SQLITE_LOG="$(mktemp)"
+trap 'rm -f "$SQLITE_LOG"' EXIT
+COACH_TEST_DATABASE_URL="" python -m pytest -m "not browser" "$@" >"$SQLITE_LOG" 2>&1 &
+sqlite_pid=$!
+pg_rc=0
+COACH_TEST_DATABASE_URL="$PG_URL" python -m pytest "$@" || pg_rc=$?
+sqlite_rc=0
+wait "$sqlite_pid" || sqlite_rc=$?
+echo "=== tests on SQLite (exit $sqlite_rc) ===" >&2
+cat "$SQLITE_LOG"
+echo "=== PostgreSQL pass: exit $pg_rc; SQLite pass: exit $sqlite_rc ===" >&2
+[ "$pg_rc" -eq 0 ] && [ "$sqlite_rc" -eq 0 ]
