@@ -3,7 +3,7 @@
 "use strict";
 const CameraEntry = (() => {
   const { el } = Coach;
-  const LABEL = "Start with this computer's camera";
+  const LABEL = I18n.t("Start with this computer's camera");
   let hasCamera = null;
 
   async function check() {
@@ -15,9 +15,10 @@ const CameraEntry = (() => {
     return hasCamera;
   }
 
-  /** Returns the (hidden) link of one plan item; reveal() shows the links when there is a camera. */
+  /** Returns the (hidden) link of one plan item (name: the exercise's, label: "set 2 of 3" or "extra set" in the
+   *  page's language); reveal() shows the links when there is a camera. */
   function link(item, name, label) {
-    return el("a", { class: "btn btn-big btn-quiet cam-start", hidden: true, "aria-label": `${LABEL}: ${name}, ${label}`,
+    return el("a", { class: "btn btn-big btn-quiet cam-start", hidden: true, "aria-label": I18n.t("{start}: {exercise}, {set}", { start: LABEL, exercise: name, set: label }),
       href: Coach.url(`/patient/camera?item=${encodeURIComponent(item.id)}`) }, LABEL);
   }
 

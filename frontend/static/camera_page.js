@@ -167,7 +167,7 @@
       if (luma !== null && luma < CameraChecks.DARK_LUMA) say(T.dark, "warn");
       else if (poses > 1) say(T.keptPatient, "warn");
       else if (CameraSender.isOffline()) say(T.offline, "warn");
-      else say(set.hint || T.counting, set.hint ? "warn" : "");
+      else say(set.hint ? T.hint(set.hint) : T.counting, set.hint ? "warn" : "");
     } else if (now - lastSeen > LOST_MS) {
       say(luma !== null && luma < CameraChecks.DARK_LUMA ? T.dark : poses > 0 ? T.keptPatient : T.leftFrame, "warn");
     }
@@ -195,7 +195,7 @@
   // ------------------------------------------------------------------ the set
 
   function renderCount() {
-    $("cam-count").replaceChildren(el("span", { class: "n" }, count), el("span", { class: "of" }, ` of ${target}`));
+    $("cam-count").replaceChildren(el("span", { class: "n" }, count), el("span", { class: "of" }, T.countOf(target)));
     $("cam-count-spoken").textContent = T.countSpoken(count, target);
   }
 
@@ -318,7 +318,7 @@
     if (!CameraPose.info.model && !(await loadTracker())) return;
     show("cam-stage");
     const view = CameraChecks.viewFor(ex) === "side" ? T.viewSide : T.viewFront;
-    status(`${name}: ${view}`);
+    status(T.nameAndView(name, view));
     okSince = null; stamps = []; placementSince = performance.now(); prevCentre = null;
     phase = "placement";
     $("cam-main-status").textContent = "placement";
@@ -342,8 +342,8 @@
     target = set.target; count = 0;
     show("cam-resume");
     const seconds = Math.max(0, Math.round((Date.now() - set.t0_ms) / 1000));
-    $("cam-resume-text").textContent = T.resumeText(seconds, name.toLowerCase());
-    status(T.resumeText(seconds, name.toLowerCase()), "warn");
+    $("cam-resume-text").textContent = T.resumeText(seconds, name);
+    status(T.resumeText(seconds, name), "warn");
     $("cam-main-status").textContent = "resume";
     return true;
   }
@@ -362,7 +362,7 @@
     $("cam-withdraw").hidden = !consent.given;
     if (consent.given) { await toPlacement(); return; }
     show("cam-consent");
-    status("Please read this first.");
+    status(T.readFirst);
     $("cam-main-status").textContent = "consent";
     $("cam-agree").onclick = async () => {
       try { await api("/camera/consent", { method: "POST", body: { consent_version: consent.consent_version } }); }
@@ -375,7 +375,7 @@
   async function init() {
     const hidden = el("span", { id: "cam-main-status", class: "sr-only", "data-testid": "phase" }, "loading");
     main.append(hidden);
-    const saveBtn = el("button", { type: "button", class: "btn btn-big btn-quiet", id: "cam-problem-save", hidden: true }, "Save what I did");
+    const saveBtn = el("button", { type: "button", class: "btn btn-big btn-quiet", id: "cam-problem-save", hidden: true }, T.saveWhatIDid);
     $("cam-problem").append(saveBtn);
     saveBtn.onclick = () => endSet("stop");
     $("cam-retry").onclick = () => (set && phase !== "result" ? toPlacementKeepingSet() : location.reload());

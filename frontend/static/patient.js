@@ -117,7 +117,8 @@
           el("div", { class: "today" }, el("strong", {}, I18n.t("Today:")), todaySets(item, mineToday).map((t) => el("span", {}, t))),
           Demo.block(item, lib[item.exercise_slug], exerciseName(lib, item.exercise_slug))),
         el("div", { class: "starts" }, startButton(lib, item, mineToday.length),
-          CameraEntry.link(item, exerciseName(lib, item.exercise_slug), mineToday.length + 1 <= item.sets ? `set ${mineToday.length + 1} of ${item.sets}` : "extra set"))));
+          CameraEntry.link(item, exerciseName(lib, item.exercise_slug), mineToday.length + 1 <= item.sets
+            ? I18n.t("set {set} of {sets}", { set: mineToday.length + 1, sets: item.sets }) : I18n.t("extra set")))));
     }
     CameraEntry.reveal();
   }

@@ -260,3 +260,31 @@ def test_a_german_patient_gets_advice_in_german(db_session, make_user, exercise)
     made = suggest_for_session(db_session=db_session, session=row, doc=doc)
     assert [s.rule for s in made] == ["too_fast"]
     assert made[0].text.startswith("Am ") and "etwa 0,8 Sekunden pro Wiederholung" in made[0].text, made[0].text
+
+
+@pytest.mark.parametrize(
+    ("locale", "consent", "script_text"),
+    [
+        (
+            "de",
+            "Das Video bleibt auf diesem Gerät.",
+            "Wir können Sie nicht sehen. Bitte stellen Sie sich vor die Kamera.",
+        ),
+        ("es", "El vídeo nunca sale de este aparato.", "No le vemos. Póngase delante de la cámara."),
+        ("fr", "La vidéo ne quitte jamais cet appareil.", "Nous ne vous voyons pas. Placez-vous devant la caméra."),
+    ],
+)
+def test_camera_page_comes_in_the_patient_language(client, make_user, auth_headers, locale, consent, script_text):
+    """The browser-camera set (consent in the template, the placement check's words in camera_text.js) follows the
+    patient's chosen language, not the browser's."""
+    patient = make_user("patient", full_name="Rosa Weber")
+    headers = auth_headers(patient)
+    assert client.patch(f"/api/v1/patients/{patient.id}", json={"locale": locale}, headers=headers).status_code == 200
+    page = client.get("/patient/camera?item=1", headers=HTML | headers | {"Accept-Language": "en"})
+    assert page.status_code == 200 and f'<html lang="{locale}">' in page.text
+    assert consent in page.text and "The video never leaves this device" not in page.text
+    messages = _page_messages(page.text)
+    assert messages["locale"] == locale
+    assert messages["messages"]["We cannot see you. Please step in front of the camera."] == script_text
+    start = messages["messages"]["Start with this computer's camera"]
+    assert start and start != "Start with this computer's camera"

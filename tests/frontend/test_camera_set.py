@@ -10,6 +10,7 @@ this machine's headless Chromium has no GPU.
 
 from __future__ import annotations
 
+import re
 import time
 import uuid
 from pathlib import Path
@@ -358,3 +359,52 @@ def test_two_people_and_the_patient_kept_in_the_checks(cam_browser, live_server)
                        "onlyOther": -1, "side": "side", "front": "front"}, out  # fmt: skip
     finally:
         context.close()
+
+
+def test_the_camera_set_speaks_the_patient_language(pw, live_server):
+    """A German patient: the patient page's camera link, the consent screen (390 px, axe-clean, no English left) and
+    a fault message (the browser refused the camera) all in German."""
+    base = live_server.url
+    email, pid, item_id = new_patient(base)
+    admin, headers = api_client(base, "admin@demo.clinic")
+    try:
+        r = admin.patch(f"/api/v1/patients/{pid}", json={"locale": "de"}, headers=headers)
+        assert r.status_code == 200, r.text
+    finally:
+        admin.close()
+    b = pw.chromium.launch(executable_path=CHROMIUM, headless=True,
+                           args=["--no-sandbox", "--use-fake-device-for-media-stream"])  # fmt: skip
+    context, page = open_page(b, base)
+    try:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        start = page.locator("a.cam-start")
+        expect(start).to_have_text("Mit der Kamera dieses Computers beginnen")
+        expect(start).to_have_attribute(
+            "aria-label", re.compile(r"^Mit der Kamera dieses Computers beginnen: .+, Satz 1 von 2$")
+        )
+        page.set_viewport_size({"width": 390, "height": 844})
+        page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
+        consent = page.locator("#cam-consent")
+        expect(consent).to_be_visible()
+        expect(consent).to_contain_text("Das Video bleibt auf diesem Gerät.")
+        expect(page.locator("#cam-status")).to_have_text("Bitte lesen Sie das zuerst.")
+        assert page.get_attribute("html", "lang") == "de"
+        text = page.inner_text("body")
+        english = ("The video never leaves", "Only the positions", "Before you start", "I agree", "Not now",
+                   "Please read this first", "Withdraw")  # fmt: skip
+        assert not [e for e in english if e in text], text
+        shot(page, "camera-consent-de-390")
+        _axe_clean(page)
+        overflow = page.evaluate("document.documentElement.scrollWidth - document.documentElement.clientWidth")
+        assert overflow <= 1, f"the German consent screen scrolls sideways by {overflow} px"
+        page.click("#cam-agree")
+        expect(page.locator("#cam-problem-text")).to_contain_text(
+            "Der Browser hat dieser Seite die Kamera nicht erlaubt"
+        )
+        expect(page.locator("#cam-retry")).to_have_text("Noch einmal versuchen")
+        shot(page, "camera-problem-de-390")
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+        b.close()
