@@ -134,6 +134,10 @@ class AgentOffline(Conflict):
     """The patient's home agent is not connected, so it cannot be asked to record."""
 
 
+class LiveSetUnknown(Conflict):
+    """A device posts live progress for a set the server did not start on that device."""
+
+
 class SessionOwnerMismatch(AppError):
     """The session file names (recorded_by) another patient than the one it is stored for, or another device than
     the one sending it."""

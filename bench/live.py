@@ -109,7 +109,8 @@ SHOWN_LISTENER = """
 
 
 def seed(url: str, n_patients: int) -> list[dict]:
-    """Creates n patients with a password and a paired device each; returns [{id, email, device}]."""
+    """Creates n patients with a password and a paired device each, each device with a started set (as the
+    patient's Start stores it: the server accepts progress only for that set); returns [{id, email, device, set_id}]."""
     from backend.database import import_all_models
     from backend.devices.models import Device
     from backend.security import DEVICE_TOKEN_PREFIX, hash_password, new_token, token_hash
@@ -126,8 +127,10 @@ def seed(url: str, n_patients: int) -> list[dict]:
             db.add(user)
             db.flush()
             device_token = new_token(DEVICE_TOKEN_PREFIX)
-            db.add(Device(patient_id=user.id, name=f"bench {k}", token_hash=token_hash(device_token)))
-            out.append({"id": user.id, "email": user.email, "device": device_token})
+            set_id = str(uuid.uuid4())
+            db.add(Device(patient_id=user.id, name=f"bench {k}", token_hash=token_hash(device_token),
+                          live_set_id=set_id))  # fmt: skip
+            out.append({"id": user.id, "email": user.email, "device": device_token, "set_id": set_id})
     engine.dispose()
     return out
 
@@ -270,7 +273,7 @@ def hold_commands(base: str, token: str, stop: threading.Event):
     return stream
 
 
-def latency_agent(base: str, token: str, n: int, rate: float, connected, go, out) -> None:
+def latency_agent(base: str, token: str, set_id: str, n: int, rate: float, connected, go, out) -> None:
     """The home agent of the measured patient, in a process of its own: holds the command stream, sets `connected`,
     waits for `go`, sends n progress messages at rate Hz through the Publisher and puts its records on `out`."""
     from kinect_agent.live.channel import Publisher
@@ -285,7 +288,7 @@ def latency_agent(base: str, token: str, n: int, rate: float, connected, go, out
     log = PostLog()
     problems: list[str] = []
     pub = Publisher(base, token, log=problems.append, transport=log)
-    set_id, session_id = str(uuid.uuid4()), str(uuid.uuid4())
+    session_id = str(uuid.uuid4())
     frames = []
     t0 = time.monotonic()
     for k in range(n):
@@ -305,6 +308,7 @@ class LoadAgent:
 
     base: str
     token: str
+    set_id: str  # the set the server started on the device (seed)
     stop: threading.Event = field(default_factory=threading.Event)
     log: PostLog = field(default_factory=lambda: PostLog(keep=False))
     offered: int = 0
@@ -319,9 +323,9 @@ class LoadAgent:
         from kinect_agent.live.channel import Publisher
 
         pub = Publisher(self.base, self.token, log=lambda _: None, transport=self.log)
-        set_id, session_id, t0, k = str(uuid.uuid4()), str(uuid.uuid4()), time.monotonic(), 0
+        session_id, t0, k = str(uuid.uuid4()), time.monotonic(), 0
         while not self.stop.wait(max(0.0, t0 + k / AGENT_HZ - time.monotonic())):
-            pub.offer(progress(set_id, session_id, k, AGENT_HZ, time.time()))
+            pub.offer(progress(self.set_id, session_id, k, AGENT_HZ, time.time()))
             k += 1
         pub.close(timeout=5)
         self.offered = k
@@ -442,8 +446,8 @@ def open_patient_page(browser, base: str, patient: dict):
 
 def wait_stream_open(page) -> None:
     """Waits until the page's event stream is open and the page has asked for the agent's state."""
-    page.wait_for_function("window.__es && window.__es.opens.length > 0", timeout=30_000)
-    page.wait_for_function("['online', 'offline', 'unpaired'].includes(document.getElementById('agent-status')"
+    page.wait_for_function("() => window.__es && window.__es.opens.length > 0", timeout=30_000)
+    page.wait_for_function("() => ['online', 'offline', 'unpaired'].includes(document.getElementById('agent-status')"
                            ".dataset.state)", timeout=30_000)  # fmt: skip
 
 
@@ -451,22 +455,23 @@ def latency_run(page, base: str, patient: dict, n: int, rate: float, usage: Usag
     """Measures frame-to-screen latency of n messages from the patient's agent to their open page."""
     ctx = mp.get_context("spawn")
     connected, go, out = ctx.Event(), ctx.Event(), ctx.Queue()
-    agent = ctx.Process(target=latency_agent, args=(base, patient["device"], n, rate, connected, go, out))
+    args = (base, patient["device"], patient["set_id"], n, rate, connected, go, out)
+    agent = ctx.Process(target=latency_agent, args=args)
     agent.start()
     try:
         if not connected.wait(60):
             raise SystemExit("the latency agent's command stream did not connect")
-        page.wait_for_function("document.getElementById('agent-status').dataset.state === 'online'",
+        page.wait_for_function("() => document.getElementById('agent-status').dataset.state === 'online'",
                                timeout=30_000)  # fmt: skip
         page.evaluate(SHOWN_LISTENER)
-        opens_before = page.evaluate("window.__es.opens.length")
+        opens_before = page.evaluate("() => window.__es.opens.length")
         before = usage.snapshot()
         go.set()
         record = out.get(timeout=n / rate + 120)
         time.sleep(TAIL_S)
         cpu = Usage.between(before, usage.snapshot())
-        shown = page.evaluate("window.__shown")
-        es = page.evaluate("window.__es")
+        shown = page.evaluate("() => window.__shown")
+        es = page.evaluate("() => window.__es")
     finally:
         agent.join(timeout=30)
         if agent.is_alive():
@@ -587,7 +592,7 @@ def run(args: argparse.Namespace) -> dict:
             a = usage.snapshot()
             time.sleep(args.window)
             r["idle"] = Usage.between(a, usage.snapshot())
-            agents = [LoadAgent(base, p["device"]) for p in patients[1 : args.agents + 1]]
+            agents = [LoadAgent(base, p["device"], p["set_id"]) for p in patients[1 : args.agents + 1]]
             for agent in agents:
                 agent.start()
             time.sleep(SETTLE_S)

@@ -23,6 +23,7 @@ class Device(Base):
     last_seen_at: Mapped[dt.datetime | None] = mapped_column()
     revoked_at: Mapped[dt.datetime | None] = mapped_column()
     live_stream_id: Mapped[str | None] = mapped_column(String(36))  # the agent's open command stream (backend/live)
+    live_set_id: Mapped[str | None] = mapped_column(String(36))  # the last set the server started on it (live)
 
 
 class PairingCode(Base):

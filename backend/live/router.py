@@ -18,7 +18,15 @@ from backend.config import Settings
 from backend.deps import Caller, CurrentCaller, CurrentDevice, DbSession, UserCaller, require_patient_access
 from backend.events.hub import HUB, SERVER_STOPPING, Event, Subscriber, publish
 from backend.events.router import RETRY_MS
-from backend.exceptions import AUTH_ERRORS, AgentOffline, Forbidden, PatientNotFound, PlanNotFound, error_responses
+from backend.exceptions import (
+    AUTH_ERRORS,
+    AgentOffline,
+    Forbidden,
+    LiveSetUnknown,
+    PatientNotFound,
+    PlanNotFound,
+    error_responses,
+)
 from backend.live import service
 from backend.live.progress_gate import LiveProgressTooFast
 from backend.live.schemas import AgentStatusOut, LiveSetOut, ProgressIn, StartIn, StopIn
@@ -106,11 +114,13 @@ async def _agent_events(
 @router.post(
     "/progress",
     status_code=status.HTTP_204_NO_CONTENT,
-    responses=error_responses(*AUTH_ERRORS, LiveProgressTooFast),
+    responses=error_responses(*AUTH_ERRORS, LiveSetUnknown, LiveProgressTooFast),
 )
 def post_progress(body: ProgressIn, request: Request, device: CurrentDevice, db_session: DbSession) -> None:
     """Passes one live message of the calling agent to its patient's pages (nothing is stored); a message repeating
-    the device's last one is not passed on, and "recording" messages are limited (progress_gate.py: 429)."""
+    the device's last one is not passed on, and "recording" messages are limited (progress_gate.py: 429). Only the
+    set the server last started on this device is accepted (409 LiveSetUnknown otherwise)."""
+    service.require_started_set(device, body.set_id)
     message = body.model_dump()
     if request.app.state.live_progress.admit(device.id, message):
         publish(db_session, Event("live.progress", device.patient_id, message | {"device_id": device.id}))

@@ -16,7 +16,7 @@ from sqlalchemy.orm import Session
 from backend.database import utcnow
 from backend.devices.models import Device
 from backend.events.hub import Event, publish
-from backend.exceptions import AgentOffline, PlanNotFound
+from backend.exceptions import AgentOffline, LiveSetUnknown, PlanNotFound
 from backend.exercises.models import Exercise
 from backend.i18n import N_
 from backend.live.schemas import AgentStatusOut, LiveSetOut
@@ -118,9 +118,19 @@ def start_set(*, db_session: Session, patient_id: int, plan_item_id: int) -> Liv
     device = _require_online(db_session, patient_id)
     out = LiveSetOut(set_id=str(uuid.uuid4()), patient_id=patient_id, device_id=device.id,
                      exercise_slug=exercise.slug, target_reps=item.repetitions, action="start")  # fmt: skip
+    device.live_set_id = out.set_id  # the only set whose progress this device may post (require_started_set)
+    db_session.flush()
     data = out.model_dump() | {"angles": list(exercise.defining_angles), "plan_item_id": item.id}
     publish(db_session, Event("live.command", patient_id, data))
     return out
+
+
+def require_started_set(device: Device, set_id: str) -> None:
+    """Raises LiveSetUnknown unless set_id is the set the server last started on this device (start_set stores it in
+    the database, so every server worker agrees); progress for any other set would show a set that never began."""
+    if device.live_set_id is None or device.live_set_id != set_id:
+        raise LiveSetUnknown(f"set_id {set_id}: the server did not start this set on device {device.id}; live progress "
+                             "is accepted only for the set the patient last started on this device")  # fmt: skip
 
 
 def stop_set(*, db_session: Session, patient_id: int, set_id: str) -> LiveSetOut:

@@ -34,8 +34,11 @@ ADMIN = {"admin"}
 PATIENTS = {"patient_own", "patient_other"}
 
 
+LIVE_SET_ID = str(uuid.uuid4())  # the set the server started on the world's device (progress is only for it)
+
+
 def _progress_body():
-    return {"set_id": str(uuid.uuid4()), "exercise_slug": "squat", "state": "recording", "count": 2, "target": 5}
+    return {"set_id": LIVE_SET_ID, "exercise_slug": "squat", "state": "recording", "count": 2, "target": 5}
 
 
 def _camera_start(w):
@@ -154,6 +157,7 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
     plan.items.append(PlanItem(exercise_id=exercise.id, sets=1, repetitions=5, frequency_per_week=2))
     db_session.add(plan)
     device.live_stream_id, device.last_seen_at = str(uuid.uuid4()), utcnow()  # the home agent is connected
+    device.live_set_id = LIVE_SET_ID
     suggestion = Suggestion(patient_id=own.id, source="system", rule="too_fast", text="Slow down.", status="pending")
     db_session.add(suggestion)
     session = ExerciseSession(

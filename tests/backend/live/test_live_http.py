@@ -9,40 +9,6 @@ import pytest
 
 from backend.database import utcnow
 from backend.live import progress_gate, service
-from backend.plans.models import Plan, PlanItem
-
-
-@pytest.fixture
-def events(monkeypatch):
-    """Returns the list of events the live routes and service publish."""
-    seen = []
-
-    def capture(_db_session, ev):
-        seen.append(ev)
-
-    monkeypatch.setattr("backend.live.service.publish", capture)
-    monkeypatch.setattr("backend.live.router.publish", capture)
-    return seen
-
-
-@pytest.fixture
-def home(db_session, make_patient_with_therapist, device_headers, auth_headers, exercise):
-    """A patient with a plan of one exercise, their therapist and a paired (not yet connected) device."""
-    patient, therapist = make_patient_with_therapist()
-    plan = Plan(patient_id=patient.id, therapist_id=therapist.id, title="p", start_date=utcnow().date())
-    plan.items.append(PlanItem(exercise_id=exercise.id, sets=2, repetitions=8, frequency_per_week=3))
-    db_session.add(plan)
-    device, device_hdr = device_headers(patient)
-    db_session.flush()
-    return {
-        "patient": patient,
-        "therapist": therapist,
-        "item": plan.items[0],
-        "device": device,
-        "device_hdr": device_hdr,
-        "patient_hdr": auth_headers(patient),
-        "therapist_hdr": auth_headers(therapist),
-    }
 
 
 def _connect(db_session, device, seen_ago_s=0.0):
@@ -141,8 +107,16 @@ def test_stop_goes_to_every_device_of_the_patient(client, home, events):
     assert r.status_code == 422 and "set_id" in r.json()["detail"]
 
 
-def test_progress_reaches_the_patient_and_names_its_device(client, home, events):
-    msg = {"set_id": str(uuid.uuid4()), "exercise_slug": "squat", "state": "recording", "count": 3, "target": 8}
+def _started(db_session, device) -> str:
+    """Returns a set id the server started on the device (as Start does; test_live_set_guard.py covers Start)."""
+    device.live_set_id = str(uuid.uuid4())
+    db_session.flush()
+    return device.live_set_id
+
+
+def test_progress_reaches_the_patient_and_names_its_device(client, db_session, home, events):
+    msg = {"set_id": _started(db_session, home["device"]), "exercise_slug": "squat", "state": "recording"}
+    msg |= {"count": 3, "target": 8}
     msg |= {"angle_name": "knee_flexion_L", "angle_deg": 87.5, "hint": "Step back a little", "sent_at": 1.8e9}
     r = client.post("/api/v1/live/progress", json=msg, headers=home["device_hdr"])
     assert r.status_code == 204, r.text
@@ -189,8 +163,8 @@ def test_devices_may_not_start(client, home):
     assert r.status_code == 403
 
 
-def test_a_flood_of_progress_is_answered_429_and_a_repeat_is_not_published(client, home, events):
-    set_id = str(uuid.uuid4())
+def test_a_flood_of_progress_is_answered_429_and_a_repeat_is_not_published(client, db_session, home, events):
+    set_id = _started(db_session, home["device"])
     statuses = []
     for i in range(3 * progress_gate.MAX_PER_WINDOW):
         msg = {"set_id": set_id, "exercise_slug": "squat", "state": "recording", "count": i}
