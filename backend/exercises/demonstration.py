@@ -10,6 +10,7 @@ noise), so the figure moves as the exercise is counted. Frames are projected to 
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import Annotated
 
 import numpy as np
 from pydantic import BaseModel, Field
@@ -29,8 +30,10 @@ class DemonstrationOut(BaseModel):
     view: str = Field(description="front or side", examples=["side"])
     rate_hz: float = Field(description="frames per second", examples=[RATE_HZ])
     joints: list[str] = Field(description="joint names, the order of each frame", examples=[["ROOT", "SPINE"]])
-    bones: list[tuple[int, int]] = Field(description="(parent, child) joint indices to draw", examples=[[[0, 1]]])
-    frames: list[list[tuple[float, float]]] = Field(
+    bones: list[Annotated[list[int], Field(min_length=2, max_length=2)]] = Field(
+        description="(parent, child) joint indices to draw", examples=[[[0, 1]]]
+    )
+    frames: list[list[Annotated[list[float], Field(min_length=2, max_length=2)]]] = Field(
         description="(T, J, 2) metres: horizontal, up; the first frame's lowest joint at 0; empty when the motion "
         "library has no movement for the exercise (the page then shows the written instructions only)"
     )
@@ -45,7 +48,7 @@ def view_for(plane: str) -> str:
 def demonstration(slug: str, view: str, pose: str | None = None) -> DemonstrationOut:
     """Returns one repetition of the exercise `slug` seen from `view`, done in `pose` ("standing", "sitting") when
     the motion allows it (no frames when the motion library has no movement for the exercise)."""
-    joints, bones = list(skeleton.JOINTS), [(int(a), int(b)) for a, b in skeleton.BONES]
+    joints, bones = list(skeleton.JOINTS), [[int(a), int(b)] for a, b in skeleton.BONES]
     if slug not in SPECS:
         return DemonstrationOut(slug=slug, view=view, rate_hz=RATE_HZ, joints=joints, bones=bones, frames=[])
     pose = pose if pose in SPECS[slug].poses else None  # the library's pose (sitting), else the motion's own

@@ -10,7 +10,7 @@ from sqlalchemy import event
 from backend.database import utcnow
 from backend.exercises.library import EXERCISES
 from backend.plans.models import Plan, PlanItem
-from backend.sessions import dashboard
+from backend.sessions import dashboard, triage
 from backend.suggestions.models import Suggestion
 
 
@@ -365,7 +365,7 @@ def test_missing_balance_gives_the_analysis_reason(db_session, make_user, exerci
     doc = {"repetitions": 5, "rom_deg": 50.0, "quality": {"ok": True}, "balance": None, "balance_missing": why}
     doc["indicators"] = {"balance": {"score": None, "missing": why}}
     store(patient, exercise, THURSDAY_NOON - dt.timedelta(hours=1), doc=doc)
-    name = exercise.slug.replace("_", " ")
+    name = triage._name(exercise.slug)  # the library's name, as the triage reasons say it
     assert _summary(db_session, patient)["balance_missing"] == f"Not measured ({name}): {why}"
 
 

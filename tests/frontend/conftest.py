@@ -208,8 +208,9 @@ def run_server(
 
 
 @pytest.fixture(scope="session")
-def browser():
-    """One headless Chromium for the run (Debian's /usr/bin/chromium)."""
+def playwright_session():
+    """Playwright for the run: one per process (a second sync_playwright() inside the first one fails), shared by
+    the browser below and by tests that launch Chromium with their own flags (the fake camera)."""
     from playwright import sync_api
 
     if not Path(CHROMIUM).exists():
@@ -217,9 +218,15 @@ def browser():
             pytest.fail(f"no Chromium at {CHROMIUM}; CI must install Debian's chromium (.ci/run does)")
         pytest.skip(f"no Chromium at {CHROMIUM} (apt-get install chromium, or set COACH_CHROMIUM)")
     with sync_api.sync_playwright() as pw:
-        b = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=["--no-sandbox"])
-        yield b
-        b.close()
+        yield pw
+
+
+@pytest.fixture(scope="session")
+def browser(playwright_session):
+    """One headless Chromium for the run (Debian's /usr/bin/chromium)."""
+    b = playwright_session.chromium.launch(executable_path=CHROMIUM, headless=True, args=["--no-sandbox"])
+    yield b
+    b.close()
 
 
 @pytest.fixture

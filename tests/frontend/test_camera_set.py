@@ -75,13 +75,9 @@ def camera_browser(playwright_module, video: Path | None):
 
 
 @pytest.fixture(scope="module")
-def pw():
-    from playwright import sync_api
-
-    if not Path(CHROMIUM).exists():
-        pytest.skip(f"no Chromium at {CHROMIUM}")
-    with sync_api.sync_playwright() as p:
-        yield p
+def pw(playwright_session):
+    """The run's Playwright (tests/frontend/conftest.py), which launches this module's camera browser."""
+    return playwright_session
 
 
 @pytest.fixture(scope="module")
