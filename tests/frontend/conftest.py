@@ -53,6 +53,7 @@ class LiveServer:
     approved_text: str  # a suggestion approved through the API before the browser tests
     pending_ids: list[int] = field(default_factory=list)
     database_url: str = ""  # what the server process uses (PostgreSQL: with its schema)
+    storage_dir: str = ""  # its object store (a second server on the same database must use the same one)
 
 
 def free_port() -> int:
@@ -160,10 +161,11 @@ def live_server(tmp_path_factory) -> Iterator[LiveServer]:
 
     server_url = _server_url(url, schema)
     try:
-        with run_server(server_url, tmp_path_factory.mktemp("log")) as base:
+        log_dir = tmp_path_factory.mktemp("log")
+        with run_server(server_url, log_dir) as base:
             patient_id, approved, pending = _upload_history(base)
             yield LiveServer(url=base, patient_id=patient_id, approved_text=approved, pending_ids=pending,
-                             database_url=server_url)  # fmt: skip
+                             database_url=server_url, storage_dir=str(log_dir / "objects"))  # fmt: skip
     finally:
         cleanup()  # after the server stopped
 

@@ -26,7 +26,13 @@ def public_url(live_server, tmp_path_factory):
     folder = tmp_path_factory.mktemp("proxy")
     port = free_port()
     public = f"https://127.0.0.1:{port}{PREFIX}"
-    with run_server(live_server.database_url, folder, COACH_PUBLIC_URL=public, COACH_COOKIE_SECURE="true") as app:
+    with run_server(
+        live_server.database_url,
+        folder,
+        COACH_PUBLIC_URL=public,
+        COACH_COOKIE_SECURE="true",
+        COACH_STORAGE_DIR=live_server.storage_dir,
+    ) as app:
         cert, key = self_signed_certificate(folder)
         with ProxyServer(app, PREFIX, port, cert, key):
             yield public

