@@ -101,7 +101,8 @@ def test_processing_boxes_scroll_with_the_keyboard(page, live_server):
         assert box.get_attribute("tabindex") == "0" and box.get_attribute("aria-label"), box.get_attribute("class")
     longest = max(range(boxes.count()), key=lambda k: boxes.nth(k).evaluate("(b) => b.textContent.length"))
     box = boxes.nth(longest)  # the file's recorded parameters may be a short one
-    box.evaluate("(b) => { b.style.maxHeight = '4rem'; }")  # make it scroll whatever the parameters' length
+    # make it scroll whatever the parameters' length (a test session's may be three lines)
+    box.evaluate("(b) => { b.style.maxHeight = '4rem'; b.textContent += '\\n'.repeat(40); }")
     box.focus()
     page.keyboard.press("PageDown")
     assert box.evaluate("(b) => b.scrollTop") > 0
