@@ -27,9 +27,9 @@ from backend.camera.errors import (
 from backend.camera.models import CameraBatch, CameraConsent, CameraSet
 from backend.camera.schemas import BatchIn, CameraSetOut, ConsentOut
 from backend.database import utcnow
-from backend.exceptions import InvalidInput, PlanNotFound
+from backend.exceptions import InvalidInput
 from backend.exercises.models import Exercise
-from backend.plans.models import Plan, PlanItem
+from backend.plans.service import patient_plan_item
 from kinect_agent.sources.webcam.landmarks import LandmarkBatch
 
 MAX_STARTS_PER_HOUR = 60  # sets a patient may start in an hour (a page restarting in a loop is stopped here)
@@ -105,15 +105,7 @@ def set_out(db_session: Session, row: CameraSet) -> CameraSetOut:
 
 def start_set(*, db_session: Session, patient_id: int, plan_item_id: int, model: str) -> CameraSet:
     """Starts a camera set of a plan item of the patient; raises PlanNotFound, ConsentMissing or CameraRateLimited."""
-    found = db_session.execute(
-        select(PlanItem, Exercise)
-        .join(Plan, Plan.id == PlanItem.plan_id)
-        .join(Exercise, Exercise.id == PlanItem.exercise_id)
-        .where(PlanItem.id == plan_item_id, Plan.patient_id == patient_id)
-    ).first()
-    if found is None:
-        raise PlanNotFound(f"plan item {plan_item_id} is not in a plan of patient {patient_id}")
-    item, exercise = found
+    item, exercise = patient_plan_item(db_session=db_session, patient_id=patient_id, plan_item_id=plan_item_id)
     if not consent_status(db_session=db_session, patient_id=patient_id).given:
         raise ConsentMissing("the patient has not agreed to recording with their camera yet (POST /camera/consent)")
     hour_ago = utcnow() - dt.timedelta(hours=1)

@@ -16,11 +16,10 @@ from sqlalchemy.orm import Session
 from backend.database import utcnow
 from backend.devices.models import Device
 from backend.events.hub import Event, publish
-from backend.exceptions import AgentOffline, LiveSetUnknown, PlanNotFound
-from backend.exercises.models import Exercise
+from backend.exceptions import AgentOffline, LiveSetUnknown
 from backend.i18n import N_
 from backend.live.schemas import AgentStatusOut, LiveSetOut
-from backend.plans.models import Plan, PlanItem
+from backend.plans.service import patient_plan_item
 from backend.users.models import User
 
 HEARTBEAT_S = 15.0
@@ -106,15 +105,7 @@ def _require_online(db_session: Session, patient_id: int) -> Device:
 
 def start_set(*, db_session: Session, patient_id: int, plan_item_id: int) -> LiveSetOut:
     """Asks the patient's connected agent to record one set of a plan item; raises PlanNotFound or AgentOffline."""
-    found = db_session.execute(
-        select(PlanItem, Exercise)
-        .join(Plan, Plan.id == PlanItem.plan_id)
-        .join(Exercise, Exercise.id == PlanItem.exercise_id)
-        .where(PlanItem.id == plan_item_id, Plan.patient_id == patient_id)
-    ).first()
-    if found is None:
-        raise PlanNotFound(f"plan item {plan_item_id} is not in a plan of patient {patient_id}")
-    item, exercise = found
+    item, exercise = patient_plan_item(db_session=db_session, patient_id=patient_id, plan_item_id=plan_item_id)
     device = _require_online(db_session, patient_id)
     out = LiveSetOut(set_id=str(uuid.uuid4()), patient_id=patient_id, device_id=device.id,
                      exercise_slug=exercise.slug, target_reps=item.repetitions, action="start")  # fmt: skip

@@ -69,6 +69,19 @@ def replace_plan(*, db_session: Session, plan: Plan, body: PlanIn) -> Plan:
     return plan
 
 
+def patient_plan_item(*, db_session: Session, patient_id: int, plan_item_id: int) -> tuple[PlanItem, Exercise]:
+    """Returns a plan item of one of the patient's plans and its exercise; raises PlanNotFound."""
+    found = db_session.execute(
+        select(PlanItem, Exercise)
+        .join(Plan, Plan.id == PlanItem.plan_id)
+        .join(Exercise, Exercise.id == PlanItem.exercise_id)
+        .where(PlanItem.id == plan_item_id, Plan.patient_id == patient_id)
+    ).first()
+    if found is None:
+        raise PlanNotFound(f"plan item {plan_item_id} is not in a plan of patient {patient_id}")
+    return found[0], found[1]
+
+
 def get_plan(*, db_session: Session, plan_id: int) -> Plan:
     """Returns one plan or raises PlanNotFound."""
     plan = db_session.get(Plan, plan_id)
