@@ -18,6 +18,7 @@ import pytest
 
 from backend.demo import DEMO_PASSWORD
 from kinect_agent.home import HomeAgent
+from tests.backend.test_demo import _demo_processes
 
 
 def _free_port() -> int:
@@ -61,18 +62,6 @@ def _server(tmp_path: Path, port: int, log: str):
         proc.wait(timeout=30)
 
 
-def _processes(marker: str) -> list[int]:
-    """Returns the pids whose command line mentions marker (the test's own folder)."""
-    pids = []
-    for entry in Path("/proc").iterdir():
-        try:
-            if entry.name.isdigit() and marker in (entry / "cmdline").read_bytes().decode(errors="replace"):
-                pids.append(int(entry.name))
-        except OSError:
-            continue
-    return pids
-
-
 def _agents(server: str, home: Path, *extra: str) -> subprocess.CompletedProcess:
     command = [sys.executable, "-m", "backend.demo_agents", "--server", server, "--home", str(home), "--no-live",
                "--history-weeks", "0", "--min-interval", "0.1", "--max-interval", "0.2", *extra]  # fmt: skip
@@ -107,11 +96,11 @@ def test_ctrl_c_ends_the_demo_and_its_agents_within_2_s_without_a_traceback(tmp_
         t0 = time.monotonic()
         os.killpg(proc.pid, signal.SIGINT)  # what a terminal's Ctrl-C does: SIGINT to the foreground group
         proc.wait(timeout=30)
-        while _processes(str(tmp_path)) and time.monotonic() - t0 < 30:
+        while _demo_processes(str(tmp_path)) and time.monotonic() - t0 < 30:
             time.sleep(0.05)
         took = time.monotonic() - t0
     finally:
-        for pid in _processes(str(tmp_path)):
+        for pid in _demo_processes(str(tmp_path)):
             os.kill(pid, signal.SIGKILL)
     out = log.read_text()
     assert "Traceback" not in out, out[-3000:]
