@@ -24,6 +24,9 @@ const Live = (() => {
   const RECENT_UPLOAD_MS = 2 * 86400000;  // a computer that uploaded within this long works, even when not live
   let pid = null, names = (slug) => slug, agent = "unknown", current = null, timer = null, howTo = (slug) => "";
   let lastUpload = null, dropped = false;  // the newest stored session's upload time; the agent left while watched
+  // events that can overtake the answers they depend on: a set's progress heard before the answer to Start gave its
+  // id, a stored session heard before the progress that names it; kept until that answer comes
+  let early = [], storedEarly = null;
 
   function init(patientId, exerciseName, instructions) {
     pid = patientId; names = exerciseName; howTo = instructions || howTo;
@@ -69,12 +72,14 @@ const Live = (() => {
 
   /** After the server came back, "online" is believed only once the agent is heard anew (a live.agent event, or
    *  its last_seen_at moving on): a server that stopped leaves its agents' streams recorded as open for a while. */
-  let confirm = null, confirmTimer = null;
+  let confirm = null, confirmTimer = null, agentEvents = 0;  // live.agent events heard so far
 
   async function status() {
     if (pid === null) return;  // the event stream opened before init(): init() asks itself
     let out = null;
+    const asked = agentEvents;
     try { out = await api(`/live/status?patient_id=${pid}`); } catch (err) { out = { state: "unknown" }; }
+    if (agentEvents !== asked) return;  // a live.agent event came while asking: it is newer than this answer
     clearTimeout(confirmTimer);
     agent = out.state;
     if (confirm && agent === "online") {
@@ -99,6 +104,9 @@ const Live = (() => {
       current.set_id = out.set_id;
       clearTimeout(timer);
       timer = setTimeout(() => { if (current && current.starting && current.set_id === out.set_id) { current.failed = I18n.t("The home computer did not answer. Please check it and try again."); render(); } }, ANSWER_MS);
+      const heard = early.filter((data) => data.set_id === out.set_id);
+      early = [];
+      heard.forEach(onProgress);
     } catch (err) {
       if (err.status === 409) { agent = "offline"; current = null; } else current.failed = kindMessage(err);
     }
@@ -113,6 +121,7 @@ const Live = (() => {
   }
 
   function onAgent(data) {
+    agentEvents += 1;
     confirm = null; clearTimeout(confirmTimer);
     agent = data.online ? "online" : "offline";
     dropped = !data.online;
@@ -129,6 +138,7 @@ const Live = (() => {
   }
 
   function onProgress(data) {
+    if (current && current.starting && !current.set_id) { early.push(data); return; }  // before Start's answer
     if (!current || current.set_id !== data.set_id) {
       if (data.state !== "recording") return;
       current = { set_id: data.set_id, slug: data.exercise_slug, target: data.target, count: 0 };  // page opened mid-set
@@ -147,6 +157,7 @@ const Live = (() => {
         if (current === c) render();
       }, SAVE_MS);
     }
+    if (storedEarly && storedEarly.client_session_id === current.session_id) { const d = storedEarly; storedEarly = null; onStored(d); }
     if (data.state === "failed") { current.failed = data.hint ? I18n.t(data.hint) : I18n.t("The set could not be recorded."); speak(current.failed); }
     render();
     speakChanges(current, before);
@@ -154,7 +165,10 @@ const Live = (() => {
   }
 
   async function onStored(data) {
-    if (!current || !current.session_id || data.client_session_id !== current.session_id) return;
+    if (!current || !current.session_id || data.client_session_id !== current.session_id) {
+      if (running()) storedEarly = data;  // its set's progress may not have been heard yet
+      return;
+    }
     try { current.result = await api(`/sessions/${data.session_id}`); } catch (err) { current.result = { error: kindMessage(err) }; }
     render();
     speakChanges(current, current.count);

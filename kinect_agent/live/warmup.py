@@ -29,3 +29,7 @@ def warm_up() -> float:
         counter.add(t, rec.positions[k], rec.state[k], online.step(t, rec.positions[k], rec.state[k]))
     counter.final()
     return time.perf_counter() - started
+
+
+if __name__ == "__main__":  # at install (scripts/_venv.sh): numba's on-disk cache is filled before the first start
+    print(f"live filter compiled in {warm_up():.1f} s")

@@ -214,6 +214,39 @@ def test_count_in_view_camera_silence_said_and_the_end_level_with_the_stored_cou
         link.close()
 
 
+def test_a_set_that_ends_before_starts_answer_still_shows_its_end(browser, live_server):
+    """The agent's progress and the stored session can reach the page before the answer to its Start (a busy
+    server answers late): the page keeps them and shows the end and the result, never "did not answer"."""
+    base = live_server.url
+    email, _, token = patient_with_device(base)
+    link = AgentLink(base, token)
+    context, page = _context(browser, base, 1366, 900)
+    sid = str(uuid.uuid4())
+
+    def answer_late(route) -> None:  # the set is over and stored before the page hears Start's answer
+        answer = route.fetch()
+        start = link.command()
+        link.progress(start, "ended", TARGET, sid, elapsed_s=9.0, reason="target")  # a short set: its only message
+        link.upload(make_khs(EXERCISE, TARGET, seed=22, session_id=sid, created_at=_now_iso()))
+        time.sleep(2)  # the events reach the page's stream meanwhile
+        route.fulfill(response=answer)
+
+    try:
+        login(page, email, PASSWORD)
+        link.connect()
+        expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
+        page.route("**/api/v1/live/start", answer_late)
+        page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2")).click()
+        expect(page.locator("#live-result")).to_contain_text("Saved", timeout=30_000)
+        expect(page.locator("#live-ended")).to_contain_text(f"You did all {TARGET}")
+        page.wait_for_timeout(500)
+        assert "did not answer" not in page.locator("#live").inner_text()
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+        link.close()
+
+
 def test_a_computer_that_uploads_but_is_not_live_is_not_called_broken(browser, live_server):
     base = live_server.url
     email, _, token = patient_with_device(base)

@@ -105,7 +105,7 @@ def test_processing_boxes_scroll_with_the_keyboard(page, live_server):
     box.evaluate("(b) => { b.style.maxHeight = '4rem'; b.textContent += '\\n'.repeat(40); }")
     box.focus()
     page.keyboard.press("PageDown")
-    assert box.evaluate("(b) => b.scrollTop") > 0
+    page.wait_for_function("(b) => b.scrollTop > 0", arg=box.element_handle())  # keyboard scrolling is animated
     found = Axe().run(page, options={"runOnly": ["scrollable-region-focusable"]}).response["violations"]
     assert not found, found
 
