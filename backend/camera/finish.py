@@ -98,7 +98,8 @@ def end_set(
     *, db_session: Session, row: CameraSet, last_seq: int, reason: str, max_frames: int, max_decoded_bytes: int
 ) -> CameraSet:
     """Ends the set row (locked by the caller) and returns it: status stored with session_id, or failed with the
-    reason in error (too few frames). A set that ended already is returned as it is. Raises BatchOutOfOrder when
+    reason in error (too few frames); either way its landmark batches are deleted. A set that ended already is
+    returned as it is. Raises BatchOutOfOrder when
     the page sent batches the server has not received (last_seq > row.last_seq): it sends them, then ends again.
     max_frames, max_decoded_bytes: the limits of an uploaded session file (Settings.SESSION_MAX_*)."""
     if row.status != "recording":
@@ -125,6 +126,7 @@ def end_set(
                 _ended_message(row, exercise, count or 0, "The set was too short to save."),
             ),
         )
+        service.drop_batches(db_session=db_session, set_id=row.id)
         db_session.flush()
         live_count.forget(row.id)
         return row
@@ -133,6 +135,7 @@ def end_set(
         db_session=db_session, upload=upload, patient_id=row.patient_id, exercise=exercise, device_id=None
     )
     row.status, row.session_id = "stored", stored.id
+    service.drop_batches(db_session=db_session, set_id=row.id)
     db_session.flush()
     if created:
         publish(

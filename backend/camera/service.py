@@ -10,7 +10,7 @@ import datetime as dt
 import uuid
 
 import numpy as np
-from sqlalchemy import func, select
+from sqlalchemy import delete, func, select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
@@ -167,7 +167,8 @@ def add_batch(*, db_session: Session, row: CameraSet, body: BatchIn) -> tuple[La
     """Stores one batch of the set row (locked by the caller); returns (its frames, repeated).
 
     A batch number received before with the same frames is a repeat (nothing stored, repeated=True); with other
-    frames BatchConflict. Raises CameraSetEnded after the end, BatchOutOfOrder when batches before it are missing,
+    frames BatchConflict; after the end (its batches are gone then, drop_batches) any number received is a repeat.
+    Raises CameraSetEnded for a new batch after the end, BatchOutOfOrder when batches before it are missing,
     InvalidInput naming the field of an implausible value or of a time that goes back, CameraRateLimited.
     """
     data = pack(check_batch(body))
@@ -175,6 +176,8 @@ def add_batch(*, db_session: Session, row: CameraSet, body: BatchIn) -> tuple[La
     batch = unpack(data, len(body.frames), (body.image_size[0], body.image_size[1]))  # as stored: float32 values
     if body.seq <= row.last_seq:
         stored = _stored_batch(db_session, row.id, body.seq)
+        if stored is None and row.status != "recording":
+            return batch, True
         if stored is None or stored.content_hash != digest:
             raise BatchConflict(f"batch {body.seq} of set {row.id} was received before with other frames")
         return batch, True
@@ -214,6 +217,12 @@ def add_batch(*, db_session: Session, row: CameraSet, body: BatchIn) -> tuple[La
     row.n_batches += 1
     db_session.flush()
     return batch, False
+
+
+def drop_batches(*, db_session: Session, set_id: uuid.UUID) -> int:
+    """Deletes the landmark batches of a set that ended (the stored session holds its skeleton; the 33 landmarks
+    with the face's are not kept beyond the set); returns how many there were."""
+    return db_session.execute(delete(CameraBatch).where(CameraBatch.set_id == set_id)).rowcount or 0
 
 
 def set_batches(*, db_session: Session, set_id: uuid.UUID, upto_seq: int | None = None) -> list[LandmarkBatch]:

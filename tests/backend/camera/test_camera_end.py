@@ -9,6 +9,7 @@ import uuid
 from sqlalchemy import func, select
 
 from backend.camera import live_count
+from backend.camera.models import CameraBatch
 from backend.sessions.metrics import json_ready
 from backend.sessions.models import ExerciseSession
 from backend.sessions.service import session_file as stored_file
@@ -32,6 +33,12 @@ def _send_all(client, set_id, frames, headers) -> list[dict]:
 def _sessions(db_session, patient_id) -> int:
     return db_session.scalar(
         select(func.count()).select_from(ExerciseSession).where(ExerciseSession.patient_id == patient_id)
+    )
+
+
+def _batches(db_session, set_id) -> int:
+    return db_session.scalar(
+        select(func.count()).select_from(CameraBatch).where(CameraBatch.set_id == uuid.UUID(set_id))
     )
 
 
@@ -61,6 +68,7 @@ def test_squats_count_live_and_the_end_stores_one_webcam_session(client, db_sess
     assert 29 <= payload.params["fps_achieved"] <= 31, payload.params["fps_achieved"]
     detail = client.get(f"/api/v1/sessions/{session_id}", headers=h).json()
     assert detail["repetitions"] == 3, detail
+    assert _batches(db_session, set_id) == 0  # the landmarks live on only as the session's skeleton
     # the same end again (a lost answer), and a batch sent again after the end: nothing new
     again = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": len(answers) - 1}, headers=h)
     assert again.status_code == 200 and again.json()["session_id"] == session_id, again.text
@@ -97,6 +105,7 @@ def test_the_end_waits_for_batches_the_page_sent_and_a_too_short_set_stores_noth
     r = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": 0}, headers=h)
     assert r.status_code == 200 and r.json()["status"] == "failed" and "frames" in r.json()["error"], r.text
     assert _sessions(db_session, camera_home["patient"].id) == 0
+    assert _batches(db_session, set_id) == 0
 
 
 def test_a_failing_live_count_does_not_lose_the_batch(client, db_session, camera_home, started, monkeypatch):

@@ -1,0 +1,235 @@
+"""A crowd of simultaneous requests spread over every endpoint and role (prints numbers; not a test).
+
+    .venv/bin/python bench/crowd_all.py [--db URL] [--workers 2] [--crowd 300] [--json OUT]
+
+bench/crowd.py sends one therapist's two pages; this one sends what a clinic's server sees at once: the admin's,
+the therapists', the patients' and the home agents' requests, every GET of the API whose parameters the demo clinic
+fills (lists, details, exports, plots, the PDF report, the data archive, the replay) plus session uploads by devices,
+with some event streams held open meanwhile. Setup (not measured): the demo clinic (`coach-server migrate`,
+`seed-demo`) in a SQLite file, or in the PostgreSQL database of --db (dropped and recreated; its name must contain
+"bench"); the real server (uvicorn, --workers processes); every demo patient's paired device uploads two sessions.
+Then the crowd leaves at once, request i taking the i-th entry of the mix (cycled). Reported: answers by status,
+each 5xx with its path, and per role the median and 99th percentile of the time to the answer. The run fails (exit
+1) on any 5xx or failed connection.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections import Counter, defaultdict
+from dataclasses import dataclass
+from pathlib import Path
+
+import httpx
+from sqlalchemy.engine import make_url
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from backend.demo import ADMIN, DEMO_PASSWORD, PATIENTS, THERAPISTS  # noqa: E402
+from bench.dashboard_load import ROOT, free_port, migrate, recreate_database, start_server, stop_server  # noqa: E402
+from bench.ingest import session_file, with_new_session_id  # noqa: E402
+
+OPEN_STREAMS = 20  # event streams held open by patients' pages during the crowd
+SESSION_MINUTES = 0.5  # the uploaded sessions' length
+
+
+@dataclass
+class Caller:
+    """One signed-in role: its client (cookie login or device token) and the paths it asks for."""
+
+    role: str
+    client: httpx.AsyncClient
+    gets: list[str]
+
+
+def _sign_in(base: str, email: str) -> dict[str, str]:
+    """Returns the login cookies of a demo user."""
+    r = httpx.post(f"{base}/api/v1/auth/login", json={"email": email, "password": DEMO_PASSWORD}, timeout=60)
+    r.raise_for_status()
+    return dict(r.cookies)
+
+
+def _pair_devices(base: str, admin: dict[str, str]) -> dict[int, str]:
+    """Pairs a device with every demo patient; returns {patient id: device token}."""
+    with httpx.Client(base_url=base, cookies=admin, timeout=60) as c:
+        csrf = {"X-CSRF-Token": c.get("/api/v1/auth/csrf").json()["csrf_token"]}
+        patients = c.get("/api/v1/patients", params={"limit": 100}).json()["items"]
+        tokens = {}
+        for p in patients:
+            code = c.post(f"/api/v1/patients/{p['id']}/pairing-codes", headers=csrf).json()["code"]
+            r = httpx.post(f"{base}/api/v1/devices/pair", json={"code": code, "name": "crowd"}, timeout=60)
+            r.raise_for_status()
+            tokens[p["id"]] = r.json()["token"]
+    return tokens
+
+
+def _upload(base: str, token: str, data: bytes) -> int:
+    headers = {"Authorization": f"Bearer {token}", "Content-Type": "application/octet-stream"}
+    r = httpx.post(f"{base}/api/v1/sessions?exercise=squat", content=with_new_session_id(data), headers=headers,
+                   timeout=120)  # fmt: skip
+    r.raise_for_status()
+    return r.json()["id"]
+
+
+def _ids(base: str, cookies: dict[str, str]) -> tuple[int, int, int | None]:
+    """Returns (a patient id, one of that patient's sessions, one of their plans) visible to the caller."""
+    with httpx.Client(base_url=base, cookies=cookies, timeout=60) as c:
+        pid = c.get("/api/v1/patients").json()["items"][0]["id"]
+        sid = c.get("/api/v1/sessions", params={"patient_id": pid, "limit": 1}).json()["items"][0]["id"]
+        plans = c.get(f"/api/v1/patients/{pid}/plans").json()
+        plans = plans["items"] if isinstance(plans, dict) else plans
+        return pid, sid, (plans[0]["id"] if plans else None)
+
+
+def _staff_gets(pid: int, sid: int, plan: int | None) -> list[str]:
+    s, p = f"/api/v1/sessions/{sid}", f"/api/v1/patients/{pid}"
+    gets = ["/api/v1/dashboard", "/api/v1/patients", p, f"{p}/therapists", f"{p}/devices", f"{p}/plans",
+            f"/api/v1/sessions?patient_id={pid}", s, f"{s}/detail", f"{s}/export?format=csv", f"{s}/file",
+            f"{s}/metric-versions", f"{s}/feeling", f"{s}/replay", f"{p}/progress", f"{p}/summary",
+            f"{p}/suggestions", f"{p}/voice", f"{p}/report.pdf", f"/api/v1/live/status?patient_id={pid}",
+            "/api/v1/exercises", "/api/v1/exercises/squat", "/api/v1/exercises/squat/demonstration",
+            "/api/v1/users/me", "/api/v1/version"]  # fmt: skip
+    return gets + ([f"/api/v1/plans/{plan}"] if plan else [])
+
+
+def _patient_gets(pid: int, sid: int) -> list[str]:
+    p = f"/api/v1/patients/{pid}"
+    return ["/api/v1/users/me", f"{p}/plans", "/api/v1/sessions", f"/api/v1/sessions/{sid}", f"{p}/progress",
+            f"{p}/suggestions", f"/api/v1/live/status?patient_id={pid}", "/api/v1/camera/consent", f"{p}/voice",
+            f"{p}/archive", "/api/v1/exercises/elbow_flexion/demonstration"]  # fmt: skip
+
+
+def setup(base: str, session: bytes) -> tuple[list[Caller], dict[int, str]]:
+    """Signs in one caller per role, pairs devices and uploads sessions; returns the callers and device tokens."""
+    admin = _sign_in(base, ADMIN[0])
+    tokens = _pair_devices(base, admin)
+    for token in tokens.values():
+        for _ in range(2):
+            _upload(base, token, session)
+    therapist = _sign_in(base, THERAPISTS[0][0])
+    patient = _sign_in(base, PATIENTS[0][0])
+    pid, sid, plan = _ids(base, therapist)
+    with httpx.Client(base_url=base, cookies=patient, timeout=60) as c:
+        own_pid = c.get("/api/v1/users/me").json()["id"]
+        own_sid = c.get("/api/v1/sessions", params={"limit": 1}).json()["items"][0]["id"]
+    device_token = tokens[own_pid]
+    limits = httpx.Limits(max_connections=1000, max_keepalive_connections=1000)
+
+    def client(**kw) -> httpx.AsyncClient:
+        return httpx.AsyncClient(base_url=base, timeout=300, limits=limits, **kw)
+
+    callers = [
+        Caller("admin", client(cookies=admin), ["/api/v1/users", "/api/v1/audit", *_staff_gets(pid, sid, plan)]),
+        Caller("therapist", client(cookies=therapist), _staff_gets(pid, sid, plan)),
+        Caller("patient", client(cookies=patient), _patient_gets(own_pid, own_sid)),
+        Caller("device", client(headers={"Authorization": f"Bearer {device_token}"}),
+               ["/api/v1/devices/me", f"/api/v1/patients/{own_pid}/plans", "POST /api/v1/sessions?exercise=squat"]),
+    ]  # fmt: skip
+    return callers, tokens
+
+
+async def crowd(callers: list[Caller], n: int, session: bytes) -> dict:
+    """Sends n requests at once (the mix of every caller's requests, cycled) while OPEN_STREAMS event streams are
+    open; returns the answers by status, the 5xx with their paths and per-role latencies (s)."""
+    mix = [(c, path) for k in range(max(len(c.gets) for c in callers)) for c in callers if k < len(c.gets)
+           for path in [c.gets[k]]]  # fmt: skip
+    patient = next(c for c in callers if c.role == "patient")
+    latencies: dict[str, list[float]] = defaultdict(list)
+    answers: Counter[str] = Counter()
+    errors: list[str] = []
+
+    async def hold_stream() -> None:
+        try:
+            async with patient.client.stream("GET", "/api/v1/events", timeout=httpx.Timeout(300, read=None)) as r:
+                async for _ in r.aiter_lines():
+                    pass
+        except (httpx.HTTPError, asyncio.CancelledError):
+            pass
+
+    async def one(i: int) -> None:
+        caller, path = mix[i % len(mix)]
+        t0 = time.perf_counter()
+        try:
+            if path.startswith("POST "):
+                r = await caller.client.post(path[5:], content=with_new_session_id(session),
+                                             headers={"Content-Type": "application/octet-stream"})  # fmt: skip
+            else:
+                r = await caller.client.get(path)
+            status = str(r.status_code)
+        except httpx.HTTPError as exc:
+            status = type(exc).__name__
+        latencies[caller.role].append(time.perf_counter() - t0)
+        answers[status] += 1
+        if not status.isdigit() or status.startswith("5"):
+            errors.append(f"{status} {caller.role} {path}")
+
+    streams = [asyncio.create_task(hold_stream()) for _ in range(OPEN_STREAMS)]
+    await asyncio.sleep(1.0)
+    t0 = time.perf_counter()
+    await asyncio.gather(*(one(i) for i in range(n)))
+    wall = time.perf_counter() - t0
+    for task in streams:
+        task.cancel()
+    await asyncio.gather(*streams, return_exceptions=True)
+    per_role = {role: {"n": len(v), "p50_s": round(statistics.median(v), 2),
+                       "p99_s": round(sorted(v)[min(len(v) - 1, int(0.99 * len(v)))], 2)}
+                for role, v in latencies.items()}  # fmt: skip
+    return {"n": n, "distinct_requests": len(mix), "answers": dict(answers), "errors": errors,
+            "last_s": round(wall, 1), "per_role": per_role}  # fmt: skip
+
+
+async def _run(callers: list[Caller], sizes: list[int], session: bytes) -> list[dict]:
+    try:
+        return [await crowd(callers, n, session) for n in sizes]
+    finally:
+        for c in callers:
+            await c.client.aclose()
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--db", help="PostgreSQL URL of a database whose name contains 'bench' (default: SQLite)")
+    parser.add_argument("--workers", type=int, default=2, help="server worker processes (default 2)")
+    parser.add_argument("--crowd", type=int, nargs="+", default=[300], help="crowd sizes (default 300)")
+    parser.add_argument("--json", type=Path, help="also write the numbers to this JSON file")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        url = args.db or f"sqlite:///{Path(tmp) / 'crowd.db'}"
+        if args.db:
+            if "bench" not in (make_url(url).database or ""):
+                raise SystemExit(f"--db {url}: the database is dropped and recreated; its name must contain 'bench'")
+            recreate_database(url)
+        migrate(url)
+        env = {**os.environ, "COACH_DATABASE_URL": url}
+        subprocess.run([str(Path(sys.executable).parent / "coach-server"), "seed-demo"], env=env, check=True, cwd=ROOT,
+                       stdout=subprocess.DEVNULL)  # fmt: skip
+        session = session_file(SESSION_MINUTES, Path(tempfile.gettempdir()))
+        port = free_port()
+        server = start_server(url, port, workers=args.workers)
+        try:
+            callers, _ = setup(f"http://127.0.0.1:{port}", session)
+            rows = asyncio.run(_run(callers, args.crowd, session))
+        finally:
+            stop_server(server)
+    for row in rows:
+        answers = ", ".join(f"{k}: {v}" for k, v in sorted(row["answers"].items()))
+        print(f"crowd {row['n']} over {row['distinct_requests']} distinct requests, {args.workers} workers: {answers};"
+              f" last answer after {row['last_s']} s")  # fmt: skip
+        for role, r in row["per_role"].items():
+            print(f"  {role:<10} {r['n']:>4} requests  p50 {r['p50_s']:>6.2f} s  p99 {r['p99_s']:>6.2f} s")
+        for line in row["errors"]:
+            print(f"  error: {line}")
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=2))
+    return 1 if any(r["errors"] for r in rows) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
