@@ -93,3 +93,23 @@ def test_patient_answers_it_hurt_and_the_dashboard_shows_it_unread_live(browser,
     finally:
         patient_ctx.close()
         therapist_ctx.close()
+
+
+def test_a_german_patient_answers_in_german(browser, live_server):
+    base = live_server.url
+    email, pid, _ = _patient_with_advice(base)
+    context, page = _context(browser, base, 390, 844)
+    try:
+        login(page, email, PASSWORD)
+        advice = page.locator("#advice li", has_text=ADVICE)
+        expect(advice).to_be_visible(timeout=LOAD_MS)
+        with page.expect_navigation():
+            page.locator("#language").select_option("de")  # saves the patient's language and shows the page in it
+        expect(advice.get_by_role("button", name="Es hat wehgetan")).to_be_visible(timeout=LOAD_MS)
+        advice.get_by_role("button", name="Erledigt").click()
+        expect(advice.locator(".answered")).to_contain_text("Sie haben heute geantwortet: Erledigt")
+        shot(page, "reply-patient-de-390")
+        assert not _serious(page)
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
