@@ -24,6 +24,7 @@ const AdviceReply = (() => {
 
   async function send(pid, adviceId, body) {
     const s = stateOf(adviceId);
+    if (s.sending) return;  // the controls stay enabled (and focused) while one answer is on its way
     s.sending = true; s.error = null; refresh();
     try {
       await api(`/patients/${pid}/replies`, { method: "POST", body: { suggestion_id: adviceId, ...body } });
@@ -36,7 +37,7 @@ const AdviceReply = (() => {
   /** Returns the answers and reply controls of one piece of advice; replies: the patient's replies to it. */
   function block(pid, advice, replies) {
     const id = advice.id, s = stateOf(id), box = `reply-text-${id}`;
-    const input = el("textarea", { id: box, rows: 2, maxlength: MAX, disabled: s.sending,
+    const input = el("textarea", { id: box, rows: 2, maxlength: MAX,
       oninput: (e) => { s.draft = e.target.value; } });
     input.value = s.draft;
     const form = el("form", { class: "reply-form", onsubmit: (e) => {
@@ -46,12 +47,12 @@ const AdviceReply = (() => {
       send(pid, id, { text });
     } },
     el("label", { for: box }, I18n.t("Or write a few words to your therapist")), input,
-    el("button", { class: "btn btn-quiet", type: "submit", disabled: s.sending }, I18n.t("Send")));
+    el("button", { class: "btn btn-quiet", type: "submit", id: `reply-send-${id}` }, I18n.t("Send")));
     return el("div", { class: "reply", "data-advice-id": id },
       replies.length ? el("ul", { class: "answered" }, replies.map(answered)) : null,
       el("div", { class: "reply-presets", role: "group", "aria-label": I18n.t("Answer this advice") },
         Object.entries(PRESETS).map(([code, label]) => el("button", { type: "button", class: "btn btn-big btn-quiet",
-          "data-preset": code, disabled: s.sending, onclick: () => send(pid, id, { preset: code }) }, label()))),
+          id: `reply-${code}-${id}`, "data-preset": code, onclick: () => send(pid, id, { preset: code }) }, label()))),
       form,
       s.said ? el("p", { class: "note", role: "status" }, s.said) : null,
       s.error ? el("p", { class: "alert", role: "alert" }, s.error) : null);

@@ -65,6 +65,7 @@ def test_patient_answers_it_hurt_and_the_dashboard_shows_it_unread_live(browser,
         advice.get_by_role("button", name="It hurt").click()
         expect(advice.locator(".answered")).to_contain_text("You answered today: It hurt")
         expect(advice.get_by_role("status")).to_have_text("Sent. Your therapist will see your answer.")
+        expect(advice.get_by_role("button", name="It hurt")).to_be_focused()  # the redraw keeps the keyboard's place
         shot(patient, f"reply-patient-{width}")
         assert not _serious(patient)
 
@@ -108,6 +109,13 @@ def test_a_german_patient_answers_in_german(browser, live_server):
         expect(advice.get_by_role("button", name="Es hat wehgetan")).to_be_visible(timeout=LOAD_MS)
         advice.get_by_role("button", name="Erledigt").click()
         expect(advice.locator(".answered")).to_contain_text("Sie haben heute geantwortet: Erledigt")
+        advice.get_by_role("button", name="Senden").click()  # nothing written yet
+        expect(advice.get_by_role("alert")).to_have_text("Bitte schreiben Sie zuerst ein paar Worte.")
+        advice.get_by_label("Oder schreiben Sie").fill("Das Knie war steif.")
+        advice.get_by_role("button", name="Senden").click()
+        expect(advice.locator(".answered li")).to_have_count(2)
+        expect(advice.locator(".answered li").last).to_contain_text("geantwortet: Das Knie war steif.")
+        expect(advice.get_by_label("Oder schreiben Sie")).to_have_value("")
         shot(page, "reply-patient-de-390")
         assert not _serious(page)
         assert not page.js_errors, page.js_errors
