@@ -140,6 +140,7 @@ def import_all_models() -> None:
     import backend.patients.models  # noqa: F401
     import backend.plans.models  # noqa: F401
     import backend.replay.models  # noqa: F401
+    import backend.replies.models  # noqa: F401
     import backend.sessions.models  # noqa: F401
     import backend.suggestions.models  # noqa: F401
     import backend.users.models  # noqa: F401

@@ -86,6 +86,10 @@ class SuggestionNotFound(NotFound):
     pass
 
 
+class ReplyNotFound(NotFound):
+    pass
+
+
 class SessionNotFound(NotFound):
     pass
 

@@ -57,6 +57,7 @@ ROUTERS = (
     "backend.voice.router",
     "backend.exercises.demo_router",
     "backend.feeling.router",
+    "backend.replies.router",
 )
 # Packages above the server (the pages, frontend.pages:mount) register a mount function in this entry-point group
 # (pyproject.toml); the server calls each on the app it builds and never imports them (docs/architecture.md).

@@ -25,7 +25,7 @@ from backend.exceptions import AppError
 
 CHANNEL = "coach_events"
 _PENDING = "coach_events"  # key in Session.info: events waiting for the commit
-DATA_KINDS = ("session.stored", "suggestion.changed", "plan.changed")  # stored data changed
+DATA_KINDS = ("session.stored", "suggestion.changed", "plan.changed", "reply.changed")  # stored data changed
 LIVE_KINDS = ("live.agent", "live.command", "live.progress")  # a home agent's presence, its commands, its progress
 KINDS = DATA_KINDS + LIVE_KINDS
 # a login (login_session_id), API tokens (api_token_ids), a device (device_id) or every login and token of a user

@@ -47,9 +47,8 @@ def visible_patients(caller: Caller, db_session: Session, patient_id: int | None
     responses={
         200: {
             "content": {"text/event-stream": {}},
-            "description": "events: session.stored, suggestion.changed, "
-            "plan.changed (and with live=true live.agent, live.command, live.progress); data: {kind, patient_id, "
-            "data}",
+            "description": "events: session.stored, suggestion.changed, plan.changed, reply.changed "
+            "(and with live=true live.agent, live.command, live.progress); data: {kind, patient_id, data}",
         },  # fmt: skip
         **error_responses(*AUTH_ERRORS, PatientNotFound, TooManyStreams),
     },

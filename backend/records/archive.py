@@ -16,6 +16,7 @@ from backend.devices.models import Device
 from backend.exercises.models import Exercise
 from backend.patients.models import TherapistPatient
 from backend.plans.models import Plan, PlanItem
+from backend.replies.models import AdviceReply
 from backend.sessions import service as sessions
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.storage import StorageError
@@ -37,6 +38,7 @@ sessions/         the session files themselves (.khs: raw and filtered skeleton,
                   kinect-agent tool, docs/session-file.md); a file removed by the clinic's retention period, or
                   that could not be read, is listed in sessions.json with "file": null and the reason
 advice.json       suggestions and messages from your therapists and from the system's rules
+replies.json      your replies to that advice, and when your therapist read them
 devices.json      the home computers paired to your account
 audit.json        every recorded access to or change of your data: who, what, when, from which address
 
@@ -113,6 +115,8 @@ def build_archive(*, db_session: Session, patient: User, requested_by: str) -> I
         _json(z, "sessions.json", listed)
         advice = db_session.scalars(select(Suggestion).where(Suggestion.patient_id == pid).order_by(Suggestion.id))
         _json(z, "advice.json", [_row(a, tuple(c.key for c in Suggestion.__table__.columns)) for a in advice])
+        replies = db_session.scalars(select(AdviceReply).where(AdviceReply.patient_id == pid).order_by(AdviceReply.id))
+        _json(z, "replies.json", [_row(r, tuple(c.key for c in AdviceReply.__table__.columns)) for r in replies])
         devices = db_session.scalars(select(Device).where(Device.patient_id == pid).order_by(Device.id))
         _json(z, "devices.json", [_row(d, ("id", "name", "created_at")) for d in devices])
         audit = db_session.scalars(

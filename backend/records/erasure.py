@@ -14,6 +14,7 @@ from backend.devices.models import Device, PairingCode
 from backend.patients.models import TherapistPatient
 from backend.plans.models import Plan, PlanItem
 from backend.replay.models import SessionReplay
+from backend.replies.models import AdviceReply
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.storage import get_store
 from backend.suggestions.models import Suggestion
@@ -45,6 +46,7 @@ def erase_patient(*, db_session: Session, patient: User, caller) -> Erasure:
     rows = {
         "session_replay": _count(db_session, delete(SessionReplay).where(SessionReplay.session_id.in_(session_ids))),
         "session_metric": _count(db_session, delete(SessionMetric).where(SessionMetric.session_id.in_(session_ids))),
+        "advice_reply": _count(db_session, delete(AdviceReply).where(AdviceReply.patient_id == pid)),
         "suggestion": _count(db_session, delete(Suggestion).where(Suggestion.patient_id == pid)),
     }
     rows["exercise_session"] = _count(db_session, delete(ExerciseSession).where(ExerciseSession.patient_id == pid))
@@ -66,6 +68,7 @@ def erase_patient(*, db_session: Session, patient: User, caller) -> Erasure:
     db_session.execute(update(Suggestion).where(Suggestion.author_id == pid).values(author_id=None))
     db_session.execute(update(Suggestion).where(Suggestion.decided_by_id == pid).values(decided_by_id=None))
     db_session.execute(update(PairingCode).where(PairingCode.created_by_id == pid).values(created_by_id=None))
+    db_session.execute(update(AdviceReply).where(AdviceReply.read_by_id == pid).values(read_by_id=None))
     db_session.expunge(patient)
     rows["user"] = _count(db_session, delete(User).where(User.id == pid))
     still_used = set(db_session.scalars(select(ExerciseSession.file_key).where(ExerciseSession.file_key.in_(keys))))

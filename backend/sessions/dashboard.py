@@ -16,6 +16,7 @@ from sqlalchemy.orm import Session, aliased
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
 from backend.plans.models import Plan, PlanItem
+from backend.replies.models import AdviceReply
 from backend.sessions import triage
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.sessions.triage import week_start
@@ -72,7 +73,8 @@ def _newest_session(*, with_metrics: bool):
 
 
 def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.datetime) -> dict[int, dict]:
-    """Returns per patient (one query): last session (brief), latest indicators, sessions this week, pending advice."""
+    """Returns per patient (one query): last session (brief), latest indicators, sessions this week, pending advice,
+    unread replies."""
     this_week = (
         select(func.count())
         .select_from(ExerciseSession)
@@ -87,6 +89,13 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
         .correlate(User)
         .scalar_subquery()
     )
+    unread = (
+        select(func.count())
+        .select_from(AdviceReply)
+        .where(AdviceReply.patient_id == User.id, AdviceReply.read_at.is_(None))
+        .correlate(User)
+        .scalar_subquery()
+    )
     per = (
         select(
             User.id.label("pid"),
@@ -94,6 +103,7 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             _newest_session(with_metrics=True).label("mid"),
             this_week.label("this_week"),
             pending.label("pending"),
+            unread.label("unread"),
         )
         .where(User.id.in_(patient_ids))
         .subquery()
@@ -104,6 +114,7 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             per.c.pid,
             per.c.this_week,
             per.c.pending,
+            per.c.unread,
             ExerciseSession.id,
             Exercise.slug,
             ExerciseSession.started_at,
@@ -124,9 +135,10 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             "last_session": dict(zip(keys, last, strict=True)) if last[0] is not None else None,
             "sessions_this_week": this_week or 0,
             "pending_suggestions": pending or 0,
+            "unread_replies": unread or 0,
             "latest_indicators": indicators if isinstance(indicators, dict) else None,
         }
-        for pid, this_week, pending, *last, indicators in rows
+        for pid, this_week, pending, unread, *last, indicators in rows
     }
 
 
@@ -201,7 +213,8 @@ def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.dateti
     per = _per_patient(db_session, ids, now)
     plans = _running_plans(db_session, ids, now.astimezone(dt.UTC).date())
     recent = _recent_sessions(db_session, ids, triage.window_start(now))
-    empty = {"last_session": None, "sessions_this_week": 0, "pending_suggestions": 0, "latest_indicators": None}
+    empty = {"last_session": None, "sessions_this_week": 0, "pending_suggestions": 0, "unread_replies": 0,
+             "latest_indicators": None}  # fmt: skip
     out = {}
     for pid in ids:
         row = {"patient_id": pid, **empty, **per.get(pid, {})}

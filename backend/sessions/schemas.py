@@ -170,6 +170,7 @@ class SummaryOut(BaseModel):
                     "planned_this_week": 6,
                     "latest_indicators": _INDICATORS_EXAMPLE,
                     "pending_suggestions": 2,
+                    "unread_replies": 1,
                     "attention_score": 72,
                     "attention_level": "now",
                     "attention_reasons": [
@@ -193,6 +194,7 @@ class SummaryOut(BaseModel):
     )
     latest_indicators: dict | None = Field(description="indicators of the newest processed session")
     pending_suggestions: int = Field(description="system suggestions waiting for a therapist's decision")
+    unread_replies: int = Field(description="the patient's replies to advice no therapist has read yet")
     attention_score: int = Field(ge=0, le=100, description="how much the patient needs attention (triage formula)")
     attention_level: Literal["now", "soon", "ok"] = Field(description="'now' at score ≥ 50, 'soon' at ≥ 20")
     attention_reasons: list[str] = Field(description="what adds to the score, in words, largest first")

@@ -150,7 +150,7 @@ const Coach = (() => {
 
   /**
    * Calls reload() when the server says something changed about the patients this page shows (a new session,
-   * changed advice, a changed plan): server-sent events on this origin, behind the same login. Bursts of events
+   * changed advice, a changed plan, a reply to advice): server-sent events on this origin, behind the same login. Bursts of events
    * give one call; the browser reconnects by itself and the page reloads its data then too.
    * patientId: only that patient's events (null: every patient the signed-in user may see).
    */
@@ -165,7 +165,7 @@ const Coach = (() => {
     const soon = () => { clearTimeout(timer); timer = setTimeout(reload, 300); };
     function connect() {
       source = new EventSource(url("/api/v1/events" + (query.toString() ? "?" + query : "")));
-      for (const kind of ["session.stored", "suggestion.changed", "plan.changed"]) source.addEventListener(kind, soon);
+      for (const kind of ["session.stored", "suggestion.changed", "plan.changed", "reply.changed"]) source.addEventListener(kind, soon);
       for (const [kind, handler] of Object.entries(live || {})) {
         if (kind === "open" || kind === "error") continue;  // called on every (re)connection and failure, below
         source.addEventListener(kind, (e) => { try { handler(JSON.parse(e.data).data || {}, e); } catch (err) { console.error(err); } });

@@ -1,4 +1,5 @@
-/* Patient feedback screen: greeting, this week's plan, the last session in plain words, advice, a progress chart. */
+/* Patient feedback screen: greeting, this week's plan, the last session in plain words, advice and the patient's
+ * replies to it, a progress chart. */
 "use strict";
 (() => {
   const { api, el, plainDay, median, exercises, exerciseName, runningPlan, showError, startOfWeekUTC, DAY } = Coach;
@@ -123,16 +124,26 @@
     CameraEntry.reveal();
   }
 
-  function adviceBlock(items) {
+  let advice = [], replies = [];
+  /** Shows the advice the patient sees, each with their answers and the reply buttons; keeps the text box being
+   *  typed in focused when the page redraws it (a reply or new data arrived). */
+  function adviceBlock() {
     const list = document.getElementById("advice");
+    const focused = document.activeElement && list.contains(document.activeElement) ? document.activeElement : null;
+    const where = focused && focused.id ? [focused.id, focused.selectionStart, focused.selectionEnd] : null;
     list.replaceChildren();
-    const shown = items.filter((s) => s.status === "approved" || s.source === "therapist");
+    const shown = advice.filter((s) => s.status === "approved" || s.source === "therapist");
     if (!shown.length) { list.append(el("li", {}, I18n.t("No new advice. Keep going with your exercises!"))); return; }
     for (const s of shown.slice(0, 5)) {
-      list.append(el("li", {}, el("span", { class: "from" }, (s.source === "therapist" ? I18n.t("From your therapist") : I18n.t("Tip, checked by your therapist"))
-        + " · " + Coach.fmtDate(s.created_at, { day: "numeric", month: "long" })), s.text));
+      const mine = replies.filter((r) => r.suggestion_id === s.id).reverse();  // oldest first
+      list.append(el("li", { "data-suggestion-id": s.id }, el("span", { class: "from" }, (s.source === "therapist" ? I18n.t("From your therapist") : I18n.t("Tip, checked by your therapist"))
+        + " · " + Coach.fmtDate(s.created_at, { day: "numeric", month: "long" })), el("p", { class: "advice-text" }, s.text),
+        AdviceReply.block(pid, s, mine)));
     }
+    const again = where && document.getElementById(where[0]);
+    if (again) { again.focus(); if (again.setSelectionRange && where[1] !== undefined) again.setSelectionRange(where[1], where[2]); }
   }
+  AdviceReply.onChange = adviceBlock;
 
   function chartBlock(plan, lib, points) {
     const box = document.getElementById("charts");
@@ -173,20 +184,22 @@
     greeting();
     const since = startOfWeekUTC().toISOString();
     try {
-      const [lib, plans, latest, week, suggestions, progress] = await Promise.all([
+      const [lib, plans, latest, week, suggestions, progress, answers] = await Promise.all([
         exercises(),
         api(`/patients/${pid}/plans?limit=20`),
         api(`/sessions?patient_id=${pid}&limit=1`),
         api(`/sessions?patient_id=${pid}&since=${encodeURIComponent(since)}&limit=200`),
         api(`/patients/${pid}/suggestions?limit=10`),
         api(`/patients/${pid}/progress`),
+        api(`/patients/${pid}/replies?limit=100`),
       ]);
       const plan = runningPlan(plans.items);
       const last = latest.items[0] || null;
       Live.uploaded(last ? last.created_at : null);
       const item = last && plan ? plan.items.find((i) => i.exercise_slug === last.exercise_slug) : null;
       lastSessionBlock(last, item, lib, last ? progress.points.filter((p) => p.exercise_slug === last.exercise_slug) : []);
-      adviceBlock(suggestions.items);
+      [advice, replies] = [suggestions.items, answers.items];
+      adviceBlock();
       planBlock(plan, lib, week.items);
       chartBlock(plan, lib, progress.points);
       Live.render();  // the new Start buttons follow the home computer's state

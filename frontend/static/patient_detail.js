@@ -1,5 +1,5 @@
-/* Therapist's view of one patient: the plan (edit, new, history), suggestions to review, a note form, progress plots,
-   paginated sessions. */
+/* Therapist's view of one patient: the plan (edit, new, history), suggestions to review, a note form, the patient's
+   replies to advice, progress plots, paginated sessions. */
 "use strict";
 (() => {
   const { api, url, el, fmtDate, fmtDateTime, exercises, exerciseName, runningPlan, showError } = Coach;
@@ -90,6 +90,22 @@
   }
   document.getElementById("decided-prev").addEventListener("click", () => { decidedOffset = Math.max(0, decidedOffset - DECIDED_PAGE); loadDecided().catch(showError); });
   document.getElementById("decided-next").addEventListener("click", () => { decidedOffset += DECIDED_PAGE; loadDecided().catch(showError); });
+
+  const REPLIES_PAGE = 20;
+  const newHere = new Set();  // replies that were unread when this page first showed them: marked "new" while it is open
+  /** Shows the patient's replies to advice, newest first, and marks the unread ones read (the therapist has seen them). */
+  async function loadReplies() {
+    const page = await api(`/patients/${pid}/replies?limit=${REPLIES_PAGE}`);
+    const unread = page.items.filter((r) => !r.read_at).map((r) => r.id);
+    unread.forEach((id) => newHere.add(id));
+    const list = document.getElementById("replies");
+    list.replaceChildren(...page.items.map((r) => RepliesView.item(r, { isNew: newHere.has(r.id) })));
+    if (!page.items.length) list.append(el("li", { class: "muted" }, "No replies yet."));
+    const more = document.getElementById("replies-more");
+    more.hidden = page.total <= page.items.length;
+    more.textContent = `The newest ${page.items.length} of ${page.total} replies are shown.`;
+    if (unread.length) await api(`/patients/${pid}/replies/read`, { method: "POST", body: { reply_ids: unread } });
+  }
 
   const FONT = 15;  // chart labels on therapist pages, px (at least 14)
   const POOR = "poor data quality";
@@ -431,8 +447,9 @@
     } catch (err) { showError(err); }
     loadPending();
     loadDecided().catch(showError);
+    loadReplies().catch(showError);
     loadSessions();
   }
   load();
-  Coach.onChange(pid, load);  // new sessions, suggestions and plan changes show without reloading the page
+  Coach.onChange(pid, load);  // new sessions, suggestions, replies and plan changes show without reloading the page
 })();

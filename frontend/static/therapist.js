@@ -1,4 +1,5 @@
-/* Therapist dashboard: assigned patients in the server's attention order, with reasons, indicator trends and advice. */
+/* Therapist dashboard: assigned patients in the server's attention order, with reasons, indicator trends and advice,
+ * and the patients' replies to advice that no therapist has read yet. */
 "use strict";
 (() => {
   const { api, url, el, fmtDate, showError, exercises, exerciseName } = Coach;
@@ -58,7 +59,8 @@
     const trends = r.indicator_trends || {};
     const [cls, label] = LEVELS[r.attention_level] || LEVELS.ok;
     return el("tr", { "data-patient-id": r.patient_id, "data-attention-score": r.attention_score, "data-attention-level": r.attention_level },
-      el("td", { "data-label": COLUMNS[0] }, el("a", { href, class: "patient-link" }, r.full_name || r.email), el("span", { class: "reasons" }, r.email)),
+      el("td", { "data-label": COLUMNS[0] }, el("a", { href, class: "patient-link" }, r.full_name || r.email), el("span", { class: "reasons" }, r.email),
+        r.unread_replies ? el("a", { href: href + "#replies-h", class: "new-replies" }, `${r.unread_replies} new ${r.unread_replies === 1 ? "reply" : "replies"}`) : null),
       el("td", { class: "attention", "data-label": COLUMNS[1] }, el("span", { class: `pill ${cls}` }, label), " ",
         el("span", { class: "attention-score", title: "attention score, 0–100" }, `score ${r.attention_score}`),
         r.attention_reasons.length ? el("ul", { class: "reasons" }, ...r.attention_reasons.map((t) => el("li", {}, t)))
@@ -69,6 +71,16 @@
       ...INDICATORS.map((k) => indicatorCell(k, ind[k], trends[k], r.balance_missing)),
       el("td", { class: "pending", "data-label": COLUMNS[8] },
         r.pending_suggestions ? el("a", { href: href + "#pending-h", "aria-label": `${r.pending_suggestions} suggestions to review` }, String(r.pending_suggestions)) : "0"));
+  }
+
+  /** Shows the replies no therapist has read yet, newest first, each linked to its patient's page. */
+  function repliesBlock(replies, rows) {
+    const names = new Map(rows.map((r) => [r.patient_id, r.full_name || r.email]));
+    const list = document.getElementById("unread-replies");
+    list.replaceChildren(...replies.items.map((r) => RepliesView.item(r, { isNew: true,
+      who: el("a", { href: url(`/therapist/patients/${r.patient_id}#replies-h`) }, names.get(r.patient_id) || `patient ${r.patient_id}`) })));
+    if (!replies.items.length) list.append(el("li", { class: "muted" }, "No unread replies."));
+    if (replies.total > replies.items.length) list.append(el("li", { class: "muted" }, `and ${replies.total - replies.items.length} more`));
   }
 
   async function load() {
@@ -82,9 +94,10 @@
         if (rows.length >= page.total || !page.items.length) break;
       }
       body.replaceChildren(...rows.map((r) => row(r, lib)));  // the server's order: attention score, highest first, then name
+      repliesBlock(await api("/replies?unread=true&limit=20"), rows);
       if (!rows.length) body.append(el("tr", {}, el("td", { colspan: 9 }, "No patients are assigned to you yet.")));
     } catch (err) { body.replaceChildren(); showError(err); }
   }
   load();
-  Coach.onChange(null, load);  // new sessions and advice re-rank the list without reloading the page
+  Coach.onChange(null, load);  // new sessions, advice and replies re-rank the list without reloading the page
 })();

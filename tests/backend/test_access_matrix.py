@@ -17,6 +17,7 @@ from backend.camera.models import CameraConsent, CameraSet
 from backend.database import utcnow
 from backend.devices.service import create_pairing_code
 from backend.plans.models import Plan, PlanItem
+from backend.replies.models import AdviceReply
 from backend.sessions.models import ExerciseSession
 from backend.suggestions.models import Suggestion
 from tests.backend.conftest import PASSWORD
@@ -110,6 +111,13 @@ ROUTES = {
     ("POST", "/api/v1/patients/{patient_id}/suggestions"): (PRESCRIBE, lambda w: {"text": "Keep going."}),
     ("POST", "/api/v1/suggestions/{suggestion_id}/approve"): (PRESCRIBE, None),  # a pending system suggestion
     ("POST", "/api/v1/suggestions/{suggestion_id}/dismiss"): (PRESCRIBE, None),
+    ("GET", "/api/v1/patients/{patient_id}/replies"): (CARE_DEV, None),
+    ("POST", "/api/v1/patients/{patient_id}/replies"): (  # only the patient answers, and only advice they see
+        {"patient_own"},
+        lambda w: {"suggestion_id": w["advice_id"], "preset": "hurt"},
+    ),
+    ("POST", "/api/v1/patients/{patient_id}/replies/read"): (PRESCRIBE, lambda w: {"reply_ids": [w["reply_id"]]}),
+    ("GET", "/api/v1/replies"): (STAFF, None),  # therapists: the replies of their assigned patients only
     ("GET", "/api/v1/audit"): (ADMIN, None),
     ("POST", "/api/v1/sessions"): (CARE_DEV, lambda w: Raw(w["khs"], {"patient_id": w["params"]["patient_id"]})),
     ("GET", "/api/v1/sessions"): (AUTHED, None),  # lists only what the caller may see
@@ -159,7 +167,11 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
     device.live_stream_id, device.last_seen_at = str(uuid.uuid4()), utcnow()  # the home agent is connected
     device.live_set_id = LIVE_SET_ID
     suggestion = Suggestion(patient_id=own.id, source="system", rule="too_fast", text="Slow down.", status="pending")
-    db_session.add(suggestion)
+    advice = Suggestion(patient_id=own.id, source="therapist", rule="therapist", text="Well done.", status="approved")
+    db_session.add_all([suggestion, advice])
+    db_session.flush()
+    reply = AdviceReply(suggestion_id=advice.id, patient_id=own.id, preset="done")
+    db_session.add(reply)
     session = ExerciseSession(
         client_session_id=uuid.uuid4(),
         patient_id=own.id,
@@ -214,6 +226,8 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
         "pairing_code": code,
         "exercise_slug": exercise.slug,
         "khs": make_khs("squat", 2, seed=11),
+        "advice_id": advice.id,
+        "reply_id": reply.id,
     }
 
 

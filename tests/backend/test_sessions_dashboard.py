@@ -96,6 +96,7 @@ def test_summary_of_a_patient_without_sessions(client, make_user, auth_headers):
         "planned_this_week": None,
         "latest_indicators": None,
         "pending_suggestions": 0,
+        "unread_replies": 0,
         "attention_score": 0,
         "attention_level": "ok",
         "attention_reasons": [],

@@ -33,7 +33,10 @@ def _patient_with_data(client, make_patient_with_therapist, auth_headers, seed):
             "items": [{"exercise_slug": "squat", "sets": 1, "repetitions": 5, "frequency_per_week": 2}]}  # fmt: skip
     th = auth_headers(therapist)
     assert client.post(f"/api/v1/patients/{patient.id}/plans", json=plan, headers=th).status_code == 201
-    assert client.post(f"/api/v1/patients/{patient.id}/suggestions", json={"text": "Slower."}, headers=th).is_success
+    advice = client.post(f"/api/v1/patients/{patient.id}/suggestions", json={"text": "Slower."}, headers=th)
+    assert advice.is_success
+    reply = {"suggestion_id": advice.json()["id"], "preset": "hurt", "text": "My knee"}
+    assert client.post(f"/api/v1/patients/{patient.id}/replies", json=reply, headers=headers).status_code == 201
     assert client.post(f"/api/v1/patients/{patient.id}/pairing-codes", headers=headers).is_success
     return patient, ids
 
@@ -55,6 +58,8 @@ def test_the_archive_holds_everything_with_a_readme(client, make_patient_with_th
     assert "password_hash" not in z.read("account.json").decode()
     assert json.loads(z.read("plans.json"))[0]["items"][0]["repetitions"] == 5
     assert json.loads(z.read("advice.json"))[-1]["text"] == "Slower."
+    reply = json.loads(z.read("replies.json"))[-1]
+    assert (reply["preset"], reply["text"], reply["read_at"]) == ("hurt", "My knee", None)
     assert any(a["action"] == "session.create" or a["action"].startswith("session") for a in
                json.loads(z.read("audit.json")))  # fmt: skip
 
@@ -109,6 +114,7 @@ def test_erasure_leaves_only_an_audit_entry(client, db_session, make_patient_wit
     response = client.post(f"/api/v1/patients/{pid}/erasure", json={"confirm_email": email.upper()}, headers=headers)
     assert response.status_code == 200, response.text
     assert response.json()["rows"]["exercise_session"] == 2 and response.json()["objects"] == 3  # 2 files, 1 replay
+    assert response.json()["rows"]["advice_reply"] == 1
     db_session.expire_all()
     assert _mentions(db_session, pid, email, ids) == []
     assert others <= set(with_store.keys()) and len(set(with_store.keys())) == len(kept) - 3
