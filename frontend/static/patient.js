@@ -123,6 +123,17 @@
     CameraEntry.reveal();
   }
 
+  /** Today's next reminder of the plan, at its time in the patient's time zone (the server's reckoning). */
+  function reminderBlock(reminders) {
+    const box = document.getElementById("reminder");
+    const next = reminders.next;
+    box.hidden = !next;
+    if (!next) { box.replaceChildren(); return; }
+    const time = new Date(next.due_at).toLocaleTimeString(I18n.tag, { hour: "2-digit", minute: "2-digit", timeZone: reminders.time_zone });
+    box.replaceChildren(el("span", { class: "reminder-icon", "aria-hidden": "true" }, "⏰"),
+      el("span", {}, I18n.t("Reminder: your exercises at {time}", { time })));
+  }
+
   function adviceBlock(items) {
     const list = document.getElementById("advice");
     list.replaceChildren();
@@ -173,19 +184,21 @@
     greeting();
     const since = startOfWeekUTC().toISOString();
     try {
-      const [lib, plans, latest, week, suggestions, progress] = await Promise.all([
+      const [lib, plans, latest, week, suggestions, progress, reminders] = await Promise.all([
         exercises(),
         api(`/patients/${pid}/plans?limit=20`),
         api(`/sessions?patient_id=${pid}&limit=1`),
         api(`/sessions?patient_id=${pid}&since=${encodeURIComponent(since)}&limit=200`),
         api(`/patients/${pid}/suggestions?limit=10`),
         api(`/patients/${pid}/progress`),
+        api(`/patients/${pid}/reminders`),
       ]);
       const plan = runningPlan(plans.items);
       const last = latest.items[0] || null;
       Live.uploaded(last ? last.created_at : null);
       const item = last && plan ? plan.items.find((i) => i.exercise_slug === last.exercise_slug) : null;
       lastSessionBlock(last, item, lib, last ? progress.points.filter((p) => p.exercise_slug === last.exercise_slug) : []);
+      reminderBlock(reminders);
       adviceBlock(suggestions.items);
       planBlock(plan, lib, week.items);
       chartBlock(plan, lib, progress.points);
