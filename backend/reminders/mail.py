@@ -37,7 +37,6 @@ def message(reminder: Reminder, *, sender: str) -> EmailMessage:
     msg["To"] = reminder.to
     msg["Date"] = format_datetime(utcnow())
     msg["Message-ID"] = make_msgid(domain=sender.rpartition("@")[2].strip("> ") or None)
-    msg["Content-Language"] = t.locale
     msg["List-Unsubscribe"] = f"<{reminder.unsubscribe_url}>"
     msg["List-Unsubscribe-Post"] = "List-Unsubscribe=One-Click"
     msg["Auto-Submitted"] = "auto-generated"
@@ -55,6 +54,7 @@ def message(reminder: Reminder, *, sender: str) -> EmailMessage:
         reminder.unsubscribe_url,
     ]
     msg.set_content("\n".join(body) + "\n")
+    msg["Content-Language"] = t.locale  # after set_content, which clears the Content-* headers
     return msg
 
 

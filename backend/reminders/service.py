@@ -101,13 +101,8 @@ def due(*, db_session: Session, settings: Settings, now: dt.datetime) -> list[Du
 
 
 def _unclaimed(db_session: Session, found: Iterable[DueReminder], *, since: dt.datetime) -> list[DueReminder]:
-    claimed = set(
-        db_session.execute(
-            select(ReminderSent.plan_id, ReminderSent.local_date, ReminderSent.local_time).where(
-                ReminderSent.due_at > since
-            )
-        ).tuples()
-    )
+    query = select(ReminderSent.plan_id, ReminderSent.local_date, ReminderSent.local_time)
+    claimed = {tuple(row) for row in db_session.execute(query.where(ReminderSent.due_at > since))}
     return [r for r in found if (r.plan_id, r.local_date, r.local_time) not in claimed]
 
 
