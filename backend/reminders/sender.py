@@ -8,9 +8,14 @@ import asyncio
 import datetime as dt
 import logging
 import smtplib
+import time
 from collections.abc import Callable
 from contextlib import AbstractContextManager
+from functools import partial
+from typing import TypeVar
 
+from sqlalchemy import Executable, delete, update
+from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import Session
 
 from backend.config import Settings
@@ -22,6 +27,7 @@ from backend.users.models import User
 
 log = logging.getLogger(__name__)
 
+T = TypeVar("T")
 SessionFactory = Callable[[], AbstractContextManager[Session]]
 
 
@@ -35,30 +41,59 @@ def send_due(*, sessions: SessionFactory, settings: Settings, now: dt.datetime |
     sent = 0
     for reminder in found:
         with sessions() as db_session:
-            claimed = service.claim(db_session=db_session, reminder=reminder)
+            claimed = _busy_retried(db_session, partial(service.claim, db_session=db_session, reminder=reminder))
             if claimed is not None:
                 sent += _deliver(db_session, settings, *claimed)
     return sent
 
 
 def _deliver(db_session: Session, settings: Settings, row: ReminderSent, token: str) -> int:
-    """E-mails one claimed reminder; returns 1 when sent, 0 when the SMTP server failed (the claim is given back)."""
+    """E-mails one claimed reminder; returns 1 when sent, 0 when the SMTP server failed (the claim is given back).
+
+    The reading transaction ends before the e-mail goes out, and the write after it opens its own transaction
+    (SQLite: a transaction that read first could not take the write lock after another process wrote)."""
     patient, plan = db_session.get(User, row.patient_id), db_session.get(Plan, row.plan_id)
     assert patient is not None and plan is not None  # the claim's foreign keys
     url = settings.PUBLIC_URL.rstrip("/") + service.UNSUBSCRIBE_PATH + token
     name = (patient.full_name or "").split(" ")[0]
     reminder = mail.Reminder(to=patient.email, name=name, locale=patient.locale, plan_title=plan.title,
                              local_time=row.local_time, unsubscribe_url=url)  # fmt: skip
+    msg = mail.message(reminder, sender=settings.SMTP_FROM)
+    db_session.rollback()
     try:
-        mail.send(mail.message(reminder, sender=settings.SMTP_FROM), settings)
+        mail.send(msg, settings)
     except (smtplib.SMTPException, OSError) as exc:
-        log.warning("reminder e-mail to patient %s failed, will retry: %s", patient.id, exc)
-        db_session.delete(row)
-        db_session.commit()
+        log.warning("reminder e-mail to patient %s failed, will retry: %s", row.patient_id, exc)
+        _write(db_session, delete(ReminderSent).where(ReminderSent.id == row.id))
         return 0
-    row.sent_at = utcnow()
-    db_session.commit()
+    _write(db_session, update(ReminderSent).where(ReminderSent.id == row.id).values(sent_at=utcnow()))
     return 1
+
+
+def _write(db_session: Session, statement: Executable) -> None:
+    """Executes and commits one statement (retried while the database is busy)."""
+
+    def run() -> None:
+        db_session.execute(statement)
+        db_session.commit()
+
+    _busy_retried(db_session, run)
+
+
+def _busy_retried(db_session: Session, work: Callable[[], T], attempts: int = 20) -> T:
+    """Returns work(), run again after a short wait while another process holds the database's write lock (SQLite
+    answers "database is locked" at once when a transaction's snapshot went stale); other errors pass."""
+    from backend.main import is_database_busy
+
+    for attempt in range(attempts):
+        try:
+            return work()
+        except DBAPIError as exc:
+            db_session.rollback()
+            if not is_database_busy(exc) or attempt == attempts - 1:
+                raise
+            time.sleep(0.02 * (attempt + 1))
+    raise AssertionError("unreachable")
 
 
 async def run(*, sessions: SessionFactory, settings: Settings, stop: asyncio.Event) -> None:
