@@ -128,10 +128,9 @@
     const box = document.getElementById("reminder");
     const next = reminders.next;
     box.hidden = !next;
-    if (!next) { box.replaceChildren(); return; }
+    if (!next) { box.textContent = ""; return; }
     const time = new Date(next.due_at).toLocaleTimeString(I18n.tag, { hour: "2-digit", minute: "2-digit", timeZone: reminders.time_zone });
-    box.replaceChildren(el("span", { class: "reminder-icon", "aria-hidden": "true" }, "⏰"),
-      el("span", {}, I18n.t("Reminder: your exercises at {time}", { time })));
+    box.textContent = I18n.t("Reminder: your exercises at {time}", { time });
   }
 
   function adviceBlock(items) {
