@@ -94,3 +94,52 @@ def test_the_therapist_sets_reminder_times_in_the_plan_editor(browser, live_serv
         assert plans[0]["reminder_times"] == ["09:15", "20:45"]
     finally:
         client.close()
+
+
+def _unsubscribe_token(live_server, pid: int) -> str:
+    """Claims a reminder e-mail of the patient's plan in the server's database, as the reminder loop does before
+    sending one, and returns the token its unsubscribe link carries."""
+    import datetime as dt
+
+    from sqlalchemy import create_engine, select
+    from sqlalchemy.orm import Session
+
+    from backend.plans.models import Plan
+    from backend.reminders.service import DueReminder, claim
+
+    engine = create_engine(live_server.database_url)
+    try:
+        with Session(engine, expire_on_commit=False) as db:
+            plan_id = db.scalar(select(Plan.id).where(Plan.patient_id == pid))
+            now = dt.datetime.now(dt.UTC)
+            claimed = claim(db_session=db, reminder=DueReminder(plan_id, pid, now.date(), "11:00", now))
+            assert claimed is not None
+            return claimed[1]
+    finally:
+        engine.dispose()
+
+
+@pytest.mark.parametrize("width,height", [(1366, 900), (390, 844)])
+def test_the_unsubscribe_page_works_without_login(browser, live_server, width, height):
+    email, pid = _patient(live_server.url, locale="fr")
+    token = _unsubscribe_token(live_server, pid)
+    context, page = _context(browser, live_server.url, width, height)  # no login
+    try:
+        page.goto(f"/unsubscribe/{token}")
+        expect(page.locator("h1")).to_have_text("Arrêter les rappels par e-mail ?")
+        shot(page, f"unsubscribe-fr-{width}")
+        bad = [v["id"] for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
+        assert not bad, bad
+        page.get_by_role("button", name="Arrêter les rappels par e-mail").click()
+        expect(page.locator("h1")).to_have_text("Plus de rappels par e-mail")
+        shot(page, f"unsubscribed-fr-{width}")
+        bad = [v["id"] for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
+        assert not bad, bad
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+    admin, _ = api_client(live_server.url, "admin@demo.clinic")
+    try:
+        assert admin.get(f"/api/v1/patients/{pid}").json()["reminder_emails"] is False
+    finally:
+        admin.close()
