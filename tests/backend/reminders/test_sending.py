@@ -153,3 +153,20 @@ def test_the_therapist_can_turn_emails_on_again(db_session, smtp, patient_plan, 
                      headers=auth_headers(make_user("admin")))  # fmt: skip
     assert r.status_code == 200 and r.json()["reminder_emails"] is True
     assert _send(db_session, mail_settings(port), BERLIN_EIGHT_IN_WINTER) == 1
+
+
+def test_only_the_plan_running_that_day_reminds(db_session, smtp, patient_plan):
+    inbox, port = smtp
+    patient, old = patient_plan
+    newer = Plan(patient_id=patient.id, title="Neu", start_date=dt.date(2026, 11, 20), reminder_times=[])
+    db_session.add(newer)
+    db_session.commit()
+    assert _send(db_session, mail_settings(port), BERLIN_EIGHT_IN_WINTER) == 0  # the newer plan has no reminders
+    newer.reminder_times = ["08:00"]
+    db_session.commit()
+    assert _send(db_session, mail_settings(port), BERLIN_EIGHT_IN_WINTER) == 1
+    assert inbox.wait_for(1)[0].get_content().count("Neu") == 1
+    newer.end_date = dt.date(2026, 11, 27)
+    old.end_date = dt.date(2026, 11, 27)
+    db_session.commit()
+    assert _send(db_session, mail_settings(port), BERLIN_EIGHT_IN_WINTER + dt.timedelta(days=1)) == 0  # both ended
