@@ -75,6 +75,17 @@ def test_the_therapist_sets_reminder_times_in_the_plan_editor(browser, live_serv
         page.goto(f"/therapist/patients/{pid}")
         expect(page.locator("#plan-reminders-shown")).to_have_text("Reminders: 11:00, 18:00 (Europe/Berlin)",
                                                                    timeout=LOAD_MS)  # fmt: skip
+        zone_field = page.locator("#patient-tz")
+        expect(zone_field).to_have_value("Europe/Berlin")
+        zone_field.fill("Mars/Olympus")
+        zone_field.dispatch_event("change")
+        expect(page.locator("#patient-tz-saved")).to_contain_text(
+            "Not saved: body.time_zone: Value error, time zone 'Mars/Olympus' is not an IANA time zone name"
+        )
+        zone_field.fill("Europe/Madrid")
+        zone_field.dispatch_event("change")
+        expect(page.locator("#patient-tz-saved")).to_have_text("Saved: reminders follow Europe/Madrid.")
+        expect(page.locator("#plan-reminders-shown")).to_have_text("Reminders: 11:00, 18:00 (Europe/Madrid)")
         page.locator("#plan-edit").click()
         field = page.locator("#plan-reminders")
         expect(field).to_have_value("11:00, 18:00")
@@ -84,7 +95,7 @@ def test_the_therapist_sets_reminder_times_in_the_plan_editor(browser, live_serv
         expect(field).to_have_attribute("aria-invalid", "true")
         field.fill("9:15, 20:45")
         page.locator("#plan-save").click()
-        expect(page.locator("#plan-reminders-shown")).to_have_text("Reminders: 09:15, 20:45 (Europe/Berlin)")
+        expect(page.locator("#plan-reminders-shown")).to_have_text("Reminders: 09:15, 20:45 (Europe/Madrid)")
         shot(page, "reminder-therapist-1366")
     finally:
         context.close()
