@@ -60,6 +60,17 @@ class Settings(BaseSettings):
     S3_SECRET_ACCESS_KEY: str = ""
     # session files older than this many days are removed by `coach-server retention` (metrics kept); 0: off
     RETENTION_DAYS: int = Field(default=0, ge=0)
+    # reminder e-mails (backend/reminders): sent through this SMTP server; empty SMTP_HOST: no e-mails are sent
+    SMTP_HOST: str = ""
+    SMTP_PORT: int = Field(default=587, ge=1, le=65535)
+    SMTP_USER: str = ""  # empty: no SMTP login
+    SMTP_PASSWORD: str = ""
+    SMTP_FROM: str = ""  # the From address of reminder e-mails, e.g. "Home Coach <coach@clinic.example.org>"
+    SMTP_STARTTLS: bool = True  # upgrade the connection with STARTTLS before logging in and sending
+    SMTP_TIMEOUT_S: float = Field(default=20.0, gt=0)  # per SMTP connection
+    TIME_ZONE: str = "UTC"  # IANA time zone of patients who have none of their own (their reminder times)
+    REMINDER_CHECK_S: float = Field(default=60.0, gt=0)  # how often each server process looks for due reminders
+    REMINDER_LATE_MINUTES: float = Field(default=60.0, gt=0)  # a reminder not sent this long after its time is dropped
 
     @model_validator(mode="after")
     def _check_public_url(self) -> Settings:
@@ -77,6 +88,23 @@ class Settings(BaseSettings):
         if self.STORAGE_BACKEND == "s3" and not self.S3_BUCKET:
             raise ValueError("COACH_STORAGE_BACKEND=s3 needs COACH_S3_BUCKET (the bucket session files go to)")
         return self
+
+    @model_validator(mode="after")
+    def _check_reminders(self) -> Settings:
+        from backend.reminders.times import zone
+
+        zone(self.TIME_ZONE)  # ValueError naming the zone
+        if self.SMTP_HOST and not (self.SMTP_FROM and self.PUBLIC_URL):
+            raise ValueError(
+                "COACH_SMTP_HOST needs COACH_SMTP_FROM (the sender of reminder e-mails) and COACH_PUBLIC_URL (where "
+                "the e-mail's unsubscribe link points)"
+            )
+        return self
+
+    @property
+    def reminder_emails(self) -> bool:
+        """Returns whether reminder e-mails are sent (an SMTP server is configured)."""
+        return bool(self.SMTP_HOST)
 
     @property
     def storage_dir(self) -> str:

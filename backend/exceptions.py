@@ -82,6 +82,10 @@ class PlanNotFound(NotFound):
     pass
 
 
+class UnsubscribeLinkUnknown(NotFound):
+    """An unsubscribe link whose token belongs to no reminder e-mail (mistyped, or of a deleted account)."""
+
+
 class SuggestionNotFound(NotFound):
     pass
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import importlib
 import logging
 from collections.abc import Callable
@@ -58,6 +59,7 @@ ROUTERS = (
     "backend.exercises.demo_router",
     "backend.feeling.router",
     "backend.replies.router",
+    "backend.reminders.router",
 )
 # Packages above the server (the pages, frontend.pages:mount) register a mount function in this entry-point group
 # (pyproject.toml); the server calls each on the app it builds and never imports them (docs/architecture.md).
@@ -207,6 +209,29 @@ def _system_router() -> APIRouter:
     return router
 
 
+class _Reminders:
+    """The reminder e-mail loop of this server process (backend.reminders.sender), stopped with the app."""
+
+    def __init__(self, settings: Settings, engine: Engine):
+        from sqlalchemy.orm import sessionmaker
+
+        from backend.reminders.sender import run
+
+        self.stopping = asyncio.Event()
+        factory = sessionmaker(bind=engine, expire_on_commit=False)
+        self.task = asyncio.create_task(run(sessions=factory, settings=settings, stop=self.stopping))
+
+    async def stop(self) -> None:
+        """Ends the loop (after the check in hand)."""
+        self.stopping.set()
+        await self.task
+
+
+def _start_reminders(settings: Settings, engine: Engine) -> _Reminders | None:
+    """Starts the reminder e-mail loop when an SMTP server is configured (COACH_SMTP_HOST), else returns None."""
+    return _Reminders(settings, engine) if settings.reminder_emails else None
+
+
 def create_app(settings: Settings | None = None, engine: Engine | None = None) -> FastAPI:
     """Returns the configured application; at start-up it refuses a database that is not at Alembic head. Every
     worker runs BLAS on one thread (kinect_agent.blas_threads: the analysis' matrices are small)."""
@@ -222,9 +247,12 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
             check_at_head(bound)
         # PostgreSQL carries the pages' events between workers and replicas (backend/events); SQLite: in-process
         listener = Listener(bound.url).start() if bound.dialect.name == "postgresql" else None
+        reminders = _start_reminders(settings, bound)
         try:
             yield
         finally:
+            if reminders is not None:
+                await reminders.stop()
             if listener is not None:
                 listener.stop()
 

@@ -22,6 +22,7 @@ from sqlalchemy.orm import Session
 from backend.deps import Caller, DbSession, optional_caller, require_patient_access
 from backend.exceptions import NotFound
 from backend.i18n import LANGUAGE_NAMES, LOCALES, N_, js_messages, negotiate, translations, translator
+from backend.reminders.service import UNSUBSCRIBE_PATH, patient_of_token, unsubscribe
 from backend.schemas import IdPath
 from frontend import vendor_assets
 
@@ -288,6 +289,33 @@ def _sign_in_first(request: Request) -> HTMLResponse:
         home=f"{_root(request)}/?next={quote(_here(request), safe='')}",
         link_text=N_("Sign in"),
     )
+
+
+@router.get(UNSUBSCRIBE_PATH + "{token}", response_class=HTMLResponse)
+def unsubscribe_page(token: str, request: Request, db_session: DbSession) -> Response:
+    """Shows the page of a reminder e-mail's unsubscribe link (no login): a button that stops the e-mails (a GET
+    changes nothing: mail scanners open links), in the patient's language; the 404 page for an unknown link."""
+    patient = patient_of_token(db_session=db_session, token=token)
+    if patient is None:
+        return _unknown_unsubscribe_link(request)
+    return _page(request, "unsubscribe.html", None, locale=page_locale(request, patient), done=False,
+                 action=_root(request) + UNSUBSCRIBE_PATH + token)  # fmt: skip
+
+
+@router.post(UNSUBSCRIBE_PATH + "{token}", response_class=HTMLResponse)
+def unsubscribe_submit(token: str, request: Request, db_session: DbSession) -> Response:
+    """Stops the patient's reminder e-mails (the page's button, or a mail program's one-click POST of RFC 8058)
+    and says so; using the link again changes nothing."""
+    try:
+        patient = unsubscribe(db_session=db_session, token=token)
+    except NotFound:
+        return _unknown_unsubscribe_link(request)
+    return _page(request, "unsubscribe.html", None, locale=page_locale(request, patient), done=True)
+
+
+def _unknown_unsubscribe_link(request: Request) -> HTMLResponse:
+    message = N_("This unsubscribe link belongs to no reminder e-mail. Please check that it is complete.")
+    return _error(request, None, 404, N_("Link not found"), message)
 
 
 @router.get("/static/vendor/plotly.min.js")

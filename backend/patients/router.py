@@ -34,6 +34,8 @@ def _out(db_session, patient: User, therapist_ids: list[int] | None = None) -> P
         created_at=patient.created_at,
         therapist_ids=therapist_ids,
         locale=patient.locale,
+        time_zone=patient.time_zone,
+        reminder_emails=patient.reminder_emails_off_at is None,
     )
 
 
@@ -66,9 +68,15 @@ def get_patient(patient_id: IdPath, caller: CurrentCaller, db_session: DbSession
 
 @router.patch("/{patient_id}", response_model=PatientOut, responses=error_responses(*AUTH_ERRORS, PatientNotFound))
 def update_patient(patient_id: IdPath, body: PatientUpdate, caller: CurrentCaller, db_session: DbSession) -> PatientOut:
-    """Changes a patient's settings (the language of their pages): the patient, their therapists, admins."""
+    """Changes a patient's settings (the language of their pages, the time zone of their reminders, reminder
+    e-mails on or off): the patient, their therapists, admins."""
     patient = require_patient_access(patient_id, caller=caller, db_session=db_session, write=True)
-    service.set_locale(db_session=db_session, patient=patient, locale=body.locale)
+    if "locale" in body.model_fields_set:
+        service.set_locale(db_session=db_session, patient=patient, locale=body.locale)
+    if "time_zone" in body.model_fields_set:
+        service.set_time_zone(db_session=db_session, patient=patient, time_zone=body.time_zone)
+    if body.reminder_emails is not None:
+        service.set_reminder_emails(db_session=db_session, patient=patient, on=body.reminder_emails)
     record(
         db_session=db_session,
         caller=caller,

@@ -81,3 +81,18 @@ def set_locale(*, db_session: Session, patient: User, locale: str | None) -> Non
     """Sets the language of a patient's pages (None: the browser's)."""
     patient.locale = locale
     db_session.flush()
+
+
+def set_time_zone(*, db_session: Session, patient: User, time_zone: str | None) -> None:
+    """Sets the IANA time zone of a patient's reminder times (None: the server's COACH_TIME_ZONE)."""
+    patient.time_zone = time_zone
+    db_session.flush()
+
+
+def set_reminder_emails(*, db_session: Session, patient: User, on: bool) -> None:
+    """Turns a patient's reminder e-mails on again or off (off keeps the first time they were stopped)."""
+    if on:
+        patient.reminder_emails_off_at = None
+    elif patient.reminder_emails_off_at is None:
+        patient.reminder_emails_off_at = utcnow()
+    db_session.flush()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 
-from sqlalchemy import CheckConstraint, ForeignKey, String, Text
+from sqlalchemy import JSON, CheckConstraint, ForeignKey, String, Text
 from sqlalchemy.orm import Mapped, mapped_column, relationship
 
 from backend.database import Base, utcnow
@@ -22,6 +22,8 @@ class Plan(Base):
     notes: Mapped[str] = mapped_column(Text, default="")  # the note to the patient, shown on the patient's page
     start_date: Mapped[dt.date] = mapped_column()
     end_date: Mapped[dt.date | None] = mapped_column()
+    # reminder times of each plan day, "HH:MM" in the patient's time zone, sorted (backend/reminders)
+    reminder_times: Mapped[list[str]] = mapped_column(JSON, default=list, server_default="[]")
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
     updated_at: Mapped[dt.datetime] = mapped_column(default=utcnow, onupdate=utcnow)
 

@@ -6,6 +6,8 @@ import datetime as dt
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from backend.reminders.times import MAX_REMINDERS_PER_DAY, normalise_times
+
 
 class PlanItemIn(BaseModel):
     """One prescribed exercise."""
@@ -33,6 +35,17 @@ class PlanIn(BaseModel):
     start_date: dt.date = Field(examples=["2026-11-23"])
     end_date: dt.date | None = Field(default=None, examples=["2026-12-21"])
     items: list[PlanItemIn] = Field(default_factory=list, max_length=50)
+    reminder_times: list[str] = Field(
+        default_factory=list,
+        max_length=MAX_REMINDERS_PER_DAY,
+        description="reminder times of each plan day, HH:MM (24-hour clock) in the patient's time zone",
+        examples=[["08:30", "18:00"]],
+    )
+
+    @field_validator("reminder_times")
+    @classmethod
+    def _reminder_times(cls, value: list[str]) -> list[str]:
+        return normalise_times(value)
 
     @field_validator("items")
     @classmethod
@@ -94,3 +107,4 @@ class PlanOut(BaseModel):
     created_at: dt.datetime = Field(examples=["2026-11-23T09:00:00Z"])
     updated_at: dt.datetime = Field(examples=["2026-11-23T09:00:00Z"])
     items: list[PlanItemOut]
+    reminder_times: list[str] = Field(description="HH:MM in the patient's time zone, sorted", examples=[["08:30"]])

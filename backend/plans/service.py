@@ -47,6 +47,7 @@ def create_plan(*, db_session: Session, patient_id: int, therapist_id: int | Non
         notes=body.notes,
         start_date=body.start_date,
         end_date=body.end_date,
+        reminder_times=body.reminder_times,
         created_at=now,
         updated_at=now,
     )
@@ -61,6 +62,7 @@ def replace_plan(*, db_session: Session, plan: Plan, body: PlanIn) -> Plan:
     new_items = _items(db_session, body)
     plan.title, plan.notes = body.title, body.notes
     plan.start_date, plan.end_date = body.start_date, body.end_date
+    plan.reminder_times = body.reminder_times
     plan.items.clear()
     db_session.flush()
     plan.items.extend(new_items)
@@ -119,6 +121,7 @@ def plan_out(*, db_session: Session, plan: Plan) -> PlanOut:
         end_date=plan.end_date,
         created_at=plan.created_at,
         updated_at=plan.updated_at,
+        reminder_times=list(plan.reminder_times or []),
         items=[
             PlanItemOut(
                 id=i.id,

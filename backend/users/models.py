@@ -28,6 +28,10 @@ class User(Base):
     deactivated_at: Mapped[dt.datetime | None] = mapped_column()
     # the language of the patient's pages ("en", "de", "es", "fr": backend.i18n.LOCALES); None: the browser's
     locale: Mapped[str | None] = mapped_column(String(16))
+    # IANA time zone of the patient's reminder times ("Europe/Berlin"); None: the server's COACH_TIME_ZONE
+    time_zone: Mapped[str | None] = mapped_column(String(64))
+    # when the patient stopped e-mail reminders (the unsubscribe link of a reminder); None: reminders are sent
+    reminder_emails_off_at: Mapped[dt.datetime | None] = mapped_column()
 
 
 class ApiToken(Base):

@@ -124,6 +124,16 @@
     CameraEntry.reveal();
   }
 
+  /** Today's next reminder of the plan, at its time in the patient's time zone (the server's reckoning). */
+  function reminderBlock(reminders) {
+    const box = document.getElementById("reminder");
+    const next = reminders.next;
+    box.hidden = !next;
+    if (!next) { box.textContent = ""; return; }
+    const time = new Date(next.due_at).toLocaleTimeString(I18n.tag, { hour: "2-digit", minute: "2-digit", timeZone: reminders.time_zone });
+    box.textContent = I18n.t("Reminder: your exercises at {time}", { time });
+  }
+
   let advice = [], replies = [];
   /** Shows the advice the patient sees, each with their answers and the reply buttons; keeps the text box being
    *  typed in focused when the page redraws it (a reply or new data arrived). */
@@ -184,7 +194,7 @@
     greeting();
     const since = startOfWeekUTC().toISOString();
     try {
-      const [lib, plans, latest, week, suggestions, progress, answers] = await Promise.all([
+      const [lib, plans, latest, week, suggestions, progress, answers, reminders] = await Promise.all([
         exercises(),
         api(`/patients/${pid}/plans?limit=20`),
         api(`/sessions?patient_id=${pid}&limit=1`),
@@ -192,6 +202,7 @@
         api(`/patients/${pid}/suggestions?limit=10`),
         api(`/patients/${pid}/progress`),
         api(`/patients/${pid}/replies?limit=100`),
+        api(`/patients/${pid}/reminders`),
       ]);
       const plan = runningPlan(plans.items);
       const last = latest.items[0] || null;
@@ -200,6 +211,7 @@
       lastSessionBlock(last, item, lib, last ? progress.points.filter((p) => p.exercise_slug === last.exercise_slug) : []);
       [advice, replies] = [suggestions.items, answers.items];
       adviceBlock();
+      reminderBlock(reminders);
       planBlock(plan, lib, week.items);
       chartBlock(plan, lib, progress.points);
       Live.render();  // the new Start buttons follow the home computer's state

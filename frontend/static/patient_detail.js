@@ -210,6 +210,7 @@
     target_rom_deg: { label: "Target range (°)", min: 1, max: 180, optional: true },  // of motion, optional
   };
   let plans = [], running = null, editing = null;  // editing: the plan being edited (null: a new plan)
+  let patientZone = null;  // the patient's IANA time zone (null: the clinic's)
   let rowSeq = 0;
 
   const isoDay = (d) => d.toISOString().slice(0, 10);
@@ -218,6 +219,9 @@
   const span = (p) => `${dayText(p.start_date)} – ${p.end_date ? dayText(p.end_date) : "open end"}`;
   const itemText = (i) => `${exerciseName(lib, i.exercise_slug)}: ${i.sets} × ${i.repetitions}, ${i.frequency_per_week} days a week`
     + (i.target_rom_deg ? `, target ${Math.round(i.target_rom_deg)}°` : "");
+
+  /** Returns the time zone the reminder times are read in: the patient's, else the clinic's. */
+  function zoneText() { return patientZone || "the clinic's time zone"; }
 
   function renderPlan() {
     const box = document.getElementById("plan-current");
@@ -229,6 +233,8 @@
         el("p", { class: "small muted" }, `Prescribed by ${running.therapist_name || "an administrator"}`),
         el("ul", { class: "plan-items", id: "plan-items" }, running.items.map((i) => el("li", {}, itemText(i),
           i.notes ? el("span", { class: "muted" }, ` — ${i.notes}`) : null))),
+        el("p", { id: "plan-reminders-shown" }, running.reminder_times.length
+          ? `Reminders: ${running.reminder_times.join(", ")} (${zoneText()})` : "No reminder times."),
         running.notes ? el("p", { id: "plan-note-shown" }, el("strong", {}, "Note to the patient: "), running.notes)
           : el("p", { class: "muted" }, "No note to the patient."));
       if (!running.items.length) box.querySelector("ul").append(el("li", { class: "muted" }, "No exercises."));
@@ -295,6 +301,7 @@
     document.getElementById("plan-start").value = plan ? plan.start_date : today;
     document.getElementById("plan-end").value = plan ? plan.end_date || "" : addDays(today, 27);
     document.getElementById("plan-notes").value = plan ? plan.notes : running ? running.notes : "";
+    document.getElementById("plan-reminders").value = (plan ? plan.reminder_times : running ? running.reminder_times : []).join(", ");
     document.getElementById("plan-rows").replaceChildren();
     const items = plan ? plan.items : running ? running.items : [];
     items.forEach(addRow);
@@ -314,7 +321,12 @@
     const clear = (input) => fieldError(input, document.getElementById(input.getAttribute("aria-describedby")), "");
     const title = document.getElementById("plan-title"), start = document.getElementById("plan-start");
     const end = document.getElementById("plan-end"), notes = document.getElementById("plan-notes");
-    [title, start, end, notes].forEach(clear);
+    const reminders = document.getElementById("plan-reminders");
+    [title, start, end, notes, reminders].forEach(clear);
+    const reminderTimes = reminders.value.split(/[,;\s]+/).filter(Boolean)
+      .map((t) => (/^\d:\d\d$/.test(t) ? "0" + t : t));  // 9:00 -> 09:00
+    const badTime = reminderTimes.find((t) => !/^([01]\d|2[0-3]):[0-5]\d$/.test(t));
+    if (badTime) fail(reminders, `“${badTime}” is not a time like 09:00 (hours 00 to 23, minutes 00 to 59, separated by commas).`);
     if (!title.value.trim()) fail(title, "Please give the plan a title.");
     if (!start.value) fail(start, "Please choose the plan's first day.");
     if (end.value && start.value && end.value < start.value) fail(end, "The last day must not be before the first day.");
@@ -348,7 +360,8 @@
       items.push(item);
     }
     if (!ok) return null;
-    return { title: title.value.trim(), notes: notes.value.trim(), start_date: start.value, end_date: end.value || null, items };
+    return { title: title.value.trim(), notes: notes.value.trim(), start_date: start.value, end_date: end.value || null, items,
+      reminder_times: reminderTimes };
   }
 
   /** Places each part of the API's 422 detail ("body.items.1.repetitions: Input should be ...") next to its field. */
@@ -386,6 +399,7 @@
         await api(`/patients/${pid}/plans`, { method: "POST", body });
         if (running && running.start_date < body.start_date) {  // the running plan ends the day before the new one
           const old = { title: running.title, notes: running.notes, start_date: running.start_date, end_date: addDays(body.start_date, -1),
+            reminder_times: running.reminder_times,
             items: running.items.map((i) => ({ exercise_slug: i.exercise_slug, sets: i.sets, repetitions: i.repetitions,
               frequency_per_week: i.frequency_per_week, target_rom_deg: i.target_rom_deg, notes: i.notes })) };
           await api(`/plans/${running.id}`, { method: "PUT", body: old });
@@ -416,6 +430,18 @@
       said.textContent = out.locale ? "Saved: the patient's pages and new advice are in this language now." : "Saved: the patient's browser decides.";
     } catch (err) { said.textContent = ""; showError(err); }
   });
+  const tzInput = document.getElementById("patient-tz");
+  document.getElementById("patient-tz-list").replaceChildren(
+    ...(Intl.supportedValuesOf ? Intl.supportedValuesOf("timeZone") : []).map((z) => el("option", { value: z })));
+  tzInput.addEventListener("change", async () => {
+    const said = document.getElementById("patient-tz-saved");
+    try {
+      const out = await api(`/patients/${pid}`, { method: "PATCH", body: { time_zone: tzInput.value.trim() || null } });
+      patientZone = out.time_zone;
+      said.textContent = out.time_zone ? `Saved: reminders follow ${out.time_zone}.` : "Saved: reminders follow the clinic's time zone.";
+      renderPlan();
+    } catch (err) { said.textContent = err.status === 422 ? `Not saved: ${err.detail}` : ""; if (err.status !== 422) showError(err); }
+  });
   document.getElementById("plan-edit").addEventListener("click", () => openForm(running));
   document.getElementById("plan-new").addEventListener("click", () => openForm(null));
   document.getElementById("plan-add").addEventListener("click", () => addRow(null).querySelector("select").focus());
@@ -429,6 +455,8 @@
     ]);
     document.getElementById("patient-name").textContent = patient.full_name || patient.email;
     document.getElementById("patient-locale").value = patient.locale || "";
+    document.getElementById("patient-tz").value = patient.time_zone || "";
+    if (patientZone !== patient.time_zone) { patientZone = patient.time_zone; renderPlan(); }
     document.title = `${patient.full_name || patient.email} · Kinect Home Coach`;
     const plan = running;
     const parts = [patient.email];

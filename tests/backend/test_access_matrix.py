@@ -150,6 +150,8 @@ ROUTES = {
     ("POST", "/api/v1/reanalysis"): (ADMIN, lambda w: {"patient_id": w["params"]["patient_id"]}),
     ("GET", "/api/v1/reanalysis/{batch}"): (ADMIN, None),  # a batch queued in the world below
     ("GET", "/api/v1/sessions/{session_id}/metric-versions"): (CARE, None),
+    ("GET", "/api/v1/patients/{patient_id}/reminders"): (CARE_DEV, None),
+    ("POST", "/api/v1/reminders/unsubscribe/{token}"): (PUBLIC, None),  # the e-mail's token is the authority
 }
 
 
@@ -196,6 +198,10 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
     from backend.jobs.queue import enqueue
 
     enqueue(db_session=db_session, kind="reanalyze", items=[("matrix", {"session_id": session.id})], batch="matrix")
+    from backend.reminders.service import DueReminder, claim
+
+    _, unsubscribe_token = claim(db_session=db_session, reminder=DueReminder(plan.id, own.id, utcnow().date(), "08:00",
+                                                                             utcnow()))  # fmt: skip
     headers = {
         "anonymous": {},
         "patient_own": auth_headers(own),
@@ -218,6 +224,7 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
         "session_id": session.id,
         "set_id": str(camera_set.id),
         "batch": "matrix",
+        "token": unsubscribe_token,
     }
     return {
         "headers": headers,
