@@ -1,7 +1,7 @@
 """reminders: plan.reminder_times, user.time_zone and user.reminder_emails_off_at, table reminder_sent
 
 Revision ID: remind_reminders
-Revises: 0014_harden_live_set
+Revises: msgs_0015_advice_reply
 Create Date: 2026-11-27 04:40:00
 
 Plain add_column / drop_column (no batch copy: on SQLite a batch copy of `user` or `plan` would cascade deletes).
