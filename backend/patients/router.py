@@ -10,6 +10,7 @@ from backend.audit.service import record, record_patients
 from backend.deps import AdminCaller, CurrentCaller, DbSession, require_patient_access
 from backend.exceptions import (
     AUTH_ERRORS,
+    Forbidden,
     PatientNotFound,
     TherapistNotFound,
     error_responses,
@@ -17,6 +18,7 @@ from backend.exceptions import (
 from backend.patients import service
 from backend.patients.schemas import PatientOut, PatientUpdate
 from backend.schemas import IdPath, Page, PageParams, page_params
+from backend.sessions.triage import PAIN_ALERT_ABOVE
 from backend.users.models import User
 from backend.users.schemas import UserOut
 
@@ -34,6 +36,7 @@ def _out(db_session, patient: User, therapist_ids: list[int] | None = None) -> P
         created_at=patient.created_at,
         therapist_ids=therapist_ids,
         locale=patient.locale,
+        pain_alert_above=PAIN_ALERT_ABOVE if patient.pain_alert_above is None else patient.pain_alert_above,
     )
 
 
@@ -64,11 +67,20 @@ def get_patient(patient_id: IdPath, caller: CurrentCaller, db_session: DbSession
     return _out(db_session, patient)
 
 
-@router.patch("/{patient_id}", response_model=PatientOut, responses=error_responses(*AUTH_ERRORS, PatientNotFound))
+@router.patch(
+    "/{patient_id}", response_model=PatientOut, responses=error_responses(*AUTH_ERRORS, PatientNotFound, Forbidden)
+)
 def update_patient(patient_id: IdPath, body: PatientUpdate, caller: CurrentCaller, db_session: DbSession) -> PatientOut:
-    """Changes a patient's settings (the language of their pages): the patient, their therapists, admins."""
+    """Changes a patient's settings: the language of their pages (the patient, their therapists, admins) and the
+    pain alert level (their therapists and admins only)."""
     patient = require_patient_access(patient_id, caller=caller, db_session=db_session, write=True)
-    service.set_locale(db_session=db_session, patient=patient, locale=body.locale)
+    given = body.model_fields_set
+    if "pain_alert_above" in given and caller.role not in ("therapist", "admin"):
+        raise Forbidden("only a therapist sets the pain alert level")
+    if "locale" in given:
+        service.set_locale(db_session=db_session, patient=patient, locale=body.locale)
+    if "pain_alert_above" in given:
+        service.set_pain_alert(db_session=db_session, patient=patient, above=body.pain_alert_above)
     record(
         db_session=db_session,
         caller=caller,
@@ -76,6 +88,7 @@ def update_patient(patient_id: IdPath, body: PatientUpdate, caller: CurrentCalle
         object_type="patient",
         object_id=patient_id,
         patient_id=patient_id,
+        detail={k: getattr(body, k) for k in sorted(given)},
     )
     return _out(db_session, patient)
 

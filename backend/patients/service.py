@@ -81,3 +81,9 @@ def set_locale(*, db_session: Session, patient: User, locale: str | None) -> Non
     """Sets the language of a patient's pages (None: the browser's)."""
     patient.locale = locale
     db_session.flush()
+
+
+def set_pain_alert(*, db_session: Session, patient: User, above: int | None) -> None:
+    """Sets the pain (0-9) above which the patient's answers after a set raise their attention (None: the default)."""
+    patient.pain_alert_above = above
+    db_session.flush()

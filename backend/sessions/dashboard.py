@@ -72,7 +72,8 @@ def _newest_session(*, with_metrics: bool):
 
 
 def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.datetime) -> dict[int, dict]:
-    """Returns per patient (one query): last session (brief), latest indicators, sessions this week, pending advice."""
+    """Returns per patient (one query): last session (brief), latest indicators, sessions this week, pending advice,
+    the pain alert level."""
     this_week = (
         select(func.count())
         .select_from(ExerciseSession)
@@ -94,6 +95,7 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             _newest_session(with_metrics=True).label("mid"),
             this_week.label("this_week"),
             pending.label("pending"),
+            User.pain_alert_above.label("pain_alert_above"),
         )
         .where(User.id.in_(patient_ids))
         .subquery()
@@ -104,6 +106,7 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             per.c.pid,
             per.c.this_week,
             per.c.pending,
+            per.c.pain_alert_above,
             ExerciseSession.id,
             Exercise.slug,
             ExerciseSession.started_at,
@@ -125,8 +128,9 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             "sessions_this_week": this_week or 0,
             "pending_suggestions": pending or 0,
             "latest_indicators": indicators if isinstance(indicators, dict) else None,
+            "pain_alert_above": triage.PAIN_ALERT_ABOVE if alert is None else alert,
         }
-        for pid, this_week, pending, *last, indicators in rows
+        for pid, this_week, pending, alert, *last, indicators in rows
     }
 
 
@@ -201,7 +205,8 @@ def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.dateti
     per = _per_patient(db_session, ids, now)
     plans = _running_plans(db_session, ids, now.astimezone(dt.UTC).date())
     recent = _recent_sessions(db_session, ids, triage.window_start(now))
-    empty = {"last_session": None, "sessions_this_week": 0, "pending_suggestions": 0, "latest_indicators": None}
+    empty = {"last_session": None, "sessions_this_week": 0, "pending_suggestions": 0, "latest_indicators": None,
+             "pain_alert_above": triage.PAIN_ALERT_ABOVE}  # fmt: skip
     out = {}
     for pid in ids:
         row = {"patient_id": pid, **empty, **per.get(pid, {})}
@@ -213,6 +218,7 @@ def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             last_session_at=last["started_at"] if last else None,
             sessions=sessions,
             pending_suggestions=row["pending_suggestions"],
+            pain_alert_above=row["pain_alert_above"],
         )
         analysed_slug = next((s.exercise_slug for s in reversed(sessions) if s.indicator_scores is not None), None)
         out[pid] = {
