@@ -28,7 +28,8 @@ RANKED_PATIENTS_MAX = 500  # the dashboard ranks up to this many visible patient
 def progress(*, db_session: Session, patient_id: int, exercise_id: int | None, since: dt.datetime | None) -> list[dict]:
     """Returns one point per session of the patient (optionally one exercise, since a time), oldest first.
 
-    Each point: session_id, exercise_slug, started_at, repetitions, rom_deg (deg), quality_ok, indicators.
+    Each point: session_id, exercise_slug, started_at, repetitions, rom_deg (deg), quality_ok, indicators, and what
+    the patient said after the set: pain_nrs (0-10), effort_cr10 (Borg CR10, 0-10); None = not said.
     """
     query = (
         select(
@@ -39,10 +40,13 @@ def progress(*, db_session: Session, patient_id: int, exercise_id: int | None, s
             SessionMetric.rom_deg,
             SessionMetric.quality_ok,
             SessionMetric.document["indicators"],
+            SessionFeeling.pain_nrs,
+            SessionFeeling.effort_cr10,
         )
         .select_from(ExerciseSession)
         .outerjoin(Exercise, Exercise.id == ExerciseSession.exercise_id)
         .outerjoin(SessionMetric, SessionMetric.session_id == ExerciseSession.id)
+        .outerjoin(SessionFeeling, SessionFeeling.session_id == ExerciseSession.id)
         .where(ExerciseSession.patient_id == patient_id)
     )
     if exercise_id is not None:
@@ -50,7 +54,8 @@ def progress(*, db_session: Session, patient_id: int, exercise_id: int | None, s
     if since is not None:
         query = query.where(ExerciseSession.started_at >= since)
     rows = db_session.execute(query.order_by(ExerciseSession.started_at, ExerciseSession.id)).all()
-    keys = ("session_id", "exercise_slug", "started_at", "repetitions", "rom_deg", "quality_ok", "indicators")
+    keys = ("session_id", "exercise_slug", "started_at", "repetitions", "rom_deg", "quality_ok", "indicators",
+            "pain_nrs", "effort_cr10")  # fmt: skip
     return [dict(zip(keys, row, strict=True)) for row in rows]
 
 
