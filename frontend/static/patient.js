@@ -169,6 +169,11 @@
     }
   }
 
+  /** Returns a date axis whose day ticks are every other day on a phone, so the dates stay level and readable. */
+  function narrowDays(axis) {
+    return window.innerWidth < 600 && axis.dtick === DAY ? { ...axis, dtick: 2 * DAY, tickangle: 0 } : axis;
+  }
+
   /** Adds the chart of the pain and effort the patient said after each exercise in the last six weeks (0-10 each);
    *  nothing when they have not answered. */
   function feelingChart(lib, points) {
@@ -190,7 +195,7 @@
       traces: [trace(pain, "pain_nrs", Plots.COLORS[1], "circle", "solid"), trace(hard, "effort_cr10", Plots.COLORS[3], "square", "dot")],
       config: { displayModeBar: false },
       layout: { showlegend: true, dragmode: false,
-        xaxis: Plots.dateAxis(x, { fixedrange: true, nticks: window.innerWidth < 600 ? 3 : 5 }),
+        xaxis: narrowDays(Plots.dateAxis(x, { fixedrange: true, nticks: window.innerWidth < 600 ? 3 : 5 })),
         yaxis: { fixedrange: true, range: [-0.3, 10.3], dtick: 5 } },
       table: { caption: I18n.t("How it felt after each exercise"),
         columns: [I18n.t("Day"), I18n.t("Exercise"), I18n.t("Pain (0 to 10)"), I18n.t("How hard (0 to 10)")],

@@ -441,6 +441,7 @@
       const out = await api(`/patients/${pid}`, { method: "PATCH", body: { pain_alert_above: value } });
       input.value = out.pain_alert_above;
       said.textContent = `Saved: pain above ${out.pain_alert_above} of 10 now raises the patient's attention score.`;
+      await overview();  // the pain chart's alert line moves to the new level
     } catch (err) { said.textContent = ""; showError(err); }
   });
   document.getElementById("plan-edit").addEventListener("click", () => openForm(running));
