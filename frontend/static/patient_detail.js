@@ -17,8 +17,12 @@
     "quality.outlier_fraction": { what: "the share of implausible joint positions", fmt: (x) => `${Math.round(x * 100)}%` },
     active_days_last_7d: { what: "the number of days with this exercise in the last 7", fmt: (x) => `${Math.round(x)}`,
       than: (t) => `the ${t} the plan asks for` },
+    pain_nrs: { what: "the pain the patient said after the set", fmt: (x) => `${Math.round(x)} of 10`,
+      than: (t) => `their pain alert level (${t})` },
+    pain_nrs_median_7d: { what: "the median pain said after sets in the last 7 days", fmt: (x) => `${+x.toFixed(1)} of 10`,
+      than: (t) => `${t} (2 points above the median of the 4 weeks before)` },
   };
-  const COMPARED = { "<": "below", ">": "above", "==": "equal to" };
+  const COMPARED = { "<": "below", ">": "above", ">=": "at or above", "==": "equal to" };
 
   /** Returns why a system suggestion was made, in words: "Because the range of motion (42°) was below 60°." */
   function ruleText(s) {
