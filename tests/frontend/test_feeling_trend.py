@@ -104,3 +104,27 @@ def test_the_trends_show_pain_and_effort_and_the_therapist_sets_the_alert(browse
     finally:
         tara.close()
     assert any(r.startswith("Said pain 6 of 10") and r.endswith("(alert above 3)") for r in reasons), reasons
+
+
+def test_a_german_patient_reads_the_pain_trend_in_german(browser, live_server):
+    base = live_server.url
+    email, pid = _patient_who_said_how_it_felt(base)
+    with httpx.Client(base_url=base, timeout=60) as patient:
+        csrf = patient.post("/api/v1/auth/login", json={"email": email, "password": PASSWORD}).json()["csrf_token"]
+        r = patient.patch(f"/api/v1/patients/{pid}", json={"locale": "de"}, headers={"X-CSRF-Token": csrf})
+        assert r.status_code == 200, r.text
+    context, page = _context(browser, base, 390, 844)
+    try:
+        login(page, email, PASSWORD)
+        figure = page.locator("figure.plot-figure", has_text="Wie es sich nach Ihren Übungen anfühlte")
+        expect(figure.locator(".plot .main-svg").first).to_be_visible(timeout=LOAD_MS)
+        assert [t["name"] for t in _traces(page, figure)] == ["Schmerz", "Wie anstrengend"]
+        figure.get_by_role("button", name="Als Tabelle zeigen").click()
+        expect(figure.locator("table thead")).to_contain_text("Schmerz (0 bis 10)")
+        expect(figure.locator("table tbody tr").last).to_contain_text("6,5")  # the German decimal comma
+        figure.scroll_into_view_if_needed()
+        shot(page, "feeling-trend-patient-de-390")
+        assert not _serious(page)
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
