@@ -85,3 +85,20 @@ def test_pain_rising_needs_two_answers_before_the_week_and_a_rise_of_two_points(
     fired = rules.pain_rising([at(20, 2), at(10, 3), at(1, 5)], now)
     assert fired is not None and (fired.threshold, fired.value) == (4.5, 5.0)
     assert "about 5 of 10" in fired.text and "about 2.5 of 10" in fired.text, fired.text
+
+
+def test_a_corrected_answer_withdraws_pain_advice_that_no_longer_holds(
+    client, db_session, make_user, auth_headers, exercise, store
+):
+    patient = make_user("patient")
+    headers = auth_headers(patient)
+    session = store(patient, exercise, utcnow() - dt.timedelta(hours=1))
+    _answer(client, headers, session.id, 8)
+    _answer(client, headers, session.id, 2)  # the patient pressed 8 by mistake
+    db_session.expire_all()
+    assert [(s.rule, s.status) for s in _system(db_session, patient.id)] == [("pain_high", "superseded")]
+    _answer(client, headers, session.id, 9)  # high again: the same advice comes back, with the new number
+    db_session.expire_all()
+    found = _system(db_session, patient.id)
+    assert [(s.rule, s.status, s.value) for s in found] == [("pain_high", "pending", 9.0)]
+    assert "your pain was 9 of 10" in found[0].text, found[0].text
