@@ -10,6 +10,7 @@ from backend.audit.service import record, record_patients
 from backend.deps import AdminCaller, CurrentCaller, DbSession, require_patient_access
 from backend.exceptions import (
     AUTH_ERRORS,
+    Forbidden,
     PatientNotFound,
     TherapistNotFound,
     error_responses,
@@ -17,6 +18,7 @@ from backend.exceptions import (
 from backend.patients import service
 from backend.patients.schemas import PatientOut, PatientUpdate
 from backend.schemas import IdPath, Page, PageParams, page_params
+from backend.sessions.triage import PAIN_ALERT_ABOVE
 from backend.users.models import User
 from backend.users.schemas import UserOut
 
@@ -36,6 +38,7 @@ def _out(db_session, patient: User, therapist_ids: list[int] | None = None) -> P
         locale=patient.locale,
         time_zone=patient.time_zone,
         reminder_emails=patient.reminder_emails_off_at is None,
+        pain_alert_above=PAIN_ALERT_ABOVE if patient.pain_alert_above is None else patient.pain_alert_above,
     )
 
 
@@ -66,17 +69,25 @@ def get_patient(patient_id: IdPath, caller: CurrentCaller, db_session: DbSession
     return _out(db_session, patient)
 
 
-@router.patch("/{patient_id}", response_model=PatientOut, responses=error_responses(*AUTH_ERRORS, PatientNotFound))
+@router.patch(
+    "/{patient_id}", response_model=PatientOut, responses=error_responses(*AUTH_ERRORS, PatientNotFound, Forbidden)
+)
 def update_patient(patient_id: IdPath, body: PatientUpdate, caller: CurrentCaller, db_session: DbSession) -> PatientOut:
-    """Changes a patient's settings (the language of their pages, the time zone of their reminders, reminder
-    e-mails on or off): the patient, their therapists, admins."""
+    """Changes a patient's settings: the language of their pages, the time zone of their reminders and reminder
+    e-mails on or off (the patient, their therapists, admins), and the pain alert level (their therapists and admins
+    only)."""
     patient = require_patient_access(patient_id, caller=caller, db_session=db_session, write=True)
-    if "locale" in body.model_fields_set:
+    given = body.model_fields_set
+    if "pain_alert_above" in given and caller.role not in ("therapist", "admin"):
+        raise Forbidden("only a therapist sets the pain alert level")
+    if "locale" in given:
         service.set_locale(db_session=db_session, patient=patient, locale=body.locale)
-    if "time_zone" in body.model_fields_set:
+    if "time_zone" in given:
         service.set_time_zone(db_session=db_session, patient=patient, time_zone=body.time_zone)
     if body.reminder_emails is not None:
         service.set_reminder_emails(db_session=db_session, patient=patient, on=body.reminder_emails)
+    if "pain_alert_above" in given:
+        service.set_pain_alert(db_session=db_session, patient=patient, above=body.pain_alert_above)
     record(
         db_session=db_session,
         caller=caller,
@@ -84,6 +95,7 @@ def update_patient(patient_id: IdPath, body: PatientUpdate, caller: CurrentCalle
         object_type="patient",
         object_id=patient_id,
         patient_id=patient_id,
+        detail={k: getattr(body, k) for k in sorted(given)},
     )
     return _out(db_session, patient)
 

@@ -8,6 +8,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from backend.reminders.times import zone
+from backend.sessions.triage import PAIN_ALERT_ABOVE
 
 Locale = Literal["en", "de", "es", "fr"]  # backend.i18n.LOCALES
 
@@ -28,6 +29,12 @@ class PatientOut(BaseModel):
                                   "the server's COACH_TIME_ZONE", examples=["Europe/Berlin"])  # fmt: skip
     reminder_emails: bool = Field(default=True, description="false once the patient used an e-mail's unsubscribe "
                                   "link (or their therapist turned e-mails off)")  # fmt: skip
+    pain_alert_above: int = Field(
+        default=PAIN_ALERT_ABOVE,
+        description="pain said after a set (0-10) above this raises the patient's attention score "
+        f"(set by the therapist; {PAIN_ALERT_ABOVE} unless set)",
+        examples=[5],
+    )
 
 
 class PatientUpdate(BaseModel):
@@ -40,6 +47,14 @@ class PatientUpdate(BaseModel):
                                   "null: the server's", examples=["Europe/Madrid"])  # fmt: skip
     reminder_emails: bool | None = Field(default=None, description="true: send reminder e-mails again; false: stop",
                                          examples=[True])  # fmt: skip
+    pain_alert_above: int | None = Field(
+        default=None,
+        ge=0,
+        le=9,
+        description="therapists only: pain said after a set (0-10) above this raises the patient's attention score; "
+        f"null: the default ({PAIN_ALERT_ABOVE})",
+        examples=[4],
+    )
 
     @field_validator("time_zone")
     @classmethod
@@ -51,7 +66,7 @@ class PatientUpdate(BaseModel):
     @model_validator(mode="after")
     def _something(self) -> PatientUpdate:
         if not self.model_fields_set:
-            raise ValueError("send at least one of locale, time_zone, reminder_emails")
+            raise ValueError("send at least one of locale, time_zone, reminder_emails, pain_alert_above")
         if "reminder_emails" in self.model_fields_set and self.reminder_emails is None:
             raise ValueError("reminder_emails must be true or false")
         return self

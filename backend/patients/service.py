@@ -96,3 +96,9 @@ def set_reminder_emails(*, db_session: Session, patient: User, on: bool) -> None
     elif patient.reminder_emails_off_at is None:
         patient.reminder_emails_off_at = utcnow()
     db_session.flush()
+
+
+def set_pain_alert(*, db_session: Session, patient: User, above: int | None) -> None:
+    """Sets the pain (0-9) above which the patient's answers after a set raise their attention (None: the default)."""
+    patient.pain_alert_above = above
+    db_session.flush()

@@ -14,6 +14,7 @@ from sqlalchemy.orm import Session
 from backend.audit.models import AuditEvent
 from backend.devices.models import Device
 from backend.exercises.models import Exercise
+from backend.feeling.models import SessionFeeling
 from backend.patients.models import TherapistPatient
 from backend.plans.models import Plan, PlanItem
 from backend.replies.models import AdviceReply
@@ -33,7 +34,8 @@ therapists.json   the therapists assigned to you
 plans.json        your exercise plans, each with its exercises, sets, repetitions and weekly frequency
 sessions.json     every exercise session: when, which exercise, how long, the file's SHA-256, and the
                   metrics computed from it (repetitions, range of motion, balance, data quality ...) with the
-                  version of the analysis that made them
+                  version of the analysis that made them, and how each set felt to you ("feeling": pain 0-10,
+                  effort 0-10 on the Borg CR10 scale, null = not answered or skipped)
 sessions/         the session files themselves (.khs: raw and filtered skeleton, readable with the open-source
                   kinect-agent tool, docs/session-file.md); a file removed by the clinic's retention period, or
                   that could not be read, is listed in sessions.json with "file": null and the reason
@@ -91,19 +93,23 @@ def build_archive(*, db_session: Session, patient: User, requested_by: str) -> I
         _json(z, "plans.json", plans)
         listed = []
         rows = db_session.execute(
-            select(ExerciseSession, Exercise.slug, SessionMetric.document)
+            select(ExerciseSession, Exercise.slug, SessionMetric.document, SessionFeeling)
             .outerjoin(Exercise, Exercise.id == ExerciseSession.exercise_id)
             .outerjoin(SessionMetric, SessionMetric.session_id == ExerciseSession.id)
+            .outerjoin(SessionFeeling, SessionFeeling.session_id == ExerciseSession.id)
             .where(ExerciseSession.patient_id == pid)
             .order_by(ExerciseSession.started_at, ExerciseSession.id)
         ).all()
-        for s, slug, doc in rows:
+        for s, slug, doc, felt in rows:
             entry = _row(s, ("id", "client_session_id", "started_at", "duration_s", "n_frames", "file_format",
                              "file_size", "content_hash", "processing_version", "processing_params", "status",
                              "error", "created_at"))  # fmt: skip
             entry["client_session_id"] = str(s.client_session_id)
             entry["exercise"] = slug
             entry["metrics"] = doc
+            entry["feeling"] = None if felt is None else {
+                "pain_nrs": felt.pain_nrs, "effort_borg_cr10": felt.effort_cr10, "answered_at": _iso(felt.updated_at)
+            }  # fmt: skip
             try:
                 data = sessions.session_file(db_session=db_session, session_id=s.id)
                 name = f"sessions/session-{s.id}.khs"

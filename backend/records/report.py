@@ -2,7 +2,8 @@
 
 Black-and-white safe: every series has its own marker and dash, every chart has its table beside it. Paper A4 or
 Letter. Sections: plan and adherence, repetitions and range of motion over time with the exercise's MDC95,
-balance, data quality, the therapist's notes, pain/effort (not recorded by this system: said so), who and when.
+balance, data quality, the therapist's notes, pain (0-10 numeric rating scale) and effort (Borg CR10) the patient
+said after each set, who and when.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from sqlalchemy.orm import Session
 
 from backend.analysis.mdc import rom_mdc95
 from backend.exercises.models import Exercise
+from backend.feeling.models import SessionFeeling
 from backend.plans.models import Plan, PlanItem
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.suggestions.models import Suggestion
@@ -63,8 +65,10 @@ def _table(rows: list[list], widths=None) -> Table:
     return t
 
 
-def _chart(title: str, series: dict[str, list[tuple[float, float]]], y_label: str, width: float) -> Drawing:
-    """Returns a line chart of {label: [(day number, value)]}, one marker and dash per series, in black."""
+def _chart(title: str, series: dict[str, list[tuple[float, float]]], y_label: str, width: float,
+           y_range: tuple[float, float] | None = None) -> Drawing:  # fmt: skip
+    """Returns a line chart of {label: [(day number, value)]}, one marker and dash per series, in black; y_range:
+    the y axis's (min, max), else fitted to the data."""
     d = Drawing(width, 60 * mm)
     plot = LinePlot()
     plot.x, plot.y, plot.width, plot.height = 12 * mm, 10 * mm, width - 16 * mm, 40 * mm
@@ -76,6 +80,8 @@ def _chart(title: str, series: dict[str, list[tuple[float, float]]], y_label: st
         line.symbol = makeMarker(MARKERS[i % len(MARKERS)], size=4)
         if DASHES[i % len(DASHES)]:
             line.strokeDashArray = DASHES[i % len(DASHES)]
+    if y_range is not None:
+        plot.yValueAxis.valueMin, plot.yValueAxis.valueMax = y_range
     plot.xValueAxis.labelTextFormat = "day %d"
     plot.xValueAxis.labels.fontSize = plot.yValueAxis.labels.fontSize = 7
     d.add(plot)
@@ -85,6 +91,37 @@ def _chart(title: str, series: dict[str, list[tuple[float, float]]], y_label: st
                        for i, k in enumerate(series))  # fmt: skip
     d.add(String(0, 0, legend, fontName="Helvetica", fontSize=7))
     return d
+
+
+def _feeling_section(rows, period: Period, body, width: float) -> list:
+    """Returns the paragraphs, chart and table of the pain and effort the patient said after the period's sets."""
+    said = [r for r in rows if r.pain_nrs is not None or r.effort_cr10 is not None]
+    if not said:
+        return [_p("The patient did not say how any set of this period felt (asked after each set; skipping is "
+                   "allowed).", body)]  # fmt: skip
+    pains = [r.pain_nrs for r in said if r.pain_nrs is not None]
+    text = f"Said after {len(said)} of {len(rows)} set(s): pain on the 0-10 numeric rating scale, effort on the "
+    text += "Borg CR10 scale (0 nothing at all, 10 maximal)."
+    if pains:
+        text += f" Pain: highest {max(pains)}, last {pains[-1]} of 10."
+    day = lambda r: float((r.started_at.date() - period.start).days)  # noqa: E731
+    series = {
+        "pain (0-10)": [(day(r), float(r.pain_nrs)) for r in said if r.pain_nrs is not None],
+        "effort (Borg CR10)": [(day(r), float(r.effort_cr10)) for r in said if r.effort_cr10 is not None],
+    }
+    out = [_p(text, body)]
+    if max(len(v) for v in series.values()) >= 2:
+        out.append(
+            _chart(
+                "Pain and effort after each set", {k: v for k, v in series.items() if v}, "of 10", width, (0.0, 10.0)
+            )
+        )
+    table = [["Date", "Exercise", "Pain (0-10)", "Effort (Borg CR10)"]]
+    for r in said:
+        table.append([f"{r.started_at:%d %b %Y %H:%M}", r.name, "skipped" if r.pain_nrs is None else str(r.pain_nrs),
+                      "skipped" if r.effort_cr10 is None else f"{r.effort_cr10:g}"])  # fmt: skip
+    out.append(_table(table, [40 * mm, 50 * mm, 30 * mm, 38 * mm]))
+    return out
 
 
 def build_report(*, db_session: Session, patient: User, period: Period, made_by: str, paper: str = "a4") -> bytes:
@@ -99,9 +136,11 @@ def build_report(*, db_session: Session, patient: User, period: Period, made_by:
     end = dt.datetime.combine(period.end + dt.timedelta(days=1), dt.time(), tzinfo=dt.UTC)
     rows = db_session.execute(
         select(ExerciseSession.started_at, Exercise.slug, Exercise.name, SessionMetric.repetitions,
-               SessionMetric.rom_deg, SessionMetric.quality_ok, SessionMetric.document)
+               SessionMetric.rom_deg, SessionMetric.quality_ok, SessionMetric.document, SessionFeeling.pain_nrs,
+               SessionFeeling.effort_cr10)
         .join(Exercise, Exercise.id == ExerciseSession.exercise_id)
         .outerjoin(SessionMetric, SessionMetric.session_id == ExerciseSession.id)
+        .outerjoin(SessionFeeling, SessionFeeling.session_id == ExerciseSession.id)
         .where(ExerciseSession.patient_id == patient.id, ExerciseSession.started_at >= start,
                ExerciseSession.started_at < end)
         .order_by(ExerciseSession.started_at)
@@ -176,9 +215,9 @@ def build_report(*, db_session: Session, patient: User, period: Period, made_by:
     story += [_p("Data quality", h2),
               _p(f"{ok} of {len(rows)} session(s) had good tracking (the camera saw the body well enough for the "
                  "numbers above to be trusted); read the others with care." if rows else "No session.", body),
-              _p("Pain and effort", h2),
-              _p("Not recorded: this system does not ask the patient for pain or effort ratings.", body),
-              _p("Therapist's notes", h2)]  # fmt: skip
+              _p("Pain and effort", h2)]  # fmt: skip
+    story += _feeling_section(rows, period, body, width)
+    story.append(_p("Therapist's notes", h2))
     notes = db_session.execute(
         select(Suggestion.created_at, Suggestion.text, User.full_name).outerjoin(User, User.id == Suggestion.author_id)
         .where(Suggestion.patient_id == patient.id, Suggestion.source == "therapist",

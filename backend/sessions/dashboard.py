@@ -29,7 +29,8 @@ RANKED_PATIENTS_MAX = 500  # the dashboard ranks up to this many visible patient
 def progress(*, db_session: Session, patient_id: int, exercise_id: int | None, since: dt.datetime | None) -> list[dict]:
     """Returns one point per session of the patient (optionally one exercise, since a time), oldest first.
 
-    Each point: session_id, exercise_slug, started_at, repetitions, rom_deg (deg), quality_ok, indicators.
+    Each point: session_id, exercise_slug, started_at, repetitions, rom_deg (deg), quality_ok, indicators, and what
+    the patient said after the set: pain_nrs (0-10), effort_cr10 (Borg CR10, 0-10); None = not said.
     """
     query = (
         select(
@@ -40,10 +41,13 @@ def progress(*, db_session: Session, patient_id: int, exercise_id: int | None, s
             SessionMetric.rom_deg,
             SessionMetric.quality_ok,
             SessionMetric.document["indicators"],
+            SessionFeeling.pain_nrs,
+            SessionFeeling.effort_cr10,
         )
         .select_from(ExerciseSession)
         .outerjoin(Exercise, Exercise.id == ExerciseSession.exercise_id)
         .outerjoin(SessionMetric, SessionMetric.session_id == ExerciseSession.id)
+        .outerjoin(SessionFeeling, SessionFeeling.session_id == ExerciseSession.id)
         .where(ExerciseSession.patient_id == patient_id)
     )
     if exercise_id is not None:
@@ -51,7 +55,8 @@ def progress(*, db_session: Session, patient_id: int, exercise_id: int | None, s
     if since is not None:
         query = query.where(ExerciseSession.started_at >= since)
     rows = db_session.execute(query.order_by(ExerciseSession.started_at, ExerciseSession.id)).all()
-    keys = ("session_id", "exercise_slug", "started_at", "repetitions", "rom_deg", "quality_ok", "indicators")
+    keys = ("session_id", "exercise_slug", "started_at", "repetitions", "rom_deg", "quality_ok", "indicators",
+            "pain_nrs", "effort_cr10")  # fmt: skip
     return [dict(zip(keys, row, strict=True)) for row in rows]
 
 
@@ -74,7 +79,7 @@ def _newest_session(*, with_metrics: bool):
 
 def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.datetime) -> dict[int, dict]:
     """Returns per patient (one query): last session (brief), latest indicators, sessions this week, pending advice,
-    unread replies."""
+    unread replies, the pain alert level."""
     this_week = (
         select(func.count())
         .select_from(ExerciseSession)
@@ -104,6 +109,7 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             this_week.label("this_week"),
             pending.label("pending"),
             unread.label("unread"),
+            User.pain_alert_above.label("pain_alert_above"),
         )
         .where(User.id.in_(patient_ids))
         .subquery()
@@ -115,6 +121,7 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             per.c.this_week,
             per.c.pending,
             per.c.unread,
+            per.c.pain_alert_above,
             ExerciseSession.id,
             Exercise.slug,
             ExerciseSession.started_at,
@@ -137,8 +144,9 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             "pending_suggestions": pending or 0,
             "unread_replies": unread or 0,
             "latest_indicators": indicators if isinstance(indicators, dict) else None,
+            "pain_alert_above": triage.PAIN_ALERT_ABOVE if alert is None else alert,
         }
-        for pid, this_week, pending, unread, *last, indicators in rows
+        for pid, this_week, pending, unread, alert, *last, indicators in rows
     }
 
 
@@ -214,7 +222,7 @@ def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.dateti
     plans = _running_plans(db_session, ids, now.astimezone(dt.UTC).date())
     recent = _recent_sessions(db_session, ids, triage.window_start(now))
     empty = {"last_session": None, "sessions_this_week": 0, "pending_suggestions": 0, "unread_replies": 0,
-             "latest_indicators": None}  # fmt: skip
+             "latest_indicators": None, "pain_alert_above": triage.PAIN_ALERT_ABOVE}  # fmt: skip
     out = {}
     for pid in ids:
         row = {"patient_id": pid, **empty, **per.get(pid, {})}
@@ -226,6 +234,7 @@ def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             last_session_at=last["started_at"] if last else None,
             sessions=sessions,
             pending_suggestions=row["pending_suggestions"],
+            pain_alert_above=row["pain_alert_above"],
         )
         analysed_slug = next((s.exercise_slug for s in reversed(sessions) if s.indicator_scores is not None), None)
         out[pid] = {

@@ -8,15 +8,27 @@ from sqlalchemy.orm import Session
 
 from backend.exceptions import ExportUnavailable
 from backend.exercises.library import EXERCISES
+from backend.feeling.service import get_feeling
 from backend.sessions import service
 from backend.sessions.detail import analysis_document, decode_stored
-from kinect_agent.export.fhir import SessionContext
+from kinect_agent.export.fhir import Feeling, SessionContext
 from kinect_agent.export.files import ExportError, ExportFile, export
+
+
+def _feeling(db_session: Session, session_id: int) -> Feeling | None:
+    """Returns what the patient answered after the set (None: not asked or not answered yet)."""
+    answer = get_feeling(db_session=db_session, session_id=session_id)
+    if answer.answered_at is None:
+        return None
+    when = answer.answered_at
+    when = when.astimezone(dt.UTC).replace(tzinfo=None) if when.tzinfo is not None else when  # stored as UTC
+    return Feeling(answer.pain, answer.effort, when.isoformat(timespec="seconds") + "Z")
 
 
 def session_export(*, db_session: Session, row: tuple, fmt: str, max_frames: int, max_decoded_bytes: int) -> ExportFile:
     """Returns the session of `row` (service.get_session_row) as `fmt`, with its metrics document: the stored one,
-    else the file analysed again as the session page does (detail.analysis_document, without indicators).
+    else the file analysed again as the session page does (detail.analysis_document, without indicators), and how
+    the set felt to the patient (csv: feeling.csv; fhir: pain and effort Observations).
 
     Raises InvalidSessionFile when the stored file cannot be decoded, ExportUnavailable when the format needs metrics
     and none can be had (no known exercise, or the analysis fails).
@@ -33,6 +45,7 @@ def session_export(*, db_session: Session, row: tuple, fmt: str, max_frames: int
         start=started,
         patient_id=session.patient_id,
         device_id=session.device_id,
+        feeling=_feeling(db_session, session.id),
     )
     try:
         return export(fmt, payload, document=document or None, context=context, stem=f"session-{session.id}")

@@ -68,6 +68,10 @@ class ProgressPoint(BaseModel):
     rom_deg: float | None = Field(description="degrees")
     quality_ok: bool | None
     indicators: dict | None = Field(description="flexibility, endurance, strength, balance: {score 0..100, ...}")
+    pain_nrs: int | None = Field(default=None, description="pain the patient said after the set, 0-10; null: not said")
+    effort_cr10: float | None = Field(
+        default=None, description="effort the patient said after the set, Borg CR10 0-10; null: not said"
+    )
 
 
 class ProgressOut(BaseModel):
@@ -88,6 +92,8 @@ class ProgressOut(BaseModel):
                             "rom_deg": 76.6,
                             "quality_ok": True,
                             "indicators": _INDICATORS_EXAMPLE,
+                            "pain_nrs": 2,
+                            "effort_cr10": 3.5,
                         }
                     ],
                 }

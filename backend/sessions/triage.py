@@ -18,9 +18,10 @@ starts Monday 00:00 UTC. The attention score is the sum of five parts, clipped t
     data quality  Q = 15 · poor / n over the last n ≤ 5 analysed sessions of the window (quality_ok false).
     advice        P = min(10, 4 · pending system suggestions): advice waiting for the therapist is the
                   therapist's own to-do, not a sign about the patient, so alone it never makes a patient "soon".
-    pain          H = 30 when the patient said pain ≥ PAIN_HIGH (6) of 10 (numeric rating scale, asked after
-                  each set) in the last RECENT_DAYS days; else 25 when the median pain of those days rose by
-                  ≥ PAIN_RISE (2) points over the median of the BASELINE_DAYS before (≥ 1 and ≥ 2 answers); else 0.
+    pain          H = 30 when the patient said pain above their alert level (0-9, set by the therapist per patient;
+                  PAIN_ALERT_ABOVE (5) when not set) of 10 (numeric rating scale, asked after each set) in the last
+                  RECENT_DAYS days; else 25 when the median pain of those days rose by ≥ PAIN_RISE (2) points over
+                  the median of the BASELINE_DAYS before (≥ 1 and ≥ 2 answers); else 0.
 
     score = clip(A + N + D + Q + P, 0, 100); a patient whose running plan started less than 7 days ago (a new
     patient) is capped at NOW_AT − 1. Level: "now" at score ≥ NOW_AT (50), "soon" at ≥ SOON_AT (20), else "ok".
@@ -50,7 +51,8 @@ TREND_WEEKS, TREND_STEP = 6, 5.0
 QUALITY_LAST = 5
 NEW_PLAN_DAYS = 7
 ADVICE_PER_SUGGESTION, ADVICE_MAX = 4.0, 10.0  # advice to review alone stays below SOON_AT
-PAIN_HIGH, PAIN_RISE = 6, 2.0  # pain said after a set (0-10): high from this value; a rise of the median this large
+PAIN_ALERT_ABOVE = 5  # pain said after a set (0-10) above this raises attention, unless the therapist set another
+PAIN_RISE = 2.0  # a rise of the median pain this large (points of 10) raises attention
 WEEK = dt.timedelta(days=7)
 
 
@@ -185,7 +187,7 @@ def _poor_quality(sessions: Sequence[RecentSession]) -> tuple[float, str | None]
     )
 
 
-def _pain(now: dt.datetime, sessions: Sequence[RecentSession]) -> tuple[float, str | None]:
+def _pain(now: dt.datetime, sessions: Sequence[RecentSession], alert_above: int) -> tuple[float, str | None]:
     recent_from = now - dt.timedelta(days=RECENT_DAYS)
     baseline_from = recent_from - dt.timedelta(days=BASELINE_DAYS)
     said = [s for s in sessions if s.pain_nrs is not None]
@@ -193,9 +195,10 @@ def _pain(now: dt.datetime, sessions: Sequence[RecentSession]) -> tuple[float, s
     if not recent:
         return 0.0, None
     worst = max(recent, key=lambda s: (s.pain_nrs, s.started_at))
-    if worst.pain_nrs >= PAIN_HIGH:
+    if worst.pain_nrs > alert_above:
         day = _fmt_date(worst.started_at.date())
-        return 30.0, f"Said pain {worst.pain_nrs} of 10 after {_name(worst.exercise_slug or '')} on {day}"
+        return 30.0, (f"Said pain {worst.pain_nrs} of 10 after {_name(worst.exercise_slug or '')} on {day} "
+                      f"(alert above {alert_above})")  # fmt: skip
     base = [s.pain_nrs for s in said if baseline_from <= s.started_at < recent_from]
     if len(base) >= 2:
         b, r = float(median(base)), float(median([s.pain_nrs for s in recent]))
@@ -213,8 +216,10 @@ def attention(
     last_session_at: dt.datetime | None,
     sessions: Sequence[RecentSession],
     pending_suggestions: int,
+    pain_alert_above: int = PAIN_ALERT_ABOVE,
 ) -> Attention:
-    """Returns the attention score, level and reasons of one patient (module doc); sessions: oldest first."""
+    """Returns the attention score, level and reasons of one patient (module doc); sessions: oldest first;
+    pain_alert_above: the patient's pain alert level (0-9; pain above it counts)."""
     parts: list[tuple[float, str | None]] = []
     new = plan is not None and (now.date() - plan.started_on).days < NEW_PLAN_DAYS
     if plan is not None and plan.per_week > 0:
@@ -222,7 +227,7 @@ def attention(
         if not new:
             parts.append(_inactive(now, plan, last_session_at))
     parts.append(_poor_quality(sessions))
-    parts.append(_pain(now, sessions))
+    parts.append(_pain(now, sessions, pain_alert_above))
     if pending_suggestions:
         points = min(ADVICE_MAX, ADVICE_PER_SUGGESTION * pending_suggestions)
         parts.append((points, f"{_plural(pending_suggestions, 'suggestion')} to review"))

@@ -29,7 +29,9 @@ ROM_DROP = "rom_drop"
 TOO_FAST = "too_fast"
 POOR_DATA_QUALITY = "poor_data_quality"
 MISSED_DAYS = "missed_days"
-RULES = (FEWER_REPS, ROM_DROP, TOO_FAST, POOR_DATA_QUALITY, MISSED_DAYS)
+PAIN_HIGH = "pain_high"  # the patient said more pain after a set than their therapist's alert level
+PAIN_RISING = "pain_rising"  # the median pain said after sets rose over the last week
+RULES = (FEWER_REPS, ROM_DROP, TOO_FAST, POOR_DATA_QUALITY, MISSED_DAYS, PAIN_HIGH, PAIN_RISING)
 
 # --- thresholds ------------------------------------------------------------------------------------------------
 ROM_DROP_FRACTION = 0.85  # fires when rom_deg < 0.85 x median rom_deg of the baseline sessions
@@ -42,6 +44,9 @@ QUALITY_MIN_TRACKED_FRACTION = 0.9  # explains a failed quality check as "step i
 QUALITY_MAX_OUTLIER_FRACTION = 0.05  # explains it as "the camera lost you" above this
 ACTIVE_DAYS_WINDOW = 7  # missed days: distinct UTC days with a session among the last 7, today included
 WEEKDAY_NAME_DAYS = 7  # a session less than this many days before the advice is named by its weekday, else by date
+PAIN_RECENT_DAYS, PAIN_BASELINE_DAYS = 7, 28  # pain rising: the median of the last 7 days against the 28 before
+PAIN_RISE_POINTS = 2.0  # ... fires when it rose by this many points of 10 or more (as backend.sessions.triage)
+PAIN_BASELINE_MIN = 2  # ... with at least this many answers before the week
 
 
 @dataclass(frozen=True)
@@ -331,3 +336,48 @@ def evaluate(
         drafts = [poor_data_quality(doc, day, t)]
     drafts.append(missed_days(past, expected_per_week, now, doc.get("exercise"), t))
     return [d for d in drafts if d is not None]
+
+
+# --- how the set felt (run when the patient answers, backend.feeling) ------------------------------------------
+
+
+def pain_high(pain: int | None, alert_above: int, exercise: object, day: str, t: Translator = ENGLISH
+              ) -> SuggestionDraft | None:  # fmt: skip
+    """Fires when the pain the patient said after a set (0-10) is above their alert level (0-9, the therapist's)."""
+    if pain is None or pain <= alert_above:
+        return None
+    text = t.gettext(
+        N_("%(day)s you said your pain was %(pain)s of 10 after your %(what)s. Do them gently and only as far as "
+           "is comfortable. Stop if the pain gets worse, and tell your therapist how you feel."),
+        day=_sentence(day), pain=pain, what=exercise_plural(exercise, t),
+    )  # fmt: skip
+    return SuggestionDraft(PAIN_HIGH, "pain_nrs", ">", float(alert_above), float(pain), text)
+
+
+def _points(value: float, t: Translator) -> str:
+    """Returns a median of pain answers as the text writes it: "4", or "4.5" (this locale's decimal sign)."""
+    return t.format_number(value, 0 if value.is_integer() else 1)
+
+
+def pain_rising(
+    answers: list[tuple[dt.datetime, int]], now: dt.datetime, t: Translator = ENGLISH
+) -> SuggestionDraft | None:
+    """Fires when the median pain said in the PAIN_RECENT_DAYS up to now rose by PAIN_RISE_POINTS or more over the
+    median of the PAIN_BASELINE_DAYS before (≥ PAIN_BASELINE_MIN answers). answers: (set started_at, pain 0-10)."""
+    now = _aware(now, "now")
+    recent_from = now - dt.timedelta(days=PAIN_RECENT_DAYS)
+    baseline_from = recent_from - dt.timedelta(days=PAIN_BASELINE_DAYS)
+    recent = [p for when, p in answers if recent_from <= _aware(when, "answers[][0]") <= now]
+    before = [p for when, p in answers if baseline_from <= _aware(when, "answers[][0]") < recent_from]
+    if not recent or len(before) < PAIN_BASELINE_MIN:
+        return None
+    was, is_ = float(statistics.median(before)), float(statistics.median(recent))
+    if is_ - was < PAIN_RISE_POINTS:
+        return None
+    text = t.gettext(
+        N_("In the last week you said more pain after your exercises than before: about %(now)s of 10, while it "
+           "was about %(before)s of 10 in the weeks before. Do your exercises gently, and tell your therapist how "
+           "you feel."),
+        now=_points(is_, t), before=_points(was, t),
+    )  # fmt: skip
+    return SuggestionDraft(PAIN_RISING, "pain_nrs_median_7d", ">=", was + PAIN_RISE_POINTS, is_, text)

@@ -10,11 +10,26 @@ from sqlalchemy.orm import Session
 
 from backend.database import utcnow
 from backend.exceptions import SuggestionNotFound, SuggestionNotPending
+from backend.exercises.models import Exercise
+from backend.feeling.models import SessionFeeling
 from backend.i18n import translator
 from backend.sessions.models import ExerciseSession
 from backend.suggestions.context import plan_targets, session_history
 from backend.suggestions.models import Suggestion
-from backend.suggestions.rules import ACTIVE_DAYS_WINDOW, MISSED_DAYS, RULES, SuggestionDraft, evaluate
+from backend.suggestions.rules import (
+    ACTIVE_DAYS_WINDOW,
+    MISSED_DAYS,
+    PAIN_BASELINE_DAYS,
+    PAIN_HIGH,
+    PAIN_RECENT_DAYS,
+    PAIN_RISING,
+    RULES,
+    SuggestionDraft,
+    evaluate,
+    pain_high,
+    pain_rising,
+    session_day,
+)
 from backend.users.models import User
 
 THERAPIST_RULE = "therapist"  # the rule field of suggestions written by a person
@@ -282,3 +297,70 @@ def supersede_older(*, db_session: Session, session: ExerciseSession, rules: set
         .execution_options(synchronize_session="fetch")
     )
     return result.rowcount
+
+
+def suggest_for_feeling(
+    *, db_session: Session, session: ExerciseSession, pain: int | None, alert_above: int
+) -> list[Suggestion]:
+    """Runs the pain rules when the patient says how a set felt: pain above their alert level (0-9), and the median
+    pain of the week up to the set rising over the 4 weeks before. Stores what fires as pending suggestions of the
+    session (once per rule and session; the therapist reviews them before the patient sees them) and supersedes
+    older pending ones of the same rules; a changed answer withdraws (supersedes) the session's pending pain advice
+    that no longer holds. Returns the new suggestions (flushed, not committed)."""
+    if pain is None:
+        _withdraw(db_session=db_session, session=session, rules={PAIN_HIGH, PAIN_RISING})
+        return []
+    started = session.started_at if session.started_at.tzinfo else session.started_at.replace(tzinfo=dt.UTC)
+    since = started - dt.timedelta(days=PAIN_RECENT_DAYS + PAIN_BASELINE_DAYS)
+    rows = db_session.execute(
+        select(ExerciseSession.started_at, SessionFeeling.pain_nrs)
+        .join(SessionFeeling, SessionFeeling.session_id == ExerciseSession.id)
+        .where(
+            ExerciseSession.patient_id == session.patient_id,
+            ExerciseSession.started_at >= since,
+            ExerciseSession.started_at <= session.started_at,
+            SessionFeeling.pain_nrs.is_not(None),
+        )
+    ).all()
+    answers = [(t if t.tzinfo else t.replace(tzinfo=dt.UTC), p) for t, p in rows]
+    t = translator(patient_locale(db_session=db_session, patient_id=session.patient_id))
+    slug = db_session.scalar(select(Exercise.slug).where(Exercise.id == session.exercise_id))
+    day = session_day(started, utcnow().date(), t)
+    drafts = [pain_high(pain, alert_above, slug, day, t), pain_rising(answers, started, t)]
+    _withdraw(db_session=db_session, session=session, rules={PAIN_HIGH, PAIN_RISING} - {d.rule for d in drafts if d})
+    reopened = _reopen(db_session=db_session, session=session, drafts=[d for d in drafts if d is not None])
+    rows_out = add_system_suggestions([d for d in drafts if d is not None], patient_id=session.patient_id,
+                                      session_id=session.id, db_session=db_session)  # fmt: skip
+    rows_out += reopened
+    supersede_older(db_session=db_session, session=session, rules={r.rule for r in rows_out})
+    return rows_out
+
+
+def _reopen(*, db_session: Session, session: ExerciseSession, drafts: list[SuggestionDraft]) -> list[Suggestion]:
+    """Makes pending again, with the draft's numbers and text, the session's withdrawn (superseded) system
+    suggestions of the drafts' rules: an answer changed back brings its advice back instead of none."""
+    out = []
+    for draft in drafts:
+        row = db_session.scalar(select(Suggestion).where(
+            Suggestion.session_id == session.id, Suggestion.source == "system", Suggestion.rule == draft.rule,
+            Suggestion.status == "superseded"))  # fmt: skip
+        if row is None:
+            continue
+        row.status, row.decided_at, row.created_at = "pending", None, utcnow()
+        row.threshold, row.value, row.text = float(draft.threshold), float(draft.value), draft.text
+        out.append(row)
+    db_session.flush()
+    return out
+
+
+def _withdraw(*, db_session: Session, session: ExerciseSession, rules: set[str]) -> None:
+    """Marks 'superseded' the session's pending system suggestions of these rules (their reason no longer holds)."""
+    if not rules:
+        return
+    db_session.execute(
+        update(Suggestion)
+        .where(Suggestion.session_id == session.id, Suggestion.source == "system", Suggestion.status == "pending",
+               Suggestion.rule.in_(sorted(rules)))
+        .values(status="superseded", decided_at=utcnow())
+        .execution_options(synchronize_session="fetch")
+    )  # fmt: skip

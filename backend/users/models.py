@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 
-from sqlalchemy import JSON, Boolean, CheckConstraint, ForeignKey, Index, String
+from sqlalchemy import JSON, Boolean, CheckConstraint, ForeignKey, Index, SmallInteger, String
 from sqlalchemy.orm import Mapped, mapped_column
 
 from backend.database import Base, utcnow
@@ -32,6 +32,9 @@ class User(Base):
     time_zone: Mapped[str | None] = mapped_column(String(64))
     # when the patient stopped e-mail reminders (the unsubscribe link of a reminder); None: reminders are sent
     reminder_emails_off_at: Mapped[dt.datetime | None] = mapped_column()
+    # a patient's pain said after a set (0-10) above this raises their attention score (backend.sessions.triage);
+    # set by their therapist; None: triage.PAIN_ALERT_ABOVE
+    pain_alert_above: Mapped[int | None] = mapped_column(SmallInteger)
 
 
 class ApiToken(Base):

@@ -190,6 +190,40 @@
     }
   }
 
+  /** Returns a date axis whose day ticks are every other day on a phone, so the dates stay level and readable. */
+  function narrowDays(axis) {
+    return window.innerWidth < 600 && axis.dtick === DAY ? { ...axis, dtick: 2 * DAY, tickangle: 0 } : axis;
+  }
+
+  /** Adds the chart of the pain and effort the patient said after each exercise in the last six weeks (0-10 each);
+   *  nothing when they have not answered. */
+  function feelingChart(lib, points) {
+    const since = Date.now() - 42 * DAY;
+    const said = points.filter((p) => +new Date(p.started_at) >= since && (p.pain_nrs !== null || p.effort_cr10 !== null))
+      .sort((a, b) => new Date(a.started_at) - new Date(b.started_at));
+    if (!said.length) return;
+    const day = (p) => Coach.fmtDate(p.started_at, { day: "numeric", month: "long" });
+    const x = said.map((p) => p.started_at);
+    const num = (v) => (v === null ? "—" : I18n.number(v, 1));
+    const pain = I18n.t("Pain"), hard = I18n.t("How hard");
+    const trace = (name, key, color, symbol, dash) => ({ type: "scatter", mode: "lines+markers", name, x, y: said.map((p) => p[key]),
+      connectgaps: true, line: { color, width: 4, dash }, marker: { color, size: 14, symbol },
+      text: said.map((p) => I18n.t("{what}: {value} of 10 after {exercise} on {day}",
+        { what: name, value: num(p[key]), exercise: exerciseName(lib, p.exercise_slug), day: day(p) })),
+      hovertemplate: "%{text}<extra></extra>" });
+    document.getElementById("charts").append(Plots.figure({
+      title: I18n.t("How it felt after your exercises (0 to 10)"), fontSize: 20, height: 320,
+      traces: [trace(pain, "pain_nrs", Plots.COLORS[1], "circle", "solid"), trace(hard, "effort_cr10", Plots.COLORS[3], "square", "dot")],
+      config: { displayModeBar: false },
+      layout: { showlegend: true, dragmode: false,
+        xaxis: narrowDays(Plots.dateAxis(x, { fixedrange: true, nticks: window.innerWidth < 600 ? 3 : 5 })),
+        yaxis: { fixedrange: true, range: [-0.3, 10.3], dtick: 5 } },
+      table: { caption: I18n.t("How it felt after each exercise"),
+        columns: [I18n.t("Day"), I18n.t("Exercise"), I18n.t("Pain (0 to 10)"), I18n.t("How hard (0 to 10)")],
+        rows: said.map((p) => [day(p), exerciseName(lib, p.exercise_slug), num(p.pain_nrs), num(p.effort_cr10)]) },
+    }));
+  }
+
   async function load() {
     greeting();
     const since = startOfWeekUTC().toISOString();
@@ -214,6 +248,7 @@
       reminderBlock(reminders);
       planBlock(plan, lib, week.items);
       chartBlock(plan, lib, progress.points);
+      feelingChart(lib, progress.points);
       Live.render();  // the new Start buttons follow the home computer's state
     } catch (err) { showError(err); }
   }

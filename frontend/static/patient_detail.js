@@ -17,8 +17,12 @@
     "quality.outlier_fraction": { what: "the share of implausible joint positions", fmt: (x) => `${Math.round(x * 100)}%` },
     active_days_last_7d: { what: "the number of days with this exercise in the last 7", fmt: (x) => `${Math.round(x)}`,
       than: (t) => `the ${t} the plan asks for` },
+    pain_nrs: { what: "the pain the patient said after the set", fmt: (x) => `${Math.round(x)} of 10`,
+      than: (t) => `their pain alert level (${t})` },
+    pain_nrs_median_7d: { what: "the median pain said after sets in the last 7 days", fmt: (x) => `${+x.toFixed(1)} of 10`,
+      than: (t) => `${t} (2 points above the median of the 4 weeks before)` },
   };
-  const COMPARED = { "<": "below", ">": "above", "==": "equal to" };
+  const COMPARED = { "<": "below", ">": "above", ">=": "at or above", "==": "equal to" };
 
   /** Returns why a system suggestion was made, in words: "Because the range of motion (42°) was below 60°." */
   function ruleText(s) {
@@ -162,6 +166,32 @@
           + "between two sessions is within what the measurement and the movement vary by (minimal detectable change, 95 %)."));
       }
     }
+  }
+
+  /** Adds the chart of pain (0-10 NRS) and effort (Borg CR10) the patient said after each set, all exercises, with
+   *  the patient's pain alert level as a dashed line; nothing when the patient has never answered. */
+  function feelingChart(points, alertAbove) {
+    const said = points.filter((p) => p.pain_nrs !== null || p.effort_cr10 !== null)
+      .sort((a, b) => new Date(a.started_at) - new Date(b.started_at));
+    if (!said.length) return;
+    const x = said.map((p) => p.started_at);
+    const hover = (what, key) => said.map((p) => `${what} ${p[key] === null ? "not said" : p[key] + " of 10"} after `
+      + `${exerciseName(lib, p.exercise_slug)} on ${fmtDateTime(p.started_at)}, session #${p.session_id}`);
+    const trace = (name, key, color, symbol) => ({ type: "scatter", mode: "lines+markers", name, x, y: said.map((p) => p[key]),
+      connectgaps: true, line: { color, width: 2.5 }, marker: { color, size: 11, symbol }, text: hover(name, key),
+      hovertemplate: "%{text}<extra></extra>" });
+    const traces = [trace("pain (0–10, NRS)", "pain_nrs", Plots.COLORS[1], "circle"),
+      trace("effort (Borg CR10)", "effort_cr10", Plots.COLORS[3], "square")];
+    const shapes = [{ type: "line", xref: "paper", x0: 0, x1: 1, y0: alertAbove, y1: alertAbove, showlegend: true,
+      name: `pain alert above ${alertAbove}`, line: { color: Plots.COLORS[1], width: 2, dash: "dash" } }];
+    document.getElementById("progress").prepend(Plots.figure({  // first: pain is what needs a therapist soonest
+      title: "How the sets felt: pain and effort the patient said (all exercises)", traces, fontSize: FONT, height: 340,
+      layout: { shapes, showlegend: true, hovermode: "closest", xaxis: Plots.dateAxis(x),
+        yaxis: { title: { text: "of 10" }, range: [-0.3, 10.3], dtick: 2 } },
+      table: { caption: "Pain and effort after each set — one row per answered set",
+        columns: ["Date", "Exercise", "Pain (0–10)", "Effort (Borg CR10)"],
+        rows: said.map((p) => [fmtDateTime(p.started_at), exerciseName(lib, p.exercise_slug), p.pain_nrs, p.effort_cr10]) },
+    }));
   }
 
   async function loadSessions() {
@@ -442,6 +472,24 @@
       renderPlan();
     } catch (err) { said.textContent = err.status === 422 ? `Not saved: ${err.detail}` : ""; if (err.status !== 422) showError(err); }
   });
+  document.getElementById("pain-alert").addEventListener("submit", async (ev) => {
+    ev.preventDefault();
+    const input = document.getElementById("pain-alert-above"), said = document.getElementById("pain-alert-msg");
+    const text = input.value.trim(), value = Number(text);
+    if (!/^\d$/.test(text)) {  // a whole number 0-9: pain above 9 of 10 can only be 10
+      input.setAttribute("aria-invalid", "true");
+      said.textContent = "Enter a whole number from 0 to 9.";
+      input.focus();
+      return;
+    }
+    input.removeAttribute("aria-invalid");
+    try {
+      const out = await api(`/patients/${pid}`, { method: "PATCH", body: { pain_alert_above: value } });
+      input.value = out.pain_alert_above;
+      said.textContent = `Saved: pain above ${out.pain_alert_above} of 10 now raises the patient's attention score.`;
+      await overview();  // the pain chart's alert line moves to the new level
+    } catch (err) { said.textContent = ""; showError(err); }
+  });
   document.getElementById("plan-edit").addEventListener("click", () => openForm(running));
   document.getElementById("plan-new").addEventListener("click", () => openForm(null));
   document.getElementById("plan-add").addEventListener("click", () => addRow(null).querySelector("select").focus());
@@ -457,6 +505,8 @@
     document.getElementById("patient-locale").value = patient.locale || "";
     document.getElementById("patient-tz").value = patient.time_zone || "";
     if (patientZone !== patient.time_zone) { patientZone = patient.time_zone; renderPlan(); }
+    const alertInput = document.getElementById("pain-alert-above");
+    if (document.activeElement !== alertInput) alertInput.value = patient.pain_alert_above;
     document.title = `${patient.full_name || patient.email} · Kinect Home Coach`;
     const plan = running;
     const parts = [patient.email];
@@ -465,6 +515,7 @@
     if (plan) parts.push(`plan “${plan.title}”: ` + plan.items.map((i) => `${exerciseName(lib, i.exercise_slug)} ${i.sets}×${i.repetitions}, ${i.frequency_per_week}/week`).join("; "));
     document.getElementById("patient-summary").textContent = parts.join(" · ");
     progressBlock(progress.points, plan);
+    feelingChart(progress.points, patient.pain_alert_above);
   }
 
   async function load() {

@@ -11,9 +11,17 @@ effectivePeriod:
                            structure (BODY_SITES; trunk angles have none) with laterality in its text
     indicators             project codes `indicator.<flexibility|endurance|strength|balance>`, score 0-100
                            (UCUM `1`), the measured value as a component
-Project codes live in CODE_SYSTEM, documented in docs/fhir.md. SNOMED CT codes (body structures) were checked in
-published mappings (DICOM anatomic region tables, HL7 examples): 16953009 elbow joint structure, 49076000 knee joint
-structure, 85537004 glenohumeral (shoulder) joint structure, 24136001 hip joint structure.
+    how the set felt       what the patient answered after the set (backend.feeling), category survey, the patient
+                           as performer, issued when answered: pain LOINC 72514-3 "Pain severity - 0-10 verbal
+                           numeric rating [Score] - Reported" (an integer 0-10, UCUM `{score}`); effort on the Borg
+                           CR10 scale (0-10 in halves, UCUM `{score}`) under FEELING_CODE_SYSTEM `effort-borg-cr10`:
+                           LOINC has no Borg CR10 term (its 82289-0 "Rating of perceived exertion [Score]" is the
+                           0-10 scale of the 2008 US Physical Activity Guidelines, docs/fhir.md). A skipped question
+                           gives no Observation.
+Project codes live in CODE_SYSTEM and FEELING_CODE_SYSTEM, documented in docs/fhir.md. SNOMED CT codes (body
+structures) were checked in published mappings (DICOM anatomic region tables, HL7 examples): 16953009 elbow joint
+structure, 49076000 knee joint structure, 85537004 glenohumeral (shoulder) joint structure, 24136001 hip joint
+structure.
 """
 
 from __future__ import annotations
@@ -24,6 +32,9 @@ from datetime import UTC, datetime, timedelta
 from typing import Any
 
 CODE_SYSTEM = "https://kinect-home-coach.example/fhir/CodeSystem/metrics"
+FEELING_CODE_SYSTEM = "https://kinect-home-coach.example/fhir/CodeSystem/patient-reported"
+PAIN_LOINC = ("72514-3", "Pain severity - 0-10 verbal numeric rating [Score] - Reported")
+EFFORT_CODE = ("effort-borg-cr10", "Perceived exertion after the set, Borg CR10 scale (0-10) - Reported")
 DEVICE_ID_SYSTEM = "https://kinect-home-coach.example/fhir/NamingSystem/device-id"
 DEVICE_CODE_SYSTEM = "https://kinect-home-coach.example/fhir/CodeSystem/recording-device"  # recording.DEVICES
 SESSION_ID_SYSTEM = "https://kinect-home-coach.example/fhir/NamingSystem/session-id"
@@ -43,6 +54,16 @@ _SIDES = {"L": "left", "R": "right"}
 
 
 @dataclass(frozen=True)
+class Feeling:
+    """How the set felt to the patient: pain_nrs 0-10 (integer), effort_cr10 0-10 in halves (Borg CR10), None =
+    skipped; answered_at: ISO 8601 UTC time of the answer."""
+
+    pain_nrs: int | None
+    effort_cr10: float | None
+    answered_at: str | None = None
+
+
+@dataclass(frozen=True)
 class SessionContext:
     """Who and what a bundle describes: ids on the clinic's server (None when unknown) and the session's start.
 
@@ -54,6 +75,7 @@ class SessionContext:
     patient_id: int | None = None
     device_id: int | None = None
     recorded_with: dict[str, Any] | None = None  # kinect_agent.analysis.validity.recorded_with of the recording
+    feeling: Feeling | None = None  # the patient's answers after the set (the server's sessions only)
 
 
 def _urn() -> str:
@@ -153,6 +175,28 @@ def _indicator_observations(document: dict[str, Any], common: dict[str, Any]) ->
     return out
 
 
+def _feeling_observations(feeling: Feeling | None, common: dict[str, Any], patient_id: int | None) -> list[dict]:
+    out: list[dict[str, Any]] = []
+    if feeling is None:
+        return out
+    fields: dict[str, Any] = {}
+    if feeling.answered_at is not None:
+        fields["issued"] = feeling.answered_at
+    if patient_id is not None:
+        fields["performer"] = [{"reference": f"Patient/{patient_id}"}]
+    plain = {k: v for k, v in common.items() if k != "device"}  # the patient said it, no device measured it
+    if feeling.pain_nrs is not None:
+        code = _concept(LOINC, *PAIN_LOINC)
+        value = _quantity(int(feeling.pain_nrs), "score", "{score}")
+        out.append(_observation(plain, code, "survey", valueQuantity=value, **fields))
+    if feeling.effort_cr10 is not None:
+        code = _concept(FEELING_CODE_SYSTEM, *EFFORT_CODE)
+        value = _quantity(float(feeling.effort_cr10), "score", "{score}")
+        method = {"text": "Borg CR10 scale: 0 nothing at all, 10 maximal"}
+        out.append(_observation({**plain, "method": method}, code, "survey", valueQuantity=value, **fields))
+    return out
+
+
 DEVICE_TYPES = {"webcam": "Ordinary camera (webcam) with BlazePose landmark model",
                 "simulator": "Simulated depth camera"}  # fmt: skip
 
@@ -206,6 +250,7 @@ def bundle(document: dict[str, Any], context: SessionContext) -> dict[str, Any]:
         observations.append(_observation(common, code, "activity", valueQuantity=value))
     observations += _rom_observations(document, common)
     observations += _indicator_observations(document, common)
+    observations += _feeling_observations(context.feeling, common, context.patient_id)
     entries += [{"fullUrl": _urn(), "resource": obs} for obs in observations]
     return {
         "resourceType": "Bundle",

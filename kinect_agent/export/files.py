@@ -1,7 +1,8 @@
 """One session exported to a file in any of FORMATS: the bytes, their media type and a file name.
 
     csv   a zip of CSV tables (export.tables): one download that a spreadsheet opens table by table; metrics.csv and
-          repetitions.csv need the server's analysis document, the angle tables only the session file.
+          repetitions.csv need the server's analysis document, feeling.csv the patient's answers, the angle tables
+          only the session file.
     trc   the filtered joint centres as an OpenSim marker file (export.trc), mm.
     bvh   the filtered recording as the kinematic model's motion (formats.bvh_writer), cm and degrees.
     fhir  an R4 Bundle of Observations (export.fhir); needs the analysis document.
@@ -55,10 +56,12 @@ def _zip(members: dict[str, str]) -> bytes:
     return out.getvalue()
 
 
-def csv_zip(payload: SessionPayload, document: dict[str, Any] | None) -> bytes:
-    """Returns the zip of metrics.csv, repetitions.csv (with a document), recording.csv (the device) and
-    angles_raw/angles_filtered.csv."""
+def csv_zip(payload: SessionPayload, document: dict[str, Any] | None, feeling: fhir.Feeling | None = None) -> bytes:
+    """Returns the zip of metrics.csv, repetitions.csv (with a document), feeling.csv (with a feeling),
+    recording.csv (the device) and angles_raw/angles_filtered.csv."""
     members: dict[str, str] = {}
+    if feeling is not None:
+        members["feeling.csv"] = tables.feeling_csv(feeling.pain_nrs, feeling.effort_cr10, feeling.answered_at)
     meta = payload.raw.meta
     if document is not None:
         members["metrics.csv"] = tables.metrics_csv(document, device=meta.device)
@@ -81,14 +84,15 @@ def export(
     """Returns `payload` exported as `fmt` (one of FORMATS); raises ExportError for an unknown format or missing input.
 
     document: the session's analysis document (backend.analysis.report plus "indicators"); needed by fhir.
-    context: ids for fhir (default: the file's session id and created_at, no patient or device). stem: file name stem.
+    context: ids for fhir (default: the file's session id and created_at, no patient or device), and how the set felt
+    (fhir and csv). stem: file name stem.
     """
     if fmt not in FORMATS:
         raise ExportError(f"unknown export format {fmt!r}; expected one of {', '.join(FORMATS)}")
     rec = payload.filtered if payload.filtered is not None else payload.raw
     file_name = f"{stem}{SUFFIXES[fmt]}"
     if fmt == "csv":
-        data = csv_zip(payload, document)
+        data = csv_zip(payload, document, context.feeling if context is not None else None)
     elif fmt == "trc":
         data = trc.write_text(rec.t, rec.positions, file_name=file_name).encode("utf-8")
     elif fmt == "bvh":

@@ -9,6 +9,8 @@ Every table is comma-separated UTF-8 with a header row, numbers with a dot, empt
                       curves), and of the filtered recording as the analysis measures it (analysis.angles.
                       measured_angles, the session page's filtered curves and the range of motion); empty where
                       an angle is undefined.
+    feeling.csv       (server exports of a session the patient answered for) pain_nrs (0-10 numeric rating
+                      scale), effort_borg_cr10 (0-10 in halves), answered_at (ISO 8601 UTC); empty = skipped.
 The metrics and repetitions come from the server's analysis document (backend.analysis.report.analyze_recording
 plus "indicators"); the angles from the session file itself.
 """
@@ -103,3 +105,8 @@ def angles_csv(recording: Recording, *, measured: bool = False) -> str:
     header = ["time_s", *[f"{name}_deg" for name in ANGLE_NAMES]]
     body = np.stack(columns, axis=1).tolist()
     return _text([header, *body])
+
+
+def feeling_csv(pain_nrs: int | None, effort_cr10: float | None, answered_at: str | None) -> str:
+    """Returns feeling.csv: one row of what the patient answered after the set (empty cells: skipped)."""
+    return _text([["pain_nrs", "effort_borg_cr10", "answered_at"], [pain_nrs, effort_cr10, answered_at]])

@@ -147,3 +147,56 @@ def test_corrupt_stored_file_is_a_typed_400(client, store, make_patient_with_the
     response = _export(client, row.id, "bvh", auth_headers(therapist))
     assert response.status_code == 400 and response.json()["error"] == "InvalidSessionFile"
     assert "checksum_mismatch" in response.json()["detail"]
+
+
+def _answer(client, session_id: int, patient_headers: dict, pain, effort) -> None:
+    r = client.put(f"/api/v1/sessions/{session_id}/feeling", json={"pain": pain, "effort": effort},
+                   headers=patient_headers)  # fmt: skip
+    assert r.status_code == 200, r.text
+
+
+def test_csv_zip_holds_how_the_set_felt(client, upload, auth_headers):
+    session_id, patient, therapist = upload(make_khs("squat", 3, seed=2), "squat")
+    _answer(client, session_id, auth_headers(patient), 6, 3.5)
+    with zipfile.ZipFile(io.BytesIO(_export(client, session_id, "csv", auth_headers(therapist)).content)) as z:
+        rows = z.read("feeling.csv").decode().splitlines()
+    assert rows[0] == "pain_nrs,effort_borg_cr10,answered_at", rows
+    pain, effort, answered = rows[1].split(",")
+    assert (pain, effort) == ("6", "3.5") and answered.endswith("Z"), rows
+
+
+def test_csv_zip_has_no_feeling_table_before_the_patient_answers(client, upload, auth_headers):
+    session_id, _, therapist = upload(make_khs("squat", 2, seed=4), "squat")
+    with zipfile.ZipFile(io.BytesIO(_export(client, session_id, "csv", auth_headers(therapist)).content)) as z:
+        assert "feeling.csv" not in z.namelist()
+
+
+def test_fhir_bundle_says_pain_with_its_loinc_code_and_effort_on_the_borg_scale(client, upload, auth_headers):
+    session_id, patient, therapist = upload(make_khs("elbow_flexion", 3, seed=3), "elbow_flexion")
+    _answer(client, session_id, auth_headers(patient), 7, 4.5)
+    body = _export(client, session_id, "fhir", auth_headers(therapist)).json()
+    R4B.Bundle.model_validate(body)
+    surveys = [e["resource"] for e in body["entry"] if e["resource"]["resourceType"] == "Observation"
+               and e["resource"]["category"][0]["coding"][0]["code"] == "survey"]  # fmt: skip
+    by_code = {o["code"]["coding"][0]["code"]: o for o in surveys}
+    assert set(by_code) == {"72514-3", "effort-borg-cr10"}, by_code
+    pain, effort = by_code["72514-3"], by_code["effort-borg-cr10"]
+    assert pain["code"]["coding"][0] == {
+        "system": "http://loinc.org",
+        "code": "72514-3",
+        "display": "Pain severity - 0-10 verbal numeric rating [Score] - Reported",
+    }
+    assert pain["valueQuantity"]["value"] == 7 and pain["valueQuantity"]["code"] == "{score}"
+    assert effort["code"]["coding"][0]["system"] == "https://kinect-home-coach.example/fhir/CodeSystem/patient-reported"
+    assert effort["valueQuantity"]["value"] == 4.5 and "Borg CR10" in effort["method"]["text"]
+    for o in (pain, effort):
+        assert o["subject"] == o["performer"][0] == {"reference": f"Patient/{patient.id}"} and "device" not in o
+        assert o["issued"].endswith("Z")
+
+
+def test_fhir_bundle_leaves_out_a_skipped_question(client, upload, auth_headers):
+    session_id, patient, therapist = upload(make_khs("elbow_flexion", 3, seed=5), "elbow_flexion")
+    _answer(client, session_id, auth_headers(patient), None, 2.0)
+    body = _export(client, session_id, "fhir", auth_headers(therapist)).json()
+    codes = [e["resource"]["code"]["coding"][0]["code"] for e in body["entry"] if "code" in e["resource"]]
+    assert "effort-borg-cr10" in codes and "72514-3" not in codes

@@ -48,6 +48,20 @@ def test_progress_without_exercise_has_every_session(client, make_user, auth_hea
     assert body["points"][1]["rom_deg"] is None and body["points"][1]["indicators"] is None
 
 
+def test_progress_carries_the_pain_and_effort_the_patient_said(client, make_user, auth_headers, exercise, store):
+    patient = make_user("patient")
+    headers = auth_headers(patient)
+    t0 = dt.datetime(2026, 11, 1, 9, tzinfo=dt.UTC)
+    said, skipped, unasked = (store(patient, exercise, t0 + dt.timedelta(days=d)) for d in range(3))
+    for session, answer in ((said, {"pain": 4, "effort": 6.5}), (skipped, {"pain": None, "effort": 2.0})):
+        r = client.put(f"/api/v1/sessions/{session.id}/feeling", json=answer, headers=headers)
+        assert r.status_code == 200, r.text
+    points = client.get(f"/api/v1/patients/{patient.id}/progress", headers=headers).json()["points"]
+    assert [(p["session_id"], p["pain_nrs"], p["effort_cr10"]) for p in points] == [
+        (said.id, 4, 6.5), (skipped.id, None, 2.0), (unasked.id, None, None)
+    ]  # fmt: skip
+
+
 def test_progress_of_another_patient_is_404(client, make_user, auth_headers):
     patient, other = make_user("patient"), make_user("patient")
     assert client.get(f"/api/v1/patients/{other.id}/progress", headers=auth_headers(patient)).status_code == 404

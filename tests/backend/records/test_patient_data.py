@@ -141,3 +141,17 @@ def test_retention_removes_old_files_and_keeps_metrics(client, db_session, make_
     assert client.get(f"/api/v1/sessions/{ids[1]}/file", headers=auth_headers(patient)).status_code == 200
     audit = db_session.scalars(sa.select(AuditEvent).where(AuditEvent.action == "session.files_expired")).one()
     assert audit.patient_id == patient.id and audit.detail["files"] == 1
+
+
+def test_the_archive_says_how_each_set_felt(client, make_user, auth_headers, with_store):
+    patient = make_user("patient")
+    headers = auth_headers(patient)
+    answered, unanswered = _upload(client, headers, 61), _upload(client, headers, 62)
+    r = client.put(f"/api/v1/sessions/{answered}/feeling", json={"pain": 3, "effort": 5.5}, headers=headers)
+    assert r.status_code == 200, r.text
+    z = zipfile.ZipFile(io.BytesIO(client.get(f"/api/v1/patients/{patient.id}/archive", headers=headers).content))
+    by_id = {s["id"]: s for s in json.loads(z.read("sessions.json"))}
+    felt = by_id[answered]["feeling"]
+    assert (felt["pain_nrs"], felt["effort_borg_cr10"]) == (3, 5.5) and felt["answered_at"], felt
+    assert by_id[unanswered]["feeling"] is None
+    assert "Borg CR10" in z.read("README.txt").decode()

@@ -31,10 +31,14 @@ def test_report_lists_sessions_plan_and_notes(client, db_session, make_patient_w
     plan = {"title": "Knees", "start_date": "2026-11-01", "notes": "Slowly, no pain.",
             "items": [{"exercise_slug": "squat", "sets": 1, "repetitions": 5, "frequency_per_week": 3}]}  # fmt: skip
     assert client.post(f"/api/v1/patients/{patient.id}/plans", json=plan, headers=th).status_code == 201
-    for seed in (91, 92):
+    mine = auth_headers(patient)
+    for seed, pain, effort in ((91, 2, 3.5), (92, 6, None)):
         r = client.post("/api/v1/sessions", content=make_khs("squat", 3, seed=seed), params={"exercise": "squat"},
-                        headers={"Content-Type": "application/octet-stream", **auth_headers(patient)})  # fmt: skip
+                        headers={"Content-Type": "application/octet-stream", **mine})  # fmt: skip
         assert r.status_code == 201, r.text
+        felt = client.put(f"/api/v1/sessions/{r.json()['id']}/feeling", json={"pain": pain, "effort": effort},
+                          headers=mine)  # fmt: skip
+        assert felt.status_code == 200, felt.text
     assert client.post(f"/api/v1/patients/{patient.id}/suggestions", json={"text": "Deeper squats."}, headers=th)
     today = dt.datetime.now(dt.UTC).date()
     response = client.get(f"/api/v1/patients/{patient.id}/report.pdf", headers=th,
@@ -46,7 +50,9 @@ def test_report_lists_sessions_plan_and_notes(client, db_session, make_patient_w
     text = _pdf_text(response.content, tmp_path)
     assert "Progress report" in text and patient.email in text
     assert "Plan and adherence" in text and "Knees" in text and "Slowly, no pain." in text
-    assert "Deeper squats." in text and "Not recorded" in text
+    assert "Deeper squats." in text and "Not recorded" not in text
+    assert "Said after 2 of 2 set(s)" in text and "Pain: highest 6, last 6 of 10." in text, text
+    assert "Borg CR10" in text and "3.5" in text and "skipped" in text
     name = db_session.scalar(select(Exercise.name).where(Exercise.slug == "squat"))
     assert f"{name}: 2 session(s)." in text and "MDC95" in text
     (SHOTS / f"report-{paper}.pdf").parent.mkdir(parents=True, exist_ok=True)
