@@ -51,6 +51,21 @@ async def one_crowd(base: str, n: int) -> dict:
         return {"n": n, "answers": dict(Counter(answers)), "last_s": round(time.perf_counter() - t0, 2)}
 
 
+def demo_clinic(db: str | None, tmp: Path) -> str:
+    """Returns the URL of a database holding the demo clinic (`coach-server migrate`, `seed-demo`): the PostgreSQL
+    database db (dropped and recreated; its name must contain "bench"), or with db None a SQLite file in tmp."""
+    url = db or f"sqlite:///{tmp / 'crowd.db'}"
+    if db:
+        if "bench" not in (make_url(url).database or ""):
+            raise SystemExit(f"--db {url}: the database is dropped and recreated; its name must contain 'bench'")
+        recreate_database(url)
+    migrate(url)
+    env = {**os.environ, "COACH_DATABASE_URL": url}
+    subprocess.run([str(Path(sys.executable).parent / "coach-server"), "seed-demo"], env=env, check=True, cwd=ROOT,
+                   stdout=subprocess.DEVNULL)  # fmt: skip
+    return url
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--db", help="PostgreSQL URL of a database whose name contains 'bench' (default: SQLite)")
@@ -58,15 +73,7 @@ def main() -> int:
     parser.add_argument("--json", type=Path, help="also write the numbers to this JSON file")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        url = args.db or f"sqlite:///{Path(tmp) / 'crowd.db'}"
-        if args.db:
-            if "bench" not in (make_url(url).database or ""):
-                raise SystemExit(f"--db {url}: the database is dropped and recreated; its name must contain 'bench'")
-            recreate_database(url)
-        migrate(url)
-        env = {**os.environ, "COACH_DATABASE_URL": url}
-        subprocess.run([str(Path(sys.executable).parent / "coach-server"), "seed-demo"], env=env, check=True, cwd=ROOT,
-                       stdout=subprocess.DEVNULL)  # fmt: skip
+        url = demo_clinic(args.db, Path(tmp))
         port = free_port()
         server = start_server(url, port, workers=1)
         try:

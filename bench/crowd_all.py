@@ -18,9 +18,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import json
-import os
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -29,11 +27,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import httpx
-from sqlalchemy.engine import make_url
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from backend.demo import ADMIN, DEMO_PASSWORD, PATIENTS, THERAPISTS  # noqa: E402
-from bench.dashboard_load import ROOT, free_port, migrate, recreate_database, start_server, stop_server  # noqa: E402
+from bench.crowd import demo_clinic  # noqa: E402
+from bench.dashboard_load import free_port, start_server, stop_server  # noqa: E402
 from bench.ingest import session_file, with_new_session_id  # noqa: E402
 
 OPEN_STREAMS = 20  # event streams held open by patients' pages during the crowd
@@ -201,15 +199,7 @@ def main() -> int:
     parser.add_argument("--json", type=Path, help="also write the numbers to this JSON file")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        url = args.db or f"sqlite:///{Path(tmp) / 'crowd.db'}"
-        if args.db:
-            if "bench" not in (make_url(url).database or ""):
-                raise SystemExit(f"--db {url}: the database is dropped and recreated; its name must contain 'bench'")
-            recreate_database(url)
-        migrate(url)
-        env = {**os.environ, "COACH_DATABASE_URL": url}
-        subprocess.run([str(Path(sys.executable).parent / "coach-server"), "seed-demo"], env=env, check=True, cwd=ROOT,
-                       stdout=subprocess.DEVNULL)  # fmt: skip
+        url = demo_clinic(args.db, Path(tmp))
         session = session_file(SESSION_MINUTES, Path(tempfile.gettempdir()))
         port = free_port()
         server = start_server(url, port, workers=args.workers)

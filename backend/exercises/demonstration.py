@@ -23,6 +23,21 @@ RATE_HZ = 15.0  # frames per second of the demonstration (smooth enough for a dr
 SIDE_PLANES = {"sagittal", "transverse"}
 
 
+SEAT_BELOW_HIPS_M = 0.08  # the seat's top under the hip joints (half a thigh's thickness)
+SEAT_BEHIND_HIPS_M = 0.12  # side view: the seat's back edge behind the hips
+SEAT_BEFORE_KNEES_M = 0.06  # side view: the seat's front edge short of the knees
+SEAT_BESIDE_HIPS_M = 0.14  # front view: the seat's edges beyond each hip
+
+
+class SeatOut(BaseModel):
+    """The chair a seated exercise is done on, in the frames' 2D metres: the seat's top at `height` from x0 to x1
+    (side view: x0 its back edge, where the backrest rises; front view: its left and right edges)."""
+
+    height: float = Field(description="metres above the floor", examples=[0.45])
+    x0: float = Field(description="metres, horizontal", examples=[-0.2])
+    x1: float = Field(description="metres, horizontal", examples=[0.25])
+
+
 class DemonstrationOut(BaseModel):
     """One repetition of an exercise as 2D joint positions over time."""
 
@@ -37,6 +52,8 @@ class DemonstrationOut(BaseModel):
         description="(T, J, 2) metres: horizontal, up; the first frame's lowest joint at 0; empty when the motion "
         "library has no movement for the exercise (the page then shows the written instructions only)"
     )
+    seat: SeatOut | None = Field(default=None, description="the chair of an exercise done seated (where the first "
+                                 "frame sits); null when standing")  # fmt: skip
 
 
 def view_for(plane: str) -> str:
@@ -64,4 +81,18 @@ def demonstration(slug: str, view: str, pose: str | None = None) -> Demonstratio
         joints=joints,
         bones=bones,
         frames=np.round(xy, 3).tolist(),
+        seat=seat_under(xy[0], view) if (pose or SPECS[slug].poses[0]) == "sitting" else None,
     )
+
+
+def seat_under(frame: np.ndarray, view: str) -> SeatOut:
+    """Returns the seat under a seated figure's frame: (J, 2) metres (horizontal, up), seen from `view`."""
+    at = skeleton.INDEX
+    hips = frame[[at["HIP_L"], at["HIP_R"]]]  # (2, 2)
+    height = float(hips[:, 1].mean()) - SEAT_BELOW_HIPS_M
+    if view == "side":  # the figure faces +x: the seat runs from behind the hips to short of the knees
+        knees = frame[[at["KNE_L"], at["KNE_R"]], 0].mean()
+        x0, x1 = float(hips[:, 0].mean()) - SEAT_BEHIND_HIPS_M, float(knees) - SEAT_BEFORE_KNEES_M
+    else:
+        x0, x1 = float(hips[:, 0].min()) - SEAT_BESIDE_HIPS_M, float(hips[:, 0].max()) + SEAT_BESIDE_HIPS_M
+    return SeatOut(height=round(height, 3), x0=round(x0, 3), x1=round(x1, 3))

@@ -27,7 +27,20 @@ const Demo = (() => {
     return best;
   }
 
-  /** Draws frame k of demo on canvas: bones as thick lines, the head as a circle, the floor as a line. */
+  const BACKREST_M = 0.45;  // the chair's backrest above the seat (side view)
+
+  /** Draws the chair of a seated exercise (demo.seat, metres) behind the figure: seat, legs, backrest from the side. */
+  function chair(ctx, demo, X, Y, dpr) {
+    const { height: h, x0, x1 } = demo.seat;
+    ctx.strokeStyle = "#a0a096"; ctx.lineWidth = 4 * dpr;
+    ctx.beginPath();
+    ctx.moveTo(X([x0, h]), Y([x0, h])); ctx.lineTo(X([x1, h]), Y([x1, h]));  // the seat
+    for (const x of [x0, x1]) { ctx.moveTo(X([x, h]), Y([x, h])); ctx.lineTo(X([x, 0]), Y([x, 0])); }  // the legs
+    if (demo.view === "side") { ctx.moveTo(X([x0, h]), Y([x0, h])); ctx.lineTo(X([x0, h + BACKREST_M]), Y([x0, h + BACKREST_M])); }
+    ctx.stroke();
+  }
+
+  /** Draws frame k of demo on canvas: bones as thick lines, the head as a circle, the floor as a line, the chair. */
   function draw(canvas, demo, k) {
     const ctx = canvas.getContext("2d"), dpr = window.devicePixelRatio || 1, w = SIZE * dpr;
     if (canvas.width !== w) { canvas.width = w; canvas.height = w; }
@@ -38,6 +51,7 @@ const Demo = (() => {
     ctx.lineCap = "round"; ctx.lineJoin = "round";
     ctx.strokeStyle = "#8a8a80"; ctx.lineWidth = 2 * dpr;
     ctx.beginPath(); ctx.moveTo(w * 0.05, oy + 2 * dpr); ctx.lineTo(w * 0.95, oy + 2 * dpr); ctx.stroke();
+    if (demo.seat) chair(ctx, demo, X, Y, dpr);
     ctx.strokeStyle = "#0b4f9c"; ctx.lineWidth = 7 * dpr;
     for (const [a, b] of demo.bones) {
       if (demo.joints[b] === "HEAD") continue;
@@ -71,7 +85,9 @@ const Demo = (() => {
         item.notes ? el("p", { class: "demo-note" }, el("strong", {}, I18n.t("From your therapist:") + " "), item.notes) : null));
     load(item.exercise_slug).then((demo) => {
       if (!demo || !demo.frames.length) { box.querySelector(".demo-stage").remove(); return; }
-      const xs = demo.frames.flat().map((p) => p[0]), ys = demo.frames.flat().map((p) => p[1]);
+      const points = demo.frames.flat();
+      if (demo.seat) points.push([demo.seat.x0, demo.seat.height + (demo.view === "side" ? BACKREST_M : 0)], [demo.seat.x1, 0]);
+      const xs = points.map((p) => p[0]), ys = points.map((p) => p[1]);
       demo.box = { x0: Math.min(...xs), y0: Math.min(...ys), w: Math.max(...xs) - Math.min(...xs), h: Math.max(...ys) - Math.min(...ys) };
       view.textContent = demo.view === "side" ? I18n.t("Seen from the side") : I18n.t("Seen from the front, as in a mirror");
       canvas.dataset.frames = demo.frames.length;
