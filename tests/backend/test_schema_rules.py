@@ -70,3 +70,20 @@ def test_the_email_pattern_is_the_servers_rule(client, make_user, auth_headers, 
     response = client.post("/api/v1/users", json=body, headers=auth_headers(make_user("admin")))
     assert response.status_code in (201, 422), response.text
     assert (response.status_code == 201) == documented, (email, response.text)
+
+
+def test_a_staff_upload_without_patient_id_is_the_documented_403(client, make_patient_with_therapist, auth_headers,
+                                                                  db_session):  # fmt: skip
+    from tests.backend.khs_files import make_khs
+
+    _, therapist = make_patient_with_therapist()
+    headers = {**auth_headers(therapist), "Content-Type": "application/octet-stream"}
+    db_session.commit()
+    response = client.post("/api/v1/sessions", content=make_khs(), headers=headers)
+    assert response.status_code == 403, response.text  # the request is well formed; the caller has no own sessions
+    detail = "a therapist or admin uploads for a patient: name them with ?patient_id="
+    assert response.json() == {"error": "PatientIdRequired", "detail": detail}
+    op = client.get("/openapi.json").json()["paths"]["/api/v1/sessions"]["post"]
+    assert "PatientIdRequired" in op["responses"]["403"]["content"]["application/json"]["examples"]
+    patient_id = next(p for p in op["parameters"] if p["name"] == "patient_id")
+    assert "required when a therapist or admin uploads (403 PatientIdRequired)" in patient_id["description"]
