@@ -152,7 +152,9 @@ class SessionOwnerMismatch(AppError):
 
 
 class PairingCodeInvalid(AppError):
-    status_code = 400
+    """A well-formed pairing code that pairs nothing (unknown, used or expired): a refused credential."""
+
+    status_code = 403
 
 
 class InvalidInput(AppError):

@@ -87,3 +87,17 @@ def test_a_staff_upload_without_patient_id_is_the_documented_403(client, make_pa
     assert "PatientIdRequired" in op["responses"]["403"]["content"]["application/json"]["examples"]
     patient_id = next(p for p in op["parameters"] if p["name"] == "patient_id")
     assert "required when a therapist or admin uploads (403 PatientIdRequired)" in patient_id["description"]
+
+
+def test_the_effort_in_halves_is_in_the_schema(client):
+    effort = client.get("/openapi.json").json()["components"]["schemas"]["FeelingIn"]["properties"]["effort"]
+    number = next(s for s in effort["anyOf"] if s.get("type") == "number")
+    assert number["multipleOf"] == 0.5, effort
+
+
+def test_a_pairing_code_that_pairs_nothing_is_a_refused_credential_not_bad_input(client):
+    response = client.post("/api/v1/devices/pair", json={"code": "0000"})  # well formed, as the schema says
+    assert response.status_code == 403, response.text
+    assert response.json()["error"] == "PairingCodeInvalid"
+    op = client.get("/openapi.json").json()["paths"]["/api/v1/devices/pair"]["post"]
+    assert "PairingCodeInvalid" in op["responses"]["403"]["content"]["application/json"]["examples"]
