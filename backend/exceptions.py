@@ -146,6 +146,12 @@ class LiveSetUnknown(Conflict):
     """A device posts live progress for a set the server did not start on that device."""
 
 
+class PatientIdRequired(AppError):
+    """A therapist or admin uploads a session without naming its patient (staff have no sessions of their own)."""
+
+    status_code = 403
+
+
 class SessionOwnerMismatch(AppError):
     """The session file names (recorded_by) another patient than the one it is stored for, or another device than
     the one sending it."""
@@ -154,7 +160,9 @@ class SessionOwnerMismatch(AppError):
 
 
 class PairingCodeInvalid(AppError):
-    status_code = 400
+    """A well-formed pairing code that pairs nothing (unknown, used or expired): a refused credential."""
+
+    status_code = 403
 
 
 class InvalidInput(AppError):
@@ -208,6 +216,7 @@ def error_responses(*errors: type[AppError]) -> dict[int | str, dict]:
 
 
 _EXAMPLE_DETAIL = {
+    "PatientIdRequired": "a therapist or admin uploads for a patient: name them with ?patient_id=",
     "NotAuthenticated": "missing or invalid credentials",
     "Forbidden": "you may not access patient 12",
     "CsrfFailed": "missing or wrong X-CSRF-Token header",

@@ -9,7 +9,7 @@ from collections.abc import Callable
 from contextlib import asynccontextmanager
 from importlib.metadata import entry_points
 
-from fastapi import APIRouter, FastAPI, Request
+from fastapi import APIRouter, Depends, FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse, Response
 from pydantic import BaseModel, Field
@@ -18,9 +18,9 @@ from sqlalchemy.engine import Engine
 from sqlalchemy.exc import DBAPIError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.middleware.gzip import GZipMiddleware
-from starlette.routing import compile_path
 
 from backend import __version__
+from backend.allowed_methods import allowed_methods, refuse_undocumented_method
 from backend.api_docs import mount as mount_api_docs
 from backend.config import Settings, get_settings
 from backend.database import get_engine
@@ -101,24 +101,6 @@ def _validation_detail(exc: RequestValidationError) -> str:
     return "; ".join(parts) or "invalid request"
 
 
-def _allowed_methods(app: FastAPI, request: Request) -> list[str]:
-    """Returns the methods the OpenAPI document gives the request's path (Starlette's Allow names only the first
-    matching route's), with OPTIONS, which the app answers for every path; empty for paths it does not list. A path
-    spelled out in the document (/devices/me) has its own methods only, not those of a template that would also
-    match it (/devices/{device_id})."""
-    if not hasattr(app.state, "path_methods"):
-        app.state.path_methods = [
-            (compile_path(path)[0], {method.upper() for method in operations}, "{" not in path)
-            for path, operations in app.openapi().get("paths", {}).items()
-        ]
-    path = request.url.path.removeprefix(request.scope.get("root_path", ""))
-    matches = [(found, literal) for regex, found, literal in app.state.path_methods if regex.match(path)]
-    if any(literal for _, literal in matches):
-        matches = [(found, literal) for found, literal in matches if literal]
-    methods = set().union(*(found for found, _ in matches))
-    return sorted(methods | {"OPTIONS"}) if methods else []
-
-
 def _page_for(app: FastAPI, request: Request, status_code: int) -> Response | None:
     """Returns the HTML error page the mounted pages give a browser (app.state.error_page), or None: JSON."""
     render = getattr(app.state, "error_page", None)
@@ -149,9 +131,6 @@ def _install_error_handlers(app: FastAPI) -> None:
 
     @app.exception_handler(RequestValidationError)
     async def validation_error(request: Request, exc: RequestValidationError) -> Response:
-        allowed = _allowed_methods(app, request)
-        if allowed and request.method not in allowed:  # PATCH /users/me: a template's route took "me" for an id
-            return await http_error(request, StarletteHTTPException(405, "Method Not Allowed"))
         page = _page_for(app, request, 404) if request.method == "GET" else None
         if page is not None:  # a page address with a malformed id: no such page
             return page
@@ -159,7 +138,7 @@ def _install_error_handlers(app: FastAPI) -> None:
 
     @app.exception_handler(StarletteHTTPException)
     async def http_error(request: Request, exc: StarletteHTTPException) -> Response:
-        allowed = _allowed_methods(app, request) if exc.status_code == 405 else []
+        allowed = allowed_methods(app, request) if exc.status_code == 405 else []
         if allowed and request.method == "OPTIONS":
             return Response(status_code=204, headers={"Allow": ", ".join(allowed)})
         if allowed:
@@ -263,6 +242,7 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
         lifespan=lifespan,
         docs_url=None,  # backend.api_docs serves /docs from the app itself; no /redoc (api_docs says why)
         redoc_url=None,
+        dependencies=[Depends(refuse_undocumented_method)],  # 405 before any other check (backend.allowed_methods)
     )
     app.state.settings = settings
     app.state.live_progress = ProgressGate()  # live progress: per-device rate limit and deduplication

@@ -49,6 +49,41 @@ def _document_request_checks(schema: dict) -> None:
                                                           "few seconds"))  # fmt: skip
 
 
+NO_NUL = r"^[^\x00]*$"  # backend.request_limits refuses a NUL character in the URL (400) and in JSON text (422)
+
+
+def _document_no_nul(schema: dict) -> None:
+    """Gives every text the client sends (parameters and request bodies, with the components they refer to) the
+    pattern NO_NUL unless it has a pattern, a fixed set of values or binary content already, so that the document
+    says what the server enforces."""
+    components = schema.get("components", {}).get("schemas", {})
+    done: set[str] = set()
+
+    def visit(node: object) -> None:
+        if isinstance(node, list):
+            for item in node:
+                visit(item)
+        if not isinstance(node, dict):
+            return
+        name = node.get("$ref", "").removeprefix("#/components/schemas/")
+        if name in components and name not in done:
+            done.add(name)
+            visit(components[name])
+        if (
+            node.get("type") == "string"
+            and not {"pattern", "enum", "const"} & node.keys()
+            and (node.get("format") != "binary")
+        ):
+            node["pattern"] = NO_NUL
+        for value in node.values():
+            visit(value)
+
+    for operations in schema.get("paths", {}).values():
+        for op in operations.values():
+            visit(op.get("parameters", []))
+            visit(op.get("requestBody", {}))
+
+
 def openapi_builder(app: FastAPI):
     """Returns app.openapi: FastAPI's document with the error body ErrorOut on every error answer, the answers
     given before any route (_document_request_checks) and the two security schemes."""
@@ -76,6 +111,7 @@ def openapi_builder(app: FastAPI):
                         },
                     }
         _document_request_checks(schema)
+        _document_no_nul(schema)
         components.pop("HTTPValidationError", None)
         components.pop("ValidationError", None)
         schema.setdefault("components", {})["securitySchemes"] = {

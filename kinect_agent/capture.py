@@ -11,10 +11,12 @@ from __future__ import annotations
 import logging
 import re
 import uuid
+from collections.abc import Callable
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
 from kinect_agent import formats
+from kinect_agent.disk_full import is_disk_full, plain_words, write_when_space
 from kinect_agent.formats.session_file import SessionPayload
 from kinect_agent.processing.config import PipelineConfig, config_for_device
 from kinect_agent.processing.errors import ProcessingError
@@ -120,24 +122,32 @@ def queue_session(
     created_at: str | None = None,
     session_id: str | None = None,
     recorded_by: dict[str, int] | None = None,
+    say: Callable[[str], None] = log.warning,
 ) -> Path:
     """Holds the raw session durably, filters it, queues the full session; returns the pending file.
 
     recorded_by: the pairing that recorded it (AgentConfig.recorded_by), written into the file. When the filter
-    fails the raw session is queued instead (the server can filter it), so nothing is lost.
+    fails the raw session is queued instead (the server can filter it), so nothing is lost. When the disk is full
+    the frames stay in memory: the family is told through say, and the session is written once there is room
+    (kinect_agent.disk_full); this returns only then.
     """
     if created_at is None:  # the session started when its first frame was taken
         start = datetime.now(UTC) - timedelta(seconds=rec.duration)
         created_at = start.isoformat(timespec="seconds").replace("+00:00", "Z")
     raw = SessionPayload(session_id=session_id or str(uuid.uuid4()), raw=rec, created_at=created_at,
                          recorded_by=recorded_by)  # fmt: skip
-    queue.hold(raw)
+    try:
+        queue.hold(raw)
+    except OSError as exc:
+        if not is_disk_full(exc):
+            raise
+        say(f"{plain_words(exc)} The safety copy of this session could not be saved; its frames are kept in memory.")
     try:
         payload = make_payload(rec, session_id=raw.session_id, created_at=raw.created_at, recorded_by=recorded_by)
     except (ValueError, ProcessingError) as exc:
         log.warning("filtering failed (%s: %s); queuing the raw session for the server to filter", type(exc).__name__,
                     exc)  # fmt: skip
         payload = raw
-    path = queue.enqueue(payload)
+    path = write_when_space(lambda: queue.enqueue(payload), what="This session", say=say)
     queue.release(raw.session_id)
     return path

@@ -12,6 +12,7 @@ import sys
 
 from kinect_agent import __version__
 from kinect_agent.blas_threads import one_blas_thread
+from kinect_agent.disk_full import is_disk_full, plain_words
 from kinect_agent.errors import AgentError
 from kinect_agent.processing.errors import ProcessingError
 
@@ -53,7 +54,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Runs one subcommand. Bad input prints one clear line and exits with status 2; an internal fault of the
-    processing (ProcessingError) says so and exits with status 1."""
+    processing (ProcessingError) says so and exits with status 1, as does a full disk (in plain words)."""
     argv = sys.argv[1:] if argv is None else argv
     first = next((a for a in argv if not a.startswith("-")), None)  # the command: no top-level option takes a value
     known = {m.rpartition(".")[2] for m in COMMANDS}
@@ -67,6 +68,11 @@ def main(argv: list[str] | None = None) -> int:
     except ProcessingError as exc:
         print(f"kinect-agent {args.command}: internal fault ({type(exc).__name__}): {exc}. The input was accepted; "
               "this is a fault of the program, please report it with the input file.", file=sys.stderr)  # fmt: skip
+        return 1
+    except OSError as exc:
+        if not is_disk_full(exc):
+            raise
+        print(f"kinect-agent {args.command}: {plain_words(exc)} Then run the command again.", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

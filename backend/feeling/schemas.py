@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field
 
 
 class FeelingIn(BaseModel):
@@ -14,15 +14,9 @@ class FeelingIn(BaseModel):
 
     pain: int | None = Field(ge=0, le=10, description="pain, numeric rating scale 0 (none) to 10 (worst)", examples=[2])
     effort: float | None = Field(
-        ge=0, le=10, description="effort, Borg CR10: 0 (nothing at all) to 10 (maximal), in halves", examples=[3.5]
-    )
-
-    @field_validator("effort")
-    @classmethod
-    def _halves(cls, value: float | None) -> float | None:
-        if value is not None and (value * 2) != int(value * 2):
-            raise ValueError("must be a whole or half number (Borg CR10)")
-        return value
+        ge=0, le=10, multiple_of=0.5, examples=[3.5],
+        description="effort, Borg CR10: 0 (nothing at all) to 10 (maximal), in halves",
+    )  # fmt: skip
 
 
 class FeelingOut(FeelingIn):

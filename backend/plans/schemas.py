@@ -33,7 +33,8 @@ class PlanIn(BaseModel):
         examples=["Take a short rest between the two sets."],
     )
     start_date: dt.date = Field(examples=["2026-11-23"])
-    end_date: dt.date | None = Field(default=None, examples=["2026-12-21"])
+    end_date: dt.date | None = Field(default=None, examples=["2026-12-21"],
+                                     description="not before start_date (422 otherwise); null: no end")  # fmt: skip
     items: list[PlanItemIn] = Field(default_factory=list, max_length=50)
     reminder_times: list[str] = Field(
         default_factory=list,

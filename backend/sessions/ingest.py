@@ -118,21 +118,22 @@ def _session_uuid(value: str) -> uuid.UUID:
 
 
 EARLIEST_START = dt.datetime(2000, 1, 1, tzinfo=dt.UTC)  # no session of this system is older
+CLOCK_TOLERANCE = dt.timedelta(minutes=5)  # how far ahead of the server's clock an agent's created_at may be
 
 
 def _started_at(value: str) -> dt.datetime:
+    """Returns the file's created_at as the session's start, or the time the server received it when the agent's
+    clock was plainly wrong (before EARLIEST_START, or more than CLOCK_TOLERANCE in the future): a wrong clock at
+    home is no defect of the file, which is stored as sent and keeps the agent's value as it reported it."""
     try:
         when = dt.datetime.fromisoformat(value.replace("Z", "+00:00"))
     except ValueError:
         raise InvalidSessionFile(f"bad_header: created_at {value[:80]!r} is not an ISO 8601 time") from None
     if when.tzinfo is None:
         raise InvalidSessionFile(f"bad_header: created_at {value[:80]!r} has no time zone (expected UTC, '...Z')")
-    latest = dt.datetime.now(dt.UTC) + dt.timedelta(days=1)
+    received = dt.datetime.now(dt.UTC)
     try:
         when = when.astimezone(dt.UTC)
-    except OverflowError:
-        when = None
-    if when is None or not EARLIEST_START <= when <= latest:
-        raise InvalidSessionFile(f"bad_header: created_at {value[:80]!r} is not between "
-                                 f"{EARLIEST_START.date()} and tomorrow")  # fmt: skip
-    return when
+    except OverflowError:  # 0001-01-01T00:00:00+23:59: before year 1 in UTC
+        return received
+    return when if EARLIEST_START <= when <= received + CLOCK_TOLERANCE else received

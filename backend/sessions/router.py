@@ -27,6 +27,7 @@ from backend.exceptions import (
     ExportUnavailable,
     InvalidInput,
     InvalidSessionFile,
+    PatientIdRequired,
     PatientNotFound,
     SessionConflict,
     SessionNotFound,
@@ -107,7 +108,7 @@ def _upload_patient(caller: Caller, patient_id: int | None, db_session: Session)
         elif caller.user is not None and caller.user.role == "patient":
             patient_id = caller.user.id
         else:
-            raise InvalidInput("query.patient_id: required when a therapist or admin uploads")
+            raise PatientIdRequired("a therapist or admin uploads for a patient: name them with ?patient_id=")
     require_patient_access(patient_id, caller=caller, db_session=db_session, write=True, allow_device=True)
     return patient_id
 
@@ -189,6 +190,7 @@ def _ingest(
             SessionConflict,
             SessionTooLarge,
             SessionOwnerMismatch,
+            PatientIdRequired,
             UploadCutOff,
             InvalidInput,
         ),
@@ -200,7 +202,13 @@ async def upload_session(
     caller: CurrentCaller,
     db_session: DbSession,
     exercise: SlugQuery = None,
-    patient_id: Annotated[IdQuery, Query(description="required unless a device or the patient uploads")] = None,
+    patient_id: Annotated[
+        IdQuery,
+        Query(
+            description="the patient the session is of: required when a therapist or admin uploads (403 "
+            "PatientIdRequired); a device or the patient uploads for themselves"
+        ),
+    ] = None,
 ):
     """Stores an uploaded session file with its metrics and suggestions: 201 when new, 200 when sent before."""
     settings = request.app.state.settings

@@ -42,6 +42,8 @@ def _document(path: Path | None) -> dict | None:
         raise AgentError(f"{path}: cannot read the metrics document: {exc.strerror}") from None
     except (UnicodeDecodeError, ValueError) as exc:
         raise AgentError(f"{path}: the metrics document is not JSON: {exc}") from None
+    except RecursionError:
+        raise AgentError(f"{path}: the metrics document is nested too deeply to be an analysis document") from None
     doc = doc.get("metrics", doc) if isinstance(doc, dict) and "metrics" in doc else doc
     if not isinstance(doc, dict) or "repetitions" not in doc:
         raise AgentError(f"{path}: not an analysis document (expected an object with 'repetitions')")

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from kinect_agent.capture import SOURCE_NAMES, capture, queue_session
 from kinect_agent.config import load_config
+from kinect_agent.disk_full import is_disk_full, plain_words
 from kinect_agent.queue import SessionQueue
 from kinect_agent.upload import DrainReport, Uploader, drain
 
@@ -42,6 +43,10 @@ def upload_now(queue: SessionQueue, server_url: str, token: str, *, transport=No
         return drain(queue, uploader, log=lambda line: print(line, file=sys.stderr, flush=True))
 
 
+def _say(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
+
+
 def run(args: argparse.Namespace) -> int:
     """Captures, queues and (unless --no-upload) uploads one session; 0 once the session is safely queued."""
     config = load_config()
@@ -49,10 +54,16 @@ def run(args: argparse.Namespace) -> int:
     queue.recover_held()
     rec = capture(args.source, exercise=args.exercise, file=args.file, reps=args.reps, seconds=args.seconds,
                   seed=args.seed, camera=args.camera, model=args.model)  # fmt: skip
-    path = queue_session(queue, rec, recorded_by=config.recorded_by)
+    path = queue_session(queue, rec, recorded_by=config.recorded_by, say=_say)
     print(f"{args.source}: {rec.n_frames} frames, {rec.duration:.1f} s of {args.exercise} -> {path}", file=sys.stderr)
     if not args.no_upload:
-        report = upload_now(queue, config.server_url, config.device_token)
+        try:
+            report = upload_now(queue, config.server_url, config.device_token)
+        except OSError as exc:
+            if not is_disk_full(exc):
+                raise
+            _say(f"{plain_words(exc)} The session is saved and goes with `kinect-agent upload` once there is room.")
+            return 0
         if report.remaining:
             print(f"{report.remaining} session(s) wait in {queue.pending_dir}; run `kinect-agent upload` later",
                   file=sys.stderr)  # fmt: skip

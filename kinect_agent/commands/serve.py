@@ -89,7 +89,7 @@ def recover_interrupted(queue: SessionQueue, folder: Path, recorded_by: dict[str
     for found in journal.recover(folder):
         if found.recording is not None:
             queue_session(queue, found.recording, created_at=found.created_at, session_id=found.session_id,
-                          recorded_by=recorded_by)  # fmt: skip
+                          recorded_by=recorded_by, say=log)  # fmt: skip
             kept += 1
             log(f"kept the interrupted set {found.session_id} ({found.recording.duration:.0f} s)")
         else:
@@ -157,7 +157,7 @@ class Service:
         log(f"set {recorder.command.set_id} ended ({result.reason}): {result.count} repetitions")
         if result.recording is not None and result.recording.n_frames >= 2:
             queue_session(self.queue, result.recording, created_at=result.created_at, session_id=result.session_id,
-                          recorded_by=self.config.recorded_by)  # fmt: skip
+                          recorded_by=self.config.recorded_by, say=log)  # fmt: skip
             uploads.now()
         result.journal.discard()
 

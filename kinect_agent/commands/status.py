@@ -2,8 +2,9 @@
 
 Paired to which server and patient; whether the server answers and accepts the device token; sessions waiting,
 uploaded (and when last), and set aside (refused by the server, or held after the same server error again and
-again) with the reason; the disk the queue uses and what is left on that disk. `--json` gives the same facts for
-scripts. Exit status 0 (2 when the agent is not paired: the configuration error says what to do).
+again) with the reason; whether this computer's clock is wrong (compared with the server's Date header); the disk
+the queue uses and what is left on that disk. `--json` gives the same facts for scripts. Exit status 0 (2 when the
+agent is not paired: the configuration error says what to do).
 """
 
 from __future__ import annotations
@@ -11,12 +12,13 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
+from email.utils import parsedate_to_datetime
 from pathlib import Path
 from typing import Any
 
 import httpx
 
-from kinect_agent import __version__
+from kinect_agent import __version__, clock
 from kinect_agent.config import AgentConfig, load_config
 from kinect_agent.queue import SessionQueue
 
@@ -24,6 +26,7 @@ NAME = "status"
 HELP = "Say what the agent is doing: pairing, server reachable, sessions waiting, uploaded and set aside, disk used."
 CHECK_PATH = "/api/v1/devices/me"
 TIMEOUT_S = 5.0
+CLOCK_OFF_S = 300.0  # the server stores sessions under its own time beyond 5 minutes ahead: say so from there on
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -32,18 +35,44 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def server_check(config: AgentConfig, transport: httpx.BaseTransport | None = None) -> dict[str, Any]:
-    """Returns {"reachable": bool, "token_accepted": bool | None, "detail": str} from GET /api/v1/devices/me."""
+    """Returns {"reachable": bool, "token_accepted": bool | None, "detail": str, "clock_off_s": float | None} from
+    GET /api/v1/devices/me; clock_off_s is this computer's clock minus the server's (its Date header), seconds."""
     headers = {"Authorization": f"Bearer {config.device_token}", "User-Agent": f"kinect-agent/{__version__}"}
     try:
         with httpx.Client(base_url=config.server_url, transport=transport, timeout=TIMEOUT_S) as client:
             response = client.get(CHECK_PATH, headers=headers)
     except httpx.HTTPError as exc:
-        return {"reachable": False, "token_accepted": None, "detail": f"{type(exc).__name__}: {exc}"}
+        return {"reachable": False, "token_accepted": None, "detail": f"{type(exc).__name__}: {exc}",
+                "clock_off_s": None}  # fmt: skip
+    facts: dict[str, Any] = {"reachable": True, "token_accepted": None, "clock_off_s": clock_off_s(response)}
     if response.status_code == 200:
-        return {"reachable": True, "token_accepted": True, "detail": "device token accepted"}
+        return facts | {"token_accepted": True, "detail": "device token accepted"}
     if response.status_code == 401:
-        return {"reachable": True, "token_accepted": False, "detail": "the server no longer accepts this device"}
-    return {"reachable": True, "token_accepted": None, "detail": f"HTTP {response.status_code} from {CHECK_PATH}"}
+        return facts | {"token_accepted": False, "detail": "the server no longer accepts this device"}
+    return facts | {"detail": f"HTTP {response.status_code} from {CHECK_PATH}"}
+
+
+def clock_off_s(response: httpx.Response) -> float | None:
+    """Returns this computer's clock minus the server's Date header, seconds (None without a readable Date; the
+    header has whole seconds, so the result is good to about a second)."""
+    try:
+        server_now = parsedate_to_datetime(response.headers["Date"])
+    except (KeyError, TypeError, ValueError):
+        return None
+    return round((clock.utc_now() - server_now).total_seconds())
+
+
+def _clock_sentence(off_s: float) -> str:
+    """Returns the plain words for a clock off_s seconds ahead (negative: behind) of the server's."""
+    amount = abs(off_s)
+    for unit, size in (("years", 365 * 86400), ("days", 86400), ("hours", 3600), ("minutes", 60)):
+        if amount >= size:
+            how_far = f"{amount / size:.0f} {unit}"
+            break
+    way = "ahead of" if off_s > 0 else "behind"
+    return (f"This computer's clock is wrong: it is {how_far} {way} the server's. Sessions are still stored, under "
+            "the time the server receives them. Set the computer's date and time (or turn on setting them "
+            "automatically).")  # fmt: skip
 
 
 def queue_facts(queue: SessionQueue) -> dict[str, Any]:
@@ -105,6 +134,8 @@ def describe(facts: dict[str, Any]) -> list[str]:
                      "and run kinect-agent pair. Sessions wait safely on this computer.")  # fmt: skip
     else:
         lines.append(f"The server answers ({server['detail']}).")
+    if server.get("clock_off_s") is not None and abs(server["clock_off_s"]) > CLOCK_OFF_S:
+        lines.append(_clock_sentence(server["clock_off_s"]))
     q = facts["queue"]
     last = f" (last on {q['last_upload'].replace('T', ' ').replace('Z', ' UTC')})" if q["last_upload"] else ""
     lines.append(f"Sessions: {q['pending']} waiting to be sent, {q['uploaded']} sent{last}, "

@@ -115,7 +115,7 @@ def _read_sidecar(path: Path) -> Metadata:
         return meta
     try:
         loaded = Metadata.from_dict(json.loads(side.read_text(encoding="utf-8-sig")))
-    except (ValueError, TypeError, UnicodeDecodeError) as exc:
+    except (ValueError, TypeError, UnicodeDecodeError, RecursionError) as exc:  # RecursionError: nested too deeply
         raise FormatError(side, f"unreadable metadata sidecar of {path.name}: {exc}") from None
     loaded.source = str(path)
     return loaded
@@ -128,7 +128,7 @@ def _numbered_lines(lines: list[str], path: Path, meta: Metadata) -> Iterator[tu
             if line.startswith(META_PREFIX):
                 try:
                     loaded = Metadata.from_dict(json.loads(line[len(META_PREFIX) :]))
-                except (ValueError, TypeError) as exc:
+                except (ValueError, TypeError, RecursionError) as exc:
                     raise FormatError(path, f"unreadable '# meta:' line: {exc}", line_no) from None
                 loaded.source = str(path)
                 meta.__dict__.update(loaded.__dict__)

@@ -24,7 +24,7 @@ def test_pairing_code_works_once(client, make_patient_with_therapist, auth_heade
     token = r.json()["token"]
     assert token.startswith("khd_") and r.json()["patient_id"] == patient.id
     again = client.post("/api/v1/devices/pair", json={"code": code})
-    assert again.status_code == 400 and again.json()["error"] == "PairingCodeInvalid"
+    assert again.status_code == 403 and again.json()["error"] == "PairingCodeInvalid"
     me = client.get("/api/v1/devices/me", headers={"Authorization": f"Bearer {token}"})
     assert me.status_code == 200 and me.json()["last_seen_at"] is not None
 
@@ -36,7 +36,7 @@ def test_expired_code_is_refused(client, make_user, auth_headers, db_session):
     row.expires_at = dt.datetime.now(dt.UTC) - dt.timedelta(seconds=1)
     db_session.flush()
     r = client.post("/api/v1/devices/pair", json={"code": code})
-    assert r.status_code == 400 and r.json()["error"] == "PairingCodeInvalid"
+    assert r.status_code == 403 and r.json()["error"] == "PairingCodeInvalid"
 
 
 def test_code_expires_in_about_15_minutes(client, make_user, auth_headers):

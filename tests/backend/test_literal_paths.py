@@ -30,3 +30,12 @@ def test_a_method_of_the_template_on_a_literal_path_is_405(client, make_user, au
 
 def test_a_template_still_takes_its_ids(client):
     assert _allow(client.options("/api/v1/devices/12")) == {"DELETE", "OPTIONS"}
+
+
+@pytest.mark.parametrize("role", ["therapist", "patient", None])
+def test_patch_users_me_is_405_for_every_caller(client, make_user, auth_headers, role):
+    headers = auth_headers(make_user(role)) if role else {}
+    response = client.patch("/api/v1/users/me", headers=headers, json={"full_name": "x"})
+    assert response.status_code == 405, response.text
+    assert response.json()["error"] == "MethodNotAllowed"
+    assert _allow(response) == {"GET", "OPTIONS"}

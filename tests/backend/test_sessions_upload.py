@@ -267,11 +267,11 @@ def test_anonymous_is_401(post, khs):
     assert post(khs, {}).status_code == 401
 
 
-def test_therapist_without_patient_id_is_422(post, make_patient_with_therapist, auth_headers, khs):
+def test_therapist_without_patient_id_is_403(post, make_patient_with_therapist, auth_headers, khs):
     _, therapist = make_patient_with_therapist()
     response = post(khs, auth_headers(therapist))
-    assert response.status_code == 422, response.text
-    assert response.json()["detail"] == "query.patient_id: required when a therapist or admin uploads"
+    assert response.status_code == 403, response.text
+    assert response.json()["error"] == "PatientIdRequired"
 
 
 def test_unknown_exercise_is_404(post, db_session, patient_device, khs):

@@ -143,7 +143,7 @@ def test_pairing_codes_have_an_attempt_limit(client, make_patient_with_therapist
     limit = Settings().PAIRING_MAX_FAILURES
     for _ in range(limit):
         r = client.post("/api/v1/devices/pair", json={"code": security.new_pairing_code(), "name": "guess"})
-        assert r.status_code == 400, r.text
+        assert r.status_code == 403, r.text
     r = client.post("/api/v1/devices/pair", json={"code": code, "name": "home"})
     assert r.status_code == 429 and r.json()["error"] == "TooManyLoginAttempts", r.text
     assert "pairing" in r.json()["detail"] and int(r.headers["Retry-After"]) > 0

@@ -96,7 +96,7 @@ def test_pair_with_a_used_code_fails_clearly(home, live_server, pairing_code, ca
     assert cli.main(["pair", "--server", live_server.url, "--code", code]) == 0
     assert cli.main(["pair", "--server", live_server.url, "--code", code, "--force"]) == 2
     err = capsys.readouterr().err
-    assert "HTTP 400" in err and "already used" in err
+    assert "HTTP 403" in err and "already used" in err
 
 
 def test_pair_with_server_down_fails_clearly(home, capsys) -> None:

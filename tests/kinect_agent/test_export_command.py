@@ -80,3 +80,14 @@ def test_a_metrics_file_that_is_not_a_document_is_refused(khs, tmp_path, capsys)
     assert main(["export", str(khs), "--format", "fhir", "--metrics", str(bad), "--out", str(tmp_path / "b")]) == 2
     assert "not an analysis document" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.json"]
+
+
+@pytest.mark.parametrize("opening", ["[", '{"a":'], ids=["lists", "objects"])
+def test_a_deeply_nested_metrics_file_is_named_not_a_traceback(khs, tmp_path, capsys, opening):
+    deep = tmp_path / "deep.json"
+    closing = "]" if opening == "[" else "}"
+    deep.write_text(opening * 100_000 + ("1" if opening != "[" else "") + closing * 100_000, encoding="utf-8")
+    assert main(["export", str(khs), "--format", "fhir", "--metrics", str(deep), "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert f"{deep}: the metrics document is nested too deeply" in err and "Traceback" not in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["deep.json"]

@@ -65,6 +65,19 @@ def test_a_broken_sidecar_is_named(tmp_path: Path, rng: np.random.Generator) -> 
         formats.read(out)
 
 
+def test_a_deeply_nested_sidecar_or_meta_line_is_named(tmp_path: Path, rng: np.random.Generator) -> None:
+    out = tmp_path / "r.csv"
+    formats.write(_recording(rng), out)
+    deep = "[" * 100_000 + "]" * 100_000
+    (tmp_path / "r.meta.json").write_text(deep)
+    with pytest.raises(FormatError, match=r"r\.meta\.json.*unreadable metadata sidecar of r\.csv"):
+        formats.read(out)
+    (tmp_path / "r.meta.json").unlink()
+    out.write_text(f"# meta: {deep}\n" + out.read_text())
+    with pytest.raises(FormatError, match=r"r\.csv:1: unreadable '# meta:' line"):
+        skeleton_csv.read(out)
+
+
 def test_minimal_file_without_state_columns_marks_empty_cells_untracked(tmp_path: Path) -> None:
     cols = skeleton_csv.header()[: 1 + 3 * skeleton.J] + ["comment"]
     row = ["0.0"] + ["0.1"] * (3 * skeleton.J) + ["hello"]
