@@ -8,7 +8,7 @@ from fastapi import APIRouter, Query, Request, Response
 
 from backend.audit.service import record
 from backend.deps import CurrentCaller, DbSession, require_patient_access
-from backend.exceptions import AUTH_ERRORS, InvalidSessionFile, SessionNotFound, error_responses
+from backend.exceptions import AUTH_ERRORS, InvalidSessionFile, SessionFileRemoved, SessionNotFound, error_responses
 from backend.replay import service
 from backend.schemas import IdPath
 from backend.sessions.service import missing, session_patient
@@ -22,7 +22,7 @@ MEDIA_TYPE = "application/octet-stream"
     response_class=Response,
     responses={
         200: {"content": {MEDIA_TYPE: {}}, "description": "the session's viser scene recording (.viser)"},
-        **error_responses(*AUTH_ERRORS, SessionNotFound, InvalidSessionFile),
+        **error_responses(*AUTH_ERRORS, SessionNotFound, InvalidSessionFile, SessionFileRemoved),
     },
 )
 def read_replay(
