@@ -141,6 +141,8 @@ ROUTES = {
     ("GET", "/api/v1/patients/{patient_id}/report.pdf"): (CARE, None),
     ("POST", "/api/v1/reanalysis"): (ADMIN, lambda w: {"patient_id": w["params"]["patient_id"]}),
     ("GET", "/api/v1/reanalysis/{batch}"): (ADMIN, None),  # a batch queued in the world below
+    ("GET", "/api/v1/reanalysis"): (ADMIN, None),
+    ("GET", "/api/v1/jobs"): (ADMIN, None),
     ("GET", "/api/v1/sessions/{session_id}/metric-versions"): (CARE, None),
 }
 
