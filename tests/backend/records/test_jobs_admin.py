@@ -81,7 +81,7 @@ def test_a_therapist_may_not_see_the_queue(path, client, make_user, auth_headers
 
 
 def test_errors_are_said_in_words():
-    trace = 'StoredObjectCorrupt: session/ab/abc does not match its sha256\nTraceback (most recent call last):\n  ...'
+    trace = "StoredObjectCorrupt: session/ab/abc does not match its sha256\nTraceback (most recent call last):\n  ..."
     assert error_words(trace) == ("The session's file in the object store is damaged: its checksum does not match: "
                                   "session/ab/abc does not match its sha256")  # fmt: skip
     assert error_words("KeyError: 'rom'\nTraceback") == "The job failed on an unexpected error (KeyError): 'rom'"
