@@ -182,6 +182,19 @@ def therapist_page(request: Request, caller: OptionalCaller) -> Response:
     return _gate(request, caller, THERAPIST_ROLES) or _page(request, "therapist.html", caller)
 
 
+@router.get("/admin/jobs", response_class=HTMLResponse)
+def jobs_page(request: Request, caller: OptionalCaller) -> Response:
+    """Shows the queue to admins: start a re-analysis (all sessions or one patient's) and follow it; the 403 page
+    for anyone else."""
+    gate = _gate(request, caller, THERAPIST_ROLES)
+    if gate is not None:
+        return gate
+    if caller is None or caller.user is None or caller.user.role != "admin":
+        return _error(request, caller, 403, N_("Not for this account"),
+                      N_("This page is for the clinic's administrators."))  # fmt: skip
+    return _page(request, "admin_jobs.html", caller)
+
+
 @router.get("/therapist/patients/{patient_id}", response_class=HTMLResponse)
 def patient_detail_page(
     patient_id: IdPath, request: Request, caller: OptionalCaller, db_session: DbSession
