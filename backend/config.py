@@ -60,6 +60,9 @@ class Settings(BaseSettings):
     S3_SECRET_ACCESS_KEY: str = ""
     # session files older than this many days are removed by `coach-server retention` (metrics kept); 0: off
     RETENTION_DAYS: int = Field(default=0, ge=0)
+    # run queued jobs (replay builds, re-analysis) in a thread of each server process too: for the demo and a
+    # one-process install without `coach-server worker`
+    EMBEDDED_WORKER: bool = False
 
     @model_validator(mode="after")
     def _check_public_url(self) -> Settings:

@@ -120,6 +120,7 @@ ROUTES = {
     ("GET", "/api/v1/sessions/{session_id}/detail"): (CARE, None),  # people only: devices do not read it
     ("GET", "/api/v1/sessions/{session_id}/export"): (CARE, lambda w: Raw(b"", {"format": "trc"})),  # as detail
     ("GET", "/api/v1/sessions/{session_id}/replay"): (CARE_DEV, None),
+    ("GET", "/api/v1/sessions/{session_id}/replay/state"): (CARE_DEV, None),
     ("GET", "/api/v1/events"): (AUTHED, None),  # each caller gets the events of the patients they may see
     ("GET", "/api/v1/live/agent"): ({"device"}, None),
     ("POST", "/api/v1/live/progress"): ({"device"}, lambda w: _progress_body()),

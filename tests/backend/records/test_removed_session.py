@@ -42,7 +42,7 @@ def test_retention_leaves_a_tombstone_with_the_date(client, db_session, make_pat
     assert body["metrics"]["rom_deg"] is not None, "the metrics stay"
 
 
-@pytest.mark.parametrize("route", ["detail", "replay", "export?format=csv", "file"])
+@pytest.mark.parametrize("route", ["detail", "replay", "replay/state", "export?format=csv", "file"])
 def test_routes_that_need_the_recording_answer_410_in_words(route, client, db_session, make_patient_with_therapist,
                                                             auth_headers, with_store):  # fmt: skip
     session_id, _, therapist = _removed_session(client, db_session, make_patient_with_therapist, auth_headers, 92)
