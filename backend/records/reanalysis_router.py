@@ -86,6 +86,9 @@ class BatchOut(BaseModel):
 class ReanalysisOverviewOut(BaseModel):
     """The server's analysis version (what a new re-analysis uses) and the newest re-analysis batches."""
 
+    model_config = {"json_schema_extra": {"examples": [{"analysis_version": ANALYSIS_VERSION, "batches": [
+                    BatchOut.model_config["json_schema_extra"]["examples"][0]]}]}}  # type: ignore[index]  # fmt: skip
+
     analysis_version: str
     batches: list[BatchOut]
 
