@@ -11,7 +11,7 @@
   let timer = null;
 
   function batchState(b) {
-    if (b.queued + b.running > 0) return b.running ? "Running" : "Waiting for a worker";
+    if (b.queued + b.running > 0) return b.running ? "Running" : `Waiting: ${b.queued} queued for a worker or a retry`;
     if (b.total === 0) return "Nothing to do";
     return b.failed ? `Finished, ${b.failed} failed` : "Finished";
   }
