@@ -261,7 +261,11 @@ def replay_page(session_id: IdPath, request: Request, caller: OptionalCaller, db
     found = _visible_session(request, caller, db_session, session_id)
     if isinstance(found, Response):
         return found
-    return _page(request, "replay.html", caller, session_id=session_id, patient_id=found)
+    from backend.replay.service import stored_replay_key
+
+    ready = stored_replay_key(db_session=db_session, session_id=session_id) is not None
+    # not built yet: the page says it is being prepared (replay.js polls its state) and reloads once it is
+    return _page(request, "replay.html", caller, session_id=session_id, patient_id=found, replay_ready=ready)
 
 
 @router.get("/replay/viewer/", response_class=HTMLResponse)

@@ -39,8 +39,8 @@ def enqueue(*, db_session: Session, kind: str, items: Iterable[tuple[str, dict]]
 
 
 def _insert_new(db_session: Session, insert, rows: list[dict]) -> int:
-    statement = insert(Job).values(rows).on_conflict_do_nothing(index_elements=["key"])
-    return int(db_session.execute(statement).rowcount or 0)
+    statement = insert(Job).values(rows).on_conflict_do_nothing(index_elements=["key"]).returning(Job.id)
+    return len(db_session.execute(statement).all())  # only the inserted rows come back
 
 
 def _claimable(now: dt.datetime):

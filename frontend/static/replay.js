@@ -17,14 +17,10 @@
   }
   load();
 
-  // the recording is built by a worker: say so while it is prepared, then open viser's player on it
+  // the recording is built by a worker: while it is prepared the page says so, then loads again with the player
   const viewer = document.getElementById("viewer");
   const stateBox = document.getElementById("replay-state");
   const POLL_MS = 1500;
-  function openViewer(recording) {
-    viewer.src = Coach.url(`/replay/viewer/?playbackPath=${encodeURIComponent(recording)}`);
-    viewer.hidden = false;
-  }
   async function waitForRecording() {
     let state;
     try {
@@ -41,7 +37,7 @@
       setTimeout(waitForRecording, POLL_MS * 2);
       return;
     }
-    if (state.state === "ready") { stateBox.hidden = true; openViewer(viewer.dataset.recording); return; }
+    if (state.state === "ready") { location.reload(); return; }
     if (state.state === "failed") {
       stateBox.className = "alert";
       stateBox.textContent = `The 3D replay could not be prepared. ${state.detail}`;
@@ -53,7 +49,7 @@
     stateBox.hidden = false;
     setTimeout(waitForRecording, POLL_MS);
   }
-  waitForRecording();
+  if (viewer.hasAttribute("data-preparing")) waitForRecording();
 
   // the two checkboxes: both skeletons (the stored recording), or one alone (?layer=); at least one stays shown
   const boxes = [document.getElementById("show-filtered"), document.getElementById("show-raw")];
@@ -64,7 +60,8 @@
       if (!shown.length) { box.checked = true; note.textContent = "At least one skeleton stays shown."; return; }
       note.textContent = "";
       const recording = viewer.dataset.recording + (shown.length === 1 ? `?layer=${shown[0]}` : "");
-      openViewer(recording);
+      viewer.src = Coach.url(`/replay/viewer/?playbackPath=${encodeURIComponent(recording)}`);
+      viewer.hidden = false;
     });
   }
 })();
