@@ -141,6 +141,7 @@ def main(argv: list[str] | None = None) -> int:
         shutil.rmtree(agents_home, ignore_errors=True)  # their device tokens belong to the old database
     os.environ["COACH_DATABASE_URL"] = f"sqlite:///{args.db.resolve()}"
     os.environ.setdefault("COACH_ENVIRONMENT", "local")
+    os.environ.setdefault("COACH_EMBEDDED_WORKER", "true")  # the demo's replays are built without a worker process
 
     from backend import cli
 

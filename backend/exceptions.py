@@ -235,4 +235,6 @@ _EXAMPLE_DETAIL = {
     "ExportUnavailable": "session 12 has no metrics; the fhir export needs them",
     "InvalidSessionFile": "checksum_mismatch: SHA-256 trailer does not match the content",
     "SessionTooLarge": "the upload exceeds 16777216 bytes",
+    "SessionFileRemoved": "This session was removed on 2026-11-27 under the clinic's retention policy: its recording "
+    "(curves, replay, exports) is gone; its metrics are kept (session 31)",
 }

@@ -227,9 +227,19 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
         # PostgreSQL carries the pages' events between workers and replicas (backend/events); SQLite: in-process
         listener = Listener(bound.url).start() if bound.dialect.name == "postgresql" else None
         reminders = _start_reminders(settings, bound)
+        worker = None
+        if settings.EMBEDDED_WORKER:  # replay builds and re-analysis without a separate `coach-server worker`
+            from sqlalchemy.orm import sessionmaker
+
+            from backend.jobs.worker import EmbeddedWorker
+
+            worker = EmbeddedWorker(sessionmaker=sessionmaker(bind=bound, expire_on_commit=False),
+                                    settings=settings).start()  # fmt: skip
         try:
             yield
         finally:
+            if worker is not None:
+                worker.stop()
             if reminders is not None:
                 await reminders.stop()
             if listener is not None:

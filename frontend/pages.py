@@ -183,6 +183,19 @@ def therapist_page(request: Request, caller: OptionalCaller) -> Response:
     return _gate(request, caller, THERAPIST_ROLES) or _page(request, "therapist.html", caller)
 
 
+@router.get("/admin/jobs", response_class=HTMLResponse)
+def jobs_page(request: Request, caller: OptionalCaller) -> Response:
+    """Shows the queue to admins: start a re-analysis (all sessions or one patient's) and follow it; the 403 page
+    for anyone else."""
+    gate = _gate(request, caller, THERAPIST_ROLES)
+    if gate is not None:
+        return gate
+    if caller is None or caller.user is None or caller.user.role != "admin":
+        return _error(request, caller, 403, N_("Not for this account"),
+                      N_("This page is for the clinic's administrators."))  # fmt: skip
+    return _page(request, "admin_jobs.html", caller)
+
+
 @router.get("/therapist/patients/{patient_id}", response_class=HTMLResponse)
 def patient_detail_page(
     patient_id: IdPath, request: Request, caller: OptionalCaller, db_session: DbSession
@@ -249,7 +262,11 @@ def replay_page(session_id: IdPath, request: Request, caller: OptionalCaller, db
     found = _visible_session(request, caller, db_session, session_id)
     if isinstance(found, Response):
         return found
-    return _page(request, "replay.html", caller, session_id=session_id, patient_id=found)
+    from backend.replay.service import stored_replay_key
+
+    ready = stored_replay_key(db_session=db_session, session_id=session_id) is not None
+    # not built yet: the page says it is being prepared (replay.js polls its state) and reloads once it is
+    return _page(request, "replay.html", caller, session_id=session_id, patient_id=found, replay_ready=ready)
 
 
 @router.get("/replay/viewer/", response_class=HTMLResponse)

@@ -77,6 +77,7 @@ def test_the_server_ingests_analyses_and_replays_without_numba(tmp_path: Path) -
         from backend.database import make_engine, import_all_models
         from backend.devices.models import Device
         from backend.exercises.service import sync_exercise_library
+        from backend.jobs.worker import work
         from backend.main import create_app
         from backend.migrate import upgrade
         from backend.security import DEVICE_TOKEN_PREFIX, new_token, token_hash
@@ -103,6 +104,10 @@ def test_the_server_ingests_analyses_and_replays_without_numba(tmp_path: Path) -
             sid, admin = r.json()["id"], {"Authorization": f"Bearer {admin_token}"}
             detail = client.get(f"/api/v1/sessions/{sid}/detail", headers=admin)  # angles, repetitions, reach
             assert detail.status_code == 200 and detail.json()["repetitions"], detail.text[:500]
+            queued = client.get(f"/api/v1/sessions/{sid}/replay", headers=admin)  # a worker builds the scene
+            assert queued.status_code == 202, queued.text[:500]
+            settings = Settings(ENVIRONMENT="local", DATABASE_URL=url)
+            assert work(sessionmaker=lambda: Session(engine), settings=settings, name="lean", once=True) == 1
             replay = client.get(f"/api/v1/sessions/{sid}/replay", headers=admin)  # the viser scene
             assert replay.status_code == 200 and len(replay.content) > 1000, replay.text[:500]
         print("loaded:", sorted(m for m in sys.modules if m.split(".")[0] in BLOCKED))

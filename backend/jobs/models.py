@@ -9,6 +9,8 @@ from sqlalchemy.orm import Mapped, mapped_column
 
 from backend.database import Base, utcnow
 
+MAX_ATTEMPTS = 3  # tries of a job before it is marked failed
+
 
 class Job(Base):
     """One unit of work: queued → running (leased by a worker until locked_until) → done or failed.
@@ -27,7 +29,7 @@ class Job(Base):
     payload: Mapped[dict] = mapped_column(JSON, default=dict)
     status: Mapped[str] = mapped_column(String(16), default="queued")
     attempts: Mapped[int] = mapped_column(default=0)
-    max_attempts: Mapped[int] = mapped_column(default=3)
+    max_attempts: Mapped[int] = mapped_column(default=MAX_ATTEMPTS)
     run_after: Mapped[dt.datetime] = mapped_column(default=utcnow)
     locked_by: Mapped[str | None] = mapped_column(String(100))
     locked_until: Mapped[dt.datetime | None] = mapped_column()

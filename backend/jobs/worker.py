@@ -1,4 +1,5 @@
-"""`coach-server worker`: takes jobs from the queue and runs them, one at a time, until stopped (or --once)."""
+"""`coach-server worker`: takes jobs from the queue (re-analysis, replay builds) and runs them, one at a time, until
+stopped (or --once); EmbeddedWorker runs the same loop in a thread of a server process (COACH_EMBEDDED_WORKER)."""
 
 from __future__ import annotations
 
@@ -7,12 +8,13 @@ import os
 import signal
 import socket
 import sys
+import threading
 import time
 import traceback
 
 from backend.jobs import queue
 
-KINDS = ("reanalyze",)
+KINDS = ("reanalyze", "replay")
 
 
 def run_job(db_session, job, settings) -> dict:
@@ -23,6 +25,12 @@ def run_job(db_session, job, settings) -> dict:
         return reanalyze_session(db_session=db_session, session_id=int(job.payload["session_id"]),
                                  max_frames=settings.SESSION_MAX_FRAMES,
                                  max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
+    if job.kind == "replay":
+        from backend.replay import jobs
+
+        return jobs.run(db_session=db_session, session_id=int(job.payload["session_id"]),
+                        max_frames=settings.SESSION_MAX_FRAMES,
+                        max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
     raise ValueError(f"unknown job kind {job.kind!r}")
 
 
@@ -48,6 +56,32 @@ def work(*, sessionmaker, settings, name: str, once: bool = False, idle_s: float
                 queue.finish(db_session=db_session, job=job, result=result)  # commits the work with the job
             ran += 1
     return ran
+
+
+class EmbeddedWorker:
+    """The worker loop in a daemon thread of a server process (the demo, a one-process install); stop() ends it
+    after the job in hand."""
+
+    def __init__(self, *, sessionmaker, settings) -> None:
+        self._stopping = threading.Event()
+        self.name = f"{socket.gethostname()}:{os.getpid()}:embedded"
+        self._thread = threading.Thread(
+            target=work,
+            kwargs={"sessionmaker": sessionmaker, "settings": settings, "name": self.name, "idle_s": 0.5,
+                    "stop": self._stopping.is_set},
+            name="coach-embedded-worker",
+            daemon=True,
+        )  # fmt: skip
+
+    def start(self) -> EmbeddedWorker:
+        """Starts the thread; returns self."""
+        self._thread.start()
+        return self
+
+    def stop(self, timeout_s: float = 5.0) -> None:
+        """Asks the loop to stop and waits up to timeout_s for the job in hand."""
+        self._stopping.set()
+        self._thread.join(timeout_s)
 
 
 def main(args: argparse.Namespace) -> int:

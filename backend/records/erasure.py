@@ -11,6 +11,7 @@ from sqlalchemy.orm import Session
 from backend.audit.models import AuditEvent
 from backend.audit.service import record
 from backend.devices.models import Device, PairingCode
+from backend.jobs.models import Job
 from backend.patients.models import TherapistPatient
 from backend.plans.models import Plan, PlanItem
 from backend.replay.models import SessionReplay
@@ -48,6 +49,8 @@ def erase_patient(*, db_session: Session, patient: User, caller) -> Erasure:
         "session_metric": _count(db_session, delete(SessionMetric).where(SessionMetric.session_id.in_(session_ids))),
         "advice_reply": _count(db_session, delete(AdviceReply).where(AdviceReply.patient_id == pid)),
         "suggestion": _count(db_session, delete(Suggestion).where(Suggestion.patient_id == pid)),
+        # queued or finished work on their sessions (replay builds, re-analysis): nothing may name them afterwards
+        "job": _count(db_session, delete(Job).where(Job.payload["session_id"].as_integer().in_(session_ids))),
     }
     rows["exercise_session"] = _count(db_session, delete(ExerciseSession).where(ExerciseSession.patient_id == pid))
     plan_ids = select(Plan.id).where(Plan.patient_id == pid)

@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import datetime as dt
+from typing import Annotated, Literal
 
-from fastapi import APIRouter, status
+from fastapi import APIRouter, Query, status
 from pydantic import BaseModel, Field
 from sqlalchemy import select
 
 from backend.audit.service import record
 from backend.deps import AdminCaller, CurrentCaller, DbSession, require_patient_access
 from backend.exceptions import AUTH_ERRORS, NotFound, SessionNotFound, error_responses
+from backend.jobs.listing import error_words, list_batches, list_jobs
 from backend.jobs.models import SessionMetricVersion
 from backend.jobs.queue import progress
 from backend.records.reanalysis import enqueue_reanalysis
@@ -18,6 +20,7 @@ from backend.schemas import IdPath
 from backend.sessions import service
 from backend.sessions.metrics import ANALYSIS_VERSION
 from backend.sessions.models import SessionMetric
+from backend.users.models import User
 
 router = APIRouter(prefix="/api/v1", tags=["re-analysis"])
 
@@ -60,6 +63,86 @@ class MetricVersionOut(BaseModel):
     rom_deg: float | None
     balance_sway_m_s: float | None
     replaced_at: dt.datetime | None
+
+
+class BatchOut(BaseModel):
+    """One re-analysis batch on the admin page: jobs per state, who queued it for which patient, when."""
+
+    model_config = {"json_schema_extra": {"examples": [{"batch": "reanalyze-0a1b2c3d4e5f", "queued": 0, "running": 1,
+                    "done": 40, "failed": 1, "total": 42, "created_at": "2026-11-27T05:00:00Z", "finished_at": None,
+                    "queued_by": "admin@demo.clinic", "patient_id": None}]}}  # fmt: skip
+    batch: str
+    queued: int
+    running: int
+    done: int
+    failed: int
+    total: int
+    created_at: dt.datetime
+    finished_at: dt.datetime | None = Field(description="when its last job ended; null while any is queued or running")
+    queued_by: str | None = Field(description="e-mail of the admin who queued it (null: the CLI)")
+    patient_id: int | None = Field(description="the one patient it is about; null: every patient")
+
+
+class ReanalysisOverviewOut(BaseModel):
+    """The server's analysis version (what a new re-analysis uses) and the newest re-analysis batches."""
+
+    model_config = {"json_schema_extra": {"examples": [{"analysis_version": ANALYSIS_VERSION, "batches": [
+                    BatchOut.model_config["json_schema_extra"]["examples"][0]]}]}}  # type: ignore[index]  # fmt: skip
+
+    analysis_version: str
+    batches: list[BatchOut]
+
+
+class JobOut(BaseModel):
+    """One job of the queue; `error` says in words why it failed or was retried (no traceback)."""
+
+    model_config = {"json_schema_extra": {"examples": [{"id": 7, "kind": "reanalyze", "batch": "reanalyze-0a1b2c3d4e5f",
+                    "status": "failed", "attempts": 3, "max_attempts": 3, "session_id": 31,
+                    "error": "The session's file is missing from the object store (run `coach-server storage check`)"
+                    ": no object session/ab/ab12...", "changed": None, "created_at": "2026-11-27T05:00:00Z",
+                    "finished_at": "2026-11-27T05:03:00Z"}]}}  # fmt: skip
+    id: int
+    kind: str
+    batch: str | None
+    status: str = Field(description="queued, running, done or failed (after max_attempts tries)")
+    attempts: int
+    max_attempts: int
+    session_id: int | None
+    error: str | None
+    changed: bool | None = Field(description="done: whether the metrics changed; null otherwise")
+    created_at: dt.datetime
+    finished_at: dt.datetime | None
+
+
+@router.get("/reanalysis", response_model=ReanalysisOverviewOut, responses=error_responses(*AUTH_ERRORS))
+def reanalysis_overview(
+    caller: AdminCaller, db_session: DbSession, limit: Annotated[int, Query(ge=1, le=100)] = 20
+) -> ReanalysisOverviewOut:
+    """Returns today's analysis version and the newest re-analysis batches with their progress (admins)."""
+    rows = list_batches(db_session=db_session, kind="reanalyze", limit=limit)
+    ids = {r.queued_by for r in rows if r.queued_by is not None}
+    emails = dict(db_session.execute(select(User.id, User.email).where(User.id.in_(ids))).all()) if ids else {}
+    batches = [BatchOut(batch=r.batch, queued=r.queued, running=r.running, done=r.done, failed=r.failed,
+                        total=r.total, created_at=r.created_at, finished_at=r.finished_at,
+                        queued_by=emails.get(r.queued_by) if r.queued_by is not None else None,
+                        patient_id=r.patient_id) for r in rows]  # fmt: skip
+    return ReanalysisOverviewOut(analysis_version=ANALYSIS_VERSION, batches=batches)
+
+
+@router.get("/jobs", response_model=list[JobOut], responses=error_responses(*AUTH_ERRORS))
+def read_jobs(
+    caller: AdminCaller,
+    db_session: DbSession,
+    batch: Annotated[str | None, Query(max_length=64)] = None,
+    state: Annotated[Literal["queued", "running", "done", "failed"] | None, Query(alias="status")] = None,
+    limit: Annotated[int, Query(ge=1, le=500)] = 50,
+) -> list[JobOut]:
+    """Returns the newest jobs of the queue, of one batch or in one state when asked (admins)."""
+    jobs = list_jobs(db_session=db_session, batch=batch, status=state, limit=limit)
+    return [JobOut(id=j.id, kind=j.kind, batch=j.batch, status=j.status, attempts=j.attempts,
+                   max_attempts=j.max_attempts, session_id=(j.payload or {}).get("session_id"),
+                   error=error_words(j.error), changed=(j.result or {}).get("changed") if j.status == "done" else None,
+                   created_at=j.created_at, finished_at=j.finished_at) for j in jobs]  # fmt: skip
 
 
 @router.post("/reanalysis", response_model=ProgressOut, status_code=status.HTTP_202_ACCEPTED,

@@ -1,5 +1,8 @@
 """The retention period: session files (and their replays) older than it are removed; their metrics are kept.
 
+A removed file leaves a tombstone: the session row keeps its metadata and metrics and records when the file went
+(file_removed_at), so its pages and the API say "removed on DATE under the clinic's retention policy" (410).
+
 Off by default (COACH_RETENTION_DAYS = 0). `coach-server retention` applies it (daily, from cron or the compose
 worker); each patient whose files went gets one audit row "session.files_expired" with the count and the cut-off.
 """
@@ -56,7 +59,9 @@ def apply_retention(*, db_session: Session, days: int, now: dt.datetime | None =
     }
     db_session.execute(delete(SessionReplay).where(SessionReplay.session_id.in_(ids)))
     db_session.execute(
-        update(ExerciseSession).where(ExerciseSession.id.in_(ids)).values(file_key=None, file_bytes=None)
+        update(ExerciseSession)
+        .where(ExerciseSession.id.in_(ids))
+        .values(file_key=None, file_bytes=None, file_removed_at=now)
     )
     still_used = set(db_session.scalars(select(ExerciseSession.file_key).where(ExerciseSession.file_key.in_(keys))))
     still_used |= set(db_session.scalars(select(SessionReplay.data_key).where(SessionReplay.data_key.in_(keys))))

@@ -1,7 +1,9 @@
 """The replay recording of a session: read from the object store, or built from the stored file and kept there.
 
-Workers and replicas share the database and the store, so a recording built by one is served by all; two workers
-building the same recording at once both succeed and one row is kept (the unique session id decides).
+The recording of both skeletons is built by a job-queue worker (backend/replay/jobs.py), never in a request;
+workers and replicas share the database and the store, so a recording built by one is served by all; two builds
+of the same recording at once both succeed and one row is kept (the unique session id decides). One skeleton
+alone (?layer=) is built in the request each time (a few hundred ms; not stored).
 """
 
 from __future__ import annotations
@@ -20,14 +22,28 @@ from backend.storage import get_store
 from kinect_agent.formats.session_file import SessionFileError, decode
 
 
-def replay_data(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int,
-                layer: str | None = None) -> bytes:  # fmt: skip
-    """Returns the `.viser` recording of a session, building and storing it when missing or of an older version;
-    the stored file is read with the server's upload limits (max_frames, max_decoded_bytes). layer: one skeleton
-    alone ("raw" or "filtered"; built each time, not stored), None: both."""
-    if layer is not None:
-        return _build(db_session=db_session, session_id=session_id, max_frames=max_frames,
-                      max_decoded_bytes=max_decoded_bytes, layers=(layer,)).data  # fmt: skip
+def layer_data(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int, layer: str) -> bytes:
+    """Returns the `.viser` recording of one skeleton alone ("raw" or "filtered"), built now from the stored file
+    read with the server's upload limits (max_frames, max_decoded_bytes); not stored."""
+    return _build(db_session=db_session, session_id=session_id, max_frames=max_frames,
+                  max_decoded_bytes=max_decoded_bytes, layers=(layer,)).data  # fmt: skip
+
+
+def stored_replay_key(*, db_session: Session, session_id: int) -> str | None:
+    """Returns where the stored recording of today's scene version is (its object key, or "database" for one not
+    moved to the store yet); None when there is none."""
+    row = db_session.execute(
+        select(SessionReplay.data_key, SessionReplay.data.is_not(None)).where(
+            SessionReplay.session_id == session_id, SessionReplay.version == scene.VERSION
+        )
+    ).first()
+    if row is None:
+        return None
+    return row[0] or ("database" if row[1] else None)
+
+
+def stored_replay(*, db_session: Session, session_id: int) -> bytes | None:
+    """Returns the stored `.viser` recording of both skeletons at today's scene version (hash checked), or None."""
     row = db_session.execute(
         select(SessionReplay.data_key, SessionReplay.data_hash, SessionReplay.data).where(
             SessionReplay.session_id == session_id, SessionReplay.version == scene.VERSION
@@ -37,15 +53,15 @@ def replay_data(*, db_session: Session, session_id: int, max_frames: int, max_de
         return get_store().get(row.data_key, row.data_hash)
     if row is not None and row.data is not None:
         return row.data
-    return _build_and_store(db_session=db_session, session_id=session_id, max_frames=max_frames,
-                            max_decoded_bytes=max_decoded_bytes)  # fmt: skip
+    return None
 
 
-def _build_and_store(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int) -> bytes:
+def build_and_store(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int) -> scene.Replay:
+    """Builds the recording of both skeletons from the stored file and keeps it (the job's work; flushes)."""
     replay = _build(db_session=db_session, session_id=session_id, max_frames=max_frames,
                     max_decoded_bytes=max_decoded_bytes, layers=scene.LAYERS)  # fmt: skip
     _store(db_session=db_session, session_id=session_id, replay=replay)
-    return replay.data
+    return replay
 
 
 def _build(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int,

@@ -36,6 +36,9 @@ class ExerciseSession(Base):
     file_bytes: Mapped[bytes | None] = deferred(mapped_column(LargeBinary))
     file_key: Mapped[str | None] = mapped_column(String(100))
     file_size: Mapped[int] = mapped_column(default=0)
+    # when the retention period removed the file (backend/records/retention.py): the session's tombstone; the row
+    # and its metrics stay
+    file_removed_at: Mapped[dt.datetime | None] = mapped_column()
     content_hash: Mapped[str] = mapped_column(String(64), index=True)
     processing_version: Mapped[str] = mapped_column(String(64), default="")
     processing_params: Mapped[dict] = mapped_column(JSON, default=dict)

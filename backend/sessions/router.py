@@ -30,6 +30,7 @@ from backend.exceptions import (
     PatientIdRequired,
     PatientNotFound,
     SessionConflict,
+    SessionFileRemoved,
     SessionNotFound,
     SessionOwnerMismatch,
     SessionTooLarge,
@@ -145,6 +146,7 @@ def _item_fields(session, slug, reps, rom, quality) -> dict:
         "rom_deg": rom,
         "quality_ok": quality,
         "created_at": session.created_at,
+        "file_removed_at": session.file_removed_at,
     }
 
 
@@ -280,7 +282,7 @@ def read_session(session_id: IdPath, caller: CurrentCaller, db_session: DbSessio
 @router.get(
     "/sessions/{session_id}/detail",
     response_model=SessionDetailOut,
-    responses=error_responses(*AUTH_ERRORS, SessionNotFound, InvalidSessionFile),
+    responses=error_responses(*AUTH_ERRORS, SessionNotFound, InvalidSessionFile, SessionFileRemoved),
 )
 def read_session_detail(session_id: IdPath, request: Request, caller: CurrentCaller, db_session: DbSession):
     """Returns the evidence behind a session's numbers: angle curves, repetitions, workspace, data quality."""
@@ -319,7 +321,9 @@ _EXPORT_CONTENT = {
             "description": "the session as a download: csv → application/zip, trc and bvh → text/plain, "
             "fhir → application/fhir+json",
         },
-        **error_responses(*AUTH_ERRORS, SessionNotFound, InvalidSessionFile, ExportUnavailable, InvalidInput),
+        **error_responses(
+            *AUTH_ERRORS, SessionNotFound, InvalidSessionFile, ExportUnavailable, InvalidInput, SessionFileRemoved
+        ),
     },
 )
 def export_session(
@@ -351,7 +355,7 @@ def export_session(
     response_class=Response,
     responses={
         200: {"content": {"application/octet-stream": {}}, "description": "the stored .khs file"},
-        **error_responses(*AUTH_ERRORS, SessionNotFound),
+        **error_responses(*AUTH_ERRORS, SessionNotFound, SessionFileRemoved),
     },
 )
 def read_session_file(session_id: IdPath, caller: CurrentCaller, db_session: DbSession):

@@ -30,6 +30,10 @@ class SessionItemOut(BaseModel):
     rom_deg: float | None = Field(description="range of motion of the defining angle, degrees", examples=[92.5])
     quality_ok: bool | None = None
     created_at: dt.datetime = Field(description="when the server stored it, UTC")
+    file_removed_at: dt.datetime | None = Field(
+        default=None,
+        description="when the clinic's retention period removed the recording (the metrics stay), UTC; null: kept",
+    )
 
 
 class SessionOut(SessionItemOut):

@@ -223,19 +223,30 @@ def session_file(*, db_session: Session, session_id: int) -> bytes:
     """Returns the stored .khs bytes of a session, read from the object store and checked against its sha256;
     raises SessionNotFound, SessionFileRemoved (retention), StoredObjectMissing or StoredObjectCorrupt."""
     row = db_session.execute(
-        select(ExerciseSession.file_key, ExerciseSession.content_hash, ExerciseSession.file_bytes).where(
-            ExerciseSession.id == session_id
-        )
+        select(
+            ExerciseSession.file_key,
+            ExerciseSession.content_hash,
+            ExerciseSession.file_bytes,
+            ExerciseSession.file_removed_at,
+        ).where(ExerciseSession.id == session_id)
     ).first()
     if row is None:
         raise missing(session_id)
     if row.file_key:
         return get_store().get(row.file_key, row.content_hash)
     if row.file_bytes is None:
-        raise SessionFileRemoved(
-            f"the file of session {session_id} was removed by the clinic's retention period; its metrics are kept"
-        )
+        raise removed(session_id, row.file_removed_at)
     return row.file_bytes
+
+
+def removed(session_id: int, removed_at: dt.datetime | None) -> SessionFileRemoved:
+    """Returns the error for a session whose recording the clinic's retention period removed (on removed_at, UTC;
+    None: before the date was kept)."""
+    when = f" on {removed_at:%Y-%m-%d}" if removed_at is not None else ""
+    return SessionFileRemoved(
+        f"This session was removed{when} under the clinic's retention policy: its recording (curves, replay, "
+        f"exports) is gone; its metrics are kept (session {session_id})"
+    )
 
 
 def session_suggestions(*, db_session: Session, session_id: int, patient_view: bool) -> list[Suggestion]:

@@ -17,8 +17,41 @@
   }
   load();
 
-  // the two checkboxes: both skeletons (the stored recording), or one alone (?layer=); at least one stays shown
+  // the recording is built by a worker: while it is prepared the page says so, then loads again with the player
   const viewer = document.getElementById("viewer");
+  const stateBox = document.getElementById("replay-state");
+  const POLL_MS = 1500;
+  async function waitForRecording() {
+    let state;
+    try {
+      state = await api(`/sessions/${sid}/replay/state`);
+    } catch (err) {
+      if (err.error === "SessionFileRemoved" || err.status === 404) {
+        stateBox.hidden = true;
+        showError(err);
+        return;
+      }
+      stateBox.className = "alert";
+      stateBox.textContent = `The replay's state could not be read (${err.detail || err.message}); trying again.`;
+      stateBox.hidden = false;
+      setTimeout(waitForRecording, POLL_MS * 2);
+      return;
+    }
+    if (state.state === "ready") { location.reload(); return; }
+    if (state.state === "failed") {
+      stateBox.className = "alert";
+      stateBox.textContent = `The 3D replay could not be prepared. ${state.detail}`;
+      stateBox.hidden = false;
+      return;
+    }
+    stateBox.className = "note";
+    stateBox.textContent = `The 3D replay is being prepared. ${state.detail}`;
+    stateBox.hidden = false;
+    setTimeout(waitForRecording, POLL_MS);
+  }
+  if (viewer.hasAttribute("data-preparing")) waitForRecording();
+
+  // the two checkboxes: both skeletons (the stored recording), or one alone (?layer=); at least one stays shown
   const boxes = [document.getElementById("show-filtered"), document.getElementById("show-raw")];
   const note = document.getElementById("layers-note");
   for (const box of boxes) {
@@ -28,6 +61,7 @@
       note.textContent = "";
       const recording = viewer.dataset.recording + (shown.length === 1 ? `?layer=${shown[0]}` : "");
       viewer.src = Coach.url(`/replay/viewer/?playbackPath=${encodeURIComponent(recording)}`);
+      viewer.hidden = false;
     });
   }
 })();

@@ -2,7 +2,7 @@
    table, movement, reach of each arm, data quality with the tracking-error strip and camera advice, processing. */
 "use strict";
 (() => {
-  const { api, url, el, fmtDateTime, showError } = Coach;
+  const { api, url, el, fmtDate, fmtDateTime, showError } = Coach;
   const main = document.getElementById("main");
   const sid = main.dataset.sessionId;
   const RAW = "#c0392b", FILTERED = "#0b4f9c", LEFT = "#0b4f9c", RIGHT = "#b8336a";
@@ -253,6 +253,26 @@
       el("li", { "data-metric": m.name }, el("strong", {}, `${metricName(m.name)}: `), m.reason)));
   }
 
+  /** Shows a session whose recording the retention period removed: the date, in plain words, and the kept numbers. */
+  async function removed() {
+    document.getElementById("session-body").hidden = true;
+    const s = await api(`/sessions/${sid}`);
+    const name = s.exercise_slug ? s.exercise_slug.replace(/_/g, " ") : "Session";
+    document.getElementById("session-title").textContent = `${name[0].toUpperCase()}${name.slice(1)} · ${fmtDateTime(s.started_at)}`;
+    document.getElementById("session-sub").textContent = "";
+    const when = s.file_removed_at ? ` on ${fmtDate(s.file_removed_at, { day: "numeric", month: "long", year: "numeric" })}` : "";
+    document.getElementById("removed-text").textContent = `This session was removed${when} under the clinic's retention policy.`;
+    document.getElementById("removed-numbers").replaceChildren(
+      ...stat("Repetitions", s.repetitions === null ? "—" : String(s.repetitions)),
+      ...stat("Range of motion", deg(s.rom_deg)),
+      ...stat("Duration", `${Math.round(s.duration_s)} s`, `${s.n_frames} frames`),
+      ...stat("Data quality", s.quality_ok === null ? "—" : s.quality_ok ? "good" : "low"));
+    document.getElementById("removed").hidden = false;
+    const back = document.getElementById("back");
+    back.href = url(`/therapist/patients/${s.patient_id}`);
+    api(`/patients/${s.patient_id}`).then((p) => { back.textContent = `← ${p.full_name || p.email}`; }).catch(() => {});
+  }
+
   async function load() {
     try {
       const d = await api(`/sessions/${sid}/detail`);
@@ -276,6 +296,9 @@
         document.getElementById("session-sub").textContent ||= `Session of ${patient.full_name || patient.email}`;
       }).catch(() => {});
     } catch (err) {
+      if (err.error === "SessionFileRemoved") {
+        try { await removed(); return; } catch (again) { err = again; }
+      }
       document.getElementById("session-sub").textContent = "This session cannot be shown.";
       document.getElementById("session-body").hidden = true;  // no empty sections, downloads or replay under the error
       showError(err);

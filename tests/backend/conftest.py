@@ -156,6 +156,23 @@ def app(db_session, settings):
 
 
 @pytest.fixture
+def run_jobs(db_session, db_connection, settings):
+    """Callable: commits the test's session, then a real worker (backend.jobs.worker.work) runs every due job on
+    the test's connection until none is left; returns how many it ran."""
+    from backend.jobs.worker import work
+
+    def run() -> int:
+        db_session.commit()
+        sessions = lambda: Session(bind=db_connection, join_transaction_mode="create_savepoint",  # noqa: E731
+                                   expire_on_commit=False)  # fmt: skip
+        ran = work(sessionmaker=sessions, settings=settings, name="test-worker", once=True)
+        db_session.expire_all()
+        return ran
+
+    return run
+
+
+@pytest.fixture
 def client(app) -> Iterator[TestClient]:
     """An httpx-based client of the ASGI app (no lifespan: the migration check is tested separately)."""
     with TestClient(app, raise_server_exceptions=False) as c:

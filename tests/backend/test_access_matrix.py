@@ -128,6 +128,7 @@ ROUTES = {
     ("GET", "/api/v1/sessions/{session_id}/detail"): (CARE, None),  # people only: devices do not read it
     ("GET", "/api/v1/sessions/{session_id}/export"): (CARE, lambda w: Raw(b"", {"format": "trc"})),  # as detail
     ("GET", "/api/v1/sessions/{session_id}/replay"): (CARE_DEV, None),
+    ("GET", "/api/v1/sessions/{session_id}/replay/state"): (CARE_DEV, None),
     ("GET", "/api/v1/events"): (AUTHED, None),  # each caller gets the events of the patients they may see
     ("GET", "/api/v1/live/agent"): ({"device"}, None),
     ("POST", "/api/v1/live/progress"): ({"device"}, lambda w: _progress_body()),
@@ -149,6 +150,8 @@ ROUTES = {
     ("GET", "/api/v1/patients/{patient_id}/report.pdf"): (CARE, None),
     ("POST", "/api/v1/reanalysis"): (ADMIN, lambda w: {"patient_id": w["params"]["patient_id"]}),
     ("GET", "/api/v1/reanalysis/{batch}"): (ADMIN, None),  # a batch queued in the world below
+    ("GET", "/api/v1/reanalysis"): (ADMIN, None),
+    ("GET", "/api/v1/jobs"): (ADMIN, None),
     ("GET", "/api/v1/sessions/{session_id}/metric-versions"): (CARE, None),
     ("GET", "/api/v1/patients/{patient_id}/reminders"): (CARE_DEV, None),
     ("POST", "/api/v1/reminders/unsubscribe/{token}"): (PUBLIC, None),  # the e-mail's token is the authority

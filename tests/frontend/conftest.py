@@ -177,8 +177,10 @@ def run_server(
     """Runs the app with uvicorn in a subprocess on `port` (default: a free port) of 127.0.0.1 (extra COACH_*
     settings in env), with `workers` worker processes; yields its base URL; stops it on exit."""
     port = port or free_port()
+    # the embedded worker builds replays (backend/replay/jobs.py) as the demo's server does
     env = os.environ | {"COACH_DATABASE_URL": database_url, "COACH_ENVIRONMENT": "local", "PYTHONPATH": str(ROOT),
-                        "COACH_STORAGE_DIR": str(log_dir / "objects"), **env}  # fmt: skip
+                        "COACH_STORAGE_DIR": str(log_dir / "objects"), "COACH_EMBEDDED_WORKER": "true",
+                        **env}  # fmt: skip
     log = open(log_dir / f"server-{port}.log", "w+")  # noqa: SIM115 - closed below
     command = [sys.executable, "-m", "uvicorn", "backend.main:create_app", "--factory", "--host", "127.0.0.1",
                "--port", str(port), "--log-level", "warning", "--proxy-headers",

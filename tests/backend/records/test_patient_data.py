@@ -24,10 +24,12 @@ def _upload(client, headers, seed):
     return response.json()["id"]
 
 
-def _patient_with_data(client, make_patient_with_therapist, auth_headers, seed):
+def _patient_with_data(client, make_patient_with_therapist, auth_headers, seed, run_jobs):
     patient, therapist = make_patient_with_therapist()
     headers = auth_headers(patient)
     ids = [_upload(client, headers, seed), _upload(client, headers, seed + 1)]
+    assert client.get(f"/api/v1/sessions/{ids[0]}/replay", headers=headers).status_code == 202
+    assert run_jobs() == 1  # a worker builds the replay
     assert client.get(f"/api/v1/sessions/{ids[0]}/replay", headers=headers).status_code == 200
     plan = {"title": "knees", "start_date": "2026-11-23",
             "items": [{"exercise_slug": "squat", "sets": 1, "repetitions": 5, "frequency_per_week": 2}]}  # fmt: skip
@@ -41,8 +43,9 @@ def _patient_with_data(client, make_patient_with_therapist, auth_headers, seed):
     return patient, ids
 
 
-def test_the_archive_holds_everything_with_a_readme(client, make_patient_with_therapist, auth_headers, with_store):
-    patient, ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=51)
+def test_the_archive_holds_everything_with_a_readme(client, make_patient_with_therapist, auth_headers, with_store,
+                                                    run_jobs):  # fmt: skip
+    patient, ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=51, run_jobs=run_jobs)
     response = client.get(f"/api/v1/patients/{patient.id}/archive", headers=auth_headers(patient))
     assert response.status_code == 200 and response.headers["content-type"] == "application/zip"
     z = zipfile.ZipFile(io.BytesIO(response.content))
@@ -90,6 +93,8 @@ def _mentions(db_session, patient_id: int, email: str, session_ids: list[int]) -
                     found.append("user.id")
                 elif col == "session_id" and value in session_ids:
                     found.append(f"{table.name}.session_id")
+                elif table.name == "job" and col == "payload" and (value or {}).get("session_id") in session_ids:
+                    found.append("job.payload names a session of theirs")
                 elif email.lower() in json.dumps(value, default=str).lower():
                     found.append(f"{table.name}.{col} holds the e-mail")
         if table.name == "therapist_patient":
@@ -99,9 +104,9 @@ def _mentions(db_session, patient_id: int, email: str, session_ids: list[int]) -
 
 
 def test_erasure_leaves_only_an_audit_entry(client, db_session, make_patient_with_therapist, make_user, auth_headers,
-                                            with_store):  # fmt: skip
-    patient, ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=61)
-    other, other_ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=71)
+                                            with_store, run_jobs):  # fmt: skip
+    patient, ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=61, run_jobs=run_jobs)
+    other, other_ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=71, run_jobs=run_jobs)
     admin = make_user("admin")
     headers = auth_headers(admin)
     assert client.get(f"/api/v1/patients/{patient.id}/archive", headers=headers).status_code == 200
@@ -124,8 +129,8 @@ def test_erasure_leaves_only_an_audit_entry(client, db_session, make_patient_wit
 
 
 def test_retention_removes_old_files_and_keeps_metrics(client, db_session, make_patient_with_therapist, auth_headers,
-                                                       with_store):  # fmt: skip
-    patient, ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=81)
+                                                       with_store, run_jobs):  # fmt: skip
+    patient, ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=81, run_jobs=run_jobs)
     old = db_session.get(ExerciseSession, ids[0])
     old.started_at = dt.datetime(2025, 1, 1, tzinfo=dt.UTC)
     db_session.flush()

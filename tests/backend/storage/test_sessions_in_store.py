@@ -12,7 +12,8 @@ from backend.sessions.models import ExerciseSession
 from tests.backend.khs_files import make_khs
 
 
-def test_an_upload_goes_to_the_store_and_reads_back_checked(client, db_session, upload, auth_headers, with_store):
+def test_an_upload_goes_to_the_store_and_reads_back_checked(client, db_session, upload, auth_headers, with_store,
+                                                            run_jobs):  # fmt: skip
     data = make_khs("squat", 1, seed=41)
     session_id, patient, _ = upload(data, "squat")
     row = db_session.get(ExerciseSession, session_id)
@@ -21,7 +22,10 @@ def test_an_upload_goes_to_the_store_and_reads_back_checked(client, db_session, 
     assert with_store.get(row.file_key, digest) == data
     response = client.get(f"/api/v1/sessions/{session_id}/file", headers=auth_headers(patient))
     assert response.status_code == 200 and response.content == data
-    replay = client.get(f"/api/v1/sessions/{session_id}/replay", headers=auth_headers(patient))
+    headers = auth_headers(patient)
+    assert client.get(f"/api/v1/sessions/{session_id}/replay", headers=headers).status_code == 202
+    assert run_jobs() == 1  # a worker builds the replay
+    replay = client.get(f"/api/v1/sessions/{session_id}/replay", headers=headers)
     assert replay.status_code == 200
     stored = db_session.scalar(select(SessionReplay).where(SessionReplay.session_id == session_id))
     assert stored.data is None and with_store.get(stored.data_key, stored.data_hash) == replay.content

@@ -1,0 +1,137 @@
+"""The admin's re-analysis page end to end: an admin starts the re-analysis of one patient's sessions, the
+server's worker runs it (COACH_EMBEDDED_WORKER: the loop of `coach-server worker`), the page follows the progress by
+itself and says a failure in words; a therapist gets the 403 page; a session whose recording the retention period
+removed says so on its page. Screenshots at 1366 and 390 px, axe-core 0 serious/critical."""
+
+from __future__ import annotations
+
+import datetime as dt
+import os
+import re
+import subprocess
+import sys
+
+import pytest
+import sqlalchemy as sa
+from axe_playwright_python.sync_playwright import Axe
+from playwright.sync_api import expect
+from sqlalchemy.orm import Session
+
+from backend.demo import ADMIN, DEMO_PASSWORD
+from backend.sessions.models import ExerciseSession, SessionMetric
+from backend.storage.local import LocalStore
+from tests.frontend.conftest import ROOT, THERAPIST, shot, upload_session
+
+pytestmark = pytest.mark.browser
+WALTER = "walter@demo.clinic"  # elbow_flexion; no other browser test uses his sessions
+REMOVED = re.compile(rf"^This session was removed on .*{dt.date.today().year}.* under the clinic's retention policy\.$")
+
+
+def _axe_blocking(page) -> list[str]:
+    found = Axe().run(page).response["violations"]
+    return [f"{v['id']}: {v['help']}" for v in found if v["impact"] in ("serious", "critical")]
+
+
+def _admin_page(browser, live_server, width: int, height: int):
+    context = browser.new_context(base_url=live_server.url, viewport={"width": width, "height": height})
+    context.set_default_timeout(20_000)
+    r = context.request.post("/api/v1/auth/login", data={"email": ADMIN[0], "password": DEMO_PASSWORD})
+    assert r.ok, r.text()
+    page = context.new_page()
+    page.js_errors = []
+    page.on("pageerror", lambda exc: page.js_errors.append(str(exc)))
+    return context, page
+
+
+def _env(live_server) -> dict[str, str]:
+    return os.environ | {"COACH_DATABASE_URL": live_server.database_url, "COACH_ENVIRONMENT": "local",
+                         "COACH_STORAGE_DIR": live_server.storage_dir, "PYTHONPATH": str(ROOT)}  # fmt: skip
+
+
+def test_an_admin_reanalyses_one_patient_and_follows_it(browser, live_server):
+    engine = sa.create_engine(live_server.database_url)
+    kept = upload_session(live_server.url, WALTER, "elbow_flexion", 3, seed=301, created_at="2026-11-21T09:00:00Z")
+    lost = upload_session(live_server.url, WALTER, "elbow_flexion", 3, seed=302, created_at="2026-11-22T09:00:00Z")
+    with Session(engine) as db, db.begin():
+        walter = db.scalar(sa.select(ExerciseSession.patient_id).where(ExerciseSession.id == kept["id"]))
+        for metric in db.scalars(sa.select(SessionMetric).join(ExerciseSession)
+                                 .where(ExerciseSession.patient_id == walter)):  # fmt: skip
+            doc = dict(metric.document)
+            doc.pop("analysis_version", None)  # as the analysis before versions made it
+            metric.document = doc
+        lost_key = db.scalar(sa.select(ExerciseSession.file_key).where(ExerciseSession.id == lost["id"]))
+    LocalStore(live_server.storage_dir).delete(lost_key)  # its file is gone from the store: that job fails
+
+    context, page = _admin_page(browser, live_server, 1366, 900)
+    try:
+        page.goto("/therapist")
+        page.get_by_role("link", name="Re-analysis and jobs").click()
+        page.wait_for_url("**/admin/jobs")
+        expect(page.locator("#version")).not_to_have_text("…")
+        page.select_option("#scope", label="Walter Young's sessions")
+        page.click("#start-btn")
+        expect(page.locator("#start-msg")).to_contain_text("queued for analysis version")
+        row = page.locator("#batches tbody tr").first
+        expect(row).to_contain_text("Walter Young")
+        expect(page.locator("#live")).to_contain_text("every 2 seconds")
+        # the server's embedded worker runs the jobs; the lost file's job is retried after 5 s and 30 s
+        retrying = page.locator(f'#jobs tr:has(a[href$="/sessions/{lost["id"]}"])')
+        expect(retrying).to_contain_text("Will try again: The session's file is missing from the object store",
+                                         timeout=20_000)  # fmt: skip
+        shot(page, "admin_jobs_retrying_1366")
+        expect(row).to_contain_text("Finished, 1 failed", timeout=90_000)  # the page polled by itself
+        failed = page.locator(f'#jobs tr[data-status="failed"]:has(a[href$="/sessions/{lost["id"]}"])')
+        expect(failed).to_contain_text("The session's file is missing from the object store")
+        expect(failed).not_to_contain_text("Traceback")
+        done = page.locator(f'#jobs tr[data-status="done"]:has(a[href$="/sessions/{kept["id"]}"])')
+        expect(done).to_contain_text("New metrics stored; the old ones are kept.")
+        expect(page.locator("#live")).to_contain_text("Up to date")
+        shot(page, "admin_jobs_1366")
+        assert _axe_blocking(page) == []
+        page.set_viewport_size({"width": 390, "height": 844})
+        shot(page, "admin_jobs_390")
+        assert _axe_blocking(page) == []
+        width = page.evaluate("[document.documentElement.scrollWidth, document.documentElement.clientWidth]")
+        assert width[0] <= width[1], f"the page scrolls sideways at 390 px: {width}"
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+        engine.dispose()
+
+
+def test_a_therapist_gets_the_403_page(page, live_server):
+    r = page.context.request.post("/api/v1/auth/login", data={"email": THERAPIST, "password": DEMO_PASSWORD})
+    assert r.ok
+    response = page.goto("/admin/jobs")
+    assert response.status == 403
+    expect(page.locator("main")).to_contain_text("This page is for the clinic's administrators.")
+
+
+def test_a_removed_session_says_when_and_why(browser, live_server):
+    old = upload_session(live_server.url, WALTER, "elbow_flexion", 2, seed=303, created_at="2019-03-01T09:00:00Z")
+    retention = subprocess.run(
+        [sys.executable, "-m", "backend.cli", "retention"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=_env(live_server) | {"COACH_RETENTION_DAYS": "2000"},
+    )
+    assert retention.returncode == 0, retention.stderr + retention.stdout
+    context, page = _admin_page(browser, live_server, 1366, 900)
+    try:
+        page.goto(f"/therapist/sessions/{old['id']}")
+        notice = page.locator("#removed")
+        expect(notice).to_be_visible()
+        expect(page.locator("#removed-text")).to_have_text(REMOVED)
+        expect(page.locator("#removed-numbers")).to_contain_text("Repetitions")
+        expect(page.locator("#session-body")).to_be_hidden()
+        expect(page.locator("#error")).to_be_hidden()
+        shot(page, "session_removed_1366")
+        assert _axe_blocking(page) == []
+        page.set_viewport_size({"width": 390, "height": 844})
+        shot(page, "session_removed_390")
+        assert _axe_blocking(page) == []
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
