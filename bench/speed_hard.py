@@ -48,8 +48,8 @@ def command_seconds(path: Path, out: Path) -> tuple[float, float]:
 
 
 def stage_seconds(path: Path, out: Path) -> dict[str, float]:
-    """Returns wall seconds of read, process (and its parts, from the pipeline's clock) and write in this process,
-    and the CPU seconds of process."""
+    """Returns wall seconds of read, process and write in this process, and the CPU seconds of process and of its
+    parts (the pipeline's own clock)."""
     timings: dict[str, float] = {}
     start = time.perf_counter()
     rec = formats.read(path)
@@ -58,7 +58,7 @@ def stage_seconds(path: Path, out: Path) -> dict[str, float]:
     result = pipeline.process(rec, config=PipelineConfig())
     timings["process"] = time.perf_counter() - start
     timings["process_cpu"] = time.process_time() - cpu
-    timings.update({f"  {k}": v for k, v in result.quality.get("stage_seconds", {}).items()})
+    timings.update({f"  {k} (CPU)": v for k, v in result.quality.get("stage_cpu_seconds", {}).items()})
     start = time.perf_counter()
     formats.write(result.filtered, out, "csv")
     timings["write"] = time.perf_counter() - start
