@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -62,7 +63,7 @@ from kinect_agent.processing.pipeline import process  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.skeleton import NOT_TRACKED  # noqa: E402
 
-DATA_DIR = ROOT_DIR.parent / "shared" / "data"
+DATA_DIR = Path(os.environ.get("COACH_SHARED_DIR", ROOT_DIR.parent / "shared")) / "data"  # as tests/conftest.py
 PAIRS_DIR = DATA_DIR / "keraal" / "kinect_vicon_pairs"
 RATE_HZ = 30.0  # common grid: the Kinect frames (KERAAL Kinect, 30 Hz assumed)
 VICON_RATE_HZ = 60.0  # KERAAL Vicon, assumed (kinect_agent.formats.keraal_vicon)

@@ -72,7 +72,8 @@ class PipelineResult:
 
     params: kinematic parameters. quality: outlier_fraction {joint: fraction of present samples removed},
     segment_sd_before_mm / segment_sd_after_mm {segment: SD of its length}, frames_without_observation,
-    n_frames, n_outliers, n_gated, smoother, online, seconds, angle_sd_seconds.
+    n_frames, n_outliers, n_gated, smoother, online, seconds, angle_sd_seconds, stage_cpu_seconds {outliers,
+    passes, smoother, angle_sd: CPU s of each step (steadier than wall time on a shared machine), for benchmarks}.
     angle_sd: {angle of angles.ANGLE_NAMES: (T,) degrees}, the calibrated SD of each clinical angle per frame
     (uncertainty.angle_sd of the smoother's covariance); None online (the forward pass keeps no covariances).
     """
@@ -140,19 +141,23 @@ def _run_pass(
     Ps = np.empty((T, n, n)) if store else None
     gated = 0
     run = np.zeros(skeleton.J, dtype=np.int64)  # consecutive observed frames each joint was gated
+    any_observed: np.ndarray = np.any(observed, axis=1)  # (T,) per frame, computed once rather than per step
+    present_joints: np.ndarray = np.all(observed.reshape(len(observed), skeleton.J, 3), axis=2)  # (T, J)
+    n_present = present_joints.sum(axis=1)  # (T,)
     for i, k in enumerate(order):
         if i:
             kf.predict_random_walk(q_steps[i])
-        if observed[k].any():
-            present = observed[k].reshape(-1, 3).all(axis=1)
+        if any_observed[k]:
+            present = present_joints[k]
             if restart is not None:
                 lost = present & (run >= restart[1])
                 if lost.any():
                     kf.reacquire(np.flatnonzero(lost), restart[0][k])
                     run[lost] = 0
             used = kf.update_joints(z[k], observed[k], R_diag[k], config.gate_chi2)
-            gated += int(present.sum() - used.sum())
-            run = np.where(used, 0, run + (present & ~used))
+            gated += int(n_present[k]) - int(np.count_nonzero(used))
+            run += present & ~used
+            run[used] = 0
         if xs is not None and Ps is not None:
             xs[k] = kf.x
             Ps[k] = kf.P
@@ -188,7 +193,8 @@ def smooth(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
     """Runs the four passes on an outlier-free recording; returns (root (T, 3), lengths (19,), theta (T, 33), info).
 
-    info: length_sd_m (19,) m, gated_per_pass [4 ints], length_pass_frames; with covariances=True also
+    info: length_sd_m (19,) m, gated_per_pass [4 ints], length_pass_frames, stage_cpu_seconds {passes, smoother}
+    (CPU s: passes 1-3; the unscented RTS or pass 4); with covariances=True also
     "covariance": (T, 36, 36) the smoothed covariance of each frame's state (root (3) m, theta (33) rad; m², rad²,
     m·rad), in the order of the returned root and theta.
     """
@@ -198,6 +204,7 @@ def smooth(
             "q_root_m": config.q_root_m if config.offline_q_root_m is None else config.offline_q_root_m,
         }
     )
+    cpu_started = time.process_time()
     T = clean.n_frames
     total = 4 * T
     done = [0]
@@ -236,16 +243,22 @@ def smooth(
     fixed = _fixed_length_config(config)
     kf3 = kf.with_lengths_fixed(lengths, fixed)
     xs3, Ps3, g3 = _run_pass(kf3, fwd, obs, scale, fixed, True, tick, restart)
+    passes_done = time.process_time()
     if config.smoother == "urts":
-        Qs = np.einsum("t,ij->tij", np.append(scale[1:], 0.0), kf3.Q)
-        xs, Ps = unscented_rts(xs3, Ps3, Qs, None, kf3.points)
+        xs, Ps = unscented_rts(xs3, Ps3, kf3.Q, None, kf3.points, q_scale=np.append(scale[1:], 0.0))
         tick(T)
         g4 = 0
     else:
         kf4 = kf3.copy(fixed)
         xs4, Ps4, g4 = _run_pass(kf4, bwd, obs, scale_bwd, fixed, True, tick, restart)
         xs, Ps = (xs4, Ps4) if config.four_pass_combine == "last" else combine_information(xs3, Ps3, xs4, Ps4)
-    info = {"length_sd_m": length_sd, "gated_per_pass": [g1, g2, g3, g4], "length_pass_frames": n_len}
+    stage_seconds = {"passes": passes_done - cpu_started, "smoother": time.process_time() - passes_done}
+    info = {
+        "length_sd_m": length_sd,
+        "gated_per_pass": [g1, g2, g3, g4],
+        "length_pass_frames": n_len,
+        "stage_cpu_seconds": {k: round(v, 3) for k, v in stage_seconds.items()},
+    }
     if covariances:
         info["covariance"] = Ps
     return xs[:, :N_ROOT], lengths, xs[:, N_ROOT:], info
@@ -299,12 +312,14 @@ def process(
 def _process(
     rec: Recording, *, online: bool, config: PipelineConfig | None, progress: Progress | None
 ) -> PipelineResult:
-    started = time.perf_counter()
+    started, cpu_started = time.perf_counter(), time.process_time()
     config = config or PipelineConfig()
     _check_input(rec)
     T = rec.n_frames
+    stages: dict[str, float] = {}
     if config.remove_outliers and not online:
         clean, prob = remove_outliers_combined(rec, config)
+        stages["outliers"] = round(time.process_time() - cpu_started, 3)
         outlier = (prob > config.outlier_threshold) & (rec.state != NOT_TRACKED)
     else:
         clean, prob, outlier = rec, np.where(rec.state == NOT_TRACKED, 1.0, 0.0), np.zeros((T, skeleton.J), bool)
@@ -315,9 +330,10 @@ def _process(
         ik = inverse_kinematics(clean.positions)
         root, lengths, theta, info = smooth(clean, ik, config, progress, covariances=True)
         model = ik.model
-        sd_started = time.perf_counter()
+        sd_started, sd_cpu = time.perf_counter(), time.process_time()
         sd = uncertainty.angle_sd(model, lengths, theta, info.pop("covariance"))
         info["angle_sd_seconds"] = round(time.perf_counter() - sd_started, 3)
+        stages.update(info.pop("stage_cpu_seconds"), angle_sd=round(time.process_time() - sd_cpu, 3))
     positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta)
     if not np.all(np.isfinite(positions)):
         bad = np.flatnonzero(~np.isfinite(positions).all(axis=(1, 2)))
@@ -359,6 +375,7 @@ def _process(
         "length_pass_frames": info.get("length_pass_frames"),
         "angle_sd_seconds": info.get("angle_sd_seconds"),
         "seconds": round(time.perf_counter() - started, 3),
+        "stage_cpu_seconds": stages,
     }
     return PipelineResult(filtered, params, quality, sd)
 

@@ -169,6 +169,31 @@ def test_unscented_rts_equals_linear_rts(rng: np.random.Generator, linear_fx: bo
     np.testing.assert_allclose(got_P, ref_P, atol=1e-8)
 
 
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_unscented_rts_with_a_noise_scale_per_step_equals_the_stacked_noise(seed: int) -> None:
+    """q_scale (T,) with one Q (n, n) gives the very numbers of Qs[k] = q_scale[k] · Q stacked (T, n, n)."""
+    rng = np.random.default_rng(seed)
+    F, H, Q, R, zs, observed = _linear_problem(rng, steps=30)
+    xs, Ps = _kalman(np.eye(4), H, Q, R, zs, observed, np.zeros(4), np.eye(4))
+    scale = rng.uniform(0.5, 2.0, len(xs))
+    got_x, got_P = unscented_rts(xs, Ps, Q, q_scale=scale)
+    ref_x, ref_P = unscented_rts(xs, Ps, np.einsum("t,ij->tij", scale, Q))
+    np.testing.assert_array_equal(got_x, ref_x)
+    np.testing.assert_array_equal(got_P, ref_P)
+
+
+def test_unscented_rts_refuses_a_noise_scale_of_the_wrong_length() -> None:
+    xs, Ps = np.zeros((5, 2)), np.broadcast_to(np.eye(2), (5, 2, 2))
+    with pytest.raises(ValueError, match=r"q_scale needs Qs \(2, 2\) and shape \(5,\), got \(2, 2\) and \(4,\)"):
+        unscented_rts(xs, Ps, np.eye(2), q_scale=np.ones(4))
+
+
+def test_unscented_rts_reports_a_predicted_covariance_that_is_not_positive_definite() -> None:
+    xs, Ps = np.zeros((3, 2)), np.broadcast_to(-np.eye(2), (3, 2, 2)).copy()
+    with pytest.raises(NotPositiveDefinite, match="predicted covariance of frame 2 in the smoother"):
+        unscented_rts(xs, Ps, 0.1 * np.eye(2))
+
+
 def test_combine_information_is_the_information_form(rng: np.random.Generator) -> None:
     A, B = rng.normal(size=(2, 4, 4))
     Pa, Pb = A @ A.T + np.eye(4), B @ B.T + np.eye(4)
