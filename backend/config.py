@@ -41,6 +41,9 @@ class Settings(BaseSettings):
     # per recording: no home session lasts longer; with the frame limit it bounds the work one upload can cause
     SESSION_MAX_DURATION_S: float = Field(default=2 * 60 * 60.0, gt=0)
     CHECK_MIGRATIONS: bool = True
+    # ready the camera sets' live filter in a background thread at start-up (its compiled code: ~1 s from numba's
+    # cache, half a minute or more the first time); off: the first camera set's first batch waits for it
+    LIVE_WARM_UP: bool = True
     COOKIE_SECURE: bool | None = None  # None: secure when PUBLIC_URL is https, or ENVIRONMENT is not local
     # where people reach the app, e.g. https://coach.example.org/clinic behind a reverse proxy; its path is the
     # prefix of every URL the pages build (never taken from a request's Host header); empty: served at /

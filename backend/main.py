@@ -224,6 +224,10 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
             from backend.migrate import check_at_head
 
             check_at_head(bound)
+        if settings.LIVE_WARM_UP:  # the camera sets' live filter compiles (or loads) now, not at a patient's first set
+            from backend.camera.live_count import start_warm_up
+
+            start_warm_up()
         # PostgreSQL carries the pages' events between workers and replicas (backend/events); SQLite: in-process
         listener = Listener(bound.url).start() if bound.dialect.name == "postgresql" else None
         reminders = _start_reminders(settings, bound)

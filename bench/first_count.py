@@ -2,7 +2,10 @@
 
 The patient's first live set after an install showed its first count 5-11 s after Start and later sets about 1 s
 (issue 26): the online filter's numba kernels compile on the first frame. Each scenario runs in a fresh process
-(NUMBA_CACHE_DIR chooses numba's on-disk cache: an empty folder is a fresh install):
+with the environment as it is (nothing set for the product): numba keeps the compiled kernels in its on-disk cache
+beside the product's modules (`cache=True`: __pycache__/*.nbi, *.nbc, or numba's user-wide cache where the install
+is read-only). "Empty cache" = those files of kinect_agent removed first, as after a fresh install; the cold runs
+write them again.
 
     cold        empty cache, no warm-up: the first set compiles
     cached      the cache filled by an earlier run, no warm-up: the first set loads the compiled code
@@ -20,11 +23,9 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import statistics
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -55,9 +56,17 @@ print(json.dumps({"warm_up_s": warm_s, "first": first, "later": later}))
 """
 
 
-def run(cache: Path, warm: bool) -> dict:
-    env = os.environ | {"NUMBA_CACHE_DIR": str(cache), "PYTHONPATH": str(ROOT)}
-    done = subprocess.run([sys.executable, "-c", CHILD, "1" if warm else "0"], env=env, cwd=ROOT, capture_output=True,
+def empty_cache() -> int:
+    """Removes numba's cached kernels of kinect_agent (index .nbi and data .nbc files); returns how many."""
+    files = [p for pattern in ("*.nbi", "*.nbc") for p in (ROOT / "kinect_agent").rglob(f"__pycache__/{pattern}")]
+    for path in files:
+        path.unlink(missing_ok=True)
+    return len(files)
+
+
+def run(warm: bool) -> dict:
+    """Runs CHILD in a fresh process (the environment as it is, the repository on the import path)."""
+    done = subprocess.run([sys.executable, "-c", CHILD, "1" if warm else "0"], cwd=ROOT, capture_output=True,
                           text=True, check=True)  # fmt: skip
     return json.loads(done.stdout.strip().splitlines()[-1])
 
@@ -69,15 +78,15 @@ def main() -> None:
     rows: dict[str, list[tuple[float, float]]] = {"cold": [], "cached": [], "warmed": [], "later set": []}
     warm_ups: list[float] = []
     for _ in range(args.runs):
-        with tempfile.TemporaryDirectory() as cache:
-            cold = run(Path(cache), warm=False)
-            rows["cold"].append(tuple(cold["first"]))
-            rows["later set"].append(tuple(cold["later"]))
-            rows["cached"].append(tuple(run(Path(cache), warm=False)["first"]))
-        with tempfile.TemporaryDirectory() as cache:
-            warmed = run(Path(cache), warm=True)
-            rows["warmed"].append(tuple(warmed["first"]))
-            warm_ups.append(warmed["warm_up_s"])
+        empty_cache()
+        cold = run(warm=False)
+        rows["cold"].append(tuple(cold["first"]))
+        rows["later set"].append(tuple(cold["later"]))
+        rows["cached"].append(tuple(run(warm=False)["first"]))
+        empty_cache()
+        warmed = run(warm=True)
+        rows["warmed"].append(tuple(warmed["first"]))
+        warm_ups.append(warmed["warm_up_s"])
     print(f"{'scenario':<10} {'Start -> first frame':>22} {'Start -> 30 frames':>20}   (median of {args.runs})")
     for name, values in rows.items():
         first = statistics.median(v[0] for v in values)

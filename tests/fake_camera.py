@@ -3,6 +3,7 @@
 
     from tests.fake_camera import sports2d_y4m
     path = sports2d_y4m(tmp_path / "camera.y4m")          # Sports2D's demo (BSD-3-Clause), see tests/media.py
+    append_blank(path, 4.0)                                # then 4 s of an empty grey picture (nobody in view)
 
 The clip is made at test time from a public video shipped in a registry package (tests/media.py); OpenCV (from the
 `webcam` extra's mediapipe dependencies) decodes it, no ffmpeg is needed. Frames are scaled to fit width x height,
@@ -74,6 +75,20 @@ def _fit(frame: np.ndarray, width: int, height: int) -> np.ndarray:
     x0, y0 = (width - nw) // 2, (height - nh) // 2
     canvas[y0 : y0 + nh, x0 : x0 + nw] = cv2.resize(frame, (nw, nh), interpolation=cv2.INTER_AREA)
     return canvas
+
+
+def append_blank(path: Path, seconds: float, luma: int = 128) -> Path:
+    """Appends `seconds` of one grey level (0 black .. 255 white; nobody in view) to the .y4m at path, at its own size
+    and frame rate (read from its header); returns path."""
+    with open(path, "rb") as f:
+        header = f.readline().decode().split()
+    fields = {h[0]: h[1:] for h in header[1:]}
+    width, height = int(fields["W"]), int(fields["H"])
+    num, den = (int(v) for v in fields["F"].split(":"))
+    frame = b"FRAME\n" + bytes([luma]) * (width * height) + bytes([128]) * (width * height // 2)
+    with open(path, "ab") as f:
+        f.write(frame * int(round(seconds * num / den)))
+    return path
 
 
 def sports2d_y4m(out: Path, **kwargs) -> Path:

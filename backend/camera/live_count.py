@@ -5,6 +5,10 @@ patient's pages as the same live.progress event a home agent's set sends.
 The filter's state lives in this process, one per set (at most MAX_SETS, the least recently used dropped). A batch
 that does not follow the state's last batch (a set continued through another worker, a state dropped, a batch
 rolled back) rebuilds the state from the set's stored batches: the count is the same, only slower once.
+
+The filter's numba kernels compile on the first frame a process filters (about half a minute, more on a busy
+machine) or load from numba's on-disk cache (about a second): start_warm_up() does that in a background thread when
+the server starts (Settings.LIVE_WARM_UP), so that the first batch of the first set is answered as fast as any.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ import threading
 import time
 import uuid
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from sqlalchemy.orm import Session
@@ -27,9 +32,11 @@ from backend.events.hub import Event, publish
 from backend.exercises.models import Exercise
 from kinect_agent.analysis.live import LiveCount, LiveStatus
 from kinect_agent.processing.online import OnlineFilter
+from kinect_agent.sources.simulator import simulate
 from kinect_agent.sources.webcam.landmarks import LandmarkBatch
 
 MAX_SETS = 64
+WARM_UP_S = 3.0  # s of a simulated squat run through the live count at start-up: the filter's start and 12 evaluations
 log = logging.getLogger(__name__)
 
 
@@ -145,3 +152,39 @@ def forget(set_id: uuid.UUID) -> None:
     """Drops the live state of a set that ended."""
     with _LOCK:
         _STATES.pop(set_id, None)
+
+
+def warm_up() -> float:
+    """Runs the camera sets' live count (OnlineFilter with the webcam's settings, then LiveCount, frame by frame)
+    over the first WARM_UP_S seconds of a simulated squat, so that its compiled code is ready; returns the seconds it
+    took."""
+    started = time.perf_counter()
+    rec = simulate("squat", 1, seed=0)[0]
+    state = _fresh(("knee_flexion_L", "knee_flexion_R"))
+    for k in range(int(np.searchsorted(rec.t, rec.t[0] + WARM_UP_S))):
+        t = float(rec.t[k])
+        state.status = state.counter.add(t, rec.positions[k], rec.state[k], state.online.step(t, rec.positions[k],
+                                                                                           rec.state[k]))  # fmt: skip
+    state.counter.final()
+    return time.perf_counter() - started
+
+
+_WARMING: dict[str, Any] = {"thread": None}
+
+
+def start_warm_up() -> threading.Thread:
+    """Starts warm_up() in a background thread, once per process (later calls return the same thread)."""
+    with _LOCK:
+        thread = _WARMING["thread"]
+        if thread is None:
+
+            def run() -> None:
+                try:
+                    log.info("camera live count ready in %.1f s", warm_up())
+                except Exception:  # noqa: BLE001 - a failed warm-up only means the first set compiles it
+                    log.exception("warming up the camera live count failed")
+
+            thread = threading.Thread(target=run, name="camera-warm-up", daemon=True)
+            _WARMING["thread"] = thread
+            thread.start()
+        return thread

@@ -191,6 +191,14 @@ def add_batch(*, db_session: Session, row: CameraSet, body: BatchIn) -> tuple[La
             f"({row.last_t} s, batch {row.last_seq})"
         )
     _check_rates(row, batch, utcnow())
+    # the set's counters first: on SQLite (pysqlite begins a transaction before the first write only) a savepoint
+    # opened outside a transaction is one, and its release commits (one more disk sync per batch, and the batch
+    # committed apart from its counters); after the UPDATE the savepoint is inside the request's transaction
+    before = (row.last_seq, row.last_t, row.n_frames, row.n_batches)
+    row.last_seq, row.last_t = body.seq, float(batch.t[-1])
+    row.n_frames += batch.n_frames
+    row.n_batches += 1
+    db_session.flush()
     try:
         with db_session.begin_nested():
             db_session.add(
@@ -208,14 +216,12 @@ def add_batch(*, db_session: Session, row: CameraSet, body: BatchIn) -> tuple[La
                 )
             )
     except IntegrityError:  # the same batch number arrived at the same time through another request
+        row.last_seq, row.last_t, row.n_frames, row.n_batches = before
+        db_session.flush()
         stored = _stored_batch(db_session, row.id, body.seq)
         if stored is None or stored.content_hash != digest:
             raise BatchConflict(f"batch {body.seq} of set {row.id} was received before with other frames") from None
         return batch, True
-    row.last_seq, row.last_t = body.seq, float(batch.t[-1])
-    row.n_frames += batch.n_frames
-    row.n_batches += 1
-    db_session.flush()
     return batch, False
 
 

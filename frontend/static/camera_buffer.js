@@ -51,11 +51,24 @@ const CameraBuffer = (() => {
     return (await tx("sets", "readonly", (s) => s.get(String(patientId)))) || null;
   }
 
-  async function putBatch(setId, seq, body) {
+  /** Stores one batch and, when withSet ({patientId, state}) is given, the set's state in the same transaction
+   * (one round trip: while it waits, the page's pose landmarker may hold the main thread). */
+  async function putBatch(setId, seq, body, withSet) {
     await open();
     const row = { set_id: setId, seq, body };
-    if (!db) { memory.batches.set(batchKey(setId, seq), row); return; }
-    await tx("batches", "readwrite", (s) => s.put(row, batchKey(setId, seq)));
+    if (!db) {
+      if (withSet) memory.sets.set(String(withSet.patientId), withSet.state);
+      memory.batches.set(batchKey(setId, seq), row);
+      return;
+    }
+    await new Promise((resolve, reject) => {
+      const t = db.transaction(withSet ? ["batches", "sets"] : "batches", "readwrite");
+      if (withSet) t.objectStore("sets").put(withSet.state, String(withSet.patientId));
+      t.objectStore("batches").put(row, batchKey(setId, seq));
+      t.oncomplete = () => resolve();
+      t.onerror = () => reject(t.error);
+      t.onabort = () => reject(t.error);
+    });
   }
 
   async function batches(setId) {

@@ -187,9 +187,9 @@
     const rate = stamps.length > 1 ? +((stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000)).toFixed(1) : null;
     const video = $("cam-video");
     const size = [video.videoWidth || 640, video.videoHeight || 480];
-    CameraBuffer.putSet(pid, set).then(() => CameraSender.add(seq, { seq, version: 1, image_size: size, frames, fps: rate }));
     set.taken = set.taken || {};
-    set.taken[seq] = [taken[0], taken[taken.length - 1]];
+    set.taken[seq] = [taken[0], taken[taken.length - 1], Date.now()];
+    CameraSender.add(seq, { seq, version: 1, image_size: size, frames, fps: rate }, { patientId: pid, state: set });
   }
 
   // ------------------------------------------------------------------ the set
@@ -199,14 +199,17 @@
     $("cam-count-spoken").textContent = T.countSpoken(count, target);
   }
 
-  function onAnswer(out, body) {
-    const shown = Date.now();
+  function onAnswer(out, body, timing) {
     if (out.count > count) { count = out.count; renderCount(); }
+    const shown = Date.now();
     set.hint = out.hint;
     const taken = set.taken && set.taken[body.seq];
-    if (taken) {
+    if (taken) {  // for benchmarks (bench/camera_page.py): where the time from a frame to its count goes
+      const [oldest, newest, flushed] = taken;
       window.dispatchEvent(new CustomEvent("coach-camera-count", { detail: { seq: body.seq, count: out.count,
-        oldest_ms: shown - taken[0], newest_ms: shown - taken[1] } }));
+        oldest_ms: shown - oldest, newest_ms: shown - newest, landmarker_ms: flushed - newest,
+        buffer_ms: timing ? timing.sent - flushed : null, server_ms: timing ? timing.answered - timing.sent : null,
+        draw_ms: timing ? shown - timing.answered : null } }));
       delete set.taken[body.seq];
     }
     if (phase !== "counting") return;
@@ -225,14 +228,15 @@
     if (phase === "counting") endSet("error");
   }
 
-  function senderFor(s) {
+  function senderFor(s, fresh) {
     CameraSender.init(s.set_id, { answer: onAnswer, network: onNetwork, refused: onRefused,
-      trouble: () => status(T.serverTrouble, "warn") });
+      trouble: () => status(T.serverTrouble, "warn") }, fresh);
   }
 
   async function beginCounting() {
     if (phase !== "placement") return;
     phase = "starting";
+    const fresh = !set;
     try {
       if (!set) {
         const model = "pose_landmarker_" + CameraPose.info.model;
@@ -241,7 +245,7 @@
           exercise_slug: out.exercise_slug, model };
         await CameraBuffer.putSet(pid, set);
       }
-      senderFor(set);
+      senderFor(set, fresh);
     } catch (err) { phase = "placement"; problem(kindMessage(err)); return; }
     target = set.target;
     renderCount();
@@ -334,6 +338,9 @@
     }
     set = saved;
     if (row.status !== "recording") { await showResult(row, saved.ended || "stop"); return true; }
+    // the page sends a batch while it writes it to the buffer: after a crash the server may hold batches the buffer
+    // missed, so the set goes on after the later of the two (camera_sender.js)
+    set.next_seq = Math.max(set.next_seq, row.last_seq + 1);
     senderFor(set);
     CameraSender.pump();  // what the reload interrupted is sent at once
     if (saved.ended) { await endSet(saved.ended); return true; }

@@ -134,6 +134,7 @@ def settings() -> Settings:
         DATABASE_URL="sqlite://",
         EVENTS_STREAM_MAX_S=0.0,
         LIVE_OFFLINE_GRACE_S=0.0,
+        LIVE_WARM_UP=False,  # tests/backend/camera/test_camera_warm_up.py turns it on
     )
 
 

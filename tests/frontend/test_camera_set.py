@@ -404,3 +404,66 @@ def test_the_camera_set_speaks_the_patient_language(pw, live_server):
     finally:
         context.close()
         b.close()
+
+
+def test_the_patient_leaving_the_picture_mid_set_is_told_and_back_in_view_counting_goes_on(pw, live_server, tmp_path):
+    """The camera shows the patient for 4 s, then an empty room for 4 s, in a loop: mid-set the page says "You left
+    the picture" once nobody was followed for 1.5 s (camera_page.js LOST_MS), and stops saying it when the patient is
+    back in view (the set goes on: frames are sent again)."""
+    from tests.fake_camera import append_blank, sports2d_y4m
+
+    base = live_server.url
+    email, _, item_id = new_patient(base, target=50)  # a set that does not end by itself
+    video = append_blank(sports2d_y4m(tmp_path / "leaves.y4m", start_s=0.0, seconds=4.0), 4.0)
+    b = camera_browser(pw, video)
+    context, page = open_page(b, base)
+    say = page.locator("#cam-say")
+    try:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
+        page.click("#cam-agree")
+        wait_phase(page, "placement")
+        page.click("#cam-anyway")
+        wait_phase(page, "counting")
+        expect(say).to_contain_text("You left the picture", timeout=60_000)
+        assert say.get_attribute("data-level") == "warn"
+        shot(page, "camera-left-picture")
+        _axe_clean(page)
+        seq = page.evaluate("CameraPage.state().next_seq")
+        expect(say).not_to_contain_text("You left the picture", timeout=60_000)  # back in view
+        page.wait_for_function("(s) => CameraPage.state().next_seq > s", arg=seq, timeout=60_000)
+        assert phase(page) == "counting"
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+        b.close()
+
+
+def test_a_camera_slower_than_10_frames_a_second_is_said_mid_set(pw, live_server, tmp_path):
+    """A camera that gives 4 frames a second (the fake camera's clip at 4 fps, whatever this machine's speed): after
+    3 s of counting the page says the computer is slow, and the rate it measured is the camera's."""
+    from tests.fake_camera import sports2d_y4m
+
+    base = live_server.url
+    email, _, item_id = new_patient(base, target=50)
+    b = camera_browser(pw, sports2d_y4m(tmp_path / "slow.y4m", fps=4, start_s=0.0, seconds=5.0))
+    context, page = open_page(b, base)
+    note = page.locator("#cam-note")
+    try:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
+        page.click("#cam-agree")
+        wait_phase(page, "placement")
+        page.click("#cam-anyway")
+        wait_phase(page, "counting")
+        expect(note).to_have_text("This computer is slow, so counting may be less exact.", timeout=60_000)
+        fps = page.evaluate("CameraPage.state().fps")
+        assert fps is not None and fps <= 5.0, fps  # the camera's 4 frames a second, not the landmarker's pace
+        shot(page, "camera-slow")
+        _axe_clean(page)
+        assert not page.js_errors, page.js_errors
+    finally:
+        context.close()
+        b.close()
