@@ -460,7 +460,9 @@ def test_a_camera_slower_than_10_frames_a_second_is_said_mid_set(pw, live_server
         wait_phase(page, "counting")
         expect(note).to_have_text("This computer is slow, so counting may be less exact.", timeout=60_000)
         fps = page.evaluate("CameraPage.state().fps")
-        assert fps is not None and fps <= 5.0, fps  # the camera's 4 frames a second, not the landmarker's pace
+        # the camera's pace, not the landmarker's (12-16 a second here): Chromium's fake camera gives the 4 fps clip's
+        # frames at 4-8 distinct frames a second depending on the machine's load
+        assert fps is not None and fps < 10.0, fps
         shot(page, "camera-slow")
         _axe_clean(page)
         assert not page.js_errors, page.js_errors
