@@ -29,7 +29,7 @@ from sqlalchemy.orm import Session
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _files(n: int) -> list[bytes]:
+def session_files(n: int) -> list[bytes]:
     from kinect_agent.capture import make_payload
     from kinect_agent.formats import session_file as sf
     from kinect_agent.sources.simulator import simulate
@@ -103,7 +103,7 @@ def main() -> None:
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--files", type=int, default=4, help="distinct session files the rows point to")
     args = ap.parse_args()
-    files = _files(args.files)
+    files = session_files(args.files)
     print(f"session file: {len(files[0]) / 1e6:.2f} MB, {args.sessions} sessions", flush=True)
     with tempfile.TemporaryDirectory() as store_dir:
         for w in args.workers:

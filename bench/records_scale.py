@@ -34,19 +34,12 @@ import sqlalchemy as sa
 from sqlalchemy.orm import Session
 
 ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:  # `python bench/records_scale.py` puts bench/ first, not the repository
+    sys.path.insert(0, str(ROOT))
+
+from bench.reanalysis import session_files  # noqa: E402
+
 CHUNK = 1000
-
-
-def _files(n: int) -> list[bytes]:
-    from kinect_agent.capture import make_payload
-    from kinect_agent.formats import session_file as sf
-    from kinect_agent.sources.simulator import simulate
-
-    out = []
-    for seed in range(n):
-        measured, _, _ = simulate("shoulder_abduction", 80, seed=seed)  # ~ 290-300 s at 30 Hz
-        out.append(sf.encode(make_payload(measured, created_at="2026-11-20T10:00:00Z")))
-    return out
 
 
 def _fresh(url: str) -> sa.Engine:
@@ -193,7 +186,7 @@ def main() -> None:
     from backend.records.reanalysis import enqueue_reanalysis
 
     import_all_models()
-    files = _files(args.files)
+    files = session_files(args.files)
     print(f"session file: {len(files[0]) / 1e6:.2f} MB; {args.sessions} sessions of {args.patients} patients",
           flush=True)  # fmt: skip
     with tempfile.TemporaryDirectory() as store_dir:

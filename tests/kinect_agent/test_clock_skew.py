@@ -1,7 +1,6 @@
 """A home computer whose clock is wrong: its sessions are stored (a file refused for it before goes on
 `upload --retry-rejected`), and `kinect-agent status` tells the family in plain words that the clock is wrong."""
 
-# ruff: noqa: F811  (pytest fixtures are imported by name and then requested as arguments)
 from __future__ import annotations
 
 import datetime as dt
@@ -13,19 +12,6 @@ from kinect_agent import cli, clock
 from kinect_agent.config import load_config
 from kinect_agent.formats.session_file import SessionPayload
 from kinect_agent.queue import SessionQueue
-from tests.kinect_agent._backend import (  # noqa: F401  (fixtures)
-    app,
-    auth_headers,
-    db_connection,
-    db_session,
-    engine,
-    live_server,
-    make_patient_with_therapist,
-    make_user,
-    pairing_code,
-    settings,
-    test_database_url,
-)
 from tests.kinect_agent.test_held_sessions import session_payload
 
 THREE_DAYS = dt.timedelta(days=3)

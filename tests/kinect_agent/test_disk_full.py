@@ -2,7 +2,6 @@
 here): `kinect-agent run` keeps the set's frames in memory, says so in plain words, writes the session once there
 is room, and never prints a traceback."""
 
-# ruff: noqa: F811  (pytest fixtures are imported by name and then requested as arguments)
 from __future__ import annotations
 
 import errno
@@ -12,19 +11,6 @@ import pytest
 from kinect_agent import cli, disk_full, queue
 from kinect_agent.config import AgentConfig, load_config, save_config
 from kinect_agent.queue import SessionQueue
-from tests.kinect_agent._backend import (  # noqa: F401  (fixtures)
-    app,
-    auth_headers,
-    db_connection,
-    db_session,
-    engine,
-    live_server,
-    make_patient_with_therapist,
-    make_user,
-    pairing_code,
-    settings,
-    test_database_url,
-)
 
 RUN = ["run", "--source", "simulator", "--exercise", "elbow_flexion", "--reps", "2", "--no-upload"]
 
