@@ -15,7 +15,7 @@ const ReminderSettings = (() => {
     const zone = deviceZone();
     const option = [...select.options].find((o) => o.value === zone);
     if (!option) return;
-    option.textContent = I18n.t("{zone} (the time zone of this device)", { zone: zone.replace(/_/g, " ") });
+    option.textContent = I18n.t("{zone} (this device)", { zone: zone.replace(/_/g, " ") });
     select.prepend(option);
   }
 

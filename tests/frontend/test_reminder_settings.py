@@ -47,7 +47,7 @@ def test_the_patient_changes_their_time_zone_and_turns_reminder_emails_off(brows
         expect(zone).to_have_value(ten)
         first = zone.locator("option").first
         expect(first).to_have_attribute("value", DEVICE_ZONE)
-        expect(first).to_have_text("America/Sao Paulo (la zona horaria de este dispositivo)")
+        expect(first).to_have_text("America/Sao Paulo (este dispositivo)")
         switch = page.get_by_role("switch", name="Enviarme los recordatorios por correo electrónico")
         expect(switch).to_be_checked()
         for target in (zone, page.locator("label.remind-emails")):
