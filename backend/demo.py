@@ -31,6 +31,10 @@ PATIENTS = (
 )
 # a patient with no Kinect and no home agent: she records her sets with her own computer's camera (backend/camera)
 CAMERA_PATIENT = ("clara@demo.clinic", "Clara Lens", ("squat", "seated_knee_extension"), 1)  # therapist index
+# the reminder times of every demo plan (HH:MM in the patient's time zone; the server's COACH_TIME_ZONE, as the demo
+# patients have none of their own): morning, afternoon and evening, so the patient page shows the next one most of
+# the day
+REMINDER_TIMES = ("09:00", "15:00", "20:00")
 
 
 def seed_demo(db_session: Session) -> str:
@@ -59,7 +63,8 @@ def seed_demo(db_session: Session) -> str:
         assign(db_session=db_session, patient=patient, therapist=therapist)
         items = [PlanItemIn(exercise_slug=s, sets=2, repetitions=10, frequency_per_week=3) for s in exercises]
         body = PlanIn(title="Home programme", start_date=today - dt.timedelta(days=28),
-                      end_date=today + dt.timedelta(days=28), items=items)  # fmt: skip
+                      end_date=today + dt.timedelta(days=28), items=items,
+                      reminder_times=list(REMINDER_TIMES))  # fmt: skip
         create_plan(db_session=db_session, patient_id=patient.id, therapist_id=therapist.id, body=body)
         _, code = create_pairing_code(db_session=db_session, patient_id=patient.id, created_by_id=therapist.id,
                                       minutes=15)  # fmt: skip
@@ -87,7 +92,7 @@ def _seed_camera_patient(db_session: Session) -> None:
     today = dt.date.today()
     items = [PlanItemIn(exercise_slug=s, sets=2, repetitions=5, frequency_per_week=3) for s in exercises]
     body = PlanIn(title="Home programme (camera)", start_date=today - dt.timedelta(days=7),
-                  end_date=today + dt.timedelta(days=56), items=items)  # fmt: skip
+                  end_date=today + dt.timedelta(days=56), items=items, reminder_times=list(REMINDER_TIMES))  # fmt: skip
     create_plan(db_session=db_session, patient_id=patient.id, therapist_id=therapist.id, body=body)
 
 

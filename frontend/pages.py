@@ -23,6 +23,7 @@ from backend.deps import Caller, DbSession, optional_caller, require_patient_acc
 from backend.exceptions import NotFound
 from backend.i18n import LANGUAGE_NAMES, LOCALES, N_, js_messages, negotiate, translations, translator
 from backend.reminders.service import UNSUBSCRIBE_PATH, patient_of_token, unsubscribe
+from backend.reminders.times import zone_names
 from backend.schemas import IdPath
 from frontend import vendor_assets
 
@@ -164,7 +165,24 @@ def patient_page(request: Request, caller: OptionalCaller) -> Response:
     """Shows the patient's feedback screen (therapists are sent to their dashboard)."""
     if caller is not None and caller.user is not None and caller.user.role in THERAPIST_ROLES:
         return RedirectResponse(f"{_root(request)}/therapist", status_code=303)
-    return _gate(request, caller, ("patient",)) or _page(request, "patient.html", caller)
+    gate = _gate(request, caller, ("patient",))
+    if gate is not None:
+        return gate
+    assert caller is not None and caller.user is not None  # _gate let a patient through
+    settings = request.app.state.settings
+    zone = caller.user.time_zone or settings.TIME_ZONE
+    choices = time_zone_choices()
+    return _page(request, "patient.html", caller, time_zones=choices if zone in choices else [zone, *choices],
+                 time_zone=zone,
+                 reminder_emails=caller.user.reminder_emails_off_at is None,
+                 clinic_sends_emails=settings.reminder_emails)  # fmt: skip
+
+
+@lru_cache(maxsize=1)
+def time_zone_choices() -> list[str]:
+    """Returns the IANA time zones a patient can choose on their page, sorted: the server's whole list (the one
+    PATCH /patients/{id} checks), without the old aliases that are no Area/Location name ("EST5EDT", "GB")."""
+    return sorted(z for z in zone_names() if "/" in z or z == "UTC")
 
 
 @router.get("/patient/camera", response_class=HTMLResponse)

@@ -254,6 +254,7 @@
   }
   load().then(() => exercises()).then((lib) => Live.init(pid, (slug) => exerciseName(lib, slug), (slug) => (lib[slug] || {}).instructions));
   Voice.init(pid);
+  ReminderSettings.init(pid, async () => reminderBlock(await api(`/patients/${pid}/reminders`)));
   // a new result, new advice or a new plan shows without reloading the page; the home computer's set live
   Connection.attach(Coach.onChange(pid, load, Connection.watch({ "live.agent": Live.onAgent, "live.command": Live.onCommand,
     "live.progress": Live.onProgress, "session.stored": Live.onStored, open: Live.status })));

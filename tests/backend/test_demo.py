@@ -210,3 +210,23 @@ def test_backfill_plan_is_patient_by_patient_oldest_first_and_repeatable(tmp_pat
         assert times == sorted(times) and times[0].date() >= today - dt.timedelta(days=21)
         assert times[-1].date() < today
     assert [(w, a.email, x) for w, a, x in plan] == [(w, a.email, x) for w, a, x in backfill_plan(agents, 3, today, 7)]
+
+
+def test_seed_demo_gives_every_demo_plan_reminder_times(db_session) -> None:
+    """The demo patients' pages show a reminder: their plans have reminder times, and at 10:00 (the server's time
+    zone, UTC here) the next one is 15:00."""
+    from sqlalchemy import select
+
+    from backend.config import Settings
+    from backend.reminders.service import today
+    from backend.users.models import User
+
+    demo.seed_demo(db_session)
+    settings = Settings(ENVIRONMENT="local", CHECK_MIGRATIONS=False, DATABASE_URL="sqlite://", TIME_ZONE="UTC")
+    ten = dt.datetime.combine(dt.date.today(), dt.time(10, 0), tzinfo=dt.UTC)
+    emails = [p[0] for p in demo.PATIENTS] + [demo.CAMERA_PATIENT[0]]
+    for email in emails:
+        patient = db_session.scalar(select(User).where(User.email == email))
+        reminders = today(db_session=db_session, patient=patient, settings=settings, now=ten)
+        assert [t.time for t in reminders.times] == ["09:00", "15:00", "20:00"], email
+        assert reminders.next is not None and reminders.next.time == "15:00", email
