@@ -20,7 +20,7 @@ from pathlib import Path
 
 import httpx
 import pytest
-from playwright.sync_api import expect
+from playwright.sync_api import Page, expect
 from sqlalchemy.orm import Session
 
 from backend.database import import_all_models
@@ -233,17 +233,38 @@ def browser(playwright_session):
     b.close()
 
 
+@contextmanager
+def open_page(browser, base_url: str | None = None, width: int = 1280, height: int = 900, *,
+              init_script: str | None = None, **context_options) -> Iterator[Page]:  # fmt: skip
+    """Yields a page of a fresh browser context (no cookies) with a `width` x `height` px window at base_url;
+    waits up to PAGE_TIMEOUT_MS, runs init_script before each document's scripts, collects script errors in
+    page.js_errors; closes the context on exit. context_options go to Browser.new_context (ignore_https_errors=...).
+    """
+    context = browser.new_context(viewport={"width": width, "height": height}, base_url=base_url, **context_options)
+    try:
+        context.set_default_timeout(PAGE_TIMEOUT_MS)
+        if init_script is not None:
+            context.add_init_script(init_script)
+        page = context.new_page()
+        page.js_errors = []
+        page.on("pageerror", lambda exc, errors=page.js_errors: errors.append(str(exc)))
+        yield page
+    finally:
+        context.close()
+
+
 @pytest.fixture
 def page(browser, live_server):
     """A fresh browser context (no cookies) with a laptop-sized window."""
-    context = browser.new_context(viewport={"width": 1280, "height": 900}, base_url=live_server.url)
-    context.set_default_timeout(PAGE_TIMEOUT_MS)
-    p = context.new_page()
-    errors: list[str] = []
-    p.on("pageerror", lambda exc: errors.append(str(exc)))
-    p.js_errors = errors
-    yield p
-    context.close()
+    with open_page(browser, live_server.url) as p:
+        yield p
+
+
+def sign_in(page, email: str, password: str = DEMO_PASSWORD) -> str:
+    """Signs the page's context in through the API (login cookie, no page load); returns its CSRF token."""
+    r = page.context.request.post("/api/v1/auth/login", data={"email": email, "password": password})
+    assert r.ok, r.text()
+    return r.json()["csrf_token"]
 
 
 def login(page, email: str, password: str = DEMO_PASSWORD) -> None:

@@ -3,13 +3,13 @@ scrolling, chart labels large enough; a full-page screenshot of each in /tmp/sho
 
 from __future__ import annotations
 
+from contextlib import ExitStack
 from dataclasses import dataclass
 
 import pytest
 from axe_playwright_python.sync_playwright import Axe
 
-from backend.demo import DEMO_PASSWORD
-from tests.frontend.conftest import PATIENT, THERAPIST, newest_session_id, shot
+from tests.frontend.conftest import PATIENT, THERAPIST, newest_session_id, open_page, shot, sign_in
 
 pytestmark = pytest.mark.browser
 
@@ -57,21 +57,14 @@ def session_id(live_server) -> int:
 @pytest.fixture(scope="module")
 def role_pages(browser, live_server):
     """One browser page per role, logged in once for the module: {"anonymous", "patient", "therapist"}."""
-    contexts, pages = [], {}
-    for role, email in (("anonymous", None), ("patient", PATIENT), ("therapist", THERAPIST)):
-        context = browser.new_context(base_url=live_server.url, viewport={"width": 1366, "height": 900})
-        context.set_default_timeout(15_000)
-        if email is not None:
-            r = context.request.post("/api/v1/auth/login", data={"email": email, "password": DEMO_PASSWORD})
-            assert r.ok, r.text()
-        page = context.new_page()
-        page.js_errors = []
-        page.on("pageerror", lambda exc, errors=page.js_errors: errors.append(str(exc)))
-        contexts.append(context)
-        pages[role] = page
-    yield pages
-    for context in contexts:
-        context.close()
+    with ExitStack() as stack:
+        pages = {}
+        for role, email in (("anonymous", None), ("patient", PATIENT), ("therapist", THERAPIST)):
+            page = stack.enter_context(open_page(browser, live_server.url, 1366, 900))
+            if email is not None:
+                sign_in(page, email)
+            pages[role] = page
+        yield pages
 
 
 def _violations(page) -> list[dict]:

@@ -10,8 +10,8 @@ import pytest
 from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
-from tests.frontend.conftest import THERAPIST, api_client, login, shot
-from tests.frontend.test_never_silent import LOAD_MS, _context
+from tests.frontend.conftest import THERAPIST, api_client, login, open_page, shot
+from tests.frontend.test_never_silent import LOAD_MS
 
 pytestmark = pytest.mark.browser
 PASSWORD = "reply-password-2026"
@@ -47,9 +47,7 @@ def _serious(page) -> list[str]:
 def test_patient_answers_it_hurt_and_the_dashboard_shows_it_unread_live(browser, live_server, width, height):
     base = live_server.url
     email, pid, name = _patient_with_advice(base)
-    therapist_ctx, dashboard = _context(browser, base, width, height)
-    patient_ctx, patient = _context(browser, base, width, height)
-    try:
+    with open_page(browser, base, width, height) as dashboard, open_page(browser, base, width, height) as patient:
         login(dashboard, THERAPIST)
         dashboard.wait_for_url("**/therapist")
         row = dashboard.locator(f"#patients tr[data-patient-id='{pid}']")
@@ -91,16 +89,12 @@ def test_patient_answers_it_hurt_and_the_dashboard_shows_it_unread_live(browser,
         expect(row.locator(".new-replies")).to_have_count(0, timeout=LOAD_MS)
         expect(unread).to_have_count(0)
         assert not dashboard.js_errors and not patient.js_errors, (dashboard.js_errors, patient.js_errors)
-    finally:
-        patient_ctx.close()
-        therapist_ctx.close()
 
 
 def test_a_german_patient_answers_in_german(browser, live_server):
     base = live_server.url
     email, pid, _ = _patient_with_advice(base)
-    context, page = _context(browser, base, 390, 844)
-    try:
+    with open_page(browser, base, 390, 844) as page:
         login(page, email, PASSWORD)
         advice = page.locator("#advice li", has_text=ADVICE)
         expect(advice).to_be_visible(timeout=LOAD_MS)
@@ -119,5 +113,3 @@ def test_a_german_patient_answers_in_german(browser, live_server):
         shot(page, "reply-patient-de-390")
         assert not _serious(page)
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()

@@ -13,7 +13,7 @@ import pytest
 from playwright.sync_api import expect
 
 from backend.demo import DEMO_PASSWORD
-from tests.frontend.conftest import THERAPIST, free_port, run_server, shot
+from tests.frontend.conftest import THERAPIST, free_port, open_page, run_server, shot
 from tests.frontend.proxy import ProxyServer, self_signed_certificate
 
 pytestmark = pytest.mark.browser
@@ -42,21 +42,14 @@ def public_url(live_server, tmp_path_factory):
 def on_origin_only(browser, public_url: str):
     """Yields a page of a fresh browser context; on leaving, asserts that no request or websocket left public_url
     and that no script error happened."""
-    context = browser.new_context(ignore_https_errors=True, viewport={"width": 1280, "height": 900})
-    context.set_default_timeout(20_000)
-    page = context.new_page()
     requests: list[str] = []
-    page.on("request", lambda r: requests.append(r.url))
-    page.on("websocket", lambda ws: requests.append(ws.url))
-    errors: list[str] = []
-    page.on("pageerror", lambda exc: errors.append(str(exc)))
-    try:
+    with open_page(browser, ignore_https_errors=True) as page:
+        page.on("request", lambda r: requests.append(r.url))
+        page.on("websocket", lambda ws: requests.append(ws.url))
         yield page
-    finally:
-        context.close()
     foreign = [u for u in requests if not (u.startswith(public_url + "/") or u.startswith(("data:", "blob:")))]
     assert not foreign, f"requests that left {public_url}: {foreign}"
-    assert not errors, errors
+    assert not page.js_errors, page.js_errors
 
 
 def test_therapist_works_through_the_proxy_and_the_replay_plays(browser, public_url, live_server):

@@ -13,21 +13,25 @@ from __future__ import annotations
 import re
 import time
 import uuid
+from collections.abc import Iterator
+from contextlib import closing, contextmanager
 from pathlib import Path
 
 import httpx
 import pytest
 from axe_playwright_python.sync_playwright import Axe
-from playwright.sync_api import expect
+from playwright.sync_api import Page, expect
 
 from kinect_agent.formats import session_file
-from tests.frontend.conftest import CHROMIUM, api_client, login, shot
+from tests.frontend.conftest import CHROMIUM, api_client, login, open_page, shot
 
 pytestmark = pytest.mark.browser
 PASSWORD = "camera-password-2026"
 EXERCISE, TARGET = "squat", 2
 WIDTHS = ((1366, 900), (768, 1024), (390, 844))
 PAGE = "/patient/camera"
+WATCH_CSP = ("window.__csp = []; document.addEventListener('securitypolicyviolation', "
+             "(e) => __csp.push([e.effectiveDirective, e.blockedURI]))")  # fmt: skip
 
 
 def _axe_clean(page) -> None:
@@ -119,19 +123,14 @@ def session_header(base: str, email: str, session_id: int):
         return session_file.decode(r.content)
 
 
-def open_page(browser, base: str):
-    context = browser.new_context(viewport={"width": 1366, "height": 900}, base_url=base)
-    context.set_default_timeout(30_000)
-    context.add_init_script("window.__csp = []; document.addEventListener('securitypolicyviolation', "
-                            "(e) => __csp.push([e.effectiveDirective, e.blockedURI]))")  # fmt: skip
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda exc: errors.append(str(exc)))
-    page.js_errors = errors
-    requests: list[str] = []
-    page.on("request", lambda req: requests.append(req.url))
-    page.requests = requests
-    return context, page
+@contextmanager
+def camera_page(browser, base: str) -> Iterator[Page]:
+    """Yields a 1366 x 900 page at base (conftest.open_page) that also keeps the CSP violations in window.__csp
+    ([directive, blocked URI] pairs) and the URLs it requested in page.requests."""
+    with open_page(browser, base, 1366, 900, init_script=WATCH_CSP) as page:
+        page.requests = []
+        page.on("request", lambda req, requests=page.requests: requests.append(req.url))
+        yield page
 
 
 def phase(page) -> str:
@@ -146,8 +145,7 @@ def wait_phase(page, *names: str, timeout: float = 60_000) -> None:
 def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, live_server):
     base = live_server.url
     email, pid, item_id = new_patient(base)
-    context, page = open_page(cam_browser, base)
-    try:
+    with camera_page(cam_browser, base) as page:
         login(page, email, PASSWORD)
         page.wait_for_url("**/patient")
         start = page.locator("a.cam-start")
@@ -200,8 +198,6 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         violations = page.evaluate("window.__csp")
         assert all(d == "connect-src" and not u.startswith(base) for d, u in violations), violations
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()
 
 
 def _to_counting(page, item_id: int, agree: bool = True) -> str:
@@ -218,9 +214,8 @@ def _to_counting(page, item_id: int, agree: bool = True) -> str:
 def test_hidden_tab_network_loss_reload_and_unplugged_camera_mid_set_store_one_session(cam_browser, live_server):
     base = live_server.url
     email, pid, item_id = new_patient(base, target=50)  # a set that does not end by itself
-    context, page = open_page(cam_browser, base)
-    status = page.locator("#cam-status")
-    try:
+    with camera_page(cam_browser, base) as page:
+        status = page.locator("#cam-status")
         login(page, email, PASSWORD)
         page.wait_for_url("**/patient")
         set_id = _to_counting(page, item_id)
@@ -232,14 +227,14 @@ def test_hidden_tab_network_loss_reload_and_unplugged_camera_mid_set_store_one_s
                       "document.dispatchEvent(new Event('visibilitychange'))")  # fmt: skip
         expect(status).to_contain_text("Welcome back")
         # the network lost mid-set, then back: batches wait in IndexedDB and go out in order
-        context.set_offline(True)
+        page.context.set_offline(True)
         expect(status).to_contain_text("connection to the server is lost", timeout=20_000)
         shot(page, "camera-offline")
         _axe_clean(page)
         page.wait_for_timeout(2000)
         waiting = page.evaluate("CameraBuffer.batches(CameraPage.state().set_id).then((b) => b.length)")
         assert waiting >= 1, "no batch was kept while offline"
-        context.set_offline(False)
+        page.context.set_offline(False)
         expect(status).to_contain_text("The connection is back", timeout=30_000)
         # the page reloaded mid-set: the set is offered to go on, with the same id
         page.reload()
@@ -268,8 +263,6 @@ def test_hidden_tab_network_loss_reload_and_unplugged_camera_mid_set_store_one_s
         assert len(stored) == 1 and stored[0]["client_session_id"] == set_id, stored
         assert page.evaluate("(id) => CameraBuffer.batches(id).then((b) => b.length)", set_id) == 0
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()
 
 
 @pytest.mark.parametrize(
@@ -284,8 +277,7 @@ def test_a_camera_that_cannot_start_is_said_in_plain_words(pw, live_server, flag
     base = live_server.url
     email, _, item_id = new_patient(base)
     b = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=["--no-sandbox", *flags])
-    context, page = open_page(b, base)
-    try:
+    with closing(b), camera_page(b, base) as page:
         login(page, email, PASSWORD)
         page.wait_for_url("**/patient")
         if "could not find" in says:
@@ -296,9 +288,6 @@ def test_a_camera_that_cannot_start_is_said_in_plain_words(pw, live_server, flag
         expect(page.locator("#cam-retry")).to_be_visible()
         shot(page, f"camera-problem-{'denied' if 'allow' in says else 'none'}")
         _axe_clean(page)
-    finally:
-        context.close()
-        b.close()
 
 
 @pytest.mark.parametrize(("luma", "code"), [(5, "dark"), (128, "nobody")], ids=["dark", "nobody"])
@@ -306,8 +295,7 @@ def test_a_dark_picture_and_an_empty_one_are_named_in_the_placement_check(pw, li
     base = live_server.url
     email, _, item_id = new_patient(base)
     b = camera_browser(pw, write_constant_y4m(tmp_path / f"grey{luma}.y4m", luma))
-    context, page = open_page(b, base)
-    try:
+    with closing(b), camera_page(b, base) as page:
         login(page, email, PASSWORD)
         page.wait_for_url("**/patient")
         page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
@@ -316,9 +304,6 @@ def test_a_dark_picture_and_an_empty_one_are_named_in_the_placement_check(pw, li
         page.wait_for_function("(c) => document.getElementById('cam-say').dataset.code === c", arg=code, timeout=60_000)
         text = page.locator("#cam-say").inner_text()
         assert ("too dark" in text) if code == "dark" else ("cannot see you" in text), text
-    finally:
-        context.close()
-        b.close()
 
 
 def test_two_people_and_the_patient_kept_in_the_checks(cam_browser, live_server):
@@ -331,8 +316,7 @@ def test_two_people_and_the_patient_kept_in_the_checks(cam_browser, live_server)
     me = [{"x": x, "y": y, "z": z, "visibility": 0.95} for x, y, z in image_of(world)]
     other = [dict(p, x=p["x"] + 0.4) for p in me]
     w = [{"x": x, "y": y, "z": z} for x, y, z in world]
-    context, page = open_page(cam_browser, base)
-    try:
+    with camera_page(cam_browser, base) as page:
         login(page, email, PASSWORD)
         page.wait_for_url("**/patient")
         page.goto(f"{PAGE}?item={item_id}")
@@ -353,8 +337,6 @@ def test_two_people_and_the_patient_kept_in_the_checks(cam_browser, live_server)
         )
         assert out == {"two": "two_people", "one": "ok", "nobody": "nobody", "dark": "dark", "kept": 1,
                        "onlyOther": -1, "side": "side", "front": "front"}, out  # fmt: skip
-    finally:
-        context.close()
 
 
 def test_the_camera_set_speaks_the_patient_language(pw, live_server):
@@ -370,8 +352,7 @@ def test_the_camera_set_speaks_the_patient_language(pw, live_server):
         admin.close()
     b = pw.chromium.launch(executable_path=CHROMIUM, headless=True,
                            args=["--no-sandbox", "--use-fake-device-for-media-stream"])  # fmt: skip
-    context, page = open_page(b, base)
-    try:
+    with closing(b), camera_page(b, base) as page:
         login(page, email, PASSWORD)
         page.wait_for_url("**/patient")
         start = page.locator("a.cam-start")
@@ -401,9 +382,6 @@ def test_the_camera_set_speaks_the_patient_language(pw, live_server):
         expect(page.locator("#cam-retry")).to_have_text("Noch einmal versuchen")
         shot(page, "camera-problem-de-390")
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()
-        b.close()
 
 
 def test_the_patient_leaving_the_picture_mid_set_is_told_and_back_in_view_counting_goes_on(pw, live_server, tmp_path):
@@ -416,9 +394,8 @@ def test_the_patient_leaving_the_picture_mid_set_is_told_and_back_in_view_counti
     email, _, item_id = new_patient(base, target=50)  # a set that does not end by itself
     video = append_blank(sports2d_y4m(tmp_path / "leaves.y4m", start_s=0.0, seconds=4.0), 4.0)
     b = camera_browser(pw, video)
-    context, page = open_page(b, base)
-    say = page.locator("#cam-say")
-    try:
+    with closing(b), camera_page(b, base) as page:
+        say = page.locator("#cam-say")
         login(page, email, PASSWORD)
         page.wait_for_url("**/patient")
         page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
@@ -435,9 +412,6 @@ def test_the_patient_leaving_the_picture_mid_set_is_told_and_back_in_view_counti
         page.wait_for_function("(s) => CameraPage.state().next_seq > s", arg=seq, timeout=60_000)
         assert phase(page) == "counting"
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()
-        b.close()
 
 
 def test_a_camera_slower_than_10_frames_a_second_is_said_mid_set(pw, live_server, tmp_path):
@@ -448,9 +422,8 @@ def test_a_camera_slower_than_10_frames_a_second_is_said_mid_set(pw, live_server
     base = live_server.url
     email, _, item_id = new_patient(base, target=50)
     b = camera_browser(pw, sports2d_y4m(tmp_path / "slow.y4m", fps=4, start_s=0.0, seconds=5.0))
-    context, page = open_page(b, base)
-    note = page.locator("#cam-note")
-    try:
+    with closing(b), camera_page(b, base) as page:
+        note = page.locator("#cam-note")
         login(page, email, PASSWORD)
         page.wait_for_url("**/patient")
         page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
@@ -466,6 +439,3 @@ def test_a_camera_slower_than_10_frames_a_second_is_said_mid_set(pw, live_server
         shot(page, "camera-slow")
         _axe_clean(page)
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()
-        b.close()

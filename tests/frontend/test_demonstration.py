@@ -10,19 +10,14 @@ import pytest
 from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
-from tests.frontend.conftest import PATIENT, api_client, login, shot
+from tests.frontend.conftest import PATIENT, api_client, login, open_page, shot
 
 pytestmark = pytest.mark.browser
 
 
 @pytest.mark.parametrize("width,height", [(1366, 900), (768, 1024), (390, 844)])
 def test_each_exercise_shows_a_moving_figure_its_instructions_and_the_week_badge(browser, live_server, width, height):
-    context = browser.new_context(viewport={"width": width, "height": height}, base_url=live_server.url)
-    context.set_default_timeout(30_000)
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda exc: errors.append(str(exc)))
-    try:
+    with open_page(browser, live_server.url, width, height) as page:
         client, _ = api_client(live_server.url, PATIENT)
         try:
             library = {e["slug"]: e for e in client.get("/api/v1/exercises?limit=200").json()["items"]}
@@ -49,9 +44,7 @@ def test_each_exercise_shows_a_moving_figure_its_instructions_and_the_week_badge
         shot(page, f"demonstration-{width}")
         bad = [v["id"] for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
         assert not bad, bad
-        assert not errors, errors
-    finally:
-        context.close()
+        assert not page.js_errors, page.js_errors
 
 
 LANGUAGES = [
@@ -75,15 +68,10 @@ def test_the_voice_control_and_the_demonstration_speak_the_patients_language(
         assert patient.patch(f"/api/v1/patients/{pid}", json={"locale": locale}, headers=headers).status_code == 200
     finally:
         patient.close()
-    context = browser.new_context(viewport={"width": 768, "height": 1024}, base_url=live_server.url)
-    context.set_default_timeout(30_000)
-    page = context.new_page()
-    try:
+    with open_page(browser, live_server.url, 768, 1024) as page:
         login(page, email, PASSWORD)
         expect(page.locator("#voice-toggle")).to_have_text(voice, timeout=30_000)
         expect(page.locator(".demo-h")).to_have_text(how, timeout=30_000)
         expect(page.locator(".demo-view")).to_have_text(view, timeout=30_000)
         assert page.evaluate("I18n.tag") == locale
         shot(page, f"patient-{locale}")
-    finally:
-        context.close()

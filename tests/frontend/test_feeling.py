@@ -5,20 +5,20 @@ from __future__ import annotations
 
 import re
 import uuid
+from contextlib import closing
 
 import pytest
 from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
 from tests.backend.khs_files import make_khs
-from tests.frontend.conftest import THERAPIST, api_client, login, shot
+from tests.frontend.conftest import THERAPIST, api_client, login, open_page, shot
 from tests.frontend.test_live_set import NAME, PASSWORD
 from tests.frontend.test_never_silent import (
     EXERCISE,
     LOAD_MS,
     TARGET,
     AgentLink,
-    _context,
     _now_iso,
     patient_with_device,
 )
@@ -43,8 +43,7 @@ def test_the_patient_says_how_the_set_felt_and_the_therapist_sees_it(browser, li
     email, pid, token = patient_with_device(base)
     _assign_to_tara(base, pid)
     link = AgentLink(base, token)
-    context, page = _context(browser, base, width, height)
-    try:
+    with closing(link), open_page(browser, base, width, height) as page:
         login(page, email, PASSWORD)
         link.connect()
         expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
@@ -66,15 +65,9 @@ def test_the_patient_says_how_the_set_felt_and_the_therapist_sees_it(browser, li
         r = link.client.get(f"/api/v1/sessions/{stored['id']}/feeling")
         assert (r.json()["pain"], r.json()["effort"]) == (3, 4.0), r.text
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()
-        link.close()
-    context, page = _context(browser, base, width, height)
-    try:
+    with open_page(browser, base, width, height) as page:
         login(page, THERAPIST)
         page.wait_for_url("**/therapist")
         page.goto(f"/therapist/sessions/{stored['id']}")
         expect(page.locator("#session-feeling")).to_contain_text("pain 3 of 10", timeout=LOAD_MS)
         expect(page.locator("#session-feeling")).to_contain_text("effort 4 of 10 (Borg CR10)")
-    finally:
-        context.close()

@@ -11,10 +11,10 @@ from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
 from tests.backend.khs_files import make_khs
-from tests.frontend.conftest import THERAPIST, api_client, login, shot
+from tests.frontend.conftest import THERAPIST, api_client, login, open_page, shot
 from tests.frontend.test_feeling import _assign_to_tara
 from tests.frontend.test_live_set import PASSWORD
-from tests.frontend.test_never_silent import EXERCISE, LOAD_MS, _context, patient_with_device
+from tests.frontend.test_never_silent import EXERCISE, LOAD_MS, patient_with_device
 
 pytestmark = pytest.mark.browser
 SAID = [(6, 2, 3.0), (3, 4, 5.0), (1, 6, 6.5)]  # (days ago, pain, effort)
@@ -53,8 +53,7 @@ def _serious(page) -> list[str]:
 def test_the_trends_show_pain_and_effort_and_the_therapist_sets_the_alert(browser, live_server, width, height):
     base = live_server.url
     email, pid = _patient_who_said_how_it_felt(base)
-    context, page = _context(browser, base, width, height)
-    try:
+    with open_page(browser, base, width, height) as page:
         login(page, email, PASSWORD)
         figure = page.locator("figure.plot-figure", has_text="How it felt after your exercises")
         expect(figure.locator(".plot .main-svg").first).to_be_visible(timeout=LOAD_MS)
@@ -67,10 +66,7 @@ def test_the_trends_show_pain_and_effort_and_the_therapist_sets_the_alert(browse
         assert page.evaluate("document.documentElement.scrollWidth") <= width, "the page scrolls sideways"
         assert not _serious(page)
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()
-    context, page = _context(browser, base, width, height)
-    try:
+    with open_page(browser, base, width, height) as page:
         login(page, THERAPIST)
         page.wait_for_url("**/therapist")
         page.goto(f"/therapist/patients/{pid}")
@@ -96,8 +92,6 @@ def test_the_trends_show_pain_and_effort_and_the_therapist_sets_the_alert(browse
         assert page.evaluate("document.documentElement.scrollWidth") <= width, "the page scrolls sideways"
         assert not _serious(page)
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()
     tara, _ = api_client(base, THERAPIST)
     try:
         reasons = tara.get(f"/api/v1/patients/{pid}/summary").json()["attention_reasons"]
@@ -113,8 +107,7 @@ def test_a_german_patient_reads_the_pain_trend_in_german(browser, live_server):
         csrf = patient.post("/api/v1/auth/login", json={"email": email, "password": PASSWORD}).json()["csrf_token"]
         r = patient.patch(f"/api/v1/patients/{pid}", json={"locale": "de"}, headers={"X-CSRF-Token": csrf})
         assert r.status_code == 200, r.text
-    context, page = _context(browser, base, 390, 844)
-    try:
+    with open_page(browser, base, 390, 844) as page:
         login(page, email, PASSWORD)
         figure = page.locator("figure.plot-figure", has_text="Wie es sich nach Ihren Übungen anfühlte")
         expect(figure.locator(".plot .main-svg").first).to_be_visible(timeout=LOAD_MS)
@@ -126,5 +119,3 @@ def test_a_german_patient_reads_the_pain_trend_in_german(browser, live_server):
         shot(page, "feeling-trend-patient-de-390")
         assert not _serious(page)
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()

@@ -17,10 +17,10 @@ from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 from sqlalchemy.orm import Session
 
-from backend.demo import ADMIN, DEMO_PASSWORD
+from backend.demo import ADMIN
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.storage.local import LocalStore
-from tests.frontend.conftest import ROOT, THERAPIST, shot, upload_session
+from tests.frontend.conftest import ROOT, THERAPIST, open_page, shot, sign_in, upload_session
 
 pytestmark = pytest.mark.browser
 WALTER = "walter@demo.clinic"  # elbow_flexion; no other browser test uses his sessions
@@ -30,17 +30,6 @@ REMOVED = re.compile(rf"^This session was removed on .*{dt.date.today().year}.* 
 def _axe_blocking(page) -> list[str]:
     found = Axe().run(page).response["violations"]
     return [f"{v['id']}: {v['help']}" for v in found if v["impact"] in ("serious", "critical")]
-
-
-def _admin_page(browser, live_server, width: int, height: int):
-    context = browser.new_context(base_url=live_server.url, viewport={"width": width, "height": height})
-    context.set_default_timeout(20_000)
-    r = context.request.post("/api/v1/auth/login", data={"email": ADMIN[0], "password": DEMO_PASSWORD})
-    assert r.ok, r.text()
-    page = context.new_page()
-    page.js_errors = []
-    page.on("pageerror", lambda exc: page.js_errors.append(str(exc)))
-    return context, page
 
 
 def _env(live_server) -> dict[str, str]:
@@ -62,46 +51,45 @@ def test_an_admin_reanalyses_one_patient_and_follows_it(browser, live_server):
         lost_key = db.scalar(sa.select(ExerciseSession.file_key).where(ExerciseSession.id == lost["id"]))
     LocalStore(live_server.storage_dir).delete(lost_key)  # its file is gone from the store: that job fails
 
-    context, page = _admin_page(browser, live_server, 1366, 900)
     try:
-        page.goto("/therapist")
-        page.get_by_role("link", name="Re-analysis and jobs").click()
-        page.wait_for_url("**/admin/jobs")
-        expect(page.locator("#version")).not_to_have_text("…")
-        page.select_option("#scope", label="Walter Young's sessions")
-        page.click("#start-btn")
-        expect(page.locator("#start-msg")).to_contain_text("queued for analysis version")
-        row = page.locator("#batches tbody tr").first
-        expect(row).to_contain_text("Walter Young")
-        expect(page.locator("#live")).to_contain_text("every 2 seconds")
-        # the server's embedded worker runs the jobs; the lost file's job is retried after 5 s and 30 s
-        retrying = page.locator(f'#jobs tr:has(a[href$="/sessions/{lost["id"]}"])')
-        expect(retrying).to_contain_text("Will try again: The session's file is missing from the object store",
-                                         timeout=20_000)  # fmt: skip
-        shot(page, "admin_jobs_retrying_1366")
-        expect(row).to_contain_text("Finished, 1 failed", timeout=90_000)  # the page polled by itself
-        failed = page.locator(f'#jobs tr[data-status="failed"]:has(a[href$="/sessions/{lost["id"]}"])')
-        expect(failed).to_contain_text("The session's file is missing from the object store")
-        expect(failed).not_to_contain_text("Traceback")
-        done = page.locator(f'#jobs tr[data-status="done"]:has(a[href$="/sessions/{kept["id"]}"])')
-        expect(done).to_contain_text("New metrics stored; the old ones are kept.")
-        expect(page.locator("#live")).to_contain_text("Up to date")
-        shot(page, "admin_jobs_1366")
-        assert _axe_blocking(page) == []
-        page.set_viewport_size({"width": 390, "height": 844})
-        shot(page, "admin_jobs_390")
-        assert _axe_blocking(page) == []
-        width = page.evaluate("[document.documentElement.scrollWidth, document.documentElement.clientWidth]")
-        assert width[0] <= width[1], f"the page scrolls sideways at 390 px: {width}"
-        assert not page.js_errors, page.js_errors
+        with open_page(browser, live_server.url, 1366, 900) as page:
+            sign_in(page, ADMIN[0])
+            page.goto("/therapist")
+            page.get_by_role("link", name="Re-analysis and jobs").click()
+            page.wait_for_url("**/admin/jobs")
+            expect(page.locator("#version")).not_to_have_text("…")
+            page.select_option("#scope", label="Walter Young's sessions")
+            page.click("#start-btn")
+            expect(page.locator("#start-msg")).to_contain_text("queued for analysis version")
+            row = page.locator("#batches tbody tr").first
+            expect(row).to_contain_text("Walter Young")
+            expect(page.locator("#live")).to_contain_text("every 2 seconds")
+            # the server's embedded worker runs the jobs; the lost file's job is retried after 5 s and 30 s
+            retrying = page.locator(f'#jobs tr:has(a[href$="/sessions/{lost["id"]}"])')
+            expect(retrying).to_contain_text("Will try again: The session's file is missing from the object store",
+                                             timeout=20_000)  # fmt: skip
+            shot(page, "admin_jobs_retrying_1366")
+            expect(row).to_contain_text("Finished, 1 failed", timeout=90_000)  # the page polled by itself
+            failed = page.locator(f'#jobs tr[data-status="failed"]:has(a[href$="/sessions/{lost["id"]}"])')
+            expect(failed).to_contain_text("The session's file is missing from the object store")
+            expect(failed).not_to_contain_text("Traceback")
+            done = page.locator(f'#jobs tr[data-status="done"]:has(a[href$="/sessions/{kept["id"]}"])')
+            expect(done).to_contain_text("New metrics stored; the old ones are kept.")
+            expect(page.locator("#live")).to_contain_text("Up to date")
+            shot(page, "admin_jobs_1366")
+            assert _axe_blocking(page) == []
+            page.set_viewport_size({"width": 390, "height": 844})
+            shot(page, "admin_jobs_390")
+            assert _axe_blocking(page) == []
+            width = page.evaluate("[document.documentElement.scrollWidth, document.documentElement.clientWidth]")
+            assert width[0] <= width[1], f"the page scrolls sideways at 390 px: {width}"
+            assert not page.js_errors, page.js_errors
     finally:
-        context.close()
         engine.dispose()
 
 
 def test_a_therapist_gets_the_403_page(page, live_server):
-    r = page.context.request.post("/api/v1/auth/login", data={"email": THERAPIST, "password": DEMO_PASSWORD})
-    assert r.ok
+    sign_in(page, THERAPIST)
     response = page.goto("/admin/jobs")
     assert response.status == 403
     expect(page.locator("main")).to_contain_text("This page is for the clinic's administrators.")
@@ -118,8 +106,8 @@ def test_a_removed_session_says_when_and_why(browser, live_server):
         env=_env(live_server) | {"COACH_RETENTION_DAYS": "2000"},
     )
     assert retention.returncode == 0, retention.stderr + retention.stdout
-    context, page = _admin_page(browser, live_server, 1366, 900)
-    try:
+    with open_page(browser, live_server.url, 1366, 900) as page:
+        sign_in(page, ADMIN[0])
         page.goto(f"/therapist/sessions/{old['id']}")
         notice = page.locator("#removed")
         expect(notice).to_be_visible()
@@ -133,5 +121,3 @@ def test_a_removed_session_says_when_and_why(browser, live_server):
         shot(page, "session_removed_390")
         assert _axe_blocking(page) == []
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()

@@ -9,8 +9,7 @@ import re
 import pytest
 from axe_playwright_python.sync_playwright import Axe
 
-from backend.demo import DEMO_PASSWORD
-from tests.frontend.conftest import PATIENT, shot
+from tests.frontend.conftest import PATIENT, open_page, shot, sign_in
 
 pytestmark = pytest.mark.browser
 
@@ -29,24 +28,17 @@ ENGLISH = ("Your exercises this week", "Advice from your therapist", "Today:", "
 @pytest.fixture(scope="module")
 def patient_page(browser, live_server):
     """Rose's page in a logged-in context; her language is set back to the browser's afterwards."""
-    context = browser.new_context(base_url=live_server.url, viewport={"width": 1366, "height": 900})
-    context.set_default_timeout(15_000)
-    r = context.request.post("/api/v1/auth/login", data={"email": PATIENT, "password": DEMO_PASSWORD})
-    assert r.ok, r.text()
-    csrf = r.json()["csrf_token"]
-    page = context.new_page()
-    page.js_errors = []
-    page.on("pageerror", lambda exc: page.js_errors.append(str(exc)))
+    with open_page(browser, live_server.url, 1366, 900) as page:
+        csrf = sign_in(page, PATIENT)
 
-    def set_locale(locale: str | None) -> None:
-        answer = context.request.patch(f"/api/v1/patients/{live_server.patient_id}", data={"locale": locale},
-                                       headers={"X-CSRF-Token": csrf})  # fmt: skip
-        assert answer.ok, answer.text()
+        def set_locale(locale: str | None) -> None:
+            answer = page.context.request.patch(f"/api/v1/patients/{live_server.patient_id}",
+                                                data={"locale": locale}, headers={"X-CSRF-Token": csrf})  # fmt: skip
+            assert answer.ok, answer.text()
 
-    page.set_locale = set_locale
-    yield page
-    set_locale(None)
-    context.close()
+        page.set_locale = set_locale
+        yield page
+        set_locale(None)
 
 
 def _load(page, width: int) -> None:

@@ -146,25 +146,13 @@ def _axe_clean(page) -> None:
     assert not bad, bad
 
 
-@pytest.fixture
-def patient_page(browser, live_server):
-    context = browser.new_context(viewport={"width": 1280, "height": 900}, base_url=live_server.url)
-    context.set_default_timeout(20_000)
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda exc: errors.append(str(exc)))
-    page.js_errors = errors
-    yield page
-    context.close()
-
-
 def _start(page) -> None:
     page.evaluate("window.__counts = []; addEventListener('coach-live-shown', (e) => __counts.push(e.detail.count))")
     page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2")).click()
 
 
-def test_patient_starts_a_set_and_sees_the_count_reach_the_target(patient_page, live_server, agent_server, tmp_path):
-    page, base = patient_page, live_server.url
+def test_patient_starts_a_set_and_sees_the_count_reach_the_target(page, live_server, agent_server, tmp_path):
+    base = live_server.url
     home = new_home(base, agent_server, tmp_path)
     login(page, home.email, PASSWORD)
     status = page.locator("#agent-status")
@@ -200,8 +188,8 @@ def test_patient_starts_a_set_and_sees_the_count_reach_the_target(patient_page, 
     assert not page.js_errors, page.js_errors
 
 
-def test_agent_killed_mid_set_page_says_offline_and_the_set_is_kept(patient_page, live_server, agent_server, tmp_path):
-    page, base = patient_page, live_server.url
+def test_agent_killed_mid_set_page_says_offline_and_the_set_is_kept(page, live_server, agent_server, tmp_path):
+    base = live_server.url
     home = new_home(base, agent_server, tmp_path)
     login(page, home.email, PASSWORD)
     status = page.locator("#agent-status")
@@ -227,8 +215,8 @@ def test_agent_killed_mid_set_page_says_offline_and_the_set_is_kept(patient_page
     assert not page.js_errors, page.js_errors
 
 
-def test_stop_ends_the_set_and_its_result_is_stored(patient_page, live_server, agent_server, tmp_path):
-    page, base = patient_page, live_server.url
+def test_stop_ends_the_set_and_its_result_is_stored(page, live_server, agent_server, tmp_path):
+    base = live_server.url
     home = new_home(base, agent_server, tmp_path)
     login(page, home.email, PASSWORD)
     with agent(home, seed=7):

@@ -17,6 +17,7 @@ import re
 import threading
 import time
 import uuid
+from contextlib import closing
 
 import httpx
 import pytest
@@ -24,7 +25,7 @@ from playwright.sync_api import expect
 
 from backend.demo import DEMO_PASSWORD
 from tests.backend.khs_files import make_khs
-from tests.frontend.conftest import THERAPIST, api_client, free_port, login, run_server, shot
+from tests.frontend.conftest import THERAPIST, api_client, free_port, login, open_page, run_server, shot
 from tests.frontend.test_live_set import NAME, PASSWORD, agent, new_home
 
 pytestmark = pytest.mark.browser
@@ -109,16 +110,6 @@ def patient_with_device(base: str, target: int = TARGET) -> tuple[str, int, str]
     return email, pid, r.json()["token"]
 
 
-def _context(browser, base: str, width: int, height: int):
-    context = browser.new_context(viewport={"width": width, "height": height}, base_url=base)
-    context.set_default_timeout(20_000)
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda exc: errors.append(str(exc)))
-    page.js_errors = errors
-    return context, page
-
-
 def _in_view(page, selector: str) -> bool:
     return page.evaluate(
         """(sel) => { const r = document.querySelector(sel).getBoundingClientRect();
@@ -131,41 +122,40 @@ def test_server_and_agent_stopped_and_restarted_under_the_page(browser, live_ser
     port = free_port()
     server = run_server(live_server.database_url, tmp_path, port=port, COACH_STORAGE_DIR=live_server.storage_dir)
     base = server.__enter__()
-    context, page = _context(browser, base, 1366, 900)
     try:
-        home = new_home(base, base, tmp_path)
-        login(page, home.email, PASSWORD)
-        status, banner = page.locator("#agent-status"), page.locator("#conn-banner")
-        start = page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2"))
-        with agent(home):
-            expect(status).to_have_attribute("data-state", "online", timeout=LOAD_MS)
-            expect(start).to_be_enabled()
-            server.__exit__(None, None, None)  # the server stops under the page
-            server = None
-            expect(banner).to_contain_text("lost its connection to the server", timeout=WITHIN_MS)
-            expect(status).to_have_attribute("data-state", "server-lost", timeout=WITHIN_MS)
-            expect(status).to_contain_text("check that your internet is working")
-            expect(start).to_be_disabled()
-            shot(page, "never-silent-server-lost")
-            server = run_server(
-                live_server.database_url, tmp_path, port=port, COACH_STORAGE_DIR=live_server.storage_dir
-            )  # back on the same address
-            server.__enter__()
-            expect(banner).to_contain_text("The connection is back", timeout=15_000)
-            # the agent reconnects by itself (backoff up to 30 s); until it is heard the page does not say "ready"
-            expect(status).not_to_have_attribute("data-state", "online", timeout=WITHIN_MS)
-            expect(status).to_have_attribute("data-state", "online", timeout=60_000)
-            expect(start).to_be_enabled()
-            expect(banner).to_be_hidden(timeout=10_000)
-        expect(status).to_have_attribute("data-state", "offline", timeout=WITHIN_MS)  # the agent stopped
-        expect(status).to_contain_text("not connected right now")
-        expect(start).to_be_hidden()
-        with agent(home):
-            expect(status).to_have_attribute("data-state", "online", timeout=30_000)
-            expect(start).to_be_visible()
-        assert not page.js_errors, page.js_errors
+        with open_page(browser, base, 1366, 900) as page:
+            home = new_home(base, base, tmp_path)
+            login(page, home.email, PASSWORD)
+            status, banner = page.locator("#agent-status"), page.locator("#conn-banner")
+            start = page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2"))
+            with agent(home):
+                expect(status).to_have_attribute("data-state", "online", timeout=LOAD_MS)
+                expect(start).to_be_enabled()
+                server.__exit__(None, None, None)  # the server stops under the page
+                server = None
+                expect(banner).to_contain_text("lost its connection to the server", timeout=WITHIN_MS)
+                expect(status).to_have_attribute("data-state", "server-lost", timeout=WITHIN_MS)
+                expect(status).to_contain_text("check that your internet is working")
+                expect(start).to_be_disabled()
+                shot(page, "never-silent-server-lost")
+                server = run_server(
+                    live_server.database_url, tmp_path, port=port, COACH_STORAGE_DIR=live_server.storage_dir
+                )  # back on the same address
+                server.__enter__()
+                expect(banner).to_contain_text("The connection is back", timeout=15_000)
+                # the agent reconnects by itself (backoff up to 30 s); until it is heard the page does not say "ready"
+                expect(status).not_to_have_attribute("data-state", "online", timeout=WITHIN_MS)
+                expect(status).to_have_attribute("data-state", "online", timeout=60_000)
+                expect(start).to_be_enabled()
+                expect(banner).to_be_hidden(timeout=10_000)
+            expect(status).to_have_attribute("data-state", "offline", timeout=WITHIN_MS)  # the agent stopped
+            expect(status).to_contain_text("not connected right now")
+            expect(start).to_be_hidden()
+            with agent(home):
+                expect(status).to_have_attribute("data-state", "online", timeout=30_000)
+                expect(start).to_be_visible()
+            assert not page.js_errors, page.js_errors
     finally:
-        context.close()
         if server is not None:
             server.__exit__(None, None, None)
 
@@ -176,8 +166,7 @@ def test_count_in_view_camera_silence_said_and_the_end_level_with_the_stored_cou
     email, _, token = patient_with_device(base)
     link = AgentLink(base, token)
     link.upload(make_khs(EXERCISE, TARGET, seed=3, created_at=_now_iso()))  # a first set: the page has a chart
-    context, page = _context(browser, base, width, height)
-    try:
+    with closing(link), open_page(browser, base, width, height) as page:
         login(page, email, PASSWORD)
         link.connect()
         expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
@@ -209,9 +198,6 @@ def test_count_in_view_camera_silence_said_and_the_end_level_with_the_stored_cou
         expect(page.locator("#live-ended")).to_contain_text(f"You did all {TARGET}" if n >= TARGET else f"{n} of")
         shot(page, f"never-silent-ended-{width}")
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()
-        link.close()
 
 
 def test_a_set_that_ends_before_starts_answer_still_shows_its_end(browser, live_server):
@@ -220,7 +206,6 @@ def test_a_set_that_ends_before_starts_answer_still_shows_its_end(browser, live_
     base = live_server.url
     email, _, token = patient_with_device(base)
     link = AgentLink(base, token)
-    context, page = _context(browser, base, 1366, 900)
     sid = str(uuid.uuid4())
 
     def answer_late(route) -> None:  # the set is over and stored before the page hears Start's answer
@@ -231,7 +216,7 @@ def test_a_set_that_ends_before_starts_answer_still_shows_its_end(browser, live_
         time.sleep(2)  # the events reach the page's stream meanwhile
         route.fulfill(response=answer)
 
-    try:
+    with closing(link), open_page(browser, base, 1366, 900) as page:
         login(page, email, PASSWORD)
         link.connect()
         expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
@@ -242,9 +227,6 @@ def test_a_set_that_ends_before_starts_answer_still_shows_its_end(browser, live_
         page.wait_for_timeout(500)
         assert "did not answer" not in page.locator("#live").inner_text()
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()
-        link.close()
 
 
 def test_a_computer_that_uploads_but_is_not_live_is_not_called_broken(browser, live_server):
@@ -253,8 +235,7 @@ def test_a_computer_that_uploads_but_is_not_live_is_not_called_broken(browser, l
     link = AgentLink(base, token)
     link.upload(make_khs(EXERCISE, TARGET, seed=5, created_at=_now_iso()))  # uploaded minutes ago, never live
     link.close()
-    context, page = _context(browser, base, 1366, 900)
-    try:
+    with open_page(browser, base, 1366, 900) as page:
         login(page, email, PASSWORD)
         status = page.locator("#agent-status")
         expect(status).to_have_attribute("data-state", "idle", timeout=LOAD_MS)
@@ -262,8 +243,6 @@ def test_a_computer_that_uploads_but_is_not_live_is_not_called_broken(browser, l
         text = status.inner_text()
         assert "not connected" not in text and "switched on" not in text, text
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()
 
 
 def test_an_expired_sign_in_keeps_the_advice_being_typed(page, live_server):

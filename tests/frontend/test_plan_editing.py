@@ -12,7 +12,7 @@ import pytest
 from playwright.sync_api import TimeoutError as PlaywrightTimeout
 from playwright.sync_api import expect
 
-from tests.frontend.conftest import THERAPIST, login, shot, upload_session
+from tests.frontend.conftest import THERAPIST, login, open_page, shot, upload_session
 
 pytestmark = pytest.mark.browser
 
@@ -89,9 +89,7 @@ def test_therapist_edits_the_plan_and_the_patient_sees_it(page, browser, live_se
         page.locator("#plan-card").screenshot(path=_shot_path(f"plan_card_{width}"))
     assert not page.js_errors, page.js_errors
 
-    context = browser.new_context(viewport={"width": 1366, "height": 900}, base_url=live_server.url)
-    try:
-        ines = context.new_page()
+    with open_page(browser, live_server.url, 1366, 900) as ines:
         login(ines, INES)
         ines.wait_for_url("**/patient")
         sit = ines.locator('#plan li[data-exercise="sit_to_stand"]')
@@ -104,8 +102,6 @@ def test_therapist_edits_the_plan_and_the_patient_sees_it(page, browser, live_se
         for width in (1366, 390):
             _fits(ines, width)
             shot(ines, f"patient_plan_{width}")
-    finally:
-        context.close()
 
 
 def test_api_validation_detail_is_shown_next_to_its_field(page, ines_id):

@@ -10,9 +10,9 @@ import pytest
 from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
-from tests.frontend.conftest import THERAPIST, api_client, login, shot
+from tests.frontend.conftest import THERAPIST, api_client, login, open_page, shot
 from tests.frontend.test_feeling import _assign_to_tara
-from tests.frontend.test_never_silent import LOAD_MS, _context
+from tests.frontend.test_never_silent import LOAD_MS
 
 pytestmark = pytest.mark.browser
 PASSWORD = "reminder password 1"
@@ -48,8 +48,7 @@ def _patient(base: str, **settings) -> tuple[str, int]:
 @pytest.mark.parametrize("width,height", [(1366, 900), (390, 844)])
 def test_the_patient_page_shows_todays_next_reminder_in_their_language(browser, live_server, width, height):
     email, _ = _patient(live_server.url, locale="de", time_zone=_zone_where_it_is_ten())
-    context, page = _context(browser, live_server.url, width, height)
-    try:
+    with open_page(browser, live_server.url, width, height) as page:
         login(page, email, PASSWORD)
         reminder = page.locator("#reminder")
         expect(reminder).to_have_text("Erinnerung: Ihre Übungen um 11:00", timeout=LOAD_MS)
@@ -60,16 +59,13 @@ def test_the_patient_page_shows_todays_next_reminder_in_their_language(browser, 
         bad = [v["id"] for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
         assert not bad, bad
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()
 
 
 def test_the_therapist_sets_reminder_times_in_the_plan_editor(browser, live_server):
     base = live_server.url
     email, pid = _patient(base, time_zone="Europe/Berlin")
     _assign_to_tara(base, pid)
-    context, page = _context(browser, base, 1366, 900)
-    try:
+    with open_page(browser, base, 1366, 900) as page:
         login(page, THERAPIST)
         page.wait_for_url("**/therapist")
         page.goto(f"/therapist/patients/{pid}")
@@ -97,8 +93,6 @@ def test_the_therapist_sets_reminder_times_in_the_plan_editor(browser, live_serv
         page.locator("#plan-save").click()
         expect(page.locator("#plan-reminders-shown")).to_have_text("Reminders: 09:15, 20:45 (Europe/Madrid)")
         shot(page, "reminder-therapist-1366")
-    finally:
-        context.close()
     client, _ = api_client(base, "admin@demo.clinic")
     try:
         plans = client.get(f"/api/v1/patients/{pid}/plans").json()["items"]
@@ -134,8 +128,7 @@ def _unsubscribe_token(live_server, pid: int) -> str:
 def test_the_unsubscribe_page_works_without_login(browser, live_server, width, height):
     email, pid = _patient(live_server.url, locale="fr")
     token = _unsubscribe_token(live_server, pid)
-    context, page = _context(browser, live_server.url, width, height)  # no login
-    try:
+    with open_page(browser, live_server.url, width, height) as page:  # no login
         page.goto(f"/unsubscribe/{token}")
         expect(page.locator("h1")).to_have_text("Arrêter les rappels par e-mail ?")
         shot(page, f"unsubscribe-fr-{width}")
@@ -147,8 +140,6 @@ def test_the_unsubscribe_page_works_without_login(browser, live_server, width, h
         bad = [v["id"] for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
         assert not bad, bad
         assert not page.js_errors, page.js_errors
-    finally:
-        context.close()
     admin, _ = api_client(live_server.url, "admin@demo.clinic")
     try:
         assert admin.get(f"/api/v1/patients/{pid}").json()["reminder_emails"] is False

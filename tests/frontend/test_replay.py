@@ -9,7 +9,7 @@ import time
 import pytest
 from playwright.sync_api import expect
 
-from tests.frontend.conftest import PATIENT, THERAPIST, login, newest_session_id, shot
+from tests.frontend.conftest import PATIENT, THERAPIST, login, newest_session_id, open_page, shot
 
 pytestmark = pytest.mark.browser
 OTHER_PATIENT = "george@demo.clinic"  # not Rose: may not see her sessions
@@ -79,18 +79,14 @@ def test_therapist_replays_a_session_from_the_patient_page(page, live_server):
 
 
 def test_replay_urls_are_401_without_login(browser, live_server):
-    context = browser.new_context(base_url=live_server.url)
-    try:
+    with open_page(browser, live_server.url) as page:
         sid = _a_session_of_rose(live_server)
         for path in (f"/therapist/sessions/{sid}/replay", "/replay/viewer/?playbackPath=x",
                      f"/api/v1/sessions/{sid}/replay", f"/api/v1/sessions/{sid}"):  # fmt: skip
-            response = context.request.get(path)
+            response = page.request.get(path)
             assert response.status == 401, f"{path}: {response.status}"
-        page = context.new_page()
         page.goto(f"/therapist/sessions/{sid}/replay")
         expect(page.get_by_role("link", name="Sign in")).to_be_visible()
-    finally:
-        context.close()
 
 
 def test_another_patient_gets_404_for_the_replay(page, live_server):

@@ -8,7 +8,7 @@ import re
 import pytest
 from playwright.sync_api import expect
 
-from tests.frontend.conftest import PATIENT, THERAPIST, login, shot, upload_session
+from tests.frontend.conftest import PATIENT, THERAPIST, login, open_page, shot, upload_session
 
 pytestmark = pytest.mark.browser
 
@@ -219,12 +219,9 @@ def test_session_page_stays_on_the_origin_and_its_data_needs_a_login(page, brows
     assert not foreign, f"requests off the app's origin: {foreign}"
     data = sorted({u for u in reads if u.startswith(origin + "/api/")})
     assert any(re.search(r"/api/v1/sessions/\d+/detail$", u) for u in data), data
-    anonymous = browser.new_context()
-    try:
+    with open_page(browser) as anonymous:
         for url in data:
             assert anonymous.request.get(url).status == 401, f"{url} answered without a login"
-    finally:
-        anonymous.close()
 
 
 def test_therapist_downloads_every_export_from_the_session_page(page, live_server):

@@ -16,7 +16,7 @@ from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
 from tests.backend.khs_files import make_khs
-from tests.frontend.conftest import THERAPIST, api_client, login, shot
+from tests.frontend.conftest import THERAPIST, api_client, login, open_page, shot
 from tests.frontend.test_live_set import NAME, PASSWORD
 from tests.frontend.test_never_silent import EXERCISE, LOAD_MS, AgentLink, _now_iso, patient_with_device
 
@@ -43,15 +43,8 @@ def _texts(page) -> list[str]:
 
 @pytest.fixture
 def voice_page(browser, live_server):
-    context = browser.new_context(viewport={"width": 1366, "height": 900}, base_url=live_server.url)
-    context.set_default_timeout(20_000)
-    context.add_init_script(OBSERVE)
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda exc: errors.append(str(exc)))
-    page.js_errors = errors
-    yield page
-    context.close()
+    with open_page(browser, live_server.url, 1366, 900, init_script=OBSERVE) as page:
+        yield page
 
 
 def _voice(base: str, email: str, pid: int) -> dict:
