@@ -10,7 +10,7 @@ import pytest
 from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
-from tests.frontend.conftest import api_client, login, shot
+from tests.frontend.conftest import api_client, login, open_page, shot
 from tests.frontend.test_never_silent import LOAD_MS
 from tests.frontend.test_reminders import PASSWORD, _patient
 
@@ -33,13 +33,7 @@ def _serious(page) -> list[str]:
 def test_the_patient_changes_their_time_zone_and_turns_reminder_emails_off(browser, live_server, width, height):
     ten, noon = _zone_where_it_is(10), _zone_where_it_is(12)
     email, pid = _patient(live_server.url, locale="es", time_zone=ten)  # reminders at 11:00 and 18:00
-    context = browser.new_context(viewport={"width": width, "height": height}, base_url=live_server.url,
-                                  timezone_id=DEVICE_ZONE)  # fmt: skip
-    context.set_default_timeout(20_000)
-    page = context.new_page()
-    errors: list[str] = []
-    page.on("pageerror", lambda exc: errors.append(str(exc)))
-    try:
+    with open_page(browser, live_server.url, width, height, timezone_id=DEVICE_ZONE) as page:
         login(page, email, PASSWORD)
         reminder = page.locator("#reminder")
         expect(reminder).to_have_text("Recordatorio: sus ejercicios a las 11:00", timeout=LOAD_MS)
@@ -73,9 +67,7 @@ def test_the_patient_changes_their_time_zone_and_turns_reminder_emails_off(brows
         expect(page.locator("#remind-zone")).to_have_value(noon, timeout=LOAD_MS)
         expect(switch).not_to_be_checked()
         expect(reminder).to_have_text("Recordatorio: sus ejercicios a las 18:00", timeout=LOAD_MS)
-        assert not errors, errors
-    finally:
-        context.close()
+        assert not page.js_errors, page.js_errors
     admin, _ = api_client(live_server.url, "admin@demo.clinic")
     try:
         saved = admin.get(f"/api/v1/patients/{pid}").json()
@@ -87,11 +79,7 @@ def test_the_patient_changes_their_time_zone_and_turns_reminder_emails_off(brows
 def test_a_setting_that_is_not_saved_is_said_and_undone(browser, live_server):
     ten = _zone_where_it_is(10)
     email, _ = _patient(live_server.url, locale="de", time_zone=ten)
-    context = browser.new_context(viewport={"width": 1366, "height": 900}, base_url=live_server.url,
-                                  timezone_id=DEVICE_ZONE)  # fmt: skip
-    context.set_default_timeout(20_000)
-    page = context.new_page()
-    try:
+    with open_page(browser, live_server.url, 1366, 900, timezone_id=DEVICE_ZONE) as page:
         login(page, email, PASSWORD)
         expect(page.locator("#reminder")).to_have_text("Erinnerung: Ihre Übungen um 11:00", timeout=LOAD_MS)
         page.route("**/api/v1/patients/*", lambda route: route.abort() if route.request.method == "PATCH"
@@ -100,5 +88,3 @@ def test_a_setting_that_is_not_saved_is_said_and_undone(browser, live_server):
         switch.click()
         expect(page.locator("#remind-saved")).to_contain_text("Nicht gespeichert:")
         expect(switch).to_be_checked()  # back as it was: nothing changed on the server
-    finally:
-        context.close()
