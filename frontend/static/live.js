@@ -36,7 +36,8 @@ const Live = (() => {
     });
     if (typeof Feeling !== "undefined") Feeling.onChange = render;
     Connection.listen((state, was) => {
-      if (state === "ok" && was === "lost") { confirm = {}; status(); resync(); }
+      // back from a lost connection: what was known of the home computer is old until the server is asked again
+      if (state === "ok" && was === "lost") { confirm = {}; agent = "unknown"; status(); resync(); }
       if (state === "lost" && running()) speak(SERVER_LOST);
       render();
     });
