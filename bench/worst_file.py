@@ -16,7 +16,7 @@ the worker for the replay build, from queueing the job until /replay/state says 
 /proc/<pid>/stat, and its peak resident memory above the request's start from /proc/<pid>/status (VmHWM, reset
 through /proc/<pid>/clear_refs before each request). Budgets (backend.analysis.work_budget, docs/deployment.md):
 upload and replay their own, every other read of the session the session page's ("detail"), per started 10
-minutes of recording. Exit status 1 when a request answers 5xx or exceeds its budget.
+minutes of recording. Exit status 1 when a request fails (4xx, 5xx) or exceeds its budget.
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ from kinect_agent.formats import session_file as sf  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.sources.simulator import simulate  # noqa: E402
 
-ADMIN, THERAPIST, PATIENT = "admin@demo.clinic", "physio@demo.clinic", "maria@demo.clinic"
+ADMIN, THERAPIST, PATIENT = "admin@demo.clinic", "therapist@demo.clinic", "maria@demo.clinic"  # Maria's therapist
 NOISE_M = 0.02  # SD of the raw positions' noise, m
 OUTLIER_SHARE = 0.03  # frames with one joint thrown away
 OUTLIER_M = 1.0  # the largest throw, m
@@ -130,7 +130,7 @@ class Measured:
 
     @property
     def failures(self) -> list[str]:
-        out = [f"{self.endpoint} answered {self.status}"] if self.status >= 500 else []
+        out = [f"{self.endpoint} answered {self.status}"] if self.status >= 400 else []
         if self.cpu_s > self.budget_cpu_s:
             out.append(f"{self.endpoint} {self.cpu_s:.1f} s CPU > {self.budget_cpu_s:g} s")
         if self.peak_mib > self.budget_mib:
