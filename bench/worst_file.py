@@ -176,8 +176,9 @@ def _replay_built(patient: httpx.Client, sid: int) -> httpx.Response:
         time.sleep(0.5)
 
 
-def run(url: str, data: bytes, duration_s: float) -> list[Measured]:
-    """Starts server and worker on the database url, uploads data, reads it through every endpoint; returns rows."""
+def run(url: str, data: bytes, duration_s: float, only: list[str]) -> list[Measured]:
+    """Starts server and worker on the database url, uploads data, reads it through every endpoint (those whose
+    name contains one of `only`, when given); returns rows."""
     port = free_port()
     base = f"http://127.0.0.1:{port}"
     server = start_server(url, port, workers=1)
@@ -214,10 +215,13 @@ def run(url: str, data: bytes, duration_s: float) -> list[Measured]:
             ("GET /report.pdf", therapist, f"{p}/report.pdf", "detail"),
             ("GET /archive", patient, f"{p}/archive", "detail"),
         ]
+        reads = [r for r in reads if not only or any(o in r[0] for o in only)]
         for name, client, path, kind in reads:
             row, _ = measure(name, on_server, budget(kind), lambda c=client, u=path: c.get(u))
             rows.append(row)
             print(row, flush=True)
+        if only and not any("replay" in o for o in only):
+            return rows
         row, _ = measure("replay build (worker job)", on_worker, budget("replay"), lambda: _replay_built(patient, sid))
         rows.append(row)
         print(row, flush=True)
@@ -257,6 +261,7 @@ def main() -> int:
     parser.add_argument("--json", type=Path, help="also write the numbers to this JSON file")
     parser.add_argument("--cache", type=Path, default=Path(tempfile.gettempdir()) / "coach-worst-file.khs",
                         help="where the file is kept between runs (writing it costs minutes of xz)")  # fmt: skip
+    parser.add_argument("--only", nargs="+", default=[], help="only the endpoints whose name contains one of these")
     args = parser.parse_args()
     settings = Settings()
     n_frames, duration_s = settings.SESSION_MAX_FRAMES, settings.SESSION_MAX_DURATION_S
@@ -271,7 +276,7 @@ def main() -> int:
         for db in args.db or ["sqlite"]:
             url = demo_clinic(None if db == "sqlite" else db, Path(tmp))
             label = "SQLite" if db == "sqlite" else "PostgreSQL"
-            rows = run(url, data, info["duration_s"])
+            rows = run(url, data, info["duration_s"], args.only)
             print_table(label, rows, info)
             report["databases"][label] = [asdict(r) for r in rows]
             failures += [f"{label}: {f}" for r in rows for f in r.failures]
