@@ -1,6 +1,6 @@
 """The worst session file the server accepts, read through every endpoint of the real server (prints numbers).
 
-    .venv/bin/python bench/worst_file.py [--db URL] [--json OUT]
+    .venv/bin/python bench/worst_file.py [--db sqlite] [--db URL] [--only NAME ...] [--json OUT] [--cache FILE]
 
 The file: the most frames (COACH_SESSION_MAX_FRAMES, 216 000) over the longest duration (COACH_SESSION_MAX_DURATION_S,
 2 h), i.e. 30 Hz, the rate at which the server analyses every frame (it thins above 40 Hz, work_budget); a squat
