@@ -14,7 +14,8 @@ Three policies, chosen by path:
   starts it, connections to this origin only;
 - the patient's camera page (/patient/camera): the page policy plus 'wasm-unsafe-eval', which compiling the pose
   landmarker's WebAssembly needs; connect-src stays 'self', so MediaPipe's usage-metrics call to another site is
-  blocked. No other page may compile WebAssembly.
+  blocked. The landmarker's worker (/static/camera_pose_worker.js) gets the same policy: a worker is governed by
+  its own script's CSP, and it is the worker that compiles the WebAssembly. No other page may compile WebAssembly.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 VIEWER_PATH = "/replay/viewer/"
 DOCS_PATHS = frozenset({"/docs", "/docs/oauth2-redirect"})
 CAMERA_PATH = "/patient/camera"
+CAMERA_WORKER_PATH = "/static/camera_pose_worker.js"  # a worker's CSP is its own script's: it compiles the wasm
 
 _COMMON = "base-uri 'none'; object-src 'none'; form-action 'self'; frame-ancestors 'self'"
 PAGE_POLICY = (
@@ -50,7 +52,7 @@ def policy_for(path: str) -> str:
         return VIEWER_POLICY
     if path in DOCS_PATHS:
         return DOCS_POLICY
-    if path == CAMERA_PATH:
+    if path in (CAMERA_PATH, CAMERA_WORKER_PATH):
         return CAMERA_POLICY
     return PAGE_POLICY
 

@@ -21,7 +21,7 @@
   let item = null, ex = null, name = "exercise", stream = null, phase = "loading";
   let set = null, pending = [], lastFlush = 0, lastT = -1, count = 0, target = 0;
   let okSince = null, lastSeen = 0, prevCentre = null, luma = null, lumaAt = 0, targetAt = null;
-  let stamps = [], placementSince = 0, slowSaid = false, lastVideoTime = -1, skipEvery = 1, frameNo = 0;
+  let stamps = [], placementSince = 0, slowSaid = false, lastVideoTime = -1, skipEvery = 1, frameNo = 0, detecting = false;
   const lumCanvas = document.createElement("canvas");
 
   function show(id) {
@@ -95,16 +95,22 @@
     return stamps.length > 1 ? (stamps.length - 1) / ((now - stamps[0]) / 1000) : null;
   }
 
+  function looking() { return phase === "placement" || phase === "counting"; }
+
+  /** Sends the newest video frame to the landmarker (in its worker) when it is not busy with the one before; the
+   *  result is handled when it comes back, and the main thread is free meanwhile (answers, count, drawing). */
   function loop() {
-    if (phase !== "placement" && phase !== "counting") return;
+    if (!looking()) return;
     const video = $("cam-video");
     const now = performance.now();
-    if (video.readyState >= 2 && video.currentTime !== lastVideoTime && !document.hidden && (frameNo++ % skipEvery === 0)) {
+    if (!detecting && video.readyState >= 2 && video.currentTime !== lastVideoTime && !document.hidden && (frameNo++ % skipEvery === 0)) {
       lastVideoTime = video.currentTime;
-      const taken = Date.now();
-      let result = null;
-      try { result = CameraPose.detect(video, now); } catch (err) { console.error(err); }
-      if (result) onResult(video, result, taken, now);
+      const taken = Date.now(), grabbedIn = phase;
+      detecting = true;
+      CameraPose.detect(video, now)  // a frame of the placement is not counted (it is older than the set's clock)
+        .then((result) => { if (result && phase === grabbedIn) onResult(video, result, taken, now); })
+        .catch((err) => console.error(err))
+        .finally(() => { detecting = false; });
     }
     schedule();
   }

@@ -1,5 +1,5 @@
-"""The camera page alone may compile WebAssembly ('wasm-unsafe-eval'); its connections stay on this origin, which
-blocks MediaPipe's usage-metrics call to another site."""
+"""The camera page and its landmarker's worker alone may compile WebAssembly ('wasm-unsafe-eval'); their connections
+stay on this origin, which blocks MediaPipe's usage-metrics call to another site."""
 
 from __future__ import annotations
 
@@ -19,7 +19,14 @@ def test_only_the_camera_page_allows_wasm(client):
         )
 
 
-@pytest.mark.parametrize("path", ["/patient/camera/", "/patient/camera2", "/patient"])
+def test_the_landmarker_worker_gets_the_camera_policy(client):
+    """A worker runs under its own script's CSP, and the worker is what compiles the landmarker's WebAssembly."""
+    r = client.get("/static/camera_pose_worker.js")
+    assert r.status_code == 200 and "javascript" in r.headers["content-type"], r.headers
+    assert r.headers["content-security-policy"] == CAMERA_POLICY
+
+
+@pytest.mark.parametrize("path", ["/patient/camera/", "/patient/camera2", "/patient", "/static/camera_pose.js"])
 def test_near_paths_get_the_page_policy(path):
     assert policy_for(path) != CAMERA_POLICY
 
