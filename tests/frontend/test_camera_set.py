@@ -200,13 +200,18 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         assert not page.js_errors, page.js_errors
 
 
-def _to_counting(page, item_id: int, agree: bool = True) -> str:
+def _start_counting(page, item_id: int, agree: bool = True) -> None:
+    """Opens the camera page of a plan item with the lite model, agrees (agree), skips the placement check: counting."""
     page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
     if agree:
         page.click("#cam-agree")
     wait_phase(page, "placement")
     page.click("#cam-anyway")
     wait_phase(page, "counting")
+
+
+def _to_counting(page, item_id: int, agree: bool = True) -> str:
+    _start_counting(page, item_id, agree)
     page.wait_for_function("() => CameraPage.state().next_seq >= 3", timeout=60_000)
     return page.evaluate("CameraPage.state().set_id")
 
@@ -398,11 +403,7 @@ def test_the_patient_leaving_the_picture_mid_set_is_told_and_back_in_view_counti
         say = page.locator("#cam-say")
         login(page, email, PASSWORD)
         page.wait_for_url("**/patient")
-        page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
-        page.click("#cam-agree")
-        wait_phase(page, "placement")
-        page.click("#cam-anyway")
-        wait_phase(page, "counting")
+        _start_counting(page, item_id)
         expect(say).to_contain_text("You left the picture", timeout=60_000)
         assert say.get_attribute("data-level") == "warn"
         shot(page, "camera-left-picture")
@@ -426,11 +427,7 @@ def test_a_camera_slower_than_10_frames_a_second_is_said_mid_set(pw, live_server
         note = page.locator("#cam-note")
         login(page, email, PASSWORD)
         page.wait_for_url("**/patient")
-        page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
-        page.click("#cam-agree")
-        wait_phase(page, "placement")
-        page.click("#cam-anyway")
-        wait_phase(page, "counting")
+        _start_counting(page, item_id)
         expect(note).to_have_text("This computer is slow, so counting may be less exact.", timeout=60_000)
         fps = page.evaluate("CameraPage.state().fps")
         # the camera's pace, not the landmarker's (12-16 a second here): Chromium's fake camera gives the 4 fps clip's
