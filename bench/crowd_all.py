@@ -104,8 +104,8 @@ def _patient_gets(pid: int, sid: int) -> list[str]:
             f"{p}/archive", "/api/v1/exercises/elbow_flexion/demonstration"]  # fmt: skip
 
 
-def setup(base: str, session: bytes) -> tuple[list[Caller], dict[int, str]]:
-    """Signs in one caller per role, pairs devices and uploads sessions; returns the callers and device tokens."""
+def setup(base: str, session: bytes) -> list[Caller]:
+    """Signs in one caller per role, pairs devices and uploads sessions; returns the callers."""
     admin = _sign_in(base, ADMIN[0])
     tokens = _pair_devices(base, admin)
     for token in tokens.values():
@@ -130,14 +130,13 @@ def setup(base: str, session: bytes) -> tuple[list[Caller], dict[int, str]]:
         Caller("device", client(headers={"Authorization": f"Bearer {device_token}"}),
                ["/api/v1/devices/me", f"/api/v1/patients/{own_pid}/plans", "POST /api/v1/sessions?exercise=squat"]),
     ]  # fmt: skip
-    return callers, tokens
+    return callers
 
 
 async def crowd(callers: list[Caller], n: int, session: bytes) -> dict:
     """Sends n requests at once (the mix of every caller's requests, cycled) while OPEN_STREAMS event streams are
     open; returns the answers by status, the 5xx with their paths and per-role latencies (s)."""
-    mix = [(c, path) for k in range(max(len(c.gets) for c in callers)) for c in callers if k < len(c.gets)
-           for path in [c.gets[k]]]  # fmt: skip
+    mix = [(c, c.gets[k]) for k in range(max(len(c.gets) for c in callers)) for c in callers if k < len(c.gets)]
     patient = next(c for c in callers if c.role == "patient")
     latencies: dict[str, list[float]] = defaultdict(list)
     answers: Counter[str] = Counter()
@@ -204,7 +203,7 @@ def main() -> int:
         port = free_port()
         server = start_server(url, port, workers=args.workers)
         try:
-            callers, _ = setup(f"http://127.0.0.1:{port}", session)
+            callers = setup(f"http://127.0.0.1:{port}", session)
             rows = asyncio.run(_run(callers, args.crowd, session))
         finally:
             stop_server(server)
