@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import datetime as dt
 
+import numpy as np
 from sqlalchemy.orm import Session
 
 from backend.camera import limits, live_count, service
@@ -41,14 +42,22 @@ def browser_runtime() -> str:
     return f"{package['name']} {package['version']} (browser)"
 
 
+def frame_rate(t: np.ndarray) -> float | None:
+    """Returns the camera's frame rate (Hz) over frame times t (T,) s: one over the median step, so that the time the
+    patient was out of the picture or the page hidden (frames missing, not slower) does not lower it; None when no
+    two frames differ in time."""
+    steps = np.diff(t)
+    steps = steps[steps > 0]
+    return round(float(1.0 / np.median(steps)), 2) if steps.size else None
+
+
 def session_bytes(row: CameraSet, exercise: Exercise, db_session: Session) -> bytes | None:
     """Returns the session file of the set's stored batches (None when they hold fewer than MIN_END_FRAMES)."""
     batches = service.set_batches(db_session=db_session, set_id=row.id)
     n_frames = sum(b.n_frames for b in batches)
     if n_frames < limits.MIN_END_FRAMES:
         return None
-    span = float(batches[-1].t[-1] - batches[0].t[0])
-    fps = round((n_frames - 1) / span, 2) if span > 0 else None
+    fps = frame_rate(np.concatenate([b.t for b in batches]))
     model = model_info(row.model_name)
     header = webcam_header(model=row.model_name.removeprefix("pose_landmarker_"), runtime=browser_runtime(),
                            fps_achieved=fps, image_size=batches[-1].image_size, images=n_frames)  # fmt: skip

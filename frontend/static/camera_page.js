@@ -73,6 +73,15 @@
     problem(T.unplugged, Boolean(set));
   }
 
+  /** The landmarker stopped and could not be started again (camera_pose.js): said, and what was done can be saved. */
+  function trackerLost() {
+    if (!looking()) return;
+    flush();
+    stopCamera();
+    phase = "problem";
+    problem(T.trackerFailed, Boolean(set));
+  }
+
   async function loadTracker() {
     status(T.loadingModel);
     const model = query.get("model") || (navigator.hardwareConcurrency >= 4 ? "full" : "lite");
@@ -109,7 +118,7 @@
       detecting = true;
       CameraPose.detect(video, now)  // a frame of the placement is not counted (it is older than the set's clock)
         .then((result) => { if (result && phase === grabbedIn) onResult(video, result, taken, now); })
-        .catch((err) => console.error(err))
+        .catch((err) => { console.error(err); trackerLost(); })
         .finally(() => { detecting = false; });
     }
     schedule();

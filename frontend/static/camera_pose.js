@@ -1,54 +1,100 @@
-/* The pose landmarker for the page: it runs in a worker (camera_pose_worker.js: MediaPipe Tasks Vision's WebAssembly
- * and the pinned BlazePose model, both served by the app from /static/vendor/mediapipe/; nothing fetched from another
- * site; the page's and the worker's CSP allow 'wasm-unsafe-eval' and connections to this origin only), so a
- * detection does not hold the page's main thread. GPU delegate when the browser gives one, else CPU.
- * The skeleton overlay is drawn here too. */
+/* The pose landmarker for the page: camera_pose_core.js (MediaPipe Tasks Vision's WebAssembly and the pinned
+ * BlazePose model, both served by the app from /static/vendor/mediapipe/; nothing fetched from another site; the
+ * page's and the worker's CSP allow 'wasm-unsafe-eval' and connections to this origin only). It runs in a worker
+ * (camera_pose_worker.js), so a detection does not hold the page's main thread; in a browser that cannot start or
+ * keep that worker (no module workers: Firefox before 114, Safari before 15) it runs on the page itself, slower but
+ * counting. GPU delegate when the browser gives one, else CPU. The skeleton overlay is drawn here too. */
 "use strict";
 const CameraPose = (() => {
   const BASE = () => Coach.url("/static/vendor/mediapipe");
   const BONES = [[11, 12], [11, 13], [13, 15], [12, 14], [14, 16], [11, 23], [12, 24], [23, 24], [23, 25], [25, 27],
     [27, 31], [24, 26], [26, 28], [28, 32], [0, 11], [0, 12]];
+  const SILENT_MS = 8000;  // a detection takes 60-150 ms, a few s on a crowded slow computer: longer, the worker died
   let worker = null, loading = null, nextId = 0;
+  let onPage = null;  // camera_pose_core.js imported into the page, once the worker failed
+  let lastLoad = null;  // the last load message, to load again on the page when the worker dies mid-set
   const waiting = new Map();  // detection id -> its promise's resolve
-  const info = { model: null, delegate: null };
+  // where the landmarker runs: "worker" | "page"; "lost" (the worker died), "loading" (onto the page), "failed"
+  const info = { model: null, delegate: null, where: null };
 
+  /** The worker, started on first use; throws when the browser cannot start a module worker. */
   function started() {
     if (worker) return worker;
     worker = new Worker(Coach.url("/static/camera_pose_worker.js"), { type: "module" });
     worker.onmessage = ({ data }) => {
-      if (data.type === "result") { waiting.get(data.id)(data.result); waiting.delete(data.id); return; }
+      if (data.type === "result") {
+        const done = waiting.get(data.id);
+        waiting.delete(data.id);
+        if (done) done(data.result);
+        return;
+      }
       const done = loading; loading = null;
       if (done) done(data);
     };
-    worker.onerror = (err) => {  // the worker could not start: every caller gets an answer
-      console.error(err);
-      for (const resolve of waiting.values()) resolve(null);
-      waiting.clear();
-      if (loading) { loading({ type: "failed", error: err.message || "worker failed" }); loading = null; }
+    worker.onerror = (event) => {  // the worker could not start, or died
+      event.preventDefault();
+      lose(event.message || "the landmarker's worker failed");
     };
     return worker;
   }
 
-  /** Loads the landmarker with model "lite" or "full"; delegate "GPU" first unless only: "CPU". Throws on failure. */
-  async function load(model, only) {
-    const w = started();
-    const out = await new Promise((resolve) => {
-      loading = resolve;
-      w.postMessage({ type: "load", base: new URL(BASE(), location.href).href, model, delegates: only ? [only] : ["GPU", "CPU"] });
+  /** Ends the worker: every caller waiting for it gets an answer; a landmarker loaded there is "lost" (the next
+   *  detection loads it on the page). */
+  function lose(error) {
+    console.warn(error);
+    if (worker) { worker.terminate(); worker = null; }
+    if (info.where === "worker") info.where = "lost";
+    for (const resolve of waiting.values()) resolve(null);
+    waiting.clear();
+    if (loading) { loading({ type: "failed", error }); loading = null; }
+  }
+
+  function inWorker(message) {
+    return new Promise((resolve) => {
+      try { loading = resolve; started().postMessage(message); }
+      catch (err) { loading = null; resolve({ type: "failed", error: String(err) }); }
     });
+  }
+
+  async function onThePage(message) {
+    try { if (!onPage) onPage = await import(Coach.url("/static/camera_pose_core.js")); }
+    catch (err) { return { type: "failed", error: String(err) }; }
+    return onPage.load(message);
+  }
+
+  /** Loads the landmarker with model "lite" or "full"; delegate "GPU" first unless only: "CPU"; in the worker, or on
+   *  the page when the worker fails. Throws when neither can load it. */
+  async function load(model, only) {
+    const message = { type: "load", base: new URL(BASE(), location.href).href, model, delegates: only ? [only] : ["GPU", "CPU"] };
+    lastLoad = message;
+    let out = onPage ? await onPage.load(message) : await inWorker(message), where = onPage ? "page" : "worker";
+    if (out.type !== "loaded" && !onPage) {
+      console.warn(`the pose landmarker runs on the page: its worker failed (${out.error})`);
+      out = await onThePage(message); where = "page";
+    }
     if (out.type !== "loaded") throw new Error(out.error);
-    info.model = out.model; info.delegate = out.delegate;
+    info.model = out.model; info.delegate = out.delegate; info.where = where;
     return info;
   }
 
   /** Resolves to the landmarker's result for the video's current frame ({landmarks, worldLandmarks}), or null.
    *  nowMs: the frame's timestamp (ms, increasing). */
   async function detect(video, nowMs) {
+    if (info.where === "lost") {  // the worker died after loading: the page loads the landmarker and goes on
+      info.where = "loading";
+      const out = await onThePage(lastLoad);
+      info.where = out.type === "loaded" ? "page" : "failed";
+    }
+    if (info.where === "failed") throw new Error("the pose landmarker could not run on this page either");
+    if (info.where === "loading") return null;
     const frame = await createImageBitmap(video);
     const id = nextId++;
+    if (onPage && info.where === "page") return onPage.detect({ id, frame, ms: nowMs }).result;
+    const timer = setTimeout(() => lose(`the landmarker's worker gave no answer in ${SILENT_MS} ms`), SILENT_MS);
     return new Promise((resolve) => {
-      waiting.set(id, resolve);
-      started().postMessage({ type: "detect", id, frame, ms: nowMs }, [frame]);
+      waiting.set(id, (result) => { clearTimeout(timer); resolve(result); });
+      try { started().postMessage({ type: "detect", id, frame, ms: nowMs }, [frame]); }
+      catch (err) { lose(String(err)); }
     });
   }
 

@@ -1,46 +1,11 @@
 /* The pose landmarker in a worker (module worker, started by camera_pose.js), so that a detection (60-150 ms a
  * frame on a slow CPU) does not hold the page's main thread: the batch answers and the count are drawn meanwhile.
- * MediaPipe Tasks Vision's module build and the pinned model, both from /static/vendor/mediapipe/ on this origin.
- * Messages in:  {type: "load", base, model: "lite"|"full", delegates: ["GPU", "CPU"] | ["CPU"]}
- *               {type: "detect", id, frame: ImageBitmap (transferred, closed here), ms: timestamp in ms, increasing}
- * Messages out: {type: "loaded", model, delegate} | {type: "failed", error}
- *               {type: "result", id, result: {landmarks, worldLandmarks} | null (no landmarker yet, or it failed)} */
-let vision = null, fileset = null, landmarker = null;
-
-async function load({ base, model, delegates }) {
-  if (!vision) vision = await import(base + "/vision_bundle.mjs");
-  if (!fileset) fileset = await vision.FilesetResolver.forVisionTasks(base + "/wasm", true);  // the module build
-  if (landmarker) { landmarker.close(); landmarker = null; }
-  let last = null;
-  for (const delegate of delegates) {
-    try {
-      landmarker = await vision.PoseLandmarker.createFromOptions(fileset, {
-        baseOptions: { modelAssetPath: `${base}/pose_landmarker_${model}.task`, delegate },
-        runningMode: "VIDEO", numPoses: 2, minPoseDetectionConfidence: 0.5, minPosePresenceConfidence: 0.5,
-        minTrackingConfidence: 0.5, outputSegmentationMasks: false,
-      });
-      return { type: "loaded", model, delegate };
-    } catch (err) { last = err; }
-  }
-  return { type: "failed", error: String(last || "no delegate") };
-}
-
-function detect({ id, frame, ms }) {
-  let result = null;
-  try {
-    if (landmarker) {
-      const r = landmarker.detectForVideo(frame, ms);
-      result = { landmarks: r.landmarks, worldLandmarks: r.worldLandmarks };
-    }
-  } catch (err) { console.error(err); }
-  frame.close();
-  return { type: "result", id, result };
-}
+ * The landmarker is camera_pose_core.js; this file only carries its messages.
+ * Messages in:  {type: "load", base, model, delegates} | {type: "detect", id, frame (transferred), ms}
+ * Messages out: what camera_pose_core.js's load and detect answer. */
+import { load, detect } from "./camera_pose_core.js";
 
 self.onmessage = async ({ data }) => {
-  if (data.type === "load") {
-    let out;
-    try { out = await load(data); } catch (err) { out = { type: "failed", error: String(err) }; }
-    self.postMessage(out);
-  } else if (data.type === "detect") self.postMessage(detect(data));
+  if (data.type === "load") self.postMessage(await load(data));
+  else if (data.type === "detect") self.postMessage(detect(data));
 };

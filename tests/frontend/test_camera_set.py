@@ -436,3 +436,39 @@ def test_a_camera_slower_than_10_frames_a_second_is_said_mid_set(pw, live_server
         shot(page, "camera-slow")
         _axe_clean(page)
         assert not page.js_errors, page.js_errors
+
+
+DYING_WORKER = """import { load, detect } from "./camera_pose_core.js";
+let detections = 0;
+self.onmessage = async ({ data }) => {
+  if (data.type === "load") self.postMessage(await load(data));
+  else if (++detections > 60) self.close();  // gone without a word, as a worker the browser killed
+  else self.postMessage(detect(data));
+};"""
+
+
+@pytest.mark.parametrize("how", ["cannot-start", "dies-mid-set"])
+def test_the_landmarker_runs_on_the_page_when_its_worker_cannot_start_or_dies(cam_browser, live_server, how):
+    """A browser that cannot start the landmarker's module worker (here its script does not load; in the field:
+    Firefox before 114, Safari before 15), or whose worker goes silent mid-set (here it closes itself after 60
+    frames): the page runs the landmarker itself and the set goes on counting."""
+    base = live_server.url
+    email, _, item_id = new_patient(base, target=50)
+    with camera_page(cam_browser, base) as page:
+        warnings: list[str] = []
+        page.on("console", lambda msg: warnings.append(msg.text) if msg.type == "warning" else None)
+        if how == "cannot-start":
+            page.route("**/static/camera_pose_worker.js", lambda route: route.abort())
+        else:
+            page.route("**/static/camera_pose_worker.js",
+                       lambda route: route.fulfill(response=route.fetch(), body=DYING_WORKER))  # fmt: skip
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        _start_counting(page, item_id)
+        page.wait_for_function("() => CameraPage.state().model.where === 'page'", timeout=60_000)
+        said = "gave no answer in 8000 ms" if how == "dies-mid-set" else "the pose landmarker runs on the page"
+        assert any(said in w for w in warnings), warnings
+        seq = page.evaluate("CameraPage.state().next_seq")
+        page.wait_for_function("(s) => CameraPage.state().next_seq >= s + 3", arg=seq, timeout=90_000)
+        assert phase(page) == "counting"
+        assert not page.js_errors, page.js_errors

@@ -116,3 +116,19 @@ def test_a_failing_live_count_does_not_lose_the_batch(client, db_session, camera
     set_id, h = started(), camera_home["headers"]
     r = client.post(f"/api/v1/camera/sets/{set_id}/batches", json=batch(0, squats(1)[:PER_BATCH]), headers=h)
     assert r.status_code == 201 and r.json()["count"] == 0 and r.json()["n_frames"] == PER_BATCH, r.text
+
+
+def test_a_set_with_minutes_out_of_the_picture_is_stored_at_the_camera_rate(client, db_session, camera_home, started):
+    """Squats at 10 frames a second, then 4 minutes with no frame (the patient out of the picture, the page hidden),
+    then more squats: 160 frames over 250 s, 0.6 a second on average, which no recording may claim as its rate. The
+    set is stored with the camera's rate, 10 Hz, and the gap stays a gap in the frame times."""
+    set_id, h = started(seconds_ago=400), camera_home["headers"]
+    frames = squats(2, fps=10.0) + squats(2, fps=10.0, t0=250.0)
+    answers = _send_all(client, set_id, frames, h)
+    r = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": len(answers) - 1, "reason": "stop"},
+                    headers=h)  # fmt: skip
+    assert r.status_code == 200 and r.json()["status"] == "stored", r.text
+    payload = session_file.decode(stored_file(db_session=db_session, session_id=r.json()["session_id"]))
+    assert payload.raw.meta.rate_hz == 10.0 and payload.params["fps_achieved"] == 10.0, payload.raw.meta
+    assert payload.raw.n_frames == len(frames)
+    assert _sessions(db_session, camera_home["patient"].id) == 1
