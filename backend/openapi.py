@@ -84,6 +84,31 @@ def _document_no_nul(schema: dict) -> None:
             visit(op.get("requestBody", {}))
 
 
+def _document_body_rules(schema: dict) -> None:
+    """Names, in the 422 answer of every operation whose JSON body schema lists x-body-rules (backend.schemas.BodyRule:
+    rules JSON Schema cannot state), each rule's refusal as an example beside the schema's own, so the document says
+    which well-formed bodies are answered 422."""
+    components = schema.get("components", {}).get("schemas", {})
+    for path in schema.get("paths", {}).values():
+        for op in path.values():
+            body = op.get("requestBody", {}).get("content", {}).get("application/json", {}).get("schema", {})
+            name = body.get("$ref", "").removeprefix("#/components/schemas/")
+            rules = components.get(name, {}).get("x-body-rules", [])
+            if not rules or "422" not in op.get("responses", {}):
+                continue
+            content = op["responses"]["422"]["content"]["application/json"]
+            examples = {"ValidationError": {"summary": "the body does not follow the schema",
+                                            "value": content.pop("example")}}  # fmt: skip
+            for rule in rules:
+                examples[rule["name"]] = {"summary": f"breaks a rule of the body: {rule['rule']}",
+                                          "value": {"error": "ValidationError", "detail": rule["detail"]}}  # fmt: skip
+            content["examples"] = examples
+            op["responses"]["422"]["description"] = (
+                "ValidationError: the body does not follow the schema, or breaks one of its x-body-rules: "
+                + "; ".join(f"{r['name']} ({r['rule']})" for r in rules)
+            )
+
+
 def openapi_builder(app: FastAPI):
     """Returns app.openapi: FastAPI's document with the error body ErrorOut on every error answer, the answers
     given before any route (_document_request_checks) and the two security schemes."""
@@ -110,6 +135,7 @@ def openapi_builder(app: FastAPI):
                             }
                         },
                     }
+        _document_body_rules(schema)
         _document_request_checks(schema)
         _document_no_nul(schema)
         components.pop("HTTPValidationError", None)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import re
+from dataclasses import dataclass
 from typing import Annotated, Generic, TypeVar
 
 from fastapi import Path, Query
@@ -17,6 +18,27 @@ class ErrorOut(BaseModel):
 
     error: str = Field(examples=["PatientNotFound"])
     detail: str = Field(examples=["patient 12 does not exist"])
+
+
+@dataclass(frozen=True)
+class BodyRule:
+    """A rule of a request body that JSON Schema cannot state (it relates two fields): its name, the rule in words,
+    and what its validator raises. A body model lists its rules in `body_rules`; the OpenAPI document names each in
+    the model's schema ("x-body-rules") and as an example of the 422 answer of every operation that takes the body
+    (backend.openapi)."""
+
+    name: str
+    rule: str
+    message: str
+
+    @property
+    def detail(self) -> str:
+        """Returns the detail of the 422 ValidationError that refuses a body breaking the rule."""
+        return f"body: Value error, {self.message}"
+
+    def as_schema(self) -> dict[str, str]:
+        """Returns the rule as the model's JSON schema lists it."""
+        return {"name": self.name, "rule": self.rule, "detail": self.detail}
 
 
 class Page(BaseModel, Generic[T]):

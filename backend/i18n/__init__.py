@@ -109,6 +109,11 @@ def normalise(tag: str | None) -> str | None:
 
 def negotiate(accept_language: str | None) -> str:
     """Returns the supported locale a browser's Accept-Language header prefers most, else English."""
+    return asked_locale(accept_language) or DEFAULT_LOCALE
+
+
+def asked_locale(accept_language: str | None) -> str | None:
+    """Returns the supported locale an Accept-Language header prefers most, or None when it names none."""
     choices = []
     for position, part in enumerate((accept_language or "").split(",")[:20]):
         tag, _, params = part.strip().partition(";")
@@ -121,7 +126,7 @@ def negotiate(accept_language: str | None) -> str:
         locale = normalise(tag) if tag and tag != "*" else None
         if locale is not None and q > 0:
             choices.append((-q, position, locale))
-    return min(choices)[2] if choices else DEFAULT_LOCALE
+    return min(choices)[2] if choices else None
 
 
 def is_script_message(locations: list[tuple[str, int | None]]) -> bool:

@@ -3,10 +3,19 @@
 from __future__ import annotations
 
 import datetime as dt
+from typing import ClassVar
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from backend.reminders.times import MAX_REMINDERS_PER_DAY, normalise_times
+from backend.schemas import BodyRule
+
+REMINDER_TIME_PATTERN = r"^([01][0-9]|2[0-3]):[0-5][0-9]$"  # what the document promises (the server also strips blanks)
+END_NOT_BEFORE_START = BodyRule(
+    "EndDateBeforeStartDate",
+    "end_date, when given, is start_date or later",
+    "end_date must not be before start_date",
+)
 
 
 class PlanItemIn(BaseModel):
@@ -23,7 +32,11 @@ class PlanItemIn(BaseModel):
 
 
 class PlanIn(BaseModel):
-    """A plan as a therapist writes it (PUT replaces every field and item)."""
+    """A plan as a therapist writes it (PUT replaces every field and item). end_date, when given, is start_date or
+    later: an earlier one is answered 422 ValidationError (x-body-rules)."""
+
+    body_rules: ClassVar[tuple[BodyRule, ...]] = (END_NOT_BEFORE_START,)
+    model_config = ConfigDict(json_schema_extra={"x-body-rules": [END_NOT_BEFORE_START.as_schema()]})
 
     title: str = Field(min_length=1, max_length=200, examples=["Knee rehab, weeks 1-4"])
     notes: str = Field(
@@ -34,13 +47,15 @@ class PlanIn(BaseModel):
     )
     start_date: dt.date = Field(examples=["2026-11-23"])
     end_date: dt.date | None = Field(default=None, examples=["2026-12-21"],
-                                     description="not before start_date (422 otherwise); null: no end")  # fmt: skip
+                                     description="start_date or later (422 ValidationError otherwise, x-body-rules "
+                                     "EndDateBeforeStartDate); null: no end")  # fmt: skip
     items: list[PlanItemIn] = Field(default_factory=list, max_length=50)
     reminder_times: list[str] = Field(
         default_factory=list,
         max_length=MAX_REMINDERS_PER_DAY,
-        description="reminder times of each plan day, HH:MM (24-hour clock) in the patient's time zone",
+        description="reminder times of each plan day, HH:MM (24-hour clock) in the patient's time zone, each once",
         examples=[["08:30", "18:00"]],
+        json_schema_extra={"uniqueItems": True, "items": {"type": "string", "pattern": REMINDER_TIME_PATTERN}},
     )
 
     @field_validator("reminder_times")
@@ -73,7 +88,7 @@ class PlanIn(BaseModel):
     @model_validator(mode="after")
     def _dates_in_order(self) -> PlanIn:
         if self.end_date is not None and self.end_date < self.start_date:
-            raise ValueError("end_date must not be before start_date")
+            raise ValueError(END_NOT_BEFORE_START.message)
         return self
 
 

@@ -15,12 +15,14 @@ from backend.audit.models import AuditEvent
 from backend.devices.models import Device
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
+from backend.i18n import Translator, translator
 from backend.patients.models import TherapistPatient
 from backend.plans.models import Plan, PlanItem
 from backend.replies.models import AdviceReply
 from backend.sessions import service as sessions
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.storage import StorageError
+from backend.suggestions import service as suggestions
 from backend.suggestions.models import Suggestion
 from backend.users.models import User
 
@@ -39,7 +41,9 @@ sessions.json     every exercise session: when, which exercise, how long, the fi
 sessions/         the session files themselves (.khs: raw and filtered skeleton, readable with the open-source
                   kinect-agent tool, docs/session-file.md); a file removed by the clinic's retention period, or
                   that could not be read, is listed in sessions.json with "file": null and the reason
-advice.json       suggestions and messages from your therapists and from the system's rules
+advice.json       suggestions and messages from your therapists and from the system's rules; the advice of a
+                  rule is in your language ("text", "locale"), written from what the rule found ("params"),
+                  with the words it was first written in ("text_as_first_written")
 replies.json      your replies to that advice, and when your therapist read them
 devices.json      the home computers paired to your account
 audit.json        every recorded access to or change of your data: who, what, when, from which address
@@ -58,6 +62,14 @@ def _row(obj, names: tuple[str, ...]) -> dict:
         v = getattr(obj, n)
         out[n] = _iso(v) if isinstance(v, dt.datetime) else v.isoformat() if isinstance(v, dt.date) else v
     return out
+
+
+def _advice(row: Suggestion, reader: Translator) -> dict:
+    """Returns one piece of advice as the archive lists it: its columns, its text in the patient's language."""
+    entry = _row(row, tuple(c.key for c in Suggestion.__table__.columns))
+    entry["text"], entry["locale"] = suggestions.shown_text(row, reader)
+    entry["text_as_first_written"] = row.text
+    return entry
 
 
 def _json(z: zipfile.ZipFile, name: str, data) -> None:
@@ -119,8 +131,9 @@ def build_archive(*, db_session: Session, patient: User, requested_by: str) -> I
                 entry["file"], entry["file_missing_reason"] = None, exc.message
             listed.append(entry)
         _json(z, "sessions.json", listed)
+        reader = translator(patient.locale)
         advice = db_session.scalars(select(Suggestion).where(Suggestion.patient_id == pid).order_by(Suggestion.id))
-        _json(z, "advice.json", [_row(a, tuple(c.key for c in Suggestion.__table__.columns)) for a in advice])
+        _json(z, "advice.json", [_advice(a, reader) for a in advice])
         replies = db_session.scalars(select(AdviceReply).where(AdviceReply.patient_id == pid).order_by(AdviceReply.id))
         _json(z, "replies.json", [_row(r, tuple(c.key for c in AdviceReply.__table__.columns)) for r in replies])
         devices = db_session.scalars(select(Device).where(Device.patient_id == pid).order_by(Device.id))

@@ -27,8 +27,10 @@ from sqlalchemy.orm import Session
 from backend.analysis.mdc import rom_mdc95
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
+from backend.i18n import translator
 from backend.plans.models import Plan, PlanItem
 from backend.sessions.models import ExerciseSession, SessionMetric
+from backend.suggestions import service as suggestions
 from backend.suggestions.models import Suggestion
 from backend.users.models import User
 
@@ -48,6 +50,9 @@ class Period:
     def weeks(self) -> float:
         """Returns the length in weeks (days / 7)."""
         return ((self.end - self.start).days + 1) / 7.0
+
+
+ENGLISH = translator("en")  # the report's language
 
 
 def _p(text: str, style) -> Paragraph:
@@ -231,6 +236,17 @@ def build_report(*, db_session: Session, patient: User, period: Period, made_by:
         story.append(_p(f"{n.created_at:%d %b %Y}, {n.full_name or 'therapist'}: {n.text}", body))
     if not notes and not plan_notes:
         story.append(_p("No note in this period.", body))
+    story.append(_p("Advice from the rules, approved", h2))
+    advice = db_session.scalars(
+        select(Suggestion).where(Suggestion.patient_id == patient.id, Suggestion.source == "system",
+                                 Suggestion.status == "approved", Suggestion.created_at >= start,
+                                 Suggestion.created_at < end)
+        .order_by(Suggestion.created_at, Suggestion.id)
+    ).all()  # fmt: skip
+    for a in advice:  # in the report's language (English), whatever the patient's was when the rule ran
+        story.append(_p(f"{a.created_at:%d %b %Y}: {suggestions.shown_text(a, ENGLISH)[0]}", body))
+    if not advice:
+        story.append(_p("No approved advice in this period.", body))
 
     def footer(canvas, doc) -> None:
         canvas.saveState()

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, Query, status
+from fastapi import APIRouter, Depends, Query, Request, status
 
 from backend.audit.service import record, record_patients
 from backend.deps import CurrentCaller, DbSession, TherapistOrAdminCaller, UserCaller, require_patient_access
@@ -35,6 +35,7 @@ UnreadQuery = Annotated[bool | None, Query(description="true: only unread replie
 )
 def list_patient_replies(
     patient_id: IdPath,
+    request: Request,
     caller: CurrentCaller,
     db_session: DbSession,
     page: Annotated[PageParams, Depends(page_params)],
@@ -44,7 +45,8 @@ def list_patient_replies(
     """Lists a patient's replies to their advice, newest first, each with the advice it answers."""
     require_patient_access(patient_id, caller=caller, db_session=db_session)
     items, total = service.list_replies(db_session=db_session, patients=[patient_id], unread=unread,
-                                        suggestion_id=suggestion_id, limit=page.limit, offset=page.offset)  # fmt: skip
+                                        suggestion_id=suggestion_id, limit=page.limit, offset=page.offset,
+                                        accept_language=request.headers.get("accept-language"))  # fmt: skip
     record(db_session=db_session, caller=caller, action="reply.list", object_type="reply", patient_id=patient_id)
     return Page[ReplyOut](items=items, total=total, limit=page.limit, offset=page.offset)
 
@@ -55,13 +57,16 @@ def list_patient_replies(
     status_code=status.HTTP_201_CREATED,
     responses=error_responses(*AUTH_ERRORS, PatientNotFound, SuggestionNotFound),
 )
-def create_reply(patient_id: IdPath, body: ReplyIn, caller: UserCaller, db_session: DbSession) -> ReplyOut:
+def create_reply(
+    patient_id: IdPath, body: ReplyIn, request: Request, caller: UserCaller, db_session: DbSession
+) -> ReplyOut:
     """Stores the patient's answer to one piece of their advice (only the patient answers); therapists see it at
     once as unread."""
     require_patient_access(patient_id, caller=caller, db_session=db_session, write=True)
     if caller.user.role != "patient":  # type: ignore[union-attr]
         raise Forbidden("only the patient answers their advice")
-    out = service.add_reply(db_session=db_session, patient_id=patient_id, body=body)
+    out = service.add_reply(db_session=db_session, patient_id=patient_id, body=body,
+                            accept_language=request.headers.get("accept-language"))  # fmt: skip
     record(db_session=db_session, caller=caller, action="reply.create", object_type="reply", object_id=out.id,
            patient_id=patient_id, detail={"suggestion_id": out.suggestion_id, "preset": out.preset})  # fmt: skip
     publish(db_session, Event(CHANGED, patient_id, {"reply_id": out.id}))
@@ -90,6 +95,7 @@ def mark_replies_read(
 
 @router.get("/replies", response_model=Page[ReplyOut], responses=error_responses(*AUTH_ERRORS))
 def list_replies(
+    request: Request,
     caller: TherapistOrAdminCaller,
     db_session: DbSession,
     page: Annotated[PageParams, Depends(page_params)],
@@ -98,7 +104,8 @@ def list_replies(
     """Lists the replies of every patient the caller may see (therapists: assigned; admins: all), newest first."""
     patients = visible_patients_query(caller).with_only_columns(User.id)
     items, total = service.list_replies(db_session=db_session, patients=patients, unread=unread,
-                                        limit=page.limit, offset=page.offset)  # fmt: skip
+                                        limit=page.limit, offset=page.offset,
+                                        accept_language=request.headers.get("accept-language"))  # fmt: skip
     record_patients(db_session=db_session, caller=caller, action="reply.list", object_type="reply",
                     patient_ids=sorted({r.patient_id for r in items}))  # fmt: skip
     return Page[ReplyOut](items=items, total=total, limit=page.limit, offset=page.offset)

@@ -7,13 +7,14 @@ from sqlalchemy.orm import Session
 
 from backend.database import utcnow
 from backend.exceptions import ReplyNotFound
+from backend.i18n import Translator
 from backend.replies.models import AdviceReply
 from backend.replies.schemas import ReplyIn, ReplyOut
 from backend.suggestions import service as suggestions
 from backend.suggestions.models import Suggestion
 
 
-def add_reply(*, db_session: Session, patient_id: int, body: ReplyIn) -> ReplyOut:
+def add_reply(*, db_session: Session, patient_id: int, body: ReplyIn, accept_language: str | None = None) -> ReplyOut:
     """Stores the patient's reply to one of their visible pieces of advice (flushed, not committed).
 
     Raises SuggestionNotFound when the advice does not exist, is another patient's, or the patient cannot see it
@@ -25,7 +26,7 @@ def add_reply(*, db_session: Session, patient_id: int, body: ReplyIn) -> ReplyOu
     row = AdviceReply(suggestion_id=advice.id, patient_id=patient_id, preset=body.preset, text=body.text)
     db_session.add(row)
     db_session.flush()
-    return _out(row, advice.text)
+    return _out(row, _advice_text(db_session, advice, accept_language, {}))
 
 
 def list_replies(
@@ -36,9 +37,11 @@ def list_replies(
     suggestion_id: int | None = None,
     limit: int,
     offset: int,
+    accept_language: str | None = None,
 ) -> tuple[list[ReplyOut], int]:
-    """Returns one page of replies (newest first) and the total; patients: a select of patient ids, or None (all)."""
-    query = select(AdviceReply, Suggestion.text).join(Suggestion, Suggestion.id == AdviceReply.suggestion_id)
+    """Returns one page of replies (newest first) and the total; patients: a select of patient ids, or None (all).
+    The advice each answers is in the request's language (accept_language; suggestions.service.reader)."""
+    query = select(AdviceReply, Suggestion).join(Suggestion, Suggestion.id == AdviceReply.suggestion_id)
     if patients is not None:
         query = query.where(AdviceReply.patient_id.in_(patients))
     if unread is not None:
@@ -49,7 +52,17 @@ def list_replies(
     rows = db_session.execute(
         query.order_by(AdviceReply.created_at.desc(), AdviceReply.id.desc()).limit(limit).offset(offset)
     ).all()
-    return [_out(reply, text) for reply, text in rows], total
+    readers: dict[int, Translator] = {}
+    return [_out(reply, _advice_text(db_session, advice, accept_language, readers)) for reply, advice in rows], total
+
+
+def _advice_text(db_session: Session, advice: Suggestion, accept_language: str | None,
+                 readers: dict[int, Translator]) -> str:  # fmt: skip
+    """Returns the advice's text in its reader's language; readers: the language found per patient so far."""
+    if advice.patient_id not in readers:
+        readers[advice.patient_id] = suggestions.reader(accept_language, db_session=db_session,
+                                                        patient_id=advice.patient_id)  # fmt: skip
+    return suggestions.shown_text(advice, readers[advice.patient_id])[0]
 
 
 def mark_read(*, db_session: Session, patient_id: int, reply_ids: list[int], reader_id: int) -> int:

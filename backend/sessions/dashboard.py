@@ -79,7 +79,7 @@ def _newest_session(*, with_metrics: bool):
 
 def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.datetime) -> dict[int, dict]:
     """Returns per patient (one query): last session (brief), latest indicators, sessions this week, pending advice,
-    unread replies, the pain alert level."""
+    unread replies (and how many of them say "It hurt", the latest when), the pain alert level."""
     this_week = (
         select(func.count())
         .select_from(ExerciseSession)
@@ -101,6 +101,16 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
         .correlate(User)
         .scalar_subquery()
     )
+
+    def unread_hurt(column):
+        return (
+            select(column)
+            .select_from(AdviceReply)
+            .where(AdviceReply.patient_id == User.id, AdviceReply.read_at.is_(None), AdviceReply.preset == "hurt")
+            .correlate(User)
+            .scalar_subquery()
+        )
+
     per = (
         select(
             User.id.label("pid"),
@@ -109,6 +119,8 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             this_week.label("this_week"),
             pending.label("pending"),
             unread.label("unread"),
+            unread_hurt(func.count()).label("unread_hurt"),
+            unread_hurt(func.max(AdviceReply.created_at)).label("last_hurt_at"),
             User.pain_alert_above.label("pain_alert_above"),
         )
         .where(User.id.in_(patient_ids))
@@ -121,6 +133,8 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             per.c.this_week,
             per.c.pending,
             per.c.unread,
+            per.c.unread_hurt,
+            per.c.last_hurt_at,
             per.c.pain_alert_above,
             ExerciseSession.id,
             Exercise.slug,
@@ -143,10 +157,12 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             "sessions_this_week": this_week or 0,
             "pending_suggestions": pending or 0,
             "unread_replies": unread or 0,
+            "unread_hurt": hurt or 0,
+            "last_hurt_at": hurt_at,
             "latest_indicators": indicators if isinstance(indicators, dict) else None,
             "pain_alert_above": triage.PAIN_ALERT_ABOVE if alert is None else alert,
         }
-        for pid, this_week, pending, unread, alert, *last, indicators in rows
+        for pid, this_week, pending, unread, hurt, hurt_at, alert, *last, indicators in rows
     }
 
 
@@ -222,7 +238,8 @@ def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.dateti
     plans = _running_plans(db_session, ids, now.astimezone(dt.UTC).date())
     recent = _recent_sessions(db_session, ids, triage.window_start(now))
     empty = {"last_session": None, "sessions_this_week": 0, "pending_suggestions": 0, "unread_replies": 0,
-             "latest_indicators": None, "pain_alert_above": triage.PAIN_ALERT_ABOVE}  # fmt: skip
+             "unread_hurt": 0, "last_hurt_at": None, "latest_indicators": None,
+             "pain_alert_above": triage.PAIN_ALERT_ABOVE}  # fmt: skip
     out = {}
     for pid in ids:
         row = {"patient_id": pid, **empty, **per.get(pid, {})}
@@ -235,6 +252,8 @@ def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             sessions=sessions,
             pending_suggestions=row["pending_suggestions"],
             pain_alert_above=row["pain_alert_above"],
+            unread_hurt=row.pop("unread_hurt"),
+            last_hurt_at=row.pop("last_hurt_at"),
         )
         analysed_slug = next((s.exercise_slug for s in reversed(sessions) if s.indicator_scores is not None), None)
         out[pid] = {

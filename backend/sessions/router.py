@@ -51,7 +51,7 @@ from backend.sessions.schemas import (
     SessionOut,
     SummaryOut,
 )
-from backend.suggestions.schemas import SuggestionOut
+from backend.suggestions import service as suggestions_service
 from kinect_agent.export.files import FORMATS
 
 router = APIRouter(prefix="/api/v1", tags=["sessions"])
@@ -114,8 +114,10 @@ def _upload_patient(caller: Caller, patient_id: int | None, db_session: Session)
     return patient_id
 
 
-def _session_out(db_session: Session, caller: Caller, session_id: int, row: tuple | None = None) -> SessionOut:
-    """Returns the session body; row: get_session_row's answer when the caller already read it."""
+def _session_out(db_session: Session, caller: Caller, session_id: int, row: tuple | None = None,
+                 accept_language: str | None = None) -> SessionOut:  # fmt: skip
+    """Returns the session body; row: get_session_row's answer when the caller already read it; accept_language:
+    the request's, the language of the advice (suggestions.service.reader)."""
     row = row or service.get_session_row(db_session=db_session, session_id=session_id)
     session, slug, reps, rom, quality, document = row
     suggestions = service.session_suggestions(
@@ -124,7 +126,9 @@ def _session_out(db_session: Session, caller: Caller, session_id: int, row: tupl
     return SessionOut(
         **_item_fields(session, slug, reps, rom, quality),
         metrics=document,
-        suggestions=[SuggestionOut.model_validate(s) for s in suggestions],
+        suggestions=suggestions_service.suggestion_outs(
+            suggestions, db_session=db_session, accept_language=accept_language
+        ),  # fmt: skip
     )
 
 
@@ -151,7 +155,14 @@ def _item_fields(session, slug, reps, rom, quality) -> dict:
 
 
 def _ingest(
-    data: bytes, *, caller: Caller, db_session: Session, patient_id: int, slug: str | None, settings
+    data: bytes,
+    *,
+    caller: Caller,
+    db_session: Session,
+    patient_id: int,
+    slug: str | None,
+    settings,
+    accept_language: str | None = None,
 ) -> tuple[SessionOut, bool]:
     upload = decode_upload(
         data,
@@ -174,7 +185,7 @@ def _ingest(
     if created:
         data = {"session_id": row.id, "client_session_id": str(upload.client_session_id)}  # the live set's session
         publish(db_session, Event("session.stored", patient_id, data))
-    return _session_out(db_session, caller, row.id), created
+    return _session_out(db_session, caller, row.id, accept_language=accept_language), created
 
 
 @router.post(
@@ -223,7 +234,14 @@ async def upload_session(
     async with lease_of(request).paused():
         data = await read_limited(request.stream(), limit)
     out, created = await run_in_threadpool(
-        _ingest, data, caller=caller, db_session=db_session, patient_id=target, slug=exercise, settings=settings
+        _ingest,
+        data,
+        caller=caller,
+        db_session=db_session,
+        patient_id=target,
+        slug=exercise,
+        settings=settings,
+        accept_language=request.headers.get("accept-language"),
     )
     response.status_code = status.HTTP_201_CREATED if created else status.HTTP_200_OK
     return out
@@ -270,13 +288,13 @@ def list_sessions(
     response_model=SessionOut,
     responses=error_responses(*AUTH_ERRORS, SessionNotFound),
 )
-def read_session(session_id: IdPath, caller: CurrentCaller, db_session: DbSession):
+def read_session(session_id: IdPath, request: Request, caller: CurrentCaller, db_session: DbSession):
     """Returns one session with its metrics document and the suggestions the caller may see."""
     row = service.get_session_row(db_session=db_session, session_id=session_id)  # one query, file never loaded
     patient_id = row[0].patient_id
     require_patient_access(patient_id, caller=caller, db_session=db_session, hidden_as=service.missing(session_id))
     _audit(db_session, caller, "session.read", session_id, patient_id)
-    return _session_out(db_session, caller, session_id, row)
+    return _session_out(db_session, caller, session_id, row, request.headers.get("accept-language"))
 
 
 @router.get(

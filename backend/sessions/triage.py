@@ -22,8 +22,10 @@ starts Monday 00:00 UTC. The attention score is the sum of five parts, clipped t
                   PAIN_ALERT_ABOVE (5) when not set) of 10 (numeric rating scale, asked after each set) in the last
                   RECENT_DAYS days; else 25 when the median pain of those days rose by ≥ PAIN_RISE (2) points over
                   the median of the BASELINE_DAYS before (≥ 1 and ≥ 2 answers); else 0.
+    it hurt       R = HURT_REPLY (30) when the patient answered advice "It hurt" and no therapist has read that
+                  reply yet (reading it clears it); else 0.
 
-    score = clip(A + N + D + Q + P, 0, 100); a patient whose running plan started less than 7 days ago (a new
+    score = clip(A + N + D + Q + P + H + R, 0, 100); a patient whose running plan started less than 7 days ago (a new
     patient) is capped at NOW_AT − 1. Level: "now" at score ≥ NOW_AT (50), "soon" at ≥ SOON_AT (20), else "ok".
     Reasons: one sentence per part that adds points (largest first), plus "no session yet" for a new patient.
 
@@ -53,6 +55,7 @@ NEW_PLAN_DAYS = 7
 ADVICE_PER_SUGGESTION, ADVICE_MAX = 4.0, 10.0  # advice to review alone stays below SOON_AT
 PAIN_ALERT_ABOVE = 5  # pain said after a set (0-10) above this raises attention, unless the therapist set another
 PAIN_RISE = 2.0  # a rise of the median pain this large (points of 10) raises attention
+HURT_REPLY = 30.0  # an unread "It hurt" reply to advice raises attention as much as pain above the alert level
 WEEK = dt.timedelta(days=7)
 
 
@@ -208,6 +211,15 @@ def _pain(now: dt.datetime, sessions: Sequence[RecentSession], alert_above: int)
     return 0.0, None
 
 
+def _hurt(unread: int, latest: dt.datetime | None) -> tuple[float, str | None]:
+    if unread <= 0:
+        return 0.0, None
+    day = f" on {_fmt_date(latest.astimezone(dt.UTC).date())}" if latest is not None else ""
+    if unread == 1:
+        return HURT_REPLY, f"Answered advice “It hurt”{day} (unread)"
+    return HURT_REPLY, f"{unread} unread “It hurt” answers to advice, the latest{day}"
+
+
 def attention(
     *,
     now: dt.datetime,
@@ -217,9 +229,12 @@ def attention(
     sessions: Sequence[RecentSession],
     pending_suggestions: int,
     pain_alert_above: int = PAIN_ALERT_ABOVE,
+    unread_hurt: int = 0,
+    last_hurt_at: dt.datetime | None = None,
 ) -> Attention:
     """Returns the attention score, level and reasons of one patient (module doc); sessions: oldest first;
-    pain_alert_above: the patient's pain alert level (0-9; pain above it counts)."""
+    pain_alert_above: the patient's pain alert level (0-9; pain above it counts); unread_hurt: the patient's "It
+    hurt" replies to advice no therapist has read, the latest sent at last_hurt_at."""
     parts: list[tuple[float, str | None]] = []
     new = plan is not None and (now.date() - plan.started_on).days < NEW_PLAN_DAYS
     if plan is not None and plan.per_week > 0:
@@ -228,6 +243,7 @@ def attention(
             parts.append(_inactive(now, plan, last_session_at))
     parts.append(_poor_quality(sessions))
     parts.append(_pain(now, sessions, pain_alert_above))
+    parts.append(_hurt(unread_hurt, last_hurt_at))
     if pending_suggestions:
         points = min(ADVICE_MAX, ADVICE_PER_SUGGESTION * pending_suggestions)
         parts.append((points, f"{_plural(pending_suggestions, 'suggestion')} to review"))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 
-from sqlalchemy import CheckConstraint, ForeignKey, String, Text
+from sqlalchemy import JSON, CheckConstraint, ForeignKey, String, Text
 from sqlalchemy.orm import Mapped, mapped_column
 
 from backend.database import Base, utcnow
@@ -14,7 +14,12 @@ STATUSES = ("pending", "approved", "dismissed")
 
 
 class Suggestion(Base):
-    """One suggestion: which rule fired on which metric (comparison against threshold) and its text."""
+    """One suggestion: which rule fired on which metric (comparison against threshold) and its text.
+
+    A system suggestion keeps what its rule found (params, backend.suggestions.rules.AdviceParams) and is shown in
+    the reader's language, written from params when read; text is the advice as first written, in the patient's
+    language of that moment (what is shown when params is null: rows made before params existed). A therapist's
+    text is shown as written."""
 
     __tablename__ = "suggestion"
     __table_args__ = (
@@ -33,6 +38,7 @@ class Suggestion(Base):
     threshold: Mapped[float | None] = mapped_column()
     value: Mapped[float | None] = mapped_column()  # the measured value compared with threshold (system ones)
     text: Mapped[str] = mapped_column(Text)
+    params: Mapped[dict | None] = mapped_column(JSON)  # what the rule found (AdviceParams); null: show text
     status: Mapped[str] = mapped_column(String(16), default="pending", index=True)
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
     decided_at: Mapped[dt.datetime | None] = mapped_column()

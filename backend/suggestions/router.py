@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Depends, Query, status
+from fastapi import APIRouter, Depends, Query, Request, status
 from sqlalchemy import select
 
 from backend.audit.service import record
@@ -38,13 +38,10 @@ def _audit(db_session, caller: Caller, action: str, suggestion_id, patient_id: i
     )
 
 
-def _outs(db_session, rows) -> list[SuggestionOut]:
-    """Returns suggestions as the API shows them, each with the start of the session it is about."""
-    started = service.session_dates(db_session=db_session, session_ids={r.session_id for r in rows if r.session_id})
-    return [
-        SuggestionOut.model_validate(r).model_copy(update={"session_started_at": started.get(r.session_id)})
-        for r in rows
-    ]
+def _outs(db_session, rows, request: Request) -> list[SuggestionOut]:
+    """Returns suggestions as the API shows them (service.suggestion_outs), in the request's language."""
+    return service.suggestion_outs(rows, db_session=db_session,
+                                   accept_language=request.headers.get("accept-language"))  # fmt: skip
 
 
 def _sees_everything(caller: Caller) -> bool:
@@ -58,6 +55,7 @@ def _sees_everything(caller: Caller) -> bool:
 )
 def list_suggestions(
     patient_id: IdPath,
+    request: Request,
     caller: CurrentCaller,
     db_session: DbSession,
     page: Annotated[PageParams, Depends(page_params)],
@@ -82,7 +80,8 @@ def list_suggestions(
         offset=page.offset,
     )
     _audit(db_session, caller, "suggestion.list", None, patient_id)
-    return Page[SuggestionOut](items=_outs(db_session, rows), total=total, limit=page.limit, offset=page.offset)
+    items = _outs(db_session, rows, request)
+    return Page[SuggestionOut](items=items, total=total, limit=page.limit, offset=page.offset)
 
 
 @router.post(
@@ -92,7 +91,7 @@ def list_suggestions(
     responses=error_responses(*AUTH_ERRORS, PatientNotFound, InvalidInput),
 )
 def create_suggestion(
-    patient_id: IdPath, body: SuggestionIn, caller: TherapistOrAdminCaller, db_session: DbSession
+    patient_id: IdPath, body: SuggestionIn, request: Request, caller: TherapistOrAdminCaller, db_session: DbSession
 ) -> SuggestionOut:
     """Writes a suggestion to a patient (an assigned therapist or an admin); the patient sees it at once."""
     require_patient_access(patient_id, caller=caller, db_session=db_session, write=True)
@@ -109,10 +108,10 @@ def create_suggestion(
     )
     _audit(db_session, caller, "suggestion.create", row.id, patient_id)
     publish(db_session, Event("suggestion.changed", patient_id, {"suggestion_id": row.id}))
-    return _outs(db_session, [row])[0]
+    return _outs(db_session, [row], request)[0]
 
 
-def _decide(suggestion_id: int, new_status: str, caller: Caller, db_session) -> SuggestionOut:
+def _decide(suggestion_id: int, new_status: str, caller: Caller, db_session, request: Request) -> SuggestionOut:
     row = service.get_suggestion(db_session=db_session, suggestion_id=suggestion_id)
     require_patient_access(row.patient_id, caller=caller, db_session=db_session, write=True,
                            hidden_as=service.missing(suggestion_id))  # fmt: skip
@@ -125,19 +124,23 @@ def _decide(suggestion_id: int, new_status: str, caller: Caller, db_session) -> 
     action = "suggestion.approve" if new_status == "approved" else "suggestion.dismiss"
     _audit(db_session, caller, action, row.id, row.patient_id, {"rule": row.rule})
     publish(db_session, Event("suggestion.changed", row.patient_id, {"suggestion_id": row.id}))
-    return _outs(db_session, [row])[0]
+    return _outs(db_session, [row], request)[0]
 
 
 DECIDE_ERRORS = error_responses(*AUTH_ERRORS, SuggestionNotFound, SuggestionNotPending)
 
 
 @router.post("/suggestions/{suggestion_id}/approve", response_model=SuggestionOut, responses=DECIDE_ERRORS)
-def approve_suggestion(suggestion_id: IdPath, caller: TherapistOrAdminCaller, db_session: DbSession) -> SuggestionOut:
+def approve_suggestion(
+    suggestion_id: IdPath, request: Request, caller: TherapistOrAdminCaller, db_session: DbSession
+) -> SuggestionOut:
     """Approves a pending system suggestion so the patient sees it (an assigned therapist or an admin)."""
-    return _decide(suggestion_id, "approved", caller, db_session)
+    return _decide(suggestion_id, "approved", caller, db_session, request)
 
 
 @router.post("/suggestions/{suggestion_id}/dismiss", response_model=SuggestionOut, responses=DECIDE_ERRORS)
-def dismiss_suggestion(suggestion_id: IdPath, caller: TherapistOrAdminCaller, db_session: DbSession) -> SuggestionOut:
+def dismiss_suggestion(
+    suggestion_id: IdPath, request: Request, caller: TherapistOrAdminCaller, db_session: DbSession
+) -> SuggestionOut:
     """Dismisses a pending system suggestion; the patient never sees it (an assigned therapist or an admin)."""
-    return _decide(suggestion_id, "dismissed", caller, db_session)
+    return _decide(suggestion_id, "dismissed", caller, db_session, request)

@@ -1,10 +1,11 @@
 """Explainable coaching rules: each compares one metric of a session against a threshold and says why in plain words.
 
 Pure functions, no database. A draft names the rule (its kind), the metric, the comparison, the threshold and the
-measured value, so a therapist can check "value <comparison> threshold" against the session's metrics; its text is
-written for the patient (short sentences, no jargon, the numbers that matter) and names the exercise and the day of
-the session ("On Saturday you did 6 of the 10 sit-to-stands in your plan. ..."), in the patient's language (a
-backend.i18n.Translator; English by default).
+measured value, so a therapist can check "value <comparison> threshold" against the session's metrics, and what the
+rule found as AdviceParams (the exercise, the days, the numbers). Its text is written for the patient (short
+sentences, no jargon, the numbers that matter) and names the exercise and the day of the session ("On Saturday you
+did 6 of the 10 sit-to-stands in your plan. ..."): advice_text(rule, metric, params, t) writes it in any language (a
+backend.i18n.Translator), so stored advice is shown in the language of whoever reads it, whenever they read it.
 """
 
 from __future__ import annotations
@@ -13,6 +14,9 @@ import datetime as dt
 import math
 import statistics
 from dataclasses import dataclass
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
 
 from backend.exercises.library import EXERCISES
 from backend.i18n import N_, Translator, translator
@@ -49,15 +53,57 @@ PAIN_RISE_POINTS = 2.0  # ... fires when it rose by this many points of 10 or mo
 PAIN_BASELINE_MIN = 2  # ... with at least this many answers before the week
 
 
+class AdviceParams(BaseModel):
+    """What a rule found, the inputs of its advice text (stored with the suggestion; version 1). Each rule fills the
+    fields its text names; the others stay None."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    version: Literal[1] = 1
+    exercise: str | None = Field(default=None, max_length=64, description="the exercise's slug, e.g. 'squat'")
+    session_on: dt.date | None = Field(default=None, description="the UTC day of the session the advice is about")
+    written_on: dt.date | None = Field(
+        default=None, description="the UTC day the advice was written: within a week of it the session is named by "
+        "its weekday, else by its date"
+    )  # fmt: skip
+    repetitions: float | None = None  # counted in the session (fewer_reps)
+    goal: int | None = None  # repetitions the plan asks for (fewer_reps)
+    rom_deg: float | None = None  # range of motion of the session, degrees (rom_drop)
+    baseline_rom_deg: float | None = None  # median range of motion of the weeks before, degrees (rom_drop)
+    tempo_s_per_rep: float | None = None  # seconds per repetition (too_fast)
+    advised_s_per_rep: int | None = None  # whole seconds per repetition the text asks for (too_fast)
+    tracked_fraction: float | None = None  # of the time the camera saw the patient, 0-1 (poor_data_quality)
+    pain: int | None = None  # pain said after the set, 0-10 (pain_high)
+    active_days: int | None = None  # days with a session in the 7 up to up_to (missed_days)
+    expected_days: int | None = None  # days a week the plan asks for (missed_days)
+    up_to: dt.date | None = None  # the last of those 7 days (missed_days)
+    pain_recent: float | None = None  # median pain of the last week (pain_rising)
+    pain_before: float | None = None  # median pain of the weeks before (pain_rising)
+
+
+@dataclass(frozen=True)
+class SessionDay:
+    """The UTC day of a session and the day advice about it is written (which decides how the text names it)."""
+
+    on: dt.date
+    written_on: dt.date
+
+    @classmethod
+    def of(cls, started_at: dt.datetime, today: dt.date) -> SessionDay:
+        """Returns the day of a session that started at started_at (timezone-aware), written on today (UTC)."""
+        return cls(started_at.astimezone(dt.UTC).date(), today)
+
+
 @dataclass(frozen=True)
 class SuggestionDraft:
-    """One fired rule: `value <comparison> threshold` held for `metric`; text is the advice for the patient."""
+    """One fired rule: `value <comparison> threshold` held for `metric`; params: what it found; text: the advice for
+    the patient in the language the rule ran in (advice_text writes it in any other)."""
 
     rule: str
     metric: str
     comparison: str
     threshold: float
     value: float
+    params: AdviceParams
     text: str
 
     @property
@@ -87,7 +133,11 @@ def exercise_plural(slug: object, t: Translator = ENGLISH) -> str:
 def session_day(started_at: dt.datetime, today: dt.date, t: Translator = ENGLISH) -> str:
     """Returns the day of a session as the advice names it: 'on Saturday' within the last week (UTC days), else
     'on 14 November' (with the year when it is not this year's); in t's language."""
-    day = started_at.astimezone(dt.UTC).date()
+    return day_words(started_at.astimezone(dt.UTC).date(), today, t)
+
+
+def day_words(day: dt.date, today: dt.date, t: Translator = ENGLISH) -> str:
+    """Returns a session's UTC day as advice written on today names it (session_day)."""
     if 0 <= (today - day).days < WEEKDAY_NAME_DAYS:
         return t.gettext(N_("on %(weekday)s"), weekday=t.format_date(day, "EEEE"))
     pattern = DATE_PATTERNS[t.locale] + ("" if day.year == today.year else YEAR_PATTERNS[t.locale])
@@ -154,28 +204,132 @@ def _checked_history(history: object) -> list[tuple[dt.datetime, dict]]:
     return out
 
 
+# --- the texts -------------------------------------------------------------------------------------------------
+
+
+def _slug(exercise: object) -> str | None:
+    return exercise if isinstance(exercise, str) else None
+
+
+def _draft(rule: str, metric: str, comparison: str, threshold: float, value: float, params: AdviceParams,
+           t: Translator) -> SuggestionDraft:  # fmt: skip
+    return SuggestionDraft(rule, metric, comparison, float(threshold), float(value), params,
+                           advice_text(rule, metric, params, t))  # fmt: skip
+
+
+def _need(value: object, name: str, rule: str):
+    if value is None:
+        raise ValueError(f"the {rule} advice needs params.{name}")
+    return value
+
+
+def _day(params: AdviceParams, rule: str, t: Translator) -> str:
+    on, written = _need(params.session_on, "session_on", rule), _need(params.written_on, "written_on", rule)
+    return _sentence(day_words(on, written, t))
+
+
+def _points(value: float, t: Translator) -> str:
+    """Returns a median of pain answers as the text writes it: "4", or "4.5" (this locale's decimal sign)."""
+    return t.format_number(value, 0 if value.is_integer() else 1)
+
+
+def advice_text(rule: str, metric: str, params: AdviceParams, t: Translator = ENGLISH) -> str:
+    """Returns the advice of a fired rule in t's language, from what the rule found (metric tells apart the texts of
+    a rule). Raises ValueError for an unknown rule or params that lack what its text names."""
+    what = exercise_plural(params.exercise, t)
+    if rule == FEWER_REPS:
+        done, goal = _need(params.repetitions, "repetitions", rule), _need(params.goal, "goal", rule)
+        if done == 0:
+            return t.gettext(
+                N_("%(day)s the camera did not count any %(what)s. Your plan asks for %(goal)s. Please try again, "
+                   "and move the way your therapist showed you."),
+                day=_day(params, rule, t), what=what, goal=goal,
+            )  # fmt: skip
+        return t.gettext(
+            N_("%(day)s you did %(done)s of the %(goal)s %(what)s in your plan. Next time, try to do all %(goal)s. "
+               "Rest for a moment between them if you need to."),
+            day=_day(params, rule, t), done=t.format_number(done), goal=goal, what=what,
+        )  # fmt: skip
+    if rule == ROM_DROP:
+        return t.gettext(
+            N_("%(day)s your %(what)s were smaller movements than in the last weeks: %(rom)s degrees, while it was "
+               "about %(before)s degrees before. Move slowly and go as far as feels comfortable. If it hurts, stop "
+               "and tell your therapist."),
+            day=_day(params, rule, t), what=what, rom=t.format_number(_need(params.rom_deg, "rom_deg", rule)),
+            before=t.format_number(_need(params.baseline_rom_deg, "baseline_rom_deg", rule)),
+        )  # fmt: skip
+    if rule == TOO_FAST:
+        return t.gettext(
+            N_("%(day)s you did your %(what)s quickly: about %(tempo)s seconds for each one. Please slow down and "
+               "take at least %(advised)s seconds for each one. Slow, steady movements help you more."),
+            day=_day(params, rule, t), what=what,
+            tempo=t.format_number(_need(params.tempo_s_per_rep, "tempo_s_per_rep", rule), 1),
+            advised=_need(params.advised_s_per_rep, "advised_s_per_rep", rule),
+        )  # fmt: skip
+    if rule == POOR_DATA_QUALITY and metric == "quality.tracked_fraction":
+        return t.gettext(
+            N_("%(day)s the camera could not see all of you during your %(what)s (it saw you %(percent)s of the "
+               "time). Please step into view: stand so that you see your whole body, from head to feet, on the "
+               "screen."),
+            day=_day(params, rule, t), what=what,
+            percent=t.format_percent(_need(params.tracked_fraction, "tracked_fraction", rule)),
+        )  # fmt: skip
+    if rule == POOR_DATA_QUALITY and metric == "quality.outlier_fraction":
+        return t.gettext(
+            N_("%(day)s the camera had trouble following your %(what)s. Please make sure the room is well lit, "
+               "nothing stands between you and the camera, and the camera points straight at you."),
+            day=_day(params, rule, t), what=what,
+        )  # fmt: skip
+    if rule == POOR_DATA_QUALITY:
+        return t.gettext(
+            N_("%(day)s the camera could not measure your %(what)s well. Please move the camera so that it faces "
+               "you and sees your whole body, then try again."),
+            day=_day(params, rule, t), what=what,
+        )  # fmt: skip
+    if rule == MISSED_DAYS:
+        active = _need(params.active_days, "active_days", rule)
+        known = params.exercise in EXERCISES
+        return t.ngettext(
+            "In the 7 days up to %(date)s you did %(what)s on %(num)d day. Your plan asks for %(expected)s days a "
+            "week. Try to choose a fixed time of day for your exercises.",
+            "In the 7 days up to %(date)s you did %(what)s on %(num)d days. Your plan asks for %(expected)s days a "
+            "week. Try to choose a fixed time of day for your exercises.",
+            active, date=t.format_date(_need(params.up_to, "up_to", rule), WEEKDAY_DATE_PATTERNS[t.locale]),
+            what=what if known else t.gettext(N_("this exercise")),
+            expected=_need(params.expected_days, "expected_days", rule),
+        )  # fmt: skip
+    if rule == PAIN_HIGH:
+        return t.gettext(
+            N_("%(day)s you said your pain was %(pain)s of 10 after your %(what)s. Do them gently and only as far "
+               "as is comfortable. Stop if the pain gets worse, and tell your therapist how you feel."),
+            day=_day(params, rule, t), pain=_need(params.pain, "pain", rule), what=what,
+        )  # fmt: skip
+    if rule == PAIN_RISING:
+        return t.gettext(
+            N_("In the last week you said more pain after your exercises than before: about %(now)s of 10, while "
+               "it was about %(before)s of 10 in the weeks before. Do your exercises gently, and tell your "
+               "therapist how you feel."),
+            now=_points(_need(params.pain_recent, "pain_recent", rule), t),
+            before=_points(_need(params.pain_before, "pain_before", rule), t),
+        )  # fmt: skip
+    raise ValueError(f"no advice text for rule {rule!r} (metric {metric!r})")
+
+
 # --- the rules -------------------------------------------------------------------------------------------------
 
 
-def fewer_reps(doc: dict, prescribed_reps: int | None, day: str, t: Translator = ENGLISH) -> SuggestionDraft | None:
-    """Fires when the session counted fewer repetitions than the plan prescribes; day: 'on Saturday'."""
+def _about(doc: dict, day: SessionDay) -> dict:
+    return {"exercise": _slug(doc.get("exercise")), "session_on": day.on, "written_on": day.written_on}
+
+
+def fewer_reps(doc: dict, prescribed_reps: int | None, day: SessionDay, t: Translator = ENGLISH
+               ) -> SuggestionDraft | None:  # fmt: skip
+    """Fires when the session counted fewer repetitions than the plan prescribes."""
     reps = _number(doc, "repetitions")
     if prescribed_reps is None or reps is None or reps >= prescribed_reps:
         return None
-    what = exercise_plural(doc.get("exercise"), t)
-    if reps == 0:
-        text = t.gettext(
-            N_("%(day)s the camera did not count any %(what)s. Your plan asks for %(goal)s. Please try again, and "
-               "move the way your therapist showed you."),
-            day=_sentence(day), what=what, goal=prescribed_reps,
-        )  # fmt: skip
-    else:
-        text = t.gettext(
-            N_("%(day)s you did %(done)s of the %(goal)s %(what)s in your plan. Next time, try to do all %(goal)s. "
-               "Rest for a moment between them if you need to."),
-            day=_sentence(day), done=t.format_number(reps), goal=prescribed_reps, what=what,
-        )  # fmt: skip
-    return SuggestionDraft(FEWER_REPS, "repetitions", "<", float(prescribed_reps), reps, text)
+    params = AdviceParams(**_about(doc, day), repetitions=reps, goal=prescribed_reps)
+    return _draft(FEWER_REPS, "repetitions", "<", prescribed_reps, reps, params, t)
 
 
 def _rom_baseline(history: list[tuple[dt.datetime, dict]], now: dt.datetime, exercise: object) -> list[float]:
@@ -197,9 +351,9 @@ def _rom_baseline(history: list[tuple[dt.datetime, dict]], now: dt.datetime, exe
 
 
 def rom_drop(
-    doc: dict, history: list[tuple[dt.datetime, dict]], now: dt.datetime, day: str, t: Translator = ENGLISH
+    doc: dict, history: list[tuple[dt.datetime, dict]], now: dt.datetime, day: SessionDay, t: Translator = ENGLISH
 ) -> SuggestionDraft | None:
-    """Fires when rom_deg < ROM_DROP_FRACTION x the median rom_deg of the last 2-4 weeks; day: 'on Saturday'."""
+    """Fires when rom_deg < ROM_DROP_FRACTION x the median rom_deg of the last 2-4 weeks."""
     rom = _number(doc, "rom_deg")
     baseline = _rom_baseline(history, now, doc.get("exercise"))
     if rom is None or not baseline:
@@ -208,63 +362,35 @@ def rom_drop(
     threshold = ROM_DROP_FRACTION * median
     if rom >= threshold:
         return None
-    text = t.gettext(
-        N_("%(day)s your %(what)s were smaller movements than in the last weeks: %(rom)s degrees, while it was "
-           "about %(before)s degrees before. Move slowly and go as far as feels comfortable. If it hurts, stop and "
-           "tell your therapist."),
-        day=_sentence(day), what=exercise_plural(doc.get("exercise"), t), rom=t.format_number(rom),
-        before=t.format_number(median),
-    )  # fmt: skip
-    return SuggestionDraft(ROM_DROP, "rom_deg", "<", threshold, rom, text)
+    params = AdviceParams(**_about(doc, day), rom_deg=rom, baseline_rom_deg=median)
+    return _draft(ROM_DROP, "rom_deg", "<", threshold, rom, params, t)
 
 
-def too_fast(doc: dict, day: str, t: Translator = ENGLISH) -> SuggestionDraft | None:
-    """Fires when a repetition took less than MIN_TEMPO_S_PER_REP seconds on average; day: 'on Saturday'."""
+def too_fast(doc: dict, day: SessionDay, t: Translator = ENGLISH) -> SuggestionDraft | None:
+    """Fires when a repetition took less than MIN_TEMPO_S_PER_REP seconds on average."""
     tempo = _number(doc, "tempo_s_per_rep")
     if tempo is None or tempo <= 0 or tempo >= MIN_TEMPO_S_PER_REP:
         return None
-    text = t.gettext(
-        N_("%(day)s you did your %(what)s quickly: about %(tempo)s seconds for each one. Please slow down and take "
-           "at least %(advised)s seconds for each one. Slow, steady movements help you more."),
-        day=_sentence(day), what=exercise_plural(doc.get("exercise"), t), tempo=t.format_number(tempo, 1),
-        advised=ADVISED_TEMPO_S_PER_REP,
-    )  # fmt: skip
-    return SuggestionDraft(TOO_FAST, "tempo_s_per_rep", "<", MIN_TEMPO_S_PER_REP, tempo, text)
+    params = AdviceParams(**_about(doc, day), tempo_s_per_rep=tempo, advised_s_per_rep=ADVISED_TEMPO_S_PER_REP)
+    return _draft(TOO_FAST, "tempo_s_per_rep", "<", MIN_TEMPO_S_PER_REP, tempo, params, t)
 
 
-def poor_data_quality(doc: dict, day: str, t: Translator = ENGLISH) -> SuggestionDraft | None:
+def poor_data_quality(doc: dict, day: SessionDay, t: Translator = ENGLISH) -> SuggestionDraft | None:
     """Fires when the analysis found the data unreliable (quality.ok false); says what to change at the camera."""
     quality = _quality(doc)
     if quality.get("ok") is not False:
         return None
-    what = exercise_plural(doc.get("exercise"), t)
     tracked = _number(quality, "tracked_fraction", "doc['quality']")
     outliers = _number(quality, "outlier_fraction", "doc['quality']")
     if tracked is not None and tracked < QUALITY_MIN_TRACKED_FRACTION:
-        text = t.gettext(
-            N_("%(day)s the camera could not see all of you during your %(what)s (it saw you %(percent)s of the "
-               "time). Please step into view: stand so that you see your whole body, from head to feet, on the "
-               "screen."),
-            day=_sentence(day), what=what, percent=t.format_percent(tracked),
-        )  # fmt: skip
-        return SuggestionDraft(
-            POOR_DATA_QUALITY, "quality.tracked_fraction", "<", QUALITY_MIN_TRACKED_FRACTION, tracked, text
-        )
+        params = AdviceParams(**_about(doc, day), tracked_fraction=tracked)
+        return _draft(POOR_DATA_QUALITY, "quality.tracked_fraction", "<", QUALITY_MIN_TRACKED_FRACTION, tracked,
+                      params, t)  # fmt: skip
+    params = AdviceParams(**_about(doc, day))
     if outliers is not None and outliers > QUALITY_MAX_OUTLIER_FRACTION:
-        text = t.gettext(
-            N_("%(day)s the camera had trouble following your %(what)s. Please make sure the room is well lit, "
-               "nothing stands between you and the camera, and the camera points straight at you."),
-            day=_sentence(day), what=what,
-        )  # fmt: skip
-        return SuggestionDraft(
-            POOR_DATA_QUALITY, "quality.outlier_fraction", ">", QUALITY_MAX_OUTLIER_FRACTION, outliers, text
-        )
-    text = t.gettext(
-        N_("%(day)s the camera could not measure your %(what)s well. Please move the camera so that it faces you "
-           "and sees your whole body, then try again."),
-        day=_sentence(day), what=what,
-    )  # fmt: skip
-    return SuggestionDraft(POOR_DATA_QUALITY, "quality.ok", "==", 0.0, 0.0, text)
+        return _draft(POOR_DATA_QUALITY, "quality.outlier_fraction", ">", QUALITY_MAX_OUTLIER_FRACTION, outliers,
+                      params, t)  # fmt: skip
+    return _draft(POOR_DATA_QUALITY, "quality.ok", "==", 0.0, 0.0, params, t)
 
 
 def missed_days(
@@ -289,16 +415,8 @@ def missed_days(
     expected = min(expected_per_week, ACTIVE_DAYS_WINDOW)
     if active >= expected:
         return None
-    known = isinstance(exercise, str) and exercise in EXERCISES
-    what = exercise_plural(exercise, t) if known else t.gettext(N_("this exercise"))
-    text = t.ngettext(
-        "In the 7 days up to %(date)s you did %(what)s on %(num)d day. Your plan asks for %(expected)s days a "
-        "week. Try to choose a fixed time of day for your exercises.",
-        "In the 7 days up to %(date)s you did %(what)s on %(num)d days. Your plan asks for %(expected)s days a "
-        "week. Try to choose a fixed time of day for your exercises.",
-        active, date=t.format_date(now, WEEKDAY_DATE_PATTERNS[t.locale]), what=what, expected=expected,
-    )  # fmt: skip
-    return SuggestionDraft(MISSED_DAYS, "active_days_last_7d", "<", float(expected), float(active), text)
+    params = AdviceParams(exercise=_slug(exercise), active_days=active, expected_days=expected, up_to=today)
+    return _draft(MISSED_DAYS, "active_days_last_7d", "<", expected, active, params, t)
 
 
 def evaluate(
@@ -317,7 +435,7 @@ def evaluate(
     the plan, None = no plan. history: (started_at, document) of earlier sessions of the same patient and exercise.
     expected_per_week: sessions per week of the plan. now: when the session happened (timezone-aware). today: the
     day the advice is written (UTC), which decides whether the text names the session's weekday or its date;
-    defaults to the day of now. t: the patient's language of the texts (English by default).
+    defaults to the day of now. t: the language of the drafts' texts (English by default).
     When quality.ok is false only the data-quality and missed-days rules run: the measurements are not trusted.
     Raises ValueError naming the argument or document key that is malformed.
     """
@@ -329,7 +447,7 @@ def evaluate(
     past = _checked_history(history)
     if today is not None and (not isinstance(today, dt.date) or isinstance(today, dt.datetime)):
         raise ValueError(f"today must be a date or None, got {today!r}")
-    day = session_day(now, now.date() if today is None else today, t)
+    day = SessionDay.of(now, now.date() if today is None else today)
     if _quality_ok(doc):
         drafts = [fewer_reps(doc, prescribed_reps, day, t), rom_drop(doc, past, now, day, t), too_fast(doc, day, t)]
     else:
@@ -341,22 +459,13 @@ def evaluate(
 # --- how the set felt (run when the patient answers, backend.feeling) ------------------------------------------
 
 
-def pain_high(pain: int | None, alert_above: int, exercise: object, day: str, t: Translator = ENGLISH
+def pain_high(pain: int | None, alert_above: int, exercise: object, day: SessionDay, t: Translator = ENGLISH
               ) -> SuggestionDraft | None:  # fmt: skip
     """Fires when the pain the patient said after a set (0-10) is above their alert level (0-9, the therapist's)."""
     if pain is None or pain <= alert_above:
         return None
-    text = t.gettext(
-        N_("%(day)s you said your pain was %(pain)s of 10 after your %(what)s. Do them gently and only as far as "
-           "is comfortable. Stop if the pain gets worse, and tell your therapist how you feel."),
-        day=_sentence(day), pain=pain, what=exercise_plural(exercise, t),
-    )  # fmt: skip
-    return SuggestionDraft(PAIN_HIGH, "pain_nrs", ">", float(alert_above), float(pain), text)
-
-
-def _points(value: float, t: Translator) -> str:
-    """Returns a median of pain answers as the text writes it: "4", or "4.5" (this locale's decimal sign)."""
-    return t.format_number(value, 0 if value.is_integer() else 1)
+    params = AdviceParams(exercise=_slug(exercise), session_on=day.on, written_on=day.written_on, pain=pain)
+    return _draft(PAIN_HIGH, "pain_nrs", ">", alert_above, pain, params, t)
 
 
 def pain_rising(
@@ -374,10 +483,5 @@ def pain_rising(
     was, is_ = float(statistics.median(before)), float(statistics.median(recent))
     if is_ - was < PAIN_RISE_POINTS:
         return None
-    text = t.gettext(
-        N_("In the last week you said more pain after your exercises than before: about %(now)s of 10, while it "
-           "was about %(before)s of 10 in the weeks before. Do your exercises gently, and tell your therapist how "
-           "you feel."),
-        now=_points(is_, t), before=_points(was, t),
-    )  # fmt: skip
-    return SuggestionDraft(PAIN_RISING, "pain_nrs_median_7d", ">=", was + PAIN_RISE_POINTS, is_, text)
+    params = AdviceParams(pain_recent=is_, pain_before=was)
+    return _draft(PAIN_RISING, "pain_nrs_median_7d", ">=", was + PAIN_RISE_POINTS, is_, params, t)

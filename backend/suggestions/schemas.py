@@ -54,6 +54,7 @@ class SuggestionOut(BaseModel):
                     "value": 6.0,
                     "text": "On Saturday you did 6 of the 10 sit-to-stands in your plan. Next time, try to do all "
                     "10. Rest for a moment between them if you need to.",
+                    "locale": "en",
                     "status": "pending",
                     "created_at": "2026-11-23T10:00:00Z",
                     "decided_at": None,
@@ -75,7 +76,14 @@ class SuggestionOut(BaseModel):
     comparison: str = Field(description="how the metric compared to the threshold: '<', '>' or '=='")
     threshold: float | None
     value: float | None = Field(description="the measured value of the metric that fired: value comparison threshold")
-    text: str = Field(description="the advice, in words the patient understands")
+    text: str = Field(
+        description="the advice, in words the patient understands: a rule's advice is written when read, in the "
+        "language the request's Accept-Language asks for, else the patient's; a therapist's as written"
+    )
+    locale: str | None = Field(
+        default=None, description="the language of text when it was written for this reader ('en', 'de', 'es', "
+        "'fr'); null: as its author wrote it (a therapist's, or a rule's stored before 2026-11-27)"
+    )  # fmt: skip
     status: Status
     created_at: dt.datetime
     decided_at: dt.datetime | None = Field(description="when it was approved or dismissed")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import datetime as dt
 from collections.abc import Iterable
 
+from pydantic import ValidationError
 from sqlalchemy import and_, func, or_, select, update
 from sqlalchemy.orm import Session
 
@@ -12,7 +13,7 @@ from backend.database import utcnow
 from backend.exceptions import SuggestionNotFound, SuggestionNotPending
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
-from backend.i18n import translator
+from backend.i18n import DEFAULT_LOCALE, Translator, asked_locale, translator
 from backend.sessions.models import ExerciseSession
 from backend.suggestions.context import plan_targets, session_history
 from backend.suggestions.models import Suggestion
@@ -24,12 +25,15 @@ from backend.suggestions.rules import (
     PAIN_RECENT_DAYS,
     PAIN_RISING,
     RULES,
+    AdviceParams,
+    SessionDay,
     SuggestionDraft,
+    advice_text,
     evaluate,
     pain_high,
     pain_rising,
-    session_day,
 )
+from backend.suggestions.schemas import SuggestionOut
 from backend.users.models import User
 
 THERAPIST_RULE = "therapist"  # the rule field of suggestions written by a person
@@ -74,6 +78,7 @@ def add_system_suggestions(
                 threshold=float(draft.threshold),
                 value=float(draft.value),
                 text=draft.text,
+                params=draft.params.model_dump(mode="json"),
                 status="pending",
                 created_at=now,
             )
@@ -156,6 +161,23 @@ def session_dates(*, db_session: Session, session_ids: set[int]) -> dict[int, dt
     return {sid: started for sid, started in rows}
 
 
+def suggestion_outs(rows: Iterable[Suggestion], *, db_session: Session, accept_language: str | None
+                    ) -> list[SuggestionOut]:  # fmt: skip
+    """Returns suggestions as the API shows them: each with the start of the session it is about, its text in the
+    reader's language (reader()) when it was written by a rule."""
+    rows = list(rows)
+    started = session_dates(db_session=db_session, session_ids={r.session_id for r in rows if r.session_id})
+    readers: dict[int, Translator] = {}
+    out = []
+    for r in rows:
+        if r.patient_id not in readers:
+            readers[r.patient_id] = reader(accept_language, db_session=db_session, patient_id=r.patient_id)
+        text, locale = shown_text(r, readers[r.patient_id])
+        out.append(SuggestionOut.model_validate(r).model_copy(
+            update={"session_started_at": started.get(r.session_id), "text": text, "locale": locale}))  # fmt: skip
+    return out
+
+
 def get_suggestion(*, db_session: Session, suggestion_id: int) -> Suggestion:
     """Returns one suggestion or raises SuggestionNotFound."""
     row = db_session.get(Suggestion, suggestion_id)
@@ -214,6 +236,27 @@ def _recently_suggested(*, db_session: Session, session: ExerciseSession, rule: 
 def patient_locale(*, db_session: Session, patient_id: int) -> str | None:
     """Returns the language a patient reads their advice in (None: not chosen, English)."""
     return db_session.scalar(select(User.locale).where(User.id == patient_id))
+
+
+def reader(accept_language: str | None, *, db_session: Session, patient_id: int) -> Translator:
+    """Returns the language a patient's advice is shown in to a request: the one its Accept-Language asks for when
+    that names a supported locale (the pages send theirs), else the patient's chosen language, else English."""
+    asked = asked_locale(accept_language)
+    if asked is not None:
+        return translator(asked)
+    return translator(patient_locale(db_session=db_session, patient_id=patient_id) or DEFAULT_LOCALE)
+
+
+def shown_text(row: Suggestion, t: Translator) -> tuple[str, str | None]:
+    """Returns a suggestion's text as a reader of t's language sees it, and its language: a system suggestion
+    written from what its rule found (params), in t's; otherwise (a therapist's, or one stored before params) its
+    text as written, language None (not known)."""
+    if row.source != "system" or row.params is None:
+        return row.text, None
+    try:
+        return advice_text(row.rule, row.metric, AdviceParams.model_validate(row.params), t), t.locale
+    except (ValidationError, ValueError):
+        return row.text, None
 
 
 def suggest_for_session(*, db_session: Session, session: ExerciseSession, doc: dict) -> list[Suggestion]:
@@ -325,7 +368,7 @@ def suggest_for_feeling(
     answers = [(t if t.tzinfo else t.replace(tzinfo=dt.UTC), p) for t, p in rows]
     t = translator(patient_locale(db_session=db_session, patient_id=session.patient_id))
     slug = db_session.scalar(select(Exercise.slug).where(Exercise.id == session.exercise_id))
-    day = session_day(started, utcnow().date(), t)
+    day = SessionDay.of(started, utcnow().date())
     drafts = [pain_high(pain, alert_above, slug, day, t), pain_rising(answers, started, t)]
     _withdraw(db_session=db_session, session=session, rules={PAIN_HIGH, PAIN_RISING} - {d.rule for d in drafts if d})
     reopened = _reopen(db_session=db_session, session=session, drafts=[d for d in drafts if d is not None])
@@ -348,6 +391,7 @@ def _reopen(*, db_session: Session, session: ExerciseSession, drafts: list[Sugge
             continue
         row.status, row.decided_at, row.created_at = "pending", None, utcnow()
         row.threshold, row.value, row.text = float(draft.threshold), float(draft.value), draft.text
+        row.params = draft.params.model_dump(mode="json")
         out.append(row)
     db_session.flush()
     return out

@@ -12,7 +12,7 @@ from backend.audit.models import AuditEvent
 from backend.database import utcnow
 from backend.sessions.models import ExerciseSession
 from backend.suggestions.models import Suggestion
-from backend.suggestions.rules import SuggestionDraft, evaluate
+from backend.suggestions.rules import AdviceParams, SuggestionDraft, evaluate
 from backend.suggestions.service import add_system_suggestions, is_visible_to_patient
 
 MONDAY = dt.date(2026, 11, 23)
@@ -122,6 +122,7 @@ def test_therapist_filters_by_status(client, care, make_suggestion):
         "threshold": 1.5,
         "value": 1.1,
         "text": "system pending",
+        "locale": None,  # a row without params: its text as stored
         "status": "pending",
         "created_at": None,
         "decided_at": None,
@@ -324,7 +325,8 @@ def test_rule_drafts_are_stored_pending_and_reviewable(client, db_session, care)
 
 def test_rule_drafts_are_not_repeated_for_the_same_session(db_session, care):
     session = _exercise_session(db_session, care["patient"])
-    draft = SuggestionDraft("too_fast", "tempo_s_per_rep", "<", 1.5, 1.0, "Slow down.")
+    params = AdviceParams(session_on=MONDAY, written_on=MONDAY, tempo_s_per_rep=1.0, advised_s_per_rep=2)
+    draft = SuggestionDraft("too_fast", "tempo_s_per_rep", "<", 1.5, 1.0, params, "Slow down.")
     kwargs = {"patient_id": care["patient"].id, "session_id": session.id, "db_session": db_session}
     assert len(add_system_suggestions([draft, draft], **kwargs)) == 1
     assert add_system_suggestions([draft], **kwargs) == []
@@ -355,7 +357,9 @@ def test_is_visible_to_patient_matches_the_list_filter(client, care, make_sugges
 
 
 @pytest.mark.parametrize(
-    "draft", [{"rule": "too_fast"}, SuggestionDraft("made_up", "x", "<", 1.0, 0.0, "text")], ids=["dict", "rule"]
+    "draft",
+    [{"rule": "too_fast"}, SuggestionDraft("made_up", "x", "<", 1.0, 0.0, AdviceParams(), "text")],
+    ids=["dict", "rule"],
 )
 def test_add_system_suggestions_rejects_bad_drafts(db_session, care, draft):
     with pytest.raises(ValueError, match=r"drafts\[0\] must be a SuggestionDraft of a known rule"):

@@ -101,3 +101,72 @@ def test_the_patient_changes_their_language_but_not_their_alert_level(client, ma
     assert r.status_code == 200 and r.json()["pain_alert_above"] == 5, r.text
     r = client.patch(f"/api/v1/patients/{patient.id}", json={"pain_alert_above": 9}, headers=mine)
     assert r.status_code == 403 and "therapist" in r.json()["detail"], r.text
+
+
+# --- "It hurt" answered to advice -----------------------------------------------------------------------------
+
+
+def test_an_unread_it_hurt_reply_makes_the_patient_soon_with_the_day():
+    found = _attention([_at(3, 2)], unread_hurt=1, last_hurt_at=THURSDAY_NOON - dt.timedelta(hours=3))
+    assert found.score == 30 and found.level == "soon", found
+    assert found.reasons == ["Answered advice “It hurt” on 26 Nov (unread)"], found.reasons
+    two = _attention([], unread_hurt=2, last_hurt_at=THURSDAY_NOON - dt.timedelta(days=2))
+    assert two.score == 30 and two.reasons == ["2 unread “It hurt” answers to advice, the latest on 24 Nov"]
+    assert _attention([_at(3, 2)], unread_hurt=0, last_hurt_at=None).score == 0
+
+
+def test_it_hurt_adds_to_high_pain():
+    found = _attention([_at(1, 7)], unread_hurt=1, last_hurt_at=THURSDAY_NOON)
+    assert found.score == 60 and found.level == "now", found
+    assert len(found.reasons) == 2 and any("It hurt" in r for r in found.reasons), found.reasons
+
+
+def _dashboard_row(client, headers, patient_id: int) -> dict:
+    r = client.get("/api/v1/dashboard", headers=headers)
+    assert r.status_code == 200, r.text
+    return next(row for row in r.json()["items"] if row["patient_id"] == patient_id)
+
+
+@pytest.mark.parametrize("preset", ["hurt", "done"])
+def test_the_dashboard_raises_an_unread_it_hurt_until_it_is_read(client, make_patient_with_therapist, auth_headers,
+                                                                 preset):  # fmt: skip
+    patient, therapist = make_patient_with_therapist()
+    theirs, mine = auth_headers(therapist), auth_headers(patient)
+    advice = client.post(f"/api/v1/patients/{patient.id}/suggestions", json={"text": "Deeper squats."}, headers=theirs)
+    before = _dashboard_row(client, theirs, patient.id)
+    reply = client.post(f"/api/v1/patients/{patient.id}/replies", json={"suggestion_id": advice.json()["id"],
+                                                                      "preset": preset}, headers=mine)  # fmt: skip
+    assert reply.status_code == 201, reply.text
+    unread = _dashboard_row(client, theirs, patient.id)
+    hurt = [r for r in unread["attention_reasons"] if "It hurt" in r]
+    if preset == "done":  # only "It hurt" is a sign about the patient
+        assert unread["attention_score"] == before["attention_score"] and not hurt, unread
+        return
+    assert unread["attention_score"] == before["attention_score"] + 30, (before, unread)
+    assert unread["attention_level"] != "ok" and hurt and hurt[0].startswith("Answered advice “It hurt” on "), unread
+    r = client.post(f"/api/v1/patients/{patient.id}/replies/read", json={"reply_ids": [reply.json()["id"]]},
+                    headers=theirs)  # fmt: skip
+    assert r.status_code == 200 and r.json()["marked"] == 1, r.text
+    read = _dashboard_row(client, theirs, patient.id)
+    assert read["attention_score"] == before["attention_score"], read
+    assert not [r for r in read["attention_reasons"] if "It hurt" in r], read
+
+
+def test_the_dashboard_puts_the_patient_who_said_it_hurt_first(client, make_user, auth_headers, db_session):
+    from backend.database import utcnow
+    from backend.patients.models import TherapistPatient
+
+    therapist = make_user("therapist")
+    patient, other = make_user("patient", full_name="Zoe Zed"), make_user("patient", full_name="Anna Able")
+    for p in (patient, other):
+        db_session.add(TherapistPatient(therapist_id=therapist.id, patient_id=p.id, created_at=utcnow()))
+    db_session.flush()
+    theirs = auth_headers(therapist)
+    advice = client.post(f"/api/v1/patients/{patient.id}/suggestions", json={"text": "Slower."}, headers=theirs)
+    names = [row["full_name"] for row in client.get("/api/v1/dashboard", headers=theirs).json()["items"]]
+    assert names == ["Anna Able", "Zoe Zed"], names  # equal scores: by name
+    r = client.post(f"/api/v1/patients/{patient.id}/replies", json={"suggestion_id": advice.json()["id"],
+                    "preset": "hurt"}, headers=auth_headers(patient))  # fmt: skip
+    assert r.status_code == 201, r.text
+    names = [row["full_name"] for row in client.get("/api/v1/dashboard", headers=theirs).json()["items"]]
+    assert names == ["Zoe Zed", "Anna Able"], names
