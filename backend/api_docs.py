@@ -3,7 +3,7 @@
 FastAPI's own pages load their scripts from a CDN and ask for /openapi.json at the server's root: a clinic network
 without internet access, or a reverse proxy with a path prefix (COACH_PUBLIC_URL https://coach.example.org/clinic),
 breaks them. Here every URL it uses starts with the configured prefix (never taken from the request) and the files
-come from the pinned `fastapi-offline` wheel (Swagger UI and a favicon), like plotly.js for the pages. No /redoc:
+come from the pinned `fastapi-offline` wheel (Swagger UI and a favicon). No /redoc:
 ReDoc fetches its logo from its vendor's CDN whatever it is told.
 """
 

@@ -30,7 +30,6 @@ from frontend import vendor_assets
 HERE = Path(__file__).resolve().parent
 STATIC = HERE / "static"
 VISER_CLIENT = Path(importlib.util.find_spec("viser").submodule_search_locations[0]) / "client" / "build" / "index.html"
-PLOTLY_JS = Path(importlib.util.find_spec("plotly").submodule_search_locations[0]) / "package_data" / "plotly.min.js"
 
 
 @lru_cache(maxsize=len(LOCALES))
@@ -98,7 +97,7 @@ def mount(app: FastAPI) -> None:
     """Mounts the pages on the app, the one place that does: their routes, and the HTML page that answers a
     browser's error outside /api/ (app.state.error_page, which the app's error handlers call)."""
     app.include_router(router)
-    app.include_router(vendor_assets.router)  # /static/vendor/mediapipe/: the pinned pose runtime and models
+    app.include_router(vendor_assets.router)  # /static/vendor/: the pinned pose runtime and models, plotly.js
     app.state.error_page = browser_error_page
 
 
@@ -351,12 +350,6 @@ def unsubscribe_submit(token: str, request: Request, db_session: DbSession) -> R
 def _unknown_unsubscribe_link(request: Request) -> HTMLResponse:
     message = N_("This unsubscribe link belongs to no reminder e-mail. Please check that it is complete.")
     return _error(request, None, 404, N_("Link not found"), message)
-
-
-@router.get("/static/vendor/plotly.min.js")
-def plotly_js() -> Response:
-    """Returns plotly.js as shipped inside the pinned `plotly` wheel (the charting library of the pages)."""
-    return FileResponse(PLOTLY_JS, media_type=_MEDIA[".js"], headers={"Cache-Control": "public, max-age=86400"})
 
 
 @router.get("/static/{name}")
