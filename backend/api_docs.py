@@ -16,7 +16,10 @@ from fastapi import APIRouter, FastAPI, Request
 from fastapi.openapi.docs import get_swagger_ui_html, get_swagger_ui_oauth2_redirect_html
 from fastapi.responses import FileResponse, HTMLResponse, Response
 
-ASSETS = Path(importlib.util.find_spec("fastapi_offline").submodule_search_locations[0]) / "static"
+_SPEC = importlib.util.find_spec("fastapi_offline")
+if _SPEC is None or not _SPEC.submodule_search_locations:
+    raise ModuleNotFoundError("the package fastapi_offline is not installed", name="fastapi_offline")
+ASSETS = Path(_SPEC.submodule_search_locations[0]) / "static"
 FILES = {  # the URL's file name -> media type; the only files served from ASSETS
     "swagger-ui-bundle.js": "text/javascript; charset=utf-8",
     "swagger-ui.css": "text/css; charset=utf-8",

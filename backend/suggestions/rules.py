@@ -13,6 +13,7 @@ import datetime as dt
 import math
 import statistics
 from dataclasses import dataclass
+from typing import Any
 
 from backend.exercises.library import EXERCISES
 from backend.i18n import N_, Translator, translator
@@ -101,7 +102,7 @@ def _sentence(text: str) -> str:
 # --- input checks ----------------------------------------------------------------------------------------------
 
 
-def _number(doc: dict, key: str, where: str = "doc") -> float | None:
+def _number(doc: dict[str, Any], key: str, where: str = "doc") -> float | None:
     """Returns doc[key] as a float; None when missing, null or not finite; ValueError when not a number."""
     value = doc.get(key)
     if value is None:
@@ -112,7 +113,7 @@ def _number(doc: dict, key: str, where: str = "doc") -> float | None:
     return value if math.isfinite(value) else None
 
 
-def _quality(doc: dict, where: str = "doc") -> dict:
+def _quality(doc: dict[str, Any], where: str = "doc") -> dict[str, Any]:
     quality = doc.get("quality")
     if quality is None:
         return {}
@@ -124,7 +125,7 @@ def _quality(doc: dict, where: str = "doc") -> dict:
     return quality
 
 
-def _quality_ok(doc: dict, where: str = "doc") -> bool:
+def _quality_ok(doc: dict[str, Any], where: str = "doc") -> bool:
     """Returns False only when the analysis said quality.ok is false (missing or null counts as ok)."""
     return _quality(doc, where).get("ok") is not False
 
@@ -143,7 +144,7 @@ def _positive_int(value: object, where: str) -> int | None:
     return value
 
 
-def _checked_history(history: object) -> list[tuple[dt.datetime, dict]]:
+def _checked_history(history: object) -> list[tuple[dt.datetime, dict[str, Any]]]:
     if not isinstance(history, list | tuple):
         raise ValueError(f"history must be a list of (datetime, dict), got {type(history).__name__}")
     out = []
@@ -157,7 +158,9 @@ def _checked_history(history: object) -> list[tuple[dt.datetime, dict]]:
 # --- the rules -------------------------------------------------------------------------------------------------
 
 
-def fewer_reps(doc: dict, prescribed_reps: int | None, day: str, t: Translator = ENGLISH) -> SuggestionDraft | None:
+def fewer_reps(
+    doc: dict[str, Any], prescribed_reps: int | None, day: str, t: Translator = ENGLISH
+) -> SuggestionDraft | None:
     """Fires when the session counted fewer repetitions than the plan prescribes; day: 'on Saturday'."""
     reps = _number(doc, "repetitions")
     if prescribed_reps is None or reps is None or reps >= prescribed_reps:
@@ -178,7 +181,7 @@ def fewer_reps(doc: dict, prescribed_reps: int | None, day: str, t: Translator =
     return SuggestionDraft(FEWER_REPS, "repetitions", "<", float(prescribed_reps), reps, text)
 
 
-def _rom_baseline(history: list[tuple[dt.datetime, dict]], now: dt.datetime, exercise: object) -> list[float]:
+def _rom_baseline(history: list[tuple[dt.datetime, dict[str, Any]]], now: dt.datetime, exercise: object) -> list[float]:
     """Returns rom_deg of the earlier good-quality sessions of the last ROM_BASELINE_WINDOW_DAYS (same exercise)."""
     start = now - dt.timedelta(days=ROM_BASELINE_WINDOW_DAYS)
     times, values = [], []
@@ -197,7 +200,11 @@ def _rom_baseline(history: list[tuple[dt.datetime, dict]], now: dt.datetime, exe
 
 
 def rom_drop(
-    doc: dict, history: list[tuple[dt.datetime, dict]], now: dt.datetime, day: str, t: Translator = ENGLISH
+    doc: dict[str, Any],
+    history: list[tuple[dt.datetime, dict[str, Any]]],
+    now: dt.datetime,
+    day: str,
+    t: Translator = ENGLISH,
 ) -> SuggestionDraft | None:
     """Fires when rom_deg < ROM_DROP_FRACTION x the median rom_deg of the last 2-4 weeks; day: 'on Saturday'."""
     rom = _number(doc, "rom_deg")
@@ -218,7 +225,7 @@ def rom_drop(
     return SuggestionDraft(ROM_DROP, "rom_deg", "<", threshold, rom, text)
 
 
-def too_fast(doc: dict, day: str, t: Translator = ENGLISH) -> SuggestionDraft | None:
+def too_fast(doc: dict[str, Any], day: str, t: Translator = ENGLISH) -> SuggestionDraft | None:
     """Fires when a repetition took less than MIN_TEMPO_S_PER_REP seconds on average; day: 'on Saturday'."""
     tempo = _number(doc, "tempo_s_per_rep")
     if tempo is None or tempo <= 0 or tempo >= MIN_TEMPO_S_PER_REP:
@@ -232,7 +239,7 @@ def too_fast(doc: dict, day: str, t: Translator = ENGLISH) -> SuggestionDraft | 
     return SuggestionDraft(TOO_FAST, "tempo_s_per_rep", "<", MIN_TEMPO_S_PER_REP, tempo, text)
 
 
-def poor_data_quality(doc: dict, day: str, t: Translator = ENGLISH) -> SuggestionDraft | None:
+def poor_data_quality(doc: dict[str, Any], day: str, t: Translator = ENGLISH) -> SuggestionDraft | None:
     """Fires when the analysis found the data unreliable (quality.ok false); says what to change at the camera."""
     quality = _quality(doc)
     if quality.get("ok") is not False:
@@ -268,7 +275,7 @@ def poor_data_quality(doc: dict, day: str, t: Translator = ENGLISH) -> Suggestio
 
 
 def missed_days(
-    history: list[tuple[dt.datetime, dict]],
+    history: list[tuple[dt.datetime, dict[str, Any]]],
     expected_per_week: int | None,
     now: dt.datetime,
     exercise: object = None,
@@ -302,10 +309,10 @@ def missed_days(
 
 
 def evaluate(
-    doc: dict,
+    doc: dict[str, Any],
     *,
     prescribed_reps: int | None,
-    history: list[tuple[dt.datetime, dict]],
+    history: list[tuple[dt.datetime, dict[str, Any]]],
     expected_per_week: int | None,
     now: dt.datetime,
     today: dt.date | None = None,

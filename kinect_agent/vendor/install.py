@@ -22,6 +22,7 @@ import subprocess
 import sys
 import tarfile
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -111,7 +112,7 @@ def _unpack(tarball: bytes, members: set[str], target: Path) -> None:
             shutil.rmtree(tmp)
 
 
-def install_packages(lock: dict[str, Any], *, relock: bool, log) -> None:
+def install_packages(lock: dict[str, Any], *, relock: bool, log: Callable[[str], None]) -> None:
     """Fetches, checks and unpacks every npm package whose unpacked copy is missing or of another version."""
     for package in lock["npm"]:
         name, version, integrity = package["name"], package["version"], package["integrity"]
@@ -152,7 +153,7 @@ def build_task(task: dict[str, Any]) -> bytes:
     return pack_task({"pose_detector.tflite": detector, "pose_landmarks_detector.tflite": landmarks})
 
 
-def install_tasks(lock: dict[str, Any], *, relock: bool, log) -> None:
+def install_tasks(lock: dict[str, Any], *, relock: bool, log: Callable[[str], None]) -> None:
     """Packs every `.task` that is missing or differs from its pinned SHA-256."""
     models = FILES / "models"
     models.mkdir(parents=True, exist_ok=True)
