@@ -3,7 +3,7 @@
 FastAPI's own pages load their scripts from a CDN and ask for /openapi.json at the server's root: a clinic network
 without internet access, or a reverse proxy with a path prefix (COACH_PUBLIC_URL https://coach.example.org/clinic),
 breaks them. Here every URL it uses starts with the configured prefix (never taken from the request) and the files
-come from the pinned `fastapi-offline` wheel (Swagger UI and a favicon), like plotly.js for the pages. No /redoc:
+come from the pinned `fastapi-offline` wheel (Swagger UI and a favicon). No /redoc:
 ReDoc fetches its logo from its vendor's CDN whatever it is told.
 """
 
@@ -16,7 +16,10 @@ from fastapi import APIRouter, FastAPI, Request
 from fastapi.openapi.docs import get_swagger_ui_html, get_swagger_ui_oauth2_redirect_html
 from fastapi.responses import FileResponse, HTMLResponse, Response
 
-ASSETS = Path(importlib.util.find_spec("fastapi_offline").submodule_search_locations[0]) / "static"
+_SPEC = importlib.util.find_spec("fastapi_offline")
+if _SPEC is None or not _SPEC.submodule_search_locations:
+    raise ModuleNotFoundError("the package fastapi_offline is not installed", name="fastapi_offline")
+ASSETS = Path(_SPEC.submodule_search_locations[0]) / "static"
 FILES = {  # the URL's file name -> media type; the only files served from ASSETS
     "swagger-ui-bundle.js": "text/javascript; charset=utf-8",
     "swagger-ui.css": "text/css; charset=utf-8",

@@ -6,15 +6,23 @@ import argparse
 import getpass
 import sys
 from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 from backend import __version__
+
+if TYPE_CHECKING:
+    from types import FrameType
+
+    from sqlalchemy.orm import Session
+
+    from backend.config import Settings
 
 
 class CliError(Exception):
     """A user error: printed as one line on stderr, exit status 2."""
 
 
-def _settings():
+def _settings() -> Settings:
     from pydantic import ValidationError
 
     from backend.config import get_settings
@@ -55,7 +63,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         agents) and calls ON_STOP: the stop then waits for none of them, and no stream is cancelled mid-response
         (a traceback)."""
 
-        def handle_exit(self, sig, frame) -> None:
+        def handle_exit(self, sig: int, frame: FrameType | None) -> None:
             HUB.stop_all()
             for callback in ON_STOP:
                 callback()
@@ -66,7 +74,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     return 0
 
 
-def serve_options(args: argparse.Namespace, settings) -> dict:
+def serve_options(args: argparse.Namespace, settings: Settings) -> dict[str, Any]:
     """Returns uvicorn's options for `serve`: the command line's, else the settings' (COACH_HOST, COACH_PORT,
     COACH_WORKERS, COACH_FORWARDED_ALLOW_IPS)."""
     workers = args.workers or settings.WORKERS
@@ -111,7 +119,7 @@ def cmd_migrate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _sync_exercises(factory) -> int | str:
+def _sync_exercises(factory: Callable[[], Session]) -> int | str:
     try:
         from backend.exercises.service import sync_exercise_library
 

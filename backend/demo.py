@@ -213,7 +213,7 @@ def _agents_line(args: argparse.Namespace, agents_home: Path) -> str:
             f"then a session every {low:.0f}-{high:.0f} s; queues in {agents_home.resolve()})\n")  # fmt: skip
 
 
-def start_agents(base: str, home: Path, args: argparse.Namespace) -> subprocess.Popen:
+def start_agents(base: str, home: Path, args: argparse.Namespace) -> subprocess.Popen[bytes]:
     """Starts backend.demo_agents as a child process that pairs and uploads through the HTTP API."""
     host = base.replace("://0.0.0.0:", "://127.0.0.1:")
     low, high = args.agent_interval
@@ -225,7 +225,7 @@ def start_agents(base: str, home: Path, args: argparse.Namespace) -> subprocess.
     return subprocess.Popen(command, start_new_session=True)
 
 
-def signal_agents(agents: subprocess.Popen, sig: int) -> None:
+def signal_agents(agents: subprocess.Popen[bytes], sig: int) -> None:
     """Sends sig to the agents' process group (the agents and the live agent they started)."""
     try:
         os.killpg(agents.pid, sig)
@@ -233,7 +233,7 @@ def signal_agents(agents: subprocess.Popen, sig: int) -> None:
         pass
 
 
-def stop_agents(agents: subprocess.Popen | None) -> None:
+def stop_agents(agents: subprocess.Popen[bytes] | None) -> None:
     """Stops the agents (SIGTERM to their group, then SIGKILL after 10 s); their queues keep whatever was not sent
     (atomic writes: any moment is safe)."""
     if agents is None:

@@ -28,6 +28,7 @@ import time
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import httpx
 
@@ -165,6 +166,8 @@ def record_one(
     progress: printed before the outcome line (e.g. "history 5/72: ").
     """
     home = agent.agent
+    if home is None:
+        raise AgentError(f"{agent.label} is not paired yet")
     started = when.astimezone(dt.UTC).isoformat(timespec="seconds").replace("+00:00", "Z")
     t0 = time.monotonic()
     if session_id is None or home.where(session_id) is None:  # a backfilled session is made once
@@ -181,10 +184,10 @@ def record_one(
         _say(f"{progress}{agent.label}: {what} ({r.session_id[:8]}) -> {outcome} ({took})")
 
 
-def backfill_plan(agents: list[Agent], weeks: int, today: dt.date, seed: int):
+def backfill_plan(agents: list[Agent], weeks: int, today: dt.date, seed: int) -> list[tuple[dt.datetime, Agent, str]]:
     """Returns [(when, agent, exercise)] of the backdated sessions: patient after patient (the first plots fill up
     first), each oldest first; the same plan on the same day."""
-    plan = []
+    plan: list[tuple[dt.datetime, Agent, str]] = []
     for agent in agents:
         rng = random.Random(f"{seed}-{agent.email}")
         for exercise in agent.exercises:
@@ -198,14 +201,14 @@ def backfill_plan(agents: list[Agent], weeks: int, today: dt.date, seed: int):
     return sorted(plan, key=lambda item: (item[1].index, item[0]))
 
 
-def _state(agent: Agent) -> dict:
+def _state(agent: Agent) -> dict[str, Any]:
     try:
         return json.loads((agent.home / STATE_NAME).read_text())
     except (FileNotFoundError, ValueError):
         return {}
 
 
-def _save_state(agent: Agent, state: dict) -> None:
+def _save_state(agent: Agent, state: dict[str, Any]) -> None:
     (agent.home / STATE_NAME).write_text(json.dumps(state))
 
 
@@ -237,7 +240,7 @@ class _Stop:
             time.sleep(min(0.5, max(end - time.monotonic(), 0.0)))
 
 
-def start_live_agent(patient: Agent, server: str) -> subprocess.Popen:
+def start_live_agent(patient: Agent, server: str) -> subprocess.Popen[bytes]:
     """Pairs a second home agent of the patient (its own folder and queue) and runs it as `kinect-agent serve` with
     the simulator as its camera, so the demo's patient page can start a set live."""
     live = Agent(email=patient.email, name=patient.name, exercises=patient.exercises, index=patient.index,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Annotated
 
@@ -41,7 +42,14 @@ class Caller:
     @property
     def role(self) -> str:
         """Returns 'device' for devices, else the user's role."""
-        return "device" if self.device is not None else self.user.role  # type: ignore[union-attr]
+        return "device" if self.device is not None else self.signed_in_user.role
+
+    @property
+    def signed_in_user(self) -> User:
+        """Returns the calling user; raises Forbidden when a device calls (what UserCaller routes refuse first)."""
+        if self.user is None:
+            raise Forbidden("this endpoint is for users, not devices")
+        return self.user
 
 
 def client_ip(request: Request) -> str:
@@ -67,10 +75,10 @@ def _from_bearer(token: str, db_session: Session, ip: str) -> Caller:
             .join(User, User.id == Device.patient_id)
             .where(Device.token_hash == token_hash(token))
         ).first()
-        device = found[0] if found is not None else None
-        if device is None or device.revoked_at is not None:
+        if found is None or found[0].revoked_at is not None:
             raise NotAuthenticated("device token is unknown or revoked")
-        if not found[1]:
+        device, patient_active = found
+        if not patient_active:
             raise NotAuthenticated("the patient of this device is deactivated")
         if device.last_seen_at is None or now - device.last_seen_at > LAST_SEEN_RESOLUTION:
             device.last_seen_at = now  # not on every live message: a write per message would be 5 a second
@@ -161,11 +169,11 @@ def current_user_caller(caller: CurrentCaller) -> Caller:
 UserCaller = Annotated[Caller, Depends(current_user_caller)]
 
 
-def require_role(*roles: str):
+def require_role(*roles: str) -> Callable[[Caller], Caller]:
     """Returns a dependency that yields the calling user when their role is one of roles."""
 
     def dependency(caller: UserCaller) -> Caller:
-        if caller.user.role not in roles:  # type: ignore[union-attr]
+        if caller.signed_in_user.role not in roles:
             raise Forbidden(f"this endpoint needs role {' or '.join(roles)}")
         return caller
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 
 class AppError(Exception):
     """Base of every error the API answers on purpose; the class name becomes the JSON "error" field."""
@@ -195,12 +197,12 @@ class DatabaseNotMigrated(RuntimeError):
 AUTH_ERRORS = (NotAuthenticated, Forbidden, CsrfFailed, InsufficientScope)
 
 
-def error_responses(*errors: type[AppError]) -> dict[int | str, dict]:
+def error_responses(*errors: type[AppError]) -> dict[int | str, dict[str, Any]]:
     """Returns a FastAPI `responses=` mapping documenting the given errors with examples."""
     by_status: dict[int, list[type[AppError]]] = {}
     for err in errors:
         by_status.setdefault(err.status_code, []).append(err)
-    out: dict[int | str, dict] = {}
+    out: dict[int | str, dict[str, Any]] = {}
     for status, errs in by_status.items():
         examples = {
             e.__name__: {"value": {"error": e.__name__, "detail": _EXAMPLE_DETAIL.get(e.__name__, e.__name__)}}

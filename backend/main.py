@@ -5,7 +5,7 @@ from __future__ import annotations
 import asyncio
 import importlib
 import logging
-from collections.abc import Callable
+from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from importlib.metadata import entry_points
 
@@ -169,7 +169,7 @@ def _system_router() -> APIRouter:
     router = APIRouter(tags=["system"])
 
     @router.get("/healthz", response_model=HealthOut, responses={503: {"model": ErrorOut}})
-    def healthz(db_session: DbSession):
+    def healthz(db_session: DbSession) -> HealthOut | JSONResponse:
         """Answers 200 when the server runs and the database answers, 503 otherwise."""
         try:
             db_session.execute(text("SELECT 1"))
@@ -218,7 +218,7 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     one_blas_thread()
 
     @asynccontextmanager
-    async def lifespan(_app: FastAPI):
+    async def lifespan(_app: FastAPI) -> AsyncIterator[None]:
         bound = engine or get_engine()
         if settings.CHECK_MIGRATIONS:
             from backend.migrate import check_at_head

@@ -3,13 +3,16 @@ every operation can give before its route runs, and the security schemes (bearer
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 from fastapi import FastAPI
 from fastapi.openapi.utils import get_openapi
 
 from backend.schemas import ErrorOut
 
 
-def _error_answer(description: str, error: str, detail: str) -> dict:
+def _error_answer(description: str, error: str, detail: str) -> dict[str, Any]:
     return {
         "description": description,
         "content": {
@@ -21,7 +24,7 @@ def _error_answer(description: str, error: str, detail: str) -> dict:
     }
 
 
-def _document_request_checks(schema: dict) -> None:
+def _document_request_checks(schema: dict[str, Any]) -> None:
     """Adds to every operation the answers that come before its route (backend.request_limits, the database)."""
     for path in schema.get("paths", {}).values():
         for method, op in path.items():
@@ -52,7 +55,7 @@ def _document_request_checks(schema: dict) -> None:
 NO_NUL = r"^[^\x00]*$"  # backend.request_limits refuses a NUL character in the URL (400) and in JSON text (422)
 
 
-def _document_no_nul(schema: dict) -> None:
+def _document_no_nul(schema: dict[str, Any]) -> None:
     """Gives every text the client sends (parameters and request bodies, with the components they refer to) the
     pattern NO_NUL unless it has a pattern, a fixed set of values or binary content already, so that the document
     says what the server enforces."""
@@ -84,7 +87,7 @@ def _document_no_nul(schema: dict) -> None:
             visit(op.get("requestBody", {}))
 
 
-def _document_body_rules(schema: dict) -> None:
+def _document_body_rules(schema: dict[str, Any]) -> None:
     """Names, in the 422 answer of every operation whose JSON body schema lists x-body-rules (backend.schemas.BodyRule:
     rules JSON Schema cannot state), each rule's refusal as an example beside the schema's own, so the document says
     which well-formed bodies are answered 422."""
@@ -109,11 +112,11 @@ def _document_body_rules(schema: dict) -> None:
             )
 
 
-def openapi_builder(app: FastAPI):
+def openapi_builder(app: FastAPI) -> Callable[[], dict[str, Any]]:
     """Returns app.openapi: FastAPI's document with the error body ErrorOut on every error answer, the answers
     given before any route (_document_request_checks) and the two security schemes."""
 
-    def build() -> dict:
+    def build() -> dict[str, Any]:
         if app.openapi_schema:
             return app.openapi_schema
         root = app.state.settings.root_path  # the configured prefix, so that "Try it out" calls the API through it

@@ -69,7 +69,7 @@ class RequestLimits:
             return
         await self.app(scope, _replay(body, receive), send)
 
-    async def _read(self, headers: dict, receive: Receive) -> tuple[bytes, JSONResponse | None]:
+    async def _read(self, headers: dict[bytes, bytes], receive: Receive) -> tuple[bytes, JSONResponse | None]:
         """Returns (the JSON body, None), or (b"", a 413 answer) once it is known to exceed the limit."""
         too_large = _error(413, "RequestTooLarge", f"JSON bodies are limited to {self.max_json_bytes} bytes")
         try:

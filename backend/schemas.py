@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from typing import Annotated, Generic, TypeVar
 
 from fastapi import Path, Query
-from pydantic import AwareDatetime, BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic import AwareDatetime, BaseModel, BeforeValidator, ConfigDict, Field, JsonValue
 
 T = TypeVar("T")
 
@@ -36,7 +36,7 @@ class BodyRule:
         """Returns the detail of the 422 ValidationError that refuses a body breaking the rule."""
         return f"body: Value error, {self.message}"
 
-    def as_schema(self) -> dict[str, str]:
+    def as_schema(self) -> dict[str, JsonValue]:
         """Returns the rule as the model's JSON schema lists it."""
         return {"name": self.name, "rule": self.rule, "detail": self.detail}
 

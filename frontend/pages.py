@@ -11,7 +11,7 @@ import importlib.util
 import re
 from functools import lru_cache
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 from urllib.parse import parse_qsl, quote
 
 from fastapi import APIRouter, Depends, FastAPI, Request
@@ -25,12 +25,22 @@ from backend.i18n import LANGUAGE_NAMES, LOCALES, N_, js_messages, negotiate, tr
 from backend.reminders.service import UNSUBSCRIBE_PATH, patient_of_token, unsubscribe
 from backend.reminders.times import zone_names
 from backend.schemas import IdPath
+from backend.users.models import User
 from frontend import vendor_assets
 
 HERE = Path(__file__).resolve().parent
 STATIC = HERE / "static"
-VISER_CLIENT = Path(importlib.util.find_spec("viser").submodule_search_locations[0]) / "client" / "build" / "index.html"
-PLOTLY_JS = Path(importlib.util.find_spec("plotly").submodule_search_locations[0]) / "package_data" / "plotly.min.js"
+
+
+def _package_dir(name: str) -> Path:
+    """Returns the folder of an installed package, without importing it."""
+    spec = importlib.util.find_spec(name)
+    if spec is None or not spec.submodule_search_locations:
+        raise ModuleNotFoundError(f"the package {name} is not installed", name=name)
+    return Path(spec.submodule_search_locations[0])
+
+
+VISER_CLIENT = _package_dir("viser") / "client" / "build" / "index.html"
 
 
 @lru_cache(maxsize=len(LOCALES))
@@ -39,7 +49,8 @@ def templates_for(locale: str) -> Jinja2Templates:
     found = Jinja2Templates(directory=str(HERE / "templates"))
     found.env.add_extension("jinja2.ext.i18n")
     found.env.policies["ext.i18n.trimmed"] = True
-    found.env.install_gettext_translations(translations(locale), newstyle=True)
+    # added to the Environment at run time by jinja2.ext.i18n; jinja2's types do not declare it
+    found.env.install_gettext_translations(translations(locale), newstyle=True)  # type: ignore[attr-defined]
     return found
 
 
@@ -67,7 +78,7 @@ def _here(request: Request) -> str:
     return _root(request) + request.url.path + (f"?{request.url.query}" if request.url.query else "")
 
 
-def page_locale(request: Request, user) -> str:
+def page_locale(request: Request, user: User | None) -> str:
     """Returns the language of a page: a patient's chosen one, else the browser's (Accept-Language); the therapist
     pages stay English for now (their templates are marked, their catalogues not written yet)."""
     if user is not None and user.role in THERAPIST_ROLES:
@@ -78,7 +89,7 @@ def page_locale(request: Request, user) -> str:
 
 
 def _page(request: Request, name: str, caller: Caller | None, status_code: int = 200, locale: str | None = None,
-          **context) -> HTMLResponse:  # fmt: skip
+          **context: Any) -> HTMLResponse:  # fmt: skip
     user = caller.user if caller is not None else None
     root = _root(request)
     locale = locale or page_locale(request, user)
@@ -98,7 +109,7 @@ def mount(app: FastAPI) -> None:
     """Mounts the pages on the app, the one place that does: their routes, and the HTML page that answers a
     browser's error outside /api/ (app.state.error_page, which the app's error handlers call)."""
     app.include_router(router)
-    app.include_router(vendor_assets.router)  # /static/vendor/mediapipe/: the pinned pose runtime and models
+    app.include_router(vendor_assets.router)  # /static/vendor/: the pinned pose runtime and models, plotly.js
     app.state.error_page = browser_error_page
 
 
@@ -124,7 +135,7 @@ def error_page(request: Request, status_code: int) -> HTMLResponse:
 
 
 def _error(
-    request: Request, caller: Caller | None, status_code: int, title: str, message: str, **context
+    request: Request, caller: Caller | None, status_code: int, title: str, message: str, **context: Any
 ) -> HTMLResponse:
     """Returns the error page, its title, message and link text (marked with N_) in the page's language."""
     user = caller.user if caller is not None else None
@@ -223,6 +234,7 @@ def patient_detail_page(
     gate = _gate(request, caller, THERAPIST_ROLES)
     if gate is not None:
         return gate
+    assert caller is not None  # _gate sent a signed-out browser to the login page
     try:
         require_patient_access(patient_id, caller=caller, db_session=db_session)
     except NotFound:
@@ -264,6 +276,7 @@ def session_page(session_id: IdPath, request: Request, caller: OptionalCaller, d
     gate = _gate(request, caller, THERAPIST_ROLES)
     if gate is not None:
         return gate
+    assert caller is not None  # _gate sent a signed-out browser to the login page
     found = _visible_session(request, caller, db_session, session_id)
     return found if isinstance(found, Response) else _page(request, "session.html", caller, session_id=session_id)
 
@@ -351,12 +364,6 @@ def unsubscribe_submit(token: str, request: Request, db_session: DbSession) -> R
 def _unknown_unsubscribe_link(request: Request) -> HTMLResponse:
     message = N_("This unsubscribe link belongs to no reminder e-mail. Please check that it is complete.")
     return _error(request, None, 404, N_("Link not found"), message)
-
-
-@router.get("/static/vendor/plotly.min.js")
-def plotly_js() -> Response:
-    """Returns plotly.js as shipped inside the pinned `plotly` wheel (the charting library of the pages)."""
-    return FileResponse(PLOTLY_JS, media_type=_MEDIA[".js"], headers={"Cache-Control": "public, max-age=86400"})
 
 
 @router.get("/static/{name}")

@@ -188,7 +188,7 @@ def drain(queue: SessionQueue, uploader: Uploader, *, log: Callable[[str], None]
             queue.mark_sent(path, _receipt(result))
         elif result.outcome == "rejected":
             queue.mark_rejected(path, error)
-        elif result.outcome == "kept" and _lasting(result.status_code):
+        elif result.outcome == "kept" and result.status_code is not None and _lasting(result.status_code):
             passes = queue.note_server_error(path, result.status_code, result.detail)
             if passes >= HOLD_AFTER_SERVER_ERRORS:
                 queue.mark_held(path, {**error, "passes": passes})

@@ -13,9 +13,11 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 # pydantic is in the shared core (the pipeline's settings, kinect_agent.processing.config); pydantic_settings is not.
 SERVER_ONLY = ("fastapi", "starlette", "uvicorn", "sqlalchemy", "alembic", "psycopg", "pydantic_settings", "argon2",
-               "jinja2", "viser", "plotly", "babel")  # fmt: skip
+               "jinja2", "viser", "babel")  # fmt: skip
 AGENT_ONLY = ("numba", "llvmlite", "tqdm")
-NEVER = ("filterpy", "matplotlib")  # a benchmark's baseline, not the product's
+# a benchmark's baseline and the evaluation figures, not the product's; plotly's Python package (the pages' plotly.js
+# is a pinned npm asset, kinect_agent/vendor/lock.json)
+NEVER = ("filterpy", "matplotlib", "plotly")
 
 BLOCK = """
 import sys
@@ -110,6 +112,8 @@ def test_the_server_ingests_analyses_and_replays_without_numba(tmp_path: Path) -
             assert work(sessionmaker=lambda: Session(engine), settings=settings, name="lean", once=True) == 1
             replay = client.get(f"/api/v1/sessions/{sid}/replay", headers=admin)  # the viser scene
             assert replay.status_code == 200 and len(replay.content) > 1000, replay.text[:500]
+            charts = client.get("/static/vendor/plotly/plotly.min.js")  # the pages' charting library
+            assert charts.status_code == 200 and b"plotly.js v" in charts.content[:200], charts.text[:500]
         print("loaded:", sorted(m for m in sys.modules if m.split(".")[0] in BLOCKED))
         from kinect_agent.body import _fk_numba
         from kinect_agent.processing import _ukf_numba

@@ -17,6 +17,8 @@ A camera tilted up or down shifts the vertical angles; the advice says "about" f
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from kinect_agent.recording import Recording
@@ -42,7 +44,7 @@ def _trunk(raw: Recording) -> np.ndarray:
     return points[np.all(np.isfinite(points), axis=1)]
 
 
-def distance_advice(trunk: np.ndarray) -> list[dict]:
+def distance_advice(trunk: np.ndarray) -> list[dict[str, Any]]:
     """Returns too_close / too_far advice from trunk positions (K, 3) m, camera frame."""
     if trunk.shape[0] == 0:
         return []
@@ -66,7 +68,7 @@ def distance_advice(trunk: np.ndarray) -> list[dict]:
     return []
 
 
-def centre_advice(trunk: np.ndarray, fov_h_deg: float) -> list[dict]:
+def centre_advice(trunk: np.ndarray, fov_h_deg: float) -> list[dict[str, Any]]:
     """Returns off_centre advice from trunk positions (K, 3) m and the horizontal field of view (degrees)."""
     if trunk.shape[0] == 0:
         return []
@@ -93,7 +95,7 @@ def out_of_view_fractions(raw: Recording) -> dict[tuple[str, str], float]:
     return out
 
 
-def limb_advice(raw: Recording) -> list[dict]:
+def limb_advice(raw: Recording) -> list[dict[str, Any]]:
     """Returns hand_out_of_view / foot_out_of_view advice naming the sides that left the picture."""
     out = []
     fractions = out_of_view_fractions(raw)
@@ -114,7 +116,7 @@ def limb_advice(raw: Recording) -> list[dict]:
     return out
 
 
-def feet_advice(raw: Recording, fov_v_deg: float) -> list[dict]:
+def feet_advice(raw: Recording, fov_v_deg: float) -> list[dict[str, Any]]:
     """Returns feet_cut_off advice when the feet sit at the bottom edge of the vertical field of view (degrees)."""
     idx = [INDEX["FOO_L"], INDEX["FOO_R"]]
     feet = raw.positions[:, idx][raw.state[:, idx] != NOT_TRACKED]
@@ -133,7 +135,7 @@ def feet_advice(raw: Recording, fov_v_deg: float) -> list[dict]:
     ]
 
 
-def camera_advice(raw: Recording) -> list[dict]:
+def camera_advice(raw: Recording) -> list[dict[str, Any]]:
     """Returns [{"code", "text"}]: plain-words advice on the camera set-up of a raw recording (module doc)."""
     fov_h, fov_v = FIELD_OF_VIEW.get(raw.meta.device, DEFAULT_FOV)
     trunk = _trunk(raw)

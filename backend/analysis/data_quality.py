@@ -20,6 +20,8 @@ probability (null), so a column where the joint was never seen is null.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from backend.analysis.quality import angle_joints
@@ -72,7 +74,7 @@ def part_score(name: str, value: float | None) -> float | None:
     return float(np.clip(100.0 * (value - bad) / (good - bad), 0.0, 100.0))
 
 
-def quality_score(values: dict[str, float | None]) -> tuple[int, list[dict]]:
+def quality_score(values: dict[str, float | None]) -> tuple[int, list[dict[str, Any]]]:
     """Returns (score 0-100, parts [{"name", "label", "value", "score", "weight"}]) of part values.
 
     values: {part name: value} for the names of PARTS. A part with no value is left out and the other weights
@@ -90,7 +92,7 @@ def quality_score(values: dict[str, float | None]) -> tuple[int, list[dict]]:
     return (int(round(total / weights)) if weights else 0), parts
 
 
-def outlier_strip(t: np.ndarray, prob: np.ndarray, max_columns: int = MAX_COLUMNS) -> dict:
+def outlier_strip(t: np.ndarray, prob: np.ndarray, max_columns: int = MAX_COLUMNS) -> dict[str, Any]:
     """Returns {"joints", "t_s", "column_s", "prob"}: prob (T, J) max-pooled over time into ≤ max_columns columns.
 
     t: (T,) s. prob: (T, J) in [0, 1], NaN = no sample. "t_s": (C,) the time of each column's centre, seconds
@@ -121,7 +123,7 @@ def outlier_strip(t: np.ndarray, prob: np.ndarray, max_columns: int = MAX_COLUMN
     }
 
 
-def assess(raw: Recording, prob: np.ndarray, angle_names: tuple[str, ...], threshold: float) -> dict:
+def assess(raw: Recording, prob: np.ndarray, angle_names: tuple[str, ...], threshold: float) -> dict[str, Any]:
     """Returns {"score", "low", "parts", "segment_spread_mm"} of a session (module doc).
 
     raw: the recording as captured. prob: (T, J) outlier probabilities of its samples (NaN where untracked).

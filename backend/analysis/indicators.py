@@ -22,6 +22,7 @@ change of definition applies to the whole history).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -36,11 +37,11 @@ def _clip100(x: float) -> float:
     return round(float(np.clip(x, 0.0, 100.0)), 1)
 
 
-def _quality_ok(doc: dict) -> bool:
+def _quality_ok(doc: dict[str, Any]) -> bool:
     return bool((doc.get("quality") or {}).get("ok"))
 
 
-def _values(history: list[dict], read) -> list[float]:
+def _values(history: list[dict[str, Any]], read: Callable[[dict[str, Any]], float | None]) -> list[float]:
     out = []
     for doc in history:
         v = read(doc)
@@ -49,7 +50,9 @@ def _values(history: list[dict], read) -> list[float]:
     return out
 
 
-def _indicator(score: float | None, value: float | None, basis: str, doc: dict, previous: list[float]) -> dict:
+def _indicator(
+    score: float | None, value: float | None, basis: str, doc: dict[str, Any], previous: list[float]
+) -> dict[str, Any]:
     return {
         "score": score,
         "value": value,
@@ -59,28 +62,28 @@ def _indicator(score: float | None, value: float | None, basis: str, doc: dict, 
     }
 
 
-def _rom(doc: dict) -> float | None:
+def _rom(doc: dict[str, Any]) -> float | None:
     return doc.get("rom_deg")
 
 
-def _reps(doc: dict) -> float | None:
+def _reps(doc: dict[str, Any]) -> float | None:
     return doc.get("repetitions")
 
 
-def _rise(doc: dict) -> float | None:
+def _rise(doc: dict[str, Any]) -> float | None:
     return (doc.get("sit_to_stand") or {}).get("mean_s")
 
 
-def _speed(doc: dict) -> float | None:
+def _speed(doc: dict[str, Any]) -> float | None:
     rates = [r["amplitude_deg"] / r["duration_s"] for r in doc.get("repetition_list") or [] if r["duration_s"] > 0]
     return round(float(np.median(rates)), 2) if rates else None
 
 
-def _sway(doc: dict) -> float | None:
+def _sway(doc: dict[str, Any]) -> float | None:
     return (doc.get("balance") or {}).get("sway_velocity_m_s")
 
 
-def flexibility(doc: dict, exercise: ExerciseSpec, history: list[dict]) -> dict:
+def flexibility(doc: dict[str, Any], exercise: ExerciseSpec, history: list[dict[str, Any]]) -> dict[str, Any]:
     """Returns the flexibility indicator (module doc)."""
     lo, hi = exercise.normal_range_deg
     value = _rom(doc)
@@ -89,11 +92,14 @@ def flexibility(doc: dict, exercise: ExerciseSpec, history: list[dict]) -> dict:
     return _indicator(score, value, basis, doc, _values(history, _rom))
 
 
-def endurance(doc: dict, target_reps: int | None, history: list[dict]) -> dict:
+def endurance(doc: dict[str, Any], target_reps: int | None, history: list[dict[str, Any]]) -> dict[str, Any]:
     """Returns the endurance indicator (module doc)."""
     value = _reps(doc)
     previous = _values(history, _reps)
-    if target_reps:
+    score: float | None
+    if value is None:
+        score, basis = None, "no repetition count in this session's analysis"
+    elif target_reps:
         score, basis = _clip100(100.0 * value / target_reps), f"repetitions against the target of {target_reps}"
     elif previous and np.median(previous) > 0:
         ref = float(np.median(previous))
@@ -103,7 +109,7 @@ def endurance(doc: dict, target_reps: int | None, history: list[dict]) -> dict:
     return _indicator(score, value, basis, doc, previous)
 
 
-def strength(doc: dict, exercise: ExerciseSpec, history: list[dict]) -> dict:
+def strength(doc: dict[str, Any], exercise: ExerciseSpec, history: list[dict[str, Any]]) -> dict[str, Any]:
     """Returns the strength indicator (module doc)."""
     if exercise.slug == "sit_to_stand":
         value = _rise(doc)
@@ -124,7 +130,7 @@ def strength(doc: dict, exercise: ExerciseSpec, history: list[dict]) -> dict:
     return _indicator(score, value, basis, doc, previous)
 
 
-def balance(doc: dict, history: list[dict]) -> dict:
+def balance(doc: dict[str, Any], history: list[dict[str, Any]]) -> dict[str, Any]:
     """Returns the balance indicator (module doc)."""
     value = _sway(doc)
     score = None
@@ -137,7 +143,9 @@ def balance(doc: dict, history: list[dict]) -> dict:
     return out
 
 
-def indicators(doc: dict, *, exercise: ExerciseSpec, target_reps: int | None, history: list[dict]) -> dict[str, Any]:
+def indicators(
+    doc: dict[str, Any], *, exercise: ExerciseSpec, target_reps: int | None, history: list[dict[str, Any]]
+) -> dict[str, Any]:
     """Returns {"flexibility", "endurance", "strength", "balance"} indicators of an analysis document.
 
     doc: report.analyze_recording output; history: earlier documents of the same patient and exercise, oldest

@@ -8,6 +8,8 @@ by path length, longest first (ties keep skeleton order).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from kinect_agent.analysis import series
@@ -22,7 +24,7 @@ def path_lengths(smoothed: np.ndarray) -> np.ndarray:
     return steps.sum(axis=0)
 
 
-def most_moving_joints(smoothed: np.ndarray) -> list[dict]:
+def most_moving_joints(smoothed: np.ndarray) -> list[dict[str, Any]]:
     """Returns [{"joint", "path_m"}] for every tracked joint, longest path first.
 
     smoothed: (T, J, 3) float, metres, camera frame, gap-filled and smoothed (series.smooth_positions).

@@ -12,6 +12,8 @@ Definitions (joints = the joints the exercise's defining angles use, else all 20
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from kinect_agent.analysis import series
@@ -57,7 +59,7 @@ def tracked_fraction(raw: Recording, angle_names: tuple[str, ...] = ()) -> float
     return float(present.mean()) if present.size else 0.0
 
 
-def assess(raw: Recording, measured: np.ndarray | None, angle_names: tuple[str, ...] = ()) -> dict:
+def assess(raw: Recording, measured: np.ndarray | None, angle_names: tuple[str, ...] = ()) -> dict[str, Any]:
     """Returns {"ok", "tracked_fraction", "outlier_fraction", "reasons"} for a session.
 
     raw: the recording as captured. measured: (T, J, 3) metres, camera frame, the positions the metrics use

@@ -19,6 +19,8 @@ A side whose hand, elbow or shoulder is never tracked reads None.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from kinect_agent.analysis import series
@@ -72,7 +74,7 @@ def hand_path(positions: np.ndarray, side: str, frame: Frame | None = None) -> t
     return np.stack([series.dot3(h, axis) / L for axis in (outward, up, forward)], axis=-1), L
 
 
-def side_workspace(positions: np.ndarray, side: str, frame: Frame | None = None) -> dict | None:
+def side_workspace(positions: np.ndarray, side: str, frame: Frame | None = None) -> dict[str, Any] | None:
     """Returns the workspace metrics of one side ("L" or "R") for positions (T, J, 3) m, camera frame.
 
     frame: (up, left, forward), each (T, 3), of angles.body_frame(positions) when already computed.
@@ -99,7 +101,7 @@ def side_workspace(positions: np.ndarray, side: str, frame: Frame | None = None)
     }
 
 
-def reachable_range(positions: np.ndarray, frame: Frame | None = None) -> dict[str, dict | None]:
+def reachable_range(positions: np.ndarray, frame: Frame | None = None) -> dict[str, dict[str, Any] | None]:
     """Returns {"left": ..., "right": ...} workspace metrics (see module doc) of positions (T, J, 3) m."""
     frame = body_frame(np.asarray(positions, dtype=np.float64)) if frame is None else frame
     return {"left": side_workspace(positions, "L", frame), "right": side_workspace(positions, "R", frame)}

@@ -81,15 +81,16 @@ def measured_peak(t: np.ndarray, angles: dict[str, np.ndarray], names: tuple[str
     return round(float(np.mean(values)) if values else rep.peak_deg, 1)
 
 
-def peak_end(rom: dict[str, float | None] | None, repetitions: list[dict]) -> str:
+def peak_end(rom: dict[str, float | None] | None, repetitions: list[dict[str, Any]]) -> str:
     """Returns "max" or "min": the end of the defining angle's range that its repetitions reach (the median
     repetition peak is nearer to it), so that the session's "peak angle" and the repetitions' peaks are one
     quantity (a seated knee extension rests bent and peaks near 0°: its peak is the range's minimum). "max"
     without repetitions or a range."""
     peaks = [r["peak_deg"] for r in repetitions if r.get("peak_deg") is not None]
-    if not rom or rom.get("min_deg") is None or rom.get("max_deg") is None or not peaks:
+    lo, hi = (rom or {}).get("min_deg"), (rom or {}).get("max_deg")
+    if lo is None or hi is None or not peaks:
         return "max"
-    mid = 0.5 * (rom["min_deg"] + rom["max_deg"])
+    mid = 0.5 * (lo + hi)
     return "min" if float(np.median(peaks)) < mid else "max"
 
 

@@ -20,6 +20,8 @@ Definitions:
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from backend.analysis.reachable import hand_path
@@ -65,7 +67,7 @@ def _rounded(values: np.ndarray, digits: int) -> list[float | None]:
     return [None if not np.isfinite(v) else float(v) for v in out]
 
 
-def curve(t_s: np.ndarray, deg: np.ndarray, max_points: int = MAX_CURVE_POINTS) -> dict[str, list]:
+def curve(t_s: np.ndarray, deg: np.ndarray, max_points: int = MAX_CURVE_POINTS) -> dict[str, list[float | None]]:
     """Returns {"t_s", "deg"}: one angle series thinned by min/max decimation (module doc).
 
     t_s: (T,) s from the session start; deg: (T,) degrees, NaN = unknown (sent as null).
@@ -97,7 +99,7 @@ def angle_curves(
     measured_deg: dict[str, np.ndarray],
     names: tuple[str, ...],
     measured_kind: str = "filtered",
-) -> list[dict]:
+) -> list[dict[str, Any]]:
     """Returns [{"angle", "kind", "label", "t_s", "deg"}]: per defining angle, the raw curve then the measured one.
 
     t: (T,) s. raw: (T, J, 3) m, camera frame, NaN = untracked. measured_deg: measured_angles' output for the
@@ -128,7 +130,7 @@ def angular_speeds(t: np.ndarray, angles: dict[str, np.ndarray]) -> dict[str, np
     return {name: np.abs(np.gradient(series.smooth(t, y), t)) for name, y in angles.items()}
 
 
-def peak_speeds(t: np.ndarray, speeds: dict[str, np.ndarray], repetitions: list[dict]) -> list[float | None]:
+def peak_speeds(t: np.ndarray, speeds: dict[str, np.ndarray], repetitions: list[dict[str, Any]]) -> list[float | None]:
     """Returns the peak speed (deg/s, 0.1) of each repetition {"start_s", "end_s", "side"} (module doc).
 
     t: (T,) s; speeds: angular_speeds' output; repetition times are seconds from t[0]. None when no angle of the
@@ -151,7 +153,9 @@ def is_arm_exercise(names: tuple[str, ...]) -> bool:
     return any(n.startswith(ARM_PREFIXES) for n in names)
 
 
-def hand_paths(measured: np.ndarray, t: np.ndarray, max_points: int = MAX_PATH_POINTS) -> dict[str, dict | None]:
+def hand_paths(
+    measured: np.ndarray, t: np.ndarray, max_points: int = MAX_PATH_POINTS
+) -> dict[str, dict[str, Any] | None]:
     """Returns {"left", "right"}: {"arm_length_m", "outward", "up", "forward"} lists in arm lengths, or None.
 
     measured: (T, J, 3) m, camera frame, the measured positions (smoothed as the analysis does); t: (T,) s.
@@ -159,7 +163,7 @@ def hand_paths(measured: np.ndarray, t: np.ndarray, max_points: int = MAX_PATH_P
     """
     smoothed = series.smooth_positions(t, measured)
     frame = body_frame(smoothed)
-    out: dict[str, dict | None] = {}
+    out: dict[str, dict[str, Any] | None] = {}
     for key, side in (("left", "L"), ("right", "R")):
         path = hand_path(smoothed, side, frame)
         if path is None:

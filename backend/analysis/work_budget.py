@@ -27,6 +27,7 @@ import numpy as np
 
 from kinect_agent.formats.session_file import SessionPayload
 from kinect_agent.processing.config import PipelineConfig
+from kinect_agent.recording import Recording
 
 SERVER_PIPELINE = PipelineConfig()  # the server's own settings; a file's params["config"] is recorded, not obeyed
 MAX_ANALYSIS_RATE_HZ = 40.0  # frames analysed per second of recording, at most
@@ -92,6 +93,6 @@ def thinned(payload: SessionPayload) -> SessionPayload:
     )
 
 
-def _frames(rec, keep: np.ndarray):
+def _frames(rec: Recording, keep: np.ndarray) -> Recording:
     step = f"server: {len(keep)} of {rec.n_frames} frames analysed (≤ {MAX_ANALYSIS_RATE_HZ:g} per second)"
     return rec.replace(step=step, t=rec.t[keep], positions=rec.positions[keep], state=rec.state[keep])

@@ -25,7 +25,7 @@ def list_events(
     patient_id: IdQuery = None,
     actor_user_id: IdQuery = None,
     action: Annotated[str | None, Query(max_length=64, examples=["plan.read"])] = None,
-):
+) -> Page[AuditEventOut]:
     """Lists audit events, newest first, optionally for one patient, actor or action (admin only)."""
     rows, total = service.list_events(
         db_session=db_session,

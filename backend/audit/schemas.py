@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+from typing import Any
 
 from pydantic import BaseModel, ConfigDict
 
@@ -20,4 +21,4 @@ class AuditEventOut(BaseModel):
     object_id: str | None
     patient_id: int | None
     ip: str | None
-    detail: dict | None
+    detail: dict[str, Any] | None

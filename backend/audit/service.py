@@ -2,21 +2,27 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, Any
+
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from backend.audit.models import AuditEvent
 
+if TYPE_CHECKING:
+    from backend.deps import Caller
+
 
 def record(
     *,
     db_session: Session,
-    caller,
+    caller: Caller | None,
     action: str,
     object_type: str,
     object_id: object = None,
     patient_id: int | None = None,
-    detail: dict | None = None,
+    detail: dict[str, Any] | None = None,
 ) -> AuditEvent:
     """Adds one audit row for the caller (a deps.Caller, or None for anonymous/system) and returns it."""
     event = AuditEvent(
@@ -35,7 +41,13 @@ def record(
 
 
 def record_patients(
-    *, db_session: Session, caller, action: str, object_type: str, patient_ids, detail: dict | None = None
+    *,
+    db_session: Session,
+    caller: Caller | None,
+    action: str,
+    object_type: str,
+    patient_ids: Iterable[int],
+    detail: dict[str, Any] | None = None,
 ) -> None:
     """Adds one audit row per patient id for the caller, in one flush (a page of patients costs one INSERT)."""
     db_session.add_all(

@@ -102,7 +102,9 @@ def create_token(body: TokenCreate, user: CurrentUser, caller: UserCaller, db_se
 
 
 @router.get("/tokens", response_model=Page[TokenOut], responses=error_responses(*AUTH_ERRORS), tags=["tokens"])
-def list_tokens(user: CurrentUser, db_session: DbSession, page: Annotated[PageParams, Depends(page_params)]):
+def list_tokens(
+    user: CurrentUser, db_session: DbSession, page: Annotated[PageParams, Depends(page_params)]
+) -> Page[TokenOut]:
     """Lists the caller's API tokens, newest first."""
     rows, total = service.list_api_tokens(db_session=db_session, user=user, limit=page.limit, offset=page.offset)
     return Page[TokenOut](

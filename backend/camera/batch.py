@@ -72,7 +72,7 @@ def check_batch(body: BatchIn, *, after_t: float | None = None) -> LandmarkBatch
     _refuse_outside("image", image[..., 2:], -limits.MAX_IMAGE_Z, limits.MAX_IMAGE_Z, "", offset=2)
     _refuse_outside("visibility", visibility, 0.0, 1.0, "")
     try:
-        return check_arrays(t, world, image, visibility, tuple(body.image_size), after_t=after_t)
+        return check_arrays(t, world, image, visibility, (body.image_size[0], body.image_size[1]), after_t=after_t)
     except LandmarkError as exc:
         raise InvalidInput(f"body.{exc}") from None
 

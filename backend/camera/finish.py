@@ -9,6 +9,7 @@ repeated (a retry after a lost answer, two tabs) finds the stored session and st
 from __future__ import annotations
 
 import datetime as dt
+from typing import Any
 
 import numpy as np
 from sqlalchemy.orm import Session
@@ -87,7 +88,7 @@ def session_bytes(row: CameraSet, exercise: Exercise, db_session: Session) -> by
     return session_file.encode(payload)
 
 
-def _ended_message(row: CameraSet, exercise: Exercise, count: int, hint: str | None = None) -> dict:
+def _ended_message(row: CameraSet, exercise: Exercise, count: int, hint: str | None = None) -> dict[str, Any]:
     state = "ended" if row.status == "stored" else "failed"
     return {
         "set_id": str(row.id),

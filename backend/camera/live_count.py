@@ -106,7 +106,8 @@ def advance(
         except (ValueError, FloatingPointError, np.linalg.LinAlgError):
             # the live count is a courtesy: the batch is stored whatever happens here, the end analyses it all
             log.exception("live count of camera set %s failed at batch %s", row.id, seq)
-            state = _STATES.pop(row.id, None) or _fresh(angles)
+            failed = _STATES.pop(row.id, None)
+            state = failed if failed is not None else _fresh(angles)
         status, t_last = state.status, state.t_last
     out = BatchOut(
         set_id=str(row.id),

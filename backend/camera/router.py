@@ -32,13 +32,13 @@ def _the_patient(caller: Caller) -> int:
 
 
 @router.get("/consent", response_model=ConsentOut, responses=error_responses(*AUTH_ERRORS))
-def read_consent(caller: UserCaller, db_session: DbSession):
+def read_consent(caller: UserCaller, db_session: DbSession) -> ConsentOut:
     """Returns whether the calling patient agreed to the current consent text of camera sets."""
     return service.consent_status(db_session=db_session, patient_id=_the_patient(caller))
 
 
 @router.post("/consent", response_model=ConsentOut, responses=error_responses(*AUTH_ERRORS, InvalidInput))
-def give_consent(body: ConsentIn, caller: UserCaller, db_session: DbSession):
+def give_consent(body: ConsentIn, caller: UserCaller, db_session: DbSession) -> ConsentOut:
     """Records that the calling patient agreed to the consent text body.consent_version (the current one)."""
     pid = _the_patient(caller)
     out = service.give_consent(db_session=db_session, patient_id=pid, consent_version=body.consent_version)
@@ -55,7 +55,7 @@ def give_consent(body: ConsentIn, caller: UserCaller, db_session: DbSession):
 
 
 @router.delete("/consent", response_model=ConsentOut, responses=error_responses(*AUTH_ERRORS))
-def withdraw_consent(caller: UserCaller, db_session: DbSession):
+def withdraw_consent(caller: UserCaller, db_session: DbSession) -> ConsentOut:
     """Withdraws the calling patient's consent: no camera set starts until they agree again."""
     pid = _the_patient(caller)
     out = service.withdraw_consent(db_session=db_session, patient_id=pid)
@@ -76,7 +76,7 @@ def withdraw_consent(caller: UserCaller, db_session: DbSession):
     status_code=status.HTTP_201_CREATED,
     responses=error_responses(*AUTH_ERRORS, PlanNotFound, ConsentMissing, CameraRateLimited),
 )
-def start_set(body: CameraStartIn, caller: UserCaller, db_session: DbSession):
+def start_set(body: CameraStartIn, caller: UserCaller, db_session: DbSession) -> CameraSetOut:
     """Starts a set of an exercise of the calling patient's plan, recorded with their own camera."""
     pid = _the_patient(caller)
     row = service.start_set(db_session=db_session, patient_id=pid, plan_item_id=body.plan_item_id, model=body.model)
@@ -94,7 +94,7 @@ def start_set(body: CameraStartIn, caller: UserCaller, db_session: DbSession):
 
 
 @router.get("/sets/{set_id}", response_model=CameraSetOut, responses=error_responses(*AUTH_ERRORS, CameraSetNotFound))
-def read_set(set_id: SetId, caller: UserCaller, db_session: DbSession):
+def read_set(set_id: SetId, caller: UserCaller, db_session: DbSession) -> CameraSetOut:
     """Returns one of the calling patient's camera sets (where it stands: the last batch received, the session)."""
     return service.set_out(
         db_session, service.get_set(db_session=db_session, patient_id=_the_patient(caller), set_id=set_id)
@@ -118,7 +118,7 @@ def read_set(set_id: SetId, caller: UserCaller, db_session: DbSession):
         ),
     },
 )
-def post_batch(set_id: SetId, body: BatchIn, response: Response, caller: UserCaller, db_session: DbSession):
+def post_batch(set_id: SetId, body: BatchIn, response: Response, caller: UserCaller, db_session: DbSession) -> BatchOut:
     """Stores a batch of landmarks of the calling patient's set and answers the live count (201; 200: repeated)."""
     row = service.get_set(db_session=db_session, patient_id=_the_patient(caller), set_id=set_id, for_update=True)
     batch, repeated = service.add_batch(db_session=db_session, row=row, body=body)
@@ -134,7 +134,7 @@ def post_batch(set_id: SetId, body: BatchIn, response: Response, caller: UserCal
     response_model=CameraSetOut,
     responses=error_responses(*AUTH_ERRORS, CameraSetNotFound, BatchOutOfOrder),
 )
-def end_set(set_id: SetId, body: EndIn, request: Request, caller: UserCaller, db_session: DbSession):
+def end_set(set_id: SetId, body: EndIn, request: Request, caller: UserCaller, db_session: DbSession) -> CameraSetOut:
     """Ends the calling patient's set: the offline pipeline runs and the session is stored once (a repeated end
     answers the same stored session). status failed with error: too few frames to analyse, nothing stored."""
     pid = _the_patient(caller)

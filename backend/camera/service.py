@@ -8,9 +8,11 @@ from __future__ import annotations
 
 import datetime as dt
 import uuid
+from typing import Any, cast
 
 import numpy as np
 from sqlalchemy import delete, func, select
+from sqlalchemy.engine import CursorResult
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
@@ -95,7 +97,7 @@ def set_out(db_session: Session, row: CameraSet) -> CameraSetOut:
         target_reps=row.target_reps,
         angles=list(exercise.defining_angles),
         model=row.model_name,
-        status=row.status,  # type: ignore[arg-type]
+        status=row.status,
         n_frames=row.n_frames,
         last_seq=row.last_seq,
         session_id=row.session_id,
@@ -228,7 +230,8 @@ def add_batch(*, db_session: Session, row: CameraSet, body: BatchIn) -> tuple[La
 def drop_batches(*, db_session: Session, set_id: uuid.UUID) -> int:
     """Deletes the landmark batches of a set that ended (the stored session holds its skeleton; the 33 landmarks
     with the face's are not kept beyond the set); returns how many there were."""
-    return db_session.execute(delete(CameraBatch).where(CameraBatch.set_id == set_id)).rowcount or 0
+    done = db_session.execute(delete(CameraBatch).where(CameraBatch.set_id == set_id))
+    return cast("CursorResult[Any]", done).rowcount or 0  # a DELETE's result is a CursorResult
 
 
 def set_batches(*, db_session: Session, set_id: uuid.UUID, upto_seq: int | None = None) -> list[LandmarkBatch]:

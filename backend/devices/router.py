@@ -41,7 +41,7 @@ def create_pairing_code(
     row, code = service.create_pairing_code(
         db_session=db_session,
         patient_id=patient_id,
-        created_by_id=caller.user.id,
+        created_by_id=caller.signed_in_user.id,
         minutes=settings.PAIRING_CODE_MINUTES,
     )
     record(
@@ -102,7 +102,7 @@ def device_me(device: CurrentDevice) -> DeviceOut:
 )
 def list_devices(
     patient_id: IdPath, caller: UserCaller, db_session: DbSession, page: Annotated[PageParams, Depends(page_params)]
-):
+) -> Page[DeviceOut]:
     """Lists a patient's devices."""
     require_patient_access(patient_id, caller=caller, db_session=db_session)
     rows, total = service.list_devices(

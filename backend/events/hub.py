@@ -16,6 +16,7 @@ import asyncio
 import json
 import threading
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 from sqlalchemy import event, select
 from sqlalchemy import func as sa_func
@@ -42,7 +43,7 @@ class Event:
 
     kind: str
     patient_id: int
-    data: dict = field(default_factory=dict)
+    data: dict[str, Any] = field(default_factory=dict[str, Any])
 
     def to_json(self) -> str:
         """Returns the event as compact JSON."""

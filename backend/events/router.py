@@ -31,12 +31,13 @@ def visible_patients(caller: Caller, db_session: Session, patient_id: int | None
     if patient_id is not None:
         require_patient_access(patient_id, caller=caller, db_session=db_session)
         return frozenset({patient_id})
-    if caller.role == "device":
+    if caller.device is not None:
         return frozenset({caller.device.patient_id})
-    if caller.role == "patient":
-        return frozenset({caller.user.id})
-    if caller.role == "therapist":
-        assigned = select(TherapistPatient.patient_id).where(TherapistPatient.therapist_id == caller.user.id)
+    user = caller.signed_in_user
+    if user.role == "patient":
+        return frozenset({user.id})
+    if user.role == "therapist":
+        assigned = select(TherapistPatient.patient_id).where(TherapistPatient.therapist_id == user.id)
         return frozenset(db_session.scalars(assigned))
     return None
 
@@ -58,7 +59,7 @@ async def stream_events(
     db_session: DbSession,
     patient_id: Annotated[IdQuery, Query(description="only this patient's events")] = None,
     live: Annotated[bool, Query(description="also the live loop's events (home agent, progress)")] = False,
-):
+) -> StreamingResponse:
     """Streams server-sent events about the patients the caller may see (one patient with patient_id)."""
     patients, owner = await run_in_threadpool(_authorize, request, db_session, patient_id)
     subscriber = HUB.subscribe(patients, frozenset(KINDS if live else DATA_KINDS), **owner.__dict__)
@@ -89,7 +90,7 @@ def _authorize(
     caller = current_caller(request, optional_caller(request, db_session))
     patients = visible_patients(caller, db_session, patient_id)
     owner = StreamOwner(
-        user_id=caller.user.id if caller.user is not None else caller.device.patient_id,  # type: ignore[union-attr]
+        user_id=caller.device.patient_id if caller.device is not None else caller.signed_in_user.id,
         login_id=caller.login_session.id if caller.login_session is not None else None,
         token_id=caller.api_token.id if caller.api_token is not None else None,
         device_id=caller.device.id if caller.device is not None else None,

@@ -38,7 +38,7 @@ def put_feeling(session_id: IdPath, body: FeelingIn, caller: UserCaller, db_sess
     or rising over the week, makes a suggestion for the therapist to review (backend.suggestions.rules)."""
     patient_id = session_patient(db_session=db_session, session_id=session_id)
     require_patient_access(patient_id, caller=caller, db_session=db_session, write=True, hidden_as=missing(session_id))
-    if caller.user.role != "patient":
+    if caller.role != "patient":
         raise Forbidden("only the patient says how a set felt")
     out = service.set_feeling(db_session=db_session, session_id=session_id, body=body)
     session = db_session.get(ExerciseSession, session_id)

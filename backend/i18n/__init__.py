@@ -16,12 +16,15 @@ from __future__ import annotations
 import datetime as dt
 import gettext
 import io
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 from babel import Locale, UnknownLocaleError
 from babel.dates import format_date as _babel_format_date
+from babel.messages.catalog import Catalog
 from babel.messages.mofile import write_mo
 from babel.messages.pofile import read_po
 from babel.numbers import format_decimal, format_percent
@@ -45,7 +48,7 @@ def po_path(locale: str) -> Path:
 
 
 @lru_cache(maxsize=len(LOCALES))
-def _catalog(locale: str):
+def _catalog(locale: str) -> Catalog:
     with po_path(locale).open("rb") as f:
         return read_po(f, locale=locale, domain=DOMAIN)
 
@@ -129,13 +132,13 @@ def asked_locale(accept_language: str | None) -> str | None:
     return min(choices)[2] if choices else None
 
 
-def is_script_message(locations: list[tuple[str, int | None]]) -> bool:
+def is_script_message(locations: Sequence[tuple[str, int | None]]) -> bool:
     """Returns whether a message is used by a page script (one of its locations is a .js file)."""
     return any(path.endswith(SCRIPT_SUFFIXES) for path, _ in locations)
 
 
 @lru_cache(maxsize=len(LOCALES))
-def js_messages(locale: str) -> dict:
+def js_messages(locale: str) -> dict[str, Any]:
     """Returns the page scripts' messages of a locale, the JSON that frontend/static/i18n.js reads:
     {"locale", "plural": "n != 1" | "n > 1", "messages": {msgid: msgstr, "singular\\u0004plural": [forms]}}.
 
@@ -148,11 +151,11 @@ def js_messages(locale: str) -> dict:
     for message in catalog:
         if not message.id or message.fuzzy or not is_script_message(message.locations):
             continue
-        if isinstance(message.id, tuple):
-            if all(message.string):
-                messages[message.id[0] + "\u0004" + message.id[1]] = list(message.string)
-        elif message.string:
-            messages[message.id] = message.string
+        if isinstance(message.id, str):
+            if isinstance(message.string, str) and message.string:
+                messages[message.id] = message.string
+        elif isinstance(message.string, tuple | list) and all(message.string):  # plural: one string per form
+            messages[message.id[0] + "\u0004" + message.id[1]] = list(message.string)
     return {"locale": locale, "plural": plural_rule(locale), "messages": messages}
 
 

@@ -99,8 +99,8 @@ class Problem:
         return f"{self.where}: {self.what}"
 
 
-def _ids(catalog: Catalog) -> set:
-    return {(m.id, m.context) for m in catalog if m.id}
+def _ids(catalog: Catalog) -> set[tuple[str | tuple[str, ...], str | None]]:
+    return {(m.id if isinstance(m.id, str) else tuple(m.id), m.context) for m in catalog if m.id}
 
 
 def check(template: Catalog | None = None) -> list[Problem]:
@@ -128,13 +128,13 @@ def check_locale(locale: str, code: Catalog, catalog: Catalog | None = None) -> 
         if not message.id:
             continue
         found = catalog.get(message.id, context=message.context)
-        ids = message.id if isinstance(message.id, tuple) else (message.id,)
+        ids = (message.id,) if isinstance(message.id, str) else tuple(message.id)
         if found is None or not found.string or (isinstance(found.string, tuple) and not all(found.string)):
             yield Problem(where, f"no translation of {ids[0]!r}")
             continue
         if found.fuzzy:
             yield Problem(where, f"fuzzy translation of {ids[0]!r}")
-        strings = found.string if isinstance(found.string, tuple) else (found.string,)
+        strings = (found.string,) if isinstance(found.string, str) else tuple(found.string)
         expected = set().union(*(placeholders(i) for i in ids))
         # a plural form may leave out the count ("once a week" for n = 1), never anything else
         optional = PLURAL_COUNTS if isinstance(message.id, tuple) else set()

@@ -71,7 +71,8 @@ def list_batches(*, db_session: Session, kind: str, limit: int) -> list[BatchRow
     for batch, state, n in db_session.execute(
         select(Job.batch, Job.status, func.count()).where(Job.batch.in_(names)).group_by(Job.batch, Job.status)
     ):
-        counts[batch][state] = int(n)
+        if batch is not None:  # in names: never None
+            counts[batch][state] = int(n)
     who = {
         a.object_id: a
         for a in db_session.scalars(

@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 import datetime as dt
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
+from typing import Any, cast
 
 from sqlalchemy import and_, func, or_, select, update
+from sqlalchemy.dialects.postgresql import Insert as PgInsert
 from sqlalchemy.dialects.postgresql import insert as pg_insert
+from sqlalchemy.dialects.sqlite import Insert as SqliteInsert
 from sqlalchemy.dialects.sqlite import insert as sqlite_insert
+from sqlalchemy.engine import CursorResult
 from sqlalchemy.orm import Session
+from sqlalchemy.sql import ColumnElement
 
 from backend.database import utcnow
 from backend.jobs.models import MAX_ATTEMPTS, Job
@@ -18,7 +23,9 @@ CHUNK = 1000  # jobs per INSERT statement
 RETRY_DELAYS_S = (5.0, 30.0, 120.0)
 
 
-def enqueue(*, db_session: Session, kind: str, items: Iterable[tuple[str, dict]], batch: str | None = None) -> int:
+def enqueue(
+    *, db_session: Session, kind: str, items: Iterable[tuple[str, dict[str, Any]]], batch: str | None = None
+) -> int:
     """Adds one job per (key, payload) whose key is not queued yet; returns how many were added. Flushes.
 
     One multi-row INSERT ... ON CONFLICT (key) DO NOTHING per CHUNK items (PostgreSQL and SQLite both have it), so
@@ -38,12 +45,14 @@ def enqueue(*, db_session: Session, kind: str, items: Iterable[tuple[str, dict]]
     return added
 
 
-def _insert_new(db_session: Session, insert, rows: list[dict]) -> int:
+def _insert_new(
+    db_session: Session, insert: Callable[[type[Job]], PgInsert | SqliteInsert], rows: list[dict[str, Any]]
+) -> int:
     statement = insert(Job).values(rows).on_conflict_do_nothing(index_elements=["key"]).returning(Job.id)
     return len(db_session.execute(statement).all())  # only the inserted rows come back
 
 
-def _claimable(now: dt.datetime):
+def _claimable(now: dt.datetime) -> ColumnElement[bool]:
     return or_(
         and_(Job.status == "queued", Job.run_after <= now),
         and_(Job.status == "running", Job.locked_until < now),  # its worker died: the lease expired
@@ -61,11 +70,12 @@ def claim(*, db_session: Session, worker: str, kinds: tuple[str, ...], now: dt.d
         if job_id is None:
             db_session.commit()
             return None
-        taken = db_session.execute(
+        done = db_session.execute(
             update(Job)
             .where(Job.id == job_id, _claimable(now))
             .values(status="running", locked_by=worker, locked_until=now + LEASE, attempts=Job.attempts + 1)
-        ).rowcount
+        )
+        taken = cast("CursorResult[Any]", done).rowcount  # an UPDATE's result is a CursorResult
         db_session.commit()
         if taken:
             return db_session.get(Job, job_id)
@@ -73,7 +83,7 @@ def claim(*, db_session: Session, worker: str, kinds: tuple[str, ...], now: dt.d
     return None
 
 
-def finish(*, db_session: Session, job: Job, result: dict) -> None:
+def finish(*, db_session: Session, job: Job, result: dict[str, Any]) -> None:
     """Marks a job done with its result and commits."""
     job.status, job.result, job.error = "done", result, None
     job.locked_by = job.locked_until = None

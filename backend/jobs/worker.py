@@ -11,13 +11,21 @@ import sys
 import threading
 import time
 import traceback
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from sqlalchemy.orm import Session
 
 from backend.jobs import queue
+from backend.jobs.models import Job
+
+if TYPE_CHECKING:
+    from backend.config import Settings
 
 KINDS = ("reanalyze", "replay")
 
 
-def run_job(db_session, job, settings) -> dict:
+def run_job(db_session: Session, job: Job, settings: Settings) -> dict[str, Any]:
     """Runs one job and returns its result (raises on failure)."""
     if job.kind == "reanalyze":
         from backend.records.reanalysis import reanalyze_session
@@ -34,7 +42,15 @@ def run_job(db_session, job, settings) -> dict:
     raise ValueError(f"unknown job kind {job.kind!r}")
 
 
-def work(*, sessionmaker, settings, name: str, once: bool = False, idle_s: float = 1.0, stop=lambda: False) -> int:
+def work(
+    *,
+    sessionmaker: Callable[[], Session],
+    settings: Settings,
+    name: str,
+    once: bool = False,
+    idle_s: float = 1.0,
+    stop: Callable[[], bool] = lambda: False,
+) -> int:
     """Runs jobs until stop() (or, once=True, until the queue is empty); returns how many it ran."""
     ran = 0
     while not stop():
@@ -62,7 +78,7 @@ class EmbeddedWorker:
     """The worker loop in a daemon thread of a server process (the demo, a one-process install); stop() ends it
     after the job in hand."""
 
-    def __init__(self, *, sessionmaker, settings) -> None:
+    def __init__(self, *, sessionmaker: Callable[[], Session], settings: Settings) -> None:
         self._stopping = threading.Event()
         self.name = f"{socket.gethostname()}:{os.getpid()}:embedded"
         self._thread = threading.Thread(

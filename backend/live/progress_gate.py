@@ -14,6 +14,7 @@ import time
 from collections import OrderedDict, deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 from backend.exceptions import AppError
 
@@ -31,7 +32,7 @@ class LiveProgressTooFast(AppError):
 @dataclass
 class _DeviceState:
     times: deque[float] = field(default_factory=deque)  # monotonic times of the recent "recording" messages
-    last: dict | None = None  # the last message passed on
+    last: dict[str, Any] | None = None  # the last message passed on
 
 
 class ProgressGate:
@@ -45,7 +46,7 @@ class ProgressGate:
         self._devices: OrderedDict[int, _DeviceState] = OrderedDict()
         self._lock = threading.Lock()
 
-    def admit(self, device_id: int, message: dict) -> bool:
+    def admit(self, device_id: int, message: dict[str, Any]) -> bool:
         """Returns True when the message is to be passed on, False when it repeats the device's last one; raises
         LiveProgressTooFast for a "recording" message over the limit."""
         now = self.clock()

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import asyncio
 import time
-from collections.abc import AsyncIterator
-from typing import Annotated
+from collections.abc import AsyncIterator, Callable
+from typing import Annotated, Any, TypeVar
 
 import anyio
 from fastapi import APIRouter, Query, Request, status
@@ -33,10 +33,11 @@ from backend.live.schemas import AgentStatusOut, LiveSetOut, ProgressIn, StartIn
 from backend.schemas import IdQuery
 
 router = APIRouter(prefix="/api/v1/live", tags=["live"])
+T = TypeVar("T")
 POLL_S = 1.0  # how often the agent's stream checks that the agent is still there
 
 
-def _committed(fn, db_session: Session, **kwargs):
+def _committed(fn: Callable[..., T], db_session: Session, **kwargs: Any) -> T:
     """Runs a service function and commits (events go out at the commit); returns its result."""
     result = fn(db_session=db_session, **kwargs)
     db_session.commit()
@@ -55,7 +56,7 @@ def _committed(fn, db_session: Session, **kwargs):
         **error_responses(*AUTH_ERRORS),
     },
 )
-async def agent_stream(request: Request, device: CurrentDevice, db_session: DbSession):
+async def agent_stream(request: Request, device: CurrentDevice, db_session: DbSession) -> StreamingResponse:
     """Streams the commands for the calling home agent; the device counts as online while the stream is open."""
     stream_id = await run_in_threadpool(_committed, service.connect, db_session, device=device)
     subscriber = HUB.subscribe(frozenset({device.patient_id}), frozenset({"live.command"}))
@@ -141,7 +142,7 @@ def get_status(
     caller: CurrentCaller,
     db_session: DbSession,
     patient_id: Annotated[IdQuery, Query(description="the patient (default: the caller's own)")] = None,
-):
+) -> AgentStatusOut:
     """Returns whether the patient's home agent is connected now."""
     pid = _patient_of(caller, patient_id)
     require_patient_access(pid, caller=caller, db_session=db_session)
@@ -160,7 +161,7 @@ def _the_patient(caller: Caller) -> int:
     status_code=status.HTTP_202_ACCEPTED,
     responses=error_responses(*AUTH_ERRORS, PlanNotFound, AgentOffline),
 )
-def start(body: StartIn, caller: UserCaller, db_session: DbSession):
+def start(body: StartIn, caller: UserCaller, db_session: DbSession) -> LiveSetOut:
     """Asks the calling patient's home agent to record one set of an exercise of their plan."""
     out = service.start_set(db_session=db_session, patient_id=_the_patient(caller), plan_item_id=body.plan_item_id)
     record(db_session=db_session, caller=caller, action="live.start", object_type="live_set", object_id=out.set_id,
@@ -174,7 +175,7 @@ def start(body: StartIn, caller: UserCaller, db_session: DbSession):
     status_code=status.HTTP_202_ACCEPTED,
     responses=error_responses(*AUTH_ERRORS),
 )
-def stop(body: StopIn, caller: UserCaller, db_session: DbSession):
+def stop(body: StopIn, caller: UserCaller, db_session: DbSession) -> LiveSetOut:
     """Asks the calling patient's home agent to end the set (what it recorded is kept); a set that is not running
     is left as it is."""
     out = service.stop_set(db_session=db_session, patient_id=_the_patient(caller), set_id=body.set_id)

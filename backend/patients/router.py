@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Annotated
 
 from fastapi import APIRouter, Depends, status
+from sqlalchemy.orm import Session
 
 from backend.audit.service import record, record_patients
 from backend.deps import AdminCaller, CurrentCaller, DbSession, require_patient_access
@@ -25,7 +26,7 @@ from backend.users.schemas import UserOut
 router = APIRouter(prefix="/api/v1/patients", tags=["patients"])
 
 
-def _out(db_session, patient: User, therapist_ids: list[int] | None = None) -> PatientOut:
+def _out(db_session: Session, patient: User, therapist_ids: list[int] | None = None) -> PatientOut:
     if therapist_ids is None:
         therapist_ids = service.therapist_ids(db_session=db_session, patient_id=patient.id)
     return PatientOut(
@@ -43,7 +44,9 @@ def _out(db_session, patient: User, therapist_ids: list[int] | None = None) -> P
 
 
 @router.get("", response_model=Page[PatientOut], responses=error_responses(*AUTH_ERRORS))
-def list_patients(caller: CurrentCaller, db_session: DbSession, page: Annotated[PageParams, Depends(page_params)]):
+def list_patients(
+    caller: CurrentCaller, db_session: DbSession, page: Annotated[PageParams, Depends(page_params)]
+) -> Page[PatientOut]:
     """Lists the patients the caller may see: admins all, therapists assigned ones, patients themselves."""
     rows, total = service.list_patients(db_session=db_session, caller=caller, limit=page.limit, offset=page.offset)
     ids = [p.id for p in rows]
@@ -105,7 +108,7 @@ def update_patient(patient_id: IdPath, body: PatientUpdate, caller: CurrentCalle
 )
 def list_therapists(
     patient_id: IdPath, caller: CurrentCaller, db_session: DbSession, page: Annotated[PageParams, Depends(page_params)]
-):
+) -> Page[UserOut]:
     """Lists the therapists assigned to a patient."""
     require_patient_access(patient_id, caller=caller, db_session=db_session)
     ids = service.therapist_ids(db_session=db_session, patient_id=patient_id)

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from sqlalchemy import func, select
+from typing import TYPE_CHECKING
+
+from sqlalchemy import Select, func, select
 from sqlalchemy.orm import Session
 
 from backend.database import utcnow
@@ -10,6 +12,9 @@ from backend.events.hub import ACCESS_ENDED, Event, publish
 from backend.exceptions import TherapistNotFound
 from backend.patients.models import TherapistPatient
 from backend.users.models import User
+
+if TYPE_CHECKING:
+    from backend.deps import Caller
 
 
 def therapist_ids_by_patient(*, db_session: Session, patient_ids: list[int]) -> dict[int, list[int]]:
@@ -31,20 +36,21 @@ def therapist_ids(*, db_session: Session, patient_id: int) -> list[int]:
     return sorted(db_session.scalars(query))
 
 
-def visible_patients_query(caller):
-    """Returns the select of patients the caller (deps.Caller) may see."""
+def visible_patients_query(caller: Caller) -> Select[User]:
+    """Returns the select of patients the caller may see."""
     query = select(User).where(User.role == "patient")
     if caller.device is not None:
         return query.where(User.id == caller.device.patient_id)
-    if caller.user.role == "patient":
-        return query.where(User.id == caller.user.id)
-    if caller.user.role == "therapist":
-        assigned = select(TherapistPatient.patient_id).where(TherapistPatient.therapist_id == caller.user.id)
+    user = caller.signed_in_user
+    if user.role == "patient":
+        return query.where(User.id == user.id)
+    if user.role == "therapist":
+        assigned = select(TherapistPatient.patient_id).where(TherapistPatient.therapist_id == user.id)
         return query.where(User.id.in_(assigned))
     return query
 
 
-def list_patients(*, db_session: Session, caller, limit: int, offset: int) -> tuple[list[User], int]:
+def list_patients(*, db_session: Session, caller: Caller, limit: int, offset: int) -> tuple[list[User], int]:
     """Returns one page of the patients the caller may see, and the total."""
     query = visible_patients_query(caller)
     total = db_session.scalar(select(func.count()).select_from(query.subquery())) or 0

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Annotated
 
 from fastapi import APIRouter, Depends, status
+from sqlalchemy.orm import Session
 
 from backend.audit.service import record
 from backend.deps import Caller, CurrentCaller, DbSession, TherapistOrAdminCaller, require_patient_access
@@ -23,7 +24,7 @@ from backend.schemas import IdPath, Page, PageParams, page_params
 router = APIRouter(prefix="/api/v1", tags=["plans"])
 
 
-def _audit(db_session, caller: Caller, action: str, plan_id, patient_id: int) -> None:
+def _audit(db_session: Session, caller: Caller, action: str, plan_id: int | None, patient_id: int) -> None:
     record(
         db_session=db_session,
         caller=caller,
@@ -41,7 +42,7 @@ def _audit(db_session, caller: Caller, action: str, plan_id, patient_id: int) ->
 )
 def list_plans(
     patient_id: IdPath, caller: CurrentCaller, db_session: DbSession, page: Annotated[PageParams, Depends(page_params)]
-):
+) -> Page[PlanOut]:
     """Lists a patient's plans, newest start first."""
     require_patient_access(patient_id, caller=caller, db_session=db_session)
     rows, total = service.list_plans(db_session=db_session, patient_id=patient_id, limit=page.limit, offset=page.offset)
@@ -63,7 +64,7 @@ def list_plans(
 def create_plan(patient_id: IdPath, body: PlanIn, caller: TherapistOrAdminCaller, db_session: DbSession) -> PlanOut:
     """Prescribes a plan to a patient (an assigned therapist or an admin)."""
     require_patient_access(patient_id, caller=caller, db_session=db_session, write=True)
-    therapist_id = caller.user.id if caller.user.role == "therapist" else None
+    therapist_id = caller.signed_in_user.id if caller.role == "therapist" else None
     plan = service.create_plan(db_session=db_session, patient_id=patient_id, therapist_id=therapist_id, body=body)
     _audit(db_session, caller, "plan.create", plan.id, patient_id)
     publish(db_session, Event("plan.changed", patient_id, {"plan_id": plan.id}))

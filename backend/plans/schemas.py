@@ -79,7 +79,7 @@ class PlanIn(BaseModel):
 
     @field_validator("start_date", "end_date", mode="before")
     @classmethod
-    def _a_date_text(cls, value):
+    def _a_date_text(cls, value: object) -> object:
         """Refuses numbers (pydantic would read 0 as 1970-01-01): a date is written as text, YYYY-MM-DD."""
         if isinstance(value, int | float):
             raise ValueError("must be a date written as text, YYYY-MM-DD (not a number)")

@@ -6,13 +6,14 @@ import datetime as dt
 import json
 import tempfile
 import zipfile
-from typing import IO
+from typing import IO, Any
 
 from sqlalchemy import or_, select
 from sqlalchemy.orm import Session
 
 from backend.audit.models import AuditEvent
 from backend.devices.models import Device
+from backend.exceptions import SessionFileRemoved
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
 from backend.i18n import Translator, translator
@@ -56,15 +57,15 @@ def _iso(t: dt.datetime | None) -> str | None:
     return None if t is None else t.isoformat()
 
 
-def _row(obj, names: tuple[str, ...]) -> dict:
-    out = {}
+def _row(obj: object, names: tuple[str, ...]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
     for n in names:
         v = getattr(obj, n)
         out[n] = _iso(v) if isinstance(v, dt.datetime) else v.isoformat() if isinstance(v, dt.date) else v
     return out
 
 
-def _advice(row: Suggestion, reader: Translator) -> dict:
+def _advice(row: Suggestion, reader: Translator) -> dict[str, Any]:
     """Returns one piece of advice as the archive lists it: its columns, its text in the patient's language."""
     entry = _row(row, tuple(c.key for c in Suggestion.__table__.columns))
     entry["text"], entry["locale"] = suggestions.shown_text(row, reader)
@@ -72,7 +73,7 @@ def _advice(row: Suggestion, reader: Translator) -> dict:
     return entry
 
 
-def _json(z: zipfile.ZipFile, name: str, data) -> None:
+def _json(z: zipfile.ZipFile, name: str, data: Any) -> None:
     z.writestr(name, json.dumps(data, indent=2, ensure_ascii=False, default=str))
 
 
@@ -127,7 +128,7 @@ def build_archive(*, db_session: Session, patient: User, requested_by: str) -> I
                 name = f"sessions/session-{s.id}.khs"
                 z.writestr(name, data)
                 entry["file"], entry["file_missing_reason"] = name, None
-            except (StorageError, sessions.SessionFileRemoved) as exc:
+            except (StorageError, SessionFileRemoved) as exc:
                 entry["file"], entry["file_missing_reason"] = None, exc.message
             listed.append(entry)
         _json(z, "sessions.json", listed)

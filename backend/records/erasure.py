@@ -4,9 +4,12 @@ an erasure happened, by whom and when."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, cast
 
 from sqlalchemy import delete, event, func, or_, select, update
+from sqlalchemy.engine import CursorResult
 from sqlalchemy.orm import Session
+from sqlalchemy.sql import Executable
 
 from backend.audit.models import AuditEvent
 from backend.audit.service import record
@@ -21,6 +24,9 @@ from backend.storage import get_store
 from backend.suggestions.models import Suggestion
 from backend.users.models import ApiToken, LoginAttempt, LoginSession, User
 
+if TYPE_CHECKING:
+    from backend.deps import Caller
+
 
 @dataclass
 class Erasure:
@@ -30,11 +36,11 @@ class Erasure:
     objects: list[str]
 
 
-def _count(db_session: Session, stmt) -> int:
-    return int(db_session.execute(stmt).rowcount or 0)
+def _count(db_session: Session, stmt: Executable) -> int:
+    return int(cast("CursorResult[Any]", db_session.execute(stmt)).rowcount or 0)  # a DELETE's result
 
 
-def erase_patient(*, db_session: Session, patient: User, caller) -> Erasure:
+def erase_patient(*, db_session: Session, patient: User, caller: Caller) -> Erasure:
     """Deletes every row about `patient` (sessions, metrics, replays, plans, advice, devices, links, logins,
     tokens, audit entries about or by them, the account) and records one audit row "patient.erase" with no
     patient id, name or e-mail. The stored objects are deleted after the transaction commits (a rollback keeps

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import datetime as dt
 import uuid
+from typing import Any
 
 from sqlalchemy import select
 from sqlalchemy.orm import Session
@@ -54,7 +55,9 @@ def enqueue_reanalysis(
     return batch, enqueue(db_session=db_session, kind=KIND, items=items, batch=batch)
 
 
-def reanalyze_session(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int) -> dict:
+def reanalyze_session(
+    *, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int
+) -> dict[str, Any]:
     """Runs the job of one session (module doc); returns {"session_id", "changed", "from", "to"}. Flushes."""
     session = db_session.get(ExerciseSession, session_id)
     if session is None:

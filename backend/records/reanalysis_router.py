@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, status
 from pydantic import BaseModel, Field
@@ -165,7 +165,7 @@ def reanalysis_progress(batch: str, caller: AdminCaller, db_session: DbSession) 
     return ProgressOut(batch=batch, analysis_version=ANALYSIS_VERSION, **counts)
 
 
-def _sway(doc: dict) -> float | None:
+def _sway(doc: dict[str, Any]) -> float | None:
     return ((doc or {}).get("balance") or {}).get("sway_velocity_m_s")
 
 

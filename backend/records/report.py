@@ -11,7 +11,9 @@ from __future__ import annotations
 import datetime as dt
 import io
 from collections import defaultdict
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from reportlab.graphics.charts.lineplots import LinePlot
 from reportlab.graphics.shapes import Drawing, String
@@ -55,11 +57,11 @@ class Period:
 ENGLISH = translator("en")  # the report's language
 
 
-def _p(text: str, style) -> Paragraph:
+def _p(text: str, style: Any) -> Paragraph:
     return Paragraph(text.replace("&", "&amp;").replace("<", "&lt;"), style)
 
 
-def _table(rows: list[list], widths=None) -> Table:
+def _table(rows: list[list[Any]], widths: list[float] | None = None) -> Table:
     t = Table(rows, colWidths=widths, repeatRows=1)
     t.setStyle(TableStyle([
         ("FONT", (0, 0), (-1, 0), "Helvetica-Bold", 8.5), ("FONT", (0, 1), (-1, -1), "Helvetica", 8.5),
@@ -98,7 +100,7 @@ def _chart(title: str, series: dict[str, list[tuple[float, float]]], y_label: st
     return d
 
 
-def _feeling_section(rows, period: Period, body, width: float) -> list:
+def _feeling_section(rows: Sequence[Any], period: Period, body: Any, width: float) -> list[Any]:
     """Returns the paragraphs, chart and table of the pain and effort the patient said after the period's sets."""
     said = [r for r in rows if r.pain_nrs is not None or r.effort_cr10 is not None]
     if not said:
@@ -109,7 +111,10 @@ def _feeling_section(rows, period: Period, body, width: float) -> list:
     text += "Borg CR10 scale (0 nothing at all, 10 maximal)."
     if pains:
         text += f" Pain: highest {max(pains)}, last {pains[-1]} of 10."
-    day = lambda r: float((r.started_at.date() - period.start).days)  # noqa: E731
+
+    def day(r: Any) -> float:
+        return float((r.started_at.date() - period.start).days)
+
     series = {
         "pain (0-10)": [(day(r), float(r.pain_nrs)) for r in said if r.pain_nrs is not None],
         "effort (Borg CR10)": [(day(r), float(r.effort_cr10)) for r in said if r.effort_cr10 is not None],
@@ -164,7 +169,7 @@ def build_report(*, db_session: Session, patient: User, period: Period, made_by:
     plans = db_session.scalars(select(Plan).where(Plan.patient_id == patient.id, Plan.start_date <= period.end)
                                .order_by(Plan.start_date)).all()  # fmt: skip
     plans = [p for p in plans if p.end_date is None or p.end_date >= period.start]
-    done = defaultdict(int)
+    done: defaultdict[str, int] = defaultdict(int)
     for r in rows:
         done[r.slug] += 1
     adherence = [["Plan", "Exercise", "Prescribed", "Planned", "Done", "Adherence"]]
@@ -184,7 +189,7 @@ def build_report(*, db_session: Session, patient: User, period: Period, made_by:
     else:
         story.append(_table(adherence, [32 * mm, 38 * mm, 36 * mm, 24 * mm, 22 * mm, 20 * mm]))
     story += [Spacer(1, 3 * mm), _p("Repetitions and range of motion", h2)]
-    by_ex: dict[str, list] = defaultdict(list)
+    by_ex: dict[str, list[Any]] = defaultdict(list)
     for r in rows:
         by_ex[r.name].append(r)
     if not rows:
@@ -248,7 +253,7 @@ def build_report(*, db_session: Session, patient: User, period: Period, made_by:
     if not advice:
         story.append(_p("No approved advice in this period.", body))
 
-    def footer(canvas, doc) -> None:
+    def footer(canvas: Any, doc: Any) -> None:
         canvas.saveState()
         canvas.setFont("Helvetica", 7.5)
         canvas.drawString(margin, 10 * mm, f"Kinect Home Coach · patient {patient.id} · {period.start} to "

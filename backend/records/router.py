@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+from collections.abc import Iterator
 from typing import Annotated, Literal
 
 from fastapi import APIRouter, Query, Response, status
@@ -44,18 +45,19 @@ class ErasureOut(BaseModel):
         **error_responses(*AUTH_ERRORS, PatientNotFound, StorageError),
     },
 )
-def download_archive(patient_id: IdPath, caller: CurrentCaller, db_session: DbSession):
+def download_archive(patient_id: IdPath, caller: CurrentCaller, db_session: DbSession) -> StreamingResponse:
     """Returns everything held about a patient as one zip archive with a README (the patient, or an admin)."""
     patient = require_patient_access(patient_id, caller=caller, db_session=db_session)
-    if caller.device is not None or (caller.role != "admin" and caller.user.id != patient_id):
+    user = caller.user
+    if user is None or (user.role != "admin" and user.id != patient_id):
         raise Forbidden("only the patient, or an admin on their behalf, downloads all of a patient's data")
-    who = "the patient" if caller.user.id == patient_id else f"admin {caller.user.email}"
+    who = "the patient" if user.id == patient_id else f"admin {user.email}"
     record(db_session=db_session, caller=caller, action="patient.archive", object_type="patient",
            object_id=patient_id, patient_id=patient_id)  # fmt: skip
     archive = build_archive(db_session=db_session, patient=patient, requested_by=who)
     name = f"patient-{patient_id}-data-{dt.datetime.now(dt.UTC):%Y%m%d}.zip"
 
-    def chunks():
+    def chunks() -> Iterator[bytes]:
         try:
             while block := archive.read(1 << 20):
                 yield block
@@ -108,7 +110,7 @@ def progress_report(
     start = start or end - dt.timedelta(weeks=12)
     if start > end or (end - start).days > 3 * 366:
         raise InvalidInput(f"the period from={start} to={end} must run forwards and last at most 3 years")
-    who = caller.user.full_name or caller.user.email
+    who = caller.signed_in_user.full_name or caller.signed_in_user.email
     record(db_session=db_session, caller=caller, action="patient.report", object_type="patient",
            object_id=patient_id, patient_id=patient_id, detail={"from": str(start), "to": str(end)})  # fmt: skip
     pdf = build_report(db_session=db_session, patient=patient, period=Period(start, end), made_by=who, paper=paper)

@@ -97,12 +97,15 @@ def due(*, db_session: Session, settings: Settings, now: dt.datetime) -> list[Du
     for patient, newest_first in plans.values():
         tz = patient_zone(patient, settings)
         for day in sorted({times.local_date(now - late, tz), times.local_date(now, tz)}):
-            plan = next((p for p in newest_first if p.start_date <= day and (p.end_date is None or p.end_date >= day)),
-                        None)  # fmt: skip
-            for t in plan.reminder_times if plan is not None else []:
+            running = next(
+                (p for p in newest_first if p.start_date <= day and (p.end_date is None or p.end_date >= day)), None
+            )
+            if running is None:
+                continue
+            for t in running.reminder_times:
                 at = times.due_at(day, t, tz)
                 if now - late < at <= now:
-                    found.append(DueReminder(plan.id, patient.id, day, t, at))
+                    found.append(DueReminder(running.id, patient.id, day, t, at))
     return _unclaimed(db_session, found, since=now - late - dt.timedelta(days=1))
 
 

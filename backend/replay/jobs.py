@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import datetime as dt
 from dataclasses import dataclass
+from typing import Any
 
 from sqlalchemy import select, update
 from sqlalchemy.orm import Session
@@ -78,7 +79,7 @@ def request_replay(*, db_session: Session, session_id: int) -> ReplayState:
     return ReplayState("preparing", _waiting(job, utcnow()) if job is not None else "The replay is queued.")
 
 
-def run(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int) -> dict:
+def run(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int) -> dict[str, Any]:
     """Runs the job of one session: builds and stores its replay unless stored already; returns what it did."""
     if db_session.get(ExerciseSession, session_id) is None:
         return {"session_id": session_id, "built": False, "skipped": "the session no longer exists"}

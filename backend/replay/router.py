@@ -12,9 +12,10 @@ from typing import Annotated, Literal
 from fastapi import APIRouter, Query, Request, Response
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
+from sqlalchemy.orm import Session
 
 from backend.audit.service import record
-from backend.deps import CurrentCaller, DbSession, require_patient_access
+from backend.deps import Caller, CurrentCaller, DbSession, require_patient_access
 from backend.exceptions import (
     AUTH_ERRORS,
     InvalidSessionFile,
@@ -40,7 +41,7 @@ class ReplayStateOut(BaseModel):
     detail: str
 
 
-def _visible(session_id: int, caller, db_session) -> int:
+def _visible(session_id: int, caller: Caller, db_session: Session) -> int:
     patient_id = session_patient(db_session=db_session, session_id=session_id)
     require_patient_access(patient_id, caller=caller, db_session=db_session, hidden_as=missing(session_id))
     return patient_id
@@ -56,7 +57,7 @@ def read_replay_state(session_id: IdPath, caller: CurrentCaller, db_session: DbS
     many ask at the same time)."""
     _visible(session_id, caller, db_session)
     found = jobs.request_replay(db_session=db_session, session_id=session_id)
-    return ReplayStateOut(state=found.state, detail=found.detail)  # type: ignore[arg-type]
+    return ReplayStateOut(state=found.state, detail=found.detail)
 
 
 @router.get(
@@ -76,7 +77,7 @@ def read_replay(
     layer: Annotated[
         Literal["raw", "filtered"] | None, Query(description="one skeleton alone (default: both, raw and filtered)")
     ] = None,
-):
+) -> Response:
     """Returns the 3D replay of a session as a viser scene recording once a worker has built it (202 with its state
     until then); one skeleton alone is built in the request each time."""
     patient_id = _visible(session_id, caller, db_session)
@@ -89,7 +90,7 @@ def read_replay(
         stored = service.stored_replay(db_session=db_session, session_id=session_id)
         if stored is None:
             found = jobs.request_replay(db_session=db_session, session_id=session_id)
-            body = ReplayStateOut(state=found.state, detail=found.detail)  # type: ignore[arg-type]
+            body = ReplayStateOut(state=found.state, detail=found.detail)
             return JSONResponse(body.model_dump(), status_code=202, headers={"Retry-After": RETRY_AFTER_S})
         data = stored
     record(db_session=db_session, caller=caller, action="session.replay.read", object_type="exercise_session",

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,6 +24,9 @@ from kinect_agent import skeleton
 from kinect_agent.formats.session_file import SessionPayload
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.recording import Recording
+
+if TYPE_CHECKING:
+    from viser import LineSegmentsHandle, PointCloudHandle, SceneApi
 
 VERSION = "replay-1"  # stored with each recording; a new version rebuilds the stored ones on first use
 RAW_COLOR = (214, 110, 20)  # orange
@@ -66,7 +70,10 @@ def ground_frame(reference: np.ndarray) -> np.ndarray:
     return np.array([root[0], floor, root[2]])
 
 
-def camera_pose(reference: np.ndarray, plane: str) -> tuple[tuple[float, ...], tuple[float, ...], str]:
+Point3 = tuple[float, float, float]
+
+
+def camera_pose(reference: np.ndarray, plane: str) -> tuple[Point3, Point3, str]:
     """Returns (camera position (3,), look-at point (3,), "side" | "front"), metres, ground frame.
 
     The body's sides come from the median shoulder axis, so a patient standing at an angle to the Kinect is still
@@ -84,7 +91,11 @@ def camera_pose(reference: np.ndarray, plane: str) -> tuple[tuple[float, ...], t
     centre = np.nanmedian(reference[:, skeleton.INDEX["SPINE"], 1]) if np.isfinite(reference).any() else np.nan
     look_at = np.array([0.0, float(centre) if np.isfinite(centre) else 0.9, 0.0])  # the middle of the body
     position = look_at + 2.4 * direction + np.array([0.0, 0.3, 0.0])
-    return tuple(float(v) for v in position), tuple(float(v) for v in look_at), view
+    return _point(position), _point(look_at), view
+
+
+def _point(v: np.ndarray) -> Point3:
+    return float(v[0]), float(v[1]), float(v[2])
 
 
 def outlier_flags(raw: Recording, config: PipelineConfig | None = None) -> np.ndarray:
@@ -146,8 +157,8 @@ def _record(
     raw: np.ndarray | None,
     filtered: np.ndarray | None,
     flags: np.ndarray,
-    camera: tuple[float, ...],
-    look_at: tuple[float, ...],
+    camera: Point3,
+    look_at: Point3,
 ) -> bytes:
     """Plays the frames `keep` into a viser scene recording and returns its bytes.
 
@@ -179,7 +190,9 @@ class _Skeleton:
     The nodes are made once and their points replaced for each frame (viser sends only the changed property).
     """
 
-    def __init__(self, scene, name: str, color: tuple[int, int, int], positions: np.ndarray, flags) -> None:
+    def __init__(
+        self, scene: SceneApi, name: str, color: tuple[int, int, int], positions: np.ndarray, flags: np.ndarray | None
+    ) -> None:
         self.positions = positions  # (T, 20, 3) metres, ground frame, NaN = untracked
         self.flags = flags  # (T, 20) bool or None
         self.bones = scene.add_line_segments(f"{name}/bones", _NOWHERE_BONE, color, thickness=0.025, visible=False)
@@ -198,11 +211,11 @@ class _Skeleton:
         bones = bones[np.isfinite(bones).all(axis=(1, 2))]
         _update(self.bones, bones)
         _update(self.joints, pts[ok])
-        if self.outliers is not None:
+        if self.outliers is not None and self.flags is not None:
             _update(self.outliers, pts[self.flags[i] & ok])
 
 
-def _update(node, points: np.ndarray) -> None:
+def _update(node: PointCloudHandle | LineSegmentsHandle, points: np.ndarray) -> None:
     """Replaces the points of a scene node; hides it while there are none."""
     if len(points):
         node.points = points.astype(np.float32)

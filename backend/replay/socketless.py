@@ -16,11 +16,16 @@ import contextlib
 import io
 import threading
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from viser import ViserServer
+    from viser.infra import WebsockServer
 
 _LOCK = threading.Lock()
 
 
-def _socketless_class():
+def _socketless_class() -> type[WebsockServer]:
     from viser import infra
     from viser.infra._async_message_buffer import AsyncMessageBuffer
 
@@ -42,19 +47,20 @@ def _socketless_class():
 
 
 @contextlib.contextmanager
-def recording_server() -> Iterator:
+def recording_server() -> Iterator[ViserServer]:
     """Yields a viser.ViserServer that listens on nothing, stopped on exit (one at a time per process)."""
     import viser
     from viser import infra
 
     with _LOCK:
         real = infra.WebsockServer
-        infra.WebsockServer = _socketless_class()
+        # a deliberate swap of viser's server class (module doc), which mypy forbids for any class attribute
+        infra.WebsockServer = _socketless_class()  # type: ignore[misc]
         try:
             with contextlib.redirect_stdout(io.StringIO()):  # no banner: there is no address to print
                 server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
         finally:
-            infra.WebsockServer = real
+            infra.WebsockServer = real  # type: ignore[misc]
         try:
             yield server
         finally:

@@ -41,7 +41,7 @@ def list_patient_replies(
     page: Annotated[PageParams, Depends(page_params)],
     unread: UnreadQuery = None,
     suggestion_id: Annotated[int | None, Query(ge=1, le=MAX_ID, description="only replies to this advice")] = None,
-):
+) -> Page[ReplyOut]:
     """Lists a patient's replies to their advice, newest first, each with the advice it answers."""
     require_patient_access(patient_id, caller=caller, db_session=db_session)
     items, total = service.list_replies(db_session=db_session, patients=[patient_id], unread=unread,
@@ -63,7 +63,7 @@ def create_reply(
     """Stores the patient's answer to one piece of their advice (only the patient answers); therapists see it at
     once as unread."""
     require_patient_access(patient_id, caller=caller, db_session=db_session, write=True)
-    if caller.user.role != "patient":  # type: ignore[union-attr]
+    if caller.role != "patient":
         raise Forbidden("only the patient answers their advice")
     out = service.add_reply(db_session=db_session, patient_id=patient_id, body=body,
                             accept_language=request.headers.get("accept-language"))  # fmt: skip
@@ -85,7 +85,7 @@ def mark_replies_read(
     unread."""
     require_patient_access(patient_id, caller=caller, db_session=db_session, write=True)
     marked = service.mark_read(db_session=db_session, patient_id=patient_id, reply_ids=body.reply_ids,
-                               reader_id=caller.user.id)  # type: ignore[union-attr]  # fmt: skip
+                               reader_id=caller.signed_in_user.id)  # fmt: skip
     record(db_session=db_session, caller=caller, action="reply.read", object_type="reply", patient_id=patient_id,
            detail={"reply_ids": sorted(set(body.reply_ids)), "marked": marked})  # fmt: skip
     if marked:
@@ -100,7 +100,7 @@ def list_replies(
     db_session: DbSession,
     page: Annotated[PageParams, Depends(page_params)],
     unread: UnreadQuery = None,
-):
+) -> Page[ReplyOut]:
     """Lists the replies of every patient the caller may see (therapists: assigned; admins: all), newest first."""
     patients = visible_patients_query(caller).with_only_columns(User.id)
     items, total = service.list_replies(db_session=db_session, patients=patients, unread=unread,

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
-from sqlalchemy import func, select, update
+from typing import Any, cast
+
+from sqlalchemy import Select, func, select, update
+from sqlalchemy.engine import CursorResult
 from sqlalchemy.orm import Session
 
 from backend.database import utcnow
@@ -32,7 +35,7 @@ def add_reply(*, db_session: Session, patient_id: int, body: ReplyIn, accept_lan
 def list_replies(
     *,
     db_session: Session,
-    patients,
+    patients: Select[int] | list[int] | None,
     unread: bool | None,
     suggestion_id: int | None = None,
     limit: int,
@@ -83,7 +86,7 @@ def mark_read(*, db_session: Session, patient_id: int, reply_ids: list[int], rea
         .values(read_at=utcnow(), read_by_id=reader_id)
         .execution_options(synchronize_session="fetch")
     )
-    return int(result.rowcount or 0)
+    return int(cast("CursorResult[Any]", result).rowcount or 0)  # an UPDATE's result is a CursorResult
 
 
 def _out(row: AdviceReply, advice_text: str) -> ReplyOut:
@@ -92,7 +95,7 @@ def _out(row: AdviceReply, advice_text: str) -> ReplyOut:
         patient_id=row.patient_id,
         suggestion_id=row.suggestion_id,
         suggestion_text=advice_text,
-        preset=row.preset,  # type: ignore[arg-type]  # the table's check constraint keeps it one of PRESETS
+        preset=row.preset,  # the table's check constraint keeps it one of PRESETS
         text=row.text,
         created_at=row.created_at,
         read_at=row.read_at,

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import datetime as dt
 from collections.abc import Sequence
+from typing import Any
 
-from sqlalchemy import func, or_, select
+from sqlalchemy import ScalarSelect, func, or_, select
 from sqlalchemy.orm import Session, aliased
 
 from backend.exercises.models import Exercise
@@ -26,7 +27,9 @@ from backend.users.models import User
 RANKED_PATIENTS_MAX = 500  # the dashboard ranks up to this many visible patients by attention, beyond it pages by id
 
 
-def progress(*, db_session: Session, patient_id: int, exercise_id: int | None, since: dt.datetime | None) -> list[dict]:
+def progress(
+    *, db_session: Session, patient_id: int, exercise_id: int | None, since: dt.datetime | None
+) -> list[dict[str, Any]]:
     """Returns one point per session of the patient (optionally one exercise, since a time), oldest first.
 
     Each point: session_id, exercise_slug, started_at, repetitions, rom_deg (deg), quality_ok, indicators, and what
@@ -60,7 +63,7 @@ def progress(*, db_session: Session, patient_id: int, exercise_id: int | None, s
     return [dict(zip(keys, row, strict=True)) for row in rows]
 
 
-def _newest_session(*, with_metrics: bool):
+def _newest_session(*, with_metrics: bool) -> ScalarSelect[int]:
     """Returns a scalar subquery correlated to User: the patient's newest session id (with metrics, if asked).
 
     ORDER BY started_at DESC, id DESC LIMIT 1 walks the (patient_id, started_at, id) index backwards from the newest
@@ -77,7 +80,7 @@ def _newest_session(*, with_metrics: bool):
     )
 
 
-def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.datetime) -> dict[int, dict]:
+def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.datetime) -> dict[int, dict[str, Any]]:
     """Returns per patient (one query): last session (brief), latest indicators, sessions this week, pending advice,
     unread replies (and how many of them say "It hurt", the latest when), the pain alert level."""
     this_week = (
@@ -102,7 +105,7 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
         .scalar_subquery()
     )
 
-    def unread_hurt(column):
+    def unread_hurt(column: Any) -> ScalarSelect[Any]:
         return (
             select(column)
             .select_from(AdviceReply)
@@ -229,7 +232,7 @@ def _recent_sessions(
     return out
 
 
-def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.datetime) -> dict[int, dict]:
+def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.datetime) -> dict[int, dict[str, Any]]:
     """Returns the dashboard summary of each patient (SummaryOut fields) in three queries, whatever their number."""
     ids = sorted(set(patient_ids))
     if not ids:

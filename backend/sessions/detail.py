@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import threading
 from collections import OrderedDict
+from collections.abc import Hashable
 from typing import Any
 
 import numpy as np
@@ -52,17 +53,17 @@ class _Lru:
 
     def __init__(self, size: int) -> None:
         self.size = size
-        self._items: OrderedDict[Any, dict] = OrderedDict()
+        self._items: OrderedDict[Hashable, dict[str, Any]] = OrderedDict()
         self._lock = threading.Lock()
 
-    def get(self, key) -> dict | None:
+    def get(self, key: Hashable) -> dict[str, Any] | None:
         with self._lock:
             value = self._items.get(key)
             if value is not None:
                 self._items.move_to_end(key)
             return value
 
-    def put(self, key, value: dict) -> None:
+    def put(self, key: Hashable, value: dict[str, Any]) -> None:
         with self._lock:
             self._items[key] = value
             self._items.move_to_end(key)
@@ -91,7 +92,9 @@ def decode_stored(data: bytes, *, session_id: int, max_frames: int, max_decoded_
     return payload
 
 
-def analysis_document(payload: SessionPayload, spec: ExerciseSpec | None, stored: dict | None) -> tuple[dict, str]:
+def analysis_document(
+    payload: SessionPayload, spec: ExerciseSpec | None, stored: dict[str, Any] | None
+) -> tuple[dict[str, Any], str]:
     """Returns (document, "stored" or "recomputed"): the stored one, else analyze_recording's ({} on failure)."""
     from backend.analysis.report import analyze_recording
 
@@ -106,14 +109,14 @@ def analysis_document(payload: SessionPayload, spec: ExerciseSpec | None, stored
         return {}, "recomputed"
 
 
-def _repetitions(doc: dict) -> list[dict]:
+def _repetitions(doc: dict[str, Any]) -> list[dict[str, Any]]:
     """Returns the document's repetitions with the keys the table needs (malformed entries left out)."""
     keys = ("index", "start_s", "end_s", "duration_s", "amplitude_deg", "peak_deg", "side")
     reps = doc.get("repetition_list") or []
     return [r for r in reps if isinstance(r, dict) and all(k in r for k in keys)]
 
 
-def file_evidence(payload: SessionPayload, names: tuple[str, ...], reps: list[dict]) -> dict:
+def file_evidence(payload: SessionPayload, names: tuple[str, ...], reps: list[dict[str, Any]]) -> dict[str, Any]:
     """Returns the file-derived part of the detail: curves, repetition speeds, hand paths, quality and advice.
 
     payload: as analysed (work_budget.thinned: at most MAX_ANALYSIS_RATE_HZ frames per second).
@@ -135,7 +138,9 @@ def file_evidence(payload: SessionPayload, names: tuple[str, ...], reps: list[di
     }
 
 
-def _cached_evidence(data: bytes, payload: SessionPayload, spec: ExerciseSpec | None, reps: list[dict]) -> dict:
+def _cached_evidence(
+    data: bytes, payload: SessionPayload, spec: ExerciseSpec | None, reps: list[dict[str, Any]]
+) -> dict[str, Any]:
     names = tuple(spec.defining_angles) if spec is not None else ()
     marks = tuple((r["start_s"], r["end_s"], r["side"]) for r in reps)
     key = (session_file.content_hash(data), names, marks, DETAIL_VERSION)
@@ -146,12 +151,13 @@ def _cached_evidence(data: bytes, payload: SessionPayload, spec: ExerciseSpec | 
     return evidence
 
 
-def _workspace(doc: dict, paths: dict | None) -> dict | None:
+def _workspace(doc: dict[str, Any], paths: dict[str, Any] | None) -> dict[str, Any] | None:
     """Returns {"left", "right"}: each arm's stored workspace metrics with its hand path, or None."""
     if paths is None:
         return None
-    metrics = doc.get("reachable_range") if isinstance(doc.get("reachable_range"), dict) else {}
-    out = {}
+    stored = doc.get("reachable_range")
+    metrics: dict[str, Any] = stored if isinstance(stored, dict) else {}
+    out: dict[str, Any] = {}
     for side in ("left", "right"):
         path, m = paths.get(side), metrics.get(side) or {}
         if path is None:
@@ -161,7 +167,7 @@ def _workspace(doc: dict, paths: dict | None) -> dict | None:
     return out
 
 
-def _rep_rows(reps: list[dict], speeds: list[float | None]) -> list[dict]:
+def _rep_rows(reps: list[dict[str, Any]], speeds: list[float | None]) -> list[dict[str, Any]]:
     keys = ("index", "start_s", "end_s", "duration_s", "peak_deg", "side")
     return [
         {k: r[k] for k in keys} | {"rom_deg": r["amplitude_deg"], "peak_speed_deg_s": s}
@@ -169,7 +175,9 @@ def _rep_rows(reps: list[dict], speeds: list[float | None]) -> list[dict]:
     ]
 
 
-def session_detail(*, db_session: Session, row: tuple, max_frames: int, max_decoded_bytes: int) -> dict:
+def session_detail(
+    *, db_session: Session, row: tuple[Any, ...], max_frames: int, max_decoded_bytes: int
+) -> dict[str, Any]:
     """Returns the body of GET /sessions/{id}/detail for get_session_row's row (keys: SessionDetailOut).
 
     Raises InvalidSessionFile when the stored file cannot be decoded or is too short to show.
@@ -182,12 +190,12 @@ def session_detail(*, db_session: Session, row: tuple, max_frames: int, max_deco
 def detail_body(
     session: ExerciseSession,
     slug: str | None,
-    stored: dict | None,
+    stored: dict[str, Any] | None,
     data: bytes,
     *,
     max_frames: int,
     max_decoded_bytes: int,
-) -> dict:
+) -> dict[str, Any]:
     """Returns the detail body of a session row, its exercise slug, stored metrics document and file bytes."""
     payload = decode_stored(data, session_id=session.id, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
     spec = EXERCISES.get(slug) if slug else None
@@ -195,7 +203,8 @@ def detail_body(
     doc, source = analysis_document(analysed, spec, stored)
     reps = _repetitions(doc)
     evidence = _cached_evidence(data, analysed, spec, reps)
-    quality = doc.get("quality") if isinstance(doc.get("quality"), dict) else {}
+    stored = doc.get("quality")
+    quality: dict[str, Any] = stored if isinstance(stored, dict) else {}
     raw, filtered = payload.raw, payload.filtered
     return {
         "session_id": session.id,
@@ -238,7 +247,7 @@ def detail_body(
     }
 
 
-def _balance(doc: dict) -> dict | None:
+def _balance(doc: dict[str, Any]) -> dict[str, Any] | None:
     """Returns the document's balance (keys: BalanceOut) when it holds a measured sway, else None."""
     b = doc.get("balance")
     if not isinstance(b, dict) or b.get("sway_velocity_m_s") is None:
@@ -246,7 +255,7 @@ def _balance(doc: dict) -> dict | None:
     return {k: b.get(k) for k in ("sway_velocity_m_s", "sway_velocity_95", "sway_area_m2", "standing_s")}
 
 
-def _balance_missing(doc: dict) -> str:
+def _balance_missing(doc: dict[str, Any]) -> str:
     """Returns why a document has no balance, in words."""
     reason = doc.get("balance_missing")
     if isinstance(reason, str) and reason:
@@ -254,7 +263,7 @@ def _balance_missing(doc: dict) -> str:
     return "this session was analysed before balance was measured in standing phases; a re-analysis measures it"
 
 
-def _uncertainty(doc: dict) -> dict | None:
+def _uncertainty(doc: dict[str, Any]) -> dict[str, Any] | None:
     """Returns the detail's uncertainty (keys: UncertaintyOut) from a document's 95 % intervals, or None.
 
     An angle whose intervals the analysis withheld is listed with null intervals and the reason."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+from typing import Any
 
 from sqlalchemy.orm import Session
 
@@ -25,7 +26,9 @@ def _feeling(db_session: Session, session_id: int) -> Feeling | None:
     return Feeling(answer.pain, answer.effort, when.isoformat(timespec="seconds") + "Z")
 
 
-def session_export(*, db_session: Session, row: tuple, fmt: str, max_frames: int, max_decoded_bytes: int) -> ExportFile:
+def session_export(
+    *, db_session: Session, row: tuple[Any, ...], fmt: str, max_frames: int, max_decoded_bytes: int
+) -> ExportFile:
     """Returns the session of `row` (service.get_session_row) as `fmt`, with its metrics document: the stored one,
     else the file analysed again as the session page does (detail.analysis_document, without indicators), and how
     the set felt to the patient (csv: feeling.csv; fhir: pain and effort Observations).

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from backend.exercises.library import ExerciseSpec
 from kinect_agent.formats.session_file import SessionPayload
@@ -13,8 +14,8 @@ ANALYSIS_VERSION = "2026.11.27-balance"
 
 
 def metrics_document(
-    payload: SessionPayload, spec: ExerciseSpec, *, target_reps: int | None, history: list[dict]
-) -> dict:
+    payload: SessionPayload, spec: ExerciseSpec, *, target_reps: int | None, history: list[dict[str, Any]]
+) -> dict[str, Any]:
     """Returns analyze_recording's document of the payload with an added "indicators" key.
 
     history: metrics documents of the patient's earlier sessions of the same exercise, oldest first.
@@ -30,7 +31,7 @@ def metrics_document(
     return doc
 
 
-def scalar_columns(doc: dict) -> dict:
+def scalar_columns(doc: dict[str, Any]) -> dict[str, Any]:
     """Returns the query columns of SessionMetric (repetitions, rom_deg, quality_ok, indicator_scores) read from a
     document."""
     reps = doc.get("repetitions")
@@ -44,7 +45,7 @@ def scalar_columns(doc: dict) -> dict:
     }
 
 
-def indicator_scores(doc: dict) -> dict | None:
+def indicator_scores(doc: dict[str, Any]) -> dict[str, Any] | None:
     """Returns {indicator: score 0-100 or None} of a document's indicators (None without indicators): the small
     copy the dashboard's trends read instead of parsing whole documents."""
     indicators = doc.get("indicators")
@@ -53,11 +54,11 @@ def indicator_scores(doc: dict) -> dict | None:
     return {name: _number(v.get("score")) if isinstance(v, dict) else None for name, v in indicators.items()}
 
 
-def _number(value) -> float | None:
+def _number(value: object) -> float | None:
     return float(value) if isinstance(value, int | float) and not isinstance(value, bool) else None
 
 
-def json_ready(value):
+def json_ready(value: Any) -> Any:
     """Returns value with numpy scalars and arrays turned into Python numbers and lists, NaN and inf into None."""
     if isinstance(value, dict):
         return {str(k): json_ready(v) for k, v in value.items()}

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import uuid
+from typing import Any
 
 from sqlalchemy import JSON, Boolean, ForeignKey, Index, LargeBinary, String, Text, UniqueConstraint
 from sqlalchemy.orm import Mapped, deferred, mapped_column, relationship
@@ -41,7 +42,7 @@ class ExerciseSession(Base):
     file_removed_at: Mapped[dt.datetime | None] = mapped_column()
     content_hash: Mapped[str] = mapped_column(String(64), index=True)
     processing_version: Mapped[str] = mapped_column(String(64), default="")
-    processing_params: Mapped[dict] = mapped_column(JSON, default=dict)
+    processing_params: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict[str, Any])
     status: Mapped[str] = mapped_column(String(16), default="processed")
     error: Mapped[str | None] = mapped_column(Text)
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
@@ -58,12 +59,12 @@ class SessionMetric(Base):
 
     id: Mapped[int] = mapped_column(primary_key=True)
     session_id: Mapped[int] = mapped_column(ForeignKey("exercise_session.id", ondelete="CASCADE"), unique=True)
-    document: Mapped[dict] = mapped_column(JSON, default=dict)
+    document: Mapped[dict[str, Any]] = mapped_column(JSON, default=dict[str, Any])
     repetitions: Mapped[int | None] = mapped_column(index=True)
     rom_deg: Mapped[float | None] = mapped_column()
     quality_ok: Mapped[bool | None] = mapped_column(Boolean, index=True)
     # {indicator: score} copied from document["indicators"] (migration 0007): the dashboard reads weeks of these
-    indicator_scores: Mapped[dict | None] = mapped_column(JSON)
+    indicator_scores: Mapped[dict[str, Any] | None] = mapped_column(JSON)
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
 
     session: Mapped[ExerciseSession] = relationship(back_populates="metric")

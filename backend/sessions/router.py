@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import datetime as dt
-from typing import Annotated, Literal
+from collections.abc import Iterable
+from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Query, Request, Response, status
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
 from backend.audit.service import record, record_patients
+from backend.config import Settings
 from backend.database import utcnow
 from backend.db_slots import lease_of
 from backend.deps import (
@@ -42,6 +44,7 @@ from backend.schemas import DateTimeQuery, IdPath, IdQuery, Page, PageParams, pa
 from backend.sessions import dashboard, detail, service
 from backend.sessions.export import session_export
 from backend.sessions.ingest import check_declared_length, check_owner, decode_upload, read_limited
+from backend.sessions.models import ExerciseSession
 from backend.sessions.schemas import (
     DashboardRowOut,
     ProgressOut,
@@ -52,7 +55,7 @@ from backend.sessions.schemas import (
     SummaryOut,
 )
 from backend.suggestions import service as suggestions_service
-from kinect_agent.export.files import FORMATS
+from kinect_agent.export.files import ExportFormat as ExportFormatName
 
 router = APIRouter(prefix="/api/v1", tags=["sessions"])
 SlugQuery = Annotated[
@@ -67,7 +70,14 @@ _UPLOAD_BODY = {
 }
 
 
-def _audit(db_session: Session, caller: Caller, action: str, session_id, patient_id: int, detail=None) -> None:
+def _audit(
+    db_session: Session,
+    caller: Caller,
+    action: str,
+    session_id: int | None,
+    patient_id: int,
+    detail: dict[str, Any] | None = None,
+) -> None:
     record(
         db_session=db_session,
         caller=caller,
@@ -79,7 +89,9 @@ def _audit(db_session: Session, caller: Caller, action: str, session_id, patient
     )
 
 
-def _audit_patients(db_session: Session, caller: Caller, action: str, patient_ids, detail=None) -> None:
+def _audit_patients(
+    db_session: Session, caller: Caller, action: str, patient_ids: Iterable[int], detail: dict[str, Any] | None = None
+) -> None:
     """Adds what _audit adds once per patient, in one flush."""
     record_patients(
         db_session=db_session,
@@ -114,7 +126,7 @@ def _upload_patient(caller: Caller, patient_id: int | None, db_session: Session)
     return patient_id
 
 
-def _session_out(db_session: Session, caller: Caller, session_id: int, row: tuple | None = None,
+def _session_out(db_session: Session, caller: Caller, session_id: int, row: tuple[Any, ...] | None = None,
                  accept_language: str | None = None) -> SessionOut:  # fmt: skip
     """Returns the session body; row: get_session_row's answer when the caller already read it; accept_language:
     the request's, the language of the advice (suggestions.service.reader)."""
@@ -132,7 +144,9 @@ def _session_out(db_session: Session, caller: Caller, session_id: int, row: tupl
     )
 
 
-def _item_fields(session, slug, reps, rom, quality) -> dict:
+def _item_fields(
+    session: ExerciseSession, slug: str | None, reps: int | None, rom: float | None, quality: bool | None
+) -> dict[str, Any]:
     return {
         "id": session.id,
         "client_session_id": session.client_session_id,
@@ -161,7 +175,7 @@ def _ingest(
     db_session: Session,
     patient_id: int,
     slug: str | None,
-    settings,
+    settings: Settings,
     accept_language: str | None = None,
 ) -> tuple[SessionOut, bool]:
     upload = decode_upload(
@@ -183,8 +197,8 @@ def _ingest(
     action = "session.create" if created else "session.upload_repeat"
     _audit(db_session, caller, action, row.id, patient_id, {"content_hash": upload.content_hash})
     if created:
-        data = {"session_id": row.id, "client_session_id": str(upload.client_session_id)}  # the live set's session
-        publish(db_session, Event("session.stored", patient_id, data))
+        stored = {"session_id": row.id, "client_session_id": str(upload.client_session_id)}  # the live set's session
+        publish(db_session, Event("session.stored", patient_id, stored))
     return _session_out(db_session, caller, row.id, accept_language=accept_language), created
 
 
@@ -222,7 +236,7 @@ async def upload_session(
             "PatientIdRequired); a device or the patient uploads for themselves"
         ),
     ] = None,
-):
+) -> SessionOut:
     """Stores an uploaded session file with its metrics and suggestions: 201 when new, 200 when sent before."""
     settings = request.app.state.settings
     limit = settings.MAX_UPLOAD_BYTES
@@ -259,7 +273,7 @@ def list_sessions(
     patient_id: Annotated[IdQuery, Query(description="only this patient's sessions")] = None,
     exercise: SlugQuery = None,
     since: Annotated[DateTimeQuery, Query(description="only sessions started at or after this time")] = None,
-):
+) -> Page[SessionItemOut]:
     """Lists the sessions the caller may see, newest first (patients: own; therapists: assigned patients')."""
     if patient_id is not None:
         require_patient_access(patient_id, caller=caller, db_session=db_session)
@@ -288,7 +302,7 @@ def list_sessions(
     response_model=SessionOut,
     responses=error_responses(*AUTH_ERRORS, SessionNotFound),
 )
-def read_session(session_id: IdPath, request: Request, caller: CurrentCaller, db_session: DbSession):
+def read_session(session_id: IdPath, request: Request, caller: CurrentCaller, db_session: DbSession) -> SessionOut:
     """Returns one session with its metrics document and the suggestions the caller may see."""
     row = service.get_session_row(db_session=db_session, session_id=session_id)  # one query, file never loaded
     patient_id = row[0].patient_id
@@ -302,7 +316,9 @@ def read_session(session_id: IdPath, request: Request, caller: CurrentCaller, db
     response_model=SessionDetailOut,
     responses=error_responses(*AUTH_ERRORS, SessionNotFound, InvalidSessionFile, SessionFileRemoved),
 )
-def read_session_detail(session_id: IdPath, request: Request, caller: CurrentCaller, db_session: DbSession):
+def read_session_detail(
+    session_id: IdPath, request: Request, caller: CurrentCaller, db_session: DbSession
+) -> dict[str, Any]:
     """Returns the evidence behind a session's numbers: angle curves, repetitions, workspace, data quality."""
     row = service.get_session_row(db_session=db_session, session_id=session_id)
     patient_id = row[0].patient_id
@@ -316,11 +332,11 @@ def read_session_detail(session_id: IdPath, request: Request, caller: CurrentCal
         max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES,
     )
     _audit(db_session, caller, "session.detail.read", session_id, patient_id)
-    return body
+    return body  # validated against SessionDetailOut, the route's response_model
 
 
 ExportFormat = Annotated[
-    Literal[FORMATS],  # kinect_agent.export.files.FORMATS: the formats the exporter writes
+    ExportFormatName,  # kinect_agent.export.files.FORMATS: the formats the exporter writes
     Query(description="csv: zip of CSV tables; trc: OpenSim markers (mm); bvh: motion (cm, deg); fhir: R4 Bundle"),
 ]
 _EXPORT_CONTENT = {
@@ -346,7 +362,7 @@ _EXPORT_CONTENT = {
 )
 def export_session(
     session_id: IdPath, format: ExportFormat, request: Request, caller: CurrentCaller, db_session: DbSession
-):
+) -> Response:
     """Returns the session exported for other software (spreadsheet, OpenSim, animation tools, FHIR servers)."""
     row = service.get_session_row(db_session=db_session, session_id=session_id)
     patient_id = row[0].patient_id
@@ -376,7 +392,7 @@ def export_session(
         **error_responses(*AUTH_ERRORS, SessionNotFound, SessionFileRemoved),
     },
 )
-def read_session_file(session_id: IdPath, caller: CurrentCaller, db_session: DbSession):
+def read_session_file(session_id: IdPath, caller: CurrentCaller, db_session: DbSession) -> Response:
     """Returns the stored session file exactly as it was uploaded."""
     patient_id = service.session_patient(db_session=db_session, session_id=session_id)
     require_patient_access(patient_id, caller=caller, db_session=db_session, hidden_as=service.missing(session_id))
@@ -400,7 +416,7 @@ def read_progress(
     db_session: DbSession,
     exercise: SlugQuery = None,
     since: Annotated[DateTimeQuery, Query(description="only sessions started at or after this time")] = None,
-):
+) -> ProgressOut:
     """Returns the patient's sessions as a time series (repetitions, range of motion, indicators), oldest first."""
     exercise_id = service.find_exercise_id(db_session=db_session, slug=exercise) if exercise else None
     points = dashboard.progress(
@@ -415,7 +431,7 @@ def read_progress(
     response_model=SummaryOut,
     responses=error_responses(*AUTH_ERRORS, PatientNotFound),
 )
-def read_summary(patient: PatientForRead, caller: CurrentCaller, db_session: DbSession):
+def read_summary(patient: PatientForRead, caller: CurrentCaller, db_session: DbSession) -> SummaryOut:
     """Returns the dashboard summary of one patient: last session, this week against the plan, indicators, advice."""
     summary = dashboard.summaries(db_session=db_session, patient_ids=[patient.id], now=utcnow())[patient.id]
     _audit(db_session, caller, "session.summary.read", None, patient.id)
@@ -429,7 +445,7 @@ def read_summary(patient: PatientForRead, caller: CurrentCaller, db_session: DbS
 )
 def read_dashboard(
     caller: TherapistOrAdminCaller, db_session: DbSession, page: Annotated[PageParams, Depends(page_params)]
-):
+) -> Page[DashboardRowOut]:
     """Returns one page of the caller's patients (therapists: assigned; admins: all), most in need of attention first.
 
     Rows are sorted by attention score (highest first), then name. Beyond RANKED_PATIENTS_MAX visible patients

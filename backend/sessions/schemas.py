@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import datetime as dt
 import uuid
-from typing import Literal
+from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, JsonValue
+from pydantic.config import JsonDict
 
 from backend.suggestions.schemas import SuggestionOut
 
@@ -39,11 +40,13 @@ class SessionItemOut(BaseModel):
 class SessionOut(SessionItemOut):
     """A stored session with its metrics document and the suggestions it produced that the caller may see."""
 
-    metrics: dict | None = Field(description="the analysis document (backend.analysis.report) with 'indicators'")
+    metrics: dict[str, Any] | None = Field(
+        description="the analysis document (backend.analysis.report) with 'indicators'"
+    )
     suggestions: list[SuggestionOut]
 
 
-_INDICATORS_EXAMPLE = {
+_INDICATORS_EXAMPLE: JsonDict = {
     "flexibility": {
         "score": 60.7,
         "value": 82.0,
@@ -71,7 +74,9 @@ class ProgressPoint(BaseModel):
     repetitions: int | None
     rom_deg: float | None = Field(description="degrees")
     quality_ok: bool | None
-    indicators: dict | None = Field(description="flexibility, endurance, strength, balance: {score 0..100, ...}")
+    indicators: dict[str, Any] | None = Field(
+        description="flexibility, endurance, strength, balance: {score 0..100, ...}"
+    )
     pain_nrs: int | None = Field(default=None, description="pain the patient said after the set, 0-10; null: not said")
     effort_cr10: float | None = Field(
         default=None, description="effort the patient said after the set, Borg CR10 0-10; null: not said"
@@ -131,8 +136,15 @@ class IndicatorTrendOut(BaseModel):
     text: str = Field(description="the trend in words", examples=["Flexibility rose from 48 to 60 over 4 weeks"])
 
 
-_TREND_WEEKS_EXAMPLE = ["2026-10-19", "2026-10-26", "2026-11-02", "2026-11-09", "2026-11-16", "2026-11-23"]
-_TRENDS_EXAMPLE = {
+_TREND_WEEKS_EXAMPLE: list[JsonValue] = [
+    "2026-10-19",
+    "2026-10-26",
+    "2026-11-02",
+    "2026-11-09",
+    "2026-11-16",
+    "2026-11-23",
+]
+_TRENDS_EXAMPLE: JsonDict = {
     "flexibility": {
         "weeks": _TREND_WEEKS_EXAMPLE,
         "weekly_median": [66.0, 64.5, 61.0, None, 55.2, 50.0],
@@ -202,7 +214,7 @@ class SummaryOut(BaseModel):
     planned_this_week: int | None = Field(
         description="sessions per week the running plans prescribe (sum over their items); null without a plan"
     )
-    latest_indicators: dict | None = Field(description="indicators of the newest processed session")
+    latest_indicators: dict[str, Any] | None = Field(description="indicators of the newest processed session")
     pending_suggestions: int = Field(description="system suggestions waiting for a therapist's decision")
     unread_replies: int = Field(description="the patient's replies to advice no therapist has read yet")
     attention_score: int = Field(ge=0, le=100, description="how much the patient needs attention (triage formula)")
@@ -325,8 +337,8 @@ class ProcessingOut(BaseModel):
     """How the session was processed: versions and parameters."""
 
     version: str = Field(description="server version that processed the upload", examples=["0.4.0"])
-    params: dict = Field(description="parameters stored with the session (from the file's params)")
-    file_params: dict = Field(description="the params written in the session file by the home agent")
+    params: dict[str, Any] = Field(description="parameters stored with the session (from the file's params)")
+    file_params: dict[str, Any] = Field(description="the params written in the session file by the home agent")
     filter_history: list[str] = Field(description="processing steps of the filtered recording, oldest first")
     analysis: str = Field(description="'stored' (the metrics document) or 'recomputed' (none was stored)")
 

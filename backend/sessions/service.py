@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import datetime as dt
 import uuid
+from typing import TYPE_CHECKING, Any
 
-from sqlalchemy import Select, func, select
+from sqlalchemy import ColumnElement, Select, func, select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
@@ -25,6 +26,9 @@ from backend.suggestions.models import Suggestion
 from backend.suggestions.service import suggest_for_session, visible_to_patient
 from backend.users.models import User
 from kinect_agent.processing.errors import ProcessingError
+
+if TYPE_CHECKING:
+    from backend.deps import Caller
 
 FILE_FORMAT = "khs"
 
@@ -53,7 +57,7 @@ def _same_or_conflict(stored: ExerciseSession, upload: Upload) -> ExerciseSessio
 
 def _analyse(
     *, db_session: Session, upload: Upload, patient_id: int, exercise: Exercise
-) -> tuple[dict | None, str | None]:
+) -> tuple[dict[str, Any] | None, str | None]:
     """Returns (metrics document, None), or (None, reason) when the analysis cannot use the recording."""
     from backend.exercises.library import EXERCISES
 
@@ -133,7 +137,7 @@ _ITEM_COLUMNS = (
 )
 
 
-def _with_metrics(*columns) -> Select:
+def _with_metrics(*columns: Any) -> Select[Any]:
     return (
         select(*columns)
         .select_from(ExerciseSession)
@@ -142,7 +146,9 @@ def _with_metrics(*columns) -> Select:
     )
 
 
-def visible_patients_filter(*, role: str, user_id: int | None, device_patient_id: int | None):
+def visible_patients_filter(
+    *, role: str, user_id: int | None, device_patient_id: int | None
+) -> ColumnElement[bool] | None:
     """Returns the WHERE clause of the sessions a caller may list: own, own patient's, assigned patients' or all."""
     if role == "device":
         return ExerciseSession.patient_id == device_patient_id
@@ -157,13 +163,13 @@ def visible_patients_filter(*, role: str, user_id: int | None, device_patient_id
 def list_sessions(
     *,
     db_session: Session,
-    visible,
+    visible: ColumnElement[bool] | None,
     patient_id: int | None,
     exercise_id: int | None,
     since: dt.datetime | None,
     limit: int,
     offset: int,
-) -> tuple[list[tuple], int]:
+) -> tuple[list[tuple[Any, ...]], int]:
     """Returns one page of (session, exercise slug, repetitions, rom_deg, quality_ok), newest first, and the total.
 
     visible: the caller's visible_patients_filter (None = every patient). The file bytes are never loaded.
@@ -184,7 +190,7 @@ def list_sessions(
     return [tuple(r) for r in rows], total
 
 
-def dashboard_patients(*, db_session: Session, caller, limit: int, offset: int) -> tuple[list[User], int]:
+def dashboard_patients(*, db_session: Session, caller: Caller, limit: int, offset: int) -> tuple[list[User], int]:
     """Returns one page of the patients the caller (deps.Caller) may see, by id, and their total.
 
     The total is counted only when the page does not tell it (a full page, or an empty page past the start).
@@ -196,7 +202,7 @@ def dashboard_patients(*, db_session: Session, caller, limit: int, offset: int) 
     return patients, db_session.scalar(select(func.count()).select_from(query.subquery())) or 0
 
 
-def get_session_row(*, db_session: Session, session_id: int) -> tuple:
+def get_session_row(*, db_session: Session, session_id: int) -> tuple[Any, ...]:
     """Returns (session, exercise slug, repetitions, rom_deg, quality_ok, document) or raises SessionNotFound."""
     row = db_session.execute(
         _with_metrics(*_ITEM_COLUMNS, SessionMetric.document).where(ExerciseSession.id == session_id)

@@ -42,6 +42,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from statistics import median
+from typing import Any
 
 from backend.analysis.balance import MIN_STANDING_S
 from backend.exercises.library import EXERCISES
@@ -68,7 +69,7 @@ class RecentSession:
     repetitions: int | None
     rom_deg: float | None
     quality_ok: bool | None
-    indicator_scores: dict | None  # {indicator: score 0-100 or None}; None: the session has no indicators
+    indicator_scores: dict[str, Any] | None  # {indicator: score 0-100 or None}; None: the session has no indicators
     pain_nrs: int | None = None  # pain 0-10 the patient said after the set (backend.feeling); None: not said
 
 
@@ -193,18 +194,18 @@ def _poor_quality(sessions: Sequence[RecentSession]) -> tuple[float, str | None]
 def _pain(now: dt.datetime, sessions: Sequence[RecentSession], alert_above: int) -> tuple[float, str | None]:
     recent_from = now - dt.timedelta(days=RECENT_DAYS)
     baseline_from = recent_from - dt.timedelta(days=BASELINE_DAYS)
-    said = [s for s in sessions if s.pain_nrs is not None]
-    recent = [s for s in said if s.started_at >= recent_from]
+    said = [(s, s.pain_nrs) for s in sessions if s.pain_nrs is not None]
+    recent = [(s, pain) for s, pain in said if s.started_at >= recent_from]
     if not recent:
         return 0.0, None
-    worst = max(recent, key=lambda s: (s.pain_nrs, s.started_at))
-    if worst.pain_nrs > alert_above:
+    worst, worst_pain = max(recent, key=lambda sp: (sp[1], sp[0].started_at))
+    if worst_pain > alert_above:
         day = _fmt_date(worst.started_at.date())
-        return 30.0, (f"Said pain {worst.pain_nrs} of 10 after {_name(worst.exercise_slug or '')} on {day} "
+        return 30.0, (f"Said pain {worst_pain} of 10 after {_name(worst.exercise_slug or '')} on {day} "
                       f"(alert above {alert_above})")  # fmt: skip
-    base = [s.pain_nrs for s in said if baseline_from <= s.started_at < recent_from]
+    base = [pain for s, pain in said if baseline_from <= s.started_at < recent_from]
     if len(base) >= 2:
-        b, r = float(median(base)), float(median([s.pain_nrs for s in recent]))
+        b, r = float(median(base)), float(median([pain for _, pain in recent]))
         if r - b >= PAIN_RISE:
             return 25.0, (f"Pain after sets rose from {b:g} to {r:g} of 10 (median of the last {RECENT_DAYS} days "
                           f"against the {BASELINE_DAYS // 7} weeks before)")  # fmt: skip
@@ -255,13 +256,13 @@ def attention(
     score = round(total)
     ranked = sorted([(p, t) for p, t in parts if t] + falling, key=lambda pt: -pt[0])
     reasons = [t for _, t in ranked]
-    if new and last_session_at is None:
+    if plan is not None and new and last_session_at is None:
         reasons.append(f"New plan since {_fmt_date(plan.started_on)}; no session yet")
     level = "now" if score >= NOW_AT else "soon" if score >= SOON_AT else "ok"
     return Attention(score=score, level=level, reasons=reasons)
 
 
-def indicator_trends(now: dt.datetime, sessions: Sequence[RecentSession]) -> dict[str, dict]:
+def indicator_trends(now: dt.datetime, sessions: Sequence[RecentSession]) -> dict[str, dict[str, Any]]:
     """Returns per indicator {"weeks", "weekly_median", "direction", "text"} over TREND_WEEKS weeks (module doc)."""
     first = window_start(now)
     weeks = [(first + k * WEEK).date() for k in range(TREND_WEEKS)]
@@ -292,7 +293,7 @@ def indicator_trends(now: dt.datetime, sessions: Sequence[RecentSession]) -> dic
     return out
 
 
-def balance_missing(latest_indicators: dict | None, exercise_slug: str | None) -> str | None:
+def balance_missing(latest_indicators: dict[str, Any] | None, exercise_slug: str | None) -> str | None:
     """Returns why the latest indicators have no balance score, in words, or None when they have one."""
     if not isinstance(latest_indicators, dict):
         return "Not measured: no analysed session yet"

@@ -52,8 +52,8 @@ def check(conn: Connection, store: ObjectStore) -> CheckReport:
             report.missing.append(f"{what}: {key}")
         elif problem == "corrupt":
             report.corrupt.append(f"{what}: {key}")
-    report.in_database = conn.scalar(
-        sa.select(sa.func.count()).select_from(_SESSION).where(_SESSION.c.file_bytes.is_not(None))
+    report.in_database = (
+        conn.scalar(sa.select(sa.func.count()).select_from(_SESSION).where(_SESSION.c.file_bytes.is_not(None))) or 0
     )
     report.orphans = sorted(k for k in store.keys() if k not in referenced)
     return report
@@ -87,9 +87,9 @@ def run(args: argparse.Namespace) -> int:
                         print(f"orphan   {key}")
                 return 0 if report.ok else 1
             mover = move_out if args.action == "move-out" else move_in
-            report = mover(conn, store, batch=args.batch, commit=True, progress=lambda m: print(m, file=sys.stderr))
+            moved = mover(conn, store, batch=args.batch, commit=True, progress=lambda m: print(m, file=sys.stderr))
             conn.commit()
-            print(f"{store.describe()}: {report.text()}")
+            print(f"{store.describe()}: {moved.text()}")
             return 0
     except StorageError as exc:
         print(f"coach-server: storage error: {exc.message}", file=sys.stderr)

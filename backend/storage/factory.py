@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from backend.storage.base import ObjectStore
+
+if TYPE_CHECKING:
+    from backend.config import Settings
 
 _store: ObjectStore | None = None
 
 
-def build_store(settings) -> ObjectStore:
+def build_store(settings: Settings) -> ObjectStore:
     """Returns the store the settings name: LocalStore under STORAGE_DIR, or S3Store on S3_BUCKET."""
     if settings.STORAGE_BACKEND == "s3":
         from backend.storage.s3 import S3Store

@@ -10,8 +10,9 @@ written (a HEAD or a stat instead of a write).
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any
 
 import sqlalchemy as sa
 from sqlalchemy.engine import Connection
@@ -35,7 +36,7 @@ class MoveReport:
     sessions: int = 0
     replays: int = 0
     replays_dropped: int = 0  # move_in only: replays whose object was gone (rebuilt from the file on next view)
-    skipped: list[int] | None = None
+    skipped: list[int] = field(default_factory=list)
 
     def text(self) -> str:
         """Returns the report in words."""
@@ -47,7 +48,9 @@ class MoveReport:
         return out
 
 
-def _batches(conn: Connection, query_for: Callable[[int], sa.Select], batch: int):
+def _batches(
+    conn: Connection, query_for: Callable[[int], sa.Select[Any]], batch: int
+) -> Iterator[Sequence[sa.Row[Any]]]:
     last = 0
     while True:
         rows = conn.execute(query_for(last).order_by(sa.text("id")).limit(batch)).all()
@@ -61,7 +64,7 @@ def move_out(
     conn: Connection, store: ObjectStore, *, batch: int = 100, commit: bool = False, progress: Progress | None = None
 ) -> MoveReport:
     """Moves every database blob to the store; returns what it did (see module doc)."""
-    report = MoveReport(skipped=[])
+    report = MoveReport()
     pending = sa.and_(_SESSION.c.file_bytes.is_not(None), _SESSION.c.file_key.is_(None))
     left = conn.scalar(sa.select(sa.func.count()).select_from(_SESSION).where(pending))
     q = lambda last: sa.select(_SESSION.c.id, _SESSION.c.file_bytes, _SESSION.c.content_hash).where(  # noqa: E731
@@ -103,7 +106,7 @@ def move_in(
 ) -> MoveReport:
     """Moves every stored object back into its row (the objects stay in the store); a session whose object is
     missing or corrupt stops the run with StoredObjectMissing/StoredObjectCorrupt, nothing of it lost."""
-    report = MoveReport(skipped=[])
+    report = MoveReport()
     q = lambda last: sa.select(_SESSION.c.id, _SESSION.c.file_key, _SESSION.c.content_hash).where(  # noqa: E731
         _SESSION.c.file_key.is_not(None), _SESSION.c.id > last
     )

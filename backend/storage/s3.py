@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import base64
 import binascii
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import Any
 
 from backend.storage.base import ObjectStore, is_object_key
 from backend.storage.errors import StorageError, StoredObjectMissing
@@ -17,7 +18,7 @@ class S3Store(ObjectStore):
 
     name = "s3"
 
-    def __init__(self, client, bucket: str, prefix: str = "", endpoint: str = "") -> None:
+    def __init__(self, client: Any, bucket: str, prefix: str = "", endpoint: str = "") -> None:
         self.client = client
         self.bucket = bucket
         self.prefix = prefix.strip("/") + "/" if prefix.strip("/") else ""
@@ -53,7 +54,7 @@ class S3Store(ObjectStore):
             raise StorageError(f"invalid object key {key!r}")
         return self.prefix + key
 
-    def _call(self, what: str, key: str, fn, **kw):
+    def _call(self, what: str, key: str, fn: Callable[..., Any], **kw: Any) -> Any:
         from botocore.exceptions import BotoCoreError, ClientError
 
         try:

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import datetime as dt
+from typing import Any
 
-from sqlalchemy import or_, select
+from sqlalchemy import Select, or_, select
 from sqlalchemy.orm import Session
 
 from backend.plans.models import Plan, PlanItem
@@ -37,7 +38,7 @@ def plan_targets(
     return (item.repetitions, item.frequency_per_week) if item is not None else (None, None)
 
 
-def _earlier(session: ExerciseSession):
+def _earlier(session: ExerciseSession) -> Select[dt.datetime, dict[str, Any] | None]:
     return (
         select(ExerciseSession.started_at, SessionMetric.document)
         .join(SessionMetric, SessionMetric.session_id == ExerciseSession.id)
@@ -50,7 +51,7 @@ def _earlier(session: ExerciseSession):
     )
 
 
-def session_history(*, db_session: Session, session: ExerciseSession) -> list[tuple[dt.datetime, dict]]:
+def session_history(*, db_session: Session, session: ExerciseSession) -> list[tuple[dt.datetime, dict[str, Any]]]:
     """Returns (started_at, metrics document) of the patient's earlier sessions of the same exercise, oldest first.
 
     Covers the rules' longest window (ROM_BASELINE_WINDOW_DAYS) plus the latest session before it, so the

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+from typing import Any
 
 from sqlalchemy import JSON, CheckConstraint, ForeignKey, String, Text
 from sqlalchemy.orm import Mapped, mapped_column
@@ -38,7 +39,7 @@ class Suggestion(Base):
     threshold: Mapped[float | None] = mapped_column()
     value: Mapped[float | None] = mapped_column()  # the measured value compared with threshold (system ones)
     text: Mapped[str] = mapped_column(Text)
-    params: Mapped[dict | None] = mapped_column(JSON)  # what the rule found (AdviceParams); null: show text
+    params: Mapped[dict[str, Any] | None] = mapped_column(JSON)  # what the rule found (AdviceParams); null: show text
     status: Mapped[str] = mapped_column(String(16), default="pending", index=True)
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
     decided_at: Mapped[dt.datetime | None] = mapped_column()

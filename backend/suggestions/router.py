@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from collections.abc import Sequence
+from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Query, Request, status
 from sqlalchemy import select
+from sqlalchemy.orm import Session
 
 from backend.audit.service import record
 from backend.deps import Caller, CurrentCaller, DbSession, TherapistOrAdminCaller, require_patient_access
@@ -21,12 +23,20 @@ from backend.exceptions import (
 from backend.schemas import MAX_ID, IdPath, Page, PageParams, page_params
 from backend.sessions.models import ExerciseSession
 from backend.suggestions import service
+from backend.suggestions.models import Suggestion
 from backend.suggestions.schemas import Status, SuggestionIn, SuggestionOut
 
 router = APIRouter(prefix="/api/v1", tags=["suggestions"])
 
 
-def _audit(db_session, caller: Caller, action: str, suggestion_id, patient_id: int, detail=None) -> None:
+def _audit(
+    db_session: Session,
+    caller: Caller,
+    action: str,
+    suggestion_id: int | None,
+    patient_id: int,
+    detail: dict[str, Any] | None = None,
+) -> None:
     record(
         db_session=db_session,
         caller=caller,
@@ -38,7 +48,7 @@ def _audit(db_session, caller: Caller, action: str, suggestion_id, patient_id: i
     )
 
 
-def _outs(db_session, rows, request: Request) -> list[SuggestionOut]:
+def _outs(db_session: Session, rows: Sequence[Suggestion], request: Request) -> list[SuggestionOut]:
     """Returns suggestions as the API shows them (service.suggestion_outs), in the request's language."""
     return service.suggestion_outs(rows, db_session=db_session,
                                    accept_language=request.headers.get("accept-language"))  # fmt: skip
@@ -66,7 +76,7 @@ def list_suggestions(
     decided: Annotated[
         bool | None, Query(description="true: only decided ones (approved, dismissed, superseded, therapists' own)")
     ] = None,
-):
+) -> Page[SuggestionOut]:
     """Lists a patient's suggestions, newest first: patients and devices see approved ones, therapists all."""
     require_patient_access(patient_id, caller=caller, db_session=db_session)
     rows, total = service.list_suggestions(
@@ -102,7 +112,7 @@ def create_suggestion(
     row = service.add_therapist_suggestion(
         db_session=db_session,
         patient_id=patient_id,
-        author_id=caller.user.id,  # type: ignore[union-attr]
+        author_id=caller.signed_in_user.id,
         text=body.text,
         session_id=body.session_id,
     )
@@ -111,7 +121,9 @@ def create_suggestion(
     return _outs(db_session, [row], request)[0]
 
 
-def _decide(suggestion_id: int, new_status: str, caller: Caller, db_session, request: Request) -> SuggestionOut:
+def _decide(
+    suggestion_id: int, new_status: str, caller: Caller, db_session: Session, request: Request
+) -> SuggestionOut:
     row = service.get_suggestion(db_session=db_session, suggestion_id=suggestion_id)
     require_patient_access(row.patient_id, caller=caller, db_session=db_session, write=True,
                            hidden_as=service.missing(suggestion_id))  # fmt: skip
@@ -119,7 +131,7 @@ def _decide(suggestion_id: int, new_status: str, caller: Caller, db_session, req
         db_session=db_session,
         suggestion=row,
         status=new_status,
-        decided_by_id=caller.user.id,  # type: ignore[union-attr]
+        decided_by_id=caller.signed_in_user.id,
     )
     action = "suggestion.approve" if new_status == "approved" else "suggestion.dismiss"
     _audit(db_session, caller, action, row.id, row.patient_id, {"rule": row.rule})

@@ -14,7 +14,7 @@ import datetime as dt
 import math
 import statistics
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal, TypeVar
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -151,7 +151,7 @@ def _sentence(text: str) -> str:
 # --- input checks ----------------------------------------------------------------------------------------------
 
 
-def _number(doc: dict, key: str, where: str = "doc") -> float | None:
+def _number(doc: dict[str, Any], key: str, where: str = "doc") -> float | None:
     """Returns doc[key] as a float; None when missing, null or not finite; ValueError when not a number."""
     value = doc.get(key)
     if value is None:
@@ -162,7 +162,7 @@ def _number(doc: dict, key: str, where: str = "doc") -> float | None:
     return value if math.isfinite(value) else None
 
 
-def _quality(doc: dict, where: str = "doc") -> dict:
+def _quality(doc: dict[str, Any], where: str = "doc") -> dict[str, Any]:
     quality = doc.get("quality")
     if quality is None:
         return {}
@@ -174,7 +174,7 @@ def _quality(doc: dict, where: str = "doc") -> dict:
     return quality
 
 
-def _quality_ok(doc: dict, where: str = "doc") -> bool:
+def _quality_ok(doc: dict[str, Any], where: str = "doc") -> bool:
     """Returns False only when the analysis said quality.ok is false (missing or null counts as ok)."""
     return _quality(doc, where).get("ok") is not False
 
@@ -193,7 +193,7 @@ def _positive_int(value: object, where: str) -> int | None:
     return value
 
 
-def _checked_history(history: object) -> list[tuple[dt.datetime, dict]]:
+def _checked_history(history: object) -> list[tuple[dt.datetime, dict[str, Any]]]:
     if not isinstance(history, list | tuple):
         raise ValueError(f"history must be a list of (datetime, dict), got {type(history).__name__}")
     out = []
@@ -217,7 +217,10 @@ def _draft(rule: str, metric: str, comparison: str, threshold: float, value: flo
                            advice_text(rule, metric, params, t))  # fmt: skip
 
 
-def _need(value: object, name: str, rule: str):
+T = TypeVar("T")
+
+
+def _need(value: T | None, name: str, rule: str) -> T:
     if value is None:
         raise ValueError(f"the {rule} advice needs params.{name}")
     return value
@@ -318,11 +321,11 @@ def advice_text(rule: str, metric: str, params: AdviceParams, t: Translator = EN
 # --- the rules -------------------------------------------------------------------------------------------------
 
 
-def _about(doc: dict, day: SessionDay) -> dict:
+def _about(doc: dict[str, Any], day: SessionDay) -> dict[str, Any]:
     return {"exercise": _slug(doc.get("exercise")), "session_on": day.on, "written_on": day.written_on}
 
 
-def fewer_reps(doc: dict, prescribed_reps: int | None, day: SessionDay, t: Translator = ENGLISH
+def fewer_reps(doc: dict[str, Any], prescribed_reps: int | None, day: SessionDay, t: Translator = ENGLISH
                ) -> SuggestionDraft | None:  # fmt: skip
     """Fires when the session counted fewer repetitions than the plan prescribes."""
     reps = _number(doc, "repetitions")
@@ -332,7 +335,7 @@ def fewer_reps(doc: dict, prescribed_reps: int | None, day: SessionDay, t: Trans
     return _draft(FEWER_REPS, "repetitions", "<", prescribed_reps, reps, params, t)
 
 
-def _rom_baseline(history: list[tuple[dt.datetime, dict]], now: dt.datetime, exercise: object) -> list[float]:
+def _rom_baseline(history: list[tuple[dt.datetime, dict[str, Any]]], now: dt.datetime, exercise: object) -> list[float]:
     """Returns rom_deg of the earlier good-quality sessions of the last ROM_BASELINE_WINDOW_DAYS (same exercise)."""
     start = now - dt.timedelta(days=ROM_BASELINE_WINDOW_DAYS)
     times, values = [], []
@@ -351,7 +354,11 @@ def _rom_baseline(history: list[tuple[dt.datetime, dict]], now: dt.datetime, exe
 
 
 def rom_drop(
-    doc: dict, history: list[tuple[dt.datetime, dict]], now: dt.datetime, day: SessionDay, t: Translator = ENGLISH
+    doc: dict[str, Any],
+    history: list[tuple[dt.datetime, dict[str, Any]]],
+    now: dt.datetime,
+    day: SessionDay,
+    t: Translator = ENGLISH,
 ) -> SuggestionDraft | None:
     """Fires when rom_deg < ROM_DROP_FRACTION x the median rom_deg of the last 2-4 weeks."""
     rom = _number(doc, "rom_deg")
@@ -366,7 +373,7 @@ def rom_drop(
     return _draft(ROM_DROP, "rom_deg", "<", threshold, rom, params, t)
 
 
-def too_fast(doc: dict, day: SessionDay, t: Translator = ENGLISH) -> SuggestionDraft | None:
+def too_fast(doc: dict[str, Any], day: SessionDay, t: Translator = ENGLISH) -> SuggestionDraft | None:
     """Fires when a repetition took less than MIN_TEMPO_S_PER_REP seconds on average."""
     tempo = _number(doc, "tempo_s_per_rep")
     if tempo is None or tempo <= 0 or tempo >= MIN_TEMPO_S_PER_REP:
@@ -375,7 +382,7 @@ def too_fast(doc: dict, day: SessionDay, t: Translator = ENGLISH) -> SuggestionD
     return _draft(TOO_FAST, "tempo_s_per_rep", "<", MIN_TEMPO_S_PER_REP, tempo, params, t)
 
 
-def poor_data_quality(doc: dict, day: SessionDay, t: Translator = ENGLISH) -> SuggestionDraft | None:
+def poor_data_quality(doc: dict[str, Any], day: SessionDay, t: Translator = ENGLISH) -> SuggestionDraft | None:
     """Fires when the analysis found the data unreliable (quality.ok false); says what to change at the camera."""
     quality = _quality(doc)
     if quality.get("ok") is not False:
@@ -394,7 +401,7 @@ def poor_data_quality(doc: dict, day: SessionDay, t: Translator = ENGLISH) -> Su
 
 
 def missed_days(
-    history: list[tuple[dt.datetime, dict]],
+    history: list[tuple[dt.datetime, dict[str, Any]]],
     expected_per_week: int | None,
     now: dt.datetime,
     exercise: object = None,
@@ -420,10 +427,10 @@ def missed_days(
 
 
 def evaluate(
-    doc: dict,
+    doc: dict[str, Any],
     *,
     prescribed_reps: int | None,
-    history: list[tuple[dt.datetime, dict]],
+    history: list[tuple[dt.datetime, dict[str, Any]]],
     expected_per_week: int | None,
     now: dt.datetime,
     today: dt.date | None = None,

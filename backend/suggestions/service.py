@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import datetime as dt
 from collections.abc import Iterable
+from typing import Any, cast
 
 from pydantic import ValidationError
-from sqlalchemy import and_, func, or_, select, update
+from sqlalchemy import ColumnElement, and_, func, or_, select, update
+from sqlalchemy.engine import CursorResult
 from sqlalchemy.orm import Session
 
 from backend.database import utcnow
@@ -113,7 +115,7 @@ def add_therapist_suggestion(
     return row
 
 
-def visible_to_patient():
+def visible_to_patient() -> ColumnElement[bool]:
     """Returns the filter of what a patient (or their device) sees: therapist-written and approved system ones."""
     return or_(Suggestion.source == "therapist", and_(Suggestion.source == "system", Suggestion.status == "approved"))
 
@@ -173,8 +175,9 @@ def suggestion_outs(rows: Iterable[Suggestion], *, db_session: Session, accept_l
         if r.patient_id not in readers:
             readers[r.patient_id] = reader(accept_language, db_session=db_session, patient_id=r.patient_id)
         text, locale = shown_text(r, readers[r.patient_id])
-        out.append(SuggestionOut.model_validate(r).model_copy(
-            update={"session_started_at": started.get(r.session_id), "text": text, "locale": locale}))  # fmt: skip
+        when = started.get(r.session_id) if r.session_id is not None else None
+        shown = {"session_started_at": when, "text": text, "locale": locale}
+        out.append(SuggestionOut.model_validate(r).model_copy(update=shown))
     return out
 
 
@@ -206,7 +209,7 @@ def decide(*, db_session: Session, suggestion: Suggestion, status: str, decided_
         .execution_options(synchronize_session="fetch")
     )
     db_session.refresh(suggestion)
-    if result.rowcount != 1:
+    if cast("CursorResult[Any]", result).rowcount != 1:  # an UPDATE's result is a CursorResult
         raise SuggestionNotPending(
             f"suggestion {suggestion.id} is already {suggestion.status}; only pending suggestions can be decided"
         )
@@ -259,7 +262,7 @@ def shown_text(row: Suggestion, t: Translator) -> tuple[str, str | None]:
         return row.text, None
 
 
-def suggest_for_session(*, db_session: Session, session: ExerciseSession, doc: dict) -> list[Suggestion]:
+def suggest_for_session(*, db_session: Session, session: ExerciseSession, doc: dict[str, Any]) -> list[Suggestion]:
     """Runs the rules on a stored session's metrics document and stores what fires as pending suggestions.
 
     Reads the plan's targets and the patient's earlier sessions; judges missed days at most once a week per
@@ -339,7 +342,7 @@ def supersede_older(*, db_session: Session, session: ExerciseSession, rules: set
         .values(status="superseded", decided_at=utcnow())
         .execution_options(synchronize_session="fetch")
     )
-    return result.rowcount
+    return cast("CursorResult[Any]", result).rowcount
 
 
 def suggest_for_feeling(
@@ -365,7 +368,7 @@ def suggest_for_feeling(
             SessionFeeling.pain_nrs.is_not(None),
         )
     ).all()
-    answers = [(t if t.tzinfo else t.replace(tzinfo=dt.UTC), p) for t, p in rows]
+    answers = [(t if t.tzinfo else t.replace(tzinfo=dt.UTC), p) for t, p in rows if p is not None]
     t = translator(patient_locale(db_session=db_session, patient_id=session.patient_id))
     slug = db_session.scalar(select(Exercise.slug).where(Exercise.id == session.exercise_id))
     day = SessionDay.of(started, utcnow().date())

@@ -34,7 +34,7 @@ def list_users(
     db_session: DbSession,
     page: Annotated[PageParams, Depends(page_params)],
     role: Annotated[Role | None, Query()] = None,
-):
+) -> Page[UserOut]:
     """Lists users (admin only), optionally of one role."""
     rows, total = service.list_users(db_session=db_session, limit=page.limit, offset=page.offset, role=role)
     return Page[UserOut](
@@ -85,7 +85,7 @@ def update_user(user_id: IdPath, body: UserUpdate, caller: AdminCaller, db_sessi
     (except the caller's own, when admins change their own password) and API tokens unless keep_api_tokens;
     deactivation revokes all of them."""
     user = service.get_user(db_session=db_session, user_id=user_id)
-    if body.is_active is False and user.id == caller.user.id:
+    if body.is_active is False and user.id == caller.signed_in_user.id:
         raise Forbidden("admins cannot deactivate themselves")
     service.update_user(
         db_session=db_session,

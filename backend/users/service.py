@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+from collections.abc import Sequence
 
 from sqlalchemy import func, select, update
 from sqlalchemy.orm import Session
@@ -155,7 +156,7 @@ def login(
         throttle.withdraw(db_session=db_session, attempt=attempt)
         raise
     throttle.settle(db_session=db_session, attempt=attempt, succeeded=ok)
-    if not ok:
+    if not ok or user is None:
         raise NotAuthenticated("wrong e-mail or password, or the account is deactivated", keep_changes=True)
     now = utcnow()
     token = new_token(SESSION_TOKEN_PREFIX)
@@ -180,7 +181,7 @@ def logout(*, db_session: Session, login_session: LoginSession) -> None:
 
 
 def create_api_token(
-    *, db_session: Session, user: User, name: str, scopes: list[str], days: int, parent: ApiToken | None = None
+    *, db_session: Session, user: User, name: str, scopes: Sequence[str], days: int, parent: ApiToken | None = None
 ) -> tuple[ApiToken, str]:
     """Creates a personal API token valid for days (no longer than its parent, the token that asked for it) and
     returns (row, secret token shown once)."""

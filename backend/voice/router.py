@@ -25,7 +25,9 @@ def get_voice(patient_id: IdPath, caller: CurrentCaller, db_session: DbSession) 
 def put_voice(patient_id: IdPath, body: VoiceIn, caller: UserCaller, db_session: DbSession) -> VoiceOut:
     """Sets the patient's voice: the patient from their page, or their therapist (an admin)."""
     require_patient_access(patient_id, caller=caller, db_session=db_session, write=True)
-    out = service.set_voice(db_session=db_session, patient_id=patient_id, body=body, by_user_id=caller.user.id)
+    out = service.set_voice(
+        db_session=db_session, patient_id=patient_id, body=body, by_user_id=caller.signed_in_user.id
+    )
     record(db_session=db_session, caller=caller, action="voice.update", object_type="patient", object_id=patient_id,
            patient_id=patient_id, detail={"enabled": body.enabled, "volume": body.volume})  # fmt: skip
     return out

@@ -1,6 +1,7 @@
-/* Plots: charts for every page, on plotly.js as shipped in the pinned `plotly` wheel (/static/vendor/plotly.min.js).
+/* Plots: charts for every page, on plotly.js from the pinned npm package plotly.js-dist-min
+   (kinect_agent/vendor/lock.json, served at /static/vendor/plotly/plotly.min.js).
 
-   Load /static/vendor/plotly.min.js, /static/api.js, then this file. One call:
+   Load /static/vendor/plotly/plotly.min.js, /static/api.js, then this file. One call:
 
      const fig = Plots.figure({
        title: "Right knee flexion",          // caption above the chart (also the table's caption by default)

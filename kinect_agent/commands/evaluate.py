@@ -6,6 +6,13 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING, TypeVar
+
+if TYPE_CHECKING:
+    from kinect_agent.evaluation.pairs import PairSpec
+
+T = TypeVar("T")
+
 
 NAME = "evaluate"
 HELP = ("Measure a Kinect against simultaneous motion capture: time alignment, registration, the paper's tables "
@@ -46,7 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures (no matplotlib needed)")
 
 
-def _per_pair(values: list, n: int, default: object, what: str) -> list:
+def _per_pair(values: list[T], n: int, default: T, what: str) -> list[T]:
     if not values:
         return [default] * n
     if len(values) == 1:
@@ -56,7 +63,7 @@ def _per_pair(values: list, n: int, default: object, what: str) -> list:
     return values
 
 
-def specs(args: argparse.Namespace) -> list:
+def specs(args: argparse.Namespace) -> list[PairSpec]:
     """Returns the PairSpecs the arguments name."""
     from kinect_agent.evaluation.pairs import PairSpec, find_pairs
 

@@ -11,6 +11,7 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 from kinect_agent.errors import AgentError
 from kinect_agent.export import fhir
@@ -33,7 +34,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )  # fmt: skip
 
 
-def _document(path: Path | None) -> dict | None:
+def _document(path: Path | None) -> dict[str, Any] | None:
     if path is None:
         return None
     try:

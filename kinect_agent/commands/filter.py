@@ -12,7 +12,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from kinect_agent import formats
 from kinect_agent.errors import AgentError
@@ -49,7 +51,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "a terminal)")  # fmt: skip
 
 
-def _progress_bar(n_frames: int, enabled: bool):
+def _progress_bar(n_frames: int, enabled: bool) -> tuple[Any, Callable[[int, int], None] | None]:
     """Returns (bar, progress callback) for a long recording when stderr is a terminal, else (None, None): a log
     file would get a line per update."""
     if not enabled or n_frames < _PROGRESS_MIN_FRAMES or not sys.stderr.isatty():
@@ -113,7 +115,7 @@ def _mean_mm(sd: dict[str, float | None]) -> float | None:
     return sum(values) / len(values) if values else None
 
 
-def quality_summary(quality: dict, top: int = 3) -> str:
+def quality_summary(quality: dict[str, Any], top: int = 3) -> str:
     """Returns one line: mean segment-length SD before -> after (mm) and the joints that lost most samples."""
     before, after = _mean_mm(quality["segment_sd_before_mm"]), _mean_mm(quality["segment_sd_after_mm"])
     sd = "segment-length SD n/a" if before is None else f"segment-length SD {before:.1f} mm -> {after or 0.0:.1f} mm"

@@ -13,6 +13,8 @@ import argparse
 import sys
 from pathlib import Path
 
+import httpx
+
 from kinect_agent.capture import SOURCE_NAMES, capture, queue_session
 from kinect_agent.config import load_config
 from kinect_agent.disk_full import is_disk_full, plain_words
@@ -37,7 +39,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-upload", action="store_true", help="only queue the session; upload later")
 
 
-def upload_now(queue: SessionQueue, server_url: str, token: str, *, transport=None) -> DrainReport:
+def upload_now(
+    queue: SessionQueue, server_url: str, token: str, *, transport: httpx.BaseTransport | None = None
+) -> DrainReport:
     """One pass over the queue with the agent's credentials, logging each file on stderr."""
     with Uploader(server_url, token, transport=transport) as uploader:
         return drain(queue, uploader, log=lambda line: print(line, file=sys.stderr, flush=True))

@@ -14,6 +14,7 @@ import signal
 import sys
 import threading
 from pathlib import Path
+from typing import Any
 
 from kinect_agent.capture import SOURCE_NAMES, check_exercise, check_source_file, queue_session
 from kinect_agent.commands.run import upload_now
@@ -122,7 +123,7 @@ class Service:
             return make_source(kind, file=self.args.file, camera=self.args.camera, model=self.args.model)
         return make_source(kind, file=self.args.file)
 
-    def start(self, data: dict, publisher: Publisher, uploads: Uploads) -> None:
+    def start(self, data: dict[str, Any], publisher: Publisher, uploads: Uploads) -> None:
         """Starts the commanded set unless one is running (then the command is refused with a message)."""
         command = SetCommand.from_message(data)
         check_exercise(command.exercise)
@@ -159,9 +160,10 @@ class Service:
             queue_session(self.queue, result.recording, created_at=result.created_at, session_id=result.session_id,
                           recorded_by=self.config.recorded_by, say=log)  # fmt: skip
             uploads.now()
-        result.journal.discard()
+        if result.journal is not None:
+            result.journal.discard()
 
-    def stop_set(self, data: dict) -> None:
+    def stop_set(self, data: dict[str, Any]) -> None:
         """Ends the running set if the command names it."""
         if self.current is not None and self.current.command.set_id == data.get("set_id"):
             self.current.stop()

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from kinect_agent import formats
+from kinect_agent.recording import Recording
 from kinect_agent.sources import kinect_noise
 from kinect_agent.sources.mocap_truth import truth_from_recording
 from kinect_agent.sources.simulator import EXERCISES, simulate
@@ -44,7 +45,7 @@ def _check_output(path: Path) -> None:
         raise ValueError(f"{path}: cannot tell the output format from the extension; use .csv or .khs")
 
 
-def _measure(args: argparse.Namespace):
+def _measure(args: argparse.Namespace) -> tuple[Recording, Recording, np.ndarray]:
     """Returns (measured, truth, outlier mask (T, J) bool) for the motion the arguments name."""
     if args.source is None:
         if args.exercise is None or args.reps is None:

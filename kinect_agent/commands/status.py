@@ -110,7 +110,7 @@ def collect(config: AgentConfig, transport: httpx.BaseTransport | None = None) -
     }
 
 
-def _size(n: int) -> str:
+def _size(n: float) -> str:
     for unit in ("bytes", "KB", "MB", "GB"):
         if n < 1000 or unit == "GB":
             return f"{n:.0f} {unit}" if unit == "bytes" else f"{n:.1f} {unit}"

@@ -5,6 +5,10 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections.abc import Callable
+from pathlib import Path
+
+import httpx
 
 from kinect_agent.config import load_config
 from kinect_agent.queue import SessionQueue
@@ -23,7 +27,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "and again) back to the queue first")  # fmt: skip
 
 
-def upload_queue(home=None, *, transport=None, log=None) -> DrainReport:
+def upload_queue(
+    home: str | Path | None = None,
+    *,
+    transport: httpx.BaseTransport | None = None,
+    log: Callable[[str], None] | None = None,
+) -> DrainReport:
     """One pass: loads the configuration, cleans crash leftovers, uploads the pending files."""
     config = load_config(home)
     queue = SessionQueue(config.queue_dir)

@@ -8,6 +8,7 @@ figure 4  joint angles over time of one pair: Kinect raw, Kinect filtered (the p
 from __future__ import annotations
 
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 
@@ -26,7 +27,7 @@ class PlottingUnavailable(AgentError):
     """matplotlib is not installed (it is in the `evaluate` extra)."""
 
 
-def pyplot():
+def pyplot() -> ModuleType:
     """Returns matplotlib.pyplot on the Agg backend; raises PlottingUnavailable when matplotlib is missing."""
     try:
         import matplotlib
@@ -81,7 +82,7 @@ def angle_figure(e: PairErrors, path: Path) -> list[str]:
         m = series["mocap"][name]
         if np.isfinite(m).mean() > 0.5:
             ranges[name] = float(np.nanmax(m) - np.nanmin(m))
-    chosen = sorted(ranges, key=ranges.get, reverse=True)[:2]
+    chosen = sorted(ranges, key=lambda name: ranges[name], reverse=True)[:2]
     if not chosen:
         return []
     plt = pyplot()

@@ -62,7 +62,10 @@ def measure(pair: Pair, config: PipelineConfig | None = None) -> PairErrors:
     raw = np.where((k.state == TRACKED)[..., None], k.positions, np.nan)[ov]
     mix, outliers = mixture_outliers(raw - truth, config)
     res = process(k, config=config)
-    flags = (res.params.outlier_prob > config.outlier_threshold) & (k.state != NOT_TRACKED)
+    prob = res.params.outlier_prob
+    if prob is None:  # process() always sets it
+        raise ValueError("the pipeline's result carries no outlier probabilities")
+    flags = (prob > config.outlier_threshold) & (k.state != NOT_TRACKED)
     estimates = {
         "raw": raw,
         "clean": np.where(outliers[..., None], np.nan, raw),

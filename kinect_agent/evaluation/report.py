@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -31,10 +32,10 @@ class Outcome:
 
     errors: list[PairErrors]
     refused: list[PairRefused]
-    summary: dict
+    summary: dict[str, Any]
 
 
-def pair_summary(e: PairErrors) -> dict:
+def pair_summary(e: PairErrors) -> dict[str, Any]:
     """Returns one aligned pair's alignment numbers (JSON-ready)."""
     p, al = e.pair, e.pair.alignment
     d = e.distance("raw")
@@ -102,16 +103,19 @@ def draw_figures(errors: list[PairErrors], out: Path, config: PipelineConfig) ->
     return [n for n in names if (out / n).is_file()]
 
 
-def _md_table(rows: list[dict]) -> list[str]:
+def _md_table(rows: list[dict[str, Any]]) -> list[str]:
     if not rows:
         return ["(empty)"]
     keys = list(rows[0])
-    cell = lambda v: "—" if v is None else f"{v:.1f}" if isinstance(v, float) else str(v)  # noqa: E731
+
+    def cell(v: object) -> str:
+        return "—" if v is None else f"{v:.1f}" if isinstance(v, float) else str(v)
+
     return ["| " + " | ".join(keys) + " |", "|---" * len(keys) + "|",
             *("| " + " | ".join(cell(r[k]) for k in keys) + " |" for r in rows)]  # fmt: skip
 
 
-def with_paper(name: str, rows: list[dict]) -> list[dict]:
+def with_paper(name: str, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Returns the rows of a table 1-4 with the paper's Kinect 2 mean and SD (mm) beside each tabled view
     (kinect_agent/sources/calibration: the paper's tables); other tables unchanged."""
     kind = "offset" if name.startswith("joint_offset_") else "bone" if name.startswith("bone_length_error_") else None
@@ -134,7 +138,7 @@ def with_paper(name: str, rows: list[dict]) -> list[dict]:
     return out
 
 
-def markdown(summary: dict) -> str:
+def markdown(summary: dict[str, Any]) -> str:
     """Returns report.md: alignment per pair, refused pairs, every table (tables 1-4 with the paper's Kinect 2
     numbers beside ours) and the figures."""
     lines = ["# Kinect accuracy against motion capture", "",

@@ -175,7 +175,9 @@ def _indicator_observations(document: dict[str, Any], common: dict[str, Any]) ->
     return out
 
 
-def _feeling_observations(feeling: Feeling | None, common: dict[str, Any], patient_id: int | None) -> list[dict]:
+def _feeling_observations(
+    feeling: Feeling | None, common: dict[str, Any], patient_id: int | None
+) -> list[dict[str, Any]]:
     out: list[dict[str, Any]] = []
     if feeling is None:
         return out
@@ -210,7 +212,7 @@ def _device(context: SessionContext) -> dict[str, Any]:
     device: dict[str, Any] = {
         "resourceType": "Device",
         "deviceName": names,
-        "type": {"text": DEVICE_TYPES.get(code, "Depth camera (Kinect) with skeleton tracking")},
+        "type": {"text": DEVICE_TYPES.get(str(code), "Depth camera (Kinect) with skeleton tracking")},
     }
     if code is not None:
         device["type"]["coding"] = [{"system": DEVICE_CODE_SYSTEM, "code": code, "display": recorded.get("label")}]

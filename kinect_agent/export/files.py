@@ -16,7 +16,7 @@ import io
 import json
 import zipfile
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal, get_args
 
 from kinect_agent.analysis.validity import recorded_with
 from kinect_agent.errors import AgentError
@@ -24,7 +24,8 @@ from kinect_agent.export import fhir, tables, trc
 from kinect_agent.formats import bvh_writer
 from kinect_agent.formats.session_file import SessionPayload
 
-FORMATS: tuple[str, ...] = ("csv", "trc", "bvh", "fhir")
+ExportFormat = Literal["csv", "trc", "bvh", "fhir"]
+FORMATS: tuple[ExportFormat, ...] = get_args(ExportFormat)
 MEDIA_TYPES: dict[str, str] = {
     "csv": "application/zip",
     "trc": "text/plain; charset=utf-8",

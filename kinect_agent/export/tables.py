@@ -65,7 +65,8 @@ def metric_rows(document: dict[str, Any]) -> list[tuple[str, Any, str]]:
         rows += [(f"{angle}.{key}", rom.get(f"{key}_deg"), "deg") for key in ("min", "max", "range")]
     indicators = document.get("indicators") or {}
     for name in INDICATORS:
-        item = indicators.get(name) if isinstance(indicators.get(name), dict) else {}
+        found = indicators.get(name)
+        item: dict[str, Any] = found if isinstance(found, dict) else {}
         rows += [(f"indicator.{name}.score", item.get("score"), "0-100")]
         unit = "s" if name == "strength" and document.get("exercise") == "sit_to_stand" else _INDICATOR_UNITS[name]
         rows += [(f"indicator.{name}.value", item.get("value"), unit)]
@@ -75,14 +76,15 @@ def metric_rows(document: dict[str, Any]) -> list[tuple[str, Any, str]]:
 def metrics_csv(document: dict[str, Any], device: str | None = None) -> str:
     """Returns metrics.csv: columns metric, value, unit; a first row names the recording device when given."""
     rows = ([("device", device, "")] if device is not None else []) + metric_rows(document)
-    return _text([["metric", "value", "unit"], *[list(r) for r in rows]])
+    table: list[list[Any]] = [["metric", "value", "unit"], *[list(r) for r in rows]]
+    return _text(table)
 
 
 def recording_csv(recorded: dict[str, Any], rate_hz: float | None) -> str:
     """Returns recording.csv: what recorded the session (kinect_agent.analysis.validity.recorded_with), one
     field, value row each."""
-    rows = [["field", "value"], *[[k, recorded.get(k)] for k in ("device", "label", "model", "model_sha256",
-                                                                 "runtime", "fps_achieved")]]  # fmt: skip
+    fields = ("device", "label", "model", "model_sha256", "runtime", "fps_achieved")
+    rows: list[list[Any]] = [["field", "value"], *[[k, recorded.get(k)] for k in fields]]
     return _text([*rows, ["rate_hz", rate_hz]])
 
 

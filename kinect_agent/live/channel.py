@@ -15,6 +15,7 @@ import json
 import random
 import threading
 from collections.abc import Callable, Iterator
+from typing import Any
 
 import httpx
 
@@ -33,7 +34,7 @@ def _headers(token: str) -> dict[str, str]:
 
 def parse_events(lines: Iterator[str]) -> Iterator[tuple[str, str]]:
     """Yields (event name, data) of a server-sent-event stream given line by line (comments skipped)."""
-    name, data = "message", []
+    name, data = "message", list[str]()
     for line in lines:
         if not line:
             if data:
@@ -54,7 +55,13 @@ class CommandStream:
     """Yields the server's commands to this device for as long as `stop` is not set, reconnecting as needed."""
 
     def __init__(
-        self, server_url: str, token: str, *, log: Callable[[str], None] = print, transport=None, seed=None
+        self,
+        server_url: str,
+        token: str,
+        *,
+        log: Callable[[str], None] = print,
+        transport: httpx.BaseTransport | None = None,
+        seed: int | None = None,
     ) -> None:
         self.url = server_url.rstrip("/") + COMMANDS_PATH
         self.token = token
@@ -68,7 +75,7 @@ class CommandStream:
         """Closes the connection (a blocked read ends with an error)."""
         self._client.close()
 
-    def commands(self, stop: threading.Event) -> Iterator[dict]:
+    def commands(self, stop: threading.Event) -> Iterator[dict[str, Any]]:
         """Yields each command's data dict ({"action": "start"|"stop", "set_id", ...}) until stop is set."""
         attempt = 0
         while not stop.is_set():
@@ -102,7 +109,7 @@ class CommandStream:
             stop.wait(delay)
 
 
-def _command(name: str, data: str) -> dict | None:
+def _command(name: str, data: str) -> dict[str, Any] | None:
     """Returns the command in one event (kind live.command), or None for anything else."""
     if name != "live.command":
         return None
@@ -118,12 +125,19 @@ def _command(name: str, data: str) -> dict | None:
 class Publisher:
     """Posts progress messages from a background thread; `offer` never blocks."""
 
-    def __init__(self, server_url: str, token: str, *, log: Callable[[str], None] = print, transport=None) -> None:
+    def __init__(
+        self,
+        server_url: str,
+        token: str,
+        *,
+        log: Callable[[str], None] = print,
+        transport: httpx.BaseTransport | None = None,
+    ) -> None:
         self.url = server_url.rstrip("/") + PROGRESS_PATH
         self.log = log
         self._client = httpx.Client(timeout=httpx.Timeout(3.0), headers=_headers(token), transport=transport)
-        self._latest: dict | None = None
-        self._kept: collections.deque[dict] = collections.deque(maxlen=100)
+        self._latest: dict[str, Any] | None = None
+        self._kept: collections.deque[dict[str, Any]] = collections.deque(maxlen=100)
         self._cond = threading.Condition()
         self._closed = False
         self.sent = self.dropped = 0
@@ -131,7 +145,7 @@ class Publisher:
         self._thread = threading.Thread(target=self._run, name="live-publisher", daemon=True)
         self._thread.start()
 
-    def offer(self, message: dict, *, keep: bool = False) -> None:
+    def offer(self, message: dict[str, Any], *, keep: bool = False) -> None:
         """Queues a message; keep=False replaces a not yet sent ordinary message."""
         with self._cond:
             if keep:
@@ -150,7 +164,7 @@ class Publisher:
         self._thread.join(timeout)
         self._client.close()
 
-    def _next(self) -> dict | None:
+    def _next(self) -> dict[str, Any] | None:
         with self._cond:
             while not self._kept and self._latest is None and not self._closed:
                 self._cond.wait()

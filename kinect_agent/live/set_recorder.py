@@ -17,6 +17,8 @@ import time
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
 
 from kinect_agent.analysis.live import LiveCount, LiveStatus
 from kinect_agent.clock import utc_now_iso
@@ -37,7 +39,7 @@ class SetCommand:
     angles: tuple[str, ...]
 
     @classmethod
-    def from_message(cls, data: dict) -> SetCommand:
+    def from_message(cls, data: dict[str, Any]) -> SetCommand:
         """Returns the command in a live.command start message; raises ValueError naming a bad field."""
         missing = [k for k in ("set_id", "exercise_slug", "target_reps", "angles") if k not in data]
         if missing:
@@ -76,7 +78,7 @@ class SetResult:
     journal: Journal | None = field(default=None, repr=False)
 
 
-def failed_message(command: SetCommand, hint: str) -> dict:
+def failed_message(command: SetCommand, hint: str) -> dict[str, Any]:
     """Returns the progress message that says a set could not be recorded, in plain words (hint)."""
     return {"set_id": command.set_id, "exercise_slug": command.exercise, "state": "failed", "count": 0, "hint": hint,
             "sent_at": time.time()}  # fmt: skip
@@ -89,8 +91,8 @@ class SetRecorder:
         self,
         command: SetCommand,
         source: Source,
-        journal_dir,
-        publish: Callable[[dict, bool], None],
+        journal_dir: Path,
+        publish: Callable[[dict[str, Any], bool], None],
         limits: SetLimits | None = None,
     ) -> None:
         self.command = command
@@ -105,7 +107,9 @@ class SetRecorder:
         """Ends the set at the next frame (its frames are kept)."""
         self._stop.set()
 
-    def _message(self, state: str, status: LiveStatus | None, elapsed: float, taken_at: float, **extra) -> dict:
+    def _message(
+        self, state: str, status: LiveStatus | None, elapsed: float, taken_at: float, **extra: Any
+    ) -> dict[str, Any]:
         """Returns a progress message; taken_at: wall clock (Unix s) when its frame arrived (for the latency)."""
         c = self.command
         msg = {"set_id": c.set_id, "exercise_slug": c.exercise, "state": state, "target": c.target_reps,

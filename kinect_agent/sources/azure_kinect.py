@@ -18,6 +18,8 @@ from __future__ import annotations
 import importlib
 import time
 from collections.abc import Iterator
+from types import ModuleType
+from typing import Any
 
 import numpy as np
 
@@ -42,7 +44,7 @@ INSTALL_HINT = (
 )
 
 
-def _import(name: str):
+def _import(name: str) -> ModuleType:
     try:
         return importlib.import_module(name)
     except ImportError as exc:  # also OSError-free: a missing native library surfaces as ImportError in both
@@ -113,7 +115,7 @@ class AzureKinectSource(SourceBase):
         return Metadata(device=self.device, rate_hz=30.0, source=self.name)
 
 
-def _body(body_frame, index: int) -> Body:
+def _body(body_frame: Any, index: int) -> Body:
     """Returns body `index` of a k4abt body frame as a Body: the 20 joints in metres, project frame, confidence as
     state."""
     joints = body_frame.get_body_skeleton(index).joints

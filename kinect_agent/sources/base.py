@@ -9,7 +9,7 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import Protocol, Self, runtime_checkable
 
 import numpy as np
 
@@ -46,6 +46,12 @@ class Source(Protocol):
     def metadata(self) -> Metadata:
         """Returns what is known about the recording this source makes."""
 
+    def __enter__(self) -> Self:
+        """Opens the source (`with source:` as the recorders use it)."""
+
+    def __exit__(self, *exc: object) -> None:
+        """Closes the source."""
+
 
 class SourceBase:
     """Context-manager plumbing shared by the sources."""
@@ -59,7 +65,7 @@ class SourceBase:
     def close(self) -> None:
         return None
 
-    def __enter__(self) -> SourceBase:
+    def __enter__(self) -> Self:
         self.open()
         return self
 

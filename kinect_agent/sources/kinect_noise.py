@@ -99,12 +99,15 @@ def _read_rows(path: Path) -> list[dict[str, str]]:
         return list(csv.DictReader(f))
 
 
-def _per_item(path: Path, key: str, names: tuple[str, ...]) -> tuple[dict, dict]:
+def _per_item(
+    path: Path, key: str, names: tuple[str, ...]
+) -> tuple[dict[tuple[str, int], np.ndarray], dict[tuple[str, int], np.ndarray]]:
     rows = {r[key]: r for r in _read_rows(path)}
     missing = [n for n in names if n not in rows]
     if missing:
         raise SimulationError(f"{path}: rows missing for {', '.join(missing)}")
-    mean, sd = {}, {}
+    mean: dict[tuple[str, int], np.ndarray] = {}
+    sd: dict[tuple[str, int], np.ndarray] = {}
     for dev, prefix in (("kinect1", "k1"), ("kinect2", "k2")):
         for view in VIEWS:
             mean[dev, view] = np.array([float(rows[n][f"{prefix}_mean_{view}"]) for n in names]) / 1000.0

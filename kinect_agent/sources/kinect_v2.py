@@ -16,6 +16,8 @@ import importlib
 import sys
 import time
 from collections.abc import Iterator
+from types import ModuleType
+from typing import Any
 
 import numpy as np
 
@@ -44,12 +46,12 @@ WRAPPERS = (
 )
 
 
-def _import_sdk():
+def _import_sdk() -> tuple[ModuleType, ModuleType]:
     """Returns (wrapper module, runtime module) of the first wrapper that imports; raises DeviceUnavailable."""
     if sys.platform != "win32":
         raise DeviceUnavailable(f"{INSTALL_HINT}; this machine runs {sys.platform}, where the SDK does not exist")
     if "object" not in np.__dict__:
-        np.object = object  # type: ignore[attr-defined]  # the wrappers' numpy.ndarray(..., dtype=numpy.object)
+        np.object = object  # the wrappers' numpy.ndarray(..., dtype=numpy.object)
     failures = []
     for wrapper, runtime in WRAPPERS:
         try:
@@ -68,8 +70,8 @@ class KinectV2Source(SourceBase):
     device = "kinect2"
 
     def __init__(self) -> None:
-        self._runtime = None
-        self._v2 = None
+        self._runtime: Any = None  # the SDK's runtime object (untyped)
+        self._v2: ModuleType | None = None
         self._chooser = PatientChooser()
 
     def open(self) -> None:
@@ -122,7 +124,7 @@ class KinectV2Source(SourceBase):
         return Metadata(device=self.device, rate_hz=30.0, source="kinect_v2")
 
 
-def _body(sdk_body) -> Body:
+def _body(sdk_body: Any) -> Body:
     """Returns one tracked SDK body as a Body: the 20 joints, metres in camera space, TrackingState as state."""
     pos = np.full((skeleton.J, 3), np.nan)
     state = np.zeros(skeleton.J, dtype=np.int8)

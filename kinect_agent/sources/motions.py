@@ -249,7 +249,16 @@ def local_rotations(ch: dict[str, np.ndarray], rng: np.random.Generator, t: np.n
     T = t.shape[0]
     R = np.tile(np.eye(3), (T, len(skeleton.BONES), 1, 1))
     rad = {k: np.radians(v) for k, v in ch.items()}
-    Rx, Ry, Rz = (lambda a, i=i: axis_rotation(i, a) for i in range(3))
+
+    def Rx(a: float | np.ndarray) -> np.ndarray:
+        return axis_rotation(0, a)
+
+    def Ry(a: float | np.ndarray) -> np.ndarray:
+        return axis_rotation(1, a)
+
+    def Rz(a: float | np.ndarray) -> np.ndarray:
+        return axis_rotation(2, a)
+
     # SPINE joint (3 DoF): trunk lean forward (+) and sideways, a little twist.
     twist = np.radians(_sway(rng, t, 2.0))
     R[:, bone("NECK")] = Ry(twist) @ Rz(rad["trunk_side"]) @ Rx(rad["trunk_lean"])

@@ -1,10 +1,11 @@
-"""Pinned third-party pose assets: MediaPipe Tasks Vision (the browser's WebAssembly runtime) and the BlazePose
-landmarker models packed as `.task` bundles (the browser and the agent's Python runtime load the same files).
+"""Pinned third-party browser assets from npm: MediaPipe Tasks Vision (the browser's WebAssembly runtime), the
+BlazePose landmarker models packed as `.task` bundles (the browser and the agent's Python runtime load the same files)
+and plotly.js (the pages' charts).
 
 `lock.json` pins every npm tarball (exact version, sha512 integrity) and the SHA-256 of every `.task` built from
 them; `python -m kinect_agent.vendor.install` fetches, checks and unpacks them into the git-ignored `files/`. The
-server serves `lock.json`'s "serve" table at /static/vendor/mediapipe/ (frontend/vendor_assets.py); nothing is
-fetched at run time.
+server serves `lock.json`'s "serve" table, one directory of it at /static/vendor/<directory>/
+(frontend/vendor_assets.py); nothing is fetched at run time.
 """
 
 from __future__ import annotations
@@ -50,10 +51,22 @@ def package_dir(name: str) -> Path:
     return FILES / "npm" / name
 
 
-def served_files(lock: dict[str, Any] | None = None) -> dict[str, Path]:
-    """Returns the files served at /static/vendor/mediapipe/: URL path below it -> file (present or not)."""
+def served_directories(lock: dict[str, Any] | None = None) -> list[str]:
+    """Returns the directories served below /static/vendor/ ("mediapipe", "plotly")."""
     lock = lock or load_lock()
-    return {url: FILES / rel for url, rel in lock["serve"].items()}
+    return list(lock["serve"])
+
+
+def served_files(directory: str, lock: dict[str, Any] | None = None) -> dict[str, Path]:
+    """Returns the files served at /static/vendor/<directory>/: URL path below it -> file (present or not)."""
+    lock = lock or load_lock()
+    return {url: FILES / rel for url, rel in lock["serve"][directory].items()}
+
+
+def all_served_files(lock: dict[str, Any] | None = None) -> dict[str, Path]:
+    """Returns every served file: URL path below /static/vendor/ -> file (present or not)."""
+    lock = lock or load_lock()
+    return {f"{d}/{url}": path for d in served_directories(lock) for url, path in served_files(d, lock).items()}
 
 
 def model_info(model: str = "lite", lock: dict[str, Any] | None = None) -> ModelInfo:

@@ -1,4 +1,4 @@
-"""Installs the pinned pose assets of lock.json into kinect_agent/vendor/files/ (idempotent, hash-checked).
+"""Installs the pinned browser assets and pose models of lock.json into kinect_agent/vendor/files/ (hash-checked).
 
     python -m kinect_agent.vendor.install [--relock] [--quiet]
 
@@ -22,10 +22,11 @@ import subprocess
 import sys
 import tarfile
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from kinect_agent.vendor import FILES, LOCK_PATH, VendorError, load_lock, package_dir, served_files
+from kinect_agent.vendor import FILES, LOCK_PATH, VendorError, all_served_files, load_lock, package_dir
 
 STAMP = FILES / ".installed"
 NPM_TIMEOUT_S = 600
@@ -46,13 +47,14 @@ def is_installed(lock: dict[str, Any]) -> bool:
         stamp = STAMP.read_text(encoding="utf-8").strip()
     except OSError:
         return False
-    return stamp == _lock_digest() and all(p.is_file() for p in served_files(lock).values())
+    return stamp == _lock_digest() and all(p.is_file() for p in all_served_files(lock).values())
 
 
 def _needed_members(lock: dict[str, Any], name: str) -> set[str]:
     """Returns the paths inside npm package `name` that are served or packed into a `.task`."""
     prefix = f"npm/{name}/"
-    members = {rel[len(prefix) :] for rel in lock["serve"].values() if rel.startswith(prefix)}
+    served = (rel for table in lock["serve"].values() for rel in table.values())
+    members = {rel[len(prefix) :] for rel in served if rel.startswith(prefix)}
     for task in lock["tasks"]:
         for part in (task["detector"], task["landmarks"]):
             if part["package"] == name:
@@ -65,7 +67,7 @@ def npm_pack(name: str, version: str, dest: Path) -> bytes:
     """Returns the bytes of the registry tarball of name@version, fetched with `npm pack`; raises VendorError."""
     npm = shutil.which("npm")
     if npm is None:
-        raise VendorError("npm is needed to fetch the pinned pose assets (Debian: apt-get install npm)")
+        raise VendorError("npm is needed to fetch the pinned browser assets (Debian: apt-get install npm)")
     cmd = [npm, "pack", f"{name}@{version}", "--json", "--ignore-scripts", "--pack-destination", str(dest)]
     try:
         done = subprocess.run(cmd, capture_output=True, text=True, timeout=NPM_TIMEOUT_S, check=False)
@@ -99,9 +101,9 @@ def _unpack(tarball: bytes, members: set[str], target: Path) -> None:
         missing = members - found
         if missing:
             raise VendorError(f"{target.name}: the tarball has no {', '.join(sorted(missing))}")
+        tmp.chmod(0o755)  # mkdtemp's 0700 would hide the files from a server running as another user
         for path in tmp.rglob("*"):
-            if path.is_file():
-                path.chmod(0o644)
+            path.chmod(0o644 if path.is_file() else 0o755)
         if target.exists():
             shutil.rmtree(target)
         tmp.rename(target)
@@ -110,7 +112,7 @@ def _unpack(tarball: bytes, members: set[str], target: Path) -> None:
             shutil.rmtree(tmp)
 
 
-def install_packages(lock: dict[str, Any], *, relock: bool, log) -> None:
+def install_packages(lock: dict[str, Any], *, relock: bool, log: Callable[[str], None]) -> None:
     """Fetches, checks and unpacks every npm package whose unpacked copy is missing or of another version."""
     for package in lock["npm"]:
         name, version, integrity = package["name"], package["version"], package["integrity"]
@@ -151,7 +153,7 @@ def build_task(task: dict[str, Any]) -> bytes:
     return pack_task({"pose_detector.tflite": detector, "pose_landmarks_detector.tflite": landmarks})
 
 
-def install_tasks(lock: dict[str, Any], *, relock: bool, log) -> None:
+def install_tasks(lock: dict[str, Any], *, relock: bool, log: Callable[[str], None]) -> None:
     """Packs every `.task` that is missing or differs from its pinned SHA-256."""
     models = FILES / "models"
     models.mkdir(parents=True, exist_ok=True)
@@ -188,11 +190,11 @@ def install(*, relock: bool = False, quiet: bool = False) -> None:
     install_tasks(lock, relock=relock, log=log)
     if relock:
         LOCK_PATH.write_text(json.dumps(lock, indent=2) + "\n", encoding="utf-8")
-    missing = [url for url, path in served_files(lock).items() if not path.is_file()]
+    missing = [url for url, path in all_served_files(lock).items() if not path.is_file()]
     if missing:
         raise VendorError(f"served files missing after install: {', '.join(missing)}")
     STAMP.write_text(_lock_digest() + "\n", encoding="utf-8")
-    log(f"pose assets ready in {FILES}")
+    log(f"browser and pose assets ready in {FILES}")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -11,6 +11,7 @@ are copied at ingest (backend.sessions.metrics.scalar_columns) and backfilled he
 
 import json
 from collections.abc import Sequence
+from typing import Any
 
 import sqlalchemy as sa
 from alembic import op
@@ -43,7 +44,7 @@ def upgrade() -> None:
         last = rows[-1][0]
 
 
-def _scores(document) -> dict | None:
+def _scores(document: Any) -> dict[str, Any] | None:
     """The same copy as backend.sessions.metrics.indicator_scores at the time of this migration."""
     indicators = document.get("indicators") if isinstance(document, dict) else None
     if not isinstance(indicators, dict):

@@ -12,6 +12,7 @@ on SQLite a batch copy of `exercise_session` would cascade deletes).
 import datetime as dt
 import json
 from collections.abc import Sequence
+from typing import Any
 
 import sqlalchemy as sa
 from alembic import op
@@ -22,7 +23,7 @@ branch_labels: str | Sequence[str] | None = None
 depends_on: str | Sequence[str] | None = None
 
 
-def _started_before(detail, dialect: str) -> dt.datetime | None:
+def _started_before(detail: Any, dialect: str) -> dt.datetime | None:
     """Returns the cut-off of a retention audit row's detail (a dict, or its JSON text on some drivers) as the
     dialect stores times: UTC, naive on SQLite (backend.database.UTCDateTime)."""
     if isinstance(detail, str):

@@ -13,6 +13,7 @@ shown as it is. Downgrade drops the column: every row still has its text.
 
 import datetime as dt
 from collections.abc import Iterator, Sequence
+from typing import Any
 
 import sqlalchemy as sa
 from alembic import op
@@ -72,7 +73,7 @@ def candidates(rule: str, metric: str, threshold: float | None, value: float | N
         found = {"pain_recent": value, "pain_before": threshold - rules.PAIN_RISE_POINTS}
     else:
         return
-    about = {"exercise": exercise}
+    about: dict[str, object] = {"exercise": exercise}
     if rule == rules.PAIN_RISING:
         about = {}
     for day in (written_on, written_on - dt.timedelta(days=1)):
@@ -84,7 +85,7 @@ def candidates(rule: str, metric: str, threshold: float | None, value: float | N
             return
 
 
-def recognised(row) -> rules.AdviceParams | None:
+def recognised(row: Any) -> rules.AdviceParams | None:
     """Returns the params from which some language writes exactly the row's stored text, else None."""
     written_on = _utc_day(row.created_at)
     if written_on is None:

@@ -1,4 +1,5 @@
-"""The pinned pose runtime and models are served from the app's own origin, exactly the files of the lock."""
+"""The pinned pose runtime and models and plotly.js are served from the app's own origin, exactly the files of the
+lock."""
 
 from __future__ import annotations
 
@@ -10,19 +11,28 @@ from kinect_agent import vendor
 
 
 @pytest.mark.parametrize(
-    ("path", "media_type"),
+    ("directory", "path", "media_type"),
     [
-        ("vision_bundle.mjs", "text/javascript; charset=utf-8"),
-        ("wasm/vision_wasm_internal.wasm", "application/wasm"),
-        ("wasm/vision_wasm_nosimd_internal.js", "text/javascript; charset=utf-8"),
-        ("pose_landmarker_lite.task", "application/octet-stream"),
+        ("mediapipe", "vision_bundle.mjs", "text/javascript; charset=utf-8"),
+        ("mediapipe", "wasm/vision_wasm_internal.wasm", "application/wasm"),
+        ("mediapipe", "wasm/vision_wasm_nosimd_internal.js", "text/javascript; charset=utf-8"),
+        ("mediapipe", "pose_landmarker_lite.task", "application/octet-stream"),
+        ("plotly", "plotly.min.js", "text/javascript; charset=utf-8"),
     ],
 )
-def test_a_served_asset_comes_with_its_media_type(client, path, media_type) -> None:
-    answer = client.get(f"/static/vendor/mediapipe/{path}")
+def test_a_served_asset_comes_with_its_media_type(client, directory, path, media_type) -> None:
+    answer = client.get(f"/static/vendor/{directory}/{path}")
     assert answer.status_code == 200, answer.text[:200]
     assert answer.headers["content-type"] == media_type
-    assert answer.content == vendor.served_files()[path].read_bytes()
+    assert answer.content == vendor.served_files(directory)[path].read_bytes()
+
+
+def test_the_served_plotly_is_the_pinned_npm_release(client) -> None:
+    package = next(p for p in vendor.load_lock()["npm"] if p["name"] == "plotly.js-dist-min")
+    marker = (vendor.package_dir("plotly.js-dist-min") / ".integrity").read_text().strip()
+    assert marker == package["integrity"]  # the unpacked copy is of the checked tarball
+    head = client.get("/static/vendor/plotly/plotly.min.js").content[:200].decode()
+    assert f"plotly.js v{package['version']}" in head, head
 
 
 def test_the_served_model_is_the_pinned_one(client) -> None:
@@ -37,3 +47,11 @@ def test_the_served_model_is_the_pinned_one(client) -> None:
 )  # fmt: skip
 def test_anything_not_in_the_lock_is_not_found(client, path) -> None:
     assert client.get(f"/static/vendor/mediapipe/{path}").status_code == 404
+
+
+@pytest.mark.parametrize(
+    "path", ["plotly/package.json", "plotly/plotly.js", "plotly/..%2F..%2Flock.json", "plotly.min.js",
+             "mediapipe/plotly.min.js", "plotly.js-dist-min/plotly.min.js"],
+)  # fmt: skip
+def test_only_the_locked_plotly_file_is_served(client, path) -> None:
+    assert client.get(f"/static/vendor/{path}").status_code == 404

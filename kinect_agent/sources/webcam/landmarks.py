@@ -188,7 +188,7 @@ def check_arrays(
     _check_range(image, MAX_IMAGE_COORD, "image", "image widths from the corner: not a point of this image")
     if np.any((visibility < 0) | (visibility > 1)):
         raise LandmarkError(
-            "visibility", "must be within 0..1", _first(((visibility < 0) | (visibility > 1)).any(axis=1))
+            "visibility", "must be within 0..1", _first(np.any((visibility < 0) | (visibility > 1), axis=1))
         )
     back = np.flatnonzero(np.diff(t) <= 0)
     if back.size:

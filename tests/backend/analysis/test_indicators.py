@@ -57,3 +57,14 @@ def test_seated_session_has_no_balance_score() -> None:
 def test_document_of_another_exercise_is_refused() -> None:
     with pytest.raises(ValueError, match="squat"):
         indicators(_doc("elbow_flexion", 1), exercise=EXERCISES["squat"], target_reps=None, history=[])
+
+
+def test_a_document_whose_repetition_count_is_null_has_no_endurance_score() -> None:
+    slug = "elbow_flexion"
+    doc = _doc(slug, 3, seed=5)
+    doc["repetitions"] = None  # a stored JSON document can carry null; the score was 100 * None (TypeError)
+    history = [_doc(slug, 6, seed=6)]
+    for target in (10, None):
+        out = indicators(doc, exercise=EXERCISES[slug], target_reps=target, history=history)
+        assert out["endurance"]["score"] is None and out["endurance"]["value"] is None, (target, out["endurance"])
+        assert out["endurance"]["quality_ok"] is False
