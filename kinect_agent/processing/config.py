@@ -89,6 +89,16 @@ class PipelineConfig(BaseModel):
         description="passes 3-4 (lengths fixed): innovation z − h(x̄) (True) or z − Σ Wm·h(σ) (False); None: as "
         "innovation_at_mean",
     )
+    rigid_input_sd_m: float | None = Field(
+        0.0005,
+        gt=0,
+        description="offline: a recording whose segment lengths spread less than this (noise_level.segment_noise_m) "
+        "is exact, e.g. mocap or an already filtered recording, and is filtered with noise_level.rigid_settings, m "
+        "(None: never)",
+    )
+    rigid_input_sigma_m: float = Field(
+        0.01, gt=0, description="offline: measurement SD per axis of an exact input's joints (the chain's misfit), m"
+    )
     alpha: float = Field(0.5, gt=0, description="sigma-point spread (van der Merwe)")
     beta: float = Field(2.0, description="sigma-point prior-distribution weight (van der Merwe; 2 for Gaussian)")
     kappa: float = Field(0.0, description="sigma-point secondary scaling (van der Merwe)")

@@ -29,6 +29,10 @@ the state's own spread, so a limb that once outruns the random walk, e.g. a knee
 would stay gated for good): the angles that place it restart from inverse kinematics of that frame with the initial
 variance, and the gate admits it again.
 Passes 1-2 use the first length_pass_max_frames frames of longer recordings (they only estimate the lengths).
+An exact input (segment lengths rigid to below rigid_input_sd_m: mocap, a filtered recording fed again) is filtered
+with noise_level.rigid_settings: the chain's misfit as measurement SD and the innovation at the mean state's joints,
+so that what goes in comes out (the default innovation, z − Σ Wm·h(σ), stretches the chain by 20-30 mm there;
+bench/README.md, "Fed the truth, return the truth").
 
 Where the parts live: the settings in config.py (PipelineConfig), the chain's UKF (state layout, observation
 function, variance ceiling, gated update, re-acquisition) in chain_filter.py (ChainFilter), the forward pass frame
@@ -49,7 +53,7 @@ from kinect_agent import skeleton
 from kinect_agent.blas_threads import one_blas_thread
 from kinect_agent.body.angles import joint_angles
 from kinect_agent.body.rotations import matrix_to_quat
-from kinect_agent.processing import offset_model, uncertainty
+from kinect_agent.processing import noise_level, offset_model, uncertainty
 from kinect_agent.processing.chain_filter import N_LEN, N_ROOT, ChainFilter
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
 from kinect_agent.processing.config import PipelineConfig
@@ -74,6 +78,8 @@ class PipelineResult:
     segment_sd_before_mm / segment_sd_after_mm {segment: SD of its length}, frames_without_observation,
     n_frames, n_outliers, n_gated, smoother, online, seconds, angle_sd_seconds, stage_cpu_seconds {outliers,
     passes, smoother, angle_sd: CPU s of each step (steadier than wall time on a shared machine), for benchmarks}.
+    segment_noise_mm: the measurement SD the input's segment lengths show (noise_level.segment_noise_m; None: too
+    few segments), rigid_input: whether it was below config.rigid_input_sd_m, so filtered as exact (offline only).
     angle_sd: {angle of angles.ANGLE_NAMES: (T,) degrees}, the calibrated SD of each clinical angle per frame
     (uncertainty.angle_sd of the smoother's covariance); None online (the forward pass keeps no covariances).
     """
@@ -317,6 +323,10 @@ def _process(
     _check_input(rec)
     T = rec.n_frames
     stages: dict[str, float] = {}
+    noise = noise_level.segment_noise_m(rec)
+    rigid = not online and noise_level.is_rigid(noise, config)
+    if rigid:
+        config = noise_level.rigid_settings(config)
     if config.remove_outliers and not online:
         clean, prob = remove_outliers_combined(rec, config)
         stages["outliers"] = round(time.process_time() - cpu_started, 3)
@@ -371,6 +381,8 @@ def _process(
             f"{skeleton.JOINTS[p]}-{skeleton.JOINTS[c]}": float(v)
             for (p, c), v in zip(skeleton.BONES, lengths, strict=True)
         },
+        "segment_noise_mm": None if noise is None else round(1e3 * noise, 3),
+        "rigid_input": rigid,
         "n_gated": int(sum(info.get("gated_per_pass", [info.get("n_gated", 0)]))),
         "length_pass_frames": info.get("length_pass_frames"),
         "angle_sd_seconds": info.get("angle_sd_seconds"),
