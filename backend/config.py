@@ -77,6 +77,10 @@ class Settings(BaseSettings):
     # run queued jobs (replay builds, re-analysis) in a thread of each server process too: for the demo and a
     # one-process install without `coach-server worker`
     EMBEDDED_WORKER: bool = False
+    # a camera set whose page sent nothing for this long (closed for good) is ended by a job-queue worker: stored
+    # once when its buffered landmarks make a session, else marked failed; its landmark batches are deleted
+    CAMERA_SET_IDLE_HOURS: float = Field(default=24.0, gt=0)
+    CAMERA_SWEEP_S: float = Field(default=600.0, gt=0)  # how often each worker looks for such sets
 
     @model_validator(mode="after")
     def _check_public_url(self) -> Settings:
