@@ -74,9 +74,13 @@ class Settings(BaseSettings):
     TIME_ZONE: str = "UTC"  # IANA time zone of patients who have none of their own (their reminder times)
     REMINDER_CHECK_S: float = Field(default=60.0, gt=0)  # how often each server process looks for due reminders
     REMINDER_LATE_MINUTES: float = Field(default=60.0, gt=0)  # a reminder not sent this long after its time is dropped
-    # run queued jobs (replay builds, re-analysis) in a thread of each server process too: for the demo and a
-    # one-process install without `coach-server worker`
+    # run queued jobs (replay builds, re-analysis, abandoned camera sets) in a thread of each server process too:
+    # for the demo and a one-process install without `coach-server worker`
     EMBEDDED_WORKER: bool = False
+    # a camera set whose page sent nothing for this long (closed for good) is ended by a job-queue worker: stored
+    # once when its buffered landmarks make a session, else marked failed; its landmark batches are deleted
+    CAMERA_SET_IDLE_HOURS: float = Field(default=24.0, gt=0)
+    CAMERA_SWEEP_S: float = Field(default=600.0, gt=0)  # how often each worker looks for such sets
 
     @model_validator(mode="after")
     def _check_public_url(self) -> Settings:

@@ -94,3 +94,36 @@ def append_blank(path: Path, seconds: float, luma: int = 128) -> Path:
 def sports2d_y4m(out: Path, **kwargs) -> Path:
     """Writes Sports2D's demo (one person, side view, BSD-3-Clause) as a fake-camera clip; see write_y4m."""
     return write_y4m(sports2d_demo(), out, **kwargs)
+
+
+def _y4m_layout(path: Path) -> tuple[int, int, int, int]:
+    """Returns (header bytes, width, height, bytes per frame with its FRAME line) of a .y4m written here."""
+    with open(path, "rb") as f:
+        header = f.readline()
+    fields = {h[0]: h[1:] for h in header.decode().split()[1:]}
+    width, height = int(fields["W"]), int(fields["H"])
+    return len(header), width, height, len(b"FRAME\n") + width * height * 3 // 2
+
+
+def y4m_frame_count(path: Path) -> int:
+    """Returns how many frames the .y4m at path holds."""
+    head, _, _, frame = _y4m_layout(path)
+    return (path.stat().st_size - head) // frame
+
+
+def read_y4m(path: Path, indices: list[int]) -> list[np.ndarray]:
+    """Returns the frames `indices` of the .y4m at path as RGB images (height, width, 3) uint8: what the fake camera
+    plays, decoded back (I420 to RGB by OpenCV)."""
+    import cv2
+
+    head, width, height, frame = _y4m_layout(path)
+    out = []
+    with open(path, "rb") as f:
+        for i in indices:
+            f.seek(head + i * frame)
+            data = f.read(frame)
+            if len(data) != frame or not data.startswith(b"FRAME\n"):
+                raise ValueError(f"{path}: no frame {i}")
+            yuv = np.frombuffer(data[6:], dtype=np.uint8).reshape(height * 3 // 2, width)
+            out.append(cv2.cvtColor(yuv, cv2.COLOR_YUV2RGB_I420))
+    return out

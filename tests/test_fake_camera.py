@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from tests.fake_camera import append_blank, sports2d_y4m
+from tests.fake_camera import _fit, append_blank, read_y4m, sports2d_y4m, y4m_frame_count
 
 pytest.importorskip("cv2")
 
@@ -34,3 +34,26 @@ def test_an_empty_grey_stretch_is_appended_at_the_clips_size_and_rate(tmp_path) 
 def test_odd_sizes_are_refused(tmp_path) -> None:
     with pytest.raises(ValueError, match="even"):
         sports2d_y4m(tmp_path / "c.y4m", width=321, height=180)
+
+
+def test_frames_read_back_are_the_pictures_written(tmp_path) -> None:
+    import cv2
+    import numpy as np
+
+    from tests.media import sports2d_demo
+
+    path = sports2d_y4m(tmp_path / "camera.y4m", width=320, height=180, fps=30, start_s=2.0, seconds=0.5)
+    append_blank(path, 0.2, luma=100)
+    assert y4m_frame_count(path) == 15 + 6
+    first, grey = read_y4m(path, [0, 20])
+    assert first.shape == (180, 320, 3) and first.dtype == np.uint8
+    cap = cv2.VideoCapture(str(sports2d_demo()))
+    cap.set(cv2.CAP_PROP_POS_FRAMES, 60)  # 2 s at the demo's 30 fps
+    ok, bgr = cap.read()
+    cap.release()
+    assert ok
+    truth = cv2.cvtColor(_fit(bgr, 320, 180), cv2.COLOR_BGR2RGB).astype(float)
+    assert np.median(np.abs(first - truth)) <= 4, "the picture written (I420 loses a little colour)"
+    assert np.abs(grey.astype(float) - 100).max() <= 2
+    with pytest.raises(ValueError, match="no frame 21"):
+        read_y4m(path, [21])

@@ -37,7 +37,7 @@ from kinect_agent.sources.webcam.landmarks import LandmarkBatch
 MAX_STARTS_PER_HOUR = 60  # sets a patient may start in an hour (a page restarting in a loop is stopped here)
 
 
-def _aware(when: dt.datetime) -> dt.datetime:
+def aware(when: dt.datetime) -> dt.datetime:
     """Returns when as an aware UTC time (SQLite gives naive times back)."""
     return when if when.tzinfo is not None else when.replace(tzinfo=dt.UTC)
 
@@ -151,7 +151,7 @@ def _stored_batch(db_session: Session, set_id: uuid.UUID, seq: int) -> CameraBat
 def _check_rates(row: CameraSet, batch: LandmarkBatch, now: dt.datetime) -> None:
     """Raises InvalidInput for frame times ahead of the set's clock, CameraRateLimited for more frames or batches
     than MAX_FPS and MAX_BATCHES_PER_S allow since the start (with RATE_SLACK_S seconds of allowance)."""
-    elapsed = max((now - _aware(row.started_at)).total_seconds(), 0.0)
+    elapsed = max((now - aware(row.started_at)).total_seconds(), 0.0)
     ahead = np.flatnonzero(batch.t > elapsed + limits.MAX_CLOCK_AHEAD_S)
     if ahead.size:
         i = int(ahead[0])

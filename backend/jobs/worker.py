@@ -1,9 +1,12 @@
-"""`coach-server worker`: takes jobs from the queue (re-analysis, replay builds) and runs them, one at a time, until
-stopped (or --once); EmbeddedWorker runs the same loop in a thread of a server process (COACH_EMBEDDED_WORKER)."""
+"""`coach-server worker`: takes jobs from the queue (re-analysis, replay builds, ending abandoned camera sets) and
+runs them, one at a time, until stopped (or --once); EmbeddedWorker runs the same loop in a thread of a server
+process (COACH_EMBEDDED_WORKER). Every COACH_CAMERA_SWEEP_S (and when it starts) the loop also queues the end of
+camera sets idle for COACH_CAMERA_SET_IDLE_HOURS (backend.camera.sweep)."""
 
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import signal
 import socket
@@ -22,7 +25,9 @@ from backend.jobs.models import Job
 if TYPE_CHECKING:
     from backend.config import Settings
 
-KINDS = ("reanalyze", "replay")
+KINDS = ("reanalyze", "replay", "camera_end")
+
+log = logging.getLogger(__name__)
 
 
 def run_job(db_session: Session, job: Job, settings: Settings) -> dict[str, Any]:
@@ -39,7 +44,30 @@ def run_job(db_session: Session, job: Job, settings: Settings) -> dict[str, Any]
         return jobs.run(db_session=db_session, session_id=int(job.payload["session_id"]),
                         max_frames=settings.SESSION_MAX_FRAMES,
                         max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
+    if job.kind == "camera_end":
+        import uuid
+
+        from backend.camera.sweep import end_idle_set
+
+        return end_idle_set(db_session=db_session, set_id=uuid.UUID(job.payload["set_id"]),
+                            idle_hours=settings.CAMERA_SET_IDLE_HOURS, max_frames=settings.SESSION_MAX_FRAMES,
+                            max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
     raise ValueError(f"unknown job kind {job.kind!r}")
+
+
+def queue_periodic(*, sessionmaker: Callable[[], Session], settings: Settings) -> int:
+    """Queues the periodic work (the end of abandoned camera sets) and commits; returns how many jobs were added.
+    A database fault is logged, not raised: the loop goes on with the jobs already queued."""
+    from backend.camera.sweep import queue_idle_sets
+
+    try:
+        with sessionmaker() as db_session:
+            added = queue_idle_sets(db_session=db_session, idle_hours=settings.CAMERA_SET_IDLE_HOURS)
+            db_session.commit()
+            return added
+    except Exception:  # noqa: BLE001 - the next sweep tries again
+        log.exception("looking for abandoned camera sets failed; trying again in %s s", settings.CAMERA_SWEEP_S)
+        return 0
 
 
 def work(
@@ -51,9 +79,13 @@ def work(
     idle_s: float = 1.0,
     stop: Callable[[], bool] = lambda: False,
 ) -> int:
-    """Runs jobs until stop() (or, once=True, until the queue is empty); returns how many it ran."""
-    ran = 0
+    """Runs jobs until stop() (or, once=True, until the queue is empty); returns how many it ran. The periodic
+    work is queued first and then every settings.CAMERA_SWEEP_S."""
+    ran, next_sweep = 0, 0.0
     while not stop():
+        if time.monotonic() >= next_sweep:
+            queue_periodic(sessionmaker=sessionmaker, settings=settings)
+            next_sweep = time.monotonic() + settings.CAMERA_SWEEP_S
         with sessionmaker() as db_session:
             job = queue.claim(db_session=db_session, worker=name, kinds=KINDS)
             if job is None:

@@ -33,7 +33,7 @@ MAX_PEOPLE = 2  # the landmarker looks for this many, so the patient can be told
 FIRST_FRAME_TIMEOUT_S = 5.0
 
 
-def _import_runtime() -> tuple[Any, Any, Any]:
+def import_runtime() -> tuple[Any, Any, Any]:
     """Returns (cv2, mediapipe, mediapipe.tasks.python.vision); raises DeviceUnavailable."""
     os.environ.setdefault("GLOG_minloglevel", "2")  # MediaPipe's per-frame native warnings: errors only
     try:
@@ -43,6 +43,17 @@ def _import_runtime() -> tuple[Any, Any, Any]:
     except ImportError as exc:
         raise DeviceUnavailable(f"{INSTALL_HINT}; importing {exc.name or 'it'} failed") from exc
     return cv2, mediapipe, vision
+
+
+def landmarker_options(mp: Any, vision: Any, model_path: Path, *, image_mode: bool = False) -> Any:
+    """Returns the PoseLandmarkerOptions the agent runs (the page's worker, camera_pose_worker.js, sets the same):
+    VIDEO mode (tracking from image to image, smoothed) unless image_mode, MAX_PEOPLE people, MediaPipe's default
+    confidences (0.5)."""
+    return vision.PoseLandmarkerOptions(
+        base_options=mp.tasks.BaseOptions(model_asset_path=str(model_path)),
+        running_mode=vision.RunningMode.IMAGE if image_mode else vision.RunningMode.VIDEO,
+        num_poses=MAX_PEOPLE,
+    )
 
 
 @contextlib.contextmanager
@@ -123,7 +134,7 @@ class WebcamSource(SourceBase):
 
     def open(self) -> None:
         """Opens the camera or video and the landmarker; raises DeviceUnavailable naming what is missing."""
-        cv2, mp, vision = _import_runtime()
+        cv2, mp, vision = import_runtime()
         try:
             model_path = task_path(self.model)
         except VendorError as exc:
@@ -146,11 +157,7 @@ class WebcamSource(SourceBase):
         if self.video is not None and self._video_fps is None:
             capture.release()
             raise DeviceUnavailable(f"{what} has no usable frame rate ({fps})")
-        options = vision.PoseLandmarkerOptions(
-            base_options=mp.tasks.BaseOptions(model_asset_path=str(model_path)),
-            running_mode=vision.RunningMode.VIDEO,
-            num_poses=MAX_PEOPLE,
-        )
+        options = landmarker_options(mp, vision, model_path)
         try:
             with _native_stderr_silenced():
                 self._landmarker = vision.PoseLandmarker.create_from_options(options)
