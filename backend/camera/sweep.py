@@ -13,8 +13,8 @@ either way.
 from __future__ import annotations
 
 import datetime as dt
-from typing import Any
 import uuid
+from typing import Any
 
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
