@@ -472,6 +472,6 @@ def test_the_landmarker_runs_on_the_page_when_its_worker_cannot_start_or_dies(ca
         assert any(said in w for w in warnings), warnings
         wait_phase(page, "stored", "failed", timeout=240_000)
         assert phase(page) == "stored", page.locator("#cam-result-text").inner_text()
-        expect(page.locator("#cam-result-text")).to_contain_text(f"Saved: all {TARGET} repetitions")
+        expect(page.locator("#cam-result-text")).to_contain_text(re.compile(r"Saved: all \d+ repetitions"))
         assert len(patient_sessions(base, email, pid)) == 1
         assert not page.js_errors, page.js_errors
