@@ -1,5 +1,6 @@
-"""`coach-server worker`: takes jobs from the queue (re-analysis, replay builds) and runs them, one at a time, until
-stopped (or --once); EmbeddedWorker runs the same loop in a thread of a server process (COACH_EMBEDDED_WORKER)."""
+"""`coach-server worker`: takes jobs from the queue (re-analysis, replay builds, session details) and runs them, one
+at a time, until stopped (or --once); EmbeddedWorker runs the same loop in a thread of a server process
+(COACH_EMBEDDED_WORKER)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import traceback
 
 from backend.jobs import queue
 
-KINDS = ("reanalyze", "replay")
+KINDS = ("reanalyze", "replay", "detail")
 
 
 def run_job(db_session, job, settings) -> dict:
@@ -26,11 +27,17 @@ def run_job(db_session, job, settings) -> dict:
                                  max_frames=settings.SESSION_MAX_FRAMES,
                                  max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
     if job.kind == "replay":
-        from backend.replay import jobs
+        from backend.replay import jobs, scene
 
         return jobs.run(db_session=db_session, session_id=int(job.payload["session_id"]),
-                        max_frames=settings.SESSION_MAX_FRAMES,
-                        max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
+                        max_frames=settings.SESSION_MAX_FRAMES, max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES,
+                        layers=tuple(job.payload.get("layers") or scene.LAYERS))  # fmt: skip
+    if job.kind == "detail":
+        from backend.sessions import prepared
+
+        return prepared.run(db_session=db_session, session_id=int(job.payload["session_id"]),
+                            max_frames=settings.SESSION_MAX_FRAMES,
+                            max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
     raise ValueError(f"unknown job kind {job.kind!r}")
 
 
