@@ -60,7 +60,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"session: {args.minutes:g} min, {payload.raw.n_frames} frames, file {len(data)} bytes")
     print(f"analysis document (done once at upload): {analysis_s:.2f} s")
     print(
-        f"detail body, built by the worker: {build_s:.2f} s; read stored (median of 7): {statistics.median(reads):.3f} s"
+        f"detail body, built by the worker: {build_s:.2f} s; "
+        f"read stored (median of 7): {statistics.median(reads):.3f} s"
     )
     print(f"JSON body: {len(text)} bytes, gzipped {len(gzip.compress(text.encode()))} bytes")
     columns = len(body["quality"]["outlier_strip"]["t_s"])
