@@ -86,14 +86,15 @@ def _detail_when_ready(page, sid: int) -> dict:
 
 
 def test_the_page_says_the_detail_is_being_prepared_then_shows_it(page, live_server, arm_session):
+    login(page, PAUL)
+    page.wait_for_url("**/therapist")
+    _detail_when_ready(page, arm_session)  # the build the upload queued is done
     engine = sa.create_engine(live_server.database_url)
     try:
         with engine.begin() as conn:  # as after a new detail version: the stored one is gone, a worker builds it
             conn.execute(sa.delete(SessionDetail).where(SessionDetail.session_id == arm_session))
     finally:
         engine.dispose()
-    login(page, PAUL)
-    page.wait_for_url("**/therapist")
     page.goto(f"/therapist/sessions/{arm_session}")
     expect(page.locator("#detail-state")).to_contain_text("The session's curves and numbers are being prepared.")
     expect(page.locator("#detail-state")).to_have_class("note")
