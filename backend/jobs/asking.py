@@ -37,7 +37,7 @@ def waiting_words(job: Job, noun: str, now: dt.datetime) -> str:
         return f"A worker is building {noun}."
     if job.error:
         return f"The last try failed; a worker will try again. {error_words(job.error)}"
-    waited = max(0, int((now - job.created_at).total_seconds()))
+    waited = max(0, int((now - job.run_after).total_seconds()))  # since it was due (queued, or queued again)
     if waited < 10:
         return f"{noun[0].upper()}{noun[1:]} is queued; a worker will build it in a moment."
     return f"{noun[0].upper()}{noun[1:]} has waited {waited} s for a worker; is `coach-server worker` running?"
