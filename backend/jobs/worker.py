@@ -95,7 +95,9 @@ def main(args: argparse.Namespace) -> int:
     """Runs the worker until SIGTERM/SIGINT (the job in hand is finished first)."""
     from backend.config import get_settings
     from backend.database import get_sessionmaker, import_all_models
+    from kinect_agent.blas_threads import one_blas_thread
 
+    one_blas_thread()  # as every server process (backend.main): small matrices, and BLAS threads spin on shared cores
     import_all_models()  # the job's queries join across every table's foreign keys
     stopping = []
     for sig in (signal.SIGTERM, signal.SIGINT):
