@@ -3,6 +3,7 @@ the reach picture of an arm exercise, the widths, and who may open it."""
 
 from __future__ import annotations
 
+import json
 import re
 import time
 
@@ -102,6 +103,32 @@ def test_the_page_says_the_detail_is_being_prepared_then_shows_it(page, live_ser
     page.locator("#workspace .js-plotly-plot").first.wait_for(timeout=60_000)
     expect(page.locator("#detail-state")).to_be_hidden()
     expect(page.locator("#reps tbody tr")).to_have_count(4)
+    assert not page.js_errors, page.js_errors
+
+
+def test_a_detail_that_could_not_be_prepared_is_said_in_words(page, live_server):
+    """The worker's build failed for good (here the server's answer is replaced by such a 202): the reason in words,
+    no polling, at every width."""
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    asked = []
+    words = "The session's file is missing from the object store (run `coach-server storage check`) (tried 6 times)"
+
+    def failed(route):
+        asked.append(route.request.url)
+        route.fulfill(status=202, content_type="application/json", headers={"Retry-After": "2"},
+                      body=json.dumps({"state": "failed", "detail": words}))  # fmt: skip
+
+    page.route("**/api/v1/sessions/*/detail", failed)
+    page.goto("/therapist/sessions/1")
+    state = page.locator("#detail-state")
+    expect(state).to_have_text(f"The session's curves and numbers could not be prepared. {words}")
+    expect(state).to_have_class("alert")
+    for width in WIDTHS:
+        page.set_viewport_size({"width": width, "height": 900})
+        assert _no_horizontal_scroll(page), f"horizontal scrolling at {width} px"
+        shot(page, f"session_detail_failed_{width}")
+    assert len(asked) == 1, "a failed build is not asked for again by the page"
     assert not page.js_errors, page.js_errors
 
 
