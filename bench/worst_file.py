@@ -9,10 +9,12 @@ set tiled over two hours, raw positions with 2 cm noise and 3 % of frames carryi
 
 Setup (not measured): the demo clinic (`coach-server migrate`, `seed-demo`) in a SQLite file in a temp folder, or in
 the PostgreSQL database of --db (dropped and recreated; its name must contain "bench"); the real server (uvicorn,
-one process, bench.dashboard_load.start_server) and a separate `coach-server worker` for the replay build. A device
-is paired with the demo patient Maria, uploads the file, then each endpoint is requested once, as Maria, or as her
-therapist where only staff may ask. For each request the CPU time of the process that does the work (the server;
-the worker for the replay build, from queueing the job until /replay/state says ready) is read from
+one process, bench.dashboard_load.start_server) and a separate `coach-server worker` for the jobs (the session page's
+detail, queued by the upload, and the replays). A device is paired with the demo patient Maria, uploads the file;
+the worker's build of the detail is measured until /detail answers 200, then each endpoint is requested once, as
+Maria, or as her therapist where only staff may ask, then the replay builds (one skeleton, both) and their reads.
+For each request the CPU time of the process that does the work (the server; the worker for a build, from the
+upload's answer or the job's queueing until /detail answers or /replay/state says ready) is read from
 /proc/<pid>/stat, and its peak resident memory above the request's start from /proc/<pid>/status (VmHWM, reset
 through /proc/<pid>/clear_refs before each request). Budgets (backend.analysis.work_budget, docs/deployment.md):
 upload and replay their own, every other read of the session the session page's ("detail"), per started 10
@@ -167,11 +169,22 @@ def _device_token(base: str, admin: httpx.Client, patient_id: int) -> str:
     return r.json()["token"]
 
 
-def _replay_built(patient: httpx.Client, sid: int) -> httpx.Response:
-    """Queues the replay build and waits until the worker has built it (or failed); returns the last state."""
+def _replay_built(patient: httpx.Client, sid: int, layer: str = "") -> httpx.Response:
+    """Queues the replay build (of one skeleton alone: layer) and waits until the worker has built it (or failed);
+    returns the last state."""
+    query = f"?layer={layer}" if layer else ""
     while True:
-        r = patient.get(f"/api/v1/sessions/{sid}/replay/state")
+        r = patient.get(f"/api/v1/sessions/{sid}/replay/state{query}")
         if r.status_code != 200 or r.json()["state"] != "preparing":
+            return r
+        time.sleep(0.5)
+
+
+def _detail_built(client: httpx.Client, sid: int) -> httpx.Response:
+    """Waits until /detail answers something else than 202 (its build queued by the upload); returns that answer."""
+    while True:
+        r = client.get(f"/api/v1/sessions/{sid}/detail")
+        if r.status_code != 202:
             return r
         time.sleep(0.5)
 
@@ -205,13 +218,18 @@ def run(url: str, data: bytes, duration_s: float, only: list[str]) -> list[Measu
             raise SystemExit(f"upload refused: {r.status_code} {r.text[:300]}")
         sid = r.json()["id"]
         s, p = f"/api/v1/sessions/{sid}", f"/api/v1/patients/{pid}"
+        if not only or any("detail" in o for o in only):
+            row, _ = measure(
+                "detail build (worker job)", on_worker, budget("detail"), lambda: _detail_built(patient, sid)
+            )
+            rows.append(row)
+            print(row, flush=True)
         reads = [
             ("GET /sessions/{id}", patient, s, "detail"),
-            ("GET /detail", patient, f"{s}/detail", "detail"),
+            ("GET /detail (stored)", patient, f"{s}/detail", "detail"),
             *[(f"GET /export?format={f}", patient, f"{s}/export?format={f}", "detail") for f in sf_formats()],
             ("GET /file", patient, f"{s}/file", "detail"),
             ("GET /metric-versions", therapist, f"{s}/metric-versions", "detail"),
-            ("GET /replay?layer=raw", patient, f"{s}/replay?layer=raw", "replay"),
             ("GET /report.pdf", therapist, f"{p}/report.pdf", "detail"),
             ("GET /archive", patient, f"{p}/archive", "detail"),
         ]
@@ -222,12 +240,16 @@ def run(url: str, data: bytes, duration_s: float, only: list[str]) -> list[Measu
             print(row, flush=True)
         if only and not any("replay" in o for o in only):
             return rows
-        row, _ = measure("replay build (worker job)", on_worker, budget("replay"), lambda: _replay_built(patient, sid))
-        rows.append(row)
-        print(row, flush=True)
-        row, _ = measure("GET /replay (built)", on_server, budget("detail"), lambda: patient.get(f"{s}/replay"))
-        rows.append(row)
-        print(row, flush=True)
+        for layer in ("raw", ""):
+            what = "replay?layer=raw" if layer else "replay"
+            row, _ = measure(f"{what} build (worker job)", on_worker, budget("replay"),
+                             lambda la=layer: _replay_built(patient, sid, la))  # fmt: skip
+            rows.append(row)
+            print(row, flush=True)
+            path = f"{s}/replay" + (f"?layer={layer}" if layer else "")
+            row, _ = measure(f"GET /{what} (stored)", on_server, budget("detail"), lambda u=path: patient.get(u))
+            rows.append(row)
+            print(row, flush=True)
     finally:
         worker.terminate()
         worker.wait(timeout=600)

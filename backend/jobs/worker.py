@@ -1,7 +1,7 @@
-"""`coach-server worker`: takes jobs from the queue (re-analysis, replay builds, ending abandoned camera sets) and
-runs them, one at a time, until stopped (or --once); EmbeddedWorker runs the same loop in a thread of a server
-process (COACH_EMBEDDED_WORKER). Every COACH_CAMERA_SWEEP_S (and when it starts) the loop also queues the end of
-camera sets idle for COACH_CAMERA_SET_IDLE_HOURS (backend.camera.sweep)."""
+"""`coach-server worker`: takes jobs from the queue (re-analysis, replay builds, session details, ending abandoned
+camera sets) and runs them, one at a time, until stopped (or --once); EmbeddedWorker runs the same loop in a thread of
+a server process (COACH_EMBEDDED_WORKER). Every COACH_CAMERA_SWEEP_S (and when it starts) the loop also queues the
+end of camera sets idle for COACH_CAMERA_SET_IDLE_HOURS (backend.camera.sweep)."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ from backend.jobs.models import Job
 if TYPE_CHECKING:
     from backend.config import Settings
 
-KINDS = ("reanalyze", "replay", "camera_end")
+KINDS = ("reanalyze", "replay", "detail", "camera_end")
 
 log = logging.getLogger(__name__)
 
@@ -39,11 +39,17 @@ def run_job(db_session: Session, job: Job, settings: Settings) -> dict[str, Any]
                                  max_frames=settings.SESSION_MAX_FRAMES,
                                  max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
     if job.kind == "replay":
-        from backend.replay import jobs
+        from backend.replay import jobs, scene
 
         return jobs.run(db_session=db_session, session_id=int(job.payload["session_id"]),
-                        max_frames=settings.SESSION_MAX_FRAMES,
-                        max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
+                        max_frames=settings.SESSION_MAX_FRAMES, max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES,
+                        layers=tuple(job.payload.get("layers") or scene.LAYERS))  # fmt: skip
+    if job.kind == "detail":
+        from backend.sessions import prepared
+
+        return prepared.run(db_session=db_session, session_id=int(job.payload["session_id"]),
+                            max_frames=settings.SESSION_MAX_FRAMES,
+                            max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
     if job.kind == "camera_end":
         import uuid
 
@@ -136,7 +142,9 @@ def main(args: argparse.Namespace) -> int:
     """Runs the worker until SIGTERM/SIGINT (the job in hand is finished first)."""
     from backend.config import get_settings
     from backend.database import get_sessionmaker, import_all_models
+    from kinect_agent.blas_threads import one_blas_thread
 
+    one_blas_thread()  # as every server process (backend.main): small matrices, and BLAS threads spin on shared cores
     import_all_models()  # the job's queries join across every table's foreign keys
     stopping = []
     for sig in (signal.SIGTERM, signal.SIGINT):

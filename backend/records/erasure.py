@@ -19,7 +19,7 @@ from backend.patients.models import TherapistPatient
 from backend.plans.models import Plan, PlanItem
 from backend.replay.models import SessionReplay
 from backend.replies.models import AdviceReply
-from backend.sessions.models import ExerciseSession, SessionMetric
+from backend.sessions.models import ExerciseSession, SessionDetail, SessionMetric
 from backend.storage import get_store
 from backend.suggestions.models import Suggestion
 from backend.users.models import ApiToken, LoginAttempt, LoginSession, User
@@ -49,13 +49,17 @@ def erase_patient(*, db_session: Session, patient: User, caller: Caller) -> Eras
     session_ids = select(ExerciseSession.id).where(ExerciseSession.patient_id == pid)
     own_files = select(ExerciseSession.file_key).where(ExerciseSession.patient_id == pid)
     own_replays = select(SessionReplay.data_key).where(SessionReplay.session_id.in_(session_ids))
+    own_details = select(SessionDetail.data_key).where(SessionDetail.session_id.in_(session_ids))
     keys = {k for k in db_session.scalars(own_files) if k} | {k for k in db_session.scalars(own_replays) if k}
+    keys |= set(db_session.scalars(own_details))
     rows = {
         "session_replay": _count(db_session, delete(SessionReplay).where(SessionReplay.session_id.in_(session_ids))),
+        "session_detail": _count(db_session, delete(SessionDetail).where(SessionDetail.session_id.in_(session_ids))),
         "session_metric": _count(db_session, delete(SessionMetric).where(SessionMetric.session_id.in_(session_ids))),
         "advice_reply": _count(db_session, delete(AdviceReply).where(AdviceReply.patient_id == pid)),
         "suggestion": _count(db_session, delete(Suggestion).where(Suggestion.patient_id == pid)),
-        # queued or finished work on their sessions (replay builds, re-analysis): nothing may name them afterwards
+        # queued or finished work on their sessions (replay and detail builds, re-analysis): nothing may name them
+        # afterwards
         "job": _count(db_session, delete(Job).where(Job.payload["session_id"].as_integer().in_(session_ids))),
     }
     rows["exercise_session"] = _count(db_session, delete(ExerciseSession).where(ExerciseSession.patient_id == pid))
@@ -82,6 +86,7 @@ def erase_patient(*, db_session: Session, patient: User, caller: Caller) -> Eras
     rows["user"] = _count(db_session, delete(User).where(User.id == pid))
     still_used = set(db_session.scalars(select(ExerciseSession.file_key).where(ExerciseSession.file_key.in_(keys))))
     still_used |= set(db_session.scalars(select(SessionReplay.data_key).where(SessionReplay.data_key.in_(keys))))
+    still_used |= set(db_session.scalars(select(SessionDetail.data_key).where(SessionDetail.data_key.in_(keys))))
     objects = sorted(keys - still_used)
     record(db_session=db_session, caller=caller, action="patient.erase", object_type="patient",
            detail={"rows_deleted": sum(rows.values()), "objects_deleted": len(objects)})  # fmt: skip

@@ -1,25 +1,25 @@
 """The replay build on the job queue: a page asks for a session's replay, a worker builds it off the request path.
 
 `request_replay` is what a request does: the recording is ready (stored, of today's scene version), or one job is
-queued to build it (key `replay:<session id>:<scene version>`, so concurrent requests and several server
-processes queue it once, and several workers build it once), or its build failed (said in words). `run` is the
-job: it builds and stores the recording unless it is stored already (a job run twice builds once).
+queued to build it (key `replay:<session id>:<scene version>`, `…:raw` or `…:filtered` for one skeleton alone, so
+concurrent requests and several server processes queue it once, and several workers build it once), or its build
+failed (said in words; asking again queues a bounded number of further tries, backend.jobs.asking; a stored file
+that cannot be read is said at once and not tried again). `run` is the job: it builds and stores the recording
+unless it is stored already (a job run twice builds once).
 """
 
 from __future__ import annotations
 
-import datetime as dt
 from dataclasses import dataclass
 from typing import Any
 
-from sqlalchemy import select, update
+from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from backend.database import utcnow
-from backend.jobs.listing import error_words
-from backend.jobs.models import Job
-from backend.jobs.queue import enqueue
+from backend.exceptions import InvalidSessionFile
+from backend.jobs.asking import ask
 from backend.replay import scene, service
+from backend.replay.models import BOTH
 from backend.sessions.models import ExerciseSession
 from backend.sessions.service import missing, removed
 
@@ -34,28 +34,20 @@ class ReplayState:
     detail: str
 
 
-def job_key(session_id: int) -> str:
-    """Returns the queue key of the build of one session's replay at today's scene version."""
-    return f"{KIND}:{session_id}:{scene.VERSION}"
+def job_key(session_id: int, layers: str = BOTH) -> str:
+    """Returns the queue key of the build of one session's replay (of the skeletons `layers`) at today's scene
+    version."""
+    tail = "" if layers == BOTH else f":{layers}"
+    return f"{KIND}:{session_id}:{scene.VERSION}{tail}"
 
 
-def _waiting(job: Job, now: dt.datetime) -> str:
-    if job.status == "running":
-        return "A worker is building the replay."
-    if job.error:
-        return f"The last try failed; a worker will try again. {error_words(job.error)}"
-    waited = max(0, int((now - job.created_at).total_seconds()))
-    if waited < 10:
-        return "The replay is queued; a worker will build it in a moment."
-    return f"The replay has waited {waited} s for a worker; is `coach-server worker` running?"
-
-
-def request_replay(*, db_session: Session, session_id: int) -> ReplayState:
-    """Returns the state of a session's replay, queueing its build when it is neither stored nor queued; flushes.
+def request_replay(*, db_session: Session, session_id: int, layers: str = BOTH) -> ReplayState:
+    """Returns the state of a session's replay (of the skeletons `layers`), queueing its build when it is neither
+    stored nor queued, or when it failed and may be tried again; flushes.
 
     Raises SessionNotFound, or SessionFileRemoved when the retention period removed the recording.
     """
-    if service.stored_replay_key(db_session=db_session, session_id=session_id) is not None:
+    if service.stored_replay_key(db_session=db_session, session_id=session_id, layers=layers) is not None:
         return ReplayState("ready", "The replay is ready.")
     row = db_session.execute(
         select(ExerciseSession.file_key, ExerciseSession.file_removed_at, ExerciseSession.file_bytes.is_not(None))
@@ -65,27 +57,25 @@ def request_replay(*, db_session: Session, session_id: int) -> ReplayState:
         raise missing(session_id)
     if not row[0] and not row[2]:
         raise removed(session_id, row[1])
-    key = job_key(session_id)
-    job = db_session.scalar(select(Job).where(Job.key == key))
-    if job is None:
-        enqueue(db_session=db_session, kind=KIND, items=[(key, {"session_id": session_id})])
-        job = db_session.scalar(select(Job).where(Job.key == key))
-    elif job.status == "done":  # built once, and the recording went since (a newer build replaced it): again
-        again = {"status": "queued", "attempts": 0, "run_after": utcnow(), "error": None, "finished_at": None}
-        db_session.execute(update(Job).where(Job.id == job.id, Job.status == "done").values(**again))
-        db_session.refresh(job)
-    if job is not None and job.status == "failed":
-        return ReplayState("failed", error_words(job.error) or "The replay could not be built.")
-    return ReplayState("preparing", _waiting(job, utcnow()) if job is not None else "The replay is queued.")
+    payload = {"session_id": session_id, "layers": layers.split(",")}
+    found = ask(db_session=db_session, kind=KIND, key=job_key(session_id, layers), payload=payload,
+                noun="the replay")  # fmt: skip
+    return ReplayState(found.state, found.detail)
 
 
-def run(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int) -> dict[str, Any]:
-    """Runs the job of one session: builds and stores its replay unless stored already; returns what it did."""
+def run(*, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int,
+        layers: tuple[str, ...] = scene.LAYERS) -> dict[str, Any]:  # fmt: skip
+    """Runs the job of one session: builds and stores its replay (of the skeletons `layers`) unless stored already;
+    returns what it did."""
+    name = service.layers_name(layers)
     if db_session.get(ExerciseSession, session_id) is None:
         return {"session_id": session_id, "built": False, "skipped": "the session no longer exists"}
-    if service.stored_replay_key(db_session=db_session, session_id=session_id) is not None:
-        return {"session_id": session_id, "built": False, "version": scene.VERSION}
-    replay = service.build_and_store(db_session=db_session, session_id=session_id, max_frames=max_frames,
-                                     max_decoded_bytes=max_decoded_bytes)  # fmt: skip
-    return {"session_id": session_id, "built": True, "version": scene.VERSION, "n_frames": replay.n_frames,
-            "size": len(replay.data)}  # fmt: skip
+    if service.stored_replay_key(db_session=db_session, session_id=session_id, layers=name) is not None:
+        return {"session_id": session_id, "built": False, "version": scene.VERSION, "layers": name}
+    try:
+        replay = service.build_and_store(db_session=db_session, session_id=session_id, max_frames=max_frames,
+                                         max_decoded_bytes=max_decoded_bytes, layers=layers)  # fmt: skip
+    except InvalidSessionFile as exc:  # no retry reads it otherwise: said to whoever asks (backend.jobs.asking)
+        return {"session_id": session_id, "built": False, "layers": name, "invalid": exc.message}
+    return {"session_id": session_id, "built": True, "version": scene.VERSION, "layers": name,
+            "n_frames": replay.n_frames, "size": len(replay.data)}  # fmt: skip

@@ -1,15 +1,15 @@
 """The 3D replay of a session over the API: its viser scene recording, same access rules as the session itself.
 
-The recording of both skeletons is built by a worker (backend/replay/jobs.py): until it is stored, the replay
-answers 202 with where its build is, and `/replay/state` says the same without the recording's bytes (the page
-polls it, then opens the viewer).
+Every recording (both skeletons, or one alone with ?layer=) is built by a worker (backend/replay/jobs.py): until it
+is stored, the replay answers 202 with where its build is, and `/replay/state` says the same without the
+recording's bytes (the page polls it, then opens the viewer).
 """
 
 from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from fastapi import APIRouter, Query, Request, Response
+from fastapi import APIRouter, Query, Response
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 from sqlalchemy.orm import Session
@@ -24,12 +24,16 @@ from backend.exceptions import (
     error_responses,
 )
 from backend.replay import jobs, service
+from backend.replay.models import BOTH
 from backend.schemas import IdPath
 from backend.sessions.service import missing, session_patient
 
 router = APIRouter(prefix="/api/v1", tags=["sessions"])
 MEDIA_TYPE = "application/octet-stream"
 RETRY_AFTER_S = "2"
+LayerQuery = Annotated[
+    Literal["raw", "filtered"] | None, Query(description="one skeleton alone (default: both, raw and filtered)")
+]
 
 
 class ReplayStateOut(BaseModel):
@@ -52,11 +56,13 @@ def _visible(session_id: int, caller: Caller, db_session: Session) -> int:
     response_model=ReplayStateOut,
     responses=error_responses(*AUTH_ERRORS, SessionNotFound, SessionFileRemoved),
 )
-def read_replay_state(session_id: IdPath, caller: CurrentCaller, db_session: DbSession) -> ReplayStateOut:
+def read_replay_state(
+    session_id: IdPath, caller: CurrentCaller, db_session: DbSession, layer: LayerQuery = None
+) -> ReplayStateOut:
     """Returns whether the session's replay is ready, queueing its build by a worker when it is not (once, however
-    many ask at the same time)."""
+    many ask at the same time; again after a failure, a few times)."""
     _visible(session_id, caller, db_session)
-    found = jobs.request_replay(db_session=db_session, session_id=session_id)
+    found = jobs.request_replay(db_session=db_session, session_id=session_id, layers=layer or BOTH)
     return ReplayStateOut(state=found.state, detail=found.detail)
 
 
@@ -71,28 +77,18 @@ def read_replay_state(session_id: IdPath, caller: CurrentCaller, db_session: DbS
 )
 def read_replay(
     session_id: IdPath,
-    request: Request,
     caller: CurrentCaller,
     db_session: DbSession,
-    layer: Annotated[
-        Literal["raw", "filtered"] | None, Query(description="one skeleton alone (default: both, raw and filtered)")
-    ] = None,
+    layer: LayerQuery = None,
 ) -> Response:
-    """Returns the 3D replay of a session as a viser scene recording once a worker has built it (202 with its state
-    until then); one skeleton alone is built in the request each time."""
+    """Returns the 3D replay of a session (both skeletons, or one alone) as a viser scene recording once a worker
+    has built it (202 with its state until then)."""
     patient_id = _visible(session_id, caller, db_session)
-    settings = request.app.state.settings
-    if layer is not None:
-        data = service.layer_data(db_session=db_session, session_id=session_id, layer=layer,
-                                  max_frames=settings.SESSION_MAX_FRAMES,
-                                  max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
-    else:
-        stored = service.stored_replay(db_session=db_session, session_id=session_id)
-        if stored is None:
-            found = jobs.request_replay(db_session=db_session, session_id=session_id)
-            body = ReplayStateOut(state=found.state, detail=found.detail)
-            return JSONResponse(body.model_dump(), status_code=202, headers={"Retry-After": RETRY_AFTER_S})
-        data = stored
+    data = service.stored_replay(db_session=db_session, session_id=session_id, layers=layer or BOTH)
+    if data is None:
+        found = jobs.request_replay(db_session=db_session, session_id=session_id, layers=layer or BOTH)
+        body = ReplayStateOut(state=found.state, detail=found.detail)
+        return JSONResponse(body.model_dump(), status_code=202, headers={"Retry-After": RETRY_AFTER_S})
     record(db_session=db_session, caller=caller, action="session.replay.read", object_type="exercise_session",
            object_id=session_id, patient_id=patient_id)  # fmt: skip
     # identity: the recording is zstd inside already, so the gzip middleware leaves it alone

@@ -1,20 +1,15 @@
 """The therapist's session page: a stored session's file decoded and measured again for the evidence behind its
 numbers (backend.analysis.session_detail, data_quality, camera_advice).
 
-The part computed from the file depends only on the file's bytes, the exercise and the repetitions, so it is
-kept in a small per-process LRU cache keyed by them (the outlier model takes seconds on a 10-minute session).
-Every worker fills its own cache; nothing in it is shared state or ever needs invalidating.
+It costs seconds on a long recording (the outlier model), so a job-queue worker computes it once and keeps it in
+the object store (backend.sessions.prepared); requests read that.
 """
 
 from __future__ import annotations
 
-import threading
-from collections import OrderedDict
-from collections.abc import Hashable
 from typing import Any
 
 import numpy as np
-from sqlalchemy.orm import Session
 
 from backend.analysis import data_quality, work_budget
 from backend.analysis.camera_advice import camera_advice
@@ -29,15 +24,13 @@ from backend.analysis.session_detail import (
 )
 from backend.exceptions import InvalidSessionFile
 from backend.exercises.library import EXERCISES, ExerciseSpec
-from backend.sessions import service
 from backend.sessions.metrics import json_ready
 from backend.sessions.models import ExerciseSession
 from kinect_agent.analysis.validity import recorded_with, session_validity
 from kinect_agent.formats import session_file
 from kinect_agent.formats.session_file import SessionFileError, SessionPayload
 
-DETAIL_VERSION = 2  # part of the cache key: bump when the file-derived output changes
-CACHE_SIZE = 8
+DETAIL_VERSION = 2  # part of a stored detail's inputs (backend.sessions.prepared): bump when the output changes
 UNCERTAINTY_NOTE = (
     "95 % intervals from the per-frame angle SDs the home agent stored (the filter's covariance, calibrated on "
     "simulated sessions with known truth)."
@@ -46,32 +39,6 @@ NO_UNCERTAINTY_NOTE = (
     "The session file stores no per-frame uncertainty of the filtered recording (an older agent), "
     "so the numbers are shown without intervals."
 )
-
-
-class _Lru:
-    """A thread-safe least-recently-used map of at most `size` entries."""
-
-    def __init__(self, size: int) -> None:
-        self.size = size
-        self._items: OrderedDict[Hashable, dict[str, Any]] = OrderedDict()
-        self._lock = threading.Lock()
-
-    def get(self, key: Hashable) -> dict[str, Any] | None:
-        with self._lock:
-            value = self._items.get(key)
-            if value is not None:
-                self._items.move_to_end(key)
-            return value
-
-    def put(self, key: Hashable, value: dict[str, Any]) -> None:
-        with self._lock:
-            self._items[key] = value
-            self._items.move_to_end(key)
-            while len(self._items) > self.size:
-                self._items.popitem(last=False)
-
-
-_cache = _Lru(CACHE_SIZE)
 
 
 def decode_stored(data: bytes, *, session_id: int, max_frames: int, max_decoded_bytes: int) -> SessionPayload:
@@ -138,19 +105,6 @@ def file_evidence(payload: SessionPayload, names: tuple[str, ...], reps: list[di
     }
 
 
-def _cached_evidence(
-    data: bytes, payload: SessionPayload, spec: ExerciseSpec | None, reps: list[dict[str, Any]]
-) -> dict[str, Any]:
-    names = tuple(spec.defining_angles) if spec is not None else ()
-    marks = tuple((r["start_s"], r["end_s"], r["side"]) for r in reps)
-    key = (session_file.content_hash(data), names, marks, DETAIL_VERSION)
-    evidence = _cache.get(key)
-    if evidence is None:
-        evidence = file_evidence(payload, names, reps)
-        _cache.put(key, evidence)
-    return evidence
-
-
 def _workspace(doc: dict[str, Any], paths: dict[str, Any] | None) -> dict[str, Any] | None:
     """Returns {"left", "right"}: each arm's stored workspace metrics with its hand path, or None."""
     if paths is None:
@@ -175,18 +129,6 @@ def _rep_rows(reps: list[dict[str, Any]], speeds: list[float | None]) -> list[di
     ]
 
 
-def session_detail(
-    *, db_session: Session, row: tuple[Any, ...], max_frames: int, max_decoded_bytes: int
-) -> dict[str, Any]:
-    """Returns the body of GET /sessions/{id}/detail for get_session_row's row (keys: SessionDetailOut).
-
-    Raises InvalidSessionFile when the stored file cannot be decoded or is too short to show.
-    """
-    session, slug, _, _, _, stored = row
-    data = service.session_file(db_session=db_session, session_id=session.id)
-    return detail_body(session, slug, stored, data, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
-
-
 def detail_body(
     session: ExerciseSession,
     slug: str | None,
@@ -202,9 +144,9 @@ def detail_body(
     analysed = work_budget.thinned(payload)  # the work is bounded by the duration, whatever the frame rate
     doc, source = analysis_document(analysed, spec, stored)
     reps = _repetitions(doc)
-    evidence = _cached_evidence(data, analysed, spec, reps)
-    stored = doc.get("quality")
-    quality: dict[str, Any] = stored if isinstance(stored, dict) else {}
+    evidence = file_evidence(analysed, tuple(spec.defining_angles) if spec is not None else (), reps)
+    found = doc.get("quality")
+    quality: dict[str, Any] = found if isinstance(found, dict) else {}
     raw, filtered = payload.raw, payload.filtered
     return {
         "session_id": session.id,

@@ -68,3 +68,19 @@ class SessionMetric(Base):
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
 
     session: Mapped[ExerciseSession] = relationship(back_populates="metric")
+
+
+class SessionDetail(Base):
+    """The session page's evidence (backend.sessions.detail: curves, repetitions, quality …) built once by a worker,
+    as JSON in the object store; `inputs` is the sha256 of what it was made from (the file, the exercise, the
+    metrics document, the detail's version), so a re-analysis or a new version makes it stale."""
+
+    __tablename__ = "session_detail"
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    session_id: Mapped[int] = mapped_column(ForeignKey("exercise_session.id", ondelete="CASCADE"), unique=True)
+    inputs: Mapped[str] = mapped_column(String(64))
+    data_key: Mapped[str] = mapped_column(String(100))  # the JSON document in the object store (backend/storage)
+    data_hash: Mapped[str] = mapped_column(String(64))  # its sha256
+    size: Mapped[int] = mapped_column()
+    created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)

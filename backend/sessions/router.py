@@ -7,6 +7,7 @@ from collections.abc import Iterable
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Query, Request, Response, status
+from fastapi.responses import JSONResponse
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
@@ -41,12 +42,13 @@ from backend.exceptions import (
 )
 from backend.exercises.service import get_exercise
 from backend.schemas import DateTimeQuery, IdPath, IdQuery, Page, PageParams, page_params
-from backend.sessions import dashboard, detail, service
+from backend.sessions import dashboard, prepared, service
 from backend.sessions.export import session_export
 from backend.sessions.ingest import check_declared_length, check_owner, decode_upload, read_limited
 from backend.sessions.models import ExerciseSession
 from backend.sessions.schemas import (
     DashboardRowOut,
+    PreparingOut,
     ProgressOut,
     ProgressPoint,
     SessionDetailOut,
@@ -58,6 +60,7 @@ from backend.suggestions import service as suggestions_service
 from kinect_agent.export.files import ExportFormat as ExportFormatName
 
 router = APIRouter(prefix="/api/v1", tags=["sessions"])
+DETAIL_RETRY_AFTER_S = "2"
 SlugQuery = Annotated[
     str | None, Query(min_length=1, max_length=64, description="exercise slug, e.g. 'squat'", examples=["squat"])
 ]
@@ -197,6 +200,7 @@ def _ingest(
     action = "session.create" if created else "session.upload_repeat"
     _audit(db_session, caller, action, row.id, patient_id, {"content_hash": upload.content_hash})
     if created:
+        prepared.queue_build(db_session=db_session, session_id=row.id)  # the session page's detail, by a worker
         stored = {"session_id": row.id, "client_session_id": str(upload.client_session_id)}  # the live set's session
         publish(db_session, Event("session.stored", patient_id, stored))
     return _session_out(db_session, caller, row.id, accept_language=accept_language), created
@@ -314,23 +318,22 @@ def read_session(session_id: IdPath, request: Request, caller: CurrentCaller, db
 @router.get(
     "/sessions/{session_id}/detail",
     response_model=SessionDetailOut,
-    responses=error_responses(*AUTH_ERRORS, SessionNotFound, InvalidSessionFile, SessionFileRemoved),
+    responses={
+        202: {"model": PreparingOut, "description": "not prepared yet: a worker is building it (Retry-After)"},
+        **error_responses(*AUTH_ERRORS, SessionNotFound, InvalidSessionFile, SessionFileRemoved),
+    },
 )
-def read_session_detail(
-    session_id: IdPath, request: Request, caller: CurrentCaller, db_session: DbSession
-) -> dict[str, Any]:
-    """Returns the evidence behind a session's numbers: angle curves, repetitions, workspace, data quality."""
+def read_session_detail(session_id: IdPath, caller: CurrentCaller, db_session: DbSession) -> Any:
+    """Returns the evidence behind a session's numbers: angle curves, repetitions, workspace, data quality; a
+    worker prepares it once (202 with where it is until then)."""
     row = service.get_session_row(db_session=db_session, session_id=session_id)
     patient_id = row[0].patient_id
     require_patient_access(patient_id, caller=caller, db_session=db_session, allow_device=False,
                            hidden_as=service.missing(session_id))  # fmt: skip
-    settings = request.app.state.settings
-    body = detail.session_detail(
-        db_session=db_session,
-        row=row,
-        max_frames=settings.SESSION_MAX_FRAMES,
-        max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES,
-    )
+    body = prepared.read_detail(db_session=db_session, row=row)
+    if isinstance(body, prepared.DetailState):
+        state = PreparingOut(state=body.state, detail=body.detail)
+        return JSONResponse(state.model_dump(), status_code=202, headers={"Retry-After": DETAIL_RETRY_AFTER_S})
     _audit(db_session, caller, "session.detail.read", session_id, patient_id)
     return body  # validated against SessionDetailOut, the route's response_model
 

@@ -407,6 +407,16 @@ class ValidityOut(BaseModel):
     metrics: list[MetricValidityOut]
 
 
+class PreparingOut(BaseModel):
+    """Where a result a worker prepares is: being prepared (ask again in a few seconds) or failed (why, in words)."""
+
+    model_config = ConfigDict(
+        json_schema_extra={"examples": [{"state": "preparing", "detail": "The session's detail is queued."}]}
+    )
+    state: Literal["preparing", "failed"] = Field(description="preparing: ask again in a few seconds")
+    detail: str
+
+
 class SessionDetailOut(BaseModel):
     """What the therapist's session page shows: the evidence behind the session's numbers."""
 

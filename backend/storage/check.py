@@ -16,6 +16,8 @@ _SESSION = sa.table("exercise_session", sa.column("id"), sa.column("file_key"), 
                     sa.column("file_bytes"))  # fmt: skip
 _REPLAY = sa.table("session_replay", sa.column("id"), sa.column("session_id"), sa.column("data_key"),
                    sa.column("data_hash"))  # fmt: skip
+_DETAIL = sa.table("session_detail", sa.column("id"), sa.column("session_id"), sa.column("data_key"),
+                   sa.column("data_hash"))  # fmt: skip
 
 
 @dataclass
@@ -44,6 +46,9 @@ def check(conn: Connection, store: ObjectStore) -> CheckReport:
     rows = conn.execute(sa.select(_REPLAY.c.session_id, _REPLAY.c.data_key, _REPLAY.c.data_hash)
                         .where(_REPLAY.c.data_key.is_not(None)).order_by(_REPLAY.c.id))  # fmt: skip
     targets += [(f"replay of session {r.session_id}", r.data_key, r.data_hash) for r in rows]
+    rows = conn.execute(sa.select(_DETAIL.c.session_id, _DETAIL.c.data_key, _DETAIL.c.data_hash)
+                        .order_by(_DETAIL.c.id))  # fmt: skip
+    targets += [(f"detail of session {r.session_id}", r.data_key, r.data_hash) for r in rows]
     for what, key, digest in targets:
         referenced.add(key)
         report.checked += 1

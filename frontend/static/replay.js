@@ -17,41 +17,45 @@
   }
   load();
 
-  // the recording is built by a worker: while it is prepared the page says so, then loads again with the player
+  // every recording (both skeletons, or one alone) is built by a worker: while it is prepared the page says so and
+  // keeps showing what it showed, then plays the new one
   const viewer = document.getElementById("viewer");
   const stateBox = document.getElementById("replay-state");
   const POLL_MS = 1500;
-  async function waitForRecording() {
+  let wanted = "";  // the skeleton the checkboxes ask for alone ("raw", "filtered"), or "" for both
+  const what = (layer) => (layer ? `The 3D replay of the ${layer} skeleton alone` : "The 3D replay");
+  function say(kind, text) { stateBox.className = kind; stateBox.textContent = text; stateBox.hidden = false; }
+  async function show(layer) {
+    wanted = layer;
+    const query = layer ? `?layer=${layer}` : "";
     let state;
     try {
-      state = await api(`/sessions/${sid}/replay/state`);
+      state = await api(`/sessions/${sid}/replay/state${query}`);
     } catch (err) {
+      if (wanted !== layer) return;
       if (err.error === "SessionFileRemoved" || err.status === 404) {
         stateBox.hidden = true;
         showError(err);
         return;
       }
-      stateBox.className = "alert";
-      stateBox.textContent = `The replay's state could not be read (${err.detail || err.message}); trying again.`;
-      stateBox.hidden = false;
-      setTimeout(waitForRecording, POLL_MS * 2);
+      say("alert", `The replay's state could not be read (${err.detail || err.message}); trying again.`);
+      setTimeout(() => { if (wanted === layer) show(layer); }, POLL_MS * 2);
       return;
     }
-    if (state.state === "ready") { location.reload(); return; }
-    if (state.state === "failed") {
-      stateBox.className = "alert";
-      stateBox.textContent = `The 3D replay could not be prepared. ${state.detail}`;
-      stateBox.hidden = false;
+    if (wanted !== layer) return;  // the checkboxes changed meanwhile
+    if (state.state === "ready") {
+      stateBox.hidden = true;
+      viewer.src = Coach.url(`/replay/viewer/?playbackPath=${encodeURIComponent(viewer.dataset.recording + query)}`);
+      viewer.hidden = false;
       return;
     }
-    stateBox.className = "note";
-    stateBox.textContent = `The 3D replay is being prepared. ${state.detail}`;
-    stateBox.hidden = false;
-    setTimeout(waitForRecording, POLL_MS);
+    if (state.state === "failed") { say("alert", `${what(layer)} could not be prepared. ${state.detail}`); return; }
+    say("note", `${what(layer)} is being prepared. ${state.detail}`);
+    setTimeout(() => { if (wanted === layer) show(layer); }, POLL_MS);
   }
-  if (viewer.hasAttribute("data-preparing")) waitForRecording();
+  if (viewer.hasAttribute("data-preparing")) show("");
 
-  // the two checkboxes: both skeletons (the stored recording), or one alone (?layer=); at least one stays shown
+  // the two checkboxes: both skeletons, or one alone (?layer=); at least one stays shown
   const boxes = [document.getElementById("show-filtered"), document.getElementById("show-raw")];
   const note = document.getElementById("layers-note");
   for (const box of boxes) {
@@ -59,9 +63,7 @@
       const shown = boxes.filter((b) => b.checked).map((b) => b.value);
       if (!shown.length) { box.checked = true; note.textContent = "At least one skeleton stays shown."; return; }
       note.textContent = "";
-      const recording = viewer.dataset.recording + (shown.length === 1 ? `?layer=${shown[0]}` : "");
-      viewer.src = Coach.url(`/replay/viewer/?playbackPath=${encodeURIComponent(recording)}`);
-      viewer.hidden = false;
+      show(shown.length === 1 ? shown[0] : "");
     });
   }
 })();

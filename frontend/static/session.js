@@ -273,9 +273,27 @@
     api(`/patients/${s.patient_id}`).then((p) => { back.textContent = `← ${p.full_name || p.email}`; }).catch(() => {});
   }
 
+  // the curves and numbers are prepared once by a worker: while they are, the page says so and asks again
+  const stateBox = document.getElementById("detail-state");
+  const POLL_MS = 1500;
+  let waiting = false;  // asked and told "being prepared" at least once
+  function say(kind, text) { stateBox.className = kind; stateBox.textContent = text; stateBox.hidden = false; }
+
   async function load() {
     try {
       const d = await api(`/sessions/${sid}/detail`);
+      if (d.state === "failed") {
+        say("alert", `The session's curves and numbers could not be prepared. ${d.detail}`);
+        document.getElementById("session-sub").textContent = "";
+        return;
+      }
+      if (d.state === "preparing") {
+        waiting = true;
+        say("note", `The session's curves and numbers are being prepared. ${d.detail}`);
+        setTimeout(load, POLL_MS);
+        return;
+      }
+      stateBox.hidden = true;
       const name = d.exercise_name || (d.exercise_slug || "Exercise").replace(/_/g, " ");
       document.getElementById("session-title").textContent = `${name} · ${fmtDateTime(d.started_at)}`;
       document.title = `${name}, ${fmtDateTime(d.started_at)} · Kinect Home Coach`;
@@ -296,6 +314,12 @@
         document.getElementById("session-sub").textContent ||= `Session of ${patient.full_name || patient.email}`;
       }).catch(() => {});
     } catch (err) {
+      if (waiting && (err.status === 0 || err.status >= 500)) {  // lost while waiting: say so, ask again
+        say("alert", `The server could not be asked whether the session is ready (${err.detail || err.message}); trying again.`);
+        setTimeout(load, POLL_MS * 2);
+        return;
+      }
+      stateBox.hidden = true;
       if (err.error === "SessionFileRemoved") {
         try { await removed(); return; } catch (again) { err = again; }
       }

@@ -267,14 +267,16 @@ def store(db_session):
 
 
 @pytest.fixture
-def upload(client, make_patient_with_therapist, auth_headers):
-    """Factory: upload(data, exercise) -> (session id, patient, therapist) after a real upload by the patient."""
+def upload(client, make_patient_with_therapist, auth_headers, run_jobs):
+    """Factory: upload(data, exercise) -> (session id, patient, therapist) after a real upload by the patient and a
+    worker's run of the job it queued (the session page's detail, backend.sessions.prepared)."""
 
     def send(data: bytes, exercise: str):
         patient, therapist = make_patient_with_therapist()
         headers = {"Content-Type": "application/octet-stream", **auth_headers(patient)}
         response = client.post("/api/v1/sessions", content=data, headers=headers, params={"exercise": exercise})
         assert response.status_code == 201, response.text
+        assert run_jobs() == 1, "an upload queues the build of its detail"
         return response.json()["id"], patient, therapist
 
     return send

@@ -92,7 +92,7 @@ def test_missing_session_is_404(client, make_user, auth_headers):
     assert response.status_code == 404 and response.json()["error"] == "SessionNotFound"
 
 
-def test_a_stored_file_that_cannot_be_read_fails_in_words_and_nothing_is_stored(
+def test_a_stored_file_that_cannot_be_read_fails_in_words_at_once_and_nothing_is_stored(
     client, make_user, auth_headers, exercise, store, db_session, run_jobs
 ):
     patient = make_user("patient")
@@ -100,28 +100,81 @@ def test_a_stored_file_that_cannot_be_read_fails_in_words_and_nothing_is_stored(
     headers = auth_headers(patient)
     assert client.get(f"/api/v1/sessions/{row.id}/replay/state", headers=headers).json()["state"] == "preparing"
     assert run_jobs() == 1
-    retry = client.get(f"/api/v1/sessions/{row.id}/replay/state", headers=headers).json()
-    assert retry["state"] == "preparing" and "a worker will try again" in retry["detail"], retry
-    assert f"The stored session file cannot be read: the stored file of session {row.id}" in retry["detail"]
-    job = db_session.scalar(select(Job).where(Job.kind == "replay"))
-    job.max_attempts, job.run_after = 1, utcnow()  # no waiting for the retry delays
-    assert run_jobs() == 1
     failed = client.get(f"/api/v1/sessions/{row.id}/replay/state", headers=headers).json()
-    assert failed["state"] == "failed" and failed["detail"].startswith("The stored session file cannot be read")
+    assert failed["state"] == "failed", failed
+    assert failed["detail"].startswith(f"The stored session file cannot be read: the stored file of session {row.id}")
     assert "Traceback" not in failed["detail"]
+    assert run_jobs() == 0, "no retry reads the same bytes otherwise"
     assert db_session.scalar(select(func.count()).select_from(SessionReplay)) == 0
 
 
-def test_one_skeleton_alone_is_built_without_the_other_and_not_stored(
-    client, make_patient_with_therapist, auth_headers, exercise, store, db_session
+def test_asking_after_a_failed_build_queues_it_again_a_few_times(client, make_user, auth_headers, exercise, store,
+                                                                 db_session, run_jobs, object_store):  # fmt: skip
+    patient = make_user("patient")
+    data = make_khs("squat", 1, seed=25)
+    row = store(patient, exercise, T0, data=data)
+    obj = object_store.put("session", data)
+    row.file_key, row.content_hash, row.file_bytes = obj.key, obj.sha256, None
+    db_session.flush()
+    headers = auth_headers(patient)
+    object_store.delete(obj.key)  # the store lost the file for a while (a passing fault)
+    state = lambda: client.get(f"/api/v1/sessions/{row.id}/replay/state", headers=headers).json()  # noqa: E731
+    assert state()["state"] == "preparing"
+    job = db_session.scalar(select(Job).where(Job.kind == "replay"))
+    for _ in range(3):  # the queue's own tries, without their delays
+        assert run_jobs() == 1
+        db_session.refresh(job)
+        job.run_after = utcnow()
+    assert job.status == "failed" and job.attempts == 3
+    asked = state()
+    assert asked["state"] == "preparing" and "a worker will try again" in asked["detail"], asked
+    assert "missing from the object store" in asked["detail"], "the error in words while it is tried again"
+    assert run_jobs() == 1
+    db_session.refresh(job)
+    assert (job.status, job.attempts) == ("failed", 4), "one more try per ask"
+    for attempts in (5, 6):
+        assert state()["state"] == "preparing"
+        assert run_jobs() == 1
+        db_session.refresh(job)
+        assert (job.status, job.attempts) == ("failed", attempts)
+    given_up = state()
+    assert given_up["state"] == "failed" and given_up["detail"].endswith("(tried 6 times)"), given_up
+    assert run_jobs() == 0, "no try beyond the bound"
+    job.status, job.attempts = "failed", 3  # another failure that is still within the bound, and the file is back
+    object_store.put("session", data)
+    db_session.flush()
+    assert state()["state"] == "preparing" and run_jobs() == 1
+    assert state()["state"] == "ready"
+
+
+def test_one_skeleton_alone_is_built_by_a_worker_and_stored(
+    client, make_patient_with_therapist, auth_headers, exercise, store, db_session, run_jobs
 ):
     patient, therapist = make_patient_with_therapist()
     row = store(patient, exercise, T0, data=make_khs("squat", 2, seed=22))
     headers = auth_headers(therapist)
-    raw = read_viser(client.get(f"/api/v1/sessions/{row.id}/replay?layer=raw", headers=headers).content)
+    for layer in ("raw", "filtered"):
+        first = client.get(f"/api/v1/sessions/{row.id}/replay?layer={layer}", headers=headers)
+        assert first.status_code == 202 and first.json()["state"] == "preparing", first.text
+        state = client.get(f"/api/v1/sessions/{row.id}/replay/state?layer={layer}", headers=headers)
+        assert state.json()["state"] == "preparing"
+    assert db_session.scalar(select(func.count()).select_from(SessionReplay)) == 0, "nothing built in a request"
+    keys = set(db_session.scalars(select(Job.key).where(Job.kind == "replay")))
+    assert keys == {f"replay:{row.id}:{scene.VERSION}:raw", f"replay:{row.id}:{scene.VERSION}:filtered"}
+    assert run_jobs() == 2
+    both = client.get(f"/api/v1/sessions/{row.id}/replay/state", headers=headers).json()
+    assert both["state"] == "preparing", "the recording of both skeletons is a build of its own"
+    raw_answer = client.get(f"/api/v1/sessions/{row.id}/replay?layer=raw", headers=headers)
+    assert raw_answer.status_code == 200, raw_answer.text
+    raw = read_viser(raw_answer.content)
     assert node_points(raw, "/raw/joints") and not node_points(raw, "/filtered/joints")
     filtered = read_viser(client.get(f"/api/v1/sessions/{row.id}/replay?layer=filtered", headers=headers).content)
     assert node_points(filtered, "/filtered/joints") and not node_points(filtered, "/raw/joints")
-    assert db_session.scalar(select(func.count()).select_from(SessionReplay)) == 0
+    stored = {r.layers: r for r in db_session.scalars(select(SessionReplay).where(SessionReplay.session_id == row.id))}
+    assert set(stored) == {"raw", "filtered"}
+    assert get_store().get(stored["raw"].data_key, stored["raw"].data_hash) == raw_answer.content
+    assert client.get(f"/api/v1/sessions/{row.id}/replay/state?layer=raw", headers=headers).json()["state"] == "ready"
+    assert run_jobs() == 1  # the one of both skeletons
+    assert db_session.scalar(select(func.count()).select_from(SessionReplay)) == 3
     bad = client.get(f"/api/v1/sessions/{row.id}/replay?layer=both", headers=headers)
     assert bad.status_code == 422 and "layer" in bad.json()["detail"]

@@ -23,6 +23,14 @@ def _detail(client, session_id: int, headers: dict):
     return client.get(f"/api/v1/sessions/{session_id}/detail", headers=headers)
 
 
+def _prepared(client, run_jobs, session_id: int, headers: dict):
+    """Asks for a stored row's detail (not uploaded: nothing queued yet), lets a worker build it, asks again."""
+    first = _detail(client, session_id, headers)
+    assert first.status_code == 202 and first.json()["state"] == "preparing", first.text
+    assert run_jobs() == 1
+    return _detail(client, session_id, headers)
+
+
 def _khs_with_bad_wrist(exercise: str, reps: int, seed: int) -> bytes:
     """A session of the simulator's truth plus 1 cm sensor noise whose raw right wrist jumps 0.6 m sideways for
     0.5 s in the middle (a tracking error); the filtered recording is the truth."""
@@ -138,24 +146,25 @@ def test_anonymous_gets_401(client, upload):
     assert _detail(client, session_id, {}).status_code == 401
 
 
-def test_corrupt_stored_file_is_a_typed_400(client, make_patient_with_therapist, auth_headers, exercise, store):
+def test_corrupt_stored_file_is_a_typed_400(client, make_patient_with_therapist, auth_headers, exercise, store,
+                                            run_jobs):  # fmt: skip
     patient, therapist = make_patient_with_therapist()
     data = bytearray(make_khs("squat", 2, seed=10))
     data[100] ^= 0xFF  # the SHA-256 trailer no longer matches
     row = store(patient, exercise, T0, data=bytes(data), metrics=False)
-    response = _detail(client, row.id, auth_headers(therapist))
+    response = _prepared(client, run_jobs, row.id, auth_headers(therapist))
     assert response.status_code == 400, response.text
     assert response.json()["error"] == "InvalidSessionFile"
     assert "checksum_mismatch" in response.json()["detail"]
 
 
 def test_session_without_metrics_is_analysed_from_its_file(
-    client, db_session, store, make_patient_with_therapist, auth_headers
+    client, db_session, store, make_patient_with_therapist, auth_headers, run_jobs
 ):
     patient, therapist = make_patient_with_therapist()
     squat = db_session.scalar(select(Exercise).where(Exercise.slug == "squat"))
     row = store(patient, squat, T0, data=make_khs("squat", 3, seed=11), metrics=False)
-    body = _detail(client, row.id, auth_headers(therapist)).json()
+    body = _prepared(client, run_jobs, row.id, auth_headers(therapist)).json()
     assert body["processing"]["analysis"] == "recomputed"
     assert body["repetition_count"] == 3
 

@@ -11,7 +11,6 @@ import pytest
 
 from backend.analysis import work_budget
 from backend.replay import scene
-from backend.sessions import detail
 from backend.sessions.detail import detail_body
 from backend.sessions.models import ExerciseSession
 from kinect_agent.formats import session_file as sf
@@ -33,13 +32,11 @@ def _at_1khz(data: bytes) -> bytes:
 
 
 def _cost(run) -> tuple[float, int]:
-    """Returns (CPU seconds of this process, peak bytes traced) of run(), each measured on a run of its own (the
-    detail's per-process cache emptied before each; tracing slows Python code, so the CPU run is untraced)."""
-    detail._cache = detail._Lru(detail.CACHE_SIZE)
+    """Returns (CPU seconds of this process, peak bytes traced) of run(), each measured on a run of its own (tracing
+    slows Python code, so the CPU run is untraced)."""
     cpu = time.process_time()
     run()
     cpu = time.process_time() - cpu
-    detail._cache = detail._Lru(detail.CACHE_SIZE)
     tracemalloc.start()
     try:
         run()

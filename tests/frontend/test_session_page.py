@@ -3,11 +3,15 @@ the reach picture of an arm exercise, the widths, and who may open it."""
 
 from __future__ import annotations
 
+import json
 import re
+import time
 
 import pytest
+import sqlalchemy as sa
 from playwright.sync_api import expect
 
+from backend.sessions.models import SessionDetail
 from tests.frontend.conftest import PATIENT, THERAPIST, login, open_page, shot, upload_session
 
 pytestmark = pytest.mark.browser
@@ -69,6 +73,63 @@ def _open_from_patient_page(page, live_server) -> None:
     link.click()
     page.wait_for_url(re.compile(r"/therapist/sessions/\d+$"))
     page.locator("#curves .js-plotly-plot").first.wait_for()
+
+
+def _detail_when_ready(page, sid: int) -> dict:
+    """Returns the session's detail once a worker has prepared it (the server's embedded worker; 202 until then)."""
+    deadline = time.monotonic() + 60
+    while True:
+        response = page.request.get(f"/api/v1/sessions/{sid}/detail")
+        if response.status != 202 or time.monotonic() > deadline:
+            assert response.status == 200, response.text()
+            return response.json()
+        page.wait_for_timeout(250)
+
+
+def test_the_page_says_the_detail_is_being_prepared_then_shows_it(page, live_server, arm_session):
+    login(page, PAUL)
+    page.wait_for_url("**/therapist")
+    _detail_when_ready(page, arm_session)  # the build the upload queued is done
+    engine = sa.create_engine(live_server.database_url)
+    try:
+        with engine.begin() as conn:  # as after a new detail version: the stored one is gone, a worker builds it
+            conn.execute(sa.delete(SessionDetail).where(SessionDetail.session_id == arm_session))
+    finally:
+        engine.dispose()
+    page.goto(f"/therapist/sessions/{arm_session}")
+    expect(page.locator("#detail-state")).to_contain_text("The session's curves and numbers are being prepared.")
+    expect(page.locator("#detail-state")).to_have_class("note")
+    shot(page, "session_preparing")
+    page.locator("#workspace .js-plotly-plot").first.wait_for(timeout=60_000)
+    expect(page.locator("#detail-state")).to_be_hidden()
+    expect(page.locator("#reps tbody tr")).to_have_count(4)
+    assert not page.js_errors, page.js_errors
+
+
+def test_a_detail_that_could_not_be_prepared_is_said_in_words(page, live_server):
+    """The worker's build failed for good (here the server's answer is replaced by such a 202): the reason in words,
+    no polling, at every width."""
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    asked = []
+    words = "The session's file is missing from the object store (run `coach-server storage check`) (tried 6 times)"
+
+    def failed(route):
+        asked.append(route.request.url)
+        route.fulfill(status=202, content_type="application/json", headers={"Retry-After": "2"},
+                      body=json.dumps({"state": "failed", "detail": words}))  # fmt: skip
+
+    page.route("**/api/v1/sessions/*/detail", failed)
+    page.goto("/therapist/sessions/1")
+    state = page.locator("#detail-state")
+    expect(state).to_have_text(f"The session's curves and numbers could not be prepared. {words}")
+    expect(state).to_have_class("alert")
+    for width in WIDTHS:
+        page.set_viewport_size({"width": width, "height": 900})
+        assert _no_horizontal_scroll(page), f"horizontal scrolling at {width} px"
+        shot(page, f"session_detail_failed_{width}")
+    assert len(asked) == 1, "a failed build is not asked for again by the page"
+    assert not page.js_errors, page.js_errors
 
 
 def test_therapist_opens_a_session_and_sees_both_curves_and_the_repetitions(page, live_server):
@@ -152,7 +213,7 @@ def test_a_session_filtered_at_home_shows_its_95_percent_intervals_or_why_not(pa
     sid = upload_session(live_server.url, GEORGE, exercise, 4, seed=seed, data=data)["id"]
     login(page, PAUL)
     page.wait_for_url("**/therapist")
-    body = page.request.get(f"/api/v1/sessions/{sid}/detail").json()
+    body = _detail_when_ready(page, sid)
     angle = body["uncertainty"]["angles"][body["defining_angle"]]
     page.goto(f"/therapist/sessions/{sid}")
     stats = page.locator("#numbers .stat")

@@ -137,8 +137,13 @@ def test_replay_shows_raw_and_filtered_through_two_plain_checkboxes(page, live_s
     raw, filtered = page.get_by_label("Raw skeleton"), page.get_by_label("Filtered skeleton")
     expect(raw).to_be_checked()
     expect(filtered).to_be_checked()
-    raw.uncheck()
-    expect(page.locator("#viewer")).to_have_attribute("src", re.compile(r"replay%3Flayer%3Dfiltered$"))
+    recording = page.locator("#viewer").get_attribute("src")
+    raw.uncheck()  # a worker builds the filtered skeleton alone: the page says so and keeps playing both meanwhile
+    expect(page.locator("#replay-state")).to_contain_text("The 3D replay of the filtered skeleton alone is being")
+    expect(page.locator("#viewer")).to_have_attribute("src", recording)
+    expect(page.locator("#viewer")).to_have_attribute("src", re.compile(r"replay%3Flayer%3Dfiltered$"),
+                                                      timeout=60_000)  # fmt: skip
+    expect(page.locator("#replay-state")).to_be_hidden()
     page.frame_locator("#viewer").locator("canvas").first.wait_for(state="visible", timeout=30_000)
     filtered.click()  # the last one shown stays shown
     expect(filtered).to_be_checked()

@@ -12,7 +12,7 @@ import sqlalchemy as sa
 from backend.audit.models import AuditEvent
 from backend.database import Base
 from backend.records.retention import apply_retention
-from backend.sessions.models import ExerciseSession, SessionMetric
+from backend.sessions.models import ExerciseSession, SessionDetail, SessionMetric
 from tests.backend.khs_files import make_khs
 
 
@@ -29,7 +29,7 @@ def _patient_with_data(client, make_patient_with_therapist, auth_headers, seed, 
     headers = auth_headers(patient)
     ids = [_upload(client, headers, seed), _upload(client, headers, seed + 1)]
     assert client.get(f"/api/v1/sessions/{ids[0]}/replay", headers=headers).status_code == 202
-    assert run_jobs() == 1  # a worker builds the replay
+    assert run_jobs() == 3  # a worker builds the replay and the two sessions' details
     assert client.get(f"/api/v1/sessions/{ids[0]}/replay", headers=headers).status_code == 200
     plan = {"title": "knees", "start_date": "2026-11-23",
             "items": [{"exercise_slug": "squat", "sets": 1, "repetitions": 5, "frequency_per_week": 2}]}  # fmt: skip
@@ -118,11 +118,12 @@ def test_erasure_leaves_only_an_audit_entry(client, db_session, make_patient_wit
     assert set(with_store.keys()) == kept
     response = client.post(f"/api/v1/patients/{pid}/erasure", json={"confirm_email": email.upper()}, headers=headers)
     assert response.status_code == 200, response.text
-    assert response.json()["rows"]["exercise_session"] == 2 and response.json()["objects"] == 3  # 2 files, 1 replay
+    # 2 files, 1 replay, 2 details
+    assert response.json()["rows"]["exercise_session"] == 2 and response.json()["objects"] == 5
     assert response.json()["rows"]["advice_reply"] == 1
     db_session.expire_all()
     assert _mentions(db_session, pid, email, ids) == []
-    assert others <= set(with_store.keys()) and len(set(with_store.keys())) == len(kept) - 3
+    assert others <= set(with_store.keys()) and len(set(with_store.keys())) == len(kept) - 5
     events = db_session.scalars(sa.select(AuditEvent).where(AuditEvent.action == "patient.erase")).all()
     assert len(events) == 1 and events[0].actor_user_id == admin.id and events[0].patient_id is None
     assert client.get(f"/api/v1/patients/{other.id}/archive", headers=headers).status_code == 200
@@ -135,9 +136,13 @@ def test_retention_removes_old_files_and_keeps_metrics(client, db_session, make_
     old.started_at = dt.datetime(2025, 1, 1, tzinfo=dt.UTC)
     db_session.flush()
     key = old.file_key
+    detail_key = db_session.scalar(sa.select(SessionDetail.data_key).where(SessionDetail.session_id == ids[0]))
+    assert with_store.exists(detail_key)
     report = apply_retention(db_session=db_session, days=365, now=dt.datetime(2026, 11, 27, tzinfo=dt.UTC))
     db_session.commit()
     assert report.per_patient == {patient.id: 1} and not with_store.exists(key)
+    assert not with_store.exists(detail_key), "the curves of a removed recording go with it"
+    assert db_session.scalar(sa.select(SessionDetail.id).where(SessionDetail.session_id == ids[0])) is None
     db_session.expire_all()
     assert db_session.get(ExerciseSession, ids[0]).file_key is None
     assert db_session.scalar(sa.select(SessionMetric.repetitions).where(SessionMetric.session_id == ids[0])) is not None
