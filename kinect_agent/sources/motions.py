@@ -230,8 +230,12 @@ def _drive_straight_leg_raise(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.
     ch["trunk_lean"] -= 0.05 * sR
 
 
+IDLE_ELBOW_DEG = 22.0  # the idle arm's elbow while the other arm exercises (m07-m10 Vicon s01: 22-29°)
+
+
 def _drive_right_abduction(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndarray, pose: str) -> None:
     # The right arm out to the side and up (m07: 150-170°), thumb up: the arm turns outwards as it rises.
+    ch["elb_L"][:] = IDLE_ELBOW_DEG
     ch["sho_abd_R"] += sR
     ch["sho_rot_R"] += 0.3 * sR
     ch["elb_R"] += 0.04 * sR
@@ -240,6 +244,7 @@ def _drive_right_abduction(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.nda
 
 def _drive_right_extension(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndarray, pose: str) -> None:
     # The straight right arm backwards (m08: shoulder flexion 0 -> -45 to -65°).
+    ch["elb_L"][:] = IDLE_ELBOW_DEG
     ch["sho_flex_R"] -= sR
     ch["trunk_lean"] += 0.06 * sR
 
@@ -252,6 +257,7 @@ def _drive_right_rotation(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndar
     # the forearm turns about the upper arm, from forward up to vertical and back.
     ch["sho_abd_R"][:] = 88.0
     ch["elb_R"][:] = 90.0
+    ch["elb_L"][:] = IDLE_ELBOW_DEG
     ch["sho_rot_R"] += ROTATION_REST_DEG + sR
 
 
@@ -259,6 +265,7 @@ def _drive_right_scaption(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndar
     # The right arm raised in the scapular plane, 40° forward of the side (m10: flexion and abduction both reach
     # 90-115°), thumb up.
     ch["sho_plane_R"] += 40.0
+    ch["elb_L"][:] = IDLE_ELBOW_DEG
     ch["sho_abd_R"] += sR
     ch["sho_rot_R"] += 0.2 * sR
     ch["elb_R"] += 0.04 * sR
