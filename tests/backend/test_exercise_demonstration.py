@@ -36,7 +36,7 @@ UI_PRMD = [
     ("deep_squat", "side", "ROOT", 0.3), ("hurdle_step", "side", "KNE_R", 0.3), ("inline_lunge", "side", "ROOT", 0.2),
     ("side_lunge", "front", "ROOT", 0.2), ("standing_active_straight_leg_raise", "side", "ANK_R", 0.5),
     ("standing_shoulder_abduction", "front", "WRI_R", 0.8), ("standing_shoulder_extension", "side", "WRI_R", 0.3),
-    ("standing_shoulder_rotation", "side", "WRI_R", 0.25), ("standing_shoulder_scaption", "front", "WRI_R", 0.6),
+    ("standing_shoulder_rotation", "front", "WRI_R", 0.2), ("standing_shoulder_scaption", "front", "WRI_R", 0.6),
 ]  # fmt: skip
 
 

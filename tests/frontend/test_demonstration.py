@@ -77,11 +77,11 @@ def test_the_voice_control_and_the_demonstration_speak_the_patients_language(
         shot(page, f"patient-{locale}")
 
 
-# The UI-PRMD movements of the library and the view each needs (side: sagittal and transverse planes, else front).
+# The UI-PRMD movements of the library and the view each needs (side: sagittal plane, else front).
 UI_PRMD_VIEWS = {
     "deep_squat": "side", "hurdle_step": "side", "inline_lunge": "side", "side_lunge": "front",
     "standing_active_straight_leg_raise": "side", "standing_shoulder_abduction": "front",
-    "standing_shoulder_extension": "side", "standing_shoulder_rotation": "side", "standing_shoulder_scaption": "front",
+    "standing_shoulder_extension": "side", "standing_shoulder_rotation": "front", "standing_shoulder_scaption": "front",
 }  # fmt: skip
 
 
@@ -131,3 +131,9 @@ def test_every_uiprmd_movement_shows_a_moving_figure_in_the_view_it_needs(browse
             assert canvas.evaluate("(c) => c.toDataURL()") != first, f"the figure of {slug} does not move"
         shot(page, f"demonstration-uiprmd-{width}")
         assert not page.js_errors, page.js_errors
+    with open_page(browser, live_server.url, width, height, reduced_motion="reduce") as page:  # still, at the peak
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        canvases = page.locator("#plan li[data-exercise] canvas.demo-figure[data-frames]")
+        expect(canvases).to_have_count(len(UI_PRMD_VIEWS))
+        shot(page, f"demonstration-uiprmd-peak-{width}")
