@@ -20,7 +20,10 @@ from kinect_agent.sources.motions import SPECS
 from kinect_agent.sources.simulator import simulate_truth
 
 RATE_HZ = 15.0  # frames per second of the demonstration (smooth enough for a drawn figure, small to send)
-SIDE_PLANES = {"sagittal", "transverse"}
+# Sagittal movements are seen from the side; frontal ones, and the transverse shoulder rotation (done with the arm
+# held out to the side: from the side its upper arm points at the viewer and the raised forearm hides in the trunk),
+# from the front.
+SIDE_PLANES = {"sagittal"}
 
 
 SEAT_BELOW_HIPS_M = 0.08  # the seat's top under the hip joints (half a thigh's thickness)
@@ -57,7 +60,7 @@ class DemonstrationOut(BaseModel):
 
 
 def view_for(plane: str) -> str:
-    """Returns the view that shows a movement in `plane` best: "side" (sagittal, transverse) or "front"."""
+    """Returns the view that shows a movement in `plane` best: "side" (sagittal) or "front" (frontal, transverse)."""
     return "side" if plane in SIDE_PLANES else "front"
 
 

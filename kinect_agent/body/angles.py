@@ -18,7 +18,9 @@ Conventions (0 = anatomical neutral, standing with arms hanging and legs straigh
     shoulder_rotation_L/R  forearm WRI-ELB about the upper arm axis, measured from the forward
                            direction towards up-in-body terms: 0 forearm pointing forward, +90 pointing
                            up (external rotation with abducted arm), -90 down; NaN-free only when
-                           the elbow is bent
+                           the elbow is bent; NaN while the upper arm hangs within ROTATION_MIN_ELEVATION_DEG
+                           of straight down (then "up" no longer tells the sign: an idle arm's reading
+                           flipped between ±150° on simulated Kinect noise)
     hip_flexion_L/R     thigh KNE-HIP in the sagittal plane: atan2(fwd, -up); 90 seated
     hip_abduction_L/R   thigh out of the sagittal plane: arcsin(thigh (unit) . out); the frontal-plane angle
                         atan2(out, -up) while the thigh moves in that plane, but, unlike it, blind to hip flexion
@@ -54,6 +56,7 @@ ANGLE_NAMES: tuple[str, ...] = (
 
 
 PLANAR_SEAM_DEG = -120.0
+ROTATION_MIN_ELEVATION_DEG = 30.0  # shoulder rotation is undefined below this elevation of the upper arm
 PLANE_MIN_FRACTION = 0.5  # a planar angle needs this much of its limb in its plane (within 60° of it)
 _PLANAR = (PLANAR_SEAM_DEG, PLANAR_SEAM_DEG + 360.0)
 # (low, high) degrees each angle can take by its definition (high excluded for the planar angles).
@@ -138,7 +141,10 @@ def joint_angles(positions: np.ndarray, *, mask_off_plane: bool = True) -> dict[
         out[f"knee_flexion_{side}"] = 180.0 - _inner_angle(hip - kne, ank - kne)
         out[f"shoulder_flexion_{side}"] = _plane_angle(upper, up, forward, m)
         out[f"shoulder_abduction_{side}"] = _plane_angle(upper, up, outward, m)
-        out[f"shoulder_rotation_{side}"] = _rotation_about(upper, fore, forward, up)
+        rotation = _rotation_about(upper, fore, forward, up)
+        with np.errstate(invalid="ignore"):
+            hanging = -np.sum(_unit(upper) * up, axis=-1) > np.cos(np.radians(ROTATION_MIN_ELEVATION_DEG))
+        out[f"shoulder_rotation_{side}"] = np.where(hanging, np.nan, rotation)
         out[f"hip_flexion_{side}"] = _plane_angle(thigh, up, forward, m)
         out[f"hip_abduction_{side}"] = _out_of_plane(thigh, outward)
     trunk = _unit(_joint(p, "NECK") - _joint(p, "ROOT"))

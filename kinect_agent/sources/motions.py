@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from kinect_agent import skeleton
-from kinect_agent.body.kinematics import TYPICAL_LENGTHS, forward_kinematics
+from kinect_agent.body.kinematics import REST_DIRECTIONS, TYPICAL_LENGTHS, forward_kinematics
 from kinect_agent.body.rotations import axis_rotation
 
 CAMERA_HEIGHT_M = 0.80  # Kinect above the floor; the floor is at y = -CAMERA_HEIGHT_M in the camera frame
@@ -72,6 +72,22 @@ class ExerciseSpec:
     angles: tuple[str, ...]  # the defining angle(s) of kinect_agent.body.angles (one per moving side)
     drive: Callable[[dict[str, np.ndarray], np.ndarray, np.ndarray, str], None]  # fills angle channels
     planted: str  # "feet" (both ankles fixed), "right"/"left"/"alternate" (stance foot fixed), "root" (seated)
+    stance: Callable[[np.ndarray, np.ndarray], Stance] | None = None  # both feet on the floor: legs solved by IK
+
+
+@dataclass(frozen=True)
+class Stance:
+    """Where the feet stand and the pelvis goes in an exercise done on both feet (legs then follow by inverse
+    kinematics, so both ankles stay exactly where they stand).
+
+    feet: (T, 2, 3) or (2, 3), the left and right ankles' places relative to where they are standing straight;
+    pelvis: (T, 2) m, body frame, the ROOT's sideways (x, the subject's left) and forward (z) shift;
+    knee: (T, 2) degrees, the least flexion of the left and right knee: the pelvis stands as high as both allow.
+    """
+
+    feet: np.ndarray
+    pelvis: np.ndarray
+    knee: np.ndarray
 
 
 # Angle channels (degrees, (T,) each) filled by the drivers; all start at a neutral value for the pose.
@@ -79,7 +95,10 @@ CHANNELS = (
     "sho_flex_L", "sho_flex_R", "sho_abd_L", "sho_abd_R", "elb_L", "elb_R",
     "hip_flex_L", "hip_flex_R", "hip_abd_L", "hip_abd_R", "knee_L", "knee_R",
     "trunk_lean", "trunk_side", "neck_nod",
+    "sho_plane_L", "sho_plane_R", "sho_rot_L", "sho_rot_R",
 )  # fmt: skip
+# sho_plane: the plane the arm is raised in (sho_abd), turned forward from the frontal plane (scaption: 30-45°);
+# sho_rot: the upper arm's rotation about its own axis, external (+) or internal (−), degrees.
 
 
 def _drive_shoulder_abduction(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndarray, pose: str) -> None:
@@ -142,6 +161,116 @@ def _drive_side_step(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndarray, 
     ch["trunk_side"] += 0.25 * (sR - sL)  # lean away from the lifted leg
 
 
+# --- The UI-PRMD movements (Vakanski et al. 2018, m01-m10). Ranges, timing and the moving side follow the recordings
+# of s01-s05 (Kinect v2 and Vicon; bench/README.md, "Simulated UI-PRMD movements"): one side moves, the right one.
+
+
+def _drive_deep_squat(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndarray, pose: str) -> None:
+    # The legs come from _stance_deep_squat; the trunk leans forward (UI-PRMD m01: 30-45°), arms forward to balance.
+    u = 0.5 * (sL + sR) / 120.0
+    ch["trunk_lean"] += 65.0 * u  # at the upper spine: the trunk NECK-ROOT leans about half as much
+    ch["sho_flex_L"] += 80.0 * u
+    ch["sho_flex_R"] += 80.0 * u
+
+
+def _stance_deep_squat(sL: np.ndarray, sR: np.ndarray) -> Stance:
+    # Feet a little wider than the hips; the hips sit back as the knees bend to 120-130° (m01 Vicon: 125°).
+    s = 0.5 * (sL + sR)
+    u = s / 120.0
+    feet = np.array([[0.07, 0.0, 0.0], [-0.07, 0.0, 0.0]])
+    pelvis = np.column_stack([np.zeros_like(u), -0.30 * u])
+    return Stance(feet, pelvis, np.column_stack([s, s]))
+
+
+def _drive_trunk_upright(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndarray, pose: str) -> None:
+    # Inline lunge: the legs come from its stance; the trunk stays nearly upright (m03 Vicon: 10-16°).
+    ch["trunk_lean"] += 0.08 * 0.5 * (sL + sR)
+
+
+def _stance_inline_lunge(sL: np.ndarray, sR: np.ndarray) -> Stance:
+    # Right foot in front (it stays planted), both feet on one line, 0.8-0.9 m apart (m03: 0.85 m); the pelvis goes
+    # straight down, both knees bend to about 90° (m03 Vicon: front 103°, back 77°; Kinect 50-170°), the back knee
+    # stopping short of the floor.
+    s = 0.5 * (sL + sR)
+    feet = np.tile([[-0.06, 0.0, -0.48], [0.06, 0.0, 0.48]], (s.shape[0], 1, 1))
+    feet[:, 0, 1] = 0.09 * s / 82.0  # the back heel rises as the back knee goes down; the foot stands on its toes
+    pelvis = np.zeros((s.shape[0], 2))
+    return Stance(feet, pelvis, np.column_stack([8.0 + s, 8.0 + s]))
+
+
+def _drive_side_lunge(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndarray, pose: str) -> None:
+    # The legs come from _stance_side_lunge; the trunk leans forward as the hips sit back (m04 Vicon: 46°).
+    u = sR / 84.0
+    ch["trunk_lean"] += 60.0 * u  # at the upper spine: the trunk NECK-ROOT leans about half as much
+    ch["sho_flex_L"] += 45.0 * u
+    ch["sho_flex_R"] += 45.0 * u
+
+
+def _stance_side_lunge(sL: np.ndarray, sR: np.ndarray) -> Stance:
+    # Feet wide apart (m04: 0.8-0.9 m between the ankles); the pelvis moves to the right and back while the right knee
+    # bends to about 90° (m04 Vicon: 80°) and the left leg stays nearly straight (13-35°).
+    u = sR / 84.0
+    feet = np.array([[0.30, 0.0, 0.0], [-0.30, 0.0, 0.0]])
+    pelvis = np.column_stack([-0.36 * u, -0.12 * u])
+    return Stance(feet, pelvis, np.column_stack([np.full_like(sR, 6.0), 6.0 + sR]))
+
+
+def _drive_hurdle_step(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndarray, pose: str) -> None:
+    # The right knee comes up and forward (m02 Vicon: hip 113°, knee 103°), a little out to clear the hurdle.
+    ch["hip_flex_R"] += sR
+    ch["knee_R"] += 0.95 * sR
+    ch["hip_abd_R"] += 0.08 * sR
+    ch["trunk_lean"] -= 0.04 * sR
+
+
+def _drive_straight_leg_raise(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndarray, pose: str) -> None:
+    # The straight right leg swings forward (m06: 70-105°), the knee bending a little at the top (Vicon: 11 -> 31°).
+    ch["hip_flex_R"] += sR
+    ch["knee_R"] += 0.12 * sR
+    ch["trunk_lean"] -= 0.05 * sR
+
+
+IDLE_ELBOW_DEG = 22.0  # the idle arm's elbow while the other arm exercises (m07-m10 Vicon s01: 22-29°)
+
+
+def _drive_right_abduction(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndarray, pose: str) -> None:
+    # The right arm out to the side and up (m07: 150-170°), thumb up: the arm turns outwards as it rises.
+    ch["elb_L"][:] = IDLE_ELBOW_DEG
+    ch["sho_abd_R"] += sR
+    ch["sho_rot_R"] += 0.3 * sR
+    ch["elb_R"] += 0.04 * sR
+    ch["trunk_side"] += 0.03 * sR  # a slight lean away at the top
+
+
+def _drive_right_extension(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndarray, pose: str) -> None:
+    # The straight right arm backwards (m08: shoulder flexion 0 -> -45 to -65°).
+    ch["elb_L"][:] = IDLE_ELBOW_DEG
+    ch["sho_flex_R"] -= sR
+    ch["trunk_lean"] += 0.06 * sR
+
+
+ROTATION_REST_DEG = -10.0  # m09: the forearm rests just below pointing forward, then turns up (Vicon s01: -8 -> 106°)
+
+
+def _drive_right_rotation(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndarray, pose: str) -> None:
+    # The right upper arm held out to the side (m09: 70-95°), the elbow at a right angle (Vicon: 66-74°, Kinect 60-98°);
+    # the forearm turns about the upper arm, from forward up to vertical and back.
+    ch["sho_abd_R"][:] = 88.0
+    ch["elb_R"][:] = 90.0
+    ch["elb_L"][:] = IDLE_ELBOW_DEG
+    ch["sho_rot_R"] += ROTATION_REST_DEG + sR
+
+
+def _drive_right_scaption(ch: dict[str, np.ndarray], sL: np.ndarray, sR: np.ndarray, pose: str) -> None:
+    # The right arm raised in the scapular plane, 40° forward of the side (m10: flexion and abduction both reach
+    # 90-115°), thumb up.
+    ch["sho_plane_R"] += 40.0
+    ch["elb_L"][:] = IDLE_ELBOW_DEG
+    ch["sho_abd_R"] += sR
+    ch["sho_rot_R"] += 0.2 * sR
+    ch["elb_R"] += 0.04 * sR
+
+
 SPECS: dict[str, ExerciseSpec] = {
     s.slug: s
     for s in (
@@ -160,6 +289,23 @@ SPECS: dict[str, ExerciseSpec] = {
                      "left"),
         ExerciseSpec("side_step", ("standing",), 2.6, 28.0, 0.05, ("hip_abduction_L", "hip_abduction_R"),
                      _drive_side_step, "alternate"),
+        ExerciseSpec("deep_squat", ("standing",), 2.6, 120.0, 0.05, ("knee_flexion_L", "knee_flexion_R"),
+                     _drive_deep_squat, "feet", _stance_deep_squat),
+        ExerciseSpec("hurdle_step", ("standing",), 2.4, 100.0, 0.05, ("hip_flexion_R",), _drive_hurdle_step, "left"),
+        ExerciseSpec("inline_lunge", ("standing",), 2.5, 82.0, 0.05, ("knee_flexion_L", "knee_flexion_R"),
+                     _drive_trunk_upright, "right", _stance_inline_lunge),
+        ExerciseSpec("side_lunge", ("standing",), 2.9, 84.0, 0.05, ("knee_flexion_R",), _drive_side_lunge, "feet",
+                     _stance_side_lunge),
+        ExerciseSpec("standing_active_straight_leg_raise", ("standing",), 2.2, 75.0, 0.05, ("hip_flexion_R",),
+                     _drive_straight_leg_raise, "left"),
+        ExerciseSpec("standing_shoulder_abduction", ("standing",), 2.6, 155.0, 0.05, ("shoulder_abduction_R",),
+                     _drive_right_abduction, "feet"),
+        ExerciseSpec("standing_shoulder_extension", ("standing",), 2.2, 55.0, 0.08, ("shoulder_flexion_R",),
+                     _drive_right_extension, "feet"),
+        ExerciseSpec("standing_shoulder_rotation", ("standing",), 2.6, 100.0, 0.05, ("shoulder_rotation_R",),
+                     _drive_right_rotation, "feet"),
+        ExerciseSpec("standing_shoulder_scaption", ("standing",), 2.2, 100.0, 0.05, ("shoulder_abduction_R",),
+                     _drive_right_scaption, "feet"),
     )
 }  # fmt: skip
 EXERCISES: tuple[str, ...] = tuple(SPECS)
@@ -244,6 +390,9 @@ def _sway(rng: np.random.Generator, t: np.ndarray, amplitude: float, n: int = 3)
     return amplitude * wave / np.sum(weights)
 
 
+DORSIFLEXION_MAX_DEG = 35.0  # the shank's forward tilt over a flat foot (ankle dorsiflexion), at most
+
+
 def local_rotations(ch: dict[str, np.ndarray], rng: np.random.Generator, t: np.ndarray) -> np.ndarray:
     """Returns R_local (T, 19, 3, 3) from the angle channels (degrees), with small natural wrist/ankle/neck motion."""
     T = t.shape[0]
@@ -267,8 +416,11 @@ def local_rotations(ch: dict[str, np.ndarray], rng: np.random.Generator, t: np.n
     for child in ("HEAD", "SHO_L", "SHO_R"):
         R[:, bone(child)] = neck
     # Shoulders and hips (3 DoF each), elbows and knees (hinges), wrists and ankles (2 DoF).
-    R[:, bone("ELB_L")] = Rz(rad["sho_abd_L"]) @ Rx(-rad["sho_flex_L"])
-    R[:, bone("ELB_R")] = Rz(-rad["sho_abd_R"]) @ Rx(-rad["sho_flex_R"])
+    # Shoulder: raised by sho_abd in a plane turned forward by sho_plane (Ry(∓plane)·Rz(±abd)·Ry(±plane) keeps the
+    # arm's own axis when the plane turns), flexed forward, then turned about its own axis by sho_rot.
+    pL, pR = rad["sho_plane_L"], rad["sho_plane_R"]
+    R[:, bone("ELB_L")] = Ry(-pL) @ Rz(rad["sho_abd_L"]) @ Ry(pL) @ Rx(-rad["sho_flex_L"]) @ Ry(rad["sho_rot_L"])
+    R[:, bone("ELB_R")] = Ry(pR) @ Rz(-rad["sho_abd_R"]) @ Ry(-pR) @ Rx(-rad["sho_flex_R"]) @ Ry(-rad["sho_rot_R"])
     R[:, bone("WRI_L")] = Rx(-rad["elb_L"])
     R[:, bone("WRI_R")] = Rx(-rad["elb_R"])
     for side in "LR":
@@ -279,8 +431,9 @@ def local_rotations(ch: dict[str, np.ndarray], rng: np.random.Generator, t: np.n
     for side, sign in (("L", 1.0), ("R", -1.0)):
         knee = rad[f"knee_{side}"]
         R[:, bone(f"ANK_{side}")] = Rx(knee)
-        # Ankle (2 DoF): keep the foot flat while the shank tilts; the foot stays level when the leg lifts.
-        shank = knee - rad[f"hip_flex_{side}"]
+        # Ankle (2 DoF): keep the foot flat while the shank tilts forward up to the ankle's reach (then the heel rises:
+        # the back foot of a lunge); the foot stays level when the leg lifts.
+        shank = np.minimum(knee - rad[f"hip_flex_{side}"], np.radians(DORSIFLEXION_MAX_DEG))
         R[:, bone(f"FOO_{side}")] = Rx(-shank) @ Ry(sign * np.radians(5.0) + 0.0 * shank)
     return R
 
@@ -300,6 +453,8 @@ def truth_positions(
     T = sched.t.shape[0]
     ch = _neutral(pose, T)
     spec.drive(ch, sched.sL, sched.sR, pose)
+    if spec.stance is not None:
+        _stand_legs(ch, spec.stance(sched.sL, sched.sR), body)
     ch["trunk_lean"] += _sway(rng, sched.t, 1.5)
     R_local = local_rotations(ch, rng, sched.t)
     R_root = np.broadcast_to(_facing(view_deg), (T, 3, 3))
@@ -316,6 +471,51 @@ def truth_positions(
     sway = np.stack([_sway(rng, sched.t, 0.01), np.zeros(T), _sway(rng, sched.t, 0.01)], axis=1)
     root = root + sway
     return forward_kinematics(root, R_root, np.broadcast_to(body.lengths, (T, 19)), R_local)
+
+
+def leg_ik(v: np.ndarray, thigh: float, shank: float, side: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Returns (hip flexion, hip abduction, knee flexion) (T,) degrees, in the channels' conventions, that put the
+    ankle at v: (T, 3) m, hip -> ankle in the body frame; thigh, shank: m. A target beyond reach gives a straight leg
+    towards it."""
+    D = np.minimum(np.linalg.norm(v, axis=-1), thigh + shank)
+    cos_k = (D**2 - thigh**2 - shank**2) / (2.0 * thigh * shank)
+    knee = np.arccos(np.clip(cos_k, -1.0, 1.0))
+    b = np.arctan2(v[:, 0], -v[:, 1])  # the leg's plane tilted sideways: Rz(b)
+    y_rot = -np.hypot(v[:, 0], v[:, 1])
+    along_y, along_z = -(thigh + shank * np.cos(knee)), -shank * np.sin(knee)  # the leg in its own plane
+    flex = np.arctan2(along_z, along_y) - np.arctan2(v[:, 2], y_rot)
+    flex = (flex + np.pi) % (2.0 * np.pi) - np.pi
+    abd = b if side == "L" else -b
+    return np.degrees(flex), np.degrees(abd), np.degrees(knee)
+
+
+def _stand_legs(ch: dict[str, np.ndarray], stance: Stance, body: Body) -> None:
+    """Sets the hip and knee channels so that both ankles stand where `stance` puts them (units of leg length)."""
+    T = stance.knee.shape[0]
+    hips, straight, lengths = {}, {}, {}
+    for side in "LR":
+        k_hip = bone(f"HIP_{side}")
+        hips[side] = body.lengths[k_hip] * REST_DIRECTIONS[k_hip]  # (3,) ROOT -> hip, body frame
+        lengths[side] = (float(body.lengths[bone(f"KNE_{side}")]), float(body.lengths[bone(f"ANK_{side}")]))
+        straight[side] = hips[side] + np.array([0.0, -sum(lengths[side]), 0.0])
+    leg = 0.5 * (sum(lengths["L"]) + sum(lengths["R"]))
+    feet = np.broadcast_to(stance.feet, (T, 2, 3))
+    ankles = {side: straight[side] + leg * feet[:, "LR".index(side)] for side in "LR"}  # (T, 3) each
+    # The pelvis height: the highest at which each knee bends at least its stance.knee.
+    pelvis = np.zeros((T, 3))
+    pelvis[:, 0], pelvis[:, 2] = leg * stance.pelvis[:, 0], leg * stance.pelvis[:, 1]
+    heights = []
+    for i, side in enumerate("LR"):
+        thigh, shank = lengths[side]
+        k = np.radians(stance.knee[:, i])
+        reach = np.sqrt(thigh**2 + shank**2 + 2.0 * thigh * shank * np.cos(k))  # hip-ankle distance at that knee
+        flat = ankles[side][:, [0, 2]] - hips[side][[0, 2]] - pelvis[:, [0, 2]]  # (T, 2) horizontal hip -> ankle
+        drop = np.sqrt(np.maximum(reach**2 - np.sum(flat**2, axis=1), 0.0))
+        heights.append(ankles[side][:, 1] - hips[side][1] + drop)
+    pelvis[:, 1] = np.min(heights, axis=0)
+    for side in "LR":
+        flex, abd, knee = leg_ik(ankles[side] - hips[side] - pelvis, *lengths[side], side)
+        ch[f"hip_flex_{side}"], ch[f"hip_abd_{side}"], ch[f"knee_{side}"] = flex, abd, knee
 
 
 def _stance_weights(spec: ExerciseSpec, sched: Schedule) -> np.ndarray:

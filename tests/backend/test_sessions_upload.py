@@ -367,3 +367,17 @@ def test_an_upload_cut_off_by_the_client_is_an_answer_not_a_server_error() -> No
 
     with pytest.raises(UploadCutOff, match="cut off after 108 bytes"):
         asyncio.run(read_limited(body(), 10_000))
+
+
+@pytest.mark.parametrize("slug", ["deep_squat", "hurdle_step", "inline_lunge", "side_lunge",
+                                  "standing_active_straight_leg_raise", "standing_shoulder_abduction",
+                                  "standing_shoulder_extension", "standing_shoulder_rotation",
+                                  "standing_shoulder_scaption"])  # fmt: skip
+def test_a_simulated_uiprmd_set_filtered_by_the_agent_is_analysed_with_its_count(post, patient_device, slug):
+    """The home agent's file of a simulated UI-PRMD movement (raw, the pipeline's filtered output, angle SDs)."""
+    _, headers = patient_device
+    response = post(khs_files.make_processed_khs(slug, 6, seed=3), headers)
+    assert response.status_code == 201, response.text
+    body = response.json()
+    assert body["exercise_slug"] == slug and body["status"] == "processed", body["error"]
+    assert body["metrics"]["repetitions"] == 6, body["metrics"]["repetitions"]

@@ -75,3 +75,65 @@ def test_the_voice_control_and_the_demonstration_speak_the_patients_language(
         expect(page.locator(".demo-view")).to_have_text(view, timeout=30_000)
         assert page.evaluate("I18n.tag") == locale
         shot(page, f"patient-{locale}")
+
+
+# The UI-PRMD movements of the library and the view each needs (side: sagittal plane, else front).
+UI_PRMD_VIEWS = {
+    "deep_squat": "side", "hurdle_step": "side", "inline_lunge": "side", "side_lunge": "front",
+    "standing_active_straight_leg_raise": "side", "standing_shoulder_abduction": "front",
+    "standing_shoulder_extension": "side", "standing_shoulder_rotation": "front", "standing_shoulder_scaption": "front",
+}  # fmt: skip
+
+
+def _patient_with_uiprmd_plan(base: str) -> str:
+    """Creates a patient whose plan holds every UI-PRMD movement except sit to stand; returns the e-mail."""
+    import time
+    import uuid
+
+    from tests.frontend.test_live_set import PASSWORD
+
+    email = f"uiprmd-{uuid.uuid4().hex[:8]}@example.org"
+    admin, headers = api_client(base, "admin@demo.clinic")
+    try:
+        r = admin.post("/api/v1/users", json={"email": email, "role": "patient", "password": PASSWORD,
+                                              "full_name": "Una Prmd"}, headers=headers)  # fmt: skip
+        assert r.status_code == 201, r.text
+        items = [
+            {"exercise_slug": slug, "sets": 1, "repetitions": 8, "frequency_per_week": 3} for slug in UI_PRMD_VIEWS
+        ]
+        plan = {"title": "UI-PRMD", "start_date": time.strftime("%Y-%m-%d"), "notes": "", "items": items}
+        r = admin.post(f"/api/v1/patients/{r.json()['id']}/plans", json=plan, headers=headers)
+        assert r.status_code == 201, r.text
+    finally:
+        admin.close()
+    return email
+
+
+@pytest.mark.parametrize("width,height", [(1366, 900), (768, 1024), (390, 844)])
+def test_every_uiprmd_movement_shows_a_moving_figure_in_the_view_it_needs(browser, live_server, width, height):
+    from tests.frontend.test_live_set import PASSWORD
+
+    email = _patient_with_uiprmd_plan(live_server.url)
+    with open_page(browser, live_server.url, width, height) as page:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        items = page.locator("#plan li[data-exercise]")
+        expect(items.first).to_be_visible()
+        assert items.count() == len(UI_PRMD_VIEWS)
+        for i in range(items.count()):
+            li = items.nth(i)
+            slug = li.get_attribute("data-exercise")
+            canvas = li.locator("canvas.demo-figure")
+            expect(canvas).to_have_attribute("data-view", UI_PRMD_VIEWS[slug])
+            assert int(canvas.get_attribute("data-frames")) >= 30, slug
+            first = canvas.evaluate("(c) => c.toDataURL()")
+            page.wait_for_timeout(700)
+            assert canvas.evaluate("(c) => c.toDataURL()") != first, f"the figure of {slug} does not move"
+        shot(page, f"demonstration-uiprmd-{width}")
+        assert not page.js_errors, page.js_errors
+    with open_page(browser, live_server.url, width, height, reduced_motion="reduce") as page:  # still, at the peak
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        canvases = page.locator("#plan li[data-exercise] canvas.demo-figure[data-frames]")
+        expect(canvases).to_have_count(len(UI_PRMD_VIEWS))
+        shot(page, f"demonstration-uiprmd-peak-{width}")

@@ -297,3 +297,26 @@ def test_simulated_side_steps_at_30_degrees_after_the_pipeline_give_exact_count(
     names = EXERCISES["side_step"].defining_angles
     reps = count_repetitions(filtered.t, counting_angles(smoothed, names), names).repetitions
     assert len(reps) == 5, [(round(r.start_s, 1), round(r.amplitude_deg), r.side) for r in reps]
+
+
+UI_PRMD_SIMULATED = ("deep_squat", "hurdle_step", "inline_lunge", "side_lunge", "standing_active_straight_leg_raise",
+                     "standing_shoulder_abduction", "standing_shoulder_extension", "standing_shoulder_rotation",
+                     "standing_shoulder_scaption")  # fmt: skip
+
+
+@pytest.mark.parametrize("slug", UI_PRMD_SIMULATED)
+@pytest.mark.parametrize("seed", [3, 4, 5, 6])
+def test_simulated_uiprmd_movement_gives_exact_count_over_seeds(slug: str, seed: int) -> None:
+    reps = 3 + seed
+    result = _count(simulate_truth(slug, reps, seed=seed), slug)
+    assert len(result.repetitions) == reps, f"{slug} seed {seed}: {[r.start_s for r in result.repetitions]}"
+    sides = {r.side for r in result.repetitions}
+    assert sides == ({"both"} if slug in ("deep_squat", "inline_lunge") else {"right"}), f"{slug}: sides {sides}"
+
+
+@pytest.mark.parametrize("slug", UI_PRMD_SIMULATED)
+@pytest.mark.parametrize("seed", [1, 2])
+def test_noisy_uiprmd_movement_after_pipeline_gives_exact_count(slug: str, seed: int) -> None:
+    measured, _ = noisy(slug, 8, seed)
+    result = _count(process(measured).filtered, slug)
+    assert len(result.repetitions) == 8, f"{slug} seed {seed}: {[r.start_s for r in result.repetitions]}"

@@ -95,3 +95,70 @@ def test_metadata_of_measured_and_truth():
 def test_bad_arguments_are_refused_clearly(kwargs, message):
     with pytest.raises(SimulationError, match=message):
         simulate(**kwargs)
+
+
+UI_PRMD_MOTIONS = ("deep_squat", "hurdle_step", "inline_lunge", "side_lunge", "standing_active_straight_leg_raise",
+                   "standing_shoulder_abduction", "standing_shoulder_extension", "standing_shoulder_rotation",
+                   "standing_shoulder_scaption")  # fmt: skip
+
+
+def test_the_uiprmd_movements_are_simulated():
+    assert set(UI_PRMD_MOTIONS) <= set(EXERCISES)
+
+
+@pytest.mark.parametrize("exercise", ["deep_squat", "side_lunge", "inline_lunge"])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_two_footed_exercise_keeps_its_feet_where_they_stand(exercise, seed):
+    """Both ankles stay put (the root's 1 cm postural sway aside); the back heel of a lunge only rises."""
+    rec = simulate_truth(exercise, 3, seed=seed)
+    at = skeleton.INDEX
+    for ankle in ("ANK_L", "ANK_R"):
+        moved = rec.positions[:, at[ankle]] - rec.positions[0, at[ankle]]  # (T, 3) m
+        horizontal = np.linalg.norm(moved[:, [0, 2]], axis=1).max()
+        assert horizontal < 0.025, f"{exercise} {ankle} slides {horizontal:.3f} m"
+        rise = (-0.01, 0.09) if (exercise, ankle) == ("inline_lunge", "ANK_L") else (-0.01, 0.01)
+        assert rise[0] < moved[:, 1].min() and moved[:, 1].max() < rise[1], f"{exercise} {ankle} height"
+    floor = -motions.CAMERA_HEIGHT_M
+    assert rec.positions[:, :, 1].min() > floor, f"{exercise}: a joint under the floor"
+
+
+@pytest.mark.parametrize(("exercise", "angle", "low", "high"), [
+    ("deep_squat", "knee_flexion_L", 100, 140), ("deep_squat", "knee_flexion_R", 100, 140),
+    ("hurdle_step", "hip_flexion_R", 80, 120), ("inline_lunge", "knee_flexion_R", 75, 110),
+    ("side_lunge", "knee_flexion_R", 70, 105), ("standing_active_straight_leg_raise", "hip_flexion_R", 60, 90),
+    ("standing_shoulder_abduction", "shoulder_abduction_R", 130, 175),
+    ("standing_shoulder_extension", "shoulder_flexion_R", -70, -40),
+    ("standing_shoulder_rotation", "shoulder_rotation_R", 75, 110),
+    ("standing_shoulder_scaption", "shoulder_abduction_R", 90, 125),
+])  # fmt: skip
+def test_a_uiprmd_movement_reaches_the_recorded_range_on_its_side(exercise, angle, low, high):
+    """Peaks within the range UI-PRMD s01-s05 reach (Kinect v2 and Vicon); the left side's same angle stays still in
+    the one-sided movements (UI-PRMD moves the right side)."""
+    rec = simulate_truth(exercise, 4, seed=5)
+    angles = joint_angles(rec.positions)
+    x = angles[angle]
+    peak = np.nanmin(x) if high < 0 else np.nanmax(x)
+    assert low <= peak <= high, f"{exercise}: {angle} peaks at {peak:.0f}°"
+    one_sided = exercise not in ("deep_squat", "inline_lunge", "side_lunge")
+    if one_sided:
+        other = angles[angle[:-1] + "L"]
+        other = other[np.isfinite(other)]  # the rotation of the hanging left arm is undefined (NaN)
+        assert other.size == 0 or np.ptp(other) < 10.0, f"{exercise}: the left side moves"
+
+
+STANDING = ("shoulder_abduction", "squat", "side_step", "deep_squat", "hurdle_step", "side_lunge",
+            "standing_shoulder_rotation", "standing_shoulder_scaption")  # fmt: skip
+
+
+@pytest.mark.parametrize("exercise", STANDING)
+def test_a_standing_knee_reads_nearly_straight_through_the_simulated_kinect(exercise):
+    """Before the first repetition (median over the frames, then over 3 seeds). UI-PRMD s01-s05 Kinect v2 standing
+    knees read 1-6°; the simulated Kinect read 26-39° when the knee's and ankle's offsets leaned towards their
+    children instead of with the hip."""
+    medians = []
+    for seed in (0, 1, 2):
+        measured, truth, _ = simulate(exercise, 2, seed=seed)
+        idle = truth.t < min(0.8, truth.meta.extra["rep_bounds_s"][0][0])
+        a = joint_angles(measured.positions)
+        medians.append(np.nanmedian(np.r_[a["knee_flexion_L"][idle], a["knee_flexion_R"][idle]]))
+    assert np.median(medians) < 12.0, f"{exercise}: idle knee {np.round(medians, 1)}°"
