@@ -5,7 +5,8 @@ State (n,): root position (3, m), segment lengths (19, m; only while they are es
 kinematics of every sigma point. Transition: the random walk, with the variance ceiling of predict_random_walk.
 Update: UnscentedKalmanFilter.gated_update (per-joint innovation gate); when numba is installed and the model runs
 the compiled forward kinematics, one fused kernel does the same step (_ukf_numba.chain_step; numpy stays the
-reference and the fallback when the kernel finds a covariance that is not positive definite).
+reference and the fallback when the kernel finds a covariance that is not positive definite). run_frames runs a
+stretch of a pass (predict, re-acquisition, update) in one compiled loop, the same steps as calling them per frame.
 """
 
 from __future__ import annotations
