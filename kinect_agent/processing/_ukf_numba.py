@@ -309,6 +309,86 @@ def _add_capped(P, diag, q, ceiling):  # pragma: no cover - compiled
         P[d, d] += min(q[i], max(ceiling[i] - P[d, d], 0.0))
 
 
+def _run_frames(
+    x, P, x_prior, P_prior, obs, order, q_steps, i0, i1, noise, kern, restart, run, used, xs, Ps
+):  # pragma: no cover - compiled
+    """Frames order[i0:i1] of one filter pass (pipeline._run_pass), in place: per frame the capped random-walk
+    predict (add_capped with q = Q·q_steps[i], none for i = 0), the re-acquisition of lost joints, chain_step, the
+    gate's bookkeeping, and x, P stored when xs has rows. The same operations as the pass's Python loop.
+
+    obs = (z (T, 60) m, observed (T, 60) bool, R_diag (T, 60) m², present (T, J) bool, n_present (T,) int,
+    any_observed (T,) bool).
+    noise = (Q diagonal (n,), diag indices (n,), ceiling (n,)). kern = chain_step's (w, gate, fixed_lengths, n_len,
+    rest, R_ref, tabs). restart = (start (T, 36) root m + theta rad, n_frames (0: never), placing (J, 36) int,
+    -1 padded: the entries of root + theta that place each joint). run (J,) int: consecutive gated frames, updated.
+    Returns (i, gated): i = i1 when done, or the index of a frame whose chain_step found a covariance that is not
+    positive definite (x, P as before its update, x_prior and P_prior set; the caller updates it in numpy).
+    """
+    z, observed, R_diag, present, n_present, any_observed = obs
+    qd, diag, ceiling = noise
+    w, gate, fixed_lengths, n_len, rest, R_ref, tabs = kern
+    start, restart_n, placing = restart
+    n = x.shape[0]
+    J = run.shape[0]
+    n_th = start.shape[1]
+    store = xs.shape[0] > 0
+    gated = 0
+    lost = np.zeros(J, dtype=np.bool_)
+    mark = np.zeros(n_th, dtype=np.bool_)
+    for i in range(i0, i1):
+        k = order[i]
+        if i:
+            scale = q_steps[i]
+            for m in range(diag.shape[0]):
+                d = diag[m]
+                P[d, d] += min(qd[m] * scale, max(ceiling[m] - P[d, d], 0.0))
+        if any_observed[k]:
+            if restart_n > 0:
+                any_lost = False
+                for j in range(J):
+                    lost[j] = present[k, j] and run[j] >= restart_n
+                    any_lost = any_lost or lost[j]
+                if any_lost:
+                    mark[:] = False
+                    for j in range(J):
+                        if lost[j]:
+                            for c in range(placing.shape[1]):
+                                if placing[j, c] >= 0:
+                                    mark[placing[j, c]] = True
+                    for e in range(n_th):
+                        if mark[e]:
+                            idx = e if e < 3 else e + n - n_th
+                            x[idx] = start[k, e]
+                            for c in range(n):
+                                P[idx, c] = 0.0
+                                P[c, idx] = 0.0
+                    for e in range(n_th):
+                        if mark[e]:
+                            idx = e if e < 3 else e + n - n_th
+                            P[idx, idx] = ceiling[idx]
+                    for j in range(J):
+                        if lost[j]:
+                            run[j] = 0
+            x_prior[:] = x
+            P_prior[:, :] = P
+            status = _chain_step_c(x, P, z[k], observed[k], R_diag[k], w, gate, fixed_lengths, n_len, rest, R_ref,
+                                   tabs, used)  # fmt: skip
+            if status != OK:
+                return i, gated
+            n_used = 0
+            for j in range(J):
+                if used[j]:
+                    n_used += 1
+                    run[j] = 0
+                elif present[k, j]:
+                    run[j] += 1
+            gated += n_present[k] - n_used
+        if store:
+            xs[k, :] = x
+            Ps[k, :, :] = P
+    return i1, gated
+
+
 if AVAILABLE:
     # error_model="numpy": no zero-division checks (loops stay vectorisable); "contract": fused multiply-adds.
     _jit = numba.njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"})
@@ -316,7 +396,9 @@ if AVAILABLE:
     _sincos_c = _inline(_sincos)
     _compose_c = _inline(_compose)
     _sigma_positions_c = _jit(_sigma_positions)
-    chain_step = _jit(_chain_step)
+    chain_step = _chain_step_c = _jit(_chain_step)
     add_capped = _jit(_add_capped)
+    # The pass loop: no fastmath (the predict's product and sums as numpy does them); chain_step keeps its flags.
+    run_frames = numba.njit(cache=True, nogil=True, error_model="numpy")(_run_frames)
 else:  # pragma: no cover - callers check AVAILABLE first
-    chain_step = add_capped = None  # type: ignore[assignment]
+    chain_step = add_capped = run_frames = None  # type: ignore[assignment]

@@ -5,10 +5,13 @@ State (n,): root position (3, m), segment lengths (19, m; only while they are es
 kinematics of every sigma point. Transition: the random walk, with the variance ceiling of predict_random_walk.
 Update: UnscentedKalmanFilter.gated_update (per-joint innovation gate); when numba is installed and the model runs
 the compiled forward kinematics, one fused kernel does the same step (_ukf_numba.chain_step; numpy stays the
-reference and the fallback when the kernel finds a covariance that is not positive definite).
+reference and the fallback when the kernel finds a covariance that is not positive definite). run_frames runs a
+stretch of a pass (predict, re-acquisition, update) in one compiled loop, the same steps as calling them per frame.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -46,6 +49,34 @@ def _placing_entries() -> tuple[np.ndarray, ...]:
 
 
 _PLACING = _placing_entries()
+# _PLACING as one table for the compiled pass (_ukf_numba.run_frames): (J, 36) int64, -1 padded.
+_PLACING_TABLE = np.full((skeleton.J, N_ROOT + N_TH), -1, dtype=np.int64)
+for _j, _entries in enumerate(_PLACING):
+    _PLACING_TABLE[_j, : len(_entries)] = _entries
+
+
+@dataclass(frozen=True)
+class FrameData:
+    """A pass's observations, prepared once: z (T, 60) m, observed (T, 60) bool, R_diag (T, 60) m², present (T, J)
+    bool (all three axes observed), n_present (T,) int, any_observed (T,) bool."""
+
+    z: np.ndarray
+    observed: np.ndarray
+    R_diag: np.ndarray
+    present: np.ndarray
+    n_present: np.ndarray
+    any_observed: np.ndarray
+
+    @classmethod
+    def of(cls, z: np.ndarray, observed: np.ndarray, R_diag: np.ndarray) -> FrameData:
+        """Returns the frame data of z (T, 60), observed (T, 60), R_diag (T, 60)."""
+        present = np.all(observed.reshape(len(observed), skeleton.J, 3), axis=2)
+        return cls(z, observed, R_diag, present, present.sum(axis=1), np.any(observed, axis=1))
+
+    def as_tuple(self) -> tuple[np.ndarray, ...]:
+        """Returns the arrays C-contiguous, in the order _ukf_numba.run_frames reads them."""
+        return tuple(np.ascontiguousarray(a) for a in (self.z, self.observed, self.R_diag, self.present,
+                                                        self.n_present, self.any_observed))  # fmt: skip
 
 
 class ChainFilter(UnscentedKalmanFilter):
@@ -180,6 +211,47 @@ class ChainFilter(UnscentedKalmanFilter):
             np.where(np.isfinite(z), z, 0.0), np.repeat(groups, 3), R_diag, gate, at_mean=self.innovation_at_mean
         )
 
+    def run_frames(
+        self,
+        frames: FrameData,
+        order: np.ndarray,
+        q_steps: np.ndarray,
+        span: tuple[int, int],
+        gate_chi2: float | None,
+        restart: tuple[np.ndarray, int] | None,
+        run: np.ndarray,
+        store: tuple[np.ndarray, np.ndarray] | None,
+    ) -> tuple[int, int]:
+        """Runs frames order[i0:i1] (span) of a pass in one compiled loop (_ukf_numba.run_frames), updating x, P,
+        x_prior, P_prior and run (J,) int, the consecutive gated frames per joint; per frame: predict_random_walk
+        (q_steps[i], none at i = 0), reacquire of joints gated in restart[1] consecutive frames (from restart[0],
+        (T, 36)), update_joints, and x, P into store = (xs (T, n), Ps (T, n, n)) at row order[i].
+
+        The same operations as calling those methods frame by frame (pipeline._run_pass). Needs self.compiled.
+        Returns (i, gated): i = i1, or the first frame whose update the kernel declined (covariance not positive
+        definite; that frame is predicted and re-acquired, and the caller updates it with update_joints);
+        gated: joint samples the gate dropped.
+        """
+        if not self.compiled:
+            raise RuntimeError("run_frames needs the compiled kernels (ChainFilter.compiled)")
+        for name in ("x", "P"):
+            a = getattr(self, name)
+            if not (a.dtype == np.float64 and a.flags.c_contiguous and a.flags.writeable):
+                setattr(self, name, np.array(a, dtype=np.float64))
+        self.x_prior, self.P_prior = self.x.copy(), self.P.copy()
+        start, n_frames = (np.zeros((1, N_ROOT + N_TH)), 0) if restart is None else restart
+        xs, Ps = store if store is not None else (np.empty((0, self.dim_x)), np.empty((0, self.dim_x, self.dim_x)))
+        gate = np.inf if gate_chi2 is None else float(gate_chi2)
+        i, gated = _ukf_numba.run_frames(
+            self.x, self.P, self.x_prior, self.P_prior, frames.as_tuple(), order, q_steps, span[0], span[1],
+            (np.ascontiguousarray(self.Q.diagonal()), self._diag, self.p0_ceiling),
+            (self.kernel_weights, gate, self.fixed_lengths, self.n_len, self.model.rest, self.model.R_ref,
+             km.STEP_TABLES),
+            (start, n_frames, _PLACING_TABLE), run, np.empty(skeleton.J, dtype=bool), xs, Ps,
+        )  # fmt: skip
+        self.y, self.S, self.log_likelihood = np.zeros(0), np.zeros((0, 0)), float("nan")
+        return int(i), int(gated)
+
     def reacquire(self, joints: np.ndarray, start: np.ndarray) -> None:
         """Restarts the state entries that place `joints` from `start` (root (3) m + theta (33) rad, e.g. IK of the
         frame). Their covariance becomes the initial one (p0_ceiling) with no correlation to the rest of the state.
@@ -192,4 +264,4 @@ class ChainFilter(UnscentedKalmanFilter):
         self.P[idx, idx] = self.p0_ceiling[idx]
 
 
-__all__ = ["ChainFilter", "state_dim"]
+__all__ = ["ChainFilter", "FrameData", "state_dim"]

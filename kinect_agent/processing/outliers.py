@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
+from kinect_agent.processing import _outliers_numba
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INFERRED, NOT_TRACKED
@@ -98,6 +99,7 @@ def fit_mixture(
     min_sigma: float = 1e-4,
     min_width: float = 0.0,
     min_rho: float = 1e-6,
+    compiled: bool = True,
 ) -> MixtureFit:
     """Fits the Gaussian + uniform mixture to every column of x by EM (maximum likelihood), vectorised over columns.
 
@@ -107,6 +109,8 @@ def fit_mixture(
     min_width: lower bound of each side of the uniform box (centred on the data's box when it is widened): the
     range a tracking loss can throw a joint over, so clean data cannot make the uniform component look narrow.
     min_rho: lower bound of each Gaussian weight ρ_c (e.g. 0.5: outliers are the minority).
+    compiled: run each iteration's E step and sums in the compiled kernels (_outliers_numba) when numba is
+    installed; the results are the same bit for bit as numpy's (compiled=False).
     """
     x = _as_3d(x)
     if x.ndim != 3:
@@ -135,6 +139,9 @@ def fit_mixture(
     prev = np.full(K, -np.inf)
     loglik = prev
     n_iter = 0
+    if compiled and _outliers_numba.AVAILABLE:
+        return _fit_mixture_compiled(xz, ok, cls, n, n_c, rho, mu, sigma, x1, x2, vol, rho0, max_iter, tol, min_sigma,
+                                     min_rho)  # fmt: skip
     for n_iter in range(1, max_iter + 1):  # noqa: B007 - the count is reported
         rho_s = np.einsum("cnk,ck->nk", onehot, rho)
         g = rho_s * _normal_pdf(xz, mu, sigma)
@@ -154,6 +161,41 @@ def fit_mixture(
     return MixtureFit(rho, mu, sigma, x1, x2, loglik, n_iter, n)
 
 
+def _fit_mixture_compiled(
+    xz: np.ndarray, ok: np.ndarray, cls: np.ndarray, n: np.ndarray, n_c: np.ndarray, rho: np.ndarray, mu: np.ndarray,
+    sigma: np.ndarray, x1: np.ndarray, x2: np.ndarray, vol: np.ndarray, rho0: float, max_iter: int, tol: float,
+    min_sigma: float, min_rho: float,
+) -> MixtureFit:  # fmt: skip
+    """fit_mixture's EM loop with the per-sample work in _outliers_numba's kernels; the (K, D) updates are the same
+    numpy expressions as fit_mixture's, so the results are the same bit for bit."""
+    N, K, D = xz.shape
+    xz = np.ascontiguousarray(xz)
+    cls = np.ascontiguousarray(np.where((cls >= 0) & (cls < len(rho)), cls, -1))  # -1: in no class (weight 0)
+    w = np.empty((N, K))
+    rho_sum = np.empty_like(rho)
+    mu_sum = np.empty((K, D))
+    var_sum = np.empty((K, D))
+    norm_d = _SQRT_2PI**D
+    prev = np.full(K, -np.inf)
+    loglik = prev
+    n_iter = 0
+    for n_iter in range(1, max_iter + 1):  # noqa: B007 - the count is reported
+        norm = np.prod(sigma, axis=-1) * norm_d
+        ll, sw_k = _outliers_numba.em_expectation(xz, ok, cls, rho, mu, sigma, norm, vol, w, rho_sum, mu_sum)
+        loglik = ll / np.maximum(n, 1)
+        sw = sw_k[:, None]
+        rho = np.clip(rho_sum / np.maximum(n_c, 1), max(min_rho, 1e-6), 1.0 - 1e-9)
+        rho = np.where(n_c > 0, rho, rho0)
+        mu = np.where(sw > 0, mu_sum / np.maximum(sw, 1e-300), mu)
+        _outliers_numba.em_spread(xz, ok, w, mu, var_sum)
+        var = var_sum / np.maximum(sw, 1e-300)
+        sigma = np.maximum(np.sqrt(np.where(sw > 0, var, sigma**2)), min_sigma)
+        if np.all(np.abs(loglik - prev) < tol):
+            break
+        prev = loglik
+    return MixtureFit(rho, mu, sigma, x1, x2, loglik, n_iter, n)
+
+
 def _window_frames(rec: Recording, window_s: float) -> int:
     """Returns the odd number of frames covering window_s at the recording's median frame interval (at least 7, so
     that the leave-one-out quadratic has three samples on each side)."""
@@ -162,16 +204,21 @@ def _window_frames(rec: Recording, window_s: float) -> int:
     return max(7, w | 1)
 
 
-def running_median(positions: np.ndarray, w: int) -> np.ndarray:
+def running_median(positions: np.ndarray, w: int, compiled: bool = True) -> np.ndarray:
     """Returns the centred running median over w frames (odd) per joint and axis, ignoring NaN.
 
     positions: (T, J, 3) m, NaN = missing. returns: (T, J, 3) m; NaN where the window holds no sample.
+    compiled: a sorted window slid along each series (_outliers_numba) when numba is installed, the same values.
     """
     T = positions.shape[0]
     half = w // 2
     flat = positions.reshape(T, -1)
     pad = np.full((T + 2 * half, flat.shape[1]), np.nan)
     pad[half : half + T] = flat
+    if compiled and _outliers_numba.AVAILABLE and T > 0:
+        out = np.empty((flat.shape[1], T))
+        _outliers_numba.running_median_kernel(np.ascontiguousarray(pad.T), w, out)
+        return out.T.reshape(positions.shape)
     win = np.sort(sliding_window_view(pad, w, axis=0), axis=-1)  # NaN sort last; (T, 3J, w)
     cnt = np.sum(np.isfinite(win), axis=-1)
     lo = np.clip((cnt - 1) // 2, 0, w - 1)
@@ -183,13 +230,17 @@ def running_median(positions: np.ndarray, w: int) -> np.ndarray:
     return med.reshape(positions.shape)
 
 
-def local_quadratic(t: np.ndarray, positions: np.ndarray, weights: np.ndarray, w: int) -> tuple[np.ndarray, np.ndarray]:
+def local_quadratic(
+    t: np.ndarray, positions: np.ndarray, weights: np.ndarray, w: int, compiled: bool = True
+) -> tuple[np.ndarray, np.ndarray]:
     """Returns (prediction (T, J, 3) m, leverage (T, J)): a weighted local quadratic fit in time per joint and axis
     over a centred window of w frames (odd), tricube kernel in time, evaluated at the centre frame *without* it.
 
     t: (T,) s. positions: (T, J, 3) m, NaN = missing. weights: (T, J) in [0, 1] (e.g. 1 − outlier probability).
     leverage h: Var(prediction) = σ²·h for independent noise of SD σ, so the prediction residual has variance
     σ²·(1 + h); it grows near the ends of the recording and around gaps. NaN where the window holds no sample.
+    compiled: the window sums and the evaluation in _outliers_numba's kernels when numba is installed (no (T, J, w)
+    temporaries), the same values bit for bit.
     """
     T, J, _ = positions.shape
     half = w // 2
@@ -205,17 +256,26 @@ def local_quadratic(t: np.ndarray, positions: np.ndarray, weights: np.ndarray, w
     k = np.nan_to_num(dt / span)  # in [-1, 1]
     kern = np.where(np.isfinite(dt), (1.0 - np.abs(k) ** 3) ** 3, 0.0)
     kern[:, half] = 0.0  # leave the centre frame out
-    Wk = sliding_window_view(wp, w, axis=0) * kern[:, None, :]  # (T, J, w)
     powers = k[..., None] ** np.arange(5)  # (T, w, 5)
-    S = np.einsum("tjw,twm->tjm", Wk, powers)
-    S2 = np.einsum("tjw,twm->tjm", Wk * Wk, powers)
-    B = np.einsum("tjaw,tjw,twm->tjma", sliding_window_view(yp, w, axis=0), Wk, powers[..., :3])  # (T, J, 3, 3)
+    fast = compiled and _outliers_numba.AVAILABLE and T > 0
+    if fast:
+        S, S2, B = np.empty((T, J, 5)), np.empty((T, J, 5)), np.empty((T, J, 3, 3))
+        _outliers_numba.window_sums(wp, yp, np.ascontiguousarray(kern), np.ascontiguousarray(powers), S, S2, B)
+    else:
+        Wk = sliding_window_view(wp, w, axis=0) * kern[:, None, :]  # (T, J, w)
+        S = np.einsum("tjw,twm->tjm", Wk, powers)
+        S2 = np.einsum("tjw,twm->tjm", Wk * Wk, powers)
+        B = np.einsum("tjaw,tjw,twm->tjma", sliding_window_view(yp, w, axis=0), Wk, powers[..., :3])  # (T, J, 3, 3)
     idx = np.add.outer(np.arange(3), np.arange(3))
     A = S[..., idx] + 1e-9 * np.eye(3)
     e0 = np.broadcast_to(np.array([1.0, 0.0, 0.0]), A.shape[:-1])
     a = np.linalg.solve(A, e0[..., None])[..., 0]  # first column of A⁻¹ (A symmetric)
-    pred = np.einsum("tjm,tjma->tja", a, B)
-    lev = np.einsum("tjm,tjmn,tjn->tj", a, S2[..., idx], a)
+    if fast:
+        pred, lev = np.empty((T, J, 3)), np.empty((T, J))
+        _outliers_numba.quadratic_at_centre(np.ascontiguousarray(a), S2, B, pred, lev)
+    else:
+        pred = np.einsum("tjm,tjma->tja", a, B)
+        lev = np.einsum("tjm,tjmn,tjn->tj", a, S2[..., idx], a)
     enough = S[..., 0] > 1e-6
     return np.where(enough[..., None], pred, np.nan), np.where(enough, np.maximum(lev, 0.0), np.nan)
 

@@ -54,7 +54,7 @@ from kinect_agent.blas_threads import one_blas_thread
 from kinect_agent.body.angles import joint_angles
 from kinect_agent.body.rotations import matrix_to_quat
 from kinect_agent.processing import noise_level, offset_model, uncertainty
-from kinect_agent.processing.chain_filter import N_LEN, N_ROOT, ChainFilter
+from kinect_agent.processing.chain_filter import N_LEN, N_ROOT, ChainFilter, FrameData
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.errors import FilterDiverged
@@ -147,6 +147,8 @@ def _run_pass(
     Ps = np.empty((T, n, n)) if store else None
     gated = 0
     run = np.zeros(skeleton.J, dtype=np.int64)  # consecutive observed frames each joint was gated
+    if kf.compiled:
+        return _run_pass_compiled(kf, order, FrameData.of(z, observed, R_diag), q_steps, config, xs, Ps, tick, restart)
     any_observed: np.ndarray = np.any(observed, axis=1)  # (T,) per frame, computed once rather than per step
     present_joints: np.ndarray = np.all(observed.reshape(len(observed), skeleton.J, 3), axis=2)  # (T, J)
     n_present = present_joints.sum(axis=1)  # (T,)
@@ -168,6 +170,48 @@ def _run_pass(
             xs[k] = kf.x
             Ps[k] = kf.P
         if i % 64 == 63:
+            tick(64)
+    tick(T % 64)
+    return xs, Ps, gated
+
+
+def _run_pass_compiled(
+    kf: ChainFilter,
+    order: np.ndarray,
+    frames: FrameData,
+    q_steps: np.ndarray,
+    config: PipelineConfig,
+    xs: np.ndarray | None,
+    Ps: np.ndarray | None,
+    tick: Callable[[int], None],
+    restart: tuple[np.ndarray, int] | None,
+) -> tuple[np.ndarray | None, np.ndarray | None, int]:
+    """_run_pass in compiled stretches of 64 frames (ChainFilter.run_frames), the same steps and results; a frame
+    whose update the kernel declines is updated here by update_joints (its numpy fallback), as _run_pass does."""
+    T = len(order)
+    order = np.ascontiguousarray(order, dtype=np.int64)
+    q_steps = np.ascontiguousarray(q_steps, dtype=np.float64)
+    run = np.zeros(skeleton.J, dtype=np.int64)
+    store = None if xs is None or Ps is None else (xs, Ps)
+    restart_c = None if restart is None else (np.ascontiguousarray(restart[0], dtype=np.float64), restart[1])
+    gated = 0
+    for begin in range(0, T, 64):
+        i, end = begin, min(begin + 64, T)
+        while i < end:
+            i, g = kf.run_frames(frames, order, q_steps, (i, end), config.gate_chi2, restart_c, run, store)
+            gated += g
+            if i < end:  # the kernel declined this frame's update: numpy's
+                k = order[i]
+                present = frames.present[k]
+                used = kf.update_joints(frames.z[k], frames.observed[k], frames.R_diag[k], config.gate_chi2)
+                gated += int(frames.n_present[k]) - int(np.count_nonzero(used))
+                run += present & ~used
+                run[used] = 0
+                if store is not None:
+                    store[0][k] = kf.x
+                    store[1][k] = kf.P
+                i += 1  # the next frame's predict is the kernel's
+        if end - begin == 64:
             tick(64)
     tick(T % 64)
     return xs, Ps, gated

@@ -8,7 +8,7 @@ import pytest
 from kinect_agent import skeleton
 from kinect_agent.body import kinematics as km
 from kinect_agent.processing import _blas_numba, _ukf_numba
-from kinect_agent.processing.chain_filter import ChainFilter
+from kinect_agent.processing.chain_filter import ChainFilter, FrameData
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.ik import inverse_kinematics
 from kinect_agent.processing.pipeline import observations
@@ -103,3 +103,67 @@ def test_lapack_wrappers_match_numpy(rng: np.random.Generator) -> None:
     np.testing.assert_allclose(np.tril(G), np.tril(0.5 * A[:, 1:] @ A[:, 1:].T), atol=1e-12)
     bad = -np.eye(3)
     assert _blas_numba.cholesky_lower(bad, 3) > 0
+
+
+def _pass_by_methods(
+    kf: ChainFilter, frames: FrameData, q_steps: np.ndarray, config: PipelineConfig, restart: tuple[np.ndarray, int]
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Runs a forward pass frame by frame through the filter's methods (the loop run_frames compiles); returns
+    (xs (T, n), Ps (T, n, n), gated)."""
+    T = len(frames.z)
+    xs, Ps = np.empty((T, kf.dim_x)), np.empty((T, kf.dim_x, kf.dim_x))
+    run = np.zeros(skeleton.J, dtype=np.int64)
+    gated = 0
+    for k in range(T):
+        if k:
+            kf.predict_random_walk(q_steps[k])
+        if frames.any_observed[k]:
+            lost = frames.present[k] & (run >= restart[1])
+            if lost.any():
+                kf.reacquire(np.flatnonzero(lost), restart[0][k])
+                run[lost] = 0
+            used = kf.update_joints(frames.z[k], frames.observed[k], frames.R_diag[k], config.gate_chi2)
+            gated += int(frames.n_present[k]) - int(np.count_nonzero(used))
+            run += frames.present[k] & ~used
+            run[used] = 0
+        xs[k], Ps[k] = kf.x, kf.P
+    return xs, Ps, gated
+
+
+@pytest.mark.parametrize("fixed", [True, False], ids=["lengths fixed (n=36)", "lengths in the state (n=55)"])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_compiled_pass_equals_the_methods_frame_by_frame(seed: int, fixed: bool) -> None:
+    rng = np.random.default_rng(seed)
+    rec = _recording(rng, frames=150)
+    fast, _, config = _filters(rec, fixed)
+    ref, _, _ = _filters(rec, fixed)
+    frames = FrameData.of(*observations(rec, config))
+    q_steps = rng.uniform(0.5, 2.0, rec.n_frames)
+    fit = inverse_kinematics(rec.positions)
+    restart = (np.concatenate((fit.root, fit.theta), axis=1), 2)  # re-acquire after 2 gated frames: it happens
+    xs_ref, Ps_ref, gated_ref = _pass_by_methods(ref, frames, q_steps, config, restart)
+    xs, Ps = np.empty_like(xs_ref), np.empty_like(Ps_ref)
+    run = np.zeros(skeleton.J, dtype=np.int64)
+    order = np.arange(rec.n_frames)
+    done, gated = 0, 0
+    for begin in range(0, rec.n_frames, 40):  # in stretches, as the pipeline runs it
+        done, g = fast.run_frames(frames, order, q_steps, (begin, min(begin + 40, rec.n_frames)), config.gate_chi2,
+                                  restart, run, (xs, Ps))  # fmt: skip
+        gated += g
+    assert done == rec.n_frames, "no frame should need numpy's fallback here"
+    assert gated == gated_ref > 0, "gated joint samples"
+    np.testing.assert_array_equal(xs, xs_ref, err_msg="states")
+    np.testing.assert_array_equal(Ps, Ps_ref, err_msg="covariances")
+    np.testing.assert_array_equal(fast.x_prior, ref.x_prior, err_msg="x_prior of the last update")
+
+
+def test_compiled_pass_stops_at_a_declined_update(rng: np.random.Generator) -> None:
+    rec = _recording(rng, frames=20)
+    fast, _, config = _filters(rec, fixed=True)
+    frames = FrameData.of(*observations(rec, config))
+    fast.P[0, 0] = -1.0  # not positive definite: chain_step declines the first update
+    x = fast.x.copy()
+    run = np.zeros(skeleton.J, dtype=np.int64)
+    done, _ = fast.run_frames(frames, np.arange(20), np.ones(20), (0, 20), config.gate_chi2, None, run, None)
+    assert done == 0, "the pass should stop at frame 0 for numpy's fallback"
+    np.testing.assert_array_equal(fast.x, x, err_msg="x changed although the update was declined")

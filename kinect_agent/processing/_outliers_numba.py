@@ -1,0 +1,184 @@
+"""Compiled kernels of the outlier model (outliers.py), used when numba is installed; numpy stays reference and
+fallback, and tests hold both to the same results bit for bit.
+
+Each kernel does the same floating-point operations in the same order as the numpy expression it replaces (numpy
+reduces a non-contiguous axis, and einsum its summed index, one term after the other; a reduction over a short
+contiguous axis of 3 runs left to right), without the temporaries: no fused multiply-add, no reassociation
+(no fastmath). Compiled on first use and cached on disk (numba cache=True), as _ukf_numba.py.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+try:
+    import numba
+except ImportError:  # pragma: no cover - exercised only where numba is absent
+    numba = None  # type: ignore[assignment]
+
+AVAILABLE = numba is not None
+
+
+def _running_median(pad, w, out):  # pragma: no cover - compiled
+    """out[m, t] = median of the finite values of pad[m, t : t + w] (NaN when none), as outliers.running_median.
+
+    pad: (M, T + w − 1) float, NaN = missing; out: (M, T). The window is kept sorted from one frame to the next.
+    """
+    M, T = out.shape
+    win = np.empty(w)
+    for m in range(M):
+        cnt = 0
+        for i in range(w):
+            v = pad[m, i]
+            if v == v:  # finite values in sorted order at the front
+                j = cnt
+                while j > 0 and win[j - 1] > v:
+                    win[j] = win[j - 1]
+                    j -= 1
+                win[j] = v
+                cnt += 1
+        for t in range(T):
+            if cnt > 0:
+                out[m, t] = 0.5 * (win[(cnt - 1) // 2] + win[cnt // 2])
+            else:
+                out[m, t] = np.nan
+            if t + 1 == T:
+                break
+            old, new = pad[m, t], pad[m, t + w]
+            if old == old:  # remove the leaving value
+                j = 0
+                while win[j] != old:
+                    j += 1
+                while j < cnt - 1:
+                    win[j] = win[j + 1]
+                    j += 1
+                cnt -= 1
+            if new == new:  # insert the entering one
+                j = cnt
+                while j > 0 and win[j - 1] > new:
+                    win[j] = win[j - 1]
+                    j -= 1
+                win[j] = new
+                cnt += 1
+
+
+def _em_expectation(xz, ok, cls, rho, mu, sigma, norm, vol, w, rho_sum, mu_sum):  # pragma: no cover - compiled
+    """One E step of outliers.fit_mixture with the sums of its M step; returns (loglik sum (K,), Σw (K,)).
+
+    xz: (N, K, D) samples (0 where absent). ok: (N, K) bool present. cls: (N, K) int class (−1: none, weight 0).
+    rho: (C, K) weights. mu, sigma: (K, D). norm: (K,) prod(σ)·√(2π)^D. vol: (K,) uniform box volume.
+    Writes w (N, K) the Gaussian responsibilities, rho_sum (C, K) Σ w per class, mu_sum (K, D) Σ w·x.
+    """
+    N, K, D = xz.shape
+    ll = np.zeros(K)
+    sw = np.zeros(K)
+    rho_sum[:] = 0.0
+    mu_sum[:] = 0.0
+    for n in range(N):
+        for k in range(K):
+            if not ok[n, k]:
+                w[n, k] = 0.0
+                continue
+            c = cls[n, k]
+            r = rho[c, k] if c >= 0 else 0.0
+            zz = 0.0
+            for d in range(D):
+                q = (xz[n, k, d] - mu[k, d]) / sigma[k, d]
+                if d == 0:
+                    zz = q * q
+                else:
+                    zz = zz + q * q
+            g = r * (math.exp(-0.5 * zz) / norm[k])
+            u = (1.0 - r) / vol[k]
+            tot = g + u
+            if tot > 0:
+                wk = g / tot
+                ll[k] += math.log(tot)
+            else:
+                wk = g / 1.0
+                ll[k] += math.log(1e-300)
+            w[n, k] = wk
+            sw[k] += wk
+            if c >= 0:
+                rho_sum[c, k] += wk
+            for d in range(D):
+                mu_sum[k, d] += wk * xz[n, k, d]
+    return ll, sw
+
+
+def _em_spread(xz, ok, w, mu, var_sum):  # pragma: no cover - compiled
+    """var_sum (K, D) = Σ_n w·(x − mu)², as outliers.fit_mixture's M step (absent samples add exact zeros)."""
+    N, K, D = xz.shape
+    var_sum[:] = 0.0
+    for n in range(N):
+        for k in range(K):
+            if ok[n, k]:
+                for d in range(D):
+                    q = xz[n, k, d] - mu[k, d]
+                    var_sum[k, d] += w[n, k] * (q * q)
+
+
+if AVAILABLE:
+    _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+    running_median_kernel = _jit(_running_median)
+    em_expectation = _jit(_em_expectation)
+    em_spread = _jit(_em_spread)
+else:  # pragma: no cover - callers check AVAILABLE first
+    running_median_kernel = em_expectation = em_spread = None  # type: ignore[assignment]
+
+
+def _window_sums(wp, yp, kern, powers, S, S2, B):  # pragma: no cover - compiled
+    """The kernel-weighted window sums of outliers.local_quadratic, Wk = wp[t + i, j]·kern[t, i]:
+    S[t, j, m] = Σ_i Wk·powers[t, i, m], S2 = Σ_i (Wk·Wk)·powers, B[t, j, m, a] = Σ_i (yp[t + i, j, a]·Wk)·powers
+    (m < 3), each summed over i in order.
+
+    wp: (T + w − 1, J) weights, yp: (T + w − 1, J, 3) m (0 where absent), kern: (T, w), powers: (T, w, 5).
+    """
+    T, J, M = S.shape
+    w = kern.shape[1]
+    wk = np.empty(w)
+    for t in range(T):
+        for j in range(J):
+            for i in range(w):
+                wk[i] = wp[t + i, j] * kern[t, i]
+            for m in range(M):
+                s = 0.0
+                s2 = 0.0
+                for i in range(w):
+                    s += wk[i] * powers[t, i, m]
+                    s2 += (wk[i] * wk[i]) * powers[t, i, m]
+                S[t, j, m] = s
+                S2[t, j, m] = s2
+            for m in range(3):
+                for a in range(3):
+                    b = 0.0
+                    for i in range(w):
+                        b += (yp[t + i, j, a] * wk[i]) * powers[t, i, m]
+                    B[t, j, m, a] = b
+
+
+def _quadratic_at_centre(coef, S2, B, pred, lev):  # pragma: no cover - compiled
+    """pred[t, j, a] = Σ_m coef[t, j, m]·B[t, j, m, a] and lev[t, j] = Σ_m Σ_n (coef_m·S2[t, j, m + n])·coef_n, each
+    summed in order, as outliers.local_quadratic's einsums."""
+    T, J, _ = coef.shape
+    for t in range(T):
+        for j in range(J):
+            for a in range(3):
+                p = 0.0
+                for m in range(3):
+                    p += coef[t, j, m] * B[t, j, m, a]
+                pred[t, j, a] = p
+            v = 0.0
+            for m in range(3):
+                for n in range(3):
+                    v += (coef[t, j, m] * S2[t, j, m + n]) * coef[t, j, n]
+            lev[t, j] = v
+
+
+if AVAILABLE:
+    window_sums = _jit(_window_sums)
+    quadratic_at_centre = _jit(_quadratic_at_centre)
+else:  # pragma: no cover - callers check AVAILABLE first
+    window_sums = quadratic_at_centre = None  # type: ignore[assignment]
