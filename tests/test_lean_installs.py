@@ -104,12 +104,14 @@ def test_the_server_ingests_analyses_and_replays_without_numba(tmp_path: Path) -
                             headers={**headers, "Content-Type": "application/octet-stream"})
             assert r.status_code == 201 and r.json()["status"] == "processed", r.text
             sid, admin = r.json()["id"], {"Authorization": f"Bearer {admin_token}"}
-            detail = client.get(f"/api/v1/sessions/{sid}/detail", headers=admin)  # angles, repetitions, reach
-            assert detail.status_code == 200 and detail.json()["repetitions"], detail.text[:500]
-            queued = client.get(f"/api/v1/sessions/{sid}/replay", headers=admin)  # a worker builds the scene
+            detail = client.get(f"/api/v1/sessions/{sid}/detail", headers=admin)  # a worker builds it
+            assert detail.status_code == 202, detail.text[:500]
+            queued = client.get(f"/api/v1/sessions/{sid}/replay", headers=admin)  # and the scene
             assert queued.status_code == 202, queued.text[:500]
             settings = Settings(ENVIRONMENT="local", DATABASE_URL=url)
-            assert work(sessionmaker=lambda: Session(engine), settings=settings, name="lean", once=True) == 1
+            assert work(sessionmaker=lambda: Session(engine), settings=settings, name="lean", once=True) == 2
+            detail = client.get(f"/api/v1/sessions/{sid}/detail", headers=admin)  # angles, repetitions, reach
+            assert detail.status_code == 200 and detail.json()["repetitions"], detail.text[:500]
             replay = client.get(f"/api/v1/sessions/{sid}/replay", headers=admin)  # the viser scene
             assert replay.status_code == 200 and len(replay.content) > 1000, replay.text[:500]
             charts = client.get("/static/vendor/plotly/plotly.min.js")  # the pages' charting library
