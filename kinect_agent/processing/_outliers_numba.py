@@ -21,6 +21,16 @@ except ImportError:  # pragma: no cover - exercised only where numba is absent
 AVAILABLE = numba is not None
 
 
+def _insert_sorted(win, cnt, v):  # pragma: no cover - compiled
+    """Inserts v into win[:cnt] (sorted ascending, ties after the equal values) and returns the new count."""
+    j = cnt
+    while j > 0 and win[j - 1] > v:
+        win[j] = win[j - 1]
+        j -= 1
+    win[j] = v
+    return cnt + 1
+
+
 def _running_median(pad, w, out):  # pragma: no cover - compiled
     """out[m, t] = median of the finite values of pad[m, t : t + w] (NaN when none), as outliers.running_median.
 
@@ -33,12 +43,7 @@ def _running_median(pad, w, out):  # pragma: no cover - compiled
         for i in range(w):
             v = pad[m, i]
             if v == v:  # finite values in sorted order at the front
-                j = cnt
-                while j > 0 and win[j - 1] > v:
-                    win[j] = win[j - 1]
-                    j -= 1
-                win[j] = v
-                cnt += 1
+                cnt = _insert_sorted(win, cnt, v)
         for t in range(T):
             if cnt > 0:
                 out[m, t] = 0.5 * (win[(cnt - 1) // 2] + win[cnt // 2])
@@ -56,12 +61,7 @@ def _running_median(pad, w, out):  # pragma: no cover - compiled
                     j += 1
                 cnt -= 1
             if new == new:  # insert the entering one
-                j = cnt
-                while j > 0 and win[j - 1] > new:
-                    win[j] = win[j - 1]
-                    j -= 1
-                win[j] = new
-                cnt += 1
+                cnt = _insert_sorted(win, cnt, new)
 
 
 def _em_expectation(xz, ok, cls, rho, mu, sigma, norm, vol, w, rho_sum, mu_sum):  # pragma: no cover - compiled
@@ -122,6 +122,7 @@ def _em_spread(xz, ok, w, mu, var_sum):  # pragma: no cover - compiled
 
 if AVAILABLE:
     _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+    _insert_sorted = _jit(_insert_sorted)  # called by _running_median: compiled before it
     running_median_kernel = _jit(_running_median)
     em_expectation = _jit(_em_expectation)
     em_spread = _jit(_em_spread)
