@@ -13,6 +13,7 @@ import socket
 import subprocess
 import sys
 import time
+import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -80,6 +81,61 @@ def api_client(base: str, email: str) -> tuple[httpx.Client, dict[str, str]]:
     the caller closes the client (client.close(): a used httpx client cannot be entered with `with`)."""
     client = httpx.Client(base_url=base, timeout=60)
     return client, {"X-CSRF-Token": _login(client, email)["csrf_token"]}
+
+
+NEW_PATIENT_PASSWORD = "new-patient-password-2026"
+
+
+def plan_item(exercise: str, repetitions: int, sets: int = 2) -> dict:
+    """One item of a plan as the API takes it (3 times a week)."""
+    return {"exercise_slug": exercise, "sets": sets, "repetitions": repetitions, "frequency_per_week": 3}
+
+
+@dataclass(frozen=True)
+class NewPatient:
+    """A patient created through the API by the demo admin (password NEW_PATIENT_PASSWORD)."""
+
+    email: str
+    id: int
+    item_ids: list[int]  # the plan's items, in order ([] without a plan)
+    pairing_code: str | None  # a fresh code for a home agent, when asked for
+
+
+def create_patient(base: str, prefix: str, full_name: str, *, items: list[dict] | None = None,
+                   plan: dict | None = None, settings: dict | None = None, therapist: str | None = None,
+                   pairing_code: bool = False) -> NewPatient:  # fmt: skip
+    """Creates a patient as the demo admin: optional patient settings (PATCH), a therapist assigned (by e-mail), a
+    plan of `items` starting today (`plan` adds or overrides fields), and a pairing code."""
+    email = f"{prefix}-{uuid.uuid4().hex[:8]}@example.org"
+    admin, headers = api_client(base, "admin@demo.clinic")
+    try:
+        r = admin.post("/api/v1/users", json={"email": email, "role": "patient", "password": NEW_PATIENT_PASSWORD,
+                                              "full_name": full_name}, headers=headers)  # fmt: skip
+        assert r.status_code == 201, r.text
+        pid = r.json()["id"]
+        if settings:
+            r = admin.patch(f"/api/v1/patients/{pid}", json=settings, headers=headers)
+            assert r.status_code == 200, r.text
+        if therapist:
+            staff, _ = api_client(base, therapist)
+            staff_id = staff.get("/api/v1/users/me").json()["id"]
+            staff.close()
+            assert admin.put(f"/api/v1/patients/{pid}/therapists/{staff_id}", headers=headers).status_code == 204
+        item_ids: list[int] = []
+        if items:
+            today = time.strftime("%Y-%m-%d")
+            body = {"title": "Plan", "start_date": today, "notes": "", "items": items} | (plan or {})
+            r = admin.post(f"/api/v1/patients/{pid}/plans", json=body, headers=headers)
+            assert r.status_code == 201, r.text
+            item_ids = [item["id"] for item in r.json()["items"]]
+        code = None
+        if pairing_code:
+            r = admin.post(f"/api/v1/patients/{pid}/pairing-codes", headers=headers)
+            assert r.status_code == 201, r.text
+            code = r.json()["code"]
+    finally:
+        admin.close()
+    return NewPatient(email, pid, item_ids, code)
 
 
 def upload_session(base: str, email: str, exercise: str, reps: int, *, seed: int,

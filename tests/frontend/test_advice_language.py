@@ -4,18 +4,24 @@ Language select; a full-page screenshot at 1366, 768 and 390 px of each in /tmp/
 
 from __future__ import annotations
 
-import uuid
-
 import pytest
 from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
 from tests.backend.khs_files import make_khs
-from tests.frontend.conftest import THERAPIST, api_client, open_page, shot, sign_in
+from tests.frontend.conftest import (
+    NEW_PATIENT_PASSWORD,
+    THERAPIST,
+    api_client,
+    create_patient,
+    open_page,
+    shot,
+    sign_in,
+)
 from tests.frontend.test_never_silent import LOAD_MS
 
 pytestmark = pytest.mark.browser
-PASSWORD = "advice-language-2026"
+PASSWORD = NEW_PATIENT_PASSWORD
 ENGLISH = "you said your pain was 8 of 10"
 GERMAN = "Schmerzen von 8 von 10"
 HEIGHT = {1366: 900, 768: 1024, 390: 844}
@@ -23,20 +29,8 @@ HEIGHT = {1366: 900, 768: 1024, 390: 844}
 
 def _new_patient(base: str) -> tuple[str, int]:
     """Creates a patient (no language chosen) assigned to the demo therapist; returns (e-mail, id)."""
-    email = f"advice-lang-{uuid.uuid4().hex[:8]}@example.org"
-    admin, headers = api_client(base, "admin@demo.clinic")
-    try:
-        r = admin.post("/api/v1/users", json={"email": email, "role": "patient", "password": PASSWORD,
-                                              "full_name": "Lena Lang"}, headers=headers)  # fmt: skip
-        assert r.status_code == 201, r.text
-        pid = r.json()["id"]
-        therapist, _ = api_client(base, THERAPIST)
-        tara = therapist.get("/api/v1/users/me").json()["id"]
-        therapist.close()
-        assert admin.put(f"/api/v1/patients/{pid}/therapists/{tara}", headers=headers).status_code == 204
-    finally:
-        admin.close()
-    return email, pid
+    new = create_patient(base, "advice-lang", "Lena Lang", therapist=THERAPIST)
+    return new.email, new.id
 
 
 def _pain_advice(page, base: str, csrf: str, pid: int) -> None:

@@ -11,8 +11,6 @@ this machine's headless Chromium has no GPU.
 from __future__ import annotations
 
 import re
-import time
-import uuid
 from collections.abc import Iterator
 from contextlib import closing, contextmanager
 from pathlib import Path
@@ -23,10 +21,19 @@ from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import Page, expect
 
 from kinect_agent.formats import session_file
-from tests.frontend.conftest import CHROMIUM, api_client, login, open_page, shot
+from tests.frontend.conftest import (
+    CHROMIUM,
+    NEW_PATIENT_PASSWORD,
+    api_client,
+    create_patient,
+    login,
+    open_page,
+    plan_item,
+    shot,
+)
 
 pytestmark = pytest.mark.browser
-PASSWORD = "camera-password-2026"
+PASSWORD = NEW_PATIENT_PASSWORD
 EXERCISE, TARGET = "squat", 2
 WIDTHS = ((1366, 900), (768, 1024), (390, 844))
 PAGE = "/patient/camera"
@@ -93,20 +100,8 @@ def cam_browser(pw, clip):
 
 def new_patient(base: str, exercise: str = EXERCISE, target: int = TARGET) -> tuple[str, int, int]:
     """Creates a patient with a plan of one exercise (2 sets of target); returns (email, patient id, plan item id)."""
-    email = f"cam-{uuid.uuid4().hex[:8]}@example.org"
-    admin, headers = api_client(base, "admin@demo.clinic")
-    try:
-        r = admin.post("/api/v1/users", json={"email": email, "role": "patient", "password": PASSWORD,
-                                              "full_name": "Carla Camera"}, headers=headers)  # fmt: skip
-        assert r.status_code == 201, r.text
-        pid = r.json()["id"]
-        item = {"exercise_slug": exercise, "sets": 2, "repetitions": target, "frequency_per_week": 3}
-        plan = {"title": "Camera", "start_date": time.strftime("%Y-%m-%d"), "notes": "", "items": [item]}
-        r = admin.post(f"/api/v1/patients/{pid}/plans", json=plan, headers=headers)
-        assert r.status_code == 201, r.text
-        return email, pid, r.json()["items"][0]["id"]
-    finally:
-        admin.close()
+    new = create_patient(base, "cam", "Carla Camera", items=[plan_item(exercise, target)], plan={"title": "Camera"})
+    return new.email, new.id, new.item_ids[0]
 
 
 def patient_sessions(base: str, email: str, pid: int) -> list[dict]:

@@ -10,7 +10,16 @@ import pytest
 from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
-from tests.frontend.conftest import PATIENT, api_client, login, open_page, shot
+from tests.frontend.conftest import (
+    NEW_PATIENT_PASSWORD,
+    PATIENT,
+    api_client,
+    create_patient,
+    login,
+    open_page,
+    plan_item,
+    shot,
+)
 
 pytestmark = pytest.mark.browser
 
@@ -58,7 +67,6 @@ LANGUAGES = [
 def test_the_voice_control_and_the_demonstration_speak_the_patients_language(
     browser, live_server, locale, voice, how, view
 ):
-    from tests.frontend.test_live_set import PASSWORD
     from tests.frontend.test_never_silent import AgentLink, patient_with_device
 
     email, pid, token = patient_with_device(live_server.url)
@@ -69,7 +77,7 @@ def test_the_voice_control_and_the_demonstration_speak_the_patients_language(
     finally:
         patient.close()
     with open_page(browser, live_server.url, 768, 1024) as page:
-        login(page, email, PASSWORD)
+        login(page, email, NEW_PATIENT_PASSWORD)
         expect(page.locator("#voice-toggle")).to_have_text(voice, timeout=30_000)
         expect(page.locator(".demo-h")).to_have_text(how, timeout=30_000)
         expect(page.locator(".demo-view")).to_have_text(view, timeout=30_000)
@@ -87,35 +95,15 @@ UI_PRMD_VIEWS = {
 
 def _patient_with_uiprmd_plan(base: str) -> str:
     """Creates a patient whose plan holds every UI-PRMD movement except sit to stand; returns the e-mail."""
-    import time
-    import uuid
-
-    from tests.frontend.test_live_set import PASSWORD
-
-    email = f"uiprmd-{uuid.uuid4().hex[:8]}@example.org"
-    admin, headers = api_client(base, "admin@demo.clinic")
-    try:
-        r = admin.post("/api/v1/users", json={"email": email, "role": "patient", "password": PASSWORD,
-                                              "full_name": "Una Prmd"}, headers=headers)  # fmt: skip
-        assert r.status_code == 201, r.text
-        items = [
-            {"exercise_slug": slug, "sets": 1, "repetitions": 8, "frequency_per_week": 3} for slug in UI_PRMD_VIEWS
-        ]
-        plan = {"title": "UI-PRMD", "start_date": time.strftime("%Y-%m-%d"), "notes": "", "items": items}
-        r = admin.post(f"/api/v1/patients/{r.json()['id']}/plans", json=plan, headers=headers)
-        assert r.status_code == 201, r.text
-    finally:
-        admin.close()
-    return email
+    items = [plan_item(slug, 8, sets=1) for slug in UI_PRMD_VIEWS]
+    return create_patient(base, "uiprmd", "Una Prmd", items=items, plan={"title": "UI-PRMD"}).email
 
 
 @pytest.mark.parametrize("width,height", [(1366, 900), (768, 1024), (390, 844)])
 def test_every_uiprmd_movement_shows_a_moving_figure_in_the_view_it_needs(browser, live_server, width, height):
-    from tests.frontend.test_live_set import PASSWORD
-
     email = _patient_with_uiprmd_plan(live_server.url)
     with open_page(browser, live_server.url, width, height) as page:
-        login(page, email, PASSWORD)
+        login(page, email, NEW_PATIENT_PASSWORD)
         page.wait_for_url("**/patient")
         items = page.locator("#plan li[data-exercise]")
         expect(items.first).to_be_visible()
@@ -132,7 +120,7 @@ def test_every_uiprmd_movement_shows_a_moving_figure_in_the_view_it_needs(browse
         shot(page, f"demonstration-uiprmd-{width}")
         assert not page.js_errors, page.js_errors
     with open_page(browser, live_server.url, width, height, reduced_motion="reduce") as page:  # still, at the peak
-        login(page, email, PASSWORD)
+        login(page, email, NEW_PATIENT_PASSWORD)
         page.wait_for_url("**/patient")
         canvases = page.locator("#plan li[data-exercise] canvas.demo-figure[data-frames]")
         expect(canvases).to_have_count(len(UI_PRMD_VIEWS))

@@ -15,7 +15,6 @@ import signal
 import subprocess
 import sys
 import time
-import uuid
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,10 +26,18 @@ from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
 from kinect_agent.live.journal import MIN_KEEP_S, RECORD
-from tests.frontend.conftest import ROOT, api_client, login, run_server, shot
+from tests.frontend.conftest import (
+    NEW_PATIENT_PASSWORD,
+    ROOT,
+    create_patient,
+    login,
+    plan_item,
+    run_server,
+    shot,
+)
 
 pytestmark = pytest.mark.browser
-PASSWORD = "live-password-2026"
+PASSWORD = NEW_PATIENT_PASSWORD
 EXERCISE, NAME, TARGET = "elbow_flexion", "Elbow flexion", 3
 COUNT = "#live-count .n"
 # An agent process starts (imports numpy, SciPy, the filter), connects and says hello: seconds on a loaded machine,
@@ -66,20 +73,9 @@ def agent_server(live_server, tmp_path_factory):
 def new_home(base: str, agent_base: str, tmp: Path) -> Home:
     """Creates a patient with a plan of TARGET elbow flexions (2 sets) as the admin, and pairs an agent with the
     server at agent_base."""
-    email = f"live-{uuid.uuid4().hex[:8]}@example.org"
-    admin, headers = api_client(base, "admin@demo.clinic")
-    try:
-        r = admin.post("/api/v1/users", json={"email": email, "role": "patient", "password": PASSWORD,
-                                              "full_name": "Lena Live"}, headers=headers)  # fmt: skip
-        assert r.status_code == 201, r.text
-        pid = r.json()["id"]
-        item = {"exercise_slug": EXERCISE, "sets": 2, "repetitions": TARGET, "frequency_per_week": 3}
-        plan = {"title": "Arms", "start_date": time.strftime("%Y-%m-%d"), "notes": "", "items": [item]}
-        r = admin.post(f"/api/v1/patients/{pid}/plans", json=plan, headers=headers)
-        assert r.status_code == 201, r.text
-        code = admin.post(f"/api/v1/patients/{pid}/pairing-codes", headers=headers).json()["code"]
-    finally:
-        admin.close()
+    new = create_patient(base, "live", "Lena Live", items=[plan_item(EXERCISE, TARGET)], plan={"title": "Arms"},
+                         pairing_code=True)  # fmt: skip
+    email, pid, code = new.email, new.id, new.pairing_code
     home = Home(email, pid, tmp / "agent", tmp / "agent.log")
     done = subprocess.run([sys.executable, "-m", "kinect_agent.cli", "pair", "--server", agent_base, "--code", code],
                           env=_agent_env(home), cwd=ROOT, capture_output=True, text=True, timeout=60)  # fmt: skip

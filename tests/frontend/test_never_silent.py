@@ -25,7 +25,16 @@ from playwright.sync_api import expect
 
 from backend.demo import DEMO_PASSWORD
 from tests.backend.khs_files import make_khs
-from tests.frontend.conftest import THERAPIST, api_client, free_port, login, open_page, run_server, shot
+from tests.frontend.conftest import (
+    THERAPIST,
+    create_patient,
+    free_port,
+    login,
+    open_page,
+    plan_item,
+    run_server,
+    shot,
+)
 from tests.frontend.test_live_set import NAME, PASSWORD, agent, new_home
 
 pytestmark = pytest.mark.browser
@@ -92,19 +101,9 @@ class AgentLink:
 def patient_with_device(base: str, target: int = TARGET) -> tuple[str, int, str]:
     """Creates a patient with a plan of `target` elbow flexions (2 sets) and a device paired through the API; returns
     (e-mail, patient id, device token)."""
-    email = f"silent-{uuid.uuid4().hex[:8]}@example.org"
-    admin, headers = api_client(base, "admin@demo.clinic")
-    try:
-        r = admin.post("/api/v1/users", json={"email": email, "role": "patient", "password": PASSWORD,
-                                              "full_name": "Sam Silent"}, headers=headers)  # fmt: skip
-        assert r.status_code == 201, r.text
-        pid = r.json()["id"]
-        item = {"exercise_slug": EXERCISE, "sets": 2, "repetitions": target, "frequency_per_week": 3}
-        plan = {"title": "Arms", "start_date": time.strftime("%Y-%m-%d"), "notes": "", "items": [item]}
-        assert admin.post(f"/api/v1/patients/{pid}/plans", json=plan, headers=headers).status_code == 201
-        code = admin.post(f"/api/v1/patients/{pid}/pairing-codes", headers=headers).json()["code"]
-    finally:
-        admin.close()
+    new = create_patient(base, "silent", "Sam Silent", items=[plan_item(EXERCISE, target)], plan={"title": "Arms"},
+                         pairing_code=True)  # fmt: skip
+    email, pid, code = new.email, new.id, new.pairing_code
     r = httpx.post(f"{base}/api/v1/devices/pair", json={"code": code, "name": "test link"}, timeout=30)
     assert r.status_code == 201, r.text
     return email, pid, r.json()["token"]

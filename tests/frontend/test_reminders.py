@@ -4,18 +4,26 @@ zone and in the patient's language; the therapist sets reminder times in the pla
 from __future__ import annotations
 
 import time
-import uuid
 
 import pytest
 from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
-from tests.frontend.conftest import THERAPIST, api_client, login, open_page, shot
+from tests.frontend.conftest import (
+    NEW_PATIENT_PASSWORD,
+    THERAPIST,
+    api_client,
+    create_patient,
+    login,
+    open_page,
+    plan_item,
+    shot,
+)
 from tests.frontend.test_feeling import _assign_to_tara
 from tests.frontend.test_never_silent import LOAD_MS
 
 pytestmark = pytest.mark.browser
-PASSWORD = "reminder password 1"
+PASSWORD = NEW_PATIENT_PASSWORD
 
 
 def _zone_where_it_is_ten() -> str:
@@ -27,22 +35,11 @@ def _zone_where_it_is_ten() -> str:
 
 
 def _patient(base: str, **settings) -> tuple[str, int]:
-    email = f"remind-{uuid.uuid4().hex[:8]}@example.org"
-    admin, headers = api_client(base, "admin@demo.clinic")
-    try:
-        r = admin.post("/api/v1/users", json={"email": email, "role": "patient", "password": PASSWORD,
-                                              "full_name": "Rita Reminder"}, headers=headers)  # fmt: skip
-        assert r.status_code == 201, r.text
-        pid = r.json()["id"]
-        assert admin.patch(f"/api/v1/patients/{pid}", json=settings, headers=headers).status_code == 200
-        item = {"exercise_slug": "elbow_flexion", "sets": 2, "repetitions": 8, "frequency_per_week": 3}
-        plan = {"title": "Arms", "start_date": time.strftime("%Y-%m-%d", time.gmtime(time.time() - 86400)),
-                "items": [item], "reminder_times": ["18:00", "11:00"]}  # fmt: skip
-        r = admin.post(f"/api/v1/patients/{pid}/plans", json=plan, headers=headers)
-        assert r.status_code == 201, r.text
-    finally:
-        admin.close()
-    return email, pid
+    start = time.strftime("%Y-%m-%d", time.gmtime(time.time() - 86400))
+    plan = {"title": "Arms", "start_date": start, "reminder_times": ["18:00", "11:00"]}
+    new = create_patient(base, "remind", "Rita Reminder", items=[plan_item("elbow_flexion", 8)], plan=plan,
+                         settings=settings)  # fmt: skip
+    return new.email, new.id
 
 
 @pytest.mark.parametrize("width,height", [(1366, 900), (390, 844)])
