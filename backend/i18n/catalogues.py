@@ -25,6 +25,7 @@ from pathlib import Path
 
 from babel.messages.catalog import Catalog
 from babel.messages.extract import extract_from_dir
+from babel.messages.jslexer import tokenize
 from babel.messages.pofile import read_po, write_po
 
 from backend.i18n import DOMAIN, DOMAINS, LOCALE_DIR, LOCALES, THERAPIST_DOMAIN, po_path
@@ -69,12 +70,16 @@ def extract_all() -> dict[str, Catalog]:
         for filename, lineno, message, comments, context in found:
             every.add(message, None, [(f"{directory}/{filename}", lineno)], auto_comments=comments, context=context)
     domains = {d: Catalog(project="Kinect Home Coach", domain=d, charset="utf-8", fuzzy=False) for d in DOMAINS}
-    for message in every:
-        if not message.id:
+    for found_message in every:
+        if not found_message.id:
             continue
-        therapist_only = all(path in THERAPIST_FILES for path, _ in message.locations)
+        therapist_only = all(path in THERAPIST_FILES for path, _ in found_message.locations)
         domains[THERAPIST_DOMAIN if therapist_only else DOMAIN].add(
-            message.id, None, message.locations, auto_comments=message.auto_comments, context=message.context
+            found_message.id,
+            None,
+            found_message.locations,
+            auto_comments=found_message.auto_comments,
+            context=found_message.context,
         )
     return domains
 
@@ -162,6 +167,8 @@ def check(templates: dict[str, Catalog] | None = None) -> list[Problem]:
             problems.append(Problem("backend/i18n/catalogues.py", f"THERAPIST_FILES names {path}, which is not there"))
         elif path.endswith(".html"):
             problems.extend(unmarked_template_text(path, (ROOT / path).read_text(encoding="utf-8")))
+        else:
+            problems.extend(unmarked_script_text(path, (ROOT / path).read_text(encoding="utf-8")))
     return problems
 
 
@@ -220,6 +227,49 @@ def unmarked_template_text(where: str, source: str) -> list[Problem]:
     finder.feed(plain)
     finder.close()
     return [Problem(f"{where}:{line}", f"text not marked for translation: {text!r}") for line, text in finder.found]
+
+
+# a script string that reads as words: two words in a row, or one capitalised word ("Approve"); not code-like
+# (CSS classes, ids, URLs, Plotly's %{x} templates, HTML) and not the product's name
+_PROSE = re.compile(r"[^\W\d_]{2,}[ ’'][^\W\d_]{2,}|^[A-Z][a-z]{2,}$")
+_CODE = re.compile(r"[-_#/=<>\[\]{}]|%\{|^\w+\.\w+$")
+_NOT_TEXT = ("Kinect Home Coach", "use strict")
+_SCRIPT_MARKS = ("I18n.t", "I18n.nt", "I18n.N_")
+
+
+def unmarked_script_text(where: str, source: str) -> list[Problem]:
+    """Returns the strings of a page script that read as words but are not marked (I18n.t, I18n.nt, I18n.N_, or
+    joined with + to a marked string): each would stay English in every locale. A heuristic for the therapist
+    scripts: CSS classes (after `class:` or `className =`), ids, URLs and Plotly templates are not text."""
+    tokens = [t for t in tokenize(source, jsx=False, template_string=True) if "comment" not in t.type]
+    marked: set[int] = set()
+    found = []
+    for i, token in enumerate(tokens):
+        if token.type not in ("string", "template_string"):
+            continue
+        before = [t.value for t in tokens[max(0, i - 4) : i]]
+        if (
+            before[-2:-1]
+            and before[-2] in _SCRIPT_MARKS
+            and before[-1] == "("  # I18n.t("...")
+            or len(before) == 4
+            and before[0] == "I18n.nt"
+            and before[1] == "("
+            and before[3] == ","  # its plural
+            or before[-1:] == ["+"]
+            and i - 2 in marked  # "..." + "..." inside a mark
+        ):
+            marked.add(i)
+            continue
+        text = re.sub(r"\$\{.*?\}", " ", token.value[1:-1])
+        for name in _NOT_TEXT:
+            text = text.replace(name, " ")
+        if not _PROSE.search(text) or _CODE.search(text):
+            continue
+        if before[-2:-1] and (before[-2] == "class" or before[-2].endswith("className")):
+            continue
+        found.append(Problem(f"{where}:{token.lineno}", f"text not marked for translation: {token.value[1:-1]!r}"))
+    return found
 
 
 def check_locale(locale: str, code: Catalog, catalog: Catalog | None = None, domain: str = DOMAIN) -> Iterable[Problem]:
