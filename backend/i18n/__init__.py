@@ -29,6 +29,7 @@ from typing import Any
 
 from babel import Locale, UnknownLocaleError
 from babel.dates import format_date as _babel_format_date
+from babel.dates import format_skeleton
 from babel.messages.catalog import Catalog
 from babel.messages.mofile import write_mo
 from babel.messages.pofile import read_po
@@ -94,23 +95,32 @@ def therapist_translations(locale: str) -> gettext.NullTranslations:
 
 @dataclass(frozen=True)
 class Translator:
-    """The messages, dates and numbers of one locale."""
+    """The messages, dates and numbers of one locale (therapist: the therapist pages' catalogue first)."""
 
     locale: str
+    therapist: bool = False
+
+    def _source(self) -> gettext.NullTranslations:
+        return therapist_translations(self.locale) if self.therapist else translations(self.locale)
 
     def gettext(self, message: str, **params: object) -> str:
         """Returns the translation of message, with %(name)s placeholders filled from params when given."""
-        text = translations(self.locale).gettext(message)
+        text = self._source().gettext(message)
         return text % params if params else text
 
     def ngettext(self, singular: str, plural: str, n: int, **params: object) -> str:
         """Returns the singular or plural translation for n; %(num)d is n unless params says otherwise."""
-        text = translations(self.locale).ngettext(singular, plural, n)
+        text = self._source().ngettext(singular, plural, n)
         return text % ({"num": n} | params)
 
     def format_date(self, value: dt.date | dt.datetime, format: str = "long") -> str:  # noqa: A002 (Babel's name)
         """Returns a date the way this locale writes it ("long": 27 November 2026 / 27. November 2026)."""
         return _babel_format_date(value, format=format, locale=self.locale)
+
+    def format_day_month(self, value: dt.date) -> str:
+        """Returns a day and short month the way this locale writes them (CLDR skeleton dMMM: 24 Nov, 24. Nov.,
+        24 nov.); English the British way, as the page scripts write dates (en-GB)."""
+        return format_skeleton("dMMM", value, locale="en_GB" if self.locale == DEFAULT_LOCALE else self.locale)
 
     def format_number(self, value: float, decimals: int = 0) -> str:
         """Returns a number with this locale's decimal sign, rounded to `decimals` places."""
@@ -125,6 +135,12 @@ class Translator:
 def translator(locale: str | None) -> Translator:
     """Returns the Translator of a supported locale (anything else: English)."""
     return Translator(locale if locale in LOCALES else DEFAULT_LOCALE)
+
+
+def therapist_translator(accept_language: str | None) -> Translator:
+    """Returns the Translator of a therapist's request: the locale of its Accept-Language among the therapist pages'
+    locales (therapist_locales; English until a therapist.po exists)."""
+    return Translator(negotiate(accept_language, therapist_locales()), therapist=True)
 
 
 def normalise(tag: str | None) -> str | None:

@@ -39,6 +39,7 @@ THERAPIST_FILES = frozenset({
     "frontend/static/replay.js", "frontend/static/admin_jobs.js", "frontend/static/records.js",
     "frontend/static/replies_view.js", "frontend/static/feeling_view.js", "frontend/static/versions.js",
     "frontend/static/voice_setting.js",
+    "backend/sessions/triage.py",  # the dashboard's attention reasons and indicator trends
 })  # fmt: skip
 PLURAL_FORMS = {"de": "nplurals=2; plural=(n != 1);", "es": "nplurals=2; plural=(n != 1);",
                 "fr": "nplurals=2; plural=(n > 1);"}  # fmt: skip
@@ -167,7 +168,7 @@ def check(templates: dict[str, Catalog] | None = None) -> list[Problem]:
             problems.append(Problem("backend/i18n/catalogues.py", f"THERAPIST_FILES names {path}, which is not there"))
         elif path.endswith(".html"):
             problems.extend(unmarked_template_text(path, (ROOT / path).read_text(encoding="utf-8")))
-        else:
+        elif path.endswith(".js"):
             problems.extend(unmarked_script_text(path, (ROOT / path).read_text(encoding="utf-8")))
     return problems
 

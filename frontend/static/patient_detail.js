@@ -336,10 +336,15 @@
     if (!past.length) list.append(el("li", { class: "muted" }, I18n.t("No earlier plans.")));
   }
 
-  /** Shows msg next to a field (or hides it when msg is empty). */
+  /** Returns the box that shows a field's error: the element "<field id>-err" (null for a field without one). */
+  function errorBox(input) { return document.getElementById(`${input.id}-err`); }
+
+  /** Shows msg next to a field (or hides it when msg is empty); a field without an error box only gets marked. */
   function fieldError(input, errBox, msg) {
-    errBox.textContent = msg || "";
-    errBox.hidden = !msg;
+    if (errBox) {
+      errBox.textContent = msg || "";
+      errBox.hidden = !msg;
+    }
     if (input) { if (msg) input.setAttribute("aria-invalid", "true"); else input.removeAttribute("aria-invalid"); }
   }
 
@@ -406,8 +411,8 @@
   /** Returns the plan body of the form, or null after showing each problem next to its field. */
   function readForm() {
     let ok = true;
-    const fail = (input, msg) => { fieldError(input, document.getElementById(input.getAttribute("aria-describedby")), msg); ok = false; };
-    const clear = (input) => fieldError(input, document.getElementById(input.getAttribute("aria-describedby")), "");
+    const fail = (input, msg) => { fieldError(input, errorBox(input), msg); ok = false; };
+    const clear = (input) => fieldError(input, errorBox(input), "");
     const title = document.getElementById("plan-title"), start = document.getElementById("plan-start");
     const end = document.getElementById("plan-end"), notes = document.getElementById("plan-notes");
     const reminders = document.getElementById("plan-reminders");
@@ -467,7 +472,7 @@
       const scope = m[1] === undefined ? document.getElementById("plan-form") : rows[+m[1]];
       const input = scope && scope.querySelector(`[name="${m[2]}"]`);
       const label = input && scope.querySelector(`label[for="${input.id}"]`);
-      if (input) fieldError(input, document.getElementById(input.getAttribute("aria-describedby")),
+      if (input) fieldError(input, errorBox(input),
         `${label ? label.textContent : m[2]}: ${m[3]}.`);
     }
   }

@@ -165,3 +165,31 @@ def test_a_therapist_po_turns_the_therapist_pages_german_without_a_code_change(
     assert '<html lang="en">' in french.text  # no French therapist catalogue: English
     assert '<html lang="de">' in client.get("/patient", headers=HTML | auth_headers(patient) | {
         "Accept-Language": "de"}).text  # fmt: skip
+
+
+def test_the_dashboard_reasons_format_numbers_and_dates_with_babel_in_the_readers_locale():
+    import datetime as dt
+
+    from backend.i18n import Translator, therapist_translator
+    from backend.sessions.triage import RecentSession, RunningPlan, attention
+
+    now = dt.datetime(2026, 11, 27, 12, tzinfo=dt.UTC)
+
+    def said(days: int, pain: int) -> RecentSession:
+        return RecentSession(started_at=now - dt.timedelta(days=days), exercise_slug="squat", repetitions=10,
+                             rom_deg=60.0, quality_ok=True, indicator_scores=None, pain_nrs=pain)  # fmt: skip
+
+    sessions = [said(20, 2), said(15, 3), said(2, 6)]  # the median pain rose from 2.5 to 6
+    plan = RunningPlan(per_week=3, started_on=dt.date(2026, 11, 24))  # new: "no session yet" names its first day
+
+    def reasons(t: Translator, last_session_at: dt.datetime | None) -> list[str]:
+        return attention(now=now, plan=plan, sessions_this_week=0, last_session_at=last_session_at, sessions=sessions,
+                         pending_suggestions=1, pain_alert_above=9, t=t).reasons  # fmt: skip
+
+    english = reasons(therapist_translator("de"), now)  # no German therapist catalogue: English
+    assert "Pain after sets rose from 2.5 to 6 of 10 (median of the last 7 days against the 4 weeks before)" in english
+    assert "1 suggestion to review" in english
+    assert reasons(therapist_translator(None), None)[-1] == "New plan since 24 Nov; no session yet"
+    german_numbers = reasons(Translator("de", therapist=True), None)
+    assert any("from 2,5 to 6 of 10" in r for r in german_numbers), german_numbers
+    assert german_numbers[-1] == "New plan since 24. Nov.; no session yet"
