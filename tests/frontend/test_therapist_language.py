@@ -1,7 +1,7 @@
 """The therapist sees which language the patient reads (issue 23, point 2), in Chromium: "Reads: Deutsch" on the
 patient's page, the system's suggestions marked as read by the patient in German, and beside the advice box and the
-plan's note that free text reaches the patient untranslated; screenshots at 1366 and 390 px in /tmp/shots, each
-checked with axe-core."""
+plan's note that free text reaches the patient untranslated; screenshots at 1366 and 390 px in /tmp/shots, checked
+with axe-core at 390 px (tests/frontend/test_accessibility.py checks the page and its plan form at every width)."""
 
 from __future__ import annotations
 
@@ -86,7 +86,7 @@ def test_the_therapist_sees_the_patients_language_and_that_free_text_is_not_tran
             scroll, client = page.evaluate("[document.documentElement.scrollWidth, "
                                            "document.documentElement.clientWidth]")  # fmt: skip
             assert scroll <= client, f"the page scrolls sideways at {width} px: {scroll} > {client}"
-            assert not _serious(page), width
+        assert not _serious(page)  # at 390 px with the plan form open (every width: test_accessibility)
         # the therapist leaves the choice to the patient's browser: the page says so at once
         page.locator("#patient-locale").select_option("")
         expect(reads).to_have_text("the language of their browser")
