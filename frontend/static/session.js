@@ -63,7 +63,7 @@
     const reps = d.uncertainty && d.uncertainty.repetitions;
     const repNote = reps && reps.ambiguous ? I18n.t("uncertain: {low}–{high}", { low: reps.low, high: reps.high }) : null;
     document.getElementById("numbers").replaceChildren(
-      ...stat(I18n.t("Repetitions"), I18n.number(d.repetition_count), repNote),
+      ...stat(I18n.t("Repetitions"), d.repetition_count === null ? "—" : I18n.number(d.repetition_count), repNote),
       ...stat(I18n.t("Range of motion"), deg(d.rom_deg), romValid(d) ? I18n.t("median of the repetitions")
         : I18n.t("median of the repetitions; not reliable from this view: see the limits above")),
       ...intervalStats(d),
