@@ -21,7 +21,17 @@ from sqlalchemy.orm import Session
 
 from backend.deps import Caller, DbSession, optional_caller, require_patient_access
 from backend.exceptions import NotFound
-from backend.i18n import LANGUAGE_NAMES, LOCALES, N_, js_messages, negotiate, translations, translator
+from backend.i18n import (
+    LANGUAGE_NAMES,
+    LOCALES,
+    N_,
+    js_messages,
+    negotiate,
+    therapist_locales,
+    therapist_translations,
+    translations,
+    translator,
+)
 from backend.reminders.service import UNSUBSCRIBE_PATH, patient_of_token, unsubscribe
 from backend.reminders.times import zone_names
 from backend.schemas import IdPath
@@ -43,14 +53,16 @@ def _package_dir(name: str) -> Path:
 VISER_CLIENT = _package_dir("viser") / "client" / "build" / "index.html"
 
 
-@lru_cache(maxsize=len(LOCALES))
-def templates_for(locale: str) -> Jinja2Templates:
-    """Returns the pages' templates in one language: Jinja's i18n extension with that locale's catalogue."""
+@lru_cache(maxsize=2 * len(LOCALES))
+def templates_for(locale: str, therapist: bool = False) -> Jinja2Templates:
+    """Returns the pages' templates in one language: Jinja's i18n extension with that locale's catalogue (for a
+    therapist's page: the therapist domain's, then the shared messages')."""
     found = Jinja2Templates(directory=str(HERE / "templates"))
     found.env.add_extension("jinja2.ext.i18n")
     found.env.policies["ext.i18n.trimmed"] = True
+    chosen = therapist_translations(locale) if therapist else translations(locale)
     # added to the Environment at run time by jinja2.ext.i18n; jinja2's types do not declare it
-    found.env.install_gettext_translations(translations(locale), newstyle=True)  # type: ignore[attr-defined]
+    found.env.install_gettext_translations(chosen, newstyle=True)  # type: ignore[attr-defined]
     return found
 
 
@@ -79,10 +91,13 @@ def _here(request: Request) -> str:
 
 
 def page_locale(request: Request, user: User | None) -> str:
-    """Returns the language of a page: a patient's chosen one, else the browser's (Accept-Language); the therapist
-    pages stay English for now (their templates are marked, their catalogues not written yet)."""
+    """Returns the language of a page: a patient's chosen one, else the browser's (Accept-Language); a therapist's
+    page: their chosen or their browser's language among the locales with a therapist catalogue (therapist.po; none
+    yet, so English), see backend/i18n."""
     if user is not None and user.role in THERAPIST_ROLES:
-        return "en"
+        if user.locale in therapist_locales():
+            return user.locale
+        return negotiate(request.headers.get("accept-language"), therapist_locales())
     if user is not None and user.locale in LOCALES:
         return user.locale
     return negotiate(request.headers.get("accept-language"))
@@ -94,9 +109,11 @@ def _page(request: Request, name: str, caller: Caller | None, status_code: int =
     root = _root(request)
     locale = locale or page_locale(request, user)
     home = root + (home_for(user.role) if user is not None else "/")
+    therapist = user is not None and user.role in THERAPIST_ROLES
     context = {"user": user, "home": home, "root": root, "locale": locale, "languages": LANGUAGE_NAMES,
-               "i18n_messages": js_messages(locale)} | context  # fmt: skip
-    return templates_for(locale).TemplateResponse(request, name, context, status_code=status_code, headers=_NO_STORE)
+               "i18n_messages": js_messages(locale, therapist)} | context  # fmt: skip
+    return templates_for(locale, therapist).TemplateResponse(request, name, context, status_code=status_code,
+                                                             headers=_NO_STORE)  # fmt: skip
 
 
 _ERROR_PAGES = {

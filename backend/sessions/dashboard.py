@@ -16,6 +16,7 @@ from sqlalchemy.orm import Session, aliased
 
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
+from backend.i18n import Translator
 from backend.plans.models import Plan, PlanItem
 from backend.replies.models import AdviceReply
 from backend.sessions import triage
@@ -232,8 +233,11 @@ def _recent_sessions(
     return out
 
 
-def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.datetime) -> dict[int, dict[str, Any]]:
-    """Returns the dashboard summary of each patient (SummaryOut fields) in three queries, whatever their number."""
+def summaries(
+    *, db_session: Session, patient_ids: Sequence[int], now: dt.datetime, t: Translator = triage.ENGLISH
+) -> dict[int, dict[str, Any]]:
+    """Returns the dashboard summary of each patient (SummaryOut fields) in three queries, whatever their number;
+    reasons and trends in t's language (the therapist's: backend.i18n.therapist_translator)."""
     ids = sorted(set(patient_ids))
     if not ids:
         return {}
@@ -257,6 +261,7 @@ def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             pain_alert_above=row["pain_alert_above"],
             unread_hurt=row.pop("unread_hurt"),
             last_hurt_at=row.pop("last_hurt_at"),
+            t=t,
         )
         analysed_slug = next((s.exercise_slug for s in reversed(sessions) if s.indicator_scores is not None), None)
         out[pid] = {
@@ -265,7 +270,7 @@ def summaries(*, db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             "attention_score": score.score,
             "attention_level": score.level,
             "attention_reasons": score.reasons,
-            "indicator_trends": triage.indicator_trends(now, sessions),
-            "balance_missing": triage.balance_missing(row["latest_indicators"], analysed_slug),
+            "indicator_trends": triage.indicator_trends(now, sessions, t),
+            "balance_missing": triage.balance_missing(row["latest_indicators"], analysed_slug, t),
         }
     return out

@@ -41,6 +41,7 @@ from backend.exceptions import (
     error_responses,
 )
 from backend.exercises.service import get_exercise
+from backend.i18n import therapist_translator
 from backend.schemas import DateTimeQuery, IdPath, IdQuery, Page, PageParams, page_params
 from backend.sessions import dashboard, prepared, service
 from backend.sessions.export import session_export
@@ -434,9 +435,11 @@ def read_progress(
     response_model=SummaryOut,
     responses=error_responses(*AUTH_ERRORS, PatientNotFound),
 )
-def read_summary(patient: PatientForRead, caller: CurrentCaller, db_session: DbSession) -> SummaryOut:
-    """Returns the dashboard summary of one patient: last session, this week against the plan, indicators, advice."""
-    summary = dashboard.summaries(db_session=db_session, patient_ids=[patient.id], now=utcnow())[patient.id]
+def read_summary(patient: PatientForRead, caller: CurrentCaller, db_session: DbSession, request: Request) -> SummaryOut:
+    """Returns the dashboard summary of one patient: last session, this week against the plan, indicators, advice
+    (reasons and trends in the language of the therapist pages that Accept-Language asks for)."""
+    t = therapist_translator(request.headers.get("accept-language"))
+    summary = dashboard.summaries(db_session=db_session, patient_ids=[patient.id], now=utcnow(), t=t)[patient.id]
     _audit(db_session, caller, "session.summary.read", None, patient.id)
     return SummaryOut(**summary)
 
@@ -447,26 +450,31 @@ def read_summary(patient: PatientForRead, caller: CurrentCaller, db_session: DbS
     responses=error_responses(*AUTH_ERRORS),
 )
 def read_dashboard(
-    caller: TherapistOrAdminCaller, db_session: DbSession, page: Annotated[PageParams, Depends(page_params)]
+    caller: TherapistOrAdminCaller,
+    db_session: DbSession,
+    page: Annotated[PageParams, Depends(page_params)],
+    request: Request,
 ) -> Page[DashboardRowOut]:
     """Returns one page of the caller's patients (therapists: assigned; admins: all), most in need of attention first.
 
     Rows are sorted by attention score (highest first), then name. Beyond RANKED_PATIENTS_MAX visible patients
-    (an admin of a large clinic) the rows come by patient id instead, each still with its score.
+    (an admin of a large clinic) the rows come by patient id instead, each still with its score. Reasons and trends
+    come in the language of the therapist pages that Accept-Language asks for (English until a catalogue exists).
     """
     now = utcnow()
+    t = therapist_translator(request.headers.get("accept-language"))
     patients, total = service.dashboard_patients(
         db_session=db_session, caller=caller, limit=dashboard.RANKED_PATIENTS_MAX + 1, offset=0
     )
     if total <= dashboard.RANKED_PATIENTS_MAX:
-        summaries = dashboard.summaries(db_session=db_session, patient_ids=[p.id for p in patients], now=now)
+        summaries = dashboard.summaries(db_session=db_session, patient_ids=[p.id for p in patients], now=now, t=t)
         patients.sort(key=lambda p: (-summaries[p.id]["attention_score"], (p.full_name or p.email).casefold(), p.id))
         patients = patients[page.offset : page.offset + page.limit]
     else:
         patients, total = service.dashboard_patients(
             db_session=db_session, caller=caller, limit=page.limit, offset=page.offset
         )
-        summaries = dashboard.summaries(db_session=db_session, patient_ids=[p.id for p in patients], now=now)
+        summaries = dashboard.summaries(db_session=db_session, patient_ids=[p.id for p in patients], now=now, t=t)
     _audit_patients(db_session, caller, "session.summary.read", [p.id for p in patients], {"via": "dashboard"})
     items = [DashboardRowOut(**summaries[p.id], full_name=p.full_name, email=p.email) for p in patients]
     return Page[DashboardRowOut](items=items, total=total, limit=page.limit, offset=page.offset)

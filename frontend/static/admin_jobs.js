@@ -5,52 +5,52 @@
   const { api, url, el, fmtDateTime, kindMessage } = Coach;
   const $ = (id) => document.getElementById(id);
   const POLL_BUSY_MS = 2000, POLL_IDLE_MS = 15000;
-  const STATE_WORDS = { queued: "waiting", running: "running", done: "done", failed: "failed" };
+  const STATE_WORDS = { queued: I18n.t("waiting"), running: I18n.t("running"), done: I18n.t("done"), failed: I18n.t("failed") };
   let shown = null;  // the batch whose jobs the lower table shows (null: the newest jobs of any batch)
   let patients = new Map();
   let timer = null;
 
   function batchState(b) {
-    if (b.queued + b.running > 0) return b.running ? "Running" : `Waiting: ${b.queued} queued for a worker or a retry`;
-    if (b.total === 0) return "Nothing to do";
-    return b.failed ? `Finished, ${b.failed} failed` : "Finished";
+    if (b.queued + b.running > 0) return b.running ? I18n.t("Running") : I18n.t("Waiting: {count} queued for a worker or a retry", { count: b.queued });
+    if (b.total === 0) return I18n.t("Nothing to do");
+    return b.failed ? I18n.t("Finished, {count} failed", { count: b.failed }) : I18n.t("Finished");
   }
 
   function scopeText(b) {
-    if (b.patient_id === null) return "every patient";
+    if (b.patient_id === null) return I18n.t("every patient");
     const p = patients.get(b.patient_id);
-    return p ? (p.full_name || p.email) : `patient ${b.patient_id}`;
+    return p ? (p.full_name || p.email) : I18n.t("patient {id}", { id: b.patient_id });
   }
 
   function progressCell(b) {
     const finished = b.done + b.failed;
     const bar = el("progress", { max: String(Math.max(b.total, 1)), value: String(finished),
-      "aria-label": `${finished} of ${b.total} sessions finished` });
+      "aria-label": I18n.t("{finished} of {total} sessions finished", { finished, total: b.total }) });
     return el("td", {}, bar, ` ${finished} / ${b.total}`);
   }
 
   function batchRow(b) {
     const show = el("button", { type: "button", class: "btn btn-quiet", "data-batch": b.batch,
-      "aria-pressed": String(shown === b.batch) }, "Show jobs");
+      "aria-pressed": String(shown === b.batch) }, I18n.t("Show jobs"));
     show.addEventListener("click", () => { shown = b.batch; refresh(); });
     return el("tr", { "data-batch": b.batch },
       el("td", {}, fmtDateTime(b.created_at)), el("td", {}, scopeText(b)), progressCell(b),
-      el("td", { class: b.failed ? "bad" : "" }, batchState(b)), el("td", {}, b.queued_by || "command line"),
+      el("td", { class: b.failed ? "bad" : "" }, batchState(b)), el("td", {}, b.queued_by || I18n.t("command line")),
       el("td", {}, show));
   }
 
   function jobRow(j) {
     const session = j.session_id === null ? "—"
-      : el("a", { href: url(`/therapist/sessions/${j.session_id}`) }, `Session ${j.session_id}`);
+      : el("a", { href: url(`/therapist/sessions/${j.session_id}`) }, I18n.t("Session {id}", { id: String(j.session_id) }));
     let what = j.error || "";
-    if (j.status === "done") what = j.changed ? "New metrics stored; the old ones are kept." : "Already analysed with this version: nothing changed.";
-    else if (j.status === "queued" && j.error) what = `Will try again: ${j.error}`;
-    else if (j.status === "queued") what = "Waiting for a worker.";
-    else if (j.status === "running") what = "A worker is analysing it.";
+    if (j.status === "done") what = j.changed ? I18n.t("New metrics stored; the old ones are kept.") : I18n.t("Already analysed with this version: nothing changed.");
+    else if (j.status === "queued" && j.error) what = I18n.t("Will try again: {reason}", { reason: j.error });
+    else if (j.status === "queued") what = I18n.t("Waiting for a worker.");
+    else if (j.status === "running") what = I18n.t("A worker is analysing it.");
     return el("tr", { "data-job": String(j.id), "data-status": j.status },
       el("td", {}, String(j.id)), el("td", {}, session),
       el("td", { class: j.status === "failed" ? "bad" : "" }, STATE_WORDS[j.status] || j.status),
-      el("td", {}, `${j.attempts} of ${j.max_attempts}`), el("td", {}, what));
+      el("td", {}, I18n.t("{count} of {total}", { count: j.attempts, total: j.max_attempts })), el("td", {}, what));
   }
 
   function fill(table, rows, empty, cols) {
@@ -64,17 +64,17 @@
     try {
       const overview = await api("/reanalysis");
       $("version").textContent = overview.analysis_version;
-      fill("batches", overview.batches.map(batchRow), "No re-analysis has been started yet.", 6);
+      fill("batches", overview.batches.map(batchRow), I18n.t("No re-analysis has been started yet."), 6);
       busy = overview.batches.some((b) => b.queued + b.running > 0);
       const query = shown ? `?batch=${encodeURIComponent(shown)}&limit=200` : "?limit=50";
       const jobs = await api(`/jobs${query}`);
-      $("jobs-of").textContent = shown ? "of the chosen re-analysis" : "(newest first)";
-      fill("jobs", jobs.map(jobRow), "No jobs.", 5);
-      $("live").textContent = busy ? "Updating every 2 seconds while work is waiting or running."
-        : `Up to date at ${new Date().toLocaleTimeString()}.`;
+      $("jobs-of").textContent = shown ? I18n.t("of the chosen re-analysis") : I18n.t("(newest first)");
+      fill("jobs", jobs.map(jobRow), I18n.t("No jobs."), 5);
+      $("live").textContent = busy ? I18n.t("Updating every 2 seconds while work is waiting or running.")
+        : I18n.t("Up to date at {time}.", { time: new Date().toLocaleTimeString(I18n.tag) });
       $("live").className = "small muted";
     } catch (err) {
-      $("live").textContent = `Could not update: ${kindMessage(err)} Trying again in a few seconds.`;
+      $("live").textContent = I18n.t("Could not update: {reason} Trying again in a few seconds.", { reason: kindMessage(err) });
       $("live").className = "small alert";
       busy = true;
     }
@@ -85,8 +85,8 @@
     try {
       const page = await api("/patients?limit=200");
       patients = new Map(page.items.map((p) => [p.id, p]));
-      $("scope").append(...page.items.map((p) => el("option", { value: String(p.id) }, `${p.full_name || p.email}'s sessions`)));
-    } catch (err) { $("start-msg").textContent = `The patient list could not be loaded: ${kindMessage(err)}`; }
+      $("scope").append(...page.items.map((p) => el("option", { value: String(p.id) }, I18n.t("{name}'s sessions", { name: p.full_name || p.email }))));
+    } catch (err) { $("start-msg").textContent = I18n.t("The patient list could not be loaded: {reason}", { reason: kindMessage(err) }); }
   }
 
   $("start").addEventListener("submit", async (e) => {
@@ -97,13 +97,15 @@
     try {
       const out = await api("/reanalysis", { method: "POST", body: pid ? { patient_id: Number(pid) } : {} });
       msg.className = "small";
-      msg.textContent = out.total ? `${out.total} session(s) queued for analysis version ${out.analysis_version}.`
-        : `Nothing to do: every stored session of ${pid ? "this patient" : "every patient"} is already analysed with version ${out.analysis_version} or queued.`;
+      msg.textContent = out.total
+        ? I18n.nt("{n} session queued for analysis version {version}.", "{n} sessions queued for analysis version {version}.", out.total, { version: out.analysis_version })
+        : pid ? I18n.t("Nothing to do: every stored session of this patient is already analysed with version {version} or queued.", { version: out.analysis_version })
+          : I18n.t("Nothing to do: every stored session of every patient is already analysed with version {version} or queued.", { version: out.analysis_version });
       shown = out.total ? out.batch : shown;
       refresh();
     } catch (err) {
       msg.className = "small alert";
-      msg.textContent = `Nothing was queued: ${kindMessage(err)}`;
+      msg.textContent = I18n.t("Nothing was queued: {reason}", { reason: kindMessage(err) });
     } finally { btn.disabled = false; }
   });
 

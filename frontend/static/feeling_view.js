@@ -6,10 +6,11 @@
   if (!main || !sub) return;
   Coach.api(`/sessions/${main.dataset.sessionId}/feeling`).then((f) => {
     const parts = [];
-    if (f.pain !== null) parts.push(`pain ${f.pain} of 10 (numeric rating scale)`);
-    if (f.effort !== null) parts.push(`effort ${f.effort} of 10 (Borg CR10)`);
-    const text = f.answered_at === null ? "The patient has not said how this set felt."
-      : parts.length ? `How it felt, said by the patient: ${parts.join(", ")}.` : "The patient skipped the questions on how it felt.";
+    if (f.pain !== null) parts.push(I18n.t("pain {pain} of 10 (numeric rating scale)", { pain: f.pain }));
+    if (f.effort !== null) parts.push(I18n.t("effort {effort} of 10 (Borg CR10)", { effort: f.effort }));
+    const text = f.answered_at === null ? I18n.t("The patient has not said how this set felt.")
+      : parts.length ? I18n.t("How it felt, said by the patient: {answers}.", { answers: parts.join(", ") })
+        : I18n.t("The patient skipped the questions on how it felt.");
     sub.after(Coach.el("p", { id: "session-feeling", class: f.pain !== null && f.pain >= 5 ? "alert" : "lead" }, text));
   }).catch((err) => Coach.showError(err));
 })();

@@ -3,6 +3,7 @@
  *   I18n.t("Hello, {name}!", { name })              -> the translation, placeholders filled
  *   I18n.nt("{n} set", "{n} sets", n, { ... })      -> the singular or plural form for n ({n} is n)
  *   I18n.date(iso, options), I18n.number(x, digits)  -> dates and numbers the way the page's language writes them
+ *   I18n.percent(fraction)                           -> 0.85: "85%" / "85 %"
  *   I18n.N_("text")                                  -> marks a text that arrives from elsewhere (translated by I18n.t(text))
  * Mark every user-facing string with I18n.t / I18n.nt (python -m backend.i18n.catalogues extract finds them). */
 "use strict";
@@ -36,6 +37,8 @@ const I18n = (() => {
   function dateTime(iso, options) { return new Date(iso).toLocaleString(tag, options); }
   /** Returns a number in the page's language, with at most `digits` decimals (0 unless given). */
   function number(x, digits = 0) { return new Intl.NumberFormat(tag, { maximumFractionDigits: digits }).format(x); }
+  /** Returns a fraction as a whole percentage in the page's language (Babel's format_percent on the server). */
+  function percent(fraction) { return new Intl.NumberFormat(tag, { style: "percent", maximumFractionDigits: 0 }).format(fraction); }
 
   /** The header's language select (patients): saves the choice for the patient, then shows the page in it. */
   document.addEventListener("DOMContentLoaded", () => {
@@ -54,5 +57,5 @@ const I18n = (() => {
    *  home computer's hints, and is translated by I18n.t(text) where it is shown). */
   function N_(msgid) { return msgid; }
 
-  return { locale, tag, t, nt, N_, date, dateTime, number };
+  return { locale, tag, t, nt, N_, date, dateTime, number, percent };
 })();

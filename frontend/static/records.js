@@ -38,13 +38,14 @@
       const rows = Object.values(out.rows).reduce((a, b) => a + b, 0);
       show(-1);
       msg.className = "note";
-      msg.replaceChildren(`The patient was erased: ${rows} records and ${out.objects} stored files deleted. `,
-        Object.assign(document.createElement("a"), { href: url("/therapist"), textContent: "Back to all patients" }));
+      msg.replaceChildren(I18n.t("The patient was erased: {rows} records and {files} stored files deleted.",
+        { rows, files: out.objects }) + " ",
+        Object.assign(document.createElement("a"), { href: url("/therapist"), textContent: I18n.t("Back to all patients") }));
       msg.hidden = false;
       msg.focus();
     } catch (err) {
       msg.className = "alert";
-      msg.textContent = `Nothing was erased: ${err.detail || err.message}`;
+      msg.textContent = I18n.t("Nothing was erased: {reason}", { reason: err.detail || err.message });
       msg.hidden = false;
       $("erase-confirm").disabled = false;
     }

@@ -10,9 +10,9 @@
       const [lib, s] = await Promise.all([exercises(), api(`/sessions/${sid}`)]);
       const name = exerciseName(lib, s.exercise_slug);
       document.getElementById("replay-title").textContent = `${name} · ${fmtDateTime(s.started_at)}`;
-      info.textContent = [`${s.repetitions === null ? "—" : s.repetitions} repetitions`,
-        s.rom_deg === null ? null : `range of motion ${s.rom_deg.toFixed(1)}°`,
-        s.quality_ok === false ? "poor data quality" : null, `${s.duration_s.toFixed(1)} s`].filter(Boolean).join(" · ");
+      info.textContent = [s.repetitions === null ? I18n.t("— repetitions") : I18n.nt("{n} repetition", "{n} repetitions", s.repetitions),
+        s.rom_deg === null ? null : I18n.t("range of motion {angle}°", { angle: I18n.number(s.rom_deg, 1) }),
+        s.quality_ok === false ? I18n.t("poor data quality") : null, I18n.t("{seconds} s", { seconds: I18n.number(s.duration_s, 1) })].filter(Boolean).join(" · ");
     } catch (err) { info.textContent = ""; showError(err); }
   }
   load();
@@ -23,7 +23,8 @@
   const stateBox = document.getElementById("replay-state");
   const POLL_MS = 1500;
   let wanted = "";  // the skeleton the checkboxes ask for alone ("raw", "filtered"), or "" for both
-  const what = (layer) => (layer ? `The 3D replay of the ${layer} skeleton alone` : "The 3D replay");
+  const what = (layer) => (layer === "raw" ? I18n.t("The 3D replay of the raw skeleton alone")
+    : layer === "filtered" ? I18n.t("The 3D replay of the filtered skeleton alone") : I18n.t("The 3D replay"));
   function say(kind, text) { stateBox.className = kind; stateBox.textContent = text; stateBox.hidden = false; }
   async function show(layer) {
     wanted = layer;
@@ -38,7 +39,7 @@
         showError(err);
         return;
       }
-      say("alert", `The replay's state could not be read (${err.detail || err.message}); trying again.`);
+      say("alert", I18n.t("The replay's state could not be read ({reason}); trying again.", { reason: err.detail || err.message }));
       setTimeout(() => { if (wanted === layer) show(layer); }, POLL_MS * 2);
       return;
     }
@@ -49,8 +50,8 @@
       viewer.hidden = false;
       return;
     }
-    if (state.state === "failed") { say("alert", `${what(layer)} could not be prepared. ${state.detail}`); return; }
-    say("note", `${what(layer)} is being prepared. ${state.detail}`);
+    if (state.state === "failed") { say("alert", `${I18n.t("{what} could not be prepared.", { what: what(layer) })} ${state.detail}`); return; }
+    say("note", `${I18n.t("{what} is being prepared.", { what: what(layer) })} ${state.detail}`);
     setTimeout(() => { if (wanted === layer) show(layer); }, POLL_MS);
   }
   if (viewer.hasAttribute("data-preparing")) show("");
@@ -61,7 +62,7 @@
   for (const box of boxes) {
     box.addEventListener("change", () => {
       const shown = boxes.filter((b) => b.checked).map((b) => b.value);
-      if (!shown.length) { box.checked = true; note.textContent = "At least one skeleton stays shown."; return; }
+      if (!shown.length) { box.checked = true; note.textContent = I18n.t("At least one skeleton stays shown."); return; }
       note.textContent = "";
       show(shown.length === 1 ? shown[0] : "");
     });

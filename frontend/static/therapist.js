@@ -4,10 +4,11 @@
 (() => {
   const { api, url, el, fmtDate, showError, exercises, exerciseName } = Coach;
   // column names, repeated on each cell for narrow screens, where the rows stack as cards (app.css)
-  const COLUMNS = ["Patient", "Attention", "Latest session", "This week", "Flexibility", "Endurance", "Strength", "Balance",
-    "To review"];
+  const COLUMNS = [I18n.t("Patient"), I18n.t("Attention"), I18n.t("Latest session"), I18n.t("This week"),
+    I18n.t("Flexibility"), I18n.t("Endurance"), I18n.t("Strength"), I18n.t("Balance"), I18n.t("To review")];
   const INDICATORS = ["flexibility", "endurance", "strength", "balance"];
-  const LEVELS = { now: ["high", "Now"], soon: ["mid", "Soon"], ok: ["low", "OK"] };
+  const INDICATOR_LABELS = { flexibility: COLUMNS[4], endurance: COLUMNS[5], strength: COLUMNS[6], balance: COLUMNS[7] };
+  const LEVELS = { now: ["high", I18n.t("Now")], soon: ["mid", I18n.t("Soon")], ok: ["low", I18n.t("OK")] };
   const ARROWS = { up: "↑", down: "↓", flat: "→" };
   const SVG = "http://www.w3.org/2000/svg";
 
@@ -36,41 +37,48 @@
 
   function indicatorCell(name, ind, t, missing) {
     const tr = trend(t);
-    const label = name.charAt(0).toUpperCase() + name.slice(1);
+    const label = INDICATOR_LABELS[name];
     if (!ind || ind.score === null || ind.score === undefined) {
       const why = name === "balance" && missing ? el("span", { class: "reasons why-missing" }, missing) : null;
-      return el("td", { class: "indicator", "data-label": label }, el("span", { class: "muted", title: ind ? ind.basis : "no data" }, "—"), tr, why);
+      return el("td", { class: "indicator", "data-label": label }, el("span", { class: "muted", title: ind ? ind.basis : I18n.t("no data") }, "—"), tr, why);
     }
-    const flag = ind.quality_ok === false ? el("span", { class: "flag", title: "data quality: the recording was poor; treat this score with care" }, "⚠") : null;
-    const prev = ind.previous !== null && ind.previous !== undefined ? `; value ${ind.value}, earlier median ${ind.previous}` : "";
+    const flag = ind.quality_ok === false ? el("span", { class: "flag", title: I18n.t("data quality: the recording was poor; treat this score with care") }, "⚠") : null;
+    const prev = ind.previous !== null && ind.previous !== undefined
+      ? I18n.t("; value {value}, earlier median {previous}", { value: ind.value, previous: ind.previous }) : "";
+    const cms = (v) => I18n.number(100 * v, 1);
     const iv = name === "balance" && ind.interval && ind.value !== null
-      ? el("span", { class: "reasons" }, `${(100 * ind.value).toFixed(1)} cm/s (95 % ${(100 * ind.interval[0]).toFixed(1)}–${(100 * ind.interval[1]).toFixed(1)})`) : null;
+      ? el("span", { class: "reasons" }, I18n.t("{speed} cm/s (95 % {low}–{high})",
+        { speed: cms(ind.value), low: cms(ind.interval[0]), high: cms(ind.interval[1]) })) : null;
     return el("td", { class: "indicator", "data-label": label, title: `${ind.basis || ""}${prev}` },
       el("span", { class: "score" }, el("span", { class: "bar", "aria-hidden": "true" }, el("i", { style: `width:${Math.round(ind.score)}%` })),
-        Math.round(ind.score), flag), tr, iv);
+        I18n.number(ind.score), flag), tr, iv);
   }
 
   function row(r, lib) {
     const href = url(`/therapist/patients/${r.patient_id}`);
     const last = r.last_session;
-    const week = r.planned_this_week ? `${r.sessions_this_week} of ${r.planned_this_week} (${Math.round(100 * r.sessions_this_week / r.planned_this_week)}%)`
-      : `${r.sessions_this_week} (no plan)`;
+    const week = r.planned_this_week
+      ? I18n.t("{done} of {planned} ({percent})", { done: r.sessions_this_week, planned: r.planned_this_week,
+        percent: I18n.percent(r.sessions_this_week / r.planned_this_week) })
+      : I18n.t("{done} (no plan)", { done: r.sessions_this_week });
     const ind = r.latest_indicators || {};
     const trends = r.indicator_trends || {};
     const [cls, label] = LEVELS[r.attention_level] || LEVELS.ok;
     return el("tr", { "data-patient-id": r.patient_id, "data-attention-score": r.attention_score, "data-attention-level": r.attention_level },
       el("td", { "data-label": COLUMNS[0] }, el("a", { href, class: "patient-link" }, r.full_name || r.email), el("span", { class: "reasons" }, r.email),
-        r.unread_replies ? el("a", { href: href + "#replies-h", class: "new-replies" }, `${r.unread_replies} new ${r.unread_replies === 1 ? "reply" : "replies"}`) : null),
+        r.unread_replies ? el("a", { href: href + "#replies-h", class: "new-replies" }, I18n.nt("{n} new reply", "{n} new replies", r.unread_replies)) : null),
       el("td", { class: "attention", "data-label": COLUMNS[1] }, el("span", { class: `pill ${cls}` }, label), " ",
-        el("span", { class: "attention-score", title: "attention score, 0–100" }, `score ${r.attention_score}`),
+        el("span", { class: "attention-score", title: I18n.t("attention score, 0–100") }, I18n.t("score {score}", { score: r.attention_score })),
         r.attention_reasons.length ? el("ul", { class: "reasons" }, ...r.attention_reasons.map((t) => el("li", {}, t)))
-          : el("span", { class: "reasons" }, "on track")),
-      el("td", { "data-label": COLUMNS[2] }, last ? el("a", { href: url(`/therapist/sessions/${last.id}`), class: "session-link" }, fmtDate(last.started_at)) : "never",
-        last ? el("span", { class: "reasons" }, `${exerciseName(lib, last.exercise_slug)}${last.repetitions !== null ? ", " + last.repetitions + " reps" : ""}`) : null),
+          : el("span", { class: "reasons" }, I18n.t("on track"))),
+      el("td", { "data-label": COLUMNS[2] }, last ? el("a", { href: url(`/therapist/sessions/${last.id}`), class: "session-link" }, fmtDate(last.started_at)) : I18n.t("never"),
+        last ? el("span", { class: "reasons" }, last.repetitions !== null
+          ? I18n.nt("{exercise}, {n} rep", "{exercise}, {n} reps", last.repetitions, { exercise: exerciseName(lib, last.exercise_slug) })
+          : exerciseName(lib, last.exercise_slug)) : null),
       el("td", { "data-label": COLUMNS[3] }, week),
       ...INDICATORS.map((k) => indicatorCell(k, ind[k], trends[k], r.balance_missing)),
       el("td", { class: "pending", "data-label": COLUMNS[8] },
-        r.pending_suggestions ? el("a", { href: href + "#pending-h", "aria-label": `${r.pending_suggestions} suggestions to review` }, String(r.pending_suggestions)) : "0"));
+        r.pending_suggestions ? el("a", { href: href + "#pending-h", "aria-label": I18n.nt("{n} suggestion to review", "{n} suggestions to review", r.pending_suggestions) }, String(r.pending_suggestions)) : "0"));
   }
 
   /** Shows the replies no therapist has read yet, newest first, each linked to its patient's page. */
@@ -78,9 +86,9 @@
     const names = new Map(rows.map((r) => [r.patient_id, r.full_name || r.email]));
     const list = document.getElementById("unread-replies");
     list.replaceChildren(...replies.items.map((r) => RepliesView.item(r, { isNew: true,
-      who: el("a", { href: url(`/therapist/patients/${r.patient_id}#replies-h`) }, names.get(r.patient_id) || `patient ${r.patient_id}`) })));
-    if (!replies.items.length) list.append(el("li", { class: "muted" }, "No unread replies."));
-    if (replies.total > replies.items.length) list.append(el("li", { class: "muted" }, `and ${replies.total - replies.items.length} more`));
+      who: el("a", { href: url(`/therapist/patients/${r.patient_id}#replies-h`) }, names.get(r.patient_id) || I18n.t("patient {id}", { id: r.patient_id })) })));
+    if (!replies.items.length) list.append(el("li", { class: "muted" }, I18n.t("No unread replies.")));
+    if (replies.total > replies.items.length) list.append(el("li", { class: "muted" }, I18n.t("and {count} more", { count: replies.total - replies.items.length })));
   }
 
   async function load() {
@@ -95,7 +103,7 @@
       }
       body.replaceChildren(...rows.map((r) => row(r, lib)));  // the server's order: attention score, highest first, then name
       repliesBlock(await api("/replies?unread=true&limit=20"), rows);
-      if (!rows.length) body.append(el("tr", {}, el("td", { colspan: 9 }, "No patients are assigned to you yet.")));
+      if (!rows.length) body.append(el("tr", {}, el("td", { colspan: 9 }, I18n.t("No patients are assigned to you yet."))));
     } catch (err) { body.replaceChildren(); showError(err); }
   }
   load();

@@ -14,7 +14,7 @@
     msg.textContent = "";
     try {
       show(await Coach.api(`/patients/${pid}/voice`, { method: "PUT", body: { enabled: on.checked, volume: +volume.value / 100 } }));
-      msg.textContent = "Saved — the patient's page uses it from the next set.";
+      msg.textContent = I18n.t("Saved — the patient's page uses it from the next set.");
     } catch (err) { msg.textContent = Coach.kindMessage(err); }
   });
   Coach.api(`/patients/${pid}/voice`).then((pref) => { show(pref); form.hidden = false; }).catch((err) => Coach.showError(err));

@@ -60,7 +60,7 @@ def test_therapist_edits_the_plan_and_the_patient_sees_it(page, browser, live_se
     rom.fill("200")
     page.click("#plan-save")  # client checks: the problem in words next to each field, nothing sent
     expect(first.locator(f"#{reps.get_attribute('id')}-err")).to_have_text(
-        "Please enter the repetitions (a number from 1 to 1000)."
+        "Please enter the repetitions (a number from 1 to 1,000)."  # numbers as the page's locale writes them
     )
     expect(first.locator(f"#{rom.get_attribute('id')}-err")).to_have_text("Target range (°) must be between 1 and 180.")
     expect(reps).to_have_attribute("aria-invalid", "true")
