@@ -11,10 +11,13 @@ rows measured, rows losing somewhere, (row, joint) pairs lost, the worst joint m
 where), per source (hdm05, cmu, sim), and with --markdown one line per motion with a cell per (view, seed):
 "joints lost / worst margin mm" (the tables of bench/README.md). The online filter always runs with the shipped
 defaults (the property is about the offline pass: --set changes the offline settings only, unless --set-online).
+With --forward the same report compares, instead, the offline pipeline's unscented RTS output with the forward pass 3
+it smooths (same lengths, same noise model): whether the smoother itself is never worse than its causal pass
+("offline" columns = RTS, "online" = pass 3).
 
     python bench/offline_vs_online.py [--views 0 60] [--seeds 1 2 3] [--white 0.02] [--motions rotateArms squat]
                                       [--tolerance-mm 1] [--set NAME=VALUE ...] [--set-online NAME=VALUE ...]
-                                      [--markdown] [--json OUT]
+                                      [--forward] [--markdown] [--json OUT]
 """
 
 from __future__ import annotations
@@ -34,7 +37,11 @@ if str(ROOT_DIR) not in sys.path:  # `python bench/offline_vs_online.py` puts be
 from bench.accuracy import pipeline_config, run_method  # noqa: E402
 from bench.arms import MOTIONS, measure, truths  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
+from kinect_agent.blas_threads import one_blas_thread  # noqa: E402
+from kinect_agent.processing.combined_outliers import remove_outliers_combined  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
+from kinect_agent.processing.ik import inverse_kinematics  # noqa: E402
+from kinect_agent.processing.pipeline import smooth  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.sources.simulator import EXERCISES, simulate  # noqa: E402
 
@@ -83,20 +90,46 @@ class Row:
         return np.flatnonzero(self.margins() > tolerance_mm)
 
 
+def smoothed_and_forward(rec: Recording, config: PipelineConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Returns (the unscented RTS output, pass 3's forward estimate), both (T, J, 3) m with the same lengths: the
+    offline pipeline's outlier step, inverse kinematics and passes (pipeline.smooth), without its rigid-input and
+    offset steps."""
+    with one_blas_thread():
+        clean = remove_outliers_combined(rec, config)[0] if config.remove_outliers else rec
+        ik = inverse_kinematics(clean.positions)
+        root, lengths, theta, info = smooth(clean, ik, config, forward=True)
+    lengths_t = np.broadcast_to(lengths, (clean.n_frames, len(lengths)))
+    f_root, f_theta = info["forward"]
+    return ik.model.positions(root, lengths_t, theta), ik.model.positions(f_root, lengths_t, f_theta)
+
+
 def per_joint(
-    motion: str, view: int, seed: int, white: float | None, config: PipelineConfig, online_config: PipelineConfig
+    motion: str,
+    view: int,
+    seed: int,
+    white: float | None,
+    config: PipelineConfig,
+    online_config: PipelineConfig,
+    forward: bool = False,
 ) -> Row:
-    """Returns the Row of one (motion, view, seed), RMSE pooled over the motion's clips."""
-    sq: dict[str, list[np.ndarray]] = {"pipeline_offline": [], "pipeline_online": []}
+    """Returns the Row of one (motion, view, seed), RMSE pooled over the motion's clips; forward=True: the RTS output
+    against its own forward pass 3 (smoothed_and_forward) in place of offline against online."""
+    sq: dict[str, list[np.ndarray]] = {"offline": [], "online": []}
     for measured, true in _clips(motion, view, seed, white):
-        for method, cfg in (("pipeline_offline", config), ("pipeline_online", online_config)):
-            est, _ = run_method(method, measured, cfg)
-            sq[method].append(np.sum((est - true) ** 2, axis=-1))
+        if forward:
+            estimates = smoothed_and_forward(measured, config)
+        else:
+            estimates = (
+                run_method("pipeline_offline", measured, config)[0],
+                run_method("pipeline_online", measured, online_config)[0],
+            )
+        for key, est in zip(sq, estimates, strict=True):
+            sq[key].append(np.sum((est - true) ** 2, axis=-1))
     rmse = {m: 1000.0 * np.sqrt(np.mean(np.concatenate(v, axis=0), axis=0)) for m, v in sq.items()}
-    return Row(motion, view, seed, rmse["pipeline_offline"], rmse["pipeline_online"])
+    return Row(motion, view, seed, rmse["offline"], rmse["online"])
 
 
-def summary(rows: list[Row], tolerance_mm: float) -> str:
+def summary(rows: list[Row], tolerance_mm: float, labels: tuple[str, str] = ("offline", "online")) -> str:
     """Returns the property's summary line of some rows: rows losing, pairs lost, worst margin and where."""
     if not rows:
         return "no rows"
@@ -107,8 +140,8 @@ def summary(rows: list[Row], tolerance_mm: float) -> str:
     return (
         f"{len(losing)} of {len(rows)} rows lose at some joint by > {tolerance_mm:g} mm, {pairs} (row, joint) pairs; "
         f"worst margin {worst.margins()[j]:+.1f} mm ({worst.motion} {worst.view}° seed {worst.seed} "
-        f"{skeleton.JOINTS[j]}: {worst.offline_mm[j]:.1f} vs {worst.online_mm[j]:.1f}); all joints offline "
-        f"{np.mean([np.sqrt(np.mean(r.offline_mm**2)) for r in rows]):.1f} / online "
+        f"{skeleton.JOINTS[j]}: {worst.offline_mm[j]:.1f} vs {worst.online_mm[j]:.1f}); all joints {labels[0]} "
+        f"{np.mean([np.sqrt(np.mean(r.offline_mm**2)) for r in rows]):.1f} / {labels[1]} "
         f"{np.mean([np.sqrt(np.mean(r.online_mm**2)) for r in rows]):.1f} mm (mean over rows)"
     )
 
@@ -140,18 +173,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--tolerance-mm", type=float, default=0.0, help="a joint loses when offline > online + this")
     parser.add_argument("--set", nargs="*", default=[], help="PipelineConfig overrides of the offline pass")
     parser.add_argument("--set-online", nargs="*", default=[], help="PipelineConfig overrides of the online filter")
+    parser.add_argument("--forward", action="store_true", help="the RTS output against its forward pass 3 instead")
     parser.add_argument("--markdown", action="store_true", help="also print the per-motion table")
     parser.add_argument("--json", type=Path, help="also write every row's per-joint RMSE to this file")
     args = parser.parse_args(argv)
     config, online_config = pipeline_config(args.set), pipeline_config(args.set_online)
     noise = f"white {args.white * 1000:.0f} mm" if args.white else "Kinect 2 model"
     overrides = f"offline overrides {args.set or 'none'}, online {args.set_online or 'none'}"
-    print(f"offline vs online per joint, {noise}, {overrides}")
+    labels = ("RTS", "forward") if args.forward else ("offline", "online")
+    pair = "RTS output vs its forward pass 3" if args.forward else "offline vs online"
+    print(f"{pair} per joint, {noise}, {overrides}")
     rows: list[Row] = []
     for motion in args.motions:
         for view in args.views:
             for seed in args.seeds:
-                r = per_joint(motion, view, seed, args.white, config, online_config)
+                r = per_joint(motion, view, seed, args.white, config, online_config, args.forward)
                 rows.append(r)
                 lost = ", ".join(
                     f"{skeleton.JOINTS[j]} {r.offline_mm[j]:.1f}>{r.online_mm[j]:.1f}"
@@ -159,16 +195,16 @@ def main(argv: list[str] | None = None) -> int:
                 )
                 off, on = np.sqrt(np.mean(r.offline_mm**2)), np.sqrt(np.mean(r.online_mm**2))
                 print(
-                    f"  {motion:22s} {view:3d}° seed {seed}: all joints offline {off:6.1f} online {on:6.1f} mm; "
-                    f"worst margin {r.margins().max():+5.1f} mm; "
-                    f"offline loses at: {lost or 'none'}",
+                    f"  {motion:22s} {view:3d}° seed {seed}: all joints {labels[0]} {off:6.1f} {labels[1]} "
+                    f"{on:6.1f} mm; worst margin {r.margins().max():+5.1f} mm; "
+                    f"{labels[0]} loses at: {lost or 'none'}",
                     flush=True,
                 )
-    print(f"all: {summary(rows, args.tolerance_mm)}")
+    print(f"all: {summary(rows, args.tolerance_mm, labels)}")
     for source in ("hdm05", "cmu", "sim"):
         part = [r for r in rows if source_of(r.motion) == source]
         if part:
-            print(f"{source}: {summary(part, args.tolerance_mm)}")
+            print(f"{source}: {summary(part, args.tolerance_mm, labels)}")
     if args.markdown:
         print(markdown(rows, args.tolerance_mm))
     if args.json:
