@@ -8,7 +8,9 @@ case that is not 10, then per kind (correct, incorrect) and stage (raw, filtered
 overall, exact / off by one / off by more than one. Subjects: every one found in the folders (UI-PRMD has s01-s10;
 subjects beyond s05 are held out from the detector's development and reported apart when present).
 
-    python bench/repetitions.py [--data ../shared/data] [--no-filter] [--json OUT]
+    python bench/repetitions.py [--data ../shared/data] [--no-filter] [--json OUT] [--set NAME=VALUE ...]
+
+--set NAME=VALUE (repeatable) filters the UI-PRMD recordings with PipelineConfig overrides instead of the defaults.
 
 Issue 13's target: at least 98 % exact and never off by more than one, on correct and incorrect executions alike.
 
@@ -44,6 +46,7 @@ from kinect_agent.analysis import series  # noqa: E402
 from kinect_agent.analysis.angles import counting_angles  # noqa: E402
 from kinect_agent.analysis.repetitions import count_repetitions  # noqa: E402
 from kinect_agent.formats import ui_prmd  # noqa: E402
+from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.sources.simulator import EXERCISES as SIMULATED  # noqa: E402
@@ -67,9 +70,9 @@ def subjects(folder: Path) -> list[str]:
     return sorted({name.split("_")[1] for name in (p.name for p in folder.rglob("m*_s*_e*_positions*"))})
 
 
-def measure(data: Path, filtered: bool) -> list[dict]:
+def measure(data: Path, filtered: bool, config: PipelineConfig | None = None) -> list[dict]:
     """Returns one row per kind, movement and subject: the raw count and (filtered=True) the count after the
-    pipeline."""
+    pipeline (settings `config`, default the shipped ones)."""
     rows = []
     for kind, folder in KINDS.items():
         kinect = data / "ui-prmd" / folder / "Kinect"
@@ -77,7 +80,7 @@ def measure(data: Path, filtered: bool) -> list[dict]:
             for movement in MOVEMENTS:
                 rec = ui_prmd.read_episodes(kinect, movement=movement, subject=subject)
                 row = {"kind": kind, "movement": movement, "subject": subject, "raw": count(rec, movement)}
-                row["filtered"] = count(process(rec).filtered, movement) if filtered else None
+                row["filtered"] = count(process(rec, config=config).filtered, movement) if filtered else None
                 rows.append(row)
     return rows
 
@@ -194,6 +197,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=Path, default=ROOT_DIR.parent / "shared" / "data", help="the shared data")
     parser.add_argument("--no-filter", action="store_true", help="raw counts only (fast)")
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                        help="PipelineConfig override of the UI-PRMD filtering (repeatable)")  # fmt: skip
     parser.add_argument("--json", type=Path, help="also write every row to this file")
     parser.add_argument("--simulated", action="store_true", help="simulated sets instead of UI-PRMD")
     parser.add_argument("--seeds", type=int, nargs="+", default=[301, 302, 303], help="simulator seeds")
@@ -216,7 +221,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {args.data / 'ui-prmd'} is missing", file=sys.stderr)
         return 2
     started = time.perf_counter()
-    rows = measure(args.data, filtered=not args.no_filter)
+    from bench.accuracy import pipeline_config
+
+    rows = measure(args.data, filtered=not args.no_filter, config=pipeline_config(args.set))
     print_report(rows)
     print(f"\n({time.perf_counter() - started:.0f} s)")
     if args.json:

@@ -240,13 +240,15 @@ def smooth(
     config: PipelineConfig,
     progress: Progress | None = None,
     covariances: bool = False,
+    forward: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
     """Runs the four passes on an outlier-free recording; returns (root (T, 3), lengths (19,), theta (T, 33), info).
 
     info: length_sd_m (19,) m, gated_per_pass [4 ints], length_pass_frames, stage_cpu_seconds {passes, smoother}
     (CPU s: passes 1-3; the unscented RTS or pass 4); with covariances=True also
     "covariance": (T, 36, 36) the smoothed covariance of each frame's state (root (3) m, theta (33) rad; m², rad²,
-    m·rad), in the order of the returned root and theta.
+    m·rad), in the order of the returned root and theta; with forward=True also "forward": (root (T, 3) m,
+    theta (T, 33) rad), pass 3's filtered estimates, the causal pass the smoother starts from (same lengths).
     """
     config = config.model_copy(
         update={
@@ -311,6 +313,8 @@ def smooth(
     }
     if covariances:
         info["covariance"] = Ps
+    if forward:
+        info["forward"] = (xs3[:, :N_ROOT], xs3[:, N_ROOT:])
     return xs[:, :N_ROOT], lengths, xs[:, N_ROOT:], info
 
 
