@@ -59,6 +59,7 @@ from kinect_agent.processing.combined_outliers import remove_outliers_combined
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.errors import FilterDiverged
 from kinect_agent.processing.ik import IKResult, inverse_kinematics
+from kinect_agent.processing.joint_smoother import smooth_joints
 from kinect_agent.processing.online import run_online
 from kinect_agent.processing.params import KinematicParams
 from kinect_agent.processing.ukf import combine_information, unscented_rts
@@ -378,8 +379,17 @@ def _process(
     else:
         clean, prob, outlier = rec, np.where(rec.state == NOT_TRACKED, 1.0, 0.0), np.zeros((T, skeleton.J), bool)
     sd = None
+    smoothed = None
     if online:
         root, lengths, theta, model, info = run_online(clean, config, progress)
+    elif config.offline_filter == "joints":
+        smoothed, flips = smooth_joints(clean, config)
+        ik = inverse_kinematics(smoothed)
+        root, lengths, theta, model = ik.root, ik.lengths, ik.theta, ik.model
+        info = {"label_swaps": int(flips.sum())}
+        stages["joints"] = round(time.process_time() - cpu_started - stages.get("outliers", 0.0), 3)
+        if progress is not None:
+            progress(T, T)
     else:
         ik = inverse_kinematics(clean.positions)
         root, lengths, theta, info = smooth(clean, ik, config, progress, covariances=True)
@@ -388,7 +398,8 @@ def _process(
         sd = uncertainty.angle_sd(model, lengths, theta, info.pop("covariance"))
         info["angle_sd_seconds"] = round(time.perf_counter() - sd_started, 3)
         stages.update(info.pop("stage_cpu_seconds"), angle_sd=round(time.process_time() - sd_cpu, 3))
-    positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta)
+    chain_positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta)
+    positions = chain_positions if smoothed is None else smoothed
     if not np.all(np.isfinite(positions)):
         bad = np.flatnonzero(~np.isfinite(positions).all(axis=(1, 2)))
         raise FilterDiverged(f"the filter's estimate is not finite in {len(bad)} of {T} frames (first: frame {bad[0]})")
@@ -396,7 +407,7 @@ def _process(
         positions = offset_model.correct(positions)
     observed = clean.state != NOT_TRACKED
     state = np.where(observed, TRACKED, INFERRED).astype(np.int8)
-    mode = "online forward pass" if online else config.smoother
+    mode = "online forward pass" if online else config.smoother if config.offline_filter == "chain" else "joints"
     step = f"{VERSION} ({mode}; {int(outlier.sum())} outliers removed)"
     filtered = rec.replace(step=step, positions=positions, state=state)
     R_world_root, R_local = model.standard_rotations(theta)
@@ -416,6 +427,8 @@ def _process(
         "n_frames": T,
         "online": online,
         "smoother": None if online else config.smoother,
+        "offline_filter": None if online else config.offline_filter,
+        "label_swaps": info.get("label_swaps"),
         "n_outliers": int(outlier.sum()),
         "outlier_fraction": {j: float(f) for j, f in zip(skeleton.JOINTS, frac, strict=True)},
         "frames_without_observation": int(np.sum(~observed.any(axis=1))),
