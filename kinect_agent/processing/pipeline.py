@@ -34,6 +34,11 @@ with noise_level.rigid_settings: the chain's misfit as measurement SD and the in
 so that what goes in comes out (the default innovation, z − Σ Wm·h(σ), stretches the chain by 20-30 mm there;
 bench/README.md, "Fed the truth, return the truth").
 
+config.offline_filter = "joints" (the webcam's setting) replaces the four passes offline by joint_smoother.py: each
+joint coordinate smoothed on its own (constant-velocity RTS), restarted at left/right label swaps; the kinematic
+parameters are then the chain fitted to its output frame by frame, and angle_sd is None (bench/README.md, "Webcam
+angles: why the pipeline made them worse").
+
 Where the parts live: the settings in config.py (PipelineConfig), the chain's UKF (state layout, observation
 function, variance ceiling, gated update, re-acquisition) in chain_filter.py (ChainFilter), the forward pass frame
 by frame for live feedback and process(online=True) in online.py (OnlineFilter, run_online); here the passes,
