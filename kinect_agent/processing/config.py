@@ -118,7 +118,9 @@ class PipelineConfig(BaseModel):
     joint_sigma_image_m: float = Field(0.01, gt=0, description="joints filter: measurement SD along x and y, m")
     joint_sigma_depth_m: float = Field(0.025, gt=0, description="joints filter: measurement SD along z (depth), m")
     joint_accel_sd_mps2: float = Field(50.0, gt=0, description="joints filter: white acceleration SD, m/s²")
-    joint_split_at_swaps: bool = Field(True, description="joints filter: restart at left/right label swaps")
+    joint_split_at_swaps: bool = Field(
+        True, description="joints filter: restart at left/right label swaps and at jumps to another body"
+    )
 
     @field_validator("excursion_max_len_s")
     @classmethod

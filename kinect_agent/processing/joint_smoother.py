@@ -6,7 +6,8 @@ labelling; on Pose2Sim's four views it made 26 of 56 angle x view cells worse th
 up to 34 degrees, mostly where it smoothed across swaps (bench/README.md, "Webcam angles: why the pipeline made them
 worse"). This filter assumes only what the data show: each coordinate moves smoothly (constant velocity between
 frames, perturbed by white acceleration), is measured with the webcam's measured jitter, and the labelling is
-continuous only between two flips (label_swaps.labelling_flips).
+continuous only between two flips (label_swaps.labelling_flips) and the body is the same one only between two jumps
+of the hips faster than a body moves (label_swaps.body_jumps: another person taken for the patient).
 
 Per coordinate c of joint j, state (position m, velocity m/s), the discrete white-noise-acceleration model
 (Bar-Shalom, Li & Kirubarajan 2001, §6.3.2):
@@ -15,7 +16,7 @@ Per coordinate c of joint j, state (position m, velocity m/s), the discrete whit
     z_k = x_k[0] + v,     R = joint_sigma_image_m² (x, y) or joint_sigma_depth_m² (z), times INFERRED_FACTOR² for
                           an inferred joint; an untracked sample is no measurement (the filter predicts through it)
 
-run forward (Kalman filter) and backward (Rauch-Tung-Striebel) within each run of frames between two flips,
+run forward (Kalman filter) and backward (Rauch-Tung-Striebel) within each run of frames between two restarts,
 vectorised over the 60 coordinates. A run shorter than MIN_RUN frames is left as measured. Output: every joint of
 every frame (a joint never measured within a run is filled linearly in time from its neighbours, ik.fill_gaps).
 """
@@ -27,11 +28,13 @@ import numpy as np
 from kinect_agent import skeleton
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.ik import fill_gaps
-from kinect_agent.processing.label_swaps import labelling_flips
+from kinect_agent.processing.label_swaps import body_jumps, labelling_flips
 from kinect_agent.recording import Recording
 
 INFERRED_FACTOR = 2.0  # an inferred joint's measurement SD relative to a tracked one's (as sigma_inferred_m)
 MIN_RUN = 3  # frames: a shorter run between two flips is left as measured
+ROOT_SPEED_LIMIT_M_S = 2.0  # the trunk's speed limit of excursions.py: a faster hip is another body
+JUMP_NOISE_SD = 4.0  # a body jump must exceed the speed limit by this many SDs of a frame-to-frame difference
 VELOCITY_SD0_M_S = 2.0  # initial SD of each coordinate's velocity, m/s (a limb's speed in an exercise)
 
 
@@ -74,8 +77,9 @@ def constant_velocity_rts(z: np.ndarray, r_sd: np.ndarray, accel_sd: float, dt: 
 
 
 def smooth_joints(rec: Recording, config: PipelineConfig) -> tuple[np.ndarray, np.ndarray]:
-    """Returns (positions (T, J, 3) m, camera frame, every joint filled; flips (T,) bool, the label swaps restarted
-    at) of a recording filtered by the joint smoother with config's joint_* settings (module docstring)."""
+    """Returns (positions (T, J, 3) m, camera frame, every joint filled; restarts (T,) bool, the label swaps and body
+    jumps it restarted at) of a recording filtered by the joint smoother with config's joint_* settings (module
+    docstring)."""
     T = rec.n_frames
     z = np.where((rec.state != skeleton.NOT_TRACKED)[..., None], rec.positions, np.nan)
     axis_sd = np.array([config.joint_sigma_image_m, config.joint_sigma_image_m, config.joint_sigma_depth_m])
@@ -83,7 +87,10 @@ def smooth_joints(rec: Recording, config: PipelineConfig) -> tuple[np.ndarray, n
     r_sd = (factor[..., None] * axis_sd).reshape(T, -1)
     steps = np.diff(rec.t)
     dt = float(np.median(steps[steps > 0])) if np.any(steps > 0) else 1.0 / config.rate_ref_hz
-    flips = labelling_flips(z) if config.joint_split_at_swaps else np.zeros(T, dtype=bool)
+    flips = np.zeros(T, dtype=bool)
+    if config.joint_split_at_swaps:
+        noise = JUMP_NOISE_SD * np.sqrt(2.0) * config.joint_sigma_image_m
+        flips = labelling_flips(z) | body_jumps(z, rec.t, ROOT_SPEED_LIMIT_M_S, noise)
     bounds = [0, *np.flatnonzero(flips).tolist(), T]
     flat = z.reshape(T, -1)
     out = flat.copy()

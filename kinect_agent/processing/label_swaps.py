@@ -53,4 +53,18 @@ def labelling_flips(positions: np.ndarray) -> np.ndarray:
     return np.concatenate(([False], flip & both.any(axis=(1, 2))))
 
 
-__all__ = ["MIRROR", "labelling_flips"]
+def body_jumps(positions: np.ndarray, t: np.ndarray, speed_m_s: float, noise_m: float) -> np.ndarray:
+    """Returns (T,) bool: True at frames where ROOT moved across the image (x, y) farther from the previous frame than
+    a body moves (speed_m_s times the interval, plus noise_m): another person taken for the patient, or the
+    patient found again elsewhere; frame 0 and frames without ROOT in either frame are never jumps.
+
+    positions: (T, J, 3) float, metres, camera frame (z the depth); t: (T,) s.
+    """
+    root = positions[:, 0, :2]
+    step = np.linalg.norm(np.diff(root, axis=0), axis=1)
+    limit = speed_m_s * np.diff(t) + noise_m
+    with np.errstate(invalid="ignore"):
+        return np.concatenate(([False], step > limit))
+
+
+__all__ = ["MIRROR", "body_jumps", "labelling_flips"]

@@ -17,7 +17,7 @@ from kinect_agent import skeleton
 from kinect_agent.body.angles import joint_angles
 from kinect_agent.processing.config import config_for_device
 from kinect_agent.processing.joint_smoother import constant_velocity_rts, smooth_joints
-from kinect_agent.processing.label_swaps import MIRROR, labelling_flips
+from kinect_agent.processing.label_swaps import MIRROR, body_jumps, labelling_flips
 from kinect_agent.processing.pipeline import process
 from kinect_agent.recording import Metadata, Recording
 from kinect_agent.sources.simulator import simulate_truth
@@ -75,6 +75,14 @@ def test_flips_are_found_where_the_labels_swap_and_nowhere_else() -> None:
     pos[40:46] = pos[40:46][:, MIRROR]
     assert np.flatnonzero(labelling_flips(pos)).tolist() == [40, 46]
     assert not labelling_flips(truth.positions).any()
+
+
+def test_another_body_is_a_jump_and_walking_is_not() -> None:
+    truth = simulate_truth("side_step", 2, seed=0)
+    pos = truth.positions.copy()
+    assert not body_jumps(pos, truth.t, 2.0, 0.06).any()
+    pos[30:] += np.array([0.8, 0.0, 0.5])  # someone else, 0.8 m to the side, taken for the patient
+    assert np.flatnonzero(body_jumps(pos, truth.t, 2.0, 0.06)).tolist() == [30]
 
 
 def _monocular_like(truth: Recording, seed: int) -> Recording:
