@@ -244,7 +244,7 @@ def main() -> None:
     results = [process(m, config=config) for m in monos]
     table = evaluate(raws, refs, [joint_angles(r.filtered.positions) for r in results], RATE_HZ)
     left_out = ", each view left out of its own" if args.leave_out else ""
-    restarts = ", ".join(f"{c['name']} {r.quality['label_swaps']}" for c, r in zip(cams, results, strict=True))
+    restarts = ", ".join(f"{c['name']} {r.quality['joint_restarts']}" for c, r in zip(cams, results, strict=True))
     print(
         f"clip {args.clip} ({n} frames in every view), model {args.model}; reference: "
         f"{np.isfinite(world[..., 0]).mean():.0%} of landmarks triangulated, median {np.median(used[used > 0]):.0f} "

@@ -35,7 +35,8 @@ so that what goes in comes out (the default innovation, z − Σ Wm·h(σ), stre
 bench/README.md, "Fed the truth, return the truth").
 
 config.offline_filter = "joints" (the webcam's setting) replaces the four passes offline by joint_smoother.py: each
-joint coordinate smoothed on its own (constant-velocity RTS), restarted at left/right label swaps; the kinematic
+joint coordinate smoothed on its own (constant-velocity RTS), restarted at left/right label swaps and body jumps
+(quality["joint_restarts"]); the kinematic
 parameters are then the chain fitted to its output frame by frame, and angle_sd is None (bench/README.md, "Webcam
 angles: why the pipeline made them worse").
 
@@ -86,6 +87,8 @@ class PipelineResult:
     passes, smoother, angle_sd: CPU s of each step (steadier than wall time on a shared machine), for benchmarks}.
     segment_noise_mm: the measurement SD the input's segment lengths show (noise_level.segment_noise_m; None: too
     few segments), rigid_input: whether it was below config.rigid_input_sd_m, so filtered as exact (offline only).
+    offline_filter: config.offline_filter (None online); joint_restarts: the frames the joints filter restarted at
+    (label swaps, body jumps; None unless that filter ran).
     angle_sd: {angle of angles.ANGLE_NAMES: (T,) degrees}, the calibrated SD of each clinical angle per frame
     (uncertainty.angle_sd of the smoother's covariance); None online (the forward pass keeps no covariances).
     """
@@ -388,10 +391,10 @@ def _process(
     if online:
         root, lengths, theta, model, info = run_online(clean, config, progress)
     elif config.offline_filter == "joints":
-        smoothed, flips = smooth_joints(clean, config)
+        smoothed, restarts = smooth_joints(clean, config)
         ik = inverse_kinematics(smoothed)
         root, lengths, theta, model = ik.root, ik.lengths, ik.theta, ik.model
-        info = {"label_swaps": int(flips.sum())}
+        info = {"joint_restarts": int(restarts.sum())}
         stages["joints"] = round(time.process_time() - cpu_started - stages.get("outliers", 0.0), 3)
         if progress is not None:
             progress(T, T)
@@ -403,8 +406,7 @@ def _process(
         sd = uncertainty.angle_sd(model, lengths, theta, info.pop("covariance"))
         info["angle_sd_seconds"] = round(time.perf_counter() - sd_started, 3)
         stages.update(info.pop("stage_cpu_seconds"), angle_sd=round(time.process_time() - sd_cpu, 3))
-    chain_positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta)
-    positions = chain_positions if smoothed is None else smoothed
+    positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta) if smoothed is None else smoothed
     if not np.all(np.isfinite(positions)):
         bad = np.flatnonzero(~np.isfinite(positions).all(axis=(1, 2)))
         raise FilterDiverged(f"the filter's estimate is not finite in {len(bad)} of {T} frames (first: frame {bad[0]})")
@@ -433,7 +435,7 @@ def _process(
         "online": online,
         "smoother": None if online else config.smoother,
         "offline_filter": None if online else config.offline_filter,
-        "label_swaps": info.get("label_swaps"),
+        "joint_restarts": info.get("joint_restarts"),
         "n_outliers": int(outlier.sum()),
         "outlier_fraction": {j: float(f) for j, f in zip(skeleton.JOINTS, frac, strict=True)},
         "frames_without_observation": int(np.sum(~observed.any(axis=1))),
