@@ -10,6 +10,7 @@ from pydantic import BaseModel, ConfigDict, Field, JsonValue
 from pydantic.config import JsonDict
 
 from backend.suggestions.schemas import SuggestionOut
+from kinect_agent.analysis.document import AnalysisDocument
 
 
 class SessionItemOut(BaseModel):
@@ -40,8 +41,8 @@ class SessionItemOut(BaseModel):
 class SessionOut(SessionItemOut):
     """A stored session with its metrics document and the suggestions it produced that the caller may see."""
 
-    metrics: dict[str, Any] | None = Field(
-        description="the analysis document (backend.analysis.report) with 'indicators'"
+    metrics: AnalysisDocument | None = Field(
+        description="the analysis document (kinect_agent.analysis.document) with its indicators; null: not analysed"
     )
     suggestions: list[SuggestionOut]
 
