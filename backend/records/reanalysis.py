@@ -13,7 +13,6 @@ import datetime as dt
 import uuid
 from typing import Any
 
-from pydantic import ValidationError
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
@@ -26,7 +25,7 @@ from backend.sessions.metrics import ANALYSIS_VERSION, metrics_document, scalar_
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.sessions.service import session_file
 from backend.suggestions.context import plan_targets, session_history
-from kinect_agent.analysis.document import UnreadableDocument, read_document
+from kinect_agent.analysis.document import read_if_readable
 from kinect_agent.formats import session_file as khs
 
 KIND = "reanalyze"
@@ -59,10 +58,8 @@ def enqueue_reanalysis(
 
 def _version(stored: dict[str, Any] | None) -> str:
     """Returns the analysis version of a stored document (OLDER without one, or when no schema reads it)."""
-    try:
-        return read_document(stored or {}).analysis_version or OLDER
-    except (ValidationError, UnreadableDocument):
-        return OLDER
+    doc = read_if_readable(stored)
+    return (doc.analysis_version if doc is not None else None) or OLDER
 
 
 def reanalyze_session(

@@ -46,6 +46,7 @@ from typing import Any
 
 from backend.analysis.balance import MIN_STANDING_S
 from backend.exercises.library import EXERCISES
+from kinect_agent.analysis.document import Indicators
 
 INDICATORS = ("flexibility", "endurance", "strength", "balance")
 NOW_AT, SOON_AT = 50, 20
@@ -293,14 +294,14 @@ def indicator_trends(now: dt.datetime, sessions: Sequence[RecentSession]) -> dic
     return out
 
 
-def balance_missing(latest_indicators: dict[str, Any] | None, exercise_slug: str | None) -> str | None:
+def balance_missing(latest_indicators: Indicators | None, exercise_slug: str | None) -> str | None:
     """Returns why the latest indicators have no balance score, in words, or None when they have one."""
-    if not isinstance(latest_indicators, dict):
+    if latest_indicators is None:
         return "Not measured: no analysed session yet"
-    if (latest_indicators.get("balance") or {}).get("score") is not None:
+    if latest_indicators.balance.score is not None:
         return None
     during = f" ({_name(exercise_slug)})" if exercise_slug else ""
-    reason = (latest_indicators.get("balance") or {}).get("missing")
-    if isinstance(reason, str) and reason:
+    reason = latest_indicators.balance.missing
+    if reason:
         return f"Not measured{during}: {reason}"
     return f"Not measured: no still standing of {MIN_STANDING_S:g} s or more in the last session{during}"

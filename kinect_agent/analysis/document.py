@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 SCHEMA_VERSION = 2
 
@@ -245,6 +245,31 @@ def read_document(doc: dict[str, Any]) -> AnalysisDocument:
     """Returns a stored metrics document of any schema version as today's model (pydantic.ValidationError or
     UnreadableDocument when it is malformed)."""
     return AnalysisDocument.model_validate(upgrade(doc))
+
+
+def read_if_readable(stored: dict[str, Any] | None) -> AnalysisDocument | None:
+    """Returns a stored metrics document of any schema version as today's model; None without one or when no
+    schema reads it (for readers that show "not measured" rather than fail: reports, archives, comparisons)."""
+    if stored is None:
+        return None
+    try:
+        return read_document(stored)
+    except (ValidationError, UnreadableDocument):
+        return None
+
+
+def read_indicators(stored: object) -> Indicators | None:
+    """Returns the "indicators" part of a stored document of any schema version (the dashboard reads only that part);
+    None without one or when no schema reads it."""
+    if not isinstance(stored, dict):
+        return None
+    balance = stored.get("balance")
+    if isinstance(balance, dict):
+        stored = {**stored, "balance": {"interval": None, "missing": None, **balance}}  # schema 1 (module doc)
+    try:
+        return Indicators.model_validate(stored)
+    except ValidationError:
+        return None
 
 
 def read_report(doc: dict[str, Any]) -> AnalysisReport:

@@ -39,7 +39,7 @@ def store_session(
     db_session.add(row)
     db_session.flush()
     if metrics:
-        doc = doc or document(reps=reps, rom=rom, quality_ok=quality_ok)
+        doc = doc or document(reps=reps, rom=rom, quality_ok=quality_ok, exercise=exercise.slug)
         db_session.add(
             SessionMetric(
                 session_id=row.id,
@@ -57,11 +57,11 @@ def store_session(
 TODAY = Path(__file__).parents[1] / "kinect_agent" / "analysis" / "documents" / "schema2.json"
 
 
-def document(*, reps: int, rom: float | None, quality_ok: bool) -> dict:
+def document(*, reps: int, rom: float | None, quality_ok: bool, exercise: str = "shoulder_abduction") -> dict:
     """Returns a stored metrics document of today's schema with these numbers; its flexibility indicator scores
     rom / 2, the other indicators have no score."""
     doc = json.loads(TODAY.read_text(encoding="utf-8"))
-    doc |= {"repetitions": reps, "rom_deg": rom}
+    doc |= {"exercise": exercise, "repetitions": reps, "rom_deg": rom}
     doc["quality"] |= {"ok": quality_ok, "reasons": [] if quality_ok else ["test: not ok"]}
     for name, item in doc["indicators"].items():
         item["score"] = None if rom is None or name != "flexibility" else rom / 2
