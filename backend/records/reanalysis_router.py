@@ -21,7 +21,7 @@ from backend.sessions import service
 from backend.sessions.metrics import ANALYSIS_VERSION
 from backend.sessions.models import SessionMetric
 from backend.users.models import User
-from kinect_agent.analysis.document import AnalysisDocument, read_document
+from kinect_agent.analysis.document import AnalysisDocument, read_document, read_if_readable
 
 router = APIRouter(prefix="/api/v1", tags=["re-analysis"])
 
@@ -166,8 +166,8 @@ def reanalysis_progress(batch: str, caller: AdminCaller, db_session: DbSession) 
     return ProgressOut(batch=batch, analysis_version=ANALYSIS_VERSION, **counts)
 
 
-def _sway(doc: AnalysisDocument) -> float | None:
-    return doc.balance.sway_velocity_m_s if doc.balance is not None else None
+def _sway(doc: AnalysisDocument | None) -> float | None:
+    return doc.balance.sway_velocity_m_s if doc is not None and doc.balance is not None else None
 
 
 @router.get("/sessions/{session_id}/metric-versions", response_model=list[MetricVersionOut],
@@ -187,8 +187,8 @@ def metric_versions(session_id: IdPath, caller: CurrentCaller, db_session: DbSes
     older = db_session.scalars(select(SessionMetricVersion).where(SessionMetricVersion.session_id == session_id)
                                .order_by(SessionMetricVersion.replaced_at.desc()))  # fmt: skip
     for v in older:
-        doc = read_document(v.document)
+        old = read_if_readable(v.document)  # a replaced document may be of any shape the server ever stored
         out.append(MetricVersionOut(analysis_version=v.analysis_version, current=False,
-                                    repetitions=doc.repetitions, rom_deg=doc.rom_deg,
-                                    balance_sway_m_s=_sway(doc), replaced_at=v.replaced_at))  # fmt: skip
+                                    repetitions=old.repetitions if old else None, rom_deg=old.rom_deg if old else None,
+                                    balance_sway_m_s=_sway(old), replaced_at=v.replaced_at))  # fmt: skip
     return out

@@ -318,7 +318,8 @@ def test_missing_balance_is_explained_in_words(db_session, make_user, exercise, 
     row = _summary(db_session, patient)
     name = EXERCISES[exercise.slug].name
     assert row["balance_missing"] == (f"Not measured: no still standing of 2 s or more in the last session ({name})")
-    doc = {"repetitions": 5, "rom_deg": 50.0, "quality": {"ok": True}, "indicators": {"balance": {"score": 80.0}}}
+    doc = document(reps=5, rom=50.0, quality_ok=True, exercise=exercise.slug)
+    doc["indicators"]["balance"]["score"] = 80.0
     store(patient, exercise, THURSDAY_NOON - dt.timedelta(hours=1), doc=doc)
     assert _summary(db_session, patient)["balance_missing"] is None
 
