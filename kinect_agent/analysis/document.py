@@ -2,9 +2,10 @@
 
 The server's analysis (backend.analysis.report.analyze_recording) builds an AnalysisReport; at ingest the server
 adds the four indicators and the analysis version (backend.sessions.metrics) and stores the AnalysisDocument as
-`model_dump(mode="json")`. Storage, the API, the pages and the exports read it through `read_document`, which
-upgrades an older stored shape first. The models live beside the agent's analysis because the agent's exports
-(kinect_agent.export) read the same document.
+`model_dump(mode="json")`. Storage, the API, the pages and the exports read it through `read_document` (or
+`read_report`, `read_if_readable`, `read_indicators`), which upgrade an older stored shape first (`upgrade`).
+The models live beside the agent's analysis because the agent's exports (kinect_agent.export) read the same
+document.
 
 Schema versions (`schema_version`; a document without it is version 1):
     1  2026-11-23 to 2026-11-27, before versions were recorded: no range_of_motion_95, range_of_motion_95_withheld,
@@ -212,6 +213,13 @@ _V1_DEFAULTS: dict[str, Any] = {
 }
 
 
+def _indicators_1_to_2(indicators: object) -> object:
+    """Returns schema-1 indicators in schema 2: the balance indicator's interval and missing None when absent."""
+    if isinstance(indicators, dict) and isinstance(indicators.get("balance"), dict):
+        return {**indicators, "balance": {"interval": None, "missing": None, **indicators["balance"]}}
+    return indicators
+
+
 def _upgrade_1_to_2(doc: dict[str, Any]) -> dict[str, Any]:
     """Returns a schema-1 document in schema 2 (module doc): missing keys None ('max' for peak_end)."""
     out = {k: v for k, v in doc.items() if k != "schema_version"}
@@ -222,10 +230,8 @@ def _upgrade_1_to_2(doc: dict[str, Any]) -> dict[str, Any]:
     ]
     if isinstance(out.get("balance"), dict):
         out["balance"] = {"sway_velocity_95": None, "n_windows": None, "method": None, **out["balance"]}
-    indicators = out.get("indicators")
-    if isinstance(indicators, dict) and isinstance(indicators.get("balance"), dict):
-        out["indicators"] = {**indicators, "balance": {"interval": None, "missing": None, **indicators["balance"]}}
     if "indicators" in out:
+        out["indicators"] = _indicators_1_to_2(out["indicators"])
         out.setdefault("analysis_version", None)
     out["schema_version"] = 2
     return out
@@ -263,11 +269,8 @@ def read_indicators(stored: object) -> Indicators | None:
     None without one or when no schema reads it."""
     if not isinstance(stored, dict):
         return None
-    balance = stored.get("balance")
-    if isinstance(balance, dict):
-        stored = {**stored, "balance": {"interval": None, "missing": None, **balance}}  # schema 1 (module doc)
     try:
-        return Indicators.model_validate(stored)
+        return Indicators.model_validate(_indicators_1_to_2(stored))
     except ValidationError:
         return None
 

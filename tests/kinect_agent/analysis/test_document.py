@@ -20,6 +20,8 @@ from kinect_agent.analysis.document import (
     AnalysisReport,
     UnreadableDocument,
     read_document,
+    read_if_readable,
+    read_indicators,
     read_report,
 )
 
@@ -102,6 +104,19 @@ def test_an_unknown_key_is_refused() -> None:
     stored["quality"]["score"] = 3
     with pytest.raises(ValidationError, match="quality.score"):
         read_document(stored)
+
+
+def test_indicators_alone_read_from_any_shape() -> None:
+    older = _stored("schema1_2026-11-23")["indicators"]
+    indicators = read_indicators(older)
+    assert indicators is not None and indicators.balance.interval is None
+    assert indicators.endurance.model_dump() == older["endurance"]
+    assert read_indicators({"flexibility": {"score": 1}}) is None and read_indicators(None) is None
+
+
+def test_readers_that_show_not_measured_get_none_for_what_no_schema_reads() -> None:
+    assert read_if_readable(None) is None and read_if_readable({"repetitions": 3}) is None
+    assert read_if_readable(_stored("schema1_2026-11-25")) is not None
 
 
 def test_the_openapi_schema_describes_every_field() -> None:
