@@ -25,6 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from sqlalchemy import create_engine, insert, text  # noqa: E402
 from sqlalchemy.orm import Session  # noqa: E402
 
+from backend.analysis.indicators import indicators  # noqa: E402
 from backend.analysis.report import analyze_recording  # noqa: E402
 from backend.database import import_all_models, make_engine, utcnow  # noqa: E402
 from backend.exercises.library import EXERCISES  # noqa: E402
@@ -57,8 +58,9 @@ def _engine(url: str | None):
 
 def _fill(engine, n_patients: int, n_sessions: int) -> list[int]:
     measured, truth, _ = simulate("squat", 5, seed=1)
-    doc = analyze_recording(measured, EXERCISES["squat"], filtered=truth)
-    doc["indicators"] = {"flexibility": {"score": 60, "value": 90.0, "basis": "bench", "quality_ok": True}}
+    report = analyze_recording(measured, EXERCISES["squat"], filtered=truth)
+    found = indicators(report, exercise=EXERCISES["squat"], target_reps=10, history=[])
+    doc = report.model_dump(mode="json") | {"indicators": found.model_dump(mode="json"), "analysis_version": "bench"}
     blob = os.urandom(FILE_BYTES)
     now = utcnow()
     with Session(engine) as s, s.begin():

@@ -95,7 +95,6 @@ def _pool(exercises: list[str], per_exercise: int) -> dict[str, list[tuple[bytes
     """Returns per exercise a list of (.khs bytes, decoded payload, analysis document) of simulated sets."""
     from backend.analysis.report import analyze_recording
     from backend.exercises.library import EXERCISES
-    from backend.sessions.metrics import json_ready
     from kinect_agent.formats import session_file as sf
     from kinect_agent.sources.simulator import simulate
 
@@ -112,7 +111,7 @@ def _pool(exercises: list[str], per_exercise: int) -> dict[str, list[tuple[bytes
                 created_at="2026-11-20T10:00:00Z",
             )
             data = sf.encode(payload)
-            doc = json_ready(analyze_recording(payload.raw, EXERCISES[slug], filtered=payload.filtered))
+            doc = analyze_recording(payload.raw, EXERCISES[slug], filtered=payload.filtered)
             pool[slug].append((data, payload, doc))
     return pool
 
@@ -127,10 +126,11 @@ def seed(url: str, n_patients: int, n_sessions: int, per_exercise: int) -> dict:
     from backend.patients.models import TherapistPatient
     from backend.plans.models import Plan, PlanItem
     from backend.security import hash_password
-    from backend.sessions.metrics import json_ready, scalar_columns
+    from backend.sessions.metrics import scalar_columns
     from backend.sessions.models import ExerciseSession, SessionMetric
     from backend.suggestions.models import Suggestion
     from backend.users.models import User
+    from kinect_agent.analysis.document import read_document
 
     import_all_models()
     slugs = sorted({s for pair in EXERCISE_PAIRS for s in pair})
@@ -179,13 +179,12 @@ def seed(url: str, n_patients: int, n_sessions: int, per_exercise: int) -> dict:
                 slug = pair[k % 2]
                 data, payload, base = pool[slug][rng.randrange(len(pool[slug]))]
                 started = now - dt.timedelta(days=(n_sessions - 1 - k) * 0.9, hours=3 + rng.random() * 6)
-                doc = dict(base)
-                doc["indicators"] = json_ready(
-                    indicators(
-                        doc, exercise=EXERCISES[slug], target_reps=target[slug], history=history[slug][-HISTORY:]
-                    )
+                found = indicators(
+                    base, exercise=EXERCISES[slug], target_reps=target[slug], history=history[slug][-HISTORY:]
                 )
-                history[slug].append(doc)
+                doc = base.model_dump(mode="json") | {"indicators": found.model_dump(mode="json"),
+                                                      "analysis_version": "bench"}  # fmt: skip
+                history[slug].append(base)
                 docs.append(doc)
                 file_bytes += len(data)
                 rows.append(
@@ -199,8 +198,8 @@ def seed(url: str, n_patients: int, n_sessions: int, per_exercise: int) -> dict:
             session_ids = list(s.scalars(insert(ExerciseSession).returning(ExerciseSession.id), rows))
             s.execute(
                 insert(SessionMetric),
-                [{"session_id": sid, "document": doc, "created_at": row["created_at"], **scalar_columns(doc)}
-                 for sid, doc, row in zip(session_ids, docs, rows, strict=True)],
+                [{"session_id": sid, "document": doc, "created_at": row["created_at"],
+                  **scalar_columns(read_document(doc))} for sid, doc, row in zip(session_ids, docs, rows, strict=True)],
             )  # fmt: skip
             if i % 4:
                 s.execute(

@@ -48,8 +48,8 @@ def session(exercise: str, patient: int, k: int, reps: int) -> tuple[dict[str, f
         truth, device="kinect2", view_deg=0, pose=truth.meta.pose, rng=np.random.default_rng([seed, 2])
     )
     result = process(measured)
-    doc = analyze_recording(measured, spec, filtered=result.filtered, angle_sd=result.angle_sd)
-    true_doc = analyze_recording(truth, spec)
+    doc = analyze_recording(measured, spec, filtered=result.filtered, angle_sd=result.angle_sd).model_dump(mode="json")
+    true_doc = analyze_recording(truth, spec).model_dump(mode="json")
     angle = true_doc["defining_angle"]
     return _metrics(doc, angle), _metrics(true_doc, angle)
 

@@ -44,7 +44,8 @@ def main(argv: list[str] | None = None) -> int:
     payload = detail.decode_stored(data, session_id=1, **limits)
     spec = detail.EXERCISES["squat"]
     started = time.perf_counter()
-    stored, _ = detail.analysis_document(payload, spec, None)
+    report, _ = detail.analysis_document(payload, spec, None)
+    stored = report.model_dump(mode="json") if report is not None else None
     analysis_s = time.perf_counter() - started
     started = time.perf_counter()
     body = detail.detail_body(session, "squat", stored, data, **limits)

@@ -1,7 +1,8 @@
 """The four indicators of the paper (flexibility, endurance, strength, balance) from one analysis document.
 
-Each indicator is {"score": 0..100 or None, "value": the measured number or None, "basis": how it was scored,
-"quality_ok": the document's quality ok and the value present, "previous": median value of the history or None}.
+Each indicator (kinect_agent.analysis.document.Indicator) is {"score": 0..100 or None, "value": the measured
+number or None, "basis": how it was scored, "quality_ok": the document's quality ok and the value present,
+"previous": median value of the history or None}.
 history = earlier documents of the same patient and exercise, oldest first (their own values are re-read, so a
 change of definition applies to the whole history).
     flexibility  value = rom_deg (median repetition amplitude of the defining angle, degrees);
@@ -23,11 +24,11 @@ change of definition applies to the whole history).
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 
 from backend.exercises.library import ExerciseSpec
+from kinect_agent.analysis.document import AnalysisReport, BalanceIndicator, Indicator, Indicators
 
 FAST_RISE_S, SLOW_RISE_S = 0.5, 2.0
 GOOD_SWAY, POOR_SWAY = 0.01, 0.06
@@ -37,11 +38,7 @@ def _clip100(x: float) -> float:
     return round(float(np.clip(x, 0.0, 100.0)), 1)
 
 
-def _quality_ok(doc: dict[str, Any]) -> bool:
-    return bool((doc.get("quality") or {}).get("ok"))
-
-
-def _values(history: list[dict[str, Any]], read: Callable[[dict[str, Any]], float | None]) -> list[float]:
+def _values(history: list[AnalysisReport], read: Callable[[AnalysisReport], float | None]) -> list[float]:
     out = []
     for doc in history:
         v = read(doc)
@@ -50,56 +47,53 @@ def _values(history: list[dict[str, Any]], read: Callable[[dict[str, Any]], floa
     return out
 
 
+def _previous(previous: list[float]) -> float | None:
+    return round(float(np.median(previous)), 3) if previous else None
+
+
 def _indicator(
-    score: float | None, value: float | None, basis: str, doc: dict[str, Any], previous: list[float]
-) -> dict[str, Any]:
-    return {
-        "score": score,
-        "value": value,
-        "basis": basis,
-        "quality_ok": _quality_ok(doc) and value is not None,
-        "previous": round(float(np.median(previous)), 3) if previous else None,
-    }
+    score: float | None, value: float | None, basis: str, doc: AnalysisReport, previous: list[float]
+) -> Indicator:
+    return Indicator(score=score, value=value, basis=basis, quality_ok=doc.quality.ok and value is not None,
+                     previous=_previous(previous))  # fmt: skip
 
 
-def _rom(doc: dict[str, Any]) -> float | None:
-    return doc.get("rom_deg")
+def _rom(doc: AnalysisReport) -> float | None:
+    return doc.rom_deg
 
 
-def _reps(doc: dict[str, Any]) -> float | None:
-    return doc.get("repetitions")
+def _reps(doc: AnalysisReport) -> float | None:
+    return doc.repetitions
 
 
-def _rise(doc: dict[str, Any]) -> float | None:
-    return (doc.get("sit_to_stand") or {}).get("mean_s")
+def _rise(doc: AnalysisReport) -> float | None:
+    return doc.sit_to_stand.mean_s if doc.sit_to_stand is not None else None
 
 
-def _speed(doc: dict[str, Any]) -> float | None:
-    rates = [r["amplitude_deg"] / r["duration_s"] for r in doc.get("repetition_list") or [] if r["duration_s"] > 0]
+def _speed(doc: AnalysisReport) -> float | None:
+    rates = [r.amplitude_deg / r.duration_s for r in doc.repetition_list if r.duration_s > 0]
     return round(float(np.median(rates)), 2) if rates else None
 
 
-def _sway(doc: dict[str, Any]) -> float | None:
-    return (doc.get("balance") or {}).get("sway_velocity_m_s")
+def _sway(doc: AnalysisReport) -> float | None:
+    return doc.balance.sway_velocity_m_s if doc.balance is not None else None
 
 
-def flexibility(doc: dict[str, Any], exercise: ExerciseSpec, history: list[dict[str, Any]]) -> dict[str, Any]:
+def flexibility(doc: AnalysisReport, exercise: ExerciseSpec, history: list[AnalysisReport]) -> Indicator:
     """Returns the flexibility indicator (module doc)."""
     lo, hi = exercise.normal_range_deg
     value = _rom(doc)
     score = _clip100(100.0 * value / (hi - lo)) if value is not None and hi > lo else None
-    basis = f"median amplitude of {doc.get('defining_angle')} against the normal range {lo:g}..{hi:g} deg"
+    basis = f"median amplitude of {doc.defining_angle} against the normal range {lo:g}..{hi:g} deg"
     return _indicator(score, value, basis, doc, _values(history, _rom))
 
 
-def endurance(doc: dict[str, Any], target_reps: int | None, history: list[dict[str, Any]]) -> dict[str, Any]:
+def endurance(doc: AnalysisReport, target_reps: int | None, history: list[AnalysisReport]) -> Indicator:
     """Returns the endurance indicator (module doc)."""
-    value = _reps(doc)
+    value = doc.repetitions
     previous = _values(history, _reps)
     score: float | None
-    if value is None:
-        score, basis = None, "no repetition count in this session's analysis"
-    elif target_reps:
+    if target_reps:
         score, basis = _clip100(100.0 * value / target_reps), f"repetitions against the target of {target_reps}"
     elif previous and np.median(previous) > 0:
         ref = float(np.median(previous))
@@ -109,7 +103,7 @@ def endurance(doc: dict[str, Any], target_reps: int | None, history: list[dict[s
     return _indicator(score, value, basis, doc, previous)
 
 
-def strength(doc: dict[str, Any], exercise: ExerciseSpec, history: list[dict[str, Any]]) -> dict[str, Any]:
+def strength(doc: AnalysisReport, exercise: ExerciseSpec, history: list[AnalysisReport]) -> Indicator:
     """Returns the strength indicator (module doc)."""
     if exercise.slug == "sit_to_stand":
         value = _rise(doc)
@@ -130,37 +124,34 @@ def strength(doc: dict[str, Any], exercise: ExerciseSpec, history: list[dict[str
     return _indicator(score, value, basis, doc, previous)
 
 
-def balance(doc: dict[str, Any], history: list[dict[str, Any]]) -> dict[str, Any]:
+def balance(doc: AnalysisReport, history: list[AnalysisReport]) -> BalanceIndicator:
     """Returns the balance indicator (module doc)."""
     value = _sway(doc)
     score = None
     if value is not None:
         score = _clip100(100.0 * (POOR_SWAY - value) / (POOR_SWAY - GOOD_SWAY))
     basis = f"trunk-and-hips sway while standing, {GOOD_SWAY * 100:g} cm/s scores 100, {POOR_SWAY * 100:g} cm/s 0"
-    out = _indicator(score, value, basis, doc, _values(history, _sway))
-    out["interval"] = (doc.get("balance") or {}).get("sway_velocity_95")
-    out["missing"] = doc.get("balance_missing") if value is None else None
-    return out
+    common = _indicator(score, value, basis, doc, _values(history, _sway))
+    interval = doc.balance.sway_velocity_95 if doc.balance is not None else None
+    missing = doc.balance_missing if value is None else None
+    return BalanceIndicator(**common.model_dump(), interval=interval, missing=missing)
 
 
 def indicators(
-    doc: dict[str, Any], *, exercise: ExerciseSpec, target_reps: int | None, history: list[dict[str, Any]]
-) -> dict[str, Any]:
-    """Returns {"flexibility", "endurance", "strength", "balance"} indicators of an analysis document.
+    doc: AnalysisReport, *, exercise: ExerciseSpec, target_reps: int | None, history: list[AnalysisReport]
+) -> Indicators:
+    """Returns the "flexibility", "endurance", "strength" and "balance" indicators of an analysis document.
 
     doc: report.analyze_recording output; history: earlier documents of the same patient and exercise, oldest
-    first. Raises ValueError when doc is not an analysis document of `exercise`.
+    first. Raises ValueError when doc is not an analysis of `exercise`.
     """
-    if not isinstance(doc, dict) or "repetitions" not in doc or "quality" not in doc:
-        raise ValueError("doc must be an analysis document (report.analyze_recording output)")
-    if doc.get("exercise") not in (None, exercise.slug):
-        raise ValueError(f"doc is an analysis of {doc.get('exercise')!r}, not of {exercise.slug!r}")
+    if doc.exercise != exercise.slug:
+        raise ValueError(f"doc is an analysis of {doc.exercise!r}, not of {exercise.slug!r}")
     if target_reps is not None and (isinstance(target_reps, bool) or not isinstance(target_reps, int)):
         raise ValueError(f"target_reps must be a whole number or None, got {target_reps!r}")
-    history = [h for h in history if isinstance(h, dict)]
-    return {
-        "flexibility": flexibility(doc, exercise, history),
-        "endurance": endurance(doc, target_reps, history),
-        "strength": strength(doc, exercise, history),
-        "balance": balance(doc, history),
-    }
+    return Indicators(
+        flexibility=flexibility(doc, exercise, history),
+        endurance=endurance(doc, target_reps, history),
+        strength=strength(doc, exercise, history),
+        balance=balance(doc, history),
+    )

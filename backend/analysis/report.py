@@ -3,8 +3,8 @@
 analyze_recording measures a recording that has already been through the agent's pipeline (or is clean, like
 simulated truth); analyze_file reads any format kinect_agent.formats knows, takes the filtered recording of a
 .khs session file when it has one and otherwise runs kinect_agent.processing.pipeline.process on the raw input,
-then measures. The document's keys are listed in .notes/CONTRACTS.md; every key is present, None when it does
-not apply.
+then measures. Every key of the document is present, None when it does not apply.
+The document's shape is kinect_agent.analysis.document.AnalysisReport (versioned, with every field described).
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ from backend.analysis.reachable import reachable_range
 from backend.analysis.sit_to_stand import sit_to_stand
 from backend.exercises.library import EXERCISES, ExerciseSpec
 from kinect_agent.analysis.angles import counting_angles, measured_angles
+from kinect_agent.analysis.document import AnalysisReport, json_ready
 from kinect_agent.analysis.repetitions import Repetition, RepetitionParams, count_repetitions
 from kinect_agent.body.angles import body_frame
 from kinect_agent.errors import FormatError
@@ -102,8 +103,8 @@ def analyze_recording(
     filtered: Recording | None = None,
     repetition_params: RepetitionParams | None = None,
     angle_sd: dict[str, np.ndarray] | None = None,
-) -> dict[str, Any]:
-    """Returns the JSON-ready analysis document of one session (keys: .notes/CONTRACTS.md).
+) -> AnalysisReport:
+    """Returns the analysis document of one session (kinect_agent.analysis.document.AnalysisReport).
 
     recording: the raw recording (its tracking states feed the quality check). filtered: the pipeline's output
     for the same frames, measured when given; else the positions rebuilt from params; else the recording itself.
@@ -128,7 +129,7 @@ def analyze_recording(
     ivs = None if sd is None else rom_intervals(t, clinical, sd, smoothed, recording.meta.device, tracked)
     moving_s, rest_s = activity.moving_time(t, smoothed)
     balance = sway(t, smoothed, clinical)
-    return {
+    doc = {
         "exercise": exercise.slug,
         "duration_s": round(recording.duration, 3),
         "n_frames": recording.n_frames,
@@ -156,6 +157,7 @@ def analyze_recording(
         "sit_to_stand": sit_to_stand(t, positions) if exercise.slug == "sit_to_stand" else None,
         "quality": quality.assess(recording, None if source == "raw" else positions, names),
     }
+    return AnalysisReport.model_validate(json_ready(doc))
 
 
 def load(path: str | Path) -> tuple[Recording, Recording, dict[str, np.ndarray] | None]:
@@ -192,28 +194,26 @@ def load(path: str | Path) -> tuple[Recording, Recording, dict[str, np.ndarray] 
     return raw, filtered, angle_sd
 
 
-def analyze_file(path: str | Path, exercise_slug: str) -> dict[str, Any]:
+def analyze_file(path: str | Path, exercise_slug: str) -> AnalysisReport:
     """Returns the analysis document of the recording file at `path` as exercise `exercise_slug`."""
     exercise = get_exercise(exercise_slug)
     raw, filtered, angle_sd = load(path)
-    doc = analyze_recording(raw, exercise, filtered=filtered, angle_sd=angle_sd)
-    doc["source"] = str(path)
-    return doc
+    return analyze_recording(raw, exercise, filtered=filtered, angle_sd=angle_sd)
 
 
-def _summary(doc: dict[str, Any]) -> str:
-    q = doc["quality"]
+def _summary(doc: AnalysisReport) -> str:
+    q = doc.quality
     lines = [
-        f"{doc['exercise']}: {doc['repetitions']} repetitions in {doc['duration_s']:.1f} s "
-        f"({doc['n_frames']} frames at {doc['rate_hz']:.1f} Hz)",
-        f"defining angle {doc['defining_angle']}, median amplitude {doc['rom_deg']} deg",
-        f"quality: {'ok' if q['ok'] else 'NOT ok'} (tracked {q['tracked_fraction']:.0%}, "
-        f"outliers {q['outlier_fraction']:.1%}){''.join('; ' + r for r in q['reasons'])}",
+        f"{doc.exercise}: {doc.repetitions} repetitions in {doc.duration_s:.1f} s "
+        f"({doc.n_frames} frames at {doc.rate_hz:.1f} Hz)",
+        f"defining angle {doc.defining_angle}, median amplitude {doc.rom_deg} deg",
+        f"quality: {'ok' if q.ok else 'NOT ok'} (tracked {q.tracked_fraction:.0%}, "
+        f"outliers {q.outlier_fraction:.1%}){''.join('; ' + r for r in q.reasons)}",
     ]
     lines += [
-        f"  #{r['index'] + 1}: {r['start_s']:.2f}-{r['end_s']:.2f} s, amplitude {r['amplitude_deg']} deg, "
-        f"peak {r['peak_deg']} deg, {r['side']}"
-        for r in doc["repetition_list"]
+        f"  #{r.index + 1}: {r.start_s:.2f}-{r.end_s:.2f} s, amplitude {r.amplitude_deg} deg, "
+        f"peak {r.peak_deg} deg, {r.side}"
+        for r in doc.repetition_list
     ]
     return "\n".join(lines)
 
@@ -248,7 +248,8 @@ def run(args: argparse.Namespace) -> int:
     except AnalysisError as exc:
         print(f"coach-server analyze: error: {exc}", file=sys.stderr)
         return 2
-    print(json.dumps(doc, indent=2, allow_nan=False) if args.json else _summary(doc))
+    document = doc.model_dump(mode="json") | {"source": str(args.file)}
+    print(json.dumps(document, indent=2, allow_nan=False) if args.json else _summary(doc))
     return 0
 
 

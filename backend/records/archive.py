@@ -26,6 +26,7 @@ from backend.storage import StorageError
 from backend.suggestions import service as suggestions
 from backend.suggestions.models import Suggestion
 from backend.users.models import User
+from kinect_agent.analysis.document import read_if_readable
 
 FORMAT_VERSION = "1"
 README = """Kinect Home Coach: all data held about patient {patient_id} ({email})
@@ -119,7 +120,8 @@ def build_archive(*, db_session: Session, patient: User, requested_by: str) -> I
                              "error", "created_at"))  # fmt: skip
             entry["client_session_id"] = str(s.client_session_id)
             entry["exercise"] = slug
-            entry["metrics"] = doc
+            readable = read_if_readable(doc)  # today's schema; a document no schema reads is kept as stored
+            entry["metrics"] = readable.model_dump(mode="json") if readable is not None else doc
             entry["feeling"] = None if felt is None else {
                 "pain_nrs": felt.pain_nrs, "effort_borg_cr10": felt.effort_cr10, "answered_at": _iso(felt.updated_at)
             }  # fmt: skip

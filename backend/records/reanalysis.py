@@ -25,6 +25,7 @@ from backend.sessions.metrics import ANALYSIS_VERSION, metrics_document, scalar_
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.sessions.service import session_file
 from backend.suggestions.context import plan_targets, session_history
+from kinect_agent.analysis.document import read_if_readable
 from kinect_agent.formats import session_file as khs
 
 KIND = "reanalyze"
@@ -55,6 +56,12 @@ def enqueue_reanalysis(
     return batch, enqueue(db_session=db_session, kind=KIND, items=items, batch=batch)
 
 
+def _version(stored: dict[str, Any] | None) -> str:
+    """Returns the analysis version of a stored document (OLDER without one, or when no schema reads it)."""
+    doc = read_if_readable(stored)
+    return (doc.analysis_version if doc is not None else None) or OLDER
+
+
 def reanalyze_session(
     *, db_session: Session, session_id: int, max_frames: int, max_decoded_bytes: int
 ) -> dict[str, Any]:
@@ -63,7 +70,7 @@ def reanalyze_session(
     if session is None:
         return {"session_id": session_id, "changed": False, "skipped": "the session no longer exists"}
     metric = db_session.scalar(select(SessionMetric).where(SessionMetric.session_id == session_id))
-    old_version = (metric.document or {}).get("analysis_version", OLDER) if metric else None
+    old_version = _version(metric.document) if metric else None
     if old_version == ANALYSIS_VERSION:
         return {"session_id": session_id, "changed": False, "from": old_version, "to": ANALYSIS_VERSION}
     slug = db_session.scalar(select(Exercise.slug).where(Exercise.id == session.exercise_id))
@@ -76,12 +83,15 @@ def reanalyze_session(
                                   exercise_id=session.exercise_id, on=session.started_at.date())  # fmt: skip
     history = [doc for _, doc in session_history(db_session=db_session, session=session)]
     doc = metrics_document(payload, spec, target_reps=target_reps, history=history)
+    stored = doc.model_dump(mode="json")
     if metric is None:
-        db_session.add(SessionMetric(session_id=session_id, document=doc, created_at=utcnow(), **scalar_columns(doc)))
+        db_session.add(
+            SessionMetric(session_id=session_id, document=stored, created_at=utcnow(), **scalar_columns(doc))
+        )
     else:
         db_session.add(SessionMetricVersion(session_id=session_id, analysis_version=old_version,
                                             document=metric.document, replaced_at=utcnow()))  # fmt: skip
-        metric.document = doc
+        metric.document = stored
         for name, value in scalar_columns(doc).items():
             setattr(metric, name, value)
     session.status, session.error = "processed", None

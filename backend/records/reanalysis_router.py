@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
 from fastapi import APIRouter, Query, status
 from pydantic import BaseModel, Field
@@ -15,12 +15,13 @@ from backend.exceptions import AUTH_ERRORS, NotFound, SessionNotFound, error_res
 from backend.jobs.listing import error_words, list_batches, list_jobs
 from backend.jobs.models import SessionMetricVersion
 from backend.jobs.queue import progress
-from backend.records.reanalysis import enqueue_reanalysis
+from backend.records.reanalysis import OLDER, enqueue_reanalysis
 from backend.schemas import IdPath
 from backend.sessions import service
 from backend.sessions.metrics import ANALYSIS_VERSION
 from backend.sessions.models import SessionMetric
 from backend.users.models import User
+from kinect_agent.analysis.document import AnalysisDocument, read_document, read_if_readable
 
 router = APIRouter(prefix="/api/v1", tags=["re-analysis"])
 
@@ -165,8 +166,8 @@ def reanalysis_progress(batch: str, caller: AdminCaller, db_session: DbSession) 
     return ProgressOut(batch=batch, analysis_version=ANALYSIS_VERSION, **counts)
 
 
-def _sway(doc: dict[str, Any]) -> float | None:
-    return ((doc or {}).get("balance") or {}).get("sway_velocity_m_s")
+def _sway(doc: AnalysisDocument | None) -> float | None:
+    return doc.balance.sway_velocity_m_s if doc is not None and doc.balance is not None else None
 
 
 @router.get("/sessions/{session_id}/metric-versions", response_model=list[MetricVersionOut],
@@ -179,15 +180,15 @@ def metric_versions(session_id: IdPath, caller: CurrentCaller, db_session: DbSes
     current = db_session.scalar(select(SessionMetric).where(SessionMetric.session_id == session_id))
     out = []
     if current is not None:
-        doc = current.document or {}
-        out.append(MetricVersionOut(analysis_version=doc.get("analysis_version", "before 2026.11.27"), current=True,
+        doc = read_document(current.document)
+        out.append(MetricVersionOut(analysis_version=doc.analysis_version or OLDER, current=True,
                                     repetitions=current.repetitions, rom_deg=current.rom_deg,
                                     balance_sway_m_s=_sway(doc), replaced_at=None))  # fmt: skip
     older = db_session.scalars(select(SessionMetricVersion).where(SessionMetricVersion.session_id == session_id)
                                .order_by(SessionMetricVersion.replaced_at.desc()))  # fmt: skip
     for v in older:
-        doc = v.document or {}
+        old = read_if_readable(v.document)  # a replaced document may be of any shape the server ever stored
         out.append(MetricVersionOut(analysis_version=v.analysis_version, current=False,
-                                    repetitions=doc.get("repetitions"), rom_deg=doc.get("rom_deg"),
-                                    balance_sway_m_s=_sway(doc), replaced_at=v.replaced_at))  # fmt: skip
+                                    repetitions=old.repetitions if old else None, rom_deg=old.rom_deg if old else None,
+                                    balance_sway_m_s=_sway(old), replaced_at=v.replaced_at))  # fmt: skip
     return out

@@ -35,6 +35,7 @@ from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.suggestions import service as suggestions
 from backend.suggestions.models import Suggestion
 from backend.users.models import User
+from kinect_agent.analysis.document import read_if_readable
 
 PAPERS = {"a4": A4, "letter": LETTER}
 MARKERS = ("FilledCircle", "FilledSquare", "FilledTriangle", "Cross", "FilledDiamond", "Circle")
@@ -214,7 +215,8 @@ def build_report(*, db_session: Session, patient: User, period: Period, made_by:
             block.append(_chart(name, {"range of motion, degrees": roms, "repetitions": reps}, "value", width))
         table = [["Date", "Repetitions", "Range of motion", "Balance sway", "Data quality"]]
         for r in rs:
-            sway = ((r.document or {}).get("balance") or {}).get("sway_velocity_m_s")
+            doc = read_if_readable(r.document)
+            sway = doc.balance.sway_velocity_m_s if doc is not None and doc.balance is not None else None
             table.append([f"{r.started_at:%d %b %Y %H:%M}", "–" if r.repetitions is None else str(r.repetitions),
                           "–" if r.rom_deg is None else f"{r.rom_deg:.0f}°",
                           "not measured" if sway is None else f"{100 * sway:.1f} cm/s",

@@ -24,6 +24,7 @@ from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.sessions.triage import week_start
 from backend.suggestions.models import Suggestion
 from backend.users.models import User
+from kinect_agent.analysis.document import read_indicators
 
 RANKED_PATIENTS_MAX = 500  # the dashboard ranks up to this many visible patients by attention, beyond it pages by id
 
@@ -61,7 +62,7 @@ def progress(
     rows = db_session.execute(query.order_by(ExerciseSession.started_at, ExerciseSession.id)).all()
     keys = ("session_id", "exercise_slug", "started_at", "repetitions", "rom_deg", "quality_ok", "indicators",
             "pain_nrs", "effort_cr10")  # fmt: skip
-    return [dict(zip(keys, row, strict=True)) for row in rows]
+    return [dict(zip(keys, row, strict=True)) | {"indicators": read_indicators(row[6])} for row in rows]
 
 
 def _newest_session(*, with_metrics: bool) -> ScalarSelect[int]:
@@ -163,7 +164,7 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             "unread_replies": unread or 0,
             "unread_hurt": hurt or 0,
             "last_hurt_at": hurt_at,
-            "latest_indicators": indicators if isinstance(indicators, dict) else None,
+            "latest_indicators": read_indicators(indicators),
             "pain_alert_above": triage.PAIN_ALERT_ABOVE if alert is None else alert,
         }
         for pid, this_week, pending, unread, hurt, hurt_at, alert, *last, indicators in rows

@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from pydantic import ValidationError
 
 from backend.analysis import data_quality, work_budget
 from backend.analysis.camera_advice import camera_advice
@@ -24,8 +25,8 @@ from backend.analysis.session_detail import (
 )
 from backend.exceptions import InvalidSessionFile
 from backend.exercises.library import EXERCISES, ExerciseSpec
-from backend.sessions.metrics import json_ready
 from backend.sessions.models import ExerciseSession
+from kinect_agent.analysis.document import AnalysisReport, RepetitionItem, UnreadableDocument, read_report
 from kinect_agent.analysis.validity import recorded_with, session_validity
 from kinect_agent.formats import session_file
 from kinect_agent.formats.session_file import SessionFileError, SessionPayload
@@ -61,29 +62,25 @@ def decode_stored(data: bytes, *, session_id: int, max_frames: int, max_decoded_
 
 def analysis_document(
     payload: SessionPayload, spec: ExerciseSpec | None, stored: dict[str, Any] | None
-) -> tuple[dict[str, Any], str]:
-    """Returns (document, "stored" or "recomputed"): the stored one, else analyze_recording's ({} on failure)."""
+) -> tuple[AnalysisReport | None, str]:
+    """Returns (document, "stored" or "recomputed"): the stored one (any schema version), else analyze_recording's
+    (None on failure)."""
     from backend.analysis.report import analyze_recording
 
-    if isinstance(stored, dict) and isinstance(stored.get("repetition_list"), list):
-        return stored, "stored"
+    if stored is not None:
+        try:
+            return read_report(stored), "stored"
+        except (ValidationError, UnreadableDocument):
+            pass
     if spec is None:
-        return {}, "recomputed"
+        return None, "recomputed"
     try:
-        doc = analyze_recording(payload.raw, spec, filtered=payload.filtered, angle_sd=payload.angle_sd)
-        return json_ready(doc), "recomputed"
+        return analyze_recording(payload.raw, spec, filtered=payload.filtered, angle_sd=payload.angle_sd), "recomputed"
     except (AnalysisError, ValueError):
-        return {}, "recomputed"
+        return None, "recomputed"
 
 
-def _repetitions(doc: dict[str, Any]) -> list[dict[str, Any]]:
-    """Returns the document's repetitions with the keys the table needs (malformed entries left out)."""
-    keys = ("index", "start_s", "end_s", "duration_s", "amplitude_deg", "peak_deg", "side")
-    reps = doc.get("repetition_list") or []
-    return [r for r in reps if isinstance(r, dict) and all(k in r for k in keys)]
-
-
-def file_evidence(payload: SessionPayload, names: tuple[str, ...], reps: list[dict[str, Any]]) -> dict[str, Any]:
+def file_evidence(payload: SessionPayload, names: tuple[str, ...], reps: list[RepetitionItem]) -> dict[str, Any]:
     """Returns the file-derived part of the detail: curves, repetition speeds, hand paths, quality and advice.
 
     payload: as analysed (work_budget.thinned: at most MAX_ANALYSIS_RATE_HZ frames per second).
@@ -98,33 +95,36 @@ def file_evidence(payload: SessionPayload, names: tuple[str, ...], reps: list[di
     strip = data_quality.outlier_strip(raw.t, prob) | {"threshold": config.outlier_threshold}
     return {
         "curves": angle_curves(raw.t, raw.positions, angles, names, kind) if names else [],
-        "peak_speeds": peak_speeds(raw.t, angular_speeds(raw.t, angles), reps),
+        "peak_speeds": peak_speeds(raw.t, angular_speeds(raw.t, angles), [r.model_dump() for r in reps]),
         "hand_paths": hand_paths(measured, raw.t) if is_arm_exercise(names) else None,
         "quality": quality | {"outlier_strip": strip, "advice": camera_advice(raw)},
         "validity": session_validity(raw.meta.device, measured, names, names[0] if names else None).to_dict(),
     }
 
 
-def _workspace(doc: dict[str, Any], paths: dict[str, Any] | None) -> dict[str, Any] | None:
+def _workspace(doc: AnalysisReport | None, paths: dict[str, Any] | None) -> dict[str, Any] | None:
     """Returns {"left", "right"}: each arm's stored workspace metrics with its hand path, or None."""
     if paths is None:
         return None
-    stored = doc.get("reachable_range")
-    metrics: dict[str, Any] = stored if isinstance(stored, dict) else {}
+    reach = doc.reachable_range if doc is not None else None
     out: dict[str, Any] = {}
     for side in ("left", "right"):
-        path, m = paths.get(side), metrics.get(side) or {}
+        path, m = paths.get(side), getattr(reach, side) if reach is not None else None
         if path is None:
             out[side] = None
             continue
-        out[side] = path | {k: m.get(k) for k in ("area_ratio", "volume_ratio", "quadrants")}
+        out[side] = path | {
+            "area_ratio": m.area_ratio if m is not None else None,
+            "volume_ratio": m.volume_ratio if m is not None else None,
+            "quadrants": m.quadrants if m is not None else None,
+        }
     return out
 
 
-def _rep_rows(reps: list[dict[str, Any]], speeds: list[float | None]) -> list[dict[str, Any]]:
-    keys = ("index", "start_s", "end_s", "duration_s", "peak_deg", "side")
+def _rep_rows(reps: list[RepetitionItem], speeds: list[float | None]) -> list[dict[str, Any]]:
     return [
-        {k: r[k] for k in keys} | {"rom_deg": r["amplitude_deg"], "peak_speed_deg_s": s}
+        r.model_dump(include={"index", "start_s", "end_s", "duration_s", "peak_deg", "side"})
+        | {"rom_deg": r.amplitude_deg, "peak_speed_deg_s": s}
         for r, s in zip(reps, speeds, strict=True)
     ]
 
@@ -143,10 +143,9 @@ def detail_body(
     spec = EXERCISES.get(slug) if slug else None
     analysed = work_budget.thinned(payload)  # the work is bounded by the duration, whatever the frame rate
     doc, source = analysis_document(analysed, spec, stored)
-    reps = _repetitions(doc)
+    reps = doc.repetition_list if doc is not None else []
     evidence = file_evidence(analysed, tuple(spec.defining_angles) if spec is not None else (), reps)
-    found = doc.get("quality")
-    quality: dict[str, Any] = found if isinstance(found, dict) else {}
+    quality = doc.quality if doc is not None else None
     raw, filtered = payload.raw, payload.filtered
     return {
         "session_id": session.id,
@@ -159,22 +158,25 @@ def detail_body(
         "duration_s": round(raw.duration, 3),
         "n_frames": raw.n_frames,
         "rate_hz": round(raw.rate_hz, 3) if np.isfinite(raw.rate_hz) else None,
-        "measured_on": doc.get("measured_on") or ("filtered" if filtered is not None else "raw"),
+        "measured_on": doc.measured_on if doc is not None else ("filtered" if filtered is not None else "raw"),
         "repetition_count": len(reps),
-        "rom_deg": doc.get("rom_deg"),
-        "defining_angle": doc.get("defining_angle"),
-        "moving_time_s": doc.get("moving_time_s"),
-        "rest_time_s": doc.get("rest_time_s"),
-        "tempo_s_per_rep": doc.get("tempo_s_per_rep"),
+        "rom_deg": doc.rom_deg if doc is not None else None,
+        "defining_angle": doc.defining_angle if doc is not None else None,
+        "moving_time_s": doc.moving_time_s if doc is not None else None,
+        "rest_time_s": doc.rest_time_s if doc is not None else None,
+        "tempo_s_per_rep": doc.tempo_s_per_rep if doc is not None else None,
         "balance": _balance(doc),
         "balance_missing": None if _balance(doc) is not None else _balance_missing(doc),
         "angles": list(spec.defining_angles) if spec is not None else [],
         "curves": evidence["curves"],
         "repetitions": _rep_rows(reps, evidence["peak_speeds"]),
-        "most_moving_joints": doc.get("most_moving_joints") or [],
+        "most_moving_joints": [j.model_dump() for j in doc.most_moving_joints] if doc is not None else [],
         "workspace": _workspace(doc, evidence["hand_paths"]),
         "quality": evidence["quality"]
-        | {"analysis_ok": quality.get("ok"), "analysis_reasons": list(quality.get("reasons") or [])},
+        | {
+            "analysis_ok": quality.ok if quality is not None else None,
+            "analysis_reasons": list(quality.reasons) if quality is not None else [],
+        },
         "processing": {
             "version": session.processing_version or "",
             "params": session.processing_params or {},
@@ -189,42 +191,40 @@ def detail_body(
     }
 
 
-def _balance(doc: dict[str, Any]) -> dict[str, Any] | None:
+def _balance(doc: AnalysisReport | None) -> dict[str, Any] | None:
     """Returns the document's balance (keys: BalanceOut) when it holds a measured sway, else None."""
-    b = doc.get("balance")
-    if not isinstance(b, dict) or b.get("sway_velocity_m_s") is None:
+    if doc is None or doc.balance is None:
         return None
-    return {k: b.get(k) for k in ("sway_velocity_m_s", "sway_velocity_95", "sway_area_m2", "standing_s")}
+    return doc.balance.model_dump(include={"sway_velocity_m_s", "sway_velocity_95", "sway_area_m2", "standing_s"})
 
 
-def _balance_missing(doc: dict[str, Any]) -> str:
+def _balance_missing(doc: AnalysisReport | None) -> str:
     """Returns why a document has no balance, in words."""
-    reason = doc.get("balance_missing")
-    if isinstance(reason, str) and reason:
-        return reason
+    if doc is not None and doc.balance_missing:
+        return doc.balance_missing
     return "this session was analysed before balance was measured in standing phases; a re-analysis measures it"
 
 
-def _uncertainty(doc: dict[str, Any]) -> dict[str, Any] | None:
+def _uncertainty(doc: AnalysisReport | None) -> dict[str, Any] | None:
     """Returns the detail's uncertainty (keys: UncertaintyOut) from a document's 95 % intervals, or None.
 
     An angle whose intervals the analysis withheld is listed with null intervals and the reason."""
-    intervals, rom = doc.get("range_of_motion_95"), doc.get("range_of_motion")
-    if not isinstance(intervals, dict) or not isinstance(rom, dict):
+    if doc is None or doc.range_of_motion_95 is None:
         return None
-    withheld = doc.get("range_of_motion_95_withheld")
-    withheld = withheld if isinstance(withheld, dict) else {}
+    withheld = doc.range_of_motion_95_withheld or {}
     angles = {}
-    for name, iv in intervals.items():
-        value = rom.get(name)
-        if not isinstance(value, dict) or not (isinstance(iv, dict) or name in withheld):
+    for name, iv in doc.range_of_motion_95.items():
+        value = doc.range_of_motion.get(name)
+        if value is None or (iv is None and name not in withheld):
             continue
-        iv = iv if isinstance(iv, dict) else {}
         angles[name] = (
-            {key: value.get(key) for key in ("min_deg", "max_deg", "range_deg")}
-            | {f"{key[:-4]}_ci95": iv.get(key) for key in ("min_deg", "max_deg", "range_deg")}
+            value.model_dump()
+            | {
+                "min_ci95": iv.min_deg if iv is not None else None,
+                "max_ci95": iv.max_deg if iv is not None else None,
+                "range_ci95": iv.range_deg if iv is not None else None,
+            }
             | {"withheld": withheld.get(name)}
         )
-    reps = doc.get("repetitions_95")
-    end = doc.get("peak_end") if doc.get("peak_end") in ("min", "max") else "max"
-    return {"angles": angles, "repetitions": reps if isinstance(reps, dict) else None, "peak_end": end}
+    reps = doc.repetitions_95.model_dump() if doc.repetitions_95 is not None else None
+    return {"angles": angles, "repetitions": reps, "peak_end": doc.peak_end}

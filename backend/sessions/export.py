@@ -51,6 +51,6 @@ def session_export(
         feeling=_feeling(db_session, session.id),
     )
     try:
-        return export(fmt, payload, document=document or None, context=context, stem=f"session-{session.id}")
+        return export(fmt, payload, document=document, context=context, stem=f"session-{session.id}")
     except ExportError as exc:
         raise ExportUnavailable(f"session {session.id}: {exc}") from None

@@ -58,6 +58,7 @@ from backend.sessions.schemas import (
     SummaryOut,
 )
 from backend.suggestions import service as suggestions_service
+from kinect_agent.analysis.document import read_document
 from kinect_agent.export.files import ExportFormat as ExportFormatName
 
 router = APIRouter(prefix="/api/v1", tags=["sessions"])
@@ -141,7 +142,7 @@ def _session_out(db_session: Session, caller: Caller, session_id: int, row: tupl
     )
     return SessionOut(
         **_item_fields(session, slug, reps, rom, quality),
-        metrics=document,
+        metrics=None if document is None else read_document(document),
         suggestions=suggestions_service.suggestion_outs(
             suggestions, db_session=db_session, accept_language=accept_language
         ),  # fmt: skip

@@ -10,6 +10,7 @@ from pydantic import BaseModel, ConfigDict, Field, JsonValue
 from pydantic.config import JsonDict
 
 from backend.suggestions.schemas import SuggestionOut
+from kinect_agent.analysis.document import AnalysisDocument, Indicators
 
 
 class SessionItemOut(BaseModel):
@@ -40,8 +41,8 @@ class SessionItemOut(BaseModel):
 class SessionOut(SessionItemOut):
     """A stored session with its metrics document and the suggestions it produced that the caller may see."""
 
-    metrics: dict[str, Any] | None = Field(
-        description="the analysis document (backend.analysis.report) with 'indicators'"
+    metrics: AnalysisDocument | None = Field(
+        description="the analysis document (kinect_agent.analysis.document) with its indicators; null: not analysed"
     )
     suggestions: list[SuggestionOut]
 
@@ -54,14 +55,29 @@ _INDICATORS_EXAMPLE: JsonDict = {
         "quality_ok": True,
         "previous": 58.1,
     },
-    "endurance": {"score": 80.0, "value": 8, "basis": "repetitions against the target of 10", "quality_ok": True},
+    "endurance": {
+        "score": 80.0,
+        "value": 8,
+        "basis": "repetitions against the target of 10",
+        "quality_ok": True,
+        "previous": 9.0,
+    },
     "strength": {
         "score": 64.0,
         "value": 26.5,
-        "basis": "movement speed (deg/s) against the last weeks",
+        "basis": "movement speed (deg/s) against the best earlier session",
         "quality_ok": True,
+        "previous": 30.1,
     },
-    "balance": {"score": None, "value": None, "basis": "body-centre sway while standing still", "quality_ok": False},
+    "balance": {
+        "score": None,
+        "value": None,
+        "basis": "trunk-and-hips sway while standing, 1 cm/s scores 100, 6 cm/s 0",
+        "quality_ok": False,
+        "previous": 0.021,
+        "interval": None,
+        "missing": "the patient was seated or crouching: balance is measured while standing",
+    },
 }
 
 
@@ -74,8 +90,8 @@ class ProgressPoint(BaseModel):
     repetitions: int | None
     rom_deg: float | None = Field(description="degrees")
     quality_ok: bool | None
-    indicators: dict[str, Any] | None = Field(
-        description="flexibility, endurance, strength, balance: {score 0..100, ...}"
+    indicators: Indicators | None = Field(
+        description="flexibility, endurance, strength, balance (the session's metrics document); null: not analysed"
     )
     pain_nrs: int | None = Field(default=None, description="pain the patient said after the set, 0-10; null: not said")
     effort_cr10: float | None = Field(
@@ -214,7 +230,7 @@ class SummaryOut(BaseModel):
     planned_this_week: int | None = Field(
         description="sessions per week the running plans prescribe (sum over their items); null without a plan"
     )
-    latest_indicators: dict[str, Any] | None = Field(description="indicators of the newest processed session")
+    latest_indicators: Indicators | None = Field(description="indicators of the newest processed session")
     pending_suggestions: int = Field(description="system suggestions waiting for a therapist's decision")
     unread_replies: int = Field(description="the patient's replies to advice no therapist has read yet")
     attention_score: int = Field(ge=0, le=100, description="how much the patient needs attention (triage formula)")

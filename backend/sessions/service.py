@@ -25,6 +25,7 @@ from backend.suggestions.context import plan_targets, session_history
 from backend.suggestions.models import Suggestion
 from backend.suggestions.service import suggest_for_session, visible_to_patient
 from backend.users.models import User
+from kinect_agent.analysis.document import AnalysisDocument
 from kinect_agent.processing.errors import ProcessingError
 
 if TYPE_CHECKING:
@@ -57,7 +58,7 @@ def _same_or_conflict(stored: ExerciseSession, upload: Upload) -> ExerciseSessio
 
 def _analyse(
     *, db_session: Session, upload: Upload, patient_id: int, exercise: Exercise
-) -> tuple[dict[str, Any] | None, str | None]:
+) -> tuple[AnalysisDocument | None, str | None]:
     """Returns (metrics document, None), or (None, reason) when the analysis cannot use the recording."""
     from backend.exercises.library import EXERCISES
 
@@ -120,9 +121,12 @@ def store_upload(
             raise
         return _same_or_conflict(stored, upload), False
     if doc is not None:
-        db_session.add(SessionMetric(session_id=row.id, document=doc, created_at=utcnow(), **scalar_columns(doc)))
+        stored_doc = doc.model_dump(mode="json")
+        db_session.add(
+            SessionMetric(session_id=row.id, document=stored_doc, created_at=utcnow(), **scalar_columns(doc))
+        )
         db_session.flush()
-        suggest_for_session(db_session=db_session, session=row, doc=doc)
+        suggest_for_session(db_session=db_session, session=row, doc=stored_doc)
     return row, True
 
 

@@ -50,6 +50,7 @@ from typing import Any
 from backend.analysis.balance import MIN_STANDING_S
 from backend.exercises.library import EXERCISES
 from backend.i18n import N_, Translator
+from kinect_agent.analysis.document import Indicators
 
 INDICATORS = ("flexibility", "endurance", "strength", "balance")
 NOW_AT, SOON_AT = 50, 20
@@ -367,15 +368,15 @@ def _trend_text(direction: str, label: str, was: str, now: str, weeks: int, t: T
 
 
 def balance_missing(
-    latest_indicators: dict[str, Any] | None, exercise_slug: str | None, t: Translator = ENGLISH
+    latest_indicators: Indicators | None, exercise_slug: str | None, t: Translator = ENGLISH
 ) -> str | None:
     """Returns why the latest indicators have no balance score, in words (t's language), or None when they have
     one; the analysis's own reason stays as it wrote it."""
-    if not isinstance(latest_indicators, dict):
+    if latest_indicators is None:
         return t.gettext("Not measured: no analysed session yet")
-    if (latest_indicators.get("balance") or {}).get("score") is not None:
+    if latest_indicators.balance.score is not None:
         return None
-    reason = (latest_indicators.get("balance") or {}).get("missing")
+    reason = latest_indicators.balance.missing
     standing = _number(MIN_STANDING_S, t)
     if exercise_slug:
         name = _name(exercise_slug, t)

@@ -11,8 +11,10 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from typing import Any
 
+from pydantic import ValidationError
+
+from kinect_agent.analysis.document import AnalysisReport, UnreadableDocument, read_report
 from kinect_agent.errors import AgentError
 from kinect_agent.export import fhir
 from kinect_agent.export.files import FORMATS, export
@@ -34,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )  # fmt: skip
 
 
-def _document(path: Path | None) -> dict[str, Any] | None:
+def _document(path: Path | None) -> AnalysisReport | None:
     if path is None:
         return None
     try:
@@ -48,7 +50,18 @@ def _document(path: Path | None) -> dict[str, Any] | None:
     doc = doc.get("metrics", doc) if isinstance(doc, dict) and "metrics" in doc else doc
     if not isinstance(doc, dict) or "repetitions" not in doc:
         raise AgentError(f"{path}: not an analysis document (expected an object with 'repetitions')")
-    return doc
+    try:
+        return read_report(doc)
+    except (ValidationError, UnreadableDocument) as exc:
+        raise AgentError(f"{path}: not an analysis document: {_first_error(exc)}") from None
+
+
+def _first_error(exc: ValidationError | UnreadableDocument) -> str:
+    """Returns the first problem of a document that does not validate, in one line."""
+    if isinstance(exc, UnreadableDocument):
+        return str(exc)
+    first = exc.errors()[0]
+    return f"{'.'.join(str(p) for p in first['loc'])}: {first['msg']}"
 
 
 def run(args: argparse.Namespace) -> int:

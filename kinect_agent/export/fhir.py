@@ -31,6 +31,8 @@ from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from typing import Any
 
+from kinect_agent.analysis.document import AnalysisDocument, AnalysisReport, Indicator
+
 CODE_SYSTEM = "https://kinect-home-coach.example/fhir/CodeSystem/metrics"
 FEELING_CODE_SYSTEM = "https://kinect-home-coach.example/fhir/CodeSystem/patient-reported"
 PAIN_LOINC = ("72514-3", "Pain severity - 0-10 verbal numeric rating [Score] - Reported")
@@ -131,46 +133,48 @@ def _observation(common: dict[str, Any], code: dict[str, Any], category: str, **
     return obs
 
 
-def _rom_observations(document: dict[str, Any], common: dict[str, Any]) -> list[dict[str, Any]]:
+def _rom_observations(document: AnalysisReport, common: dict[str, Any]) -> list[dict[str, Any]]:
     out = []
-    for angle, rom in (document.get("range_of_motion") or {}).items():
-        if not isinstance(rom, dict) or rom.get("range_deg") is None:
+    for angle, rom in document.range_of_motion.items():
+        if rom.range_deg is None:
             continue
         code = _concept(CODE_SYSTEM, f"range-of-motion.{angle}", f"Range of motion, {_label(angle)}")
-        fields: dict[str, Any] = {"valueQuantity": _quantity(rom["range_deg"], "deg", "deg")}
+        fields: dict[str, Any] = {"valueQuantity": _quantity(rom.range_deg, "deg", "deg")}
         site = body_site(angle)
         if site is not None:
             fields["bodySite"] = site
+        ends = (("min", rom.min_deg), ("max", rom.max_deg))
         fields["component"] = [
             {
                 "code": _concept(CODE_SYSTEM, f"range-of-motion.{key}", f"{key.capitalize()}imum angle"),
-                "valueQuantity": _quantity(rom[f"{key}_deg"], "deg", "deg"),
+                "valueQuantity": _quantity(value, "deg", "deg"),
             }
-            for key in ("min", "max")
-            if rom.get(f"{key}_deg") is not None
+            for key, value in ends
+            if value is not None
         ]
         out.append(_observation(common, code, "exam", **fields))
     return out
 
 
-def _indicator_observations(document: dict[str, Any], common: dict[str, Any]) -> list[dict[str, Any]]:
-    out = []
-    indicators = document.get("indicators") or {}
+def _indicator_observations(document: AnalysisReport, common: dict[str, Any]) -> list[dict[str, Any]]:
+    out: list[dict[str, Any]] = []
+    if not isinstance(document, AnalysisDocument):
+        return out
     for name in INDICATORS:
-        item = indicators.get(name)
-        if not isinstance(item, dict) or item.get("score") is None:
+        item: Indicator = getattr(document.indicators, name)
+        if item.score is None:
             continue
         code = _concept(CODE_SYSTEM, f"indicator.{name}", f"{name.capitalize()} indicator (0-100)")
-        fields: dict[str, Any] = {"valueQuantity": _quantity(item["score"], "score", "1")}
-        if item.get("value") is not None:
+        fields: dict[str, Any] = {"valueQuantity": _quantity(item.score, "score", "1")}
+        if item.value is not None:
             fields["component"] = [
                 {
                     "code": _concept(CODE_SYSTEM, f"indicator.{name}.value", f"{name.capitalize()} measured value"),
-                    "valueQuantity": {"value": item["value"]},
+                    "valueQuantity": {"value": item.value},
                 }
             ]
-        if item.get("basis"):
-            fields["note"] = [{"text": str(item["basis"])}]
+        if item.basis:
+            fields["note"] = [{"text": item.basis}]
         out.append(_observation(common, code, "exam", **fields))
     return out
 
@@ -226,15 +230,15 @@ def _device(context: SessionContext) -> dict[str, Any]:
     return device
 
 
-def bundle(document: dict[str, Any], context: SessionContext) -> dict[str, Any]:
-    """Returns the Bundle of a session's analysis document (report.analyze_recording output with "indicators")."""
+def bundle(document: AnalysisReport, context: SessionContext) -> dict[str, Any]:
+    """Returns the Bundle of a session's analysis document (an AnalysisDocument: its indicators too)."""
     entries: list[dict[str, Any]] = []
     common: dict[str, Any] = {
         "identifier": [{"system": SESSION_ID_SYSTEM, "value": context.session_id}],
-        "effectivePeriod": _period(context, document.get("duration_s")),
+        "effectivePeriod": _period(context, document.duration_s),
     }
-    if document.get("exercise"):
-        common["method"] = {"text": f"Kinect Home Coach exercise {document['exercise']}"}
+    if document.exercise:
+        common["method"] = {"text": f"Kinect Home Coach exercise {document.exercise}"}
     if context.patient_id is not None:
         common["subject"] = {"reference": f"Patient/{context.patient_id}"}
     if context.device_id is not None or context.recorded_with is not None:
@@ -242,13 +246,13 @@ def bundle(document: dict[str, Any], context: SessionContext) -> dict[str, Any]:
         entries.append({"fullUrl": device_url, "resource": _device(context)})
         common["device"] = {"reference": device_url}
     observations = []
-    if document.get("duration_s") is not None:
+    if document.duration_s is not None:
         code = _concept(LOINC, "55411-3", "Exercise duration")
-        value = _quantity(document["duration_s"], "s", "s")
+        value = _quantity(document.duration_s, "s", "s")
         observations.append(_observation(common, code, "activity", valueQuantity=value))
-    if document.get("repetitions") is not None:
+    if document.repetitions is not None:
         code = _concept(CODE_SYSTEM, "repetitions", "Repetitions of the exercise")
-        value = _quantity(document["repetitions"], "repetitions", "{repetitions}")
+        value = _quantity(document.repetitions, "repetitions", "{repetitions}")
         observations.append(_observation(common, code, "activity", valueQuantity=value))
     observations += _rom_observations(document, common)
     observations += _indicator_observations(document, common)

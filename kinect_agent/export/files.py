@@ -16,8 +16,9 @@ import io
 import json
 import zipfile
 from dataclasses import dataclass
-from typing import Any, Literal, get_args
+from typing import Literal, get_args
 
+from kinect_agent.analysis.document import AnalysisReport
 from kinect_agent.analysis.validity import recorded_with
 from kinect_agent.errors import AgentError
 from kinect_agent.export import fhir, tables, trc
@@ -57,7 +58,7 @@ def _zip(members: dict[str, str]) -> bytes:
     return out.getvalue()
 
 
-def csv_zip(payload: SessionPayload, document: dict[str, Any] | None, feeling: fhir.Feeling | None = None) -> bytes:
+def csv_zip(payload: SessionPayload, document: AnalysisReport | None, feeling: fhir.Feeling | None = None) -> bytes:
     """Returns the zip of metrics.csv, repetitions.csv (with a document), feeling.csv (with a feeling),
     recording.csv (the device) and angles_raw/angles_filtered.csv."""
     members: dict[str, str] = {}
@@ -78,7 +79,7 @@ def export(
     fmt: str,
     payload: SessionPayload,
     *,
-    document: dict[str, Any] | None = None,
+    document: AnalysisReport | None = None,
     context: fhir.SessionContext | None = None,
     stem: str = "session",
 ) -> ExportFile:

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from kinect_agent.analysis.angles import measured_angles
+from kinect_agent.analysis.document import AnalysisDocument, AnalysisReport, RepetitionItem
 from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.recording import Recording
 
@@ -47,33 +48,33 @@ def _text(rows: list[list[Any]]) -> str:
     return out.getvalue()
 
 
-def metric_rows(document: dict[str, Any]) -> list[tuple[str, Any, str]]:
-    """Returns (metric, value, unit) rows of an analysis document (missing values as None)."""
+def metric_rows(document: AnalysisReport) -> list[tuple[str, Any, str]]:
+    """Returns (metric, value, unit) rows of an analysis document (missing values as None; the indicators' rows
+    empty without indicators)."""
     rows: list[tuple[str, Any, str]] = [
-        ("exercise", document.get("exercise"), ""),
-        ("duration", document.get("duration_s"), "s"),
-        ("frames", document.get("n_frames"), ""),
-        ("frame_rate", document.get("rate_hz"), "Hz"),
-        ("repetitions", document.get("repetitions"), ""),
-        ("defining_angle", document.get("defining_angle"), ""),
-        ("repetition_amplitude_median", document.get("rom_deg"), "deg"),
-        ("moving_time", document.get("moving_time_s"), "s"),
-        ("rest_time", document.get("rest_time_s"), "s"),
+        ("exercise", document.exercise, ""),
+        ("duration", document.duration_s, "s"),
+        ("frames", document.n_frames, ""),
+        ("frame_rate", document.rate_hz, "Hz"),
+        ("repetitions", document.repetitions, ""),
+        ("defining_angle", document.defining_angle, ""),
+        ("repetition_amplitude_median", document.rom_deg, "deg"),
+        ("moving_time", document.moving_time_s, "s"),
+        ("rest_time", document.rest_time_s, "s"),
     ]
-    for angle, rom in (document.get("range_of_motion") or {}).items():
-        rom = rom if isinstance(rom, dict) else {}
-        rows += [(f"{angle}.{key}", rom.get(f"{key}_deg"), "deg") for key in ("min", "max", "range")]
-    indicators = document.get("indicators") or {}
+    for angle, rom in document.range_of_motion.items():
+        rows += [(f"{angle}.min", rom.min_deg, "deg"), (f"{angle}.max", rom.max_deg, "deg")]
+        rows += [(f"{angle}.range", rom.range_deg, "deg")]
+    indicators = document.indicators if isinstance(document, AnalysisDocument) else None
     for name in INDICATORS:
-        found = indicators.get(name)
-        item: dict[str, Any] = found if isinstance(found, dict) else {}
-        rows += [(f"indicator.{name}.score", item.get("score"), "0-100")]
-        unit = "s" if name == "strength" and document.get("exercise") == "sit_to_stand" else _INDICATOR_UNITS[name]
-        rows += [(f"indicator.{name}.value", item.get("value"), unit)]
+        item = getattr(indicators, name) if indicators is not None else None
+        rows += [(f"indicator.{name}.score", item.score if item is not None else None, "0-100")]
+        unit = "s" if name == "strength" and document.exercise == "sit_to_stand" else _INDICATOR_UNITS[name]
+        rows += [(f"indicator.{name}.value", item.value if item is not None else None, unit)]
     return rows
 
 
-def metrics_csv(document: dict[str, Any], device: str | None = None) -> str:
+def metrics_csv(document: AnalysisReport, device: str | None = None) -> str:
     """Returns metrics.csv: columns metric, value, unit; a first row names the recording device when given."""
     rows = ([("device", device, "")] if device is not None else []) + metric_rows(document)
     table: list[list[Any]] = [["metric", "value", "unit"], *[list(r) for r in rows]]
@@ -88,12 +89,10 @@ def recording_csv(recorded: dict[str, Any], rate_hz: float | None) -> str:
     return _text([*rows, ["rate_hz", rate_hz]])
 
 
-def repetitions_csv(document: dict[str, Any]) -> str:
+def repetitions_csv(document: AnalysisReport) -> str:
     """Returns repetitions.csv: a 1-based `repetition` column then the keys of each repetition_list entry."""
-    reps = [r for r in document.get("repetition_list") or [] if isinstance(r, dict)]
-    keys: list[str] = []
-    for rep in reps:
-        keys += [k for k in rep if k not in keys]
+    reps = [r.model_dump(mode="json") for r in document.repetition_list]
+    keys = list(RepetitionItem.model_fields) if reps else []
     return _text([["repetition", *keys], *[[i + 1, *[rep.get(k) for k in keys]] for i, rep in enumerate(reps)]])
 
 

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import uuid
+from pathlib import Path
 
 from backend.sessions.metrics import indicator_scores
 from backend.sessions.models import ExerciseSession, SessionMetric
@@ -37,12 +39,7 @@ def store_session(
     db_session.add(row)
     db_session.flush()
     if metrics:
-        doc = doc or {
-            "repetitions": reps,
-            "rom_deg": rom,
-            "quality": {"ok": quality_ok},
-            "indicators": {"flexibility": {"score": rom / 2, "value": rom, "basis": "test", "quality_ok": True}},
-        }
+        doc = doc or document(reps=reps, rom=rom, quality_ok=quality_ok, exercise=exercise.slug)
         db_session.add(
             SessionMetric(
                 session_id=row.id,
@@ -55,3 +52,18 @@ def store_session(
         )
         db_session.flush()
     return row
+
+
+TODAY = Path(__file__).parents[1] / "kinect_agent" / "analysis" / "documents" / "schema2.json"
+
+
+def document(*, reps: int, rom: float | None, quality_ok: bool, exercise: str = "shoulder_abduction") -> dict:
+    """Returns a stored metrics document of today's schema with these numbers; its flexibility indicator scores
+    rom / 2, the other indicators have no score."""
+    doc = json.loads(TODAY.read_text(encoding="utf-8"))
+    doc |= {"exercise": exercise, "repetitions": reps, "rom_deg": rom}
+    doc["quality"] |= {"ok": quality_ok, "reasons": [] if quality_ok else ["test: not ok"]}
+    for name, item in doc["indicators"].items():
+        item["score"] = None if rom is None or name != "flexibility" else rom / 2
+    doc["indicators"]["flexibility"] |= {"value": rom, "basis": "test"}
+    return doc

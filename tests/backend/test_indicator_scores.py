@@ -9,6 +9,8 @@ import sqlalchemy as sa
 
 from backend.migrate import upgrade
 from backend.sessions.metrics import indicator_scores, scalar_columns
+from kinect_agent.analysis.document import read_document
+from tests.backend.session_rows import document
 
 DOC = {
     "repetitions": 8,
@@ -29,7 +31,16 @@ def test_scores_are_copied_from_the_document():
         "flexibility": None,
         "endurance": None,
     }
-    assert scalar_columns(DOC)["indicator_scores"] == {"flexibility": 62.0, "balance": None, "strength": 40.0}
+
+
+def test_scalar_columns_are_read_from_the_model() -> None:
+    doc = read_document(document(reps=8, rom=71.5, quality_ok=False))
+    assert scalar_columns(doc) == {
+        "repetitions": 8,
+        "rom_deg": 71.5,
+        "quality_ok": False,
+        "indicator_scores": {"flexibility": 35.75, "endurance": None, "strength": None, "balance": None},
+    }
 
 
 def test_migration_0007_backfills_the_stored_documents(fresh_engine):

@@ -12,6 +12,7 @@ from backend.exercises.library import EXERCISES
 from backend.plans.models import Plan, PlanItem
 from backend.sessions import dashboard, triage
 from backend.suggestions.models import Suggestion
+from tests.backend.session_rows import document
 
 
 def test_week_start_is_monday_midnight_utc():
@@ -136,7 +137,7 @@ def test_summaries_of_many_patients_take_three_queries(db_session, make_user, ex
         event.remove(connection, "before_cursor_execute", listener)
     assert len(statements) <= 3, statements
     assert all("file_bytes" not in s for s in statements)
-    assert {r["latest_indicators"]["flexibility"]["value"] for r in result.values()} == {54.0}
+    assert {r["latest_indicators"].flexibility.value for r in result.values()} == {54.0}
 
 
 def test_dashboard_lists_only_the_therapists_patients_with_their_summaries(
@@ -317,7 +318,8 @@ def test_missing_balance_is_explained_in_words(db_session, make_user, exercise, 
     row = _summary(db_session, patient)
     name = EXERCISES[exercise.slug].name
     assert row["balance_missing"] == (f"Not measured: no still standing of 2 s or more in the last session ({name})")
-    doc = {"repetitions": 5, "rom_deg": 50.0, "quality": {"ok": True}, "indicators": {"balance": {"score": 80.0}}}
+    doc = document(reps=5, rom=50.0, quality_ok=True, exercise=exercise.slug)
+    doc["indicators"]["balance"]["score"] = 80.0
     store(patient, exercise, THURSDAY_NOON - dt.timedelta(hours=1), doc=doc)
     assert _summary(db_session, patient)["balance_missing"] is None
 
@@ -377,8 +379,11 @@ def test_dashboard_queries_do_not_grow_with_patients(client, db_session, make_us
 def test_missing_balance_gives_the_analysis_reason(db_session, make_user, exercise, store):
     patient = make_user("patient")
     why = "the patient was seated or crouching: balance is measured while standing"
-    doc = {"repetitions": 5, "rom_deg": 50.0, "quality": {"ok": True}, "balance": None, "balance_missing": why}
-    doc["indicators"] = {"balance": {"score": None, "missing": why}}
+    doc = document(reps=5, rom=50.0, quality_ok=True, exercise=exercise.slug) | {
+        "balance": None,
+        "balance_missing": why,
+    }
+    doc["indicators"]["balance"] |= {"score": None, "value": None, "interval": None, "missing": why}
     store(patient, exercise, THURSDAY_NOON - dt.timedelta(hours=1), doc=doc)
     name = triage._name(exercise.slug)  # the library's name, as the triage reasons say it
     assert _summary(db_session, patient)["balance_missing"] == f"Not measured ({name}): {why}"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -18,7 +19,7 @@ def khs(tmp_path_factory):
     folder = tmp_path_factory.mktemp("export")
     path = folder / "set.khs"
     sf.write_payload(payload, path)
-    (folder / "doc.json").write_text(json.dumps(doc), encoding="utf-8")
+    (folder / "doc.json").write_text(json.dumps(doc.model_dump(mode="json")), encoding="utf-8")
     return path
 
 
@@ -79,6 +80,25 @@ def test_a_metrics_file_that_is_not_a_document_is_refused(khs, tmp_path, capsys)
     bad.write_text("[1, 2]", encoding="utf-8")
     assert main(["export", str(khs), "--format", "fhir", "--metrics", str(bad), "--out", str(tmp_path / "b")]) == 2
     assert "not an analysis document" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.json"]
+
+
+def test_a_document_of_an_older_schema_exports(khs, tmp_path):
+    older = Path(__file__).parent / "analysis" / "documents" / "schema1_2026-11-23.json"
+    out = tmp_path / "b.json"
+    assert main(["export", str(khs), "--format", "fhir", "--metrics", str(older), "--out", str(out)]) == 0
+    codes = [
+        e["resource"].get("code", {}).get("coding", [{}])[0].get("code") for e in json.loads(out.read_text())["entry"]
+    ]
+    assert "indicator.flexibility" in codes and "range-of-motion.shoulder_abduction_L" in codes
+
+
+def test_a_document_with_a_wrong_value_is_refused_by_its_key(khs, tmp_path, capsys):
+    bad = tmp_path / "bad.json"
+    doc = json.loads(khs.with_name("doc.json").read_text(encoding="utf-8"))
+    bad.write_text(json.dumps(doc | {"rom_deg": "wide"}), encoding="utf-8")
+    assert main(["export", str(khs), "--format", "fhir", "--metrics", str(bad), "--out", str(tmp_path / "b")]) == 2
+    assert "not an analysis document: rom_deg:" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.json"]
 
 

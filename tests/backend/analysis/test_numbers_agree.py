@@ -113,7 +113,9 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
     body = detail_body(_session(slug, payload.raw.n_frames), slug, None, data, max_frames=10**7,
                        max_decoded_bytes=2**31)  # fmt: skip
     payload = session_file.decode(data, max_frames=10**7, max_decoded_bytes=2**31)  # what the server stores
-    doc = analyze_recording(payload.raw, EXERCISES[slug], filtered=payload.filtered, angle_sd=payload.angle_sd)
+    doc = analyze_recording(
+        payload.raw, EXERCISES[slug], filtered=payload.filtered, angle_sd=payload.angle_sd
+    ).model_dump(mode="json")
     problems: list[str] = []
     rom, ivs, withheld = doc["range_of_motion"], doc["range_of_motion_95"] or {}, doc["range_of_motion_95_withheld"]
     raw_angles = joint_angles(payload.raw.positions)

@@ -32,7 +32,7 @@ REP_KEYS = {"index", "start_s", "end_s", "duration_s", "amplitude_deg", "peak_de
 
 def test_document_has_every_contract_key_and_is_json() -> None:
     truth = simulate_truth("elbow_flexion", 4, seed=1)
-    doc = analyze_recording(truth, EXERCISES["elbow_flexion"])
+    doc = analyze_recording(truth, EXERCISES["elbow_flexion"]).model_dump(mode="json")
     assert CONTRACT_KEYS <= set(doc)
     assert doc["repetitions"] == 4 == len(doc["repetition_list"])
     assert all(set(r) == REP_KEYS for r in doc["repetition_list"])
@@ -42,7 +42,9 @@ def test_document_has_every_contract_key_and_is_json() -> None:
 
 
 def test_standing_session_fills_every_metric() -> None:
-    doc = analyze_recording(simulate_truth("shoulder_abduction", 5, seed=2), EXERCISES["shoulder_abduction"])
+    doc = analyze_recording(
+        simulate_truth("shoulder_abduction", 5, seed=2), EXERCISES["shoulder_abduction"]
+    ).model_dump(mode="json")
     # the intervals need the agent's angle SDs; balance_missing is None when balance is measured
     no_sd = {"sit_to_stand", "range_of_motion_95", "range_of_motion_95_withheld", "repetitions_95", "balance_missing"}
     assert all(doc[k] is not None for k in CONTRACT_KEYS - no_sd), [k for k in doc if doc[k] is None]
@@ -55,13 +57,15 @@ def test_standing_session_fills_every_metric() -> None:
 
 
 def test_sit_to_stand_session_reports_its_transitions() -> None:
-    doc = analyze_recording(simulate_truth("sit_to_stand", 4, seed=2), EXERCISES["sit_to_stand"])
+    doc = analyze_recording(simulate_truth("sit_to_stand", 4, seed=2), EXERCISES["sit_to_stand"]).model_dump(
+        mode="json"
+    )
     assert doc["repetitions"] == 4 and doc["sit_to_stand"]["count"] == 4
 
 
 def test_rom_is_the_median_amplitude_and_range_of_motion_covers_it() -> None:
     truth = simulate_truth("shoulder_flexion", 5, seed=3)
-    doc = analyze_recording(truth, EXERCISES["shoulder_flexion"])
+    doc = analyze_recording(truth, EXERCISES["shoulder_flexion"]).model_dump(mode="json")
     assert doc["rom_deg"] == pytest.approx(np.median([r["amplitude_deg"] for r in doc["repetition_list"]]), abs=0.1)
     rom = doc["range_of_motion"][doc["defining_angle"]]
     assert rom["range_deg"] == pytest.approx(doc["rom_deg"], rel=0.1)
@@ -71,7 +75,7 @@ def test_rom_is_the_median_amplitude_and_range_of_motion_covers_it() -> None:
 def test_filtered_recording_is_measured_and_quality_counts_outliers() -> None:
     measured, _ = noisy("squat", 7, 11)
     filtered = process(measured).filtered
-    doc = analyze_recording(measured, EXERCISES["squat"], filtered=filtered)
+    doc = analyze_recording(measured, EXERCISES["squat"], filtered=filtered).model_dump(mode="json")
     assert doc["measured_on"] == "filtered" and doc["repetitions"] == 7
     assert 0.0 < doc["quality"]["outlier_fraction"] < 0.05
     assert doc["quality"]["tracked_fraction"] > 0.95
@@ -82,7 +86,7 @@ def test_poorly_tracked_recording_is_flagged() -> None:
     positions = truth.positions.copy()
     positions[np.arange(truth.n_frames) % 3 != 0, :16] = np.nan  # two frames in three lose all but the right leg
     rec = Recording.from_positions(truth.t, positions, truth.meta)
-    q = analyze_recording(rec, EXERCISES["squat"])["quality"]
+    q = analyze_recording(rec, EXERCISES["squat"]).model_dump(mode="json")["quality"]
     assert q["ok"] is False and q["tracked_fraction"] < 0.8
     assert any("tracked" in r for r in q["reasons"])
 
@@ -92,7 +96,7 @@ def test_ten_minutes_at_30_hz_analyse_fast() -> None:
     assert 590 < truth.duration < 660
     analyze_recording(truth, EXERCISES["squat"])  # warm-up (imports, caches)
     started = time.process_time()  # CPU time: the test machine is shared; measured 0.12 s
-    doc = analyze_recording(truth, EXERCISES["squat"], filtered=truth)
+    doc = analyze_recording(truth, EXERCISES["squat"], filtered=truth).model_dump(mode="json")
     elapsed = time.process_time() - started
     assert doc["repetitions"] == 122
     assert elapsed < 0.4, f"analyze_recording took {elapsed:.3f} s CPU on {truth.n_frames} frames"
@@ -102,7 +106,7 @@ def test_analyze_file_reads_csv_and_runs_the_pipeline(tmp_path: Path) -> None:
     measured, _ = noisy("shoulder_abduction", 5, 3)
     path = tmp_path / "session.csv"
     formats.write(measured, path)
-    doc = analyze_file(path, "shoulder_abduction")
+    doc = analyze_file(path, "shoulder_abduction").model_dump(mode="json")
     assert doc["repetitions"] == 5 and doc["measured_on"] == "filtered"
 
 
@@ -111,7 +115,7 @@ def test_analyze_file_uses_the_filtered_recording_of_a_session_file(tmp_path: Pa
     raw = truth.replace(positions=truth.positions + 0.3)  # the raw part alone would read as all outliers
     path = tmp_path / "s.khs"
     write_payload(SessionPayload(session_id="abc", raw=raw, filtered=truth), path)
-    doc = analyze_file(path, "elbow_flexion")
+    doc = analyze_file(path, "elbow_flexion").model_dump(mode="json")
     assert doc["repetitions"] == 3
     assert doc["quality"]["outlier_fraction"] == pytest.approx(1.0, abs=0.01)
 
@@ -119,7 +123,7 @@ def test_analyze_file_uses_the_filtered_recording_of_a_session_file(tmp_path: Pa
 @pytest.mark.shared_data
 def test_analyze_file_reads_a_uiprmd_episode(data_dir: Path) -> None:
     path = data_dir / UI_PRMD_KINECT / "Positions" / "m07_s02_e01_positions.txt.gz"
-    doc = analyze_file(path, "standing_shoulder_abduction")
+    doc = analyze_file(path, "standing_shoulder_abduction").model_dump(mode="json")
     assert doc["repetitions"] == 1 and doc["repetition_list"][0]["side"] == "right"
 
 
@@ -178,7 +182,7 @@ def test_cli_missing_exercise_option_exits_2(tmp_path: Path, capsys) -> None:
 @pytest.mark.parametrize("subject", ["s02", "s04"])
 def test_uiprmd_document_counts_ten_repetitions(data_dir: Path, movement: str, subject: str) -> None:
     exercise = next(s for s in EXERCISES.values() if s.uiprmd_movement == movement)
-    doc = analyze_recording(uiprmd(data_dir, movement, subject), exercise)
+    doc = analyze_recording(uiprmd(data_dir, movement, subject), exercise).model_dump(mode="json")
     assert doc["repetitions"] == 10, f"{movement} {subject}: {[r['start_s'] for r in doc['repetition_list']]}"
     assert doc["quality"]["ok"], doc["quality"]["reasons"]
 
@@ -190,7 +194,7 @@ def test_intervals_need_the_filtered_recording_and_its_angle_sds() -> None:
     measured, _, _ = simulate("elbow_flexion", 4, seed=3)
     result = process(measured)
     spec = EXERCISES["elbow_flexion"]
-    doc = analyze_recording(measured, spec, filtered=result.filtered, angle_sd=result.angle_sd)
+    doc = analyze_recording(measured, spec, filtered=result.filtered, angle_sd=result.angle_sd).model_dump(mode="json")
     for name, rom in doc["range_of_motion"].items():
         iv = doc["range_of_motion_95"][name]
         if iv is None:
@@ -199,5 +203,5 @@ def test_intervals_need_the_filtered_recording_and_its_angle_sds() -> None:
     assert doc["range_of_motion_95"]["shoulder_rotation_L"] is None
     assert doc["repetitions_95"]["low"] <= doc["repetitions"] <= doc["repetitions_95"]["high"]
     json.dumps(doc, allow_nan=False)
-    bare = analyze_recording(measured, spec, filtered=result.filtered)
+    bare = analyze_recording(measured, spec, filtered=result.filtered).model_dump(mode="json")
     assert bare["range_of_motion_95"] is None and bare["repetitions_95"] is None

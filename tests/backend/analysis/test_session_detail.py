@@ -119,7 +119,7 @@ def test_peak_speed_of_a_side_reads_that_side_only() -> None:
 def test_peak_speeds_of_simulated_repetitions_are_positive(seed: int) -> None:
     measured, truth = noisy("squat", 3, seed)
     spec = EXERCISES["squat"]
-    doc = analyze_recording(measured, spec, filtered=truth)
+    doc = analyze_recording(measured, spec, filtered=truth).model_dump(mode="json")
     angles = measured_angles(truth.t, truth.positions, spec.defining_angles)
     speeds = peak_speeds(truth.t, angular_speeds(truth.t, angles), doc["repetition_list"])
     assert len(speeds) == 3 and all(20 < s < 400 for s in speeds), f"seed {seed}: {speeds}"
@@ -147,7 +147,7 @@ def test_hand_path_of_abduction_rises_sideways_within_one_arm_length(seed: int) 
 def test_uiprmd_shoulder_abduction_curves_and_speeds(data_dir: Path) -> None:
     rec = uiprmd(data_dir, "m07", "s02")
     spec = EXERCISES["standing_shoulder_abduction"]
-    doc = analyze_recording(rec, spec)
+    doc = analyze_recording(rec, spec).model_dump(mode="json")
     angles = measured_angles(rec.t, rec.positions, spec.defining_angles)
     curves = angle_curves(rec.t, rec.positions, angles, spec.defining_angles, "smoothed")
     right = next(c for c in curves if c["angle"] == "shoulder_abduction_R" and c["kind"] == "smoothed")

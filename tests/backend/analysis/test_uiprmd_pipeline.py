@@ -21,7 +21,7 @@ from ._data import uiprmd
 def test_lower_limb_movement_after_pipeline_gives_ten_repetitions(data_dir, movement: str, subject: str) -> None:
     exercise = next(s for s in EXERCISES.values() if s.uiprmd_movement == movement)
     raw = uiprmd(data_dir, movement, subject)
-    doc = analyze_recording(raw, exercise, filtered=process(raw).filtered)
+    doc = analyze_recording(raw, exercise, filtered=process(raw).filtered).model_dump(mode="json")
     assert doc["measured_on"] == "filtered"
     starts = [r["start_s"] for r in doc["repetition_list"]]
     assert doc["repetitions"] == 10, f"{movement} {subject} ({exercise.slug}): repetitions start at {starts} s"

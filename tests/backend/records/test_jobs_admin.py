@@ -23,7 +23,7 @@ def _old(db_session, session_id: int) -> None:
     """Makes a session's document look made by the analysis before versions were recorded."""
     metric = db_session.scalar(sa.select(SessionMetric).where(SessionMetric.session_id == session_id))
     doc = dict(metric.document)
-    doc.pop("analysis_version")
+    doc.pop("analysis_version"), doc.pop("schema_version")  # schema 1: neither was recorded
     metric.document = doc
     db_session.flush()
 

@@ -26,7 +26,7 @@ def _old_session(client, db_session, upload):
     session_id, patient, therapist = upload(make_processed_khs("shoulder_abduction", 3, seed=5), "shoulder_abduction")
     metric = db_session.scalar(sa.select(SessionMetric).where(SessionMetric.session_id == session_id))
     old = dict(metric.document, balance=None, rom_deg=1.0)
-    old.pop("analysis_version")
+    old.pop("analysis_version"), old.pop("schema_version")  # stored before either was recorded: schema 1
     metric.document, metric.rom_deg = old, 1.0
     db_session.flush()
     return session_id, patient, therapist

@@ -41,11 +41,11 @@ def test_observations_carry_patient_device_units_and_body_sites(squat_session):
     assert all(o["device"] == {"reference": device_url} for o in obs.values())
     duration = obs["55411-3"]
     assert duration["code"]["coding"][0]["system"] == fhir.LOINC
-    assert duration["valueQuantity"] == {"value": doc["duration_s"], "unit": "s", "system": fhir.UCUM, "code": "s"}
-    assert obs["repetitions"]["valueQuantity"]["value"] == doc["repetitions"] == 3
+    assert duration["valueQuantity"] == {"value": doc.duration_s, "unit": "s", "system": fhir.UCUM, "code": "s"}
+    assert obs["repetitions"]["valueQuantity"]["value"] == doc.repetitions == 3
     knee = obs["range-of-motion.knee_flexion_L"]
     assert knee["valueQuantity"]["code"] == "deg" and knee["valueQuantity"]["system"] == fhir.UCUM
-    assert knee["valueQuantity"]["value"] == doc["range_of_motion"]["knee_flexion_L"]["range_deg"]
+    assert knee["valueQuantity"]["value"] == doc.range_of_motion["knee_flexion_L"].range_deg
     knee_site = {"system": fhir.SNOMED, "code": "49076000", "display": "Knee joint structure"}
     assert knee["bodySite"]["coding"][0] == knee_site
     assert "left" in knee["bodySite"]["text"]
@@ -53,7 +53,7 @@ def test_observations_carry_patient_device_units_and_body_sites(squat_session):
     for name in fhir.INDICATORS:
         indicator = obs[f"indicator.{name}"]
         assert 0 <= indicator["valueQuantity"]["value"] <= 100, name
-        assert indicator["valueQuantity"]["value"] == doc["indicators"][name]["score"]
+        assert indicator["valueQuantity"]["value"] == getattr(doc.indicators, name).score
 
 
 def test_without_patient_or_device_the_bundle_has_neither(squat_session):

@@ -30,12 +30,12 @@ def test_zip_holds_metrics_repetitions_and_both_angle_tables(squat_session):
     ]
     metrics = {r["metric"]: (r["value"], r["unit"]) for r in tables["metrics.csv"]}
     assert metrics["repetitions"] == ("3", "")
-    assert float(metrics["duration"][0]) == doc["duration_s"] and metrics["duration"][1] == "s"
-    assert float(metrics["knee_flexion_L.range"][0]) == doc["range_of_motion"]["knee_flexion_L"]["range_deg"]
-    assert float(metrics["indicator.endurance.score"][0]) == doc["indicators"]["endurance"]["score"]
+    assert float(metrics["duration"][0]) == doc.duration_s and metrics["duration"][1] == "s"
+    assert float(metrics["knee_flexion_L.range"][0]) == doc.range_of_motion["knee_flexion_L"].range_deg
+    assert float(metrics["indicator.endurance.score"][0]) == doc.indicators.endurance.score
     reps = tables["repetitions.csv"]
     assert [int(r["repetition"]) for r in reps] == [1, 2, 3]
-    assert [float(r["amplitude_deg"]) for r in reps] == [r["amplitude_deg"] for r in doc["repetition_list"]]
+    assert [float(r["amplitude_deg"]) for r in reps] == [r.amplitude_deg for r in doc.repetition_list]
 
 
 def test_angle_tables_match_the_angles_of_each_recording(squat_session):

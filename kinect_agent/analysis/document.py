@@ -1,0 +1,298 @@
+"""The analysis document of one session as pydantic models (versioned), and reading stored documents of any version.
+
+The server's analysis (backend.analysis.report.analyze_recording) builds an AnalysisReport; at ingest the server
+adds the four indicators and the analysis version (backend.sessions.metrics) and stores the AnalysisDocument as
+`model_dump(mode="json")`. Storage, the API, the pages and the exports read it through `read_document` (or
+`read_report`, `read_if_readable`, `read_indicators`), which upgrade an older stored shape first (`upgrade`).
+The models live beside the agent's analysis because the agent's exports (kinect_agent.export) read the same
+document.
+
+Schema versions (`schema_version`; a document without it is version 1):
+    1  2026-11-23 to 2026-11-27, before versions were recorded: no range_of_motion_95, range_of_motion_95_withheld,
+       repetitions_95, peak_end, balance_missing, analysis_version; repetitions without peak_s; balance without
+       sway_velocity_95, n_windows, method; the balance indicator without interval and missing. Documents of
+       2026-11-25 to 2026-11-27 already hold range_of_motion_95 and repetitions_95.
+    2  today: every key present, None where it does not apply.
+Raise SCHEMA_VERSION and add one step to `upgrade` whenever a key is added, removed or changes its meaning.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+SCHEMA_VERSION = 2
+
+
+class _Part(BaseModel):
+    """A part of the document: exactly the keys the analysis writes (an unknown key is an error)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+
+class RepetitionItem(_Part):
+    """One counted repetition of the defining angle."""
+
+    index: int = Field(description="0-based position in the session")
+    start_s: float = Field(description="start, s from the recording's first frame (1 ms)")
+    end_s: float = Field(description="end, s from the recording's first frame (1 ms)")
+    duration_s: float = Field(description="end_s − start_s, s (1 ms)")
+    amplitude_deg: float = Field(description="excursion of the counting angle, degrees (0.1)")
+    peak_deg: float = Field(description="the measured defining angle at the peak, degrees (0.1)")
+    side: str = Field(description="'left', 'right', 'both' or 'center'")
+    peak_s: float | None = Field(description="time of the peak, s from the first frame (1 ms); None: schema 1")
+
+
+class AngleRange(_Part):
+    """One angle's range of motion over the session (1st to 99th percentile); None where the angle is undefined."""
+
+    min_deg: float | None = Field(description="lowest angle, degrees (0.1)")
+    max_deg: float | None = Field(description="highest angle, degrees (0.1)")
+    range_deg: float | None = Field(description="max_deg − min_deg, degrees (0.1)")
+
+
+class AngleRangeInterval(_Part):
+    """95 % intervals [low, high] of one angle's range, degrees (0.1)."""
+
+    min_deg: list[float] = Field(description="[low, high] of min_deg, degrees", min_length=2, max_length=2)
+    max_deg: list[float] = Field(description="[low, high] of max_deg, degrees", min_length=2, max_length=2)
+    range_deg: list[float] = Field(description="[low, high] of range_deg, degrees", min_length=2, max_length=2)
+
+
+class CountInterval(_Part):
+    """95 % interval of the repetition count."""
+
+    low: int = Field(description="fewest repetitions")
+    high: int = Field(description="most repetitions")
+    ambiguous: bool = Field(description="low != high")
+
+
+class MovingJoint(_Part):
+    """One joint's path length over the session."""
+
+    joint: str = Field(description="joint name (kinect_agent.skeleton.JOINTS)")
+    path_m: float = Field(description="length of the smoothed path, metres (1 mm)")
+
+
+class Workspace(_Part):
+    """The reachable range of one hand, relative to its arm's length."""
+
+    arm_length_m: float = Field(description="median shoulder-to-hand length, metres (1 mm)")
+    area_ratio: float = Field(description="share of the front hemisphere's directions reached, 0..1")
+    volume_ratio: float = Field(description="share of the front half-sphere of radius arm length reached, 0..1")
+    quadrants: dict[str, float] = Field(
+        description="{upper_lateral, upper_medial, lower_medial, lower_lateral}: share of each quadrant reached, 0..1"
+    )
+
+
+class ReachableRange(_Part):
+    """The reachable range of both hands; None for a hand that was not tracked."""
+
+    left: Workspace | None
+    right: Workspace | None
+
+
+class Fatigue(_Part):
+    """Trends over the repetitions; None with fewer than 3 repetitions."""
+
+    amplitude_slope_pct_per_rep: float | None = Field(description="amplitude trend, % of the mean per repetition")
+    duration_slope_pct_per_rep: float | None = Field(description="duration trend, % of the mean per repetition")
+
+
+class Balance(_Part):
+    """Trunk-and-hips centre-of-mass sway in standing phases."""
+
+    sway_path_m: float = Field(description="path of the centre of mass on the floor, metres")
+    sway_area_m2: float = Field(description="95 % ellipse area of the centre of mass on the floor, m²")
+    sway_velocity_m_s: float = Field(description="sway_path_m / standing_s, m/s")
+    sway_velocity_95: list[float] | None = Field(description="95 % interval [low, high] m/s; None: schema 1")
+    standing_s: float = Field(description="time standing still, s")
+    n_windows: int | None = Field(description="windows of the interval's bootstrap; None: schema 1")
+    method: str | None = Field(description="what was measured, in words; None: schema 1")
+
+
+class SitToStand(_Part):
+    """The rises of a sit-to-stand session."""
+
+    mean_s: float = Field(description="mean 20-80 % rise time, s (1 ms)")
+    count: int = Field(description="rises measured")
+
+
+class Quality(_Part):
+    """The analysis' own quality check."""
+
+    ok: bool = Field(description="no reason found")
+    tracked_fraction: float = Field(description="share of the defining joints' samples tracked, 0..1")
+    outlier_fraction: float = Field(description="share of tracked samples far from the filtered body, 0..1")
+    reasons: list[str] = Field(description="why the session is not ok, in words")
+
+
+class Indicator(_Part):
+    """One of the four indicators (backend.analysis.indicators)."""
+
+    score: float | None = Field(description="0..100; None when it cannot be scored")
+    value: int | float | None = Field(description="the measured number it scores (unit in basis); None: missing")
+    basis: str = Field(description="how it was scored, in words")
+    quality_ok: bool = Field(description="the document's quality ok and the value present")
+    previous: float | None = Field(description="median value of the patient's earlier sessions; None: none")
+
+
+class BalanceIndicator(Indicator):
+    """The balance indicator, with the sway interval and why it is missing."""
+
+    interval: list[float] | None = Field(description="balance.sway_velocity_95, [low, high] m/s; None: none")
+    missing: str | None = Field(description="balance_missing when there is no value, in words")
+
+
+class Indicators(_Part):
+    """The four indicators of the paper."""
+
+    flexibility: Indicator
+    endurance: Indicator
+    strength: Indicator
+    balance: BalanceIndicator
+
+
+class AnalysisReport(_Part):
+    """What analyze_recording measures in one session (every key present, None where it does not apply)."""
+
+    schema_version: int = Field(default=SCHEMA_VERSION, description="the shape of this document (module doc)")
+    exercise: str = Field(description="exercise slug")
+    duration_s: float = Field(description="recording length, s (1 ms)")
+    n_frames: int = Field(description="frames recorded")
+    rate_hz: float = Field(description="mean frame rate, Hz")
+    measured_on: Literal["filtered", "params", "raw"] = Field(description="the positions the metrics measured")
+    repetitions: int = Field(description="repetitions counted")
+    repetition_list: list[RepetitionItem]
+    defining_angle: str | None = Field(description="the angle that counted the repetitions; None: none moved")
+    peak_end: Literal["min", "max"] = Field(
+        description="the end of the defining angle's range its repetitions reach ('max' in schema 1)"
+    )
+    range_of_motion: dict[str, AngleRange] = Field(description="{angle: range}, degrees")
+    range_of_motion_95: dict[str, AngleRangeInterval | None] | None = Field(
+        description="{angle: 95 % intervals or None (withheld)}; None without the agent's angle SDs"
+    )
+    range_of_motion_95_withheld: dict[str, str] | None = Field(
+        description="{angle: why its interval is withheld, in words}; None without the agent's angle SDs"
+    )
+    repetitions_95: CountInterval | None = Field(description="None without the agent's angle SDs")
+    rom_deg: float | None = Field(description="median repetition amplitude, degrees (0.1); None: no repetition")
+    most_moving_joints: list[MovingJoint] = Field(description="joints by path length, longest first")
+    reachable_range: ReachableRange
+    moving_time_s: float = Field(description="time moving, s (10 ms)")
+    rest_time_s: float = Field(description="time at rest, s (10 ms)")
+    tempo_s_per_rep: float | None = Field(description="median time between repetition starts, s; None: none")
+    fatigue: Fatigue
+    balance: Balance | None = Field(description="None when the patient did not stand still long enough")
+    balance_missing: str | None = Field(description="why balance is None, in words; None when measured")
+    sit_to_stand: SitToStand | None = Field(description="the sit_to_stand exercise only")
+    quality: Quality
+
+
+class AnalysisDocument(AnalysisReport):
+    """The stored metrics document of a session: the report, its indicators and the analysis version."""
+
+    indicators: Indicators
+    analysis_version: str | None = Field(
+        description="the analysis that made it (backend.sessions.metrics.ANALYSIS_VERSION); None: schema 1"
+    )
+
+
+class UnreadableDocument(ValueError):
+    """A stored document that no known schema version describes."""
+
+
+_V1_DEFAULTS: dict[str, Any] = {
+    "range_of_motion_95": None,
+    "range_of_motion_95_withheld": None,
+    "repetitions_95": None,
+    "peak_end": "max",
+    "balance_missing": None,
+}
+
+
+def _indicators_1_to_2(indicators: object) -> object:
+    """Returns schema-1 indicators in schema 2: the balance indicator's interval and missing None when absent."""
+    if isinstance(indicators, dict) and isinstance(indicators.get("balance"), dict):
+        return {**indicators, "balance": {"interval": None, "missing": None, **indicators["balance"]}}
+    return indicators
+
+
+def _upgrade_1_to_2(doc: dict[str, Any]) -> dict[str, Any]:
+    """Returns a schema-1 document in schema 2 (module doc): missing keys None ('max' for peak_end)."""
+    out = {k: v for k, v in doc.items() if k != "schema_version"}
+    for key, value in _V1_DEFAULTS.items():
+        out.setdefault(key, value)
+    out["repetition_list"] = [
+        {"peak_s": None, **r} if isinstance(r, dict) else r for r in out.get("repetition_list") or []
+    ]
+    if isinstance(out.get("balance"), dict):
+        out["balance"] = {"sway_velocity_95": None, "n_windows": None, "method": None, **out["balance"]}
+    if "indicators" in out:
+        out["indicators"] = _indicators_1_to_2(out["indicators"])
+        out.setdefault("analysis_version", None)
+    out["schema_version"] = 2
+    return out
+
+
+def upgrade(doc: dict[str, Any]) -> dict[str, Any]:
+    """Returns a stored document (JSON object) in today's schema; raises UnreadableDocument for an unknown version."""
+    version = doc.get("schema_version", 1)
+    if not isinstance(version, int) or isinstance(version, bool) or not 1 <= version <= SCHEMA_VERSION:
+        raise UnreadableDocument(f"unknown analysis document schema_version {version!r} (1..{SCHEMA_VERSION} known)")
+    if version == 1:
+        doc = _upgrade_1_to_2(doc)
+    return doc
+
+
+def read_document(doc: dict[str, Any]) -> AnalysisDocument:
+    """Returns a stored metrics document of any schema version as today's model (pydantic.ValidationError or
+    UnreadableDocument when it is malformed)."""
+    return AnalysisDocument.model_validate(upgrade(doc))
+
+
+def read_if_readable(stored: dict[str, Any] | None) -> AnalysisDocument | None:
+    """Returns a stored metrics document of any schema version as today's model; None without one or when no
+    schema reads it (for readers that show "not measured" rather than fail: reports, archives, comparisons)."""
+    if stored is None:
+        return None
+    try:
+        return read_document(stored)
+    except (ValidationError, UnreadableDocument):
+        return None
+
+
+def read_indicators(stored: object) -> Indicators | None:
+    """Returns the "indicators" part of a stored document of any schema version (the dashboard reads only that part);
+    None without one or when no schema reads it."""
+    if not isinstance(stored, dict):
+        return None
+    try:
+        return Indicators.model_validate(_indicators_1_to_2(stored))
+    except ValidationError:
+        return None
+
+
+def read_report(doc: dict[str, Any]) -> AnalysisReport:
+    """Returns a report (`coach-server analyze --json`, whose "source" is dropped) or a stored document of any
+    schema version: an AnalysisDocument when it holds indicators, else an AnalysisReport (pydantic.ValidationError
+    or UnreadableDocument when it is malformed)."""
+    upgraded = {k: v for k, v in upgrade(doc).items() if k != "source"}
+    if "indicators" in upgraded:
+        return AnalysisDocument.model_validate(upgraded)
+    return AnalysisReport.model_validate(upgraded)
+
+
+def json_ready(value: Any) -> Any:
+    """Returns value with numpy scalars and arrays turned into Python numbers and lists, NaN and inf into None."""
+    if isinstance(value, dict):
+        return {str(k): json_ready(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_ready(v) for v in value]
+    if hasattr(value, "tolist") and not isinstance(value, str | bytes):
+        return json_ready(value.tolist())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
