@@ -10,6 +10,9 @@ import textwrap
 import tomllib
 from pathlib import Path
 
+import pytest
+
+pytestmark = pytest.mark.own_database  # each install runs on a SQLite file of its own
 REPO = Path(__file__).resolve().parents[1]
 # pydantic is in the shared core (the pipeline's settings, kinect_agent.processing.config); pydantic_settings is not.
 SERVER_ONLY = ("fastapi", "starlette", "uvicorn", "sqlalchemy", "alembic", "psycopg", "pydantic_settings", "argon2",
