@@ -261,7 +261,7 @@ def create_app(settings: Settings | None = None, engine: Engine | None = None) -
     app.state.settings = settings
     app.state.live_progress = ProgressGate()  # live progress: per-device rate limit and deduplication
     _install_error_handlers(app)
-    # plotly.js (4.8 MB), viser's client and JSON compress 3-5x; the replay recording is already zstd (identity)
+    # plotly.js (1.5 MB), viser's client and JSON compress 3-5x; the replay recording is already zstd (identity)
     app.add_middleware(GZipMiddleware, minimum_size=1024)
     # a request waits for a database slot in the event loop, not in a thread holding a connection (backend/db_slots)
     app.state.db_slots = DbSlots(lambda: engine or get_engine(), wait_s=settings.DB_SLOT_WAIT_S)

@@ -35,24 +35,50 @@ ruff format --check .
 mypy
 python -m pytest -q -p no:cacheprovider tests/test_layers.py
 
-# The browser tests (marker "browser") are slow and exercise the pages, not the database: they run once, on
-# PostgreSQL, the production database. The two passes run side by side (each waits on servers, browsers and the
-# database much of the time, so two cores serve both); the SQLite pass's output follows the PostgreSQL pass's.
-echo "=== tests on PostgreSQL ($PG_URL), and on SQLite beside it (browser tests on PostgreSQL only) ===" >&2
-SQLITE_LOG="$(mktemp)"
-trap 'rm -f "$SQLITE_LOG"' EXIT
-COACH_TEST_DATABASE_URL="" python -m pytest -m "not browser" "$@" >"$SQLITE_LOG" 2>&1 &
-sqlite_pid=$!
-# Tests that never open a database (the signal code, readers, analysis, benchmarks' helpers) run once, in the SQLite
-# pass: on PostgreSQL they would repeat the same computation.
+# Three passes run side by side, each in its own process (the two cores serve them: the browser pass waits on
+# servers and Chromium much of the time):
+#   - PostgreSQL, the browser tests (marker "browser"): slow, and they exercise the pages, not the database, so they
+#     run once, on the production database (one of their own, below);
+#   - PostgreSQL, every other test that opens the suite's database;
+#   - SQLite, every test but the browser tests: the database tests again, and those that never open the suite's
+#     database (the signal code, readers, analysis, benchmarks' helpers; marker "own_database": the demo's and the
+#     lean installs' own SQLite files), which run in this pass only.
+# Each pass's output is printed whole when all have ended.
+echo "=== tests: PostgreSQL ($PG_URL: the browser tests, and the rest) and SQLite, side by side ===" >&2
+LOGS="$(mktemp -d)"
+trap 'rm -rf "$LOGS"' EXIT
 NO_DATABASE=(tests/kinect_agent/analysis tests/kinect_agent/body tests/kinect_agent/evaluation tests/kinect_agent/export
   tests/kinect_agent/formats tests/kinect_agent/live tests/kinect_agent/processing tests/kinect_agent/sources
   tests/kinect_agent/vendor tests/bench tests/backend/analysis)
-pg_rc=0
-COACH_TEST_DATABASE_URL="$PG_URL" python -m pytest "${NO_DATABASE[@]/#/--ignore=}" "$@" || pg_rc=$?
-sqlite_rc=0
+# The browser pass gets a database of its own beside PG_URL's (NAME_browser): its servers' LISTEN/NOTIFY events must
+# not reach the other pass's listeners, and two schemas of one database would share them.
+BROWSER_PG_URL="$(python - "$PG_URL" <<'PY'
+import sys
+import sqlalchemy as sa
+url = sa.make_url(sys.argv[1])
+name = f"{url.database}_browser"
+admin = sa.create_engine(url, isolation_level="AUTOCOMMIT")
+with admin.connect() as conn:
+    if conn.execute(sa.text("SELECT 1 FROM pg_database WHERE datname = :n"), {"n": name}).scalar() is None:
+        conn.execute(sa.text(f'CREATE DATABASE "{name}"'))
+admin.dispose()
+print(url.set(database=name).render_as_string(hide_password=False))
+PY
+)"
+COACH_TEST_DATABASE_URL="$BROWSER_PG_URL" python -m pytest -m browser "$@" >"$LOGS/browser" 2>&1 &
+browser_pid=$!
+COACH_TEST_DATABASE_URL="$PG_URL" python -m pytest -m "not browser and not own_database" \
+  "${NO_DATABASE[@]/#/--ignore=}" "$@" >"$LOGS/postgresql" 2>&1 &
+pg_pid=$!
+COACH_TEST_DATABASE_URL="" python -m pytest -m "not browser" "$@" >"$LOGS/sqlite" 2>&1 &
+sqlite_pid=$!
+browser_rc=0 pg_rc=0 sqlite_rc=0
+wait "$browser_pid" || browser_rc=$?
+wait "$pg_pid" || pg_rc=$?
 wait "$sqlite_pid" || sqlite_rc=$?
-echo "=== tests on SQLite (exit $sqlite_rc) ===" >&2
-cat "$SQLITE_LOG"
-echo "=== PostgreSQL pass: exit $pg_rc; SQLite pass: exit $sqlite_rc ===" >&2
-[ "$pg_rc" -eq 0 ] && [ "$sqlite_rc" -eq 0 ]
+for pass in browser postgresql sqlite; do
+  echo "=== tests: $pass ===" >&2
+  cat "$LOGS/$pass"
+done
+echo "=== browser (PostgreSQL): exit $browser_rc; PostgreSQL: exit $pg_rc; SQLite: exit $sqlite_rc ===" >&2
+[ "$browser_rc" -eq 0 ] && [ "$pg_rc" -eq 0 ] && [ "$sqlite_rc" -eq 0 ]

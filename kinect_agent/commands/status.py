@@ -53,13 +53,14 @@ def server_check(config: AgentConfig, transport: httpx.BaseTransport | None = No
 
 
 def clock_off_s(response: httpx.Response) -> float | None:
-    """Returns this computer's clock minus the server's Date header, seconds (None without a readable Date; the
-    header has whole seconds, so the result is good to about a second)."""
+    """Returns this computer's clock minus the server's Date header, seconds (None without a readable Date). The
+    server's time is set against the middle of the round trip (as NTP does), so a slow answer does not count as a
+    clock off; the header has whole seconds, so the result is good to about a second."""
     try:
         server_now = parsedate_to_datetime(response.headers["Date"])
     except (KeyError, TypeError, ValueError):
         return None
-    return round((clock.utc_now() - server_now).total_seconds())
+    return round((clock.utc_now() - response.elapsed / 2 - server_now).total_seconds())
 
 
 def _clock_sentence(off_s: float) -> str:

@@ -54,6 +54,7 @@ def demo_server(tmp_path: Path, demo_args: list[str]):
         proc.wait(timeout=20)
 
 
+@pytest.mark.own_database  # the demo runs on its own SQLite file
 def test_demo_serves_the_seeded_clinic_and_prints_urls(demo_server) -> None:
     base, proc = demo_server
     with httpx.Client(base_url=base) as client:
@@ -84,6 +85,7 @@ def _demo_processes(marker: str) -> list[int]:
     return pids
 
 
+@pytest.mark.own_database  # the demo runs on its own SQLite file
 @pytest.mark.parametrize("demo_args", [["--history-weeks", "1", "--agent-interval", "1", "2"]])
 def test_demo_agents_upload_backdated_and_live_sessions(demo_server, tmp_path: Path) -> None:
     """The simulated agents pair through the API and upload: history first (backdated), the queue drains."""
@@ -152,6 +154,7 @@ def _patients_named(base: str, name: str) -> int:
     return sum(u["full_name"] == name for u in users)
 
 
+@pytest.mark.own_database  # the demo runs on its own SQLite file
 def test_demo_keeps_its_database_between_runs_and_fresh_starts_over(tmp_path: Path) -> None:
     proc, base = _start_demo(tmp_path)
     try:

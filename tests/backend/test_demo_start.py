@@ -20,6 +20,8 @@ from backend.demo import DEMO_PASSWORD
 from kinect_agent.home import HomeAgent
 from tests.backend.test_demo import _demo_processes
 
+pytestmark = pytest.mark.own_database  # the demo runs on its own SQLite file
+
 
 def _free_port() -> int:
     with socket.socket() as s:

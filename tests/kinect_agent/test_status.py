@@ -61,7 +61,9 @@ def test_a_working_agent_with_json_for_scripts(tmp_path, monkeypatch, capsys, li
     capsys.readouterr()
     assert cli.main(["status", "--json"]) == 0
     facts = json.loads(capsys.readouterr().out)
-    assert abs(facts["server"].pop("clock_off_s")) <= 2  # this computer's clock agrees with the server's
+    # this computer's clock agrees with the server's (whole seconds, a busy machine's answer late by a few more; the
+    # command speaks of a wrong clock beyond status.CLOCK_OFF_S, 300 s)
+    assert abs(facts["server"].pop("clock_off_s")) <= 5
     assert facts["server"] == {"reachable": True, "token_accepted": True, "detail": "device token accepted"}
     assert facts["queue"]["pending"] == 0 and facts["queue"]["uploaded"] == 1 and facts["queue"]["last_upload"]
     assert facts["queue"]["queue_bytes"] > 0 and facts["queue"]["set_aside"] == []

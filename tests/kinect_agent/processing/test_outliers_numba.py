@@ -1,4 +1,6 @@
-"""The compiled outlier-model kernels (_outliers_numba) against the numpy reference, bit for bit."""
+"""The compiled outlier-model kernels (_outliers_numba) against the numpy reference: bit for bit, except the mixture's
+fit on CPUs where numpy evaluates exp and log with its own AVX-512 code (numba calls libm's): there the two differ in
+the last bits (measured: 1 element of 60 off by 9.5e-16 relative), and the fit is held to 1e-12 relative."""
 
 from __future__ import annotations
 
@@ -6,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from numpy._core._multiarray_umath import __cpu_features__
 
 from kinect_agent import skeleton
 from kinect_agent.processing import _outliers_numba
@@ -24,12 +27,16 @@ from ._data import inject_outliers, smooth_motion, utkinect
 pytestmark = pytest.mark.skipif(not _outliers_numba.AVAILABLE, reason="numba is not installed")
 
 FIELDS = ("rho", "mu", "sigma", "x1", "x2", "loglik", "n")
+NUMPY_OWN_EXP = bool(__cpu_features__.get("AVX512_SKX"))  # numpy's exp/log are then not libm's
 
 
 def _assert_same_fit(fast: MixtureFit, ref: MixtureFit) -> None:
     assert fast.n_iter == ref.n_iter, f"EM iterations {fast.n_iter} vs {ref.n_iter}"
     for name in FIELDS:
-        np.testing.assert_array_equal(getattr(fast, name), getattr(ref, name), err_msg=name)
+        if NUMPY_OWN_EXP:
+            np.testing.assert_allclose(getattr(fast, name), getattr(ref, name), rtol=1e-12, atol=0, err_msg=name)
+        else:
+            np.testing.assert_array_equal(getattr(fast, name), getattr(ref, name), err_msg=name)
 
 
 def _fit(e: np.ndarray, cls: np.ndarray, compiled: bool = True) -> MixtureFit:
