@@ -16,6 +16,7 @@ from backend.audit.models import AuditEvent
 from backend.config import Settings
 from backend.exercises.models import Exercise
 from backend.jobs.models import Job
+from backend.records.retention import apply_retention
 from backend.sessions.models import ExerciseSession, SessionExport
 from backend.sessions.prepared_export import in_request
 from tests.backend.khs_files import make_khs
@@ -178,3 +179,29 @@ def test_a_removed_recording_is_410_and_queues_nothing(client, make_user, auth_h
     response = _export(client, row.id, "csv", auth_headers(patient))
     assert response.status_code == 410 and response.json()["error"] == "SessionFileRemoved", response.text
     assert _count(db_session, Job, Job.kind == "export") == 0
+
+
+def _stored_export(client, db_session, run_jobs, session_id: int, headers: dict) -> str:
+    """Has a worker build the session's BVH; returns its object key."""
+    assert _export(client, session_id, "bvh", headers).status_code == 202 and run_jobs() == 1
+    return db_session.scalar(select(SessionExport.data_key).where(SessionExport.session_id == session_id))
+
+
+def test_retention_and_erasure_remove_the_stored_exports(
+    client, upload, make_user, auth_headers, db_session, run_jobs, object_store
+):
+    old_id, _, therapist = upload(make_khs("squat", 2, seed=48), "squat")
+    th = auth_headers(therapist)
+    old_key = _stored_export(client, db_session, run_jobs, old_id, th)
+    db_session.get(ExerciseSession, old_id).started_at = dt.datetime(2025, 1, 1, tzinfo=dt.UTC)
+    db_session.flush()
+    apply_retention(db_session=db_session, days=365, now=dt.datetime(2026, 11, 27, tzinfo=dt.UTC))
+    db_session.commit()
+    assert not object_store.exists(old_key) and _count(db_session, SessionExport) == 0
+    assert _export(client, old_id, "bvh", th).status_code == 410
+    new_id, patient, _ = upload(make_khs("squat", 2, seed=49), "squat")
+    key = _stored_export(client, db_session, run_jobs, new_id, auth_headers(patient))
+    erased = client.post(f"/api/v1/patients/{patient.id}/erasure", json={"confirm_email": patient.email},
+                         headers=auth_headers(make_user("admin")))  # fmt: skip
+    assert erased.status_code == 200 and erased.json()["rows"]["session_export"] == 1, erased.text
+    assert not object_store.exists(key) and _count(db_session, SessionExport) == 0
