@@ -90,8 +90,9 @@ def work(
     once: bool = False,
     idle_s: float = 1.0,
     stop: Callable[[], bool] = lambda: False,
+    kinds: tuple[str, ...] = KINDS,
 ) -> int:
-    """Runs jobs until stop() (or, once=True, until the queue is empty); returns how many it ran. The periodic
+    """Runs jobs of `kinds` until stop() (or, once=True, until none is due); returns how many it ran. The periodic
     work is queued first and then every settings.CAMERA_SWEEP_S."""
     ran, next_sweep = 0, 0.0
     while not stop():
@@ -99,7 +100,7 @@ def work(
             queue_periodic(sessionmaker=sessionmaker, settings=settings)
             next_sweep = time.monotonic() + settings.CAMERA_SWEEP_S
         with sessionmaker() as db_session:
-            job = queue.claim(db_session=db_session, worker=name, kinds=KINDS)
+            job = queue.claim(db_session=db_session, worker=name, kinds=kinds)
             if job is None:
                 if once:
                     return ran
@@ -156,8 +157,9 @@ def main(args: argparse.Namespace) -> int:
     for sig in (signal.SIGTERM, signal.SIGINT):
         signal.signal(sig, lambda *_: stopping.append(True))
     name = f"{socket.gethostname()}:{os.getpid()}"
-    print(f"worker {name} started", file=sys.stderr)
+    kinds = tuple(getattr(args, "kinds", None) or KINDS)
+    print(f"worker {name} started ({', '.join(kinds)})", file=sys.stderr)
     ran = work(sessionmaker=get_sessionmaker(), settings=get_settings(), name=name, once=args.once,
-               stop=lambda: bool(stopping))  # fmt: skip
+               stop=lambda: bool(stopping), kinds=kinds)  # fmt: skip
     print(f"worker {name} stopped after {ran} job(s)", file=sys.stderr)
     return 0
