@@ -98,9 +98,9 @@ class SessionExport(Base):
     session_id: Mapped[int] = mapped_column(ForeignKey("exercise_session.id", ondelete="CASCADE"))
     format: Mapped[str] = mapped_column(String(8))
     inputs: Mapped[str] = mapped_column(String(64))
-    data_key: Mapped[str] = mapped_column(String(100))  # the file's bytes in the object store (backend/storage)
-    data_hash: Mapped[str] = mapped_column(String(64))  # their sha256
-    size: Mapped[int] = mapped_column()
+    data_key: Mapped[str] = mapped_column(String(100))  # the file gzip-compressed in the object store (backend/storage)
+    data_hash: Mapped[str] = mapped_column(String(64))  # the sha256 of the stored (compressed) bytes
+    size: Mapped[int] = mapped_column()  # of the stored (compressed) bytes
     media_type: Mapped[str] = mapped_column(String(64))  # the download's Content-Type
     file_name: Mapped[str] = mapped_column(String(100))  # the download's name, e.g. session-12.bvh
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)

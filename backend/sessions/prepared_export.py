@@ -15,6 +15,7 @@ the next ask queues a new build.
 from __future__ import annotations
 
 import dataclasses
+import gzip
 import hashlib
 import json
 from dataclasses import dataclass
@@ -36,8 +37,23 @@ from kinect_agent.export.fhir import SessionContext
 from kinect_agent.export.files import ExportFile
 
 KIND = "export"
+GZIP_LEVEL = 6  # the stored file's compression: built once, handed out as it is to clients that accept gzip
 EXPORT_VERSION = 1  # part of a stored export's inputs: bump when kinect_agent.export's output changes
 NAMES = {"csv": "tables (CSV)", "trc": "OpenSim markers (TRC)", "bvh": "motion (BVH)", "fhir": "health record (FHIR)"}
+
+
+@dataclass(frozen=True)
+class StoredExport:
+    """A download read from the object store: its bytes gzip-compressed as stored (a request hands them on as they
+    are to a client that accepts gzip, so no request compresses the file again), media type and file name."""
+
+    gzipped: bytes
+    media_type: str
+    file_name: str
+
+    def data(self) -> bytes:
+        """Returns the download's bytes, uncompressed."""
+        return gzip.decompress(self.gzipped)
 
 
 @dataclass(frozen=True)
@@ -75,17 +91,17 @@ def job_key(session_id: int, fmt: str, inputs: str) -> str:
     return f"{KIND}:{session_id}:{fmt}:{inputs}"
 
 
-def _stored(db_session: Session, session_id: int, fmt: str, inputs: str) -> ExportFile | None:
+def _stored(db_session: Session, session_id: int, fmt: str, inputs: str) -> StoredExport | None:
     row = db_session.execute(
         select(SessionExport.data_key, SessionExport.data_hash, SessionExport.media_type, SessionExport.file_name)
         .where(SessionExport.session_id == session_id, SessionExport.format == fmt, SessionExport.inputs == inputs)
     ).first()  # fmt: skip
     if row is None:
         return None
-    return ExportFile(get_store().get(row.data_key, row.data_hash), row.media_type, row.file_name)
+    return StoredExport(get_store().get(row.data_key, row.data_hash), row.media_type, row.file_name)
 
 
-def read_export(*, db_session: Session, row: tuple[Any, ...], fmt: str) -> ExportFile | ExportState:
+def read_export(*, db_session: Session, row: tuple[Any, ...], fmt: str) -> StoredExport | ExportState:
     """Returns the stored `fmt` export of get_session_row's row when it is stored for today's inputs, else where
     its build is (queueing it when it is neither stored nor queued, or failed and may be tried again); flushes.
 
@@ -119,9 +135,10 @@ def read_export(*, db_session: Session, row: tuple[Any, ...], fmt: str) -> Expor
 
 
 def run(*, db_session: Session, session_id: int, fmt: str, max_frames: int, max_decoded_bytes: int) -> dict[str, Any]:
-    """Runs the job of one session's `fmt` export: builds it whole, then stores it, unless one of today's inputs is
-    stored; a file that cannot be read or exported is a result (said to whoever asks), not a failure to retry.
-    Nothing is stored when the build fails: the object is written (atomically) only once its bytes are complete."""
+    """Runs the job of one session's `fmt` export: builds it whole, then stores it gzip-compressed, unless one of
+    today's inputs is stored; a file that cannot be read or exported is a result (said to whoever asks), not a
+    failure to retry. Nothing is stored when the build fails: the object is written (atomically) only once its
+    bytes are complete, its row after it."""
     try:
         row = service.get_session_row(db_session=db_session, session_id=session_id)
     except SessionNotFound:
@@ -142,7 +159,7 @@ def run(*, db_session: Session, session_id: int, fmt: str, max_frames: int, max_
         return done | {"invalid": exc.message}
     except ExportUnavailable as exc:
         return done | {"unavailable": exc.message}
-    obj = get_store().put(KIND, file.data)
+    obj = get_store().put(KIND, gzip.compress(file.data, compresslevel=GZIP_LEVEL, mtime=0))
     _keep(db_session, session_id, fmt, inputs, obj, file)
     return done | {"built": True, "size": obj.size}
 

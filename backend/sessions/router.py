@@ -43,6 +43,7 @@ from backend.exceptions import (
 from backend.exercises.service import get_exercise
 from backend.schemas import DateTimeQuery, IdPath, IdQuery, Page, PageParams, page_params
 from backend.sessions import dashboard, prepared, prepared_export, service
+from backend.sessions.encoding import accepts_gzip
 from backend.sessions.export import session_export
 from backend.sessions.ingest import check_declared_length, check_owner, decode_upload, read_limited
 from backend.sessions.models import ExerciseSession
@@ -385,18 +386,27 @@ def export_session(
     if small:
         result = session_export(db_session=db_session, row=row, fmt=format, max_frames=settings.SESSION_MAX_FRAMES,
                                 max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
-    else:
-        found = prepared_export.read_export(db_session=db_session, row=row, fmt=format)
-        if isinstance(found, prepared_export.ExportState):
-            state = PreparingOut(state=found.state, detail=found.detail)
-            return JSONResponse(state.model_dump(), status_code=202, headers={"Retry-After": EXPORT_RETRY_AFTER_S})
-        result = found
+        _audit(db_session, caller, "session.export.read", session_id, session.patient_id, {"format": format})
+        return _download(result.data, result.media_type, result.file_name, None, stored=False)
+    found = prepared_export.read_export(db_session=db_session, row=row, fmt=format)
+    if isinstance(found, prepared_export.ExportState):
+        state = PreparingOut(state=found.state, detail=found.detail)
+        return JSONResponse(state.model_dump(), status_code=202, headers={"Retry-After": EXPORT_RETRY_AFTER_S})
     _audit(db_session, caller, "session.export.read", session_id, session.patient_id, {"format": format})
-    return Response(
-        content=result.data,
-        media_type=result.media_type,
-        headers={"Content-Disposition": f'attachment; filename="{result.file_name}"'},
-    )
+    if accepts_gzip(request.headers.get("accept-encoding")):  # as stored: no request compresses the file again
+        return _download(found.gzipped, found.media_type, found.file_name, "gzip")
+    return _download(found.data(), found.media_type, found.file_name, None)
+
+
+def _download(data: bytes, media_type: str, file_name: str, encoding: str | None, *, stored: bool = True) -> Response:
+    """Returns a download; a stored one says its encoding (the gzip middleware passes an encoded answer on as it is
+    and compresses the others, adding its own Vary)."""
+    headers = {"Content-Disposition": f'attachment; filename="{file_name}"'}
+    if stored:
+        headers["Vary"] = "Accept-Encoding"
+    if encoding is not None:
+        headers["Content-Encoding"] = encoding
+    return Response(content=data, media_type=media_type, headers=headers)
 
 
 @router.get(

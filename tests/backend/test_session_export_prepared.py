@@ -6,6 +6,7 @@ server's limits are lowered so that short simulated sets take the worker's path 
 from __future__ import annotations
 
 import datetime as dt
+import gzip
 import json
 import re
 
@@ -17,6 +18,7 @@ from backend.config import Settings
 from backend.exercises.models import Exercise
 from backend.jobs.models import Job
 from backend.records.retention import apply_retention
+from backend.sessions.encoding import accepts_gzip
 from backend.sessions.models import ExerciseSession, SessionExport
 from backend.sessions.prepared_export import in_request
 from tests.backend.khs_files import make_khs
@@ -41,6 +43,15 @@ def _count(db_session, model, *where) -> int:
     return db_session.scalar(select(func.count()).select_from(model).where(*where))
 
 
+@pytest.mark.parametrize(
+    ("header", "gzip_ok"),
+    [("gzip, deflate", True), ("br;q=1.0, GZIP;q=0.5", True), ("gzip;q=0", False), ("identity", False),
+     ("*", True), (None, False), ("gzip;q=x", False)],
+)  # fmt: skip
+def test_accept_encoding_allows_gzip_only_when_listed_with_a_weight(header, gzip_ok):
+    assert accepts_gzip(header) is gzip_ok
+
+
 def test_the_request_builds_only_a_recording_short_in_both_duration_and_frames():
     limits = {"max_s": 300.0, "max_frames": 9000}
     assert in_request(duration_s=300.0, n_frames=9000, **limits)
@@ -48,7 +59,9 @@ def test_the_request_builds_only_a_recording_short_in_both_duration_and_frames()
     assert not in_request(duration_s=60.0, n_frames=216_000, **limits), "many frames in a minute: the worker"
 
 
-def test_a_long_session_answers_202_then_the_file_a_worker_stored(client, upload, auth_headers, db_session, run_jobs):
+def test_a_long_session_answers_202_then_the_file_a_worker_stored(
+    client, upload, auth_headers, db_session, run_jobs, object_store
+):
     session_id, _, therapist = upload(make_khs("squat", 2, seed=41), "squat")
     th = auth_headers(therapist)
     first = _export(client, session_id, "bvh", th)
@@ -63,11 +76,16 @@ def test_a_long_session_answers_202_then_the_file_a_worker_stored(client, upload
     assert ready.status_code == 200, ready.text
     assert ready.headers["content-type"] == "text/plain; charset=utf-8"
     assert ready.headers["content-disposition"] == f'attachment; filename="session-{session_id}.bvh"'
+    assert ready.headers["content-encoding"] == "gzip", "handed out as stored: the request compresses nothing"
     kept = db_session.scalar(select(SessionExport).where(SessionExport.session_id == session_id))
-    assert kept.format == "bvh" and kept.data_key.startswith("export/") and kept.size == len(ready.content)
+    assert kept.format == "bvh" and kept.data_key.startswith("export/")
+    assert gzip.decompress(object_store.get(kept.data_key, kept.data_hash)) == ready.content
+    plain = client.get(f"/api/v1/sessions/{session_id}/export", params={"format": "bvh"},
+                       headers=th | {"Accept-Encoding": "identity"})  # fmt: skip
+    assert plain.status_code == 200 and "content-encoding" not in plain.headers and plain.content == ready.content
     reads = (AuditEvent.action == "session.export.read", AuditEvent.object_id == str(session_id))
     audited = db_session.scalars(select(AuditEvent.detail).where(*reads)).all()
-    assert audited == [{"format": "bvh"}], "audited when the file is handed out, not while it is prepared"
+    assert audited == [{"format": "bvh"}] * 2, "audited when the file is handed out, not while it is prepared"
     assert run_jobs() == 0 and _export(client, session_id, "bvh", th).content == ready.content
 
 
