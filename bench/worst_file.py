@@ -240,7 +240,7 @@ def run(url: str, data: bytes, duration_s: float, n_frames: int, only: list[str]
             print(row, flush=True)
         small = prepared_export.in_request(duration_s=duration_s, n_frames=n_frames, max_s=settings.EXPORT_DIRECT_MAX_S,
                                            max_frames=settings.EXPORT_DIRECT_MAX_FRAMES)  # fmt: skip
-        for fmt in sf_formats() if not only or any("export" in o for o in only) else ():
+        for fmt in [f for f in sf_formats() if not only or any(o in f"GET /export?format={f}" for o in only)]:
             path = f"{s}/export?format={fmt}"
             if small:  # built in the request, every time: held to the request's own bound
                 rows.append(_repeated(f"GET /export?format={fmt} (in the request)", on_server,
