@@ -35,6 +35,19 @@ def settings() -> Settings:
                     EXPORT_DIRECT_MAX_FRAMES=DIRECT_MAX_FRAMES)  # fmt: skip
 
 
+@pytest.fixture
+def stored(db_session, store, make_patient_with_therapist):
+    """Factory: stored(seed) -> (session id, patient, therapist): a simulated squat set stored as an upload stores it
+    (file, metrics), without the upload's own work (the detail build), so the tests stay fast."""
+    squat = db_session.scalar(select(Exercise).where(Exercise.slug == "squat"))
+
+    def make(seed: int):
+        patient, therapist = make_patient_with_therapist()
+        return store(patient, squat, T0, data=make_khs("squat", 2, seed=seed)).id, patient, therapist
+
+    return make
+
+
 def _export(client, session_id: int, fmt: str, headers: dict):
     return client.get(f"/api/v1/sessions/{session_id}/export", params={"format": fmt}, headers=headers)
 
@@ -60,9 +73,9 @@ def test_the_request_builds_only_a_recording_short_in_both_duration_and_frames()
 
 
 def test_a_long_session_answers_202_then_the_file_a_worker_stored(
-    client, upload, auth_headers, db_session, run_jobs, object_store
+    client, stored, auth_headers, db_session, run_jobs, object_store
 ):
-    session_id, _, therapist = upload(make_khs("squat", 2, seed=41), "squat")
+    session_id, _, therapist = stored(41)
     th = auth_headers(therapist)
     first = _export(client, session_id, "bvh", th)
     assert first.status_code == 202 and first.headers["retry-after"] == "5", first.text
@@ -100,9 +113,9 @@ def _fhir_without_fresh_ids(body: bytes) -> dict:
 
 @pytest.mark.parametrize("fmt", ["csv", "trc", "bvh", "fhir"])
 def test_the_stored_export_is_the_file_the_request_builds_for_a_short_session(
-    client, upload, auth_headers, run_jobs, settings, fmt
+    client, stored, auth_headers, run_jobs, settings, fmt
 ):
-    session_id, patient, _ = upload(make_khs("squat", 2, seed=42), "squat")
+    session_id, patient, _ = stored(42)
     headers = auth_headers(patient)
     assert _export(client, session_id, fmt, headers).status_code == 202
     assert run_jobs() == 1
@@ -118,8 +131,8 @@ def test_the_stored_export_is_the_file_the_request_builds_for_a_short_session(
         assert stored.content == direct.content, f"{fmt}: {len(stored.content)} against {len(direct.content)} bytes"
 
 
-def test_a_new_answer_about_the_set_makes_the_stored_csv_stale(client, upload, auth_headers, db_session, run_jobs):
-    session_id, patient, therapist = upload(make_khs("squat", 2, seed=43), "squat")
+def test_a_new_answer_about_the_set_makes_the_stored_csv_stale(client, stored, auth_headers, db_session, run_jobs):
+    session_id, patient, therapist = stored(43)
     th = auth_headers(therapist)
     assert _export(client, session_id, "csv", th).status_code == 202 and run_jobs() == 1
     before = _export(client, session_id, "csv", th)
@@ -206,9 +219,9 @@ def _stored_export(client, db_session, run_jobs, session_id: int, headers: dict)
 
 
 def test_retention_and_erasure_remove_the_stored_exports(
-    client, upload, make_user, auth_headers, db_session, run_jobs, object_store
+    client, stored, make_user, auth_headers, db_session, run_jobs, object_store
 ):
-    old_id, _, therapist = upload(make_khs("squat", 2, seed=48), "squat")
+    old_id, _, therapist = stored(48)
     th = auth_headers(therapist)
     old_key = _stored_export(client, db_session, run_jobs, old_id, th)
     db_session.get(ExerciseSession, old_id).started_at = dt.datetime(2025, 1, 1, tzinfo=dt.UTC)
@@ -217,7 +230,7 @@ def test_retention_and_erasure_remove_the_stored_exports(
     db_session.commit()
     assert not object_store.exists(old_key) and _count(db_session, SessionExport) == 0
     assert _export(client, old_id, "bvh", th).status_code == 410
-    new_id, patient, _ = upload(make_khs("squat", 2, seed=49), "squat")
+    new_id, patient, _ = stored(49)
     key = _stored_export(client, db_session, run_jobs, new_id, auth_headers(patient))
     erased = client.post(f"/api/v1/patients/{patient.id}/erasure", json={"confirm_email": patient.email},
                          headers=auth_headers(make_user("admin")))  # fmt: skip
