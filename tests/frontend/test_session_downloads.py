@@ -65,7 +65,7 @@ def test_a_file_that_could_not_be_prepared_is_said_in_words(page, live_server, s
     page.route("**/api/v1/sessions/*/export?format=trc", failed)
     page.goto(f"/therapist/sessions/{squat_session}")
     downloads = []
-    page.on("download", downloads.append)
+    page.on("download", lambda d: downloads.append(d))
     page.click("#downloads >> text=Markers for OpenSim (TRC)")
     state = page.locator("#download-state")
     expect(state).to_have_text(f"The Markers for OpenSim (TRC) file could not be prepared. {words}")
