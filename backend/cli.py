@@ -325,8 +325,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--wait", action="store_true", help="print the progress until the batch is done")
     p.set_defaults(_run=cmd_reanalyze)
 
-    p = sub.add_parser("worker", help="run queued jobs (re-analysis) until stopped; run several, on several machines")
+    from backend.jobs.worker import KINDS
+
+    p = sub.add_parser("worker", help="run queued jobs (re-analysis, replays, session details, long sessions' "
+                       "exports) until stopped; run several, on several machines")  # fmt: skip
     p.add_argument("--once", action="store_true", help="stop when the queue is empty")
+    p.add_argument("--kinds", nargs="+", choices=KINDS, default=list(KINDS), metavar="KIND",
+                   help=f"run only these kinds of job (default: all of {', '.join(KINDS)})")  # fmt: skip
     p.set_defaults(_run=cmd_worker)
 
     p = sub.add_parser("retention", help="remove session files older than COACH_RETENTION_DAYS (metrics are kept)")

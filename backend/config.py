@@ -40,6 +40,10 @@ class Settings(BaseSettings):
     SESSION_MAX_DECODED_BYTES: int = 128 * 1024 * 1024  # all recordings of one file, after decompression (268 B/frame)
     # per recording: no home session lasts longer; with the frame limit it bounds the work one upload can cause
     SESSION_MAX_DURATION_S: float = Field(default=2 * 60 * 60.0, gt=0)
+    # a download (csv, trc, bvh, fhir) is built in the request only for a recording within both limits (≤ 2 s CPU,
+    # ≤ 256 MiB measured at them, bench/README.md); any larger one by a worker, then read from the object store
+    EXPORT_DIRECT_MAX_FRAMES: int = Field(default=9000, ge=0)
+    EXPORT_DIRECT_MAX_S: float = Field(default=300.0, ge=0)
     CHECK_MIGRATIONS: bool = True
     # ready the camera sets' live filter in a background thread at start-up (its compiled code: ~1 s from numba's
     # cache, half a minute or more the first time); off: the first camera set's first batch waits for it

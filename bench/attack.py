@@ -43,7 +43,7 @@ ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/attack.py` puts bench/ first, not the repository
     sys.path.insert(0, str(ROOT_DIR))
 
-from bench.attack_work import print_work, run_work_case, work_cases  # noqa: E402
+from bench.attack_work import jobs_runner, print_work, run_work_case, work_cases  # noqa: E402
 from bench.ingest import db_label, make_app, open_engine  # noqa: E402
 from kinect_agent.formats import session_file as sf  # noqa: E402
 from tests.backend import khs_files  # noqa: E402
@@ -838,8 +838,9 @@ def run_database(url: str, seeds: list[int], quick: bool, cache_dir: Path, famil
             work = []
             if families != "uploads":
                 reader = _reader_headers(engine, users["A"][1])
+                run_jobs = jobs_runner(engine, settings)
                 for case in work_cases(settings.SESSION_MAX_FRAMES, cache_dir, quick=quick):
-                    work.append(run_work_case(client, case, users["A"][2], reader))
+                    work.append(run_work_case(client, case, users["A"][2], reader, run_jobs))
                     _stored(engine, patient_ids, purge=True)
     finally:
         cleanup()

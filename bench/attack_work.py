@@ -2,12 +2,15 @@
 
 Each case is a valid session file that asks for more work than its recording is worth: a params["config"] with
 large outlier_iterations or outlier_window_s, a high frame rate (1 kHz), the most frames the server accepts, or a
-long duration. It is uploaded by a paired device, then GET /sessions/{id}/detail and GET /sessions/{id}/replay are
-sent once each. For every request the CPU time of the process (time.process_time: the app and the test client
-run in it, nothing else) and its peak resident memory above the request's start (/proc/self/statm sampled every
-2 ms) are measured and compared with the budget of backend.analysis.work_budget: BUDGETS[request] per started
-10 minutes of recording. A case fails when a request answers 5xx or exceeds its budget; a file the
-server refuses at upload (4xx) passes, its refusal is the bound.
+long duration. It is uploaded by a paired device, then GET /sessions/{id}/detail, /replay and /export?format=bvh are
+sent once each (a worker prepares them: the answer is 202, or the export itself for a short recording), then a
+real worker (backend.jobs.worker.work, in this process) builds what each queued, one kind of job at a time, and
+each is read again (200 expected). For every request and build the CPU time of the process (time.process_time:
+the app, the test client and the worker run in it, nothing else) and its peak resident memory above its start
+(/proc/self/statm sampled every 2 ms) are measured and compared with the budget of backend.analysis.work_budget:
+BUDGETS[request] per started 10 minutes of recording (a stored read with the upload's). A case fails when a
+request answers 5xx, stays 202 after its build, or exceeds its budget; a file the server refuses at upload (4xx)
+passes, its refusal is the bound.
 """
 
 from __future__ import annotations
@@ -142,46 +145,75 @@ def _measured(send: Callable[[], object]) -> tuple[object, float, float, int]:
     return response, time.perf_counter() - wall, time.process_time() - cpu, rss.peak_bytes
 
 
-def run_work_case(client, case: WorkCase, headers: dict, reader: dict) -> dict:
-    """Uploads the case's file with a device's headers, reads its detail and replay with the patient's (reader)
-    headers; returns the record: each request's status, wall and CPU seconds, peak bytes, budget and failures."""
+def jobs_runner(engine, settings) -> Callable[[str], int]:
+    """Returns run(kind): a real worker (backend.jobs.worker.work) on engine runs every due job of that kind in this
+    process (so _measured counts its CPU and memory) until none is left; returns how many it ran."""
+    from sqlalchemy.orm import sessionmaker
+
+    from backend.jobs.worker import work
+
+    sessions = sessionmaker(bind=engine, expire_on_commit=False)
+
+    def run(kind: str) -> int:
+        return work(sessionmaker=sessions, settings=settings, name="bench-attack", once=True, kinds=(kind,))
+
+    return run
+
+
+EXPORT_FORMAT = "bvh"  # the dearest export of the worst file (bench/README.md)
+# (request, path under the session, the worker's job kind that builds it, the budget it is held to)
+READS = (("detail", "detail", "detail"), ("replay", "replay", "replay"),
+         ("export", f"export?format={EXPORT_FORMAT}", "export"))  # fmt: skip
+
+
+def run_work_case(client, case: WorkCase, headers: dict, reader: dict, run_jobs: Callable[[str], int]) -> dict:
+    """Uploads the case's file with a device's headers, asks for its detail, replay and BVH export with the patient's
+    (reader) headers (202 while a worker prepares them, or the answer itself), then has a worker build each (run_jobs,
+    one kind at a time) and reads each again (200 expected); returns the record: each request's and each build's
+    status, wall and CPU seconds, peak bytes, budget and failures."""
     data = case.make()
     payload = sf.decode(data, max_frames=10**7, max_decoded_bytes=2**31)
     duration = payload.raw.duration
     record = {"family": FAMILY, "name": case.name, "file_bytes": len(data), "n_frames": payload.raw.n_frames,
               "duration_s": round(duration, 1), "requests": [], "failures": []}  # fmt: skip
-    session_id = None
-    for name in ("upload", "detail", "replay"):
-        if name == "upload":
-            send = lambda: client.post("/api/v1/sessions", content=data, headers=headers,  # noqa: E731
-                                       params={"exercise": "squat"})  # fmt: skip
-        else:
-            send = lambda url=f"/api/v1/sessions/{session_id}/{name}": client.get(url, headers=reader)  # noqa: E731
+
+    def measured(name: str, kind: str, send: Callable[[], object], status_of=lambda r: r.status_code) -> object:
         response, wall, cpu, peak = _measured(send)
-        cpu_budget, bytes_budget = work_budget.budget(duration, name)
-        record["requests"].append(_request(name, response, wall, cpu, peak) | {"budget_cpu_s": cpu_budget,
+        cpu_budget, bytes_budget = work_budget.budget(duration, kind)
+        status = status_of(response)
+        record["requests"].append(_request(name, response, status, wall, cpu, peak) | {"budget_cpu_s": cpu_budget,
                                   "budget_mib": bytes_budget / 2**20})  # fmt: skip
-        if response.status_code >= 500:
-            record["failures"].append(f"{name} {response.status_code}")
+        if status >= 500:
+            record["failures"].append(f"{name} {status}")
         if cpu > cpu_budget:
             record["failures"].append(f"{name} {cpu:.2f} s CPU > {cpu_budget:g} s")
         if peak > bytes_budget:
             record["failures"].append(f"{name} {peak / 2**20:.0f} MiB > {bytes_budget / 2**20:.0f} MiB")
-        if name == "upload":
-            if response.status_code != 201:
-                break
-            session_id = response.json()["id"]
+        return response
+
+    upload = measured("upload", "upload", lambda: client.post("/api/v1/sessions", content=data, headers=headers,
+                                                               params={"exercise": "squat"}))  # fmt: skip
+    if upload.status_code != 201:
+        return record
+    base = f"/api/v1/sessions/{upload.json()['id']}"
+    for name, path, kind in READS:  # the request: queues the build (202), or answers
+        measured(name, kind, lambda u=f"{base}/{path}": client.get(u, headers=reader))
+    for name, path, kind in READS:  # the worker's build: what the 202 put off
+        measured(f"{name} build", kind, lambda k=kind: run_jobs(k), status_of=lambda ran: 200)
+        again = measured(f"{name} stored", "upload", lambda u=f"{base}/{path}": client.get(u, headers=reader))
+        if again.status_code != 200:
+            record["failures"].append(f"{name} still {again.status_code} after the worker ran")
     return record
 
 
-def _request(name: str, response, wall: float, cpu: float, peak: int) -> dict:
+def _request(name: str, response, status: int, wall: float, cpu: float, peak: int) -> dict:
     error = ""
-    if response.status_code >= 400:
+    if status >= 400:
         try:
             error = f"{response.json().get('error')}: {str(response.json().get('detail'))[:120]}"
         except ValueError:
             error = response.text[:120]
-    return {"request": name, "status": response.status_code, "wall_s": round(wall, 3), "cpu_s": round(cpu, 3),
+    return {"request": name, "status": status, "wall_s": round(wall, 3), "cpu_s": round(cpu, 3),
             "peak_mib": round(peak / 2**20, 1), "error": error}  # fmt: skip
 
 
@@ -189,11 +221,11 @@ def print_work(db: str, records: list[dict]) -> None:
     """Prints the family's table for one database."""
     budgets = ", ".join(f"{k} {c:g} s, {m / 2**20:.0f} MiB" for k, (c, m) in work_budget.BUDGETS.items())
     print(f"\nFile chooses the work, db {db}: budget per started 10 min of recording: {budgets}")
-    print(f"{'case':<38}{'frames':>8}{'dur s':>9}  {'request':<8}{'status':>7}{'wall s':>8}{'CPU s':>8}{'MiB':>7}")
+    print(f"{'case':<38}{'frames':>8}{'dur s':>9}  {'request':<15}{'status':>7}{'wall s':>8}{'CPU s':>8}{'MiB':>7}")
     for r in records:
         for i, q in enumerate(r["requests"]):
             head = f"{r['name']:<38}{r['n_frames']:>8}{r['duration_s']:>9}" if i == 0 else " " * 55
-            print(f"{head}  {q['request']:<8}{q['status']:>7}{q['wall_s']:>8.2f}{q['cpu_s']:>8.2f}{q['peak_mib']:>7.0f}"
-                  f"  {q['error']}")  # fmt: skip
+            print(f"{head}  {q['request']:<15}{q['status']:>7}{q['wall_s']:>8.2f}{q['cpu_s']:>8.2f}"
+                  f"{q['peak_mib']:>7.0f}  {q['error']}")  # fmt: skip
         if r["failures"]:
             print(f"  FAILED: {'; '.join(r['failures'])}")

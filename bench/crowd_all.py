@@ -8,9 +8,14 @@ fills (lists, details, exports, plots, the PDF report, the data archive, the rep
 with some event streams held open meanwhile. Setup (not measured): the demo clinic (`coach-server migrate`,
 `seed-demo`) in a SQLite file, or in the PostgreSQL database of --db (dropped and recreated; its name must contain
 "bench"); the real server (uvicorn, --workers processes); every demo patient's paired device uploads two sessions.
-Then the crowd leaves at once, request i taking the i-th entry of the mix (cycled). Reported: answers by status,
-each 5xx with its path, and per role the median and 99th percentile of the time to the answer. The run fails (exit
-1) on any 5xx or failed connection.
+A `coach-server worker` runs beside the server, as in production, and one patient's device uploads a longer
+session (LONG_MINUTES) whose four exports are in the staff's mix (past the limits of an export built in the
+request: prepared by the worker). Then the crowd leaves at once, request i taking the i-th entry of the mix
+(cycled). Reported: answers by status, each 5xx with its path, per role the median and 99th percentile of the
+time to the answer; then the build work the 202 answers put off: every distinct request answered 202 is asked
+again every 2 s until it answers 200 (when each was ready), and the worker's CPU time and peak memory over the
+crowds until the last was ready. The run fails (exit 1) on any 5xx, failed connection, or 202 that never turned
+into a 200.
 """
 
 from __future__ import annotations
@@ -18,7 +23,9 @@ from __future__ import annotations
 import argparse
 import asyncio
 import json
+import os
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -31,11 +38,14 @@ import httpx
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from backend.demo import ADMIN, DEMO_PASSWORD, PATIENTS, THERAPISTS  # noqa: E402
 from bench.crowd import demo_clinic  # noqa: E402
-from bench.dashboard_load import free_port, start_server, stop_server  # noqa: E402
+from bench.dashboard_load import ROOT, free_port, start_server, stop_server  # noqa: E402
 from bench.ingest import session_file, with_new_session_id  # noqa: E402
+from bench.worst_file import ProcessMeter  # noqa: E402
 
 OPEN_STREAMS = 20  # event streams held open by patients' pages during the crowd
 SESSION_MINUTES = 0.5  # the uploaded sessions' length
+LONG_MINUTES = 6.0  # one longer session, past the server's limits for exports built in the request
+DRAIN_S = 900.0  # the longest wait for the worker to prepare what the crowd was told "being prepared"
 
 
 @dataclass
@@ -86,15 +96,16 @@ def _ids(base: str, cookies: dict[str, str]) -> tuple[int, int, int | None]:
         return pid, sid, (plans[0]["id"] if plans else None)
 
 
-def _staff_gets(pid: int, sid: int, plan: int | None) -> list[str]:
+def _staff_gets(pid: int, sid: int, plan: int | None, long_sid: int) -> list[str]:
     s, p = f"/api/v1/sessions/{sid}", f"/api/v1/patients/{pid}"
+    exports = [f"/api/v1/sessions/{long_sid}/export?format={f}" for f in ("csv", "trc", "bvh", "fhir")]
     gets = ["/api/v1/dashboard", "/api/v1/patients", p, f"{p}/therapists", f"{p}/devices", f"{p}/plans",
             f"/api/v1/sessions?patient_id={pid}", s, f"{s}/detail", f"{s}/export?format=csv", f"{s}/file",
             f"{s}/metric-versions", f"{s}/feeling", f"{s}/replay", f"{p}/progress", f"{p}/summary",
             f"{p}/suggestions", f"{p}/voice", f"{p}/report.pdf", f"/api/v1/live/status?patient_id={pid}",
             "/api/v1/exercises", "/api/v1/exercises/squat", "/api/v1/exercises/squat/demonstration",
             "/api/v1/users/me", "/api/v1/version"]  # fmt: skip
-    return gets + ([f"/api/v1/plans/{plan}"] if plan else [])
+    return gets + exports + ([f"/api/v1/plans/{plan}"] if plan else [])
 
 
 def _patient_gets(pid: int, sid: int) -> list[str]:
@@ -104,8 +115,9 @@ def _patient_gets(pid: int, sid: int) -> list[str]:
             f"{p}/archive", "/api/v1/exercises/elbow_flexion/demonstration"]  # fmt: skip
 
 
-def setup(base: str, session: bytes) -> list[Caller]:
-    """Signs in one caller per role, pairs devices and uploads sessions; returns the callers."""
+def setup(base: str, session: bytes, long_session: bytes) -> list[Caller]:
+    """Signs in one caller per role, pairs devices and uploads sessions (and one long session of the therapist's
+    first patient); returns the callers."""
     admin = _sign_in(base, ADMIN[0])
     tokens = _pair_devices(base, admin)
     for token in tokens.values():
@@ -114,6 +126,7 @@ def setup(base: str, session: bytes) -> list[Caller]:
     therapist = _sign_in(base, THERAPISTS[0][0])
     patient = _sign_in(base, PATIENTS[0][0])
     pid, sid, plan = _ids(base, therapist)
+    long_sid = _upload(base, tokens[pid], long_session)
     with httpx.Client(base_url=base, cookies=patient, timeout=60) as c:
         own_pid = c.get("/api/v1/users/me").json()["id"]
         own_sid = c.get("/api/v1/sessions", params={"limit": 1}).json()["items"][0]["id"]
@@ -124,8 +137,9 @@ def setup(base: str, session: bytes) -> list[Caller]:
         return httpx.AsyncClient(base_url=base, timeout=300, limits=limits, **kw)
 
     callers = [
-        Caller("admin", client(cookies=admin), ["/api/v1/users", "/api/v1/audit", *_staff_gets(pid, sid, plan)]),
-        Caller("therapist", client(cookies=therapist), _staff_gets(pid, sid, plan)),
+        Caller("admin", client(cookies=admin),
+               ["/api/v1/users", "/api/v1/audit", *_staff_gets(pid, sid, plan, long_sid)]),
+        Caller("therapist", client(cookies=therapist), _staff_gets(pid, sid, plan, long_sid)),
         Caller("patient", client(cookies=patient), _patient_gets(own_pid, own_sid)),
         Caller("device", client(headers={"Authorization": f"Bearer {device_token}"}),
                ["/api/v1/devices/me", f"/api/v1/patients/{own_pid}/plans", "POST /api/v1/sessions?exercise=squat"]),
@@ -141,6 +155,7 @@ async def crowd(callers: list[Caller], n: int, session: bytes) -> dict:
     latencies: dict[str, list[float]] = defaultdict(list)
     answers: Counter[str] = Counter()
     errors: list[str] = []
+    preparing: dict[tuple[str, str], Caller] = {}  # (role, path) answered 202: a worker prepares it
 
     async def hold_stream() -> None:
         try:
@@ -164,6 +179,8 @@ async def crowd(callers: list[Caller], n: int, session: bytes) -> dict:
             status = type(exc).__name__
         latencies[caller.role].append(time.perf_counter() - t0)
         answers[status] += 1
+        if status == "202":
+            preparing[(caller.role, path)] = caller
         if not status.isdigit() or status.startswith("5"):
             errors.append(f"{status} {caller.role} {path}")
 
@@ -178,8 +195,38 @@ async def crowd(callers: list[Caller], n: int, session: bytes) -> dict:
     per_role = {role: {"n": len(v), "p50_s": round(statistics.median(v), 2),
                        "p99_s": round(sorted(v)[min(len(v) - 1, int(0.99 * len(v)))], 2)}
                 for role, v in latencies.items()}  # fmt: skip
+    built = await drain(preparing, t0)
+    errors += built.pop("errors")
     return {"n": n, "distinct_requests": len(mix), "answers": dict(answers), "errors": errors,
-            "last_s": round(wall, 1), "per_role": per_role}  # fmt: skip
+            "last_s": round(wall, 1), "per_role": per_role, "builds": built}  # fmt: skip
+
+
+async def drain(preparing: dict[tuple[str, str], Caller], t0: float) -> dict:
+    """Asks again every 2 s for each distinct request the crowd was answered 202 (a worker prepares it) until it
+    answers something else; returns how many, when each was ready (s since the crowd left: median, last) and the
+    failures (not 200, or still 202 after DRAIN_S)."""
+    ready: list[float] = []
+    errors: list[str] = []
+
+    async def one(role: str, path: str, caller: Caller) -> None:
+        while True:
+            try:
+                r = await caller.client.get(path)
+                status = str(r.status_code)
+            except httpx.HTTPError as exc:
+                status = type(exc).__name__
+            if status != "202":
+                break
+            if time.perf_counter() - t0 > DRAIN_S:
+                break
+            await asyncio.sleep(2.0)
+        ready.append(time.perf_counter() - t0)
+        if status != "200":
+            errors.append(f"{status} {role} {path} (after its build)")
+
+    await asyncio.gather(*(one(role, path, c) for (role, path), c in preparing.items()))
+    return {"prepared": len(preparing), "ready_p50_s": round(statistics.median(ready), 1) if ready else 0.0,
+            "ready_last_s": round(max(ready), 1) if ready else 0.0, "errors": errors}  # fmt: skip
 
 
 async def _run(callers: list[Caller], sizes: list[int], session: bytes) -> list[dict]:
@@ -200,12 +247,21 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         url = demo_clinic(args.db, Path(tmp))
         session = session_file(SESSION_MINUTES, Path(tempfile.gettempdir()))
+        long_session = session_file(LONG_MINUTES, Path(tempfile.gettempdir()))
         port = free_port()
         server = start_server(url, port, workers=args.workers)
+        env = {**os.environ, "COACH_DATABASE_URL": url, "COACH_ENVIRONMENT": "local"}
+        worker = subprocess.Popen([str(Path(sys.executable).parent / "coach-server"), "worker"], env=env, cwd=ROOT,
+                                  stderr=subprocess.DEVNULL)  # fmt: skip
         try:
-            callers = setup(f"http://127.0.0.1:{port}", session)
+            callers = setup(f"http://127.0.0.1:{port}", session, long_session)
+            meter = ProcessMeter(worker.pid)
+            meter.start()
             rows = asyncio.run(_run(callers, args.crowd, session))
+            cpu, peak = meter.stop()  # every crowd's builds, until the last was ready
         finally:
+            worker.terminate()
+            worker.wait(timeout=600)
             stop_server(server)
     for row in rows:
         answers = ", ".join(f"{k}: {v}" for k, v in sorted(row["answers"].items()))
@@ -213,10 +269,16 @@ def main() -> int:
               f" last answer after {row['last_s']} s")  # fmt: skip
         for role, r in row["per_role"].items():
             print(f"  {role:<10} {r['n']:>4} requests  p50 {r['p50_s']:>6.2f} s  p99 {r['p99_s']:>6.2f} s")
+        b = row["builds"]
+        print(f"  prepared by the worker: {b['prepared']} distinct requests answered 202, ready after "
+              f"{b['ready_p50_s']} s (median) / {b['ready_last_s']} s (last)")  # fmt: skip
         for line in row["errors"]:
             print(f"  error: {line}")
+    print(f"worker: {cpu:.1f} s CPU, peak {peak / 2**20:.0f} MiB above its start, over every crowd until the last "
+          f"build was ready")  # fmt: skip
     if args.json:
-        args.json.write_text(json.dumps(rows, indent=2))
+        args.json.write_text(json.dumps({"crowds": rows, "worker": {"cpu_s": round(cpu, 1),
+                                         "peak_mib": round(peak / 2**20)}}, indent=2))  # fmt: skip
     return 1 if any(r["errors"] for r in rows) else 0
 
 

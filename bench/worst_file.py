@@ -1,24 +1,29 @@
 """The worst session file the server accepts, read through every endpoint of the real server (prints numbers).
 
     .venv/bin/python bench/worst_file.py [--db sqlite] [--db URL] [--only NAME ...] [--json OUT] [--cache FILE]
+                                         [--at-export-limit] [--repeat N]
 
 The file: the most frames (COACH_SESSION_MAX_FRAMES, 216 000) over the longest duration (COACH_SESSION_MAX_DURATION_S,
 2 h), i.e. 30 Hz, the rate at which the server analyses every frame (it thins above 40 Hz, work_budget); a squat
 set tiled over two hours, raw positions with 2 cm noise and 3 % of frames carrying outliers (a joint thrown up to
 1 m), the noise-free recording as the filtered one. It is within the upload (32 MiB) and decoded-size limits.
+--at-export-limit: the same kind of file with COACH_EXPORT_DIRECT_MAX_FRAMES frames over COACH_EXPORT_DIRECT_MAX_S,
+the longest whose downloads are built in the request (held to work_budget.EXPORT_IN_REQUEST, not per 10 minutes).
 
 Setup (not measured): the demo clinic (`coach-server migrate`, `seed-demo`) in a SQLite file in a temp folder, or in
 the PostgreSQL database of --db (dropped and recreated; its name must contain "bench"); the real server (uvicorn,
-one process, bench.dashboard_load.start_server) and a separate `coach-server worker` for the jobs (the session page's
-detail, queued by the upload, and the replays). A device is paired with the demo patient Maria, uploads the file;
-the worker's build of the detail is measured until /detail answers 200, then each endpoint is requested once, as
-Maria, or as her therapist where only staff may ask, then the replay builds (one skeleton, both) and their reads.
-For each request the CPU time of the process that does the work (the server; the worker for a build, from the
-upload's answer or the job's queueing until /detail answers or /replay/state says ready) is read from
+one process, bench.dashboard_load.start_server) and two `coach-server worker`s: one for the exports (`--kinds
+export`), one for the other jobs (the session page's detail, queued by the upload, and the replays; with --only
+and neither named, none). A device is paired with the demo patient Maria, uploads the file; the worker's build of
+the detail is measured until /detail answers 200; each export is asked for until it is not 202 (its worker's
+build) and then read (`--repeat` times, median), or read in the request for a short recording; then each other
+endpoint is requested once, as Maria, or as her therapist where only staff may ask, then the replay builds (one
+skeleton, both) and their reads. For each request the CPU time of the process that does the work (the server;
+the worker for a build, from the upload's answer or the first ask until the answer is ready) is read from
 /proc/<pid>/stat, and its peak resident memory above the request's start from /proc/<pid>/status (VmHWM, reset
 through /proc/<pid>/clear_refs before each request). Budgets (backend.analysis.work_budget, docs/deployment.md):
-upload and replay their own, every other read of the session the session page's ("detail"), per started 10
-minutes of recording. Exit status 1 when a request fails (4xx, 5xx) or exceeds its budget.
+upload, replay and export builds their own, every other read of the session the session page's ("detail"), per
+started 10 minutes of recording. Exit status 1 when a request fails (4xx, 5xx) or exceeds its budget.
 """
 
 from __future__ import annotations
@@ -42,6 +47,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from backend.analysis import work_budget  # noqa: E402
 from backend.config import Settings  # noqa: E402
 from backend.demo import DEMO_PASSWORD  # noqa: E402
+from backend.jobs.worker import KINDS  # noqa: E402
+from backend.sessions import prepared_export  # noqa: E402
 from bench.crowd import demo_clinic  # noqa: E402
 from bench.dashboard_load import ROOT, free_port, start_server, stop_server  # noqa: E402
 from kinect_agent.formats import session_file as sf  # noqa: E402
@@ -189,15 +196,21 @@ def _detail_built(client: httpx.Client, sid: int) -> httpx.Response:
         time.sleep(0.5)
 
 
-def run(url: str, data: bytes, duration_s: float, only: list[str]) -> list[Measured]:
-    """Starts server and worker on the database url, uploads data, reads it through every endpoint (those whose
-    name contains one of `only`, when given); returns rows."""
+def run(url: str, data: bytes, duration_s: float, n_frames: int, only: list[str], repeat: int = 1) -> list[Measured]:
+    """Starts server and workers on the database url, uploads data, reads it through every endpoint (those whose
+    name contains one of `only`, when given; the export reads `repeat` times, median); returns rows."""
+    settings = Settings()
     port = free_port()
     base = f"http://127.0.0.1:{port}"
     server = start_server(url, port, workers=1)
     env = {**os.environ, "COACH_DATABASE_URL": url, "COACH_ENVIRONMENT": "local"}
-    worker = subprocess.Popen([str(Path(sys.executable).parent / "coach-server"), "worker"], env=env, cwd=ROOT,
+    coach = str(Path(sys.executable).parent / "coach-server")
+    # one worker for the exports, one for everything else: each build is measured on the process that does it
+    others = [k for k in KINDS if k != "export"]
+    builds = not only or any(w in o for o in only for w in ("detail", "replay"))  # else only the exports' worker
+    worker = subprocess.Popen([coach, "worker", "--kinds", *(others if builds else ["camera_end"])], env=env, cwd=ROOT,
                               stderr=subprocess.DEVNULL)  # fmt: skip
+    exporter = subprocess.Popen([coach, "worker", "--kinds", "export"], env=env, cwd=ROOT, stderr=subprocess.DEVNULL)
     rows: list[Measured] = []
     try:
         admin, therapist, patient = _client(base, ADMIN), _client(base, THERAPIST), _client(base, PATIENT)
@@ -205,6 +218,7 @@ def run(url: str, data: bytes, duration_s: float, only: list[str]) -> list[Measu
         device = {"Authorization": f"Bearer {_device_token(base, admin, pid)}",
                   "Content-Type": "application/octet-stream"}  # fmt: skip
         on_server, on_worker = ProcessMeter(server.pid), ProcessMeter(worker.pid)
+        on_exporter = ProcessMeter(exporter.pid)
 
         def budget(kind: str) -> tuple[float, int]:
             return work_budget.budget(duration_s, kind)
@@ -224,10 +238,24 @@ def run(url: str, data: bytes, duration_s: float, only: list[str]) -> list[Measu
             )
             rows.append(row)
             print(row, flush=True)
+        small = prepared_export.in_request(duration_s=duration_s, n_frames=n_frames, max_s=settings.EXPORT_DIRECT_MAX_S,
+                                           max_frames=settings.EXPORT_DIRECT_MAX_FRAMES)  # fmt: skip
+        for fmt in [f for f in sf_formats() if not only or any(o in f"GET /export?format={f}" for o in only)]:
+            path = f"{s}/export?format={fmt}"
+            if small:  # built in the request, every time: held to the request's own bound
+                rows.append(_repeated(f"GET /export?format={fmt} (in the request)", on_server,
+                                      work_budget.EXPORT_IN_REQUEST, lambda u=path: patient.get(u),
+                                      repeat))  # fmt: skip
+                continue
+            row, _ = measure(f"export?format={fmt} build (worker job)", on_exporter, budget("export"),
+                             lambda u=path: _export_built(patient, u))  # fmt: skip
+            rows.append(row)
+            print(row, flush=True)
+            rows.append(_repeated(f"GET /export?format={fmt} (stored)", on_server, budget("detail"),
+                                  lambda u=path: patient.get(u), repeat))  # fmt: skip
         reads = [
             ("GET /sessions/{id}", patient, s, "detail"),
             ("GET /detail (stored)", patient, f"{s}/detail", "detail"),
-            *[(f"GET /export?format={f}", patient, f"{s}/export?format={f}", "detail") for f in sf_formats()],
             ("GET /file", patient, f"{s}/file", "detail"),
             ("GET /metric-versions", therapist, f"{s}/metric-versions", "detail"),
             ("GET /report.pdf", therapist, f"{p}/report.pdf", "detail"),
@@ -251,10 +279,34 @@ def run(url: str, data: bytes, duration_s: float, only: list[str]) -> list[Measu
             rows.append(row)
             print(row, flush=True)
     finally:
-        worker.terminate()
-        worker.wait(timeout=600)
+        for process in (worker, exporter):
+            process.terminate()
+            process.wait(timeout=600)
         stop_server(server)
     return rows
+
+
+def _repeated(endpoint: str, meter: ProcessMeter, budget: tuple[float, int], send: Callable[[], httpx.Response],
+              repeat: int) -> Measured:  # fmt: skip
+    """Returns the request measured `repeat` times: the median of its wall and CPU time, the largest peak (the first
+    run's, usually: later ones reuse memory the process kept) and the worst status."""
+    runs = [measure(endpoint, meter, budget, send)[0] for _ in range(repeat)]
+    row = runs[-1]
+    row.wall_s, row.cpu_s = (float(np.median([getattr(r, k) for r in runs])) for k in ("wall_s", "cpu_s"))
+    row.peak_mib = max(r.peak_mib for r in runs)
+    row.status = max(r.status for r in runs)
+    print(row, f"(median of {repeat})" if repeat > 1 else "", flush=True)
+    return row
+
+
+def _export_built(client: httpx.Client, path: str) -> httpx.Response:
+    """Asks for an export until it is something else than 202 (the first ask queues its build); returns that answer
+    (the stored file read at the end is the server's, not the worker's, work)."""
+    while True:
+        r = client.get(path)
+        if r.status_code != 202:
+            return r
+        time.sleep(0.5)
 
 
 def sf_formats() -> tuple[str, ...]:
@@ -284,9 +336,19 @@ def main() -> int:
     parser.add_argument("--cache", type=Path, default=Path(tempfile.gettempdir()) / "coach-worst-file.khs",
                         help="where the file is kept between runs (writing it costs minutes of xz)")  # fmt: skip
     parser.add_argument("--only", nargs="+", default=[], help="only the endpoints whose name contains one of these")
+    parser.add_argument(
+        "--at-export-limit",
+        action="store_true",
+        help="the longest recording whose exports are "
+        "built in the request (COACH_EXPORT_DIRECT_MAX_FRAMES over _MAX_S) instead of the worst file",
+    )
+    parser.add_argument("--repeat", type=int, default=1, help="ask each export this many times (median; default 1)")
     args = parser.parse_args()
     settings = Settings()
     n_frames, duration_s = settings.SESSION_MAX_FRAMES, settings.SESSION_MAX_DURATION_S
+    if args.at_export_limit:
+        n_frames, duration_s = settings.EXPORT_DIRECT_MAX_FRAMES, settings.EXPORT_DIRECT_MAX_S
+        args.cache = args.cache.with_name(f"coach-export-limit-{n_frames}-{duration_s:g}.khs")
     if not args.cache.exists():
         args.cache.write_bytes(worst_file(n_frames, duration_s * (n_frames - 1) / n_frames))
     data = args.cache.read_bytes()
@@ -298,7 +360,7 @@ def main() -> int:
         for db in args.db or ["sqlite"]:
             url = demo_clinic(None if db == "sqlite" else db, Path(tmp))
             label = "SQLite" if db == "sqlite" else "PostgreSQL"
-            rows = run(url, data, info["duration_s"], args.only)
+            rows = run(url, data, info["duration_s"], info["n_frames"], args.only, args.repeat)
             print_table(label, rows, info)
             report["databases"][label] = [asdict(r) for r in rows]
             failures += [f"{label}: {f}" for r in rows for f in r.failures]

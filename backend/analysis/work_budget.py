@@ -37,12 +37,16 @@ BUDGETS: dict[str, tuple[float, int]] = {
     "upload": (2.0, 256 * 2**20),
     "detail": (8.0, 512 * 2**20),
     "replay": (20.0, 512 * 2**20),
+    "export": (8.0, 512 * 2**20),  # one download's build (csv, trc, bvh, fhir), by a worker past the request's limits
 }
+# (CPU seconds, bytes) one download may cost when built in the request, whatever its recording: the request builds
+# it only within COACH_EXPORT_DIRECT_MAX_S and _FRAMES (backend.sessions.prepared_export), set so that it holds
+EXPORT_IN_REQUEST: tuple[float, int] = (2.0, 256 * 2**20)
 
 
 def budget(duration_s: float, request: str = "detail") -> tuple[float, int]:
-    """Returns (CPU seconds, bytes) one request ("upload", "detail", "replay") may spend on a recording of
-    duration_s seconds."""
+    """Returns (CPU seconds, bytes) one request or build ("upload", "detail", "replay", "export") may spend on a
+    recording of duration_s seconds."""
     units = max(1, math.ceil(max(duration_s, 0.0) / BUDGET_PER_S))
     cpu, memory = BUDGETS[request]
     return cpu * units, memory * units

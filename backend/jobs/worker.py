@@ -1,7 +1,7 @@
-"""`coach-server worker`: takes jobs from the queue (re-analysis, replay builds, session details, ending abandoned
-camera sets) and runs them, one at a time, until stopped (or --once); EmbeddedWorker runs the same loop in a thread of
-a server process (COACH_EMBEDDED_WORKER). Every COACH_CAMERA_SWEEP_S (and when it starts) the loop also queues the
-end of camera sets idle for COACH_CAMERA_SET_IDLE_HOURS (backend.camera.sweep)."""
+"""`coach-server worker`: takes jobs from the queue (re-analysis, replay builds, session details, long sessions'
+exports, ending abandoned camera sets) and runs them, one at a time, until stopped (or --once); EmbeddedWorker runs
+the same loop in a thread of a server process (COACH_EMBEDDED_WORKER). Every COACH_CAMERA_SWEEP_S (and when it
+starts) the loop also queues the end of camera sets idle for COACH_CAMERA_SET_IDLE_HOURS (backend.camera.sweep)."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ from backend.jobs.models import Job
 if TYPE_CHECKING:
     from backend.config import Settings
 
-KINDS = ("reanalyze", "replay", "detail", "camera_end")
+KINDS = ("reanalyze", "replay", "detail", "export", "camera_end")
 
 log = logging.getLogger(__name__)
 
@@ -50,6 +50,12 @@ def run_job(db_session: Session, job: Job, settings: Settings) -> dict[str, Any]
         return prepared.run(db_session=db_session, session_id=int(job.payload["session_id"]),
                             max_frames=settings.SESSION_MAX_FRAMES,
                             max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
+    if job.kind == "export":
+        from backend.sessions import prepared_export
+
+        return prepared_export.run(db_session=db_session, session_id=int(job.payload["session_id"]),
+                                   fmt=str(job.payload["format"]), max_frames=settings.SESSION_MAX_FRAMES,
+                                   max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
     if job.kind == "camera_end":
         import uuid
 
@@ -84,8 +90,9 @@ def work(
     once: bool = False,
     idle_s: float = 1.0,
     stop: Callable[[], bool] = lambda: False,
+    kinds: tuple[str, ...] = KINDS,
 ) -> int:
-    """Runs jobs until stop() (or, once=True, until the queue is empty); returns how many it ran. The periodic
+    """Runs jobs of `kinds` until stop() (or, once=True, until none is due); returns how many it ran. The periodic
     work is queued first and then every settings.CAMERA_SWEEP_S."""
     ran, next_sweep = 0, 0.0
     while not stop():
@@ -93,7 +100,7 @@ def work(
             queue_periodic(sessionmaker=sessionmaker, settings=settings)
             next_sweep = time.monotonic() + settings.CAMERA_SWEEP_S
         with sessionmaker() as db_session:
-            job = queue.claim(db_session=db_session, worker=name, kinds=KINDS)
+            job = queue.claim(db_session=db_session, worker=name, kinds=kinds)
             if job is None:
                 if once:
                     return ran
@@ -150,8 +157,9 @@ def main(args: argparse.Namespace) -> int:
     for sig in (signal.SIGTERM, signal.SIGINT):
         signal.signal(sig, lambda *_: stopping.append(True))
     name = f"{socket.gethostname()}:{os.getpid()}"
-    print(f"worker {name} started", file=sys.stderr)
+    kinds = tuple(getattr(args, "kinds", None) or KINDS)
+    print(f"worker {name} started ({', '.join(kinds)})", file=sys.stderr)
     ran = work(sessionmaker=get_sessionmaker(), settings=get_settings(), name=name, once=args.once,
-               stop=lambda: bool(stopping))  # fmt: skip
+               stop=lambda: bool(stopping), kinds=kinds)  # fmt: skip
     print(f"worker {name} stopped after {ran} job(s)", file=sys.stderr)
     return 0

@@ -19,7 +19,7 @@ from backend.patients.models import TherapistPatient
 from backend.plans.models import Plan, PlanItem
 from backend.replay.models import SessionReplay
 from backend.replies.models import AdviceReply
-from backend.sessions.models import ExerciseSession, SessionDetail, SessionMetric
+from backend.sessions.models import ExerciseSession, SessionDetail, SessionExport, SessionMetric
 from backend.storage import get_store
 from backend.suggestions.models import Suggestion
 from backend.users.models import ApiToken, LoginAttempt, LoginSession, User
@@ -51,10 +51,12 @@ def erase_patient(*, db_session: Session, patient: User, caller: Caller) -> Eras
     own_replays = select(SessionReplay.data_key).where(SessionReplay.session_id.in_(session_ids))
     own_details = select(SessionDetail.data_key).where(SessionDetail.session_id.in_(session_ids))
     keys = {k for k in db_session.scalars(own_files) if k} | {k for k in db_session.scalars(own_replays) if k}
-    keys |= set(db_session.scalars(own_details))
+    own_exports = select(SessionExport.data_key).where(SessionExport.session_id.in_(session_ids))
+    keys |= set(db_session.scalars(own_details)) | set(db_session.scalars(own_exports))
     rows = {
         "session_replay": _count(db_session, delete(SessionReplay).where(SessionReplay.session_id.in_(session_ids))),
         "session_detail": _count(db_session, delete(SessionDetail).where(SessionDetail.session_id.in_(session_ids))),
+        "session_export": _count(db_session, delete(SessionExport).where(SessionExport.session_id.in_(session_ids))),
         "session_metric": _count(db_session, delete(SessionMetric).where(SessionMetric.session_id.in_(session_ids))),
         "advice_reply": _count(db_session, delete(AdviceReply).where(AdviceReply.patient_id == pid)),
         "suggestion": _count(db_session, delete(Suggestion).where(Suggestion.patient_id == pid)),
@@ -87,6 +89,7 @@ def erase_patient(*, db_session: Session, patient: User, caller: Caller) -> Eras
     still_used = set(db_session.scalars(select(ExerciseSession.file_key).where(ExerciseSession.file_key.in_(keys))))
     still_used |= set(db_session.scalars(select(SessionReplay.data_key).where(SessionReplay.data_key.in_(keys))))
     still_used |= set(db_session.scalars(select(SessionDetail.data_key).where(SessionDetail.data_key.in_(keys))))
+    still_used |= set(db_session.scalars(select(SessionExport.data_key).where(SessionExport.data_key.in_(keys))))
     objects = sorted(keys - still_used)
     record(db_session=db_session, caller=caller, action="patient.erase", object_type="patient",
            detail={"rows_deleted": sum(rows.values()), "objects_deleted": len(objects)})  # fmt: skip

@@ -19,7 +19,7 @@ from sqlalchemy.orm import Session
 from backend.audit.service import record
 from backend.records.erasure import delete_after_commit
 from backend.replay.models import SessionReplay
-from backend.sessions.models import ExerciseSession, SessionDetail
+from backend.sessions.models import ExerciseSession, SessionDetail, SessionExport
 
 
 @dataclass
@@ -58,8 +58,10 @@ def apply_retention(*, db_session: Session, days: int, now: dt.datetime | None =
         k for k in db_session.scalars(select(SessionReplay.data_key).where(SessionReplay.session_id.in_(ids))) if k
     }
     keys |= set(db_session.scalars(select(SessionDetail.data_key).where(SessionDetail.session_id.in_(ids))))
+    keys |= set(db_session.scalars(select(SessionExport.data_key).where(SessionExport.session_id.in_(ids))))
     db_session.execute(delete(SessionReplay).where(SessionReplay.session_id.in_(ids)))
     db_session.execute(delete(SessionDetail).where(SessionDetail.session_id.in_(ids)))  # curves of the recording
+    db_session.execute(delete(SessionExport).where(SessionExport.session_id.in_(ids)))  # downloads of the recording
     db_session.execute(
         update(ExerciseSession)
         .where(ExerciseSession.id.in_(ids))
@@ -68,6 +70,7 @@ def apply_retention(*, db_session: Session, days: int, now: dt.datetime | None =
     still_used = set(db_session.scalars(select(ExerciseSession.file_key).where(ExerciseSession.file_key.in_(keys))))
     still_used |= set(db_session.scalars(select(SessionReplay.data_key).where(SessionReplay.data_key.in_(keys))))
     still_used |= set(db_session.scalars(select(SessionDetail.data_key).where(SessionDetail.data_key.in_(keys))))
+    still_used |= set(db_session.scalars(select(SessionExport.data_key).where(SessionExport.data_key.in_(keys))))
     objects = sorted(keys - still_used)
     per_patient = dict(Counter(r.patient_id for r in rows))
     for pid, n in per_patient.items():

@@ -26,30 +26,42 @@ def _feeling(db_session: Session, session_id: int) -> Feeling | None:
     return Feeling(answer.pain, answer.effort, when.isoformat(timespec="seconds") + "Z")
 
 
+def export_context(*, db_session: Session, row: tuple[Any, ...]) -> SessionContext:
+    """Returns who and what the export of `row` (service.get_session_row) describes, with how the set felt to the
+    patient (csv: feeling.csv; fhir: pain and effort Observations); a few small queries, no file read."""
+    session = row[0]
+    when = session.started_at
+    when = when.astimezone(dt.UTC).replace(tzinfo=None) if when.tzinfo is not None else when  # stored as UTC
+    return SessionContext(
+        session_id=str(session.client_session_id),
+        start=when.isoformat(timespec="seconds") + "Z",
+        patient_id=session.patient_id,
+        device_id=session.device_id,
+        feeling=_feeling(db_session, session.id),
+    )
+
+
 def session_export(
-    *, db_session: Session, row: tuple[Any, ...], fmt: str, max_frames: int, max_decoded_bytes: int
+    *,
+    db_session: Session,
+    row: tuple[Any, ...],
+    fmt: str,
+    max_frames: int,
+    max_decoded_bytes: int,
+    context: SessionContext | None = None,
 ) -> ExportFile:
     """Returns the session of `row` (service.get_session_row) as `fmt`, with its metrics document: the stored one,
-    else the file analysed again as the session page does (detail.analysis_document, without indicators), and how
-    the set felt to the patient (csv: feeling.csv; fhir: pain and effort Observations).
+    else the file analysed again as the session page does (detail.analysis_document, without indicators), and
+    `context` (export_context, read now when None).
 
     Raises InvalidSessionFile when the stored file cannot be decoded, ExportUnavailable when the format needs metrics
     and none can be had (no known exercise, or the analysis fails).
     """
     session, slug, _reps, _rom, _quality, stored = row
+    context = context or export_context(db_session=db_session, row=row)
     data = service.session_file(db_session=db_session, session_id=session.id)
     payload = decode_stored(data, session_id=session.id, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
     document, _ = analysis_document(payload, EXERCISES.get(slug) if slug else None, stored)
-    when = session.started_at
-    when = when.astimezone(dt.UTC).replace(tzinfo=None) if when.tzinfo is not None else when  # stored as UTC
-    started = when.isoformat(timespec="seconds") + "Z"
-    context = SessionContext(
-        session_id=str(session.client_session_id),
-        start=started,
-        patient_id=session.patient_id,
-        device_id=session.device_id,
-        feeling=_feeling(db_session, session.id),
-    )
     try:
         return export(fmt, payload, document=document, context=context, stem=f"session-{session.id}")
     except ExportError as exc:

@@ -84,3 +84,23 @@ class SessionDetail(Base):
     data_hash: Mapped[str] = mapped_column(String(64))  # its sha256
     size: Mapped[int] = mapped_column()
     created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
+
+
+class SessionExport(Base):
+    """A session's download in one format (csv, trc, bvh, fhir) built once by a worker, its bytes in the object
+    store; `inputs` is the sha256 of what it was made from (backend.sessions.prepared_export.inputs_of), so a
+    re-analysis, a new answer about how the set felt or a new exporter version makes it stale."""
+
+    __tablename__ = "session_export"
+    __table_args__ = (UniqueConstraint("session_id", "format"),)
+
+    id: Mapped[int] = mapped_column(primary_key=True)
+    session_id: Mapped[int] = mapped_column(ForeignKey("exercise_session.id", ondelete="CASCADE"))
+    format: Mapped[str] = mapped_column(String(8))
+    inputs: Mapped[str] = mapped_column(String(64))
+    data_key: Mapped[str] = mapped_column(String(100))  # the file gzip-compressed in the object store (backend/storage)
+    data_hash: Mapped[str] = mapped_column(String(64))  # the sha256 of the stored (compressed) bytes
+    size: Mapped[int] = mapped_column()  # of the stored (compressed) bytes
+    media_type: Mapped[str] = mapped_column(String(64))  # the download's Content-Type
+    file_name: Mapped[str] = mapped_column(String(100))  # the download's name, e.g. session-12.bvh
+    created_at: Mapped[dt.datetime] = mapped_column(default=utcnow)

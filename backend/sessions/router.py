@@ -43,7 +43,8 @@ from backend.exceptions import (
 from backend.exercises.service import get_exercise
 from backend.i18n import therapist_translator
 from backend.schemas import DateTimeQuery, IdPath, IdQuery, Page, PageParams, page_params
-from backend.sessions import dashboard, prepared, service
+from backend.sessions import dashboard, prepared, prepared_export, service
+from backend.sessions.encoding import accepts_gzip
 from backend.sessions.export import session_export
 from backend.sessions.ingest import check_declared_length, check_owner, decode_upload, read_limited
 from backend.sessions.models import ExerciseSession
@@ -63,6 +64,7 @@ from kinect_agent.export.files import ExportFormat as ExportFormatName
 
 router = APIRouter(prefix="/api/v1", tags=["sessions"])
 DETAIL_RETRY_AFTER_S = "2"
+EXPORT_RETRY_AFTER_S = "5"  # a long recording's export takes a worker tens of seconds
 SlugQuery = Annotated[
     str | None, Query(min_length=1, max_length=64, description="exercise slug, e.g. 'squat'", examples=["squat"])
 ]
@@ -360,6 +362,10 @@ _EXPORT_CONTENT = {
             "description": "the session as a download: csv → application/zip, trc and bvh → text/plain, "
             "fhir → application/fhir+json",
         },
+        202: {
+            "model": PreparingOut,
+            "description": "a long recording's download is not prepared yet: a worker is building it (Retry-After)",
+        },
         **error_responses(
             *AUTH_ERRORS, SessionNotFound, InvalidSessionFile, ExportUnavailable, InvalidInput, SessionFileRemoved
         ),
@@ -368,25 +374,41 @@ _EXPORT_CONTENT = {
 def export_session(
     session_id: IdPath, format: ExportFormat, request: Request, caller: CurrentCaller, db_session: DbSession
 ) -> Response:
-    """Returns the session exported for other software (spreadsheet, OpenSim, animation tools, FHIR servers)."""
+    """Returns the session exported for other software (spreadsheet, OpenSim, animation tools, FHIR servers); a
+    recording longer than the server's limits (COACH_EXPORT_DIRECT_MAX_S, _FRAMES) is prepared once by a worker
+    (202 with where it is until then)."""
     row = service.get_session_row(db_session=db_session, session_id=session_id)
-    patient_id = row[0].patient_id
-    require_patient_access(patient_id, caller=caller, db_session=db_session, allow_device=False,
+    session = row[0]
+    require_patient_access(session.patient_id, caller=caller, db_session=db_session, allow_device=False,
                            hidden_as=service.missing(session_id))  # fmt: skip
     settings = request.app.state.settings
-    result = session_export(
-        db_session=db_session,
-        row=row,
-        fmt=format,
-        max_frames=settings.SESSION_MAX_FRAMES,
-        max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES,
-    )
-    _audit(db_session, caller, "session.export.read", session_id, patient_id, {"format": format})
-    return Response(
-        content=result.data,
-        media_type=result.media_type,
-        headers={"Content-Disposition": f'attachment; filename="{result.file_name}"'},
-    )
+    small = prepared_export.in_request(duration_s=session.duration_s, n_frames=session.n_frames,
+                                       max_s=settings.EXPORT_DIRECT_MAX_S,
+                                       max_frames=settings.EXPORT_DIRECT_MAX_FRAMES)  # fmt: skip
+    if small:
+        result = session_export(db_session=db_session, row=row, fmt=format, max_frames=settings.SESSION_MAX_FRAMES,
+                                max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
+        _audit(db_session, caller, "session.export.read", session_id, session.patient_id, {"format": format})
+        return _download(result.data, result.media_type, result.file_name, None, stored=False)
+    found = prepared_export.read_export(db_session=db_session, row=row, fmt=format)
+    if isinstance(found, prepared_export.ExportState):
+        state = PreparingOut(state=found.state, detail=found.detail)
+        return JSONResponse(state.model_dump(), status_code=202, headers={"Retry-After": EXPORT_RETRY_AFTER_S})
+    _audit(db_session, caller, "session.export.read", session_id, session.patient_id, {"format": format})
+    if accepts_gzip(request.headers.get("accept-encoding")):  # as stored: no request compresses the file again
+        return _download(found.gzipped, found.media_type, found.file_name, "gzip")
+    return _download(found.data(), found.media_type, found.file_name, None)
+
+
+def _download(data: bytes, media_type: str, file_name: str, encoding: str | None, *, stored: bool = True) -> Response:
+    """Returns a download; a stored one says its encoding (the gzip middleware passes an encoded answer on as it is
+    and compresses the others, adding its own Vary)."""
+    headers = {"Content-Disposition": f'attachment; filename="{file_name}"'}
+    if stored:
+        headers["Vary"] = "Accept-Encoding"
+    if encoding is not None:
+        headers["Content-Encoding"] = encoding
+    return Response(content=data, media_type=media_type, headers=headers)
 
 
 @router.get(

@@ -18,6 +18,8 @@ _REPLAY = sa.table("session_replay", sa.column("id"), sa.column("session_id"), s
                    sa.column("data_hash"))  # fmt: skip
 _DETAIL = sa.table("session_detail", sa.column("id"), sa.column("session_id"), sa.column("data_key"),
                    sa.column("data_hash"))  # fmt: skip
+_EXPORT = sa.table("session_export", sa.column("id"), sa.column("session_id"), sa.column("format"),
+                   sa.column("data_key"), sa.column("data_hash"))  # fmt: skip
 
 
 @dataclass
@@ -49,6 +51,9 @@ def check(conn: Connection, store: ObjectStore) -> CheckReport:
     rows = conn.execute(sa.select(_DETAIL.c.session_id, _DETAIL.c.data_key, _DETAIL.c.data_hash)
                         .order_by(_DETAIL.c.id))  # fmt: skip
     targets += [(f"detail of session {r.session_id}", r.data_key, r.data_hash) for r in rows]
+    rows = conn.execute(sa.select(_EXPORT.c.session_id, _EXPORT.c.format, _EXPORT.c.data_key, _EXPORT.c.data_hash)
+                        .order_by(_EXPORT.c.id))  # fmt: skip
+    targets += [(f"{r.format} export of session {r.session_id}", r.data_key, r.data_hash) for r in rows]
     for what, key, digest in targets:
         referenced.add(key)
         report.checked += 1
