@@ -13,7 +13,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from backend.exceptions import InvalidSessionFile
@@ -21,7 +20,7 @@ from backend.jobs.asking import ask
 from backend.replay import scene, service
 from backend.replay.models import BOTH
 from backend.sessions.models import ExerciseSession
-from backend.sessions.service import missing, removed
+from backend.sessions.service import require_recording
 
 KIND = "replay"
 
@@ -49,14 +48,7 @@ def request_replay(*, db_session: Session, session_id: int, layers: str = BOTH) 
     """
     if service.stored_replay_key(db_session=db_session, session_id=session_id, layers=layers) is not None:
         return ReplayState("ready", "The replay is ready.")
-    row = db_session.execute(
-        select(ExerciseSession.file_key, ExerciseSession.file_removed_at, ExerciseSession.file_bytes.is_not(None))
-        .where(ExerciseSession.id == session_id)
-    ).first()  # fmt: skip
-    if row is None:
-        raise missing(session_id)
-    if not row[0] and not row[2]:
-        raise removed(session_id, row[1])
+    require_recording(db_session=db_session, session_id=session_id)
     payload = {"session_id": session_id, "layers": layers.split(",")}
     found = ask(db_session=db_session, kind=KIND, key=job_key(session_id, layers), payload=payload,
                 noun="the replay")  # fmt: skip

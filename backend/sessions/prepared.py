@@ -25,7 +25,7 @@ from backend.jobs.asking import ask
 from backend.jobs.models import Job
 from backend.jobs.queue import enqueue
 from backend.sessions import detail, service
-from backend.sessions.models import ExerciseSession, SessionDetail
+from backend.sessions.models import SessionDetail
 from backend.sessions.schemas import SessionDetailOut
 from backend.storage import get_store
 from backend.storage.base import StoredObject
@@ -104,14 +104,7 @@ def read_detail(*, db_session: Session, row: tuple[Any, ...]) -> dict[str, Any] 
     document = _stored_document(db_session, session.id, inputs)
     if document is not None:
         return with_row(document, row)
-    file = db_session.execute(
-        select(ExerciseSession.file_key, ExerciseSession.file_removed_at, ExerciseSession.file_bytes.is_not(None))
-        .where(ExerciseSession.id == session.id)
-    ).first()  # fmt: skip
-    if file is None:
-        raise service.missing(session.id)
-    if not file[0] and not file[2]:
-        raise service.removed(session.id, file[1])
+    service.require_recording(db_session=db_session, session_id=session.id)
     key = job_key(session.id, inputs)
     done = db_session.scalar(select(Job.result).where(Job.key == key, Job.status == "done"))
     if isinstance(done, dict) and done.get("invalid"):

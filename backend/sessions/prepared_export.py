@@ -30,7 +30,7 @@ from backend.jobs.asking import ask
 from backend.jobs.models import Job
 from backend.sessions import service
 from backend.sessions.export import export_context, session_export
-from backend.sessions.models import ExerciseSession, SessionExport
+from backend.sessions.models import SessionExport
 from backend.storage import get_store
 from backend.storage.base import StoredObject
 from kinect_agent.export.fhir import SessionContext
@@ -114,14 +114,7 @@ def read_export(*, db_session: Session, row: tuple[Any, ...], fmt: str) -> Store
     stored = _stored(db_session, session.id, fmt, inputs)
     if stored is not None:
         return stored
-    file = db_session.execute(
-        select(ExerciseSession.file_key, ExerciseSession.file_removed_at, ExerciseSession.file_bytes.is_not(None))
-        .where(ExerciseSession.id == session.id)
-    ).first()  # fmt: skip
-    if file is None:
-        raise service.missing(session.id)
-    if not file[0] and not file[2]:
-        raise service.removed(session.id, file[1])
+    service.require_recording(db_session=db_session, session_id=session.id)
     key = job_key(session.id, fmt, inputs)
     done = db_session.scalar(select(Job.result).where(Job.key == key, Job.status == "done"))
     if isinstance(done, dict) and done.get("invalid"):

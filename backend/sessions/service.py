@@ -249,6 +249,19 @@ def session_file(*, db_session: Session, session_id: int) -> bytes:
     return row.file_bytes
 
 
+def require_recording(*, db_session: Session, session_id: int) -> None:
+    """Raises SessionNotFound when the session does not exist, SessionFileRemoved when the retention period removed
+    its recording (neither an object key nor bytes in the row)."""
+    row = db_session.execute(
+        select(ExerciseSession.file_key, ExerciseSession.file_removed_at, ExerciseSession.file_bytes.is_not(None))
+        .where(ExerciseSession.id == session_id)
+    ).first()  # fmt: skip
+    if row is None:
+        raise missing(session_id)
+    if not row[0] and not row[2]:
+        raise removed(session_id, row[1])
+
+
 def removed(session_id: int, removed_at: dt.datetime | None) -> SessionFileRemoved:
     """Returns the error for a session whose recording the clinic's retention period removed (on removed_at, UTC;
     None: before the date was kept)."""
