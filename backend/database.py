@@ -5,10 +5,12 @@ from __future__ import annotations
 import datetime as dt
 from collections.abc import Callable, Iterator
 from functools import lru_cache
+from typing import Any, TypeVar
 
-from sqlalchemy import DateTime, MetaData, create_engine, event
+from sqlalchemy import DateTime, MetaData, create_engine, event, select
 from sqlalchemy.engine import Dialect, Engine
 from sqlalchemy.engine.interfaces import DBAPIConnection
+from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import DeclarativeBase, Session, sessionmaker
 from sqlalchemy.types import TypeDecorator
 
@@ -59,6 +61,25 @@ def _sqlite_pragmas(dbapi_connection: DBAPIConnection, _record: object) -> None:
     cursor.execute("PRAGMA foreign_keys=ON")
     cursor.execute("PRAGMA journal_mode=WAL")
     cursor.close()
+
+
+Row = TypeVar("Row", bound=Base)
+
+
+def keep_row(db_session: Session, model: type[Row], key: dict[str, Any], fields: dict[str, Any]) -> None:
+    """Sets `fields` on the row of `model` whose unique columns are `key`, inserting it when there is none, in a
+    savepoint; when another worker inserts the same key first (IntegrityError), its row stays: workers store the
+    same result for the same key (replays, session details, downloads)."""
+    try:
+        with db_session.begin_nested():
+            row = db_session.scalar(select(model).filter_by(**key))
+            if row is None:
+                db_session.add(model(**key, **fields))
+            else:
+                for name, value in fields.items():
+                    setattr(row, name, value)
+    except IntegrityError:
+        pass
 
 
 def make_engine(url: str) -> Engine:

@@ -9,9 +9,9 @@ recording built by one is served by all; two builds of the same recording at onc
 from __future__ import annotations
 
 from sqlalchemy import ColumnElement, select
-from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
+from backend.database import keep_row
 from backend.exceptions import InvalidSessionFile
 from backend.exercises.models import Exercise
 from backend.replay import scene
@@ -87,15 +87,4 @@ def _store(*, db_session: Session, session_id: int, layers: str, replay: scene.R
     fields = {"version": scene.VERSION, "data": None, "data_key": obj.key, "data_hash": obj.sha256,
               "size": len(replay.data), "n_frames": replay.n_frames, "duration_s": replay.duration_s,
               "view": replay.view}  # fmt: skip
-    try:
-        with db_session.begin_nested():
-            stored = db_session.scalar(
-                select(SessionReplay).where(SessionReplay.session_id == session_id, SessionReplay.layers == layers)
-            )
-            if stored is None:
-                db_session.add(SessionReplay(session_id=session_id, layers=layers, **fields))
-            else:
-                for name, value in fields.items():
-                    setattr(stored, name, value)
-    except IntegrityError:  # another worker stored it first: the same recording
-        pass
+    keep_row(db_session, SessionReplay, {"session_id": session_id, "layers": layers}, fields)

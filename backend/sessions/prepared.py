@@ -17,9 +17,9 @@ from dataclasses import dataclass
 from typing import Any
 
 from sqlalchemy import select
-from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
+from backend.database import keep_row
 from backend.exceptions import InvalidSessionFile, SessionNotFound
 from backend.jobs.asking import ask
 from backend.jobs.models import Job
@@ -142,13 +142,4 @@ def run(*, db_session: Session, session_id: int, max_frames: int, max_decoded_by
 def _keep(db_session: Session, session_id: int, inputs: str, obj: StoredObject) -> None:
     """Points the session's row at the stored document (replacing a stale one); a concurrent insert wins."""
     fields = {"inputs": inputs, "data_key": obj.key, "data_hash": obj.sha256, "size": obj.size}
-    try:
-        with db_session.begin_nested():
-            kept = db_session.scalar(select(SessionDetail).where(SessionDetail.session_id == session_id))
-            if kept is None:
-                db_session.add(SessionDetail(session_id=session_id, **fields))
-            else:
-                for name, value in fields.items():
-                    setattr(kept, name, value)
-    except IntegrityError:  # another worker stored it first: the same document
-        pass
+    keep_row(db_session, SessionDetail, {"session_id": session_id}, fields)

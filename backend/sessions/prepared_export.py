@@ -22,9 +22,9 @@ from dataclasses import dataclass
 from typing import Any
 
 from sqlalchemy import select
-from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
+from backend.database import keep_row
 from backend.exceptions import ExportUnavailable, InvalidSessionFile, SessionNotFound
 from backend.jobs.asking import ask
 from backend.jobs.models import Job
@@ -161,15 +161,4 @@ def _keep(db_session: Session, session_id: int, fmt: str, inputs: str, obj: Stor
     """Points the session's row of `fmt` at the stored file (replacing a stale one); a concurrent insert wins."""
     fields = {"inputs": inputs, "data_key": obj.key, "data_hash": obj.sha256, "size": obj.size,
               "media_type": file.media_type, "file_name": file.file_name}  # fmt: skip
-    try:
-        with db_session.begin_nested():
-            kept = db_session.scalar(
-                select(SessionExport).where(SessionExport.session_id == session_id, SessionExport.format == fmt)
-            )
-            if kept is None:
-                db_session.add(SessionExport(session_id=session_id, format=fmt, **fields))
-            else:
-                for name, value in fields.items():
-                    setattr(kept, name, value)
-    except IntegrityError:  # another worker stored it first: the same file
-        pass
+    keep_row(db_session, SessionExport, {"session_id": session_id, "format": fmt}, fields)
