@@ -81,7 +81,7 @@ def reanalyze_session(
                          max_decoded_bytes=max_decoded_bytes)  # fmt: skip
     target_reps, _ = plan_targets(db_session=db_session, patient_id=session.patient_id,
                                   exercise_id=session.exercise_id, on=session.started_at.date())  # fmt: skip
-    history = [doc for _, doc in session_history(db_session=db_session, session=session)]
+    history = [doc for _, doc in session_history(db_session=db_session, session=session) if doc is not None]
     doc = metrics_document(payload, spec, target_reps=target_reps, history=history)
     stored = doc.model_dump(mode="json")
     if metric is None:

@@ -5,16 +5,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from pydantic import ValidationError
-
 from backend.exercises.library import ExerciseSpec
 from kinect_agent.analysis.document import (
     AnalysisDocument,
     AnalysisReport,
     Indicators,
-    UnreadableDocument,
     json_ready,
-    read_report,
 )
 from kinect_agent.formats.session_file import SessionPayload
 
@@ -26,32 +22,20 @@ ANALYSIS_VERSION = "2026.11.27-balance"
 
 
 def metrics_document(
-    payload: SessionPayload, spec: ExerciseSpec, *, target_reps: int | None, history: list[dict[str, Any]]
+    payload: SessionPayload, spec: ExerciseSpec, *, target_reps: int | None, history: list[AnalysisReport]
 ) -> AnalysisDocument:
     """Returns analyze_recording's report of the payload with its indicators and today's analysis version.
 
-    history: stored metrics documents (any schema version) of the patient's earlier sessions of the same exercise,
-    oldest first.
+    history: the documents of the patient's earlier sessions of the same exercise, oldest first
+    (backend.suggestions.context.session_history, its readable ones).
     Raises backend.analysis.errors.AnalysisError when the recording cannot be analysed.
     """
     from backend.analysis.indicators import indicators
     from backend.analysis.report import analyze_recording
 
     report = analyze_recording(payload.raw, spec, filtered=payload.filtered, angle_sd=payload.angle_sd)
-    found = indicators(report, exercise=spec, target_reps=target_reps, history=readable(history))
+    found = indicators(report, exercise=spec, target_reps=target_reps, history=history)
     return AnalysisDocument(**dict(report), indicators=found, analysis_version=ANALYSIS_VERSION)
-
-
-def readable(stored: list[dict[str, Any]]) -> list[AnalysisReport]:
-    """Returns the stored documents (any schema version) that a schema reads, in order; the others are left out
-    (a document no schema reads has no values to compare with)."""
-    out = []
-    for doc in stored:
-        try:
-            out.append(read_report(doc))
-        except (ValidationError, UnreadableDocument):
-            continue
-    return out
 
 
 def scalar_columns(doc: AnalysisDocument) -> dict[str, Any]:

@@ -68,7 +68,7 @@ def _analyse(
     on = upload.started_at.date()
     target_reps, _ = plan_targets(db_session=db_session, patient_id=patient_id, exercise_id=exercise.id, on=on)
     probe = ExerciseSession(patient_id=patient_id, exercise_id=exercise.id, started_at=upload.started_at)
-    history = [doc for _, doc in session_history(db_session=db_session, session=probe)]
+    history = [doc for _, doc in session_history(db_session=db_session, session=probe) if doc is not None]
     try:
         return metrics_document(upload.payload, spec, target_reps=target_reps, history=history), None
     except AnalysisError as exc:
@@ -126,7 +126,7 @@ def store_upload(
             SessionMetric(session_id=row.id, document=stored_doc, created_at=utcnow(), **scalar_columns(doc))
         )
         db_session.flush()
-        suggest_for_session(db_session=db_session, session=row, doc=stored_doc)
+        suggest_for_session(db_session=db_session, session=row, doc=doc)
     return row, True
 
 

@@ -5,12 +5,14 @@ from __future__ import annotations
 import datetime as dt
 from typing import Any
 
+from pydantic import ValidationError
 from sqlalchemy import Select, or_, select
 from sqlalchemy.orm import Session
 
 from backend.plans.models import Plan, PlanItem
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.suggestions.rules import ROM_BASELINE_WINDOW_DAYS
+from kinect_agent.analysis.document import AnalysisReport, UnreadableDocument, read_report
 
 
 def plan_targets(
@@ -51,8 +53,12 @@ def _earlier(session: ExerciseSession) -> Select[dt.datetime, dict[str, Any] | N
     )
 
 
-def session_history(*, db_session: Session, session: ExerciseSession) -> list[tuple[dt.datetime, dict[str, Any]]]:
-    """Returns (started_at, metrics document) of the patient's earlier sessions of the same exercise, oldest first.
+def session_history(
+    *, db_session: Session, session: ExerciseSession
+) -> list[tuple[dt.datetime, AnalysisReport | None]]:
+    """Returns (started_at, metrics document) of the patient's earlier sessions of the same exercise, oldest first;
+    the document read from whatever schema version it was stored in, None where no schema reads it (the session
+    still happened: the missed-days rule counts its day).
 
     Covers the rules' longest window (ROM_BASELINE_WINDOW_DAYS) plus the latest session before it, so the
     missed-days rule can tell a returning patient from a new one.
@@ -62,5 +68,14 @@ def session_history(*, db_session: Session, session: ExerciseSession) -> list[tu
     older = db_session.execute(
         _earlier(session).where(ExerciseSession.started_at < start).order_by(ExerciseSession.started_at.desc()).limit(1)
     ).all()
-    rows = [(t, doc) for t, doc in [*older, *recent] if isinstance(doc, dict)]
+    rows = [(t, _readable(doc)) for t, doc in [*older, *recent]]
     return sorted(rows, key=lambda row: row[0])
+
+
+def _readable(stored: dict[str, Any] | None) -> AnalysisReport | None:
+    if stored is None:
+        return None
+    try:
+        return read_report(stored)
+    except (ValidationError, UnreadableDocument):
+        return None

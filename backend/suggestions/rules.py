@@ -20,6 +20,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from backend.exercises.library import EXERCISES
 from backend.i18n import N_, Translator, translator
+from kinect_agent.analysis.document import AnalysisReport
 
 ENGLISH = translator("en")
 # the day of a session in the advice ("on 14 November"), per locale; with " y" appended in another year
@@ -151,32 +152,9 @@ def _sentence(text: str) -> str:
 # --- input checks ----------------------------------------------------------------------------------------------
 
 
-def _number(doc: dict[str, Any], key: str, where: str = "doc") -> float | None:
-    """Returns doc[key] as a float; None when missing, null or not finite; ValueError when not a number."""
-    value = doc.get(key)
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{where}[{key!r}] must be a number or null, got {type(value).__name__} {value!r}")
-    value = float(value)
-    return value if math.isfinite(value) else None
-
-
-def _quality(doc: dict[str, Any], where: str = "doc") -> dict[str, Any]:
-    quality = doc.get("quality")
-    if quality is None:
-        return {}
-    if not isinstance(quality, dict):
-        raise ValueError(f"{where}['quality'] must be an object or null, got {type(quality).__name__}")
-    ok = quality.get("ok")
-    if ok is not None and not isinstance(ok, bool):
-        raise ValueError(f"{where}['quality']['ok'] must be true, false or null, got {ok!r}")
-    return quality
-
-
-def _quality_ok(doc: dict[str, Any], where: str = "doc") -> bool:
-    """Returns False only when the analysis said quality.ok is false (missing or null counts as ok)."""
-    return _quality(doc, where).get("ok") is not False
+def _finite(value: float | None) -> float | None:
+    """Returns value, or None when it is missing or not finite (a NaN or infinite metric counts as missing)."""
+    return value if value is not None and math.isfinite(value) else None
 
 
 def _aware(value: object, where: str) -> dt.datetime:
@@ -193,22 +171,18 @@ def _positive_int(value: object, where: str) -> int | None:
     return value
 
 
-def _checked_history(history: object) -> list[tuple[dt.datetime, dict[str, Any]]]:
+def _checked_history(history: object) -> list[tuple[dt.datetime, AnalysisReport | None]]:
     if not isinstance(history, list | tuple):
-        raise ValueError(f"history must be a list of (datetime, dict), got {type(history).__name__}")
+        raise ValueError(f"history must be a list of (datetime, document) pairs, got {type(history).__name__}")
     out = []
     for i, entry in enumerate(history):
-        if not isinstance(entry, tuple | list) or len(entry) != 2 or not isinstance(entry[1], dict):
-            raise ValueError(f"history[{i}] must be a (datetime, dict) pair, got {entry!r:.80}")
+        if not isinstance(entry, tuple | list) or len(entry) != 2 or not isinstance(entry[1], AnalysisReport | None):
+            raise ValueError(f"history[{i}] must be a (datetime, AnalysisReport or None) pair, got {entry!r:.80}")
         out.append((_aware(entry[0], f"history[{i}][0]"), entry[1]))
     return out
 
 
 # --- the texts -------------------------------------------------------------------------------------------------
-
-
-def _slug(exercise: object) -> str | None:
-    return exercise if isinstance(exercise, str) else None
 
 
 def _draft(rule: str, metric: str, comparison: str, threshold: float, value: float, params: AdviceParams,
@@ -321,30 +295,29 @@ def advice_text(rule: str, metric: str, params: AdviceParams, t: Translator = EN
 # --- the rules -------------------------------------------------------------------------------------------------
 
 
-def _about(doc: dict[str, Any], day: SessionDay) -> dict[str, Any]:
-    return {"exercise": _slug(doc.get("exercise")), "session_on": day.on, "written_on": day.written_on}
+def _about(doc: AnalysisReport, day: SessionDay) -> dict[str, Any]:
+    return {"exercise": doc.exercise, "session_on": day.on, "written_on": day.written_on}
 
 
-def fewer_reps(doc: dict[str, Any], prescribed_reps: int | None, day: SessionDay, t: Translator = ENGLISH
+def fewer_reps(doc: AnalysisReport, prescribed_reps: int | None, day: SessionDay, t: Translator = ENGLISH
                ) -> SuggestionDraft | None:  # fmt: skip
     """Fires when the session counted fewer repetitions than the plan prescribes."""
-    reps = _number(doc, "repetitions")
-    if prescribed_reps is None or reps is None or reps >= prescribed_reps:
+    reps = doc.repetitions
+    if prescribed_reps is None or reps >= prescribed_reps:
         return None
     params = AdviceParams(**_about(doc, day), repetitions=reps, goal=prescribed_reps)
     return _draft(FEWER_REPS, "repetitions", "<", prescribed_reps, reps, params, t)
 
 
-def _rom_baseline(history: list[tuple[dt.datetime, dict[str, Any]]], now: dt.datetime, exercise: object) -> list[float]:
+def _rom_baseline(history: list[tuple[dt.datetime, AnalysisReport | None]], now: dt.datetime, exercise: str
+                  ) -> list[float]:  # fmt: skip
     """Returns rom_deg of the earlier good-quality sessions of the last ROM_BASELINE_WINDOW_DAYS (same exercise)."""
     start = now - dt.timedelta(days=ROM_BASELINE_WINDOW_DAYS)
     times, values = [], []
-    for i, (t, past) in enumerate(history):
-        if not start <= t < now or not _quality_ok(past, f"history[{i}][1]"):
+    for t, past in history:
+        if past is None or not start <= t < now or not past.quality.ok or past.exercise != exercise:
             continue
-        if exercise is not None and past.get("exercise") not in (None, exercise):
-            continue
-        rom = _number(past, "rom_deg", f"history[{i}][1]")
+        rom = _finite(past.rom_deg)
         if rom is not None:
             times.append(t)
             values.append(rom)
@@ -354,15 +327,15 @@ def _rom_baseline(history: list[tuple[dt.datetime, dict[str, Any]]], now: dt.dat
 
 
 def rom_drop(
-    doc: dict[str, Any],
-    history: list[tuple[dt.datetime, dict[str, Any]]],
+    doc: AnalysisReport,
+    history: list[tuple[dt.datetime, AnalysisReport | None]],
     now: dt.datetime,
     day: SessionDay,
     t: Translator = ENGLISH,
 ) -> SuggestionDraft | None:
     """Fires when rom_deg < ROM_DROP_FRACTION x the median rom_deg of the last 2-4 weeks."""
-    rom = _number(doc, "rom_deg")
-    baseline = _rom_baseline(history, now, doc.get("exercise"))
+    rom = _finite(doc.rom_deg)
+    baseline = _rom_baseline(history, now, doc.exercise)
     if rom is None or not baseline:
         return None
     median = statistics.median(baseline)
@@ -373,22 +346,20 @@ def rom_drop(
     return _draft(ROM_DROP, "rom_deg", "<", threshold, rom, params, t)
 
 
-def too_fast(doc: dict[str, Any], day: SessionDay, t: Translator = ENGLISH) -> SuggestionDraft | None:
+def too_fast(doc: AnalysisReport, day: SessionDay, t: Translator = ENGLISH) -> SuggestionDraft | None:
     """Fires when a repetition took less than MIN_TEMPO_S_PER_REP seconds on average."""
-    tempo = _number(doc, "tempo_s_per_rep")
+    tempo = _finite(doc.tempo_s_per_rep)
     if tempo is None or tempo <= 0 or tempo >= MIN_TEMPO_S_PER_REP:
         return None
     params = AdviceParams(**_about(doc, day), tempo_s_per_rep=tempo, advised_s_per_rep=ADVISED_TEMPO_S_PER_REP)
     return _draft(TOO_FAST, "tempo_s_per_rep", "<", MIN_TEMPO_S_PER_REP, tempo, params, t)
 
 
-def poor_data_quality(doc: dict[str, Any], day: SessionDay, t: Translator = ENGLISH) -> SuggestionDraft | None:
+def poor_data_quality(doc: AnalysisReport, day: SessionDay, t: Translator = ENGLISH) -> SuggestionDraft | None:
     """Fires when the analysis found the data unreliable (quality.ok false); says what to change at the camera."""
-    quality = _quality(doc)
-    if quality.get("ok") is not False:
+    if doc.quality.ok:
         return None
-    tracked = _number(quality, "tracked_fraction", "doc['quality']")
-    outliers = _number(quality, "outlier_fraction", "doc['quality']")
+    tracked, outliers = _finite(doc.quality.tracked_fraction), _finite(doc.quality.outlier_fraction)
     if tracked is not None and tracked < QUALITY_MIN_TRACKED_FRACTION:
         params = AdviceParams(**_about(doc, day), tracked_fraction=tracked)
         return _draft(POOR_DATA_QUALITY, "quality.tracked_fraction", "<", QUALITY_MIN_TRACKED_FRACTION, tracked,
@@ -401,15 +372,16 @@ def poor_data_quality(doc: dict[str, Any], day: SessionDay, t: Translator = ENGL
 
 
 def missed_days(
-    history: list[tuple[dt.datetime, dict[str, Any]]],
+    history: list[tuple[dt.datetime, AnalysisReport | None]],
     expected_per_week: int | None,
     now: dt.datetime,
-    exercise: object = None,
+    exercise: str | None = None,
     t: Translator = ENGLISH,
 ) -> SuggestionDraft | None:
     """Fires when fewer of the last 7 days (today included, UTC) had a session than the plan expects per week.
 
-    Only judged once the patient has sessions from before that week (a first week is never "missed").
+    Only judged once the patient has sessions from before that week (a first week is never "missed"). A session
+    whose stored document no schema reads (None in history) still counts as a day exercised.
     """
     if expected_per_week is None:
         return None
@@ -422,15 +394,15 @@ def missed_days(
     expected = min(expected_per_week, ACTIVE_DAYS_WINDOW)
     if active >= expected:
         return None
-    params = AdviceParams(exercise=_slug(exercise), active_days=active, expected_days=expected, up_to=today)
+    params = AdviceParams(exercise=exercise, active_days=active, expected_days=expected, up_to=today)
     return _draft(MISSED_DAYS, "active_days_last_7d", "<", expected, active, params, t)
 
 
 def evaluate(
-    doc: dict[str, Any],
+    doc: AnalysisReport,
     *,
     prescribed_reps: int | None,
-    history: list[tuple[dt.datetime, dict[str, Any]]],
+    history: list[tuple[dt.datetime, AnalysisReport | None]],
     expected_per_week: int | None,
     now: dt.datetime,
     today: dt.date | None = None,
@@ -438,16 +410,18 @@ def evaluate(
 ) -> list[SuggestionDraft]:
     """Returns the drafts of every rule that fires for one analysed session.
 
-    doc: the analysis document of the session (backend.analysis.report). prescribed_reps: repetitions per set of
-    the plan, None = no plan. history: (started_at, document) of earlier sessions of the same patient and exercise.
-    expected_per_week: sessions per week of the plan. now: when the session happened (timezone-aware). today: the
-    day the advice is written (UTC), which decides whether the text names the session's weekday or its date;
-    defaults to the day of now. t: the language of the drafts' texts (English by default).
+    doc: the analysis document of the session (kinect_agent.analysis.document; a stored one read with
+    read_report). prescribed_reps: repetitions per set of the plan, None = no plan. history: (started_at, document)
+    of earlier sessions of the same patient and exercise, document None where no schema reads the stored one
+    (backend.suggestions.context.session_history). expected_per_week: sessions per week of the plan. now: when the
+    session happened (timezone-aware). today: the day the advice is written (UTC), which decides whether the text
+    names the session's weekday or its date; defaults to the day of now. t: the language of the drafts' texts
+    (English by default).
     When quality.ok is false only the data-quality and missed-days rules run: the measurements are not trusted.
-    Raises ValueError naming the argument or document key that is malformed.
+    A metric that is NaN or infinite counts as missing. Raises ValueError naming the argument that is malformed.
     """
-    if not isinstance(doc, dict):
-        raise ValueError(f"doc must be a dict (the analysis document), got {type(doc).__name__}")
+    if not isinstance(doc, AnalysisReport):
+        raise ValueError(f"doc must be an AnalysisReport (the analysis document), got {type(doc).__name__}")
     now = _aware(now, "now")
     prescribed_reps = _positive_int(prescribed_reps, "prescribed_reps")
     expected_per_week = _positive_int(expected_per_week, "expected_per_week")
@@ -455,23 +429,23 @@ def evaluate(
     if today is not None and (not isinstance(today, dt.date) or isinstance(today, dt.datetime)):
         raise ValueError(f"today must be a date or None, got {today!r}")
     day = SessionDay.of(now, now.date() if today is None else today)
-    if _quality_ok(doc):
+    if doc.quality.ok:
         drafts = [fewer_reps(doc, prescribed_reps, day, t), rom_drop(doc, past, now, day, t), too_fast(doc, day, t)]
     else:
         drafts = [poor_data_quality(doc, day, t)]
-    drafts.append(missed_days(past, expected_per_week, now, doc.get("exercise"), t))
+    drafts.append(missed_days(past, expected_per_week, now, doc.exercise, t))
     return [d for d in drafts if d is not None]
 
 
 # --- how the set felt (run when the patient answers, backend.feeling) ------------------------------------------
 
 
-def pain_high(pain: int | None, alert_above: int, exercise: object, day: SessionDay, t: Translator = ENGLISH
+def pain_high(pain: int | None, alert_above: int, exercise: str | None, day: SessionDay, t: Translator = ENGLISH
               ) -> SuggestionDraft | None:  # fmt: skip
     """Fires when the pain the patient said after a set (0-10) is above their alert level (0-9, the therapist's)."""
     if pain is None or pain <= alert_above:
         return None
-    params = AdviceParams(exercise=_slug(exercise), session_on=day.on, written_on=day.written_on, pain=pain)
+    params = AdviceParams(exercise=exercise, session_on=day.on, written_on=day.written_on, pain=pain)
     return _draft(PAIN_HIGH, "pain_nrs", ">", alert_above, pain, params, t)
 
 

@@ -37,6 +37,7 @@ from backend.suggestions.rules import (
 )
 from backend.suggestions.schemas import SuggestionOut
 from backend.users.models import User
+from kinect_agent.analysis.document import AnalysisReport
 
 THERAPIST_RULE = "therapist"  # the rule field of suggestions written by a person
 
@@ -262,12 +263,12 @@ def shown_text(row: Suggestion, t: Translator) -> tuple[str, str | None]:
         return row.text, None
 
 
-def suggest_for_session(*, db_session: Session, session: ExerciseSession, doc: dict[str, Any]) -> list[Suggestion]:
+def suggest_for_session(*, db_session: Session, session: ExerciseSession, doc: AnalysisReport) -> list[Suggestion]:
     """Runs the rules on a stored session's metrics document and stores what fires as pending suggestions.
 
     Reads the plan's targets and the patient's earlier sessions; judges missed days at most once a week per
     exercise. Keeps at most one pending suggestion per rule and exercise: the newest session's. Returns the new
-    suggestions (flushed, not committed). Raises ValueError for a malformed document.
+    suggestions (flushed, not committed).
     """
     reps, per_week = plan_targets(
         db_session=db_session,

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from backend.sessions.metrics import indicator_scores
 from backend.sessions.models import ExerciseSession, SessionMetric
+from kinect_agent.analysis.document import AnalysisReport, read_report
 
 
 def store_session(
@@ -67,3 +68,11 @@ def document(*, reps: int, rom: float | None, quality_ok: bool, exercise: str = 
         item["score"] = None if rom is None or name != "flexibility" else rom / 2
     doc["indicators"]["flexibility"] |= {"value": rom, "basis": "test"}
     return doc
+
+
+def report(**fields) -> AnalysisReport:
+    """Returns today's example document with these top-level fields replaced; `quality` (a dict) is merged into the
+    example's quality. The rules' tests describe a session by the few numbers a rule reads."""
+    doc = json.loads(TODAY.read_text(encoding="utf-8"))
+    doc["quality"] |= fields.pop("quality", {})
+    return read_report(doc | fields)

@@ -17,6 +17,8 @@ from backend.i18n import LOCALES, translator
 from backend.suggestions import rules
 from backend.suggestions.models import Suggestion
 from backend.suggestions.rules import AdviceParams, advice_text, evaluate
+from kinect_agent.analysis.document import AnalysisReport
+from tests.backend.session_rows import report
 
 NOW = dt.datetime(2026, 11, 23, 10, 0, tzinfo=dt.UTC)
 
@@ -142,10 +144,10 @@ def test_the_report_has_approved_advice_in_english(
     assert "Advice from the rules, approved" in text and "your pain was 8 of 10" in " ".join(text.split()), text
 
 
-def _doc(**overrides) -> dict:
-    doc = {"exercise": "squat", "repetitions": 10, "rom_deg": 90.0, "tempo_s_per_rep": 3.0,
-           "quality": {"ok": True, "tracked_fraction": 0.99, "outlier_fraction": 0.01}}  # fmt: skip
-    return doc | overrides
+def _doc(**overrides) -> AnalysisReport:
+    good = {"exercise": "squat", "repetitions": 10, "rom_deg": 90.0, "tempo_s_per_rep": 3.0,
+            "quality": {"ok": True, "tracked_fraction": 0.99, "outlier_fraction": 0.01}}  # fmt: skip
+    return report(**(good | overrides))
 
 
 CASES = {  # one document per text of every session rule: (doc, prescribed_reps, history days ago, per week, today)

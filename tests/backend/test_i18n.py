@@ -12,6 +12,7 @@ from babel.messages.catalog import Catalog
 
 from backend.i18n import LOCALES, js_messages, negotiate, normalise, translator
 from backend.i18n.catalogues import check, check_locale, extract, placeholders
+from tests.backend.session_rows import report
 
 HTML = {"Accept": "text/html"}
 
@@ -221,7 +222,7 @@ def test_advice_is_written_in_the_patient_language(locale, expected):
     from backend.suggestions.rules import evaluate
 
     saturday = dt.datetime(2026, 11, 21, 10, tzinfo=dt.UTC)
-    doc = {"exercise": "squat", "repetitions": 6, "quality": {"ok": True}}
+    doc = report(exercise="squat", repetitions=6, tempo_s_per_rep=3.0, quality={"ok": True})
     drafts = evaluate(doc, prescribed_reps=10, history=[], expected_per_week=None, now=saturday,
                       today=dt.date(2026, 11, 23), t=translator(locale))  # fmt: skip
     assert [d.rule for d in drafts] == ["fewer_reps"]
@@ -235,7 +236,7 @@ def test_advice_dates_and_numbers_follow_the_locale():
     assert session_day(long_ago, dt.date(2026, 11, 23), translator("de")) == "am 14. März 2025"
     assert session_day(long_ago, dt.date(2026, 11, 23), translator("es")) == "el 14 de marzo de 2025"
     assert session_day(long_ago, dt.date(2026, 11, 23), translator("en")) == "on 14 March 2025"
-    doc = {"exercise": "squat", "repetitions": 10, "tempo_s_per_rep": 1.25, "quality": {"ok": True}}
+    doc = report(exercise="squat", repetitions=10, tempo_s_per_rep=1.25, quality={"ok": True})
     now = dt.datetime(2026, 11, 21, 10, tzinfo=dt.UTC)
     fast = evaluate(doc, prescribed_reps=10, history=[], expected_per_week=None, now=now, t=translator("fr"))
     assert "environ 1,2 secondes" in fast[0].text, fast[0].text
@@ -249,12 +250,12 @@ def test_a_german_patient_gets_advice_in_german(db_session, make_user, exercise)
 
     patient = make_user("patient")
     patient.locale = "de"
-    doc = {"exercise": exercise.slug, "repetitions": 10, "rom_deg": 80.0, "tempo_s_per_rep": 0.8,
-           "quality": {"ok": True, "tracked_fraction": 1.0, "outlier_fraction": 0.0, "reasons": []}}  # fmt: skip
+    doc = report(exercise=exercise.slug, repetitions=10, rom_deg=80.0, tempo_s_per_rep=0.8,
+                 quality={"ok": True, "tracked_fraction": 1.0, "outlier_fraction": 0.0, "reasons": []})  # fmt: skip
     row = ExerciseSession(client_session_id=uuid.uuid4(), patient_id=patient.id, exercise_id=exercise.id,
                           started_at=dt.datetime.now(dt.UTC), duration_s=30.0, n_frames=900, file_bytes=b"",
                           content_hash=uuid.uuid4().hex * 2)  # fmt: skip
-    row.metric = SessionMetric(document=doc, repetitions=10, rom_deg=80.0)
+    row.metric = SessionMetric(document=doc.model_dump(mode="json"), repetitions=10, rom_deg=80.0)
     db_session.add(row)
     db_session.flush()
     made = suggest_for_session(db_session=db_session, session=row, doc=doc)

@@ -13,27 +13,29 @@ from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.suggestions.context import plan_targets, session_history
 from backend.suggestions.models import Suggestion
 from backend.suggestions.service import suggest_for_session
+from kinect_agent.analysis.document import AnalysisReport, read_report
+from tests.backend.session_rows import report
 
 NOW = dt.datetime(2026, 11, 23, 10, 0, tzinfo=dt.UTC)
 TODAY = NOW.date()
 
 
-def _doc(slug: str, **overrides) -> dict:
-    doc = {
+def _doc(slug: str, **overrides) -> AnalysisReport:
+    good = {
         "exercise": slug,
         "repetitions": 10,
         "rom_deg": 80.0,
         "tempo_s_per_rep": 3.0,
         "quality": {"ok": True, "tracked_fraction": 1.0, "outlier_fraction": 0.0, "reasons": []},
     }
-    return doc | overrides
+    return report(**(good | overrides))
 
 
 @pytest.fixture
 def store(db_session):
     """Factory: store(patient, exercise, days_ago, doc=None, **doc overrides) -> ExerciseSession with metrics."""
 
-    def make(patient, exercise, days_ago: float, doc: dict | None = None, **overrides) -> ExerciseSession:
+    def make(patient, exercise, days_ago: float, doc: AnalysisReport | None = None, **overrides) -> ExerciseSession:
         doc = doc or _doc(exercise.slug, **overrides)
         row = ExerciseSession(
             client_session_id=uuid.uuid4(),
@@ -45,7 +47,8 @@ def store(db_session):
             file_bytes=b"",
             content_hash=uuid.uuid4().hex * 2,
         )
-        row.metric = SessionMetric(document=doc, repetitions=doc["repetitions"], rom_deg=doc["rom_deg"])
+        row.metric = SessionMetric(document=doc.model_dump(mode="json"), repetitions=doc.repetitions,
+                                   rom_deg=doc.rom_deg)  # fmt: skip
         db_session.add(row)
         db_session.flush()
         return row
@@ -122,7 +125,7 @@ def test_history_is_earlier_sessions_of_the_same_patient_oldest_first(db_session
     history = session_history(db_session=db_session, session=current)
     assert [t for t, _ in history] == [old.started_at, recent.started_at], "window plus the latest older one"
     assert ancient.started_at not in [t for t, _ in history]
-    assert history[-1][1]["exercise"] == exercise.slug
+    assert history[-1][1] is not None and history[-1][1].exercise == exercise.slug
 
 
 # --- the whole pass ---
@@ -164,10 +167,13 @@ def test_missed_days_is_suggested_once_a_week(db_session, make_user, exercise, s
     assert ([r.rule for r in first], second, [r.rule for r in later]) == (["missed_days"], [], ["missed_days"])
 
 
-def test_suggest_for_session_rejects_a_malformed_document(db_session, make_user, exercise, store):
+def test_an_earlier_document_no_schema_reads_is_a_session_without_numbers(db_session, make_user, exercise, store):
     patient = make_user("patient")
-    with pytest.raises(ValueError, match=r"doc\['rom_deg'\] must be a number"):
-        suggest_for_session(db_session=db_session, session=store(patient, exercise, 0), doc=_doc("x", rom_deg="x"))
+    broken = store(patient, exercise, 3)
+    broken.metric.document = {"exercise": exercise.slug, "rom_deg": "wide"}
+    db_session.flush()
+    current = store(patient, exercise, 0)
+    assert session_history(db_session=db_session, session=current) == [(broken.started_at, None)]
 
 
 def test_newer_advice_supersedes_pending_advice_of_the_same_rule_and_exercise(
@@ -177,7 +183,7 @@ def test_newer_advice_supersedes_pending_advice_of_the_same_rule_and_exercise(
     fired = {}
     for days, ex in ((10, exercise), (6, other_exercise), (3, exercise)):
         session = store(patient, ex, days, tempo_s_per_rep=1.0)  # too fast every time
-        rows = suggest_for_session(db_session=db_session, session=session, doc=session.metric.document)
+        rows = suggest_for_session(db_session=db_session, session=session, doc=read_report(session.metric.document))
         fired[days] = {r.rule: r for r in rows}
     db_session.refresh(fired[10]["too_fast"])
     assert fired[10]["too_fast"].status == "superseded"  # replaced by the session 3 days ago: same exercise, rule
@@ -186,7 +192,7 @@ def test_newer_advice_supersedes_pending_advice_of_the_same_rule_and_exercise(
     assert fired[3]["too_fast"].status == "pending"
 
     late = store(patient, exercise, 20, tempo_s_per_rep=1.0)  # an older session uploaded late
-    rows = suggest_for_session(db_session=db_session, session=late, doc=late.metric.document)
+    rows = suggest_for_session(db_session=db_session, session=late, doc=read_report(late.metric.document))
     db_session.refresh(fired[3]["too_fast"])
     assert fired[3]["too_fast"].status == "pending"  # never replaces newer advice
     assert [r.status for r in rows if r.rule == "too_fast"] == ["superseded"]  # born replaced by the newer one
@@ -202,7 +208,7 @@ def test_one_pending_suggestion_per_rule_and_exercise_whatever_the_upload_order(
     for days in order:  # uploaded in this order; each one too short and too fast, for both exercises
         for ex in (exercise, other_exercise):
             session = store(patient, ex, days, repetitions=4, tempo_s_per_rep=1.0)
-            suggest_for_session(db_session=db_session, session=session, doc=session.metric.document)
+            suggest_for_session(db_session=db_session, session=session, doc=read_report(session.metric.document))
             sessions[session.id] = (ex.slug, days)
     pending = db_session.scalars(
         select(Suggestion).where(Suggestion.patient_id == patient.id, Suggestion.status == "pending")

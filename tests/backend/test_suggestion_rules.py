@@ -9,24 +9,25 @@ import pytest
 
 from backend.suggestions import rules
 from backend.suggestions.rules import SuggestionDraft, evaluate
+from kinect_agent.analysis.document import AnalysisReport
+from tests.backend.session_rows import report
 
 NOW = dt.datetime(2026, 11, 23, 10, 0, tzinfo=dt.UTC)
 
 
-def _doc(**overrides) -> dict:
+def _doc(**overrides) -> AnalysisReport:
     """A good session: 10 repetitions, 90 degrees, 3 s per repetition, quality ok."""
-    doc = {
+    good = {
         "exercise": "squat",
         "repetitions": 10,
         "rom_deg": 90.0,
         "tempo_s_per_rep": 3.0,
         "quality": {"ok": True, "tracked_fraction": 0.99, "outlier_fraction": 0.01, "reasons": []},
     }
-    doc.update(overrides)
-    return doc
+    return report(**(good | overrides))
 
 
-def _past(days_ago: float, **overrides) -> tuple[dt.datetime, dict]:
+def _past(days_ago: float, **overrides) -> tuple[dt.datetime, AnalysisReport]:
     return NOW - dt.timedelta(days=days_ago), _doc(**overrides)
 
 
@@ -286,17 +287,12 @@ def test_every_text_is_plain_sentences_without_rule_codes():
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"doc": [1]}, "doc must be a dict"),
-        ({"doc": _doc(rom_deg="wide")}, "doc['rom_deg'] must be a number"),
-        ({"doc": _doc(repetitions=True)}, "doc['repetitions'] must be a number"),
-        ({"doc": _doc(quality="fine")}, "doc['quality'] must be an object"),
-        ({"doc": _doc(quality={"ok": "yes"})}, "doc['quality']['ok'] must be true, false or null"),
+        ({"doc": {"repetitions": 3}}, "doc must be an AnalysisReport"),
         ({"now": dt.datetime(2026, 11, 23)}, "now must be a timezone-aware datetime"),
         ({"prescribed_reps": 0}, "prescribed_reps must be a positive integer"),
         ({"expected_per_week": 2.5}, "expected_per_week must be a positive integer"),
-        ({"history": [(NOW, "doc")]}, "history[0] must be a (datetime, dict) pair"),
-        ({"history": [(dt.datetime(2026, 11, 1), {})]}, "history[0][0] must be a timezone-aware"),
-        ({"history": [_past(20, rom_deg=[1])]}, "history[0][1]['rom_deg'] must be a number"),
+        ({"history": [(NOW, {"rom_deg": 80.0})]}, "history[0] must be a (datetime, AnalysisReport or None) pair"),
+        ({"history": [(dt.datetime(2026, 11, 1), None)]}, "history[0][0] must be a timezone-aware"),
         ({"today": NOW}, "today must be a date or None"),
     ],
 )
@@ -308,3 +304,10 @@ def test_bad_input_names_what_and_where(kwargs, message):
 
 def test_nan_metric_counts_as_missing():
     assert _eval(_doc(rom_deg=float("nan"), tempo_s_per_rep=float("nan")), history=_rom_history()) == {}
+
+
+def test_a_session_whose_document_no_schema_reads_counts_as_a_day_but_not_in_the_baseline():
+    unreadable = [(when, None) for when, _ in _rom_history(80.0)]
+    assert rules.ROM_DROP not in _eval(_doc(rom_deg=10.0), history=unreadable)
+    draft = _eval(_doc(), history=[_past(9), (NOW - dt.timedelta(days=3), None)], expected_per_week=3)
+    assert draft[rules.MISSED_DAYS].value == 2.0  # 3 days ago and today

@@ -14,6 +14,7 @@ from backend.sessions.models import ExerciseSession
 from backend.suggestions.models import Suggestion
 from backend.suggestions.rules import AdviceParams, SuggestionDraft, evaluate
 from backend.suggestions.service import add_system_suggestions, is_visible_to_patient
+from tests.backend.session_rows import report
 
 MONDAY = dt.date(2026, 11, 23)
 
@@ -298,13 +299,7 @@ def test_unassigned_therapist_cannot_approve(client, care, make_suggestion, make
 
 def test_rule_drafts_are_stored_pending_and_reviewable(client, db_session, care):
     session = _exercise_session(db_session, care["patient"])
-    doc = {
-        "exercise": "sit_to_stand",
-        "repetitions": 6,
-        "rom_deg": 80.0,
-        "tempo_s_per_rep": 1.0,
-        "quality": {"ok": True},
-    }
+    doc = report(exercise="sit_to_stand", repetitions=6, rom_deg=80.0, tempo_s_per_rep=1.0, quality={"ok": True})
     saturday = dt.datetime(2026, 11, 21, 18, 30, tzinfo=dt.UTC)
     drafts = evaluate(doc, prescribed_reps=10, history=[], expected_per_week=None, now=saturday, today=MONDAY)
     rows = add_system_suggestions(drafts, patient_id=care["patient"].id, session_id=session.id, db_session=db_session)

@@ -18,7 +18,7 @@ def session(exercise: str, reps: int, seed: int) -> tuple[sf.SessionPayload, Ana
                                 recorded_by={"device_id": 3, "patient_id": 7})  # fmt: skip
     payload = sf.decode(sf.encode(payload))
     # a history with one earlier session gives every indicator a score
-    history = [metrics_document(payload, get_exercise(exercise), target_reps=None, history=[]).model_dump(mode="json")]
+    history = [metrics_document(payload, get_exercise(exercise), target_reps=None, history=[])]
     return payload, metrics_document(payload, get_exercise(exercise), target_reps=reps, history=history)
 
 
