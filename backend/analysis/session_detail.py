@@ -20,6 +20,7 @@ Definitions:
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -27,6 +28,7 @@ import numpy as np
 from backend.analysis.reachable import hand_path
 from kinect_agent.analysis import angles as analysis_angles
 from kinect_agent.analysis import series
+from kinect_agent.analysis.document import RepetitionItem
 from kinect_agent.body.angles import body_frame, joint_angles
 
 MAX_CURVE_POINTS = 1500
@@ -130,8 +132,10 @@ def angular_speeds(t: np.ndarray, angles: dict[str, np.ndarray]) -> dict[str, np
     return {name: np.abs(np.gradient(series.smooth(t, y), t)) for name, y in angles.items()}
 
 
-def peak_speeds(t: np.ndarray, speeds: dict[str, np.ndarray], repetitions: list[dict[str, Any]]) -> list[float | None]:
-    """Returns the peak speed (deg/s, 0.1) of each repetition {"start_s", "end_s", "side"} (module doc).
+def peak_speeds(t: np.ndarray, speeds: dict[str, np.ndarray], repetitions: Sequence[RepetitionItem]
+                ) -> list[float | None]:  # fmt: skip
+    """Returns the peak speed (deg/s, 0.1) of each repetition, read between its start_s and end_s on its side's
+    angles (module doc).
 
     t: (T,) s; speeds: angular_speeds' output; repetition times are seconds from t[0]. None when no angle of the
     repetition has a finite speed inside it.
@@ -140,8 +144,8 @@ def peak_speeds(t: np.ndarray, speeds: dict[str, np.ndarray], repetitions: list[
     names = tuple(speeds)
     out: list[float | None] = []
     for rep in repetitions:
-        inside = (t_s >= rep["start_s"] - 1e-6) & (t_s <= rep["end_s"] + 1e-6)
-        values = [speeds[n][inside] for n in _rep_angles(rep.get("side", "both"), names)]
+        inside = (t_s >= rep.start_s - 1e-6) & (t_s <= rep.end_s + 1e-6)
+        values = [speeds[n][inside] for n in _rep_angles(rep.side, names)]
         values = [v[np.isfinite(v)] for v in values]
         best = max((float(v.max()) for v in values if v.size), default=None)
         out.append(None if best is None else round(best, 1))

@@ -95,7 +95,7 @@ def file_evidence(payload: SessionPayload, names: tuple[str, ...], reps: list[Re
     strip = data_quality.outlier_strip(raw.t, prob) | {"threshold": config.outlier_threshold}
     return {
         "curves": angle_curves(raw.t, raw.positions, angles, names, kind) if names else [],
-        "peak_speeds": peak_speeds(raw.t, angular_speeds(raw.t, angles), [r.model_dump() for r in reps]),
+        "peak_speeds": peak_speeds(raw.t, angular_speeds(raw.t, angles), reps),
         "hand_paths": hand_paths(measured, raw.t) if is_arm_exercise(names) else None,
         "quality": quality | {"outlier_strip": strip, "advice": camera_advice(raw)},
         "validity": session_validity(raw.meta.device, measured, names, names[0] if names else None).to_dict(),

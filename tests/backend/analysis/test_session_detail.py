@@ -21,6 +21,7 @@ from backend.analysis.session_detail import (
     peak_speeds,
 )
 from backend.exercises.library import EXERCISES
+from kinect_agent.analysis.document import RepetitionItem
 from kinect_agent.body.angles import DOMAIN_DEG
 from tests.backend.analysis._data import noisy, uiprmd
 
@@ -93,13 +94,19 @@ def test_filtered_curve_follows_the_truth_and_raw_one_is_noisier(seed: int) -> N
     assert np.nanstd(np.diff(np.array(raw["deg"], dtype=float))) > np.std(np.diff(filtered["deg"])), f"seed {seed}"
 
 
+def _rep(start_s: float, end_s: float, side: str) -> RepetitionItem:
+    """A repetition as the analysis lists it; only its times and side matter to the peak speed."""
+    return RepetitionItem(index=0, start_s=start_s, end_s=end_s, duration_s=end_s - start_s, amplitude_deg=0.0,
+                          peak_deg=0.0, side=side, peak_s=None)  # fmt: skip
+
+
 @pytest.mark.parametrize("seed", SEEDS)
 def test_peak_speeds_are_those_of_a_known_sine(seed: int) -> None:
     rng = np.random.default_rng(seed)
     period, amplitude = rng.uniform(2.0, 4.0), rng.uniform(30.0, 80.0)
     t = np.arange(0, 3 * period, 1 / 30)
     angle = amplitude / 2 * (1 - np.cos(2 * np.pi * t / period))
-    reps = [{"start_s": k * period, "end_s": (k + 1) * period, "side": "left"} for k in range(3)]
+    reps = [_rep(k * period, (k + 1) * period, "left") for k in range(3)]
     speeds = peak_speeds(t, angular_speeds(t, {"knee_flexion_L": angle}), reps)
     expected = np.pi * amplitude / period
     np.testing.assert_allclose(speeds, expected, rtol=0.05, err_msg=f"seed {seed}")
@@ -109,9 +116,7 @@ def test_peak_speed_of_a_side_reads_that_side_only() -> None:
     t = np.arange(0, 4, 1 / 30)
     still, moving = np.zeros_like(t), 40 * np.sin(np.pi * t / 4)
     speeds = angular_speeds(t, {"knee_flexion_L": still, "knee_flexion_R": moving})
-    left, right, both = peak_speeds(
-        t, speeds, [{"start_s": 0, "end_s": 4, "side": s} for s in ("left", "right", "both")]
-    )
+    left, right, both = peak_speeds(t, speeds, [_rep(0.0, 4.0, s) for s in ("left", "right", "both")])
     assert left == pytest.approx(0.0, abs=0.1) and right == both > 20
 
 
@@ -119,9 +124,9 @@ def test_peak_speed_of_a_side_reads_that_side_only() -> None:
 def test_peak_speeds_of_simulated_repetitions_are_positive(seed: int) -> None:
     measured, truth = noisy("squat", 3, seed)
     spec = EXERCISES["squat"]
-    doc = analyze_recording(measured, spec, filtered=truth).model_dump(mode="json")
+    doc = analyze_recording(measured, spec, filtered=truth)
     angles = measured_angles(truth.t, truth.positions, spec.defining_angles)
-    speeds = peak_speeds(truth.t, angular_speeds(truth.t, angles), doc["repetition_list"])
+    speeds = peak_speeds(truth.t, angular_speeds(truth.t, angles), doc.repetition_list)
     assert len(speeds) == 3 and all(20 < s < 400 for s in speeds), f"seed {seed}: {speeds}"
 
 
@@ -147,12 +152,12 @@ def test_hand_path_of_abduction_rises_sideways_within_one_arm_length(seed: int) 
 def test_uiprmd_shoulder_abduction_curves_and_speeds(data_dir: Path) -> None:
     rec = uiprmd(data_dir, "m07", "s02")
     spec = EXERCISES["standing_shoulder_abduction"]
-    doc = analyze_recording(rec, spec).model_dump(mode="json")
+    doc = analyze_recording(rec, spec)
     angles = measured_angles(rec.t, rec.positions, spec.defining_angles)
     curves = angle_curves(rec.t, rec.positions, angles, spec.defining_angles, "smoothed")
     right = next(c for c in curves if c["angle"] == "shoulder_abduction_R" and c["kind"] == "smoothed")
     assert len(right["t_s"]) <= MAX_CURVE_POINTS and max(right["deg"]) > 60, "the right arm is raised sideways"
-    speeds = peak_speeds(rec.t, angular_speeds(rec.t, angles), doc["repetition_list"])
+    speeds = peak_speeds(rec.t, angular_speeds(rec.t, angles), doc.repetition_list)
     assert len(speeds) == 10 and all(30 < s < 600 for s in speeds), speeds
     paths = hand_paths(rec.positions, rec.t)
     assert max(paths["right"]["up"]) > max(paths["left"]["up"]) + 0.3, "only the right hand rises"
