@@ -143,6 +143,19 @@ def therapist_translator(accept_language: str | None) -> Translator:
     return Translator(negotiate(accept_language, therapist_locales()), therapist=True)
 
 
+def reader_translator(accept_language: str | None, *, role: str, locale: str | None = None) -> Translator:
+    """Returns the Translator of an API reader: a patient's (the locale their page asks for in Accept-Language, else
+    their chosen one), a therapist's or admin's (the same among the therapist pages' locales, therapist catalogue
+    first), anyone else's (a device) English."""
+    if role == "patient":
+        return translator(asked_locale(accept_language) or locale)
+    if role in ("therapist", "admin"):
+        chosen = locale if locale in therapist_locales() else None
+        return Translator(asked_locale(accept_language, therapist_locales()) or chosen or DEFAULT_LOCALE,
+                          therapist=True)  # fmt: skip
+    return Translator(DEFAULT_LOCALE)
+
+
 def normalise(tag: str | None) -> str | None:
     """Returns the supported locale of a language tag ("de-AT" -> "de", "fr_CA" -> "fr"), or None."""
     if not tag:
