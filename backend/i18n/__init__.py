@@ -21,6 +21,7 @@ from __future__ import annotations
 import datetime as dt
 import gettext
 import io
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -35,7 +36,8 @@ from babel.messages.mofile import write_mo
 from babel.messages.pofile import read_po
 from babel.numbers import format_decimal, format_percent
 
-LOCALE_DIR = Path(__file__).resolve().parent / "locale"
+# the catalogues: the shipped ones, or a copy named by COACH_LOCALE_DIR (a clinic's own therapist.po, a test's)
+LOCALE_DIR = Path(os.environ.get("COACH_LOCALE_DIR") or Path(__file__).resolve().parent / "locale")
 DOMAIN = "messages"
 THERAPIST_DOMAIN = "therapist"  # texts only the therapist pages show; a locale's therapist.po is optional
 DOMAINS = (DOMAIN, THERAPIST_DOMAIN)
@@ -91,6 +93,13 @@ def therapist_translations(locale: str) -> gettext.NullTranslations:
     found = _compiled(locale, THERAPIST_DOMAIN)
     found.add_fallback(_compiled(locale, DOMAIN))
     return found
+
+
+def forget_catalogues() -> None:
+    """Forgets the catalogues read so far and the therapist locales found (read again at next use: after the
+    catalogues or LOCALE_DIR changed)."""
+    for cache in (_catalog, translations, therapist_locales, therapist_translations, js_messages):
+        cache.cache_clear()
 
 
 @dataclass(frozen=True)

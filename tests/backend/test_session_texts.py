@@ -4,37 +4,19 @@
 
 from __future__ import annotations
 
-import shutil
-import uuid
-
-import numpy as np
 import pytest
-from babel.messages.catalog import Catalog
-from babel.messages.pofile import write_po
 
 import backend.i18n as i18n
 from backend.analysis import data_quality
 from backend.analysis.camera_advice import advice_text
 from backend.i18n import Translator, translator
-from backend.i18n.catalogues import PLURAL_FORMS, marks_in_template_literals
+from backend.i18n.catalogues import marks_in_template_literals
 from backend.sessions import detail
 from kinect_agent.analysis.validity import REASONS
-from kinect_agent.formats import session_file as sf
-from kinect_agent.skeleton import INDEX
-from kinect_agent.sources.simulator import simulate
+from tests.backend.khs_files import make_khs_at_distance
+from tests.catalogue_copies import copy_with_therapist_catalogues
 
 SEEDS = (1, 2)
-
-
-def _khs_too_close(seed: int, z_m: float = 1.1) -> bytes:
-    """A squat session of the simulator's truth moved to z_m metres from the camera (too close: camera advice)."""
-    _, truth, _ = simulate("squat", 3, seed=seed)
-    z = float(np.nanmedian(truth.positions[:, INDEX["ROOT"], 2]))
-    moved = truth.replace(step="test: moved close", positions=truth.positions + np.array([0.0, 0.0, z_m - z]),
-                          state=truth.state)  # fmt: skip
-    payload = sf.SessionPayload(session_id=str(uuid.uuid4()), raw=moved, filtered=moved,
-                                created_at="2026-11-20T10:00:00Z")  # fmt: skip
-    return sf.encode(payload)
 
 
 def _detail(client, session_id: int, headers: dict) -> dict:
@@ -47,7 +29,7 @@ def _detail(client, session_id: int, headers: dict) -> dict:
 def test_a_patient_reads_the_camera_advice_in_their_language_with_the_same_code_and_params(
     client, db_session, upload, auth_headers, seed
 ):
-    session_id, patient, _ = upload(_khs_too_close(seed), "squat")
+    session_id, patient, _ = upload(make_khs_at_distance(seed=seed), "squat")
     headers = auth_headers(patient)
     english = _detail(client, session_id, headers)["quality"]["advice"]
     assert english[0]["code"] == "too_close", english  # (and feet_cut_off: at 1.1 m the feet leave the picture)
@@ -65,7 +47,7 @@ def test_a_patient_reads_the_camera_advice_in_their_language_with_the_same_code_
 
 
 def test_the_therapist_reads_english_while_the_therapist_pages_have_no_german_catalogue(client, upload, auth_headers):
-    session_id, _, therapist = upload(_khs_too_close(1), "squat")
+    session_id, _, therapist = upload(make_khs_at_distance(seed=1), "squat")
     body = _detail(client, session_id, auth_headers(therapist) | {"Accept-Language": "de"})
     assert [p["label"] for p in body["quality"]["parts"]] == [
         "Body seen by the camera", "Tracking errors", "Steadiness of measured bone lengths"]  # fmt: skip
@@ -75,34 +57,25 @@ def test_the_therapist_reads_english_while_the_therapist_pages_have_no_german_ca
 
 @pytest.fixture
 def german_therapist_catalogue(tmp_path, monkeypatch):
-    """The shipped catalogues plus a German therapist.po translating the session page's server texts (what
-    `python -m backend.i18n.catalogues init de` and a translator would make); caches emptied before and after."""
-    shutil.copytree(i18n.LOCALE_DIR, tmp_path / "locale")
-    catalog = Catalog(locale="de", domain=i18n.THERAPIST_DOMAIN)
-    catalog.mime_headers = [("Plural-Forms", PLURAL_FORMS["de"])]
+    """The shipped catalogues plus a German therapist.po translating the session page's server texts; the
+    catalogue caches emptied before and after."""
     words = {"Body seen by the camera": "Vom Körper gesehen", "Tracking errors": "Messfehler",
              "Steadiness of measured bone lengths": "Stetigkeit der gemessenen Knochenlängen",
              detail.UNCERTAINTY_NOTE: "95-%-Intervalle aus den Winkel-SDs je Bild",
              detail.NO_UNCERTAINTY_NOTE: "Ohne Intervalle: die Datei speichert keine Unsicherheit."}  # fmt: skip
-    for msgid, msgstr in words.items():
-        catalog.add(msgid, msgstr)
-    with (tmp_path / "locale" / "de" / "LC_MESSAGES" / "therapist.po").open("wb") as f:
-        write_po(f, catalog)
-    caches = (i18n.therapist_locales, i18n.therapist_translations, i18n.translations, i18n._catalog)
-    for cache in caches:
-        cache.cache_clear()
-    monkeypatch.setattr(i18n, "LOCALE_DIR", tmp_path / "locale")
+    locale_dir = copy_with_therapist_catalogues(tmp_path, {"de": words})
+    i18n.forget_catalogues()
+    monkeypatch.setattr(i18n, "LOCALE_DIR", locale_dir)
     yield words
     monkeypatch.undo()
-    for cache in caches:
-        cache.cache_clear()
+    i18n.forget_catalogues()
 
 
 def test_a_german_therapist_catalogue_writes_the_session_texts_in_german(
     client, upload, auth_headers, german_therapist_catalogue
 ):
     words = german_therapist_catalogue
-    session_id, _, therapist = upload(_khs_too_close(2), "squat")
+    session_id, _, therapist = upload(make_khs_at_distance(seed=2), "squat")
     body = _detail(client, session_id, auth_headers(therapist) | {"Accept-Language": "de-AT,de;q=0.9"})
     assert [p["label"] for p in body["quality"]["parts"]] == [
         "Vom Körper gesehen", "Messfehler", "Stetigkeit der gemessenen Knochenlängen"]  # fmt: skip
@@ -134,7 +107,7 @@ def test_every_piece_of_advice_is_written_in_every_language(locale):
 
 
 def test_the_replay_state_is_said_in_the_patients_language(client, db_session, upload, auth_headers):
-    session_id, patient, _ = upload(_khs_too_close(1, z_m=2.5), "squat")
+    session_id, patient, _ = upload(make_khs_at_distance(seed=1, z_m=2.5), "squat")
     patient.locale = "fr"
     db_session.flush()
     state = client.get(f"/api/v1/sessions/{session_id}/replay/state", headers=auth_headers(patient))
