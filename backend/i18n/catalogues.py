@@ -165,9 +165,9 @@ def check(templates: dict[str, Catalog] | None = None) -> list[Problem]:
         problems.extend(check_template(domain, code[domain]))
         for locale in domain_locales(domain):
             problems.extend(check_locale(locale, code[domain], domain=domain))
-    for path in sorted((ROOT / "frontend/static").glob("*.js")):
-        where = str(path.relative_to(ROOT))
-        problems.extend(marks_in_template_literals(where, path.read_text(encoding="utf-8")))
+    for script in sorted((ROOT / "frontend/static").glob("*.js")):
+        where = str(script.relative_to(ROOT))
+        problems.extend(marks_in_template_literals(where, script.read_text(encoding="utf-8")))
     for path in sorted(THERAPIST_FILES):
         if not (ROOT / path).is_file():
             problems.append(Problem("backend/i18n/catalogues.py", f"THERAPIST_FILES names {path}, which is not there"))
