@@ -14,6 +14,7 @@ from sqlalchemy.orm import Session
 from backend.database import get_db, utcnow
 from backend.devices.models import Device
 from backend.exceptions import AppError, CsrfFailed, Forbidden, InsufficientScope, NotAuthenticated, PatientNotFound
+from backend.i18n import Translator, reader_translator
 from backend.patients.models import TherapistPatient
 from backend.security import API_TOKEN_PREFIX, DEVICE_TOKEN_PREFIX, same_secret, token_hash
 from backend.users.models import ApiToken, LoginSession, User
@@ -50,6 +51,13 @@ class Caller:
         if self.user is None:
             raise Forbidden("this endpoint is for users, not devices")
         return self.user
+
+
+def reader_of(request: Request, caller: Caller) -> Translator:
+    """Returns the language a caller reads the server's texts in: the page's (Accept-Language), else the user's
+    chosen one; a therapist's among the therapist pages' locales (backend.i18n.reader_translator)."""
+    locale = caller.user.locale if caller.user is not None else None
+    return reader_translator(request.headers.get("accept-language"), role=caller.role, locale=locale)
 
 
 def client_ip(request: Request) -> str:

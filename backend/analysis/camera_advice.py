@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from backend.i18n import N_, Translator, translator
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INDEX, NOT_TRACKED, TRACKED
 
@@ -34,6 +35,8 @@ FIELD_OF_VIEW = {"kinect1": (57.0, 43.0), "kinect2": (70.0, 60.0), "azure_kinect
 DEFAULT_FOV = FIELD_OF_VIEW["kinect2"]
 _LIMBS = (("hand", "HAN", "WRI"), ("foot", "FOO", "ANK"))
 _SIDES = (("left", "L"), ("right", "R"))
+ENGLISH = translator("en")
+Advice = dict[str, Any]  # {"code", "params", "text"}
 
 
 def _trunk(raw: Recording) -> np.ndarray:
@@ -44,44 +47,26 @@ def _trunk(raw: Recording) -> np.ndarray:
     return points[np.all(np.isfinite(points), axis=1)]
 
 
-def distance_advice(trunk: np.ndarray) -> list[dict[str, Any]]:
+def distance_advice(trunk: np.ndarray) -> list[Advice]:
     """Returns too_close / too_far advice from trunk positions (K, 3) m, camera frame."""
     if trunk.shape[0] == 0:
         return []
     z = float(np.median(trunk[:, 2]))
     if z < NEAR_M:
-        return [
-            {
-                "code": "too_close",
-                "text": f"You were about {z:.1f} m from the camera, which is too close for it to "
-                "see your whole body. Stand further back, about 2 to 3 m away.",
-            }
-        ]
+        return [advice("too_close", distance_m=round(z, 2))]
     if z > FAR_M:
-        return [
-            {
-                "code": "too_far",
-                "text": f"You were about {z:.1f} m from the camera, which is far for it to see you "
-                "clearly. Come closer, to about 2 to 3 m away.",
-            }
-        ]
+        return [advice("too_far", distance_m=round(z, 2))]
     return []
 
 
-def centre_advice(trunk: np.ndarray, fov_h_deg: float) -> list[dict[str, Any]]:
+def centre_advice(trunk: np.ndarray, fov_h_deg: float) -> list[Advice]:
     """Returns off_centre advice from trunk positions (K, 3) m and the horizontal field of view (degrees)."""
     if trunk.shape[0] == 0:
         return []
     x, z = float(np.median(trunk[:, 0])), float(np.median(trunk[:, 2]))
     if z <= 0 or np.degrees(np.arctan(abs(x) / z)) <= OFF_CENTRE_FRAC * fov_h_deg / 2:
         return []
-    return [
-        {
-            "code": "off_centre",
-            "text": f"You were about {abs(x):.1f} m to one side of the middle of the camera's "
-            "view. Stand in the middle, or turn the camera towards where you exercise.",
-        }
-    ]
+    return [advice("off_centre", distance_m=round(abs(x), 2))]
 
 
 def out_of_view_fractions(raw: Recording) -> dict[tuple[str, str], float]:
@@ -95,7 +80,7 @@ def out_of_view_fractions(raw: Recording) -> dict[tuple[str, str], float]:
     return out
 
 
-def limb_advice(raw: Recording) -> list[dict[str, Any]]:
+def limb_advice(raw: Recording) -> list[Advice]:
     """Returns hand_out_of_view / foot_out_of_view advice naming the sides that left the picture."""
     out = []
     fractions = out_of_view_fractions(raw)
@@ -104,19 +89,12 @@ def limb_advice(raw: Recording) -> list[dict[str, Any]]:
         if not sides:
             continue
         worst = max(fractions[(limb, side)] for side in sides)
-        which = f"both {limb}s" if len(sides) == 2 else f"your {sides[0]} {limb}"
-        out.append(
-            {
-                "code": f"{limb}_out_of_view",
-                "text": f"The camera lost {which} in about {worst:.0%} of the "
-                f"recording. Make sure your whole body, {limb}s included, fits in the picture while you move: "
-                "step back a little or point the camera at the middle of your body.",
-            }
-        )
+        out.append(advice(f"{limb}_out_of_view", sides="both" if len(sides) == 2 else sides[0],
+                          fraction=round(worst, 4)))  # fmt: skip
     return out
 
 
-def feet_advice(raw: Recording, fov_v_deg: float) -> list[dict[str, Any]]:
+def feet_advice(raw: Recording, fov_v_deg: float) -> list[Advice]:
     """Returns feet_cut_off advice when the feet sit at the bottom edge of the vertical field of view (degrees)."""
     idx = [INDEX["FOO_L"], INDEX["FOO_R"]]
     feet = raw.positions[:, idx][raw.state[:, idx] != NOT_TRACKED]
@@ -126,17 +104,83 @@ def feet_advice(raw: Recording, fov_v_deg: float) -> list[dict[str, Any]]:
     below = np.degrees(np.arctan2(-feet[:, 1], feet[:, 2]))
     if float(np.percentile(below, 95)) < fov_v_deg / 2 - EDGE_MARGIN_DEG:
         return []
-    return [
-        {
-            "code": "feet_cut_off",
-            "text": "Your feet were at the bottom edge of the picture. Tilt the camera down "
-            "a little, or place it further away, so that your feet are well inside the view.",
-        }
-    ]
+    return [advice("feet_cut_off")]
 
 
-def camera_advice(raw: Recording) -> list[dict[str, Any]]:
-    """Returns [{"code", "text"}]: plain-words advice on the camera set-up of a raw recording (module doc)."""
+def camera_advice(raw: Recording) -> list[Advice]:
+    """Returns [{"code", "params", "text"}]: the advice on the camera set-up of a raw recording (module doc), its
+    text in English (advice_text writes it in the reader's language)."""
     fov_h, fov_v = FIELD_OF_VIEW.get(raw.meta.device, DEFAULT_FOV)
     trunk = _trunk(raw)
     return distance_advice(trunk) + centre_advice(trunk, fov_h) + limb_advice(raw) + feet_advice(raw, fov_v)
+
+
+# the patient is the one who moves the camera or stands elsewhere: the advice speaks to them (catalogue `messages`)
+_TOO_CLOSE = N_(
+    "You were about %(distance)s m from the camera, which is too close for it to see your whole body. "
+    "Stand further back, about 2 to 3 m away."
+)
+_TOO_FAR = N_(
+    "You were about %(distance)s m from the camera, which is far for it to see you clearly. "
+    "Come closer, to about 2 to 3 m away."
+)
+_OFF_CENTRE = N_(
+    "You were about %(distance)s m to one side of the middle of the camera's view. "
+    "Stand in the middle, or turn the camera towards where you exercise."
+)
+# (limb, sides) -> the sentence: a whole sentence each, as "both hands"/"your left hand" change the words around them
+_OUT_OF_VIEW = {
+    ("hand", "both"): N_(
+        "The camera lost both hands in about %(share)s of the recording. Make sure your whole body, hands "
+        "included, fits in the picture while you move: step back a little or point the camera at the middle of "
+        "your body."
+    ),
+    ("hand", "left"): N_(
+        "The camera lost your left hand in about %(share)s of the recording. Make sure your whole body, hands "
+        "included, fits in the picture while you move: step back a little or point the camera at the middle of "
+        "your body."
+    ),
+    ("hand", "right"): N_(
+        "The camera lost your right hand in about %(share)s of the recording. Make sure your whole body, hands "
+        "included, fits in the picture while you move: step back a little or point the camera at the middle of "
+        "your body."
+    ),
+    ("foot", "both"): N_(
+        "The camera lost both feet in about %(share)s of the recording. Make sure your whole body, feet "
+        "included, fits in the picture while you move: step back a little or point the camera at the middle of "
+        "your body."
+    ),
+    ("foot", "left"): N_(
+        "The camera lost your left foot in about %(share)s of the recording. Make sure your whole body, feet "
+        "included, fits in the picture while you move: step back a little or point the camera at the middle of "
+        "your body."
+    ),
+    ("foot", "right"): N_(
+        "The camera lost your right foot in about %(share)s of the recording. Make sure your whole body, feet "
+        "included, fits in the picture while you move: step back a little or point the camera at the middle of "
+        "your body."
+    ),
+}
+_FEET_CUT_OFF = N_(
+    "Your feet were at the bottom edge of the picture. Tilt the camera down a little, or place it further away, "
+    "so that your feet are well inside the view."
+)
+
+
+def advice(code: str, **params: float | str) -> Advice:
+    """Returns one piece of advice: its code, what it was found from (params) and its text in English."""
+    return {"code": code, "params": params, "text": advice_text(code, params, ENGLISH)}
+
+
+def advice_text(code: str, params: dict[str, Any], t: Translator) -> str:
+    """Returns the text of one piece of advice (code and params as camera_advice gives them) in t's language, its
+    numbers as t's locale writes them; raises KeyError for an unknown code or missing params."""
+    if code in ("too_close", "too_far", "off_centre"):
+        message = {"too_close": _TOO_CLOSE, "too_far": _TOO_FAR, "off_centre": _OFF_CENTRE}[code]
+        return t.gettext(message, distance=t.format_number(float(params["distance_m"]), 1))
+    if code in ("hand_out_of_view", "foot_out_of_view"):
+        message = _OUT_OF_VIEW[(code.split("_")[0], str(params["sides"]))]
+        return t.gettext(message, share=t.format_percent(float(params["fraction"])))
+    if code == "feet_cut_off":
+        return t.gettext(_FEET_CUT_OFF)
+    raise KeyError(code)

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from backend.analysis.quality import angle_joints
+from backend.i18n import N_, Translator
 from kinect_agent.processing.combined_outliers import outlier_probabilities_combined
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.recording import Recording
@@ -34,12 +35,17 @@ MAX_COLUMNS = 400
 MIN_SEGMENT_FRAMES = 10
 LOW_SCORE = 70
 MAD_TO_SD = 1.4826
-# part -> (good value, bad value, weight, label)
+# part -> (good value, bad value, weight, label in English: the therapist catalogue's msgid, see part_label)
 PARTS = {
-    "tracked_fraction": (0.98, 0.60, 0.4, "Body seen by the camera"),
-    "outlier_fraction": (0.01, 0.15, 0.3, "Tracking errors"),
-    "segment_spread_mm": (10.0, 50.0, 0.3, "Steadiness of measured bone lengths"),
+    "tracked_fraction": (0.98, 0.60, 0.4, N_("Body seen by the camera")),
+    "outlier_fraction": (0.01, 0.15, 0.3, N_("Tracking errors")),
+    "segment_spread_mm": (10.0, 50.0, 0.3, N_("Steadiness of measured bone lengths")),
 }
+
+
+def part_label(name: str, t: Translator) -> str:
+    """Returns the label of one part (PARTS) in t's language."""
+    return t.gettext(PARTS[name][3])
 
 
 def outlier_probabilities(raw: Recording, config: PipelineConfig | None = None) -> np.ndarray:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import datetime as dt
 import gettext
 import io
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -35,7 +36,8 @@ from babel.messages.mofile import write_mo
 from babel.messages.pofile import read_po
 from babel.numbers import format_decimal, format_percent
 
-LOCALE_DIR = Path(__file__).resolve().parent / "locale"
+# the catalogues: the shipped ones, or a copy named by COACH_LOCALE_DIR (a clinic's own therapist.po, a test's)
+LOCALE_DIR = Path(os.environ.get("COACH_LOCALE_DIR") or Path(__file__).resolve().parent / "locale")
 DOMAIN = "messages"
 THERAPIST_DOMAIN = "therapist"  # texts only the therapist pages show; a locale's therapist.po is optional
 DOMAINS = (DOMAIN, THERAPIST_DOMAIN)
@@ -93,6 +95,13 @@ def therapist_translations(locale: str) -> gettext.NullTranslations:
     return found
 
 
+def forget_catalogues() -> None:
+    """Forgets the catalogues read so far and the therapist locales found (read again at next use: after the
+    catalogues or LOCALE_DIR changed)."""
+    for cache in (_catalog, translations, therapist_locales, therapist_translations, js_messages):
+        cache.cache_clear()
+
+
 @dataclass(frozen=True)
 class Translator:
     """The messages, dates and numbers of one locale (therapist: the therapist pages' catalogue first)."""
@@ -141,6 +150,19 @@ def therapist_translator(accept_language: str | None) -> Translator:
     """Returns the Translator of a therapist's request: the locale of its Accept-Language among the therapist pages'
     locales (therapist_locales; English until a therapist.po exists)."""
     return Translator(negotiate(accept_language, therapist_locales()), therapist=True)
+
+
+def reader_translator(accept_language: str | None, *, role: str, locale: str | None = None) -> Translator:
+    """Returns the Translator of an API reader: a patient's (the locale their page asks for in Accept-Language, else
+    their chosen one), a therapist's or admin's (the same among the therapist pages' locales, therapist catalogue
+    first), anyone else's (a device) English."""
+    if role == "patient":
+        return translator(asked_locale(accept_language) or locale)
+    if role in ("therapist", "admin"):
+        chosen = locale if locale in therapist_locales() else None
+        return Translator(asked_locale(accept_language, therapist_locales()) or chosen or DEFAULT_LOCALE,
+                          therapist=True)  # fmt: skip
+    return Translator(DEFAULT_LOCALE)
 
 
 def normalise(tag: str | None) -> str | None:

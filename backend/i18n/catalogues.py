@@ -31,15 +31,17 @@ from babel.messages.pofile import read_po, write_po
 from backend.i18n import DOMAIN, DOMAINS, LOCALE_DIR, LOCALES, THERAPIST_DOMAIN, po_path
 
 ROOT = Path(__file__).resolve().parents[2]
-# the files of the pages only therapists (and admins) see: their messages form the therapist domain
+# the files of the pages only therapists (and admins) see: their messages form the therapist domain (the replay page
+# is not one: a patient opens it too, in their language)
 THERAPIST_FILES = frozenset({
     "frontend/templates/therapist.html", "frontend/templates/patient_detail.html", "frontend/templates/session.html",
-    "frontend/templates/replay.html", "frontend/templates/admin_jobs.html",
+    "frontend/templates/admin_jobs.html",
     "frontend/static/therapist.js", "frontend/static/patient_detail.js", "frontend/static/session.js",
-    "frontend/static/replay.js", "frontend/static/admin_jobs.js", "frontend/static/records.js",
+    "frontend/static/admin_jobs.js", "frontend/static/records.js",
     "frontend/static/replies_view.js", "frontend/static/feeling_view.js", "frontend/static/versions.js",
-    "frontend/static/voice_setting.js",
+    "frontend/static/voice_setting.js", "frontend/static/downloads.js",
     "backend/sessions/triage.py",  # the dashboard's attention reasons and indicator trends
+    "backend/sessions/detail.py", "backend/analysis/data_quality.py",  # the session page's notes and quality labels
 })  # fmt: skip
 PLURAL_FORMS = {"de": "nplurals=2; plural=(n != 1);", "es": "nplurals=2; plural=(n != 1);",
                 "fr": "nplurals=2; plural=(n > 1);"}  # fmt: skip
@@ -163,6 +165,9 @@ def check(templates: dict[str, Catalog] | None = None) -> list[Problem]:
         problems.extend(check_template(domain, code[domain]))
         for locale in domain_locales(domain):
             problems.extend(check_locale(locale, code[domain], domain=domain))
+    for script in sorted((ROOT / "frontend/static").glob("*.js")):
+        where = str(script.relative_to(ROOT))
+        problems.extend(marks_in_template_literals(where, script.read_text(encoding="utf-8")))
     for path in sorted(THERAPIST_FILES):
         if not (ROOT / path).is_file():
             problems.append(Problem("backend/i18n/catalogues.py", f"THERAPIST_FILES names {path}, which is not there"))
@@ -271,6 +276,19 @@ def unmarked_script_text(where: str, source: str) -> list[Problem]:
             continue
         found.append(Problem(f"{where}:{token.lineno}", f"text not marked for translation: {token.value[1:-1]!r}"))
     return found
+
+
+_MARK_IN_LITERAL = re.compile(r"\$\{\s*I18n\.(?:t|nt|N_)\(")
+
+
+def marks_in_template_literals(where: str, source: str) -> list[Problem]:
+    """Returns the I18n marks inside a template literal (`${I18n.t("...")}`) of a page script: Babel's extractor
+    does not look inside template literals, so such a message would be in no catalogue and stay English."""
+    return [
+        Problem(f"{where}:{source.count(chr(10), 0, m.start()) + 1}",
+                "I18n mark inside a template literal (not extracted): join with + instead")
+        for m in _MARK_IN_LITERAL.finditer(source)
+    ]  # fmt: skip
 
 
 def check_locale(locale: str, code: Catalog, catalog: Catalog | None = None, domain: str = DOMAIN) -> Iterable[Problem]:

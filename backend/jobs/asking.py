@@ -16,47 +16,97 @@ from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
 from backend.database import utcnow
+from backend.i18n import N_, Translator, translator
 from backend.jobs.listing import error_words
 from backend.jobs.models import Job
 from backend.jobs.queue import enqueue
 
+ENGLISH = translator("en")
 ASK_ATTEMPTS = 6  # tries of one job in all, the queue's own retries and one more per ask after it failed
 
 
 @dataclass(frozen=True)
 class Asked:
-    """Where the job of a result is: "preparing" (queued or running) or "failed" (for good); detail in words."""
+    """Where the job of a result is: "preparing" (queued or running) or "failed" (for good); detail in words, in the
+    language of the translator ask was given."""
 
     state: str
     detail: str
     job: Job | None
 
 
-def waiting_words(job: Job, noun: str, now: dt.datetime) -> str:
-    """Returns where a queued or running job is, in words; noun: what it prepares ("the replay")."""
+@dataclass(frozen=True)
+class Words:
+    """What one kind of result is told in, a whole sentence each (a noun put into a shared sentence does not
+    translate: "the replay" and "the session's curves" change the words around them in German or French)."""
+
+    building: str
+    queued: str
+    waited: str  # %(seconds)s
+    not_built: str
+
+
+# the patient opens the replay page too: these are in the `messages` catalogue, translated for every locale
+WORDS = {
+    "replay": Words(
+        N_("A worker is building the replay."),
+        N_("The replay is queued; a worker will build it in a moment."),
+        N_("The replay has waited %(seconds)s s for a worker; is `coach-server worker` running?"),
+        N_("The replay could not be built."),
+    ),
+    "detail": Words(
+        N_("A worker is preparing the session's curves and numbers."),
+        N_("The session's curves and numbers are queued; a worker will prepare them in a moment."),
+        N_(
+            "The session's curves and numbers have waited %(seconds)s s for a worker; is `coach-server worker` running?"
+        ),
+        N_("The session's curves and numbers could not be prepared."),
+    ),
+    "export": Words(  # %(file)s: the download's name, "motion (BVH)"
+        N_("A worker is building the session's %(file)s file."),
+        N_("The session's %(file)s file is queued; a worker will build it in a moment."),
+        N_("The session's %(file)s file has waited %(seconds)s s for a worker; is `coach-server worker` running?"),
+        N_("The session's %(file)s file could not be built."),
+    ),
+}
+_TRY_AGAIN = N_("The last try failed; a worker will try again. %(reason)s")
+_UNREADABLE = N_("The stored session file cannot be read: %(reason)s")
+
+
+def waiting_words(job: Job, words: Words, now: dt.datetime, t: Translator = ENGLISH, **params: str) -> str:
+    """Returns where a queued or running job is, in t's words (params: the words' placeholders but seconds)."""
     if job.status == "running":
-        return f"A worker is building {noun}."
+        return t.gettext(words.building, **params)
     if job.error:
-        return f"The last try failed; a worker will try again. {error_words(job.error)}"
+        return t.gettext(_TRY_AGAIN, reason=error_words(job.error) or "")
     waited = max(0, int((now - job.run_after).total_seconds()))  # since it was due (queued, or queued again)
     if waited < 10:
-        return f"{noun[0].upper()}{noun[1:]} is queued; a worker will build it in a moment."
-    return f"{noun[0].upper()}{noun[1:]} has waited {waited} s for a worker; is `coach-server worker` running?"
+        return t.gettext(words.queued, **params)
+    return t.gettext(words.waited, seconds=t.format_number(waited), **params)
 
 
 def ask(
-    *, db_session: Session, kind: str, key: str, payload: dict[str, Any], noun: str, redo_done: bool = True
+    *,
+    db_session: Session,
+    kind: str,
+    key: str,
+    payload: dict[str, Any],
+    redo_done: bool = True,
+    t: Translator = ENGLISH,
+    params: dict[str, str] | None = None,
 ) -> Asked:
     """Queues the job `key` unless it is queued or running, and returns where it is; flushes.
 
     A job done whose result is gone (redo_done: a newer build replaced it) is queued afresh, unless its result says
     the file is `invalid` (it cannot be used, said at once); a failed one is queued for one more try while it has had
-    fewer than ASK_ATTEMPTS, its last error kept for the words meanwhile.
+    fewer than ASK_ATTEMPTS, its last error kept for the words meanwhile. kind: one of WORDS, params its words'
+    placeholders; t: the reader's language (the reasons a job or file gives stay as recorded).
     """
+    words, params = WORDS[kind], params or {}
     job = db_session.scalar(select(Job).where(Job.key == key))
     invalid = job.result.get("invalid") if job is not None and job.status == "done" and job.result else None
     if invalid:  # the job found the stored file cannot be used: no try changes that
-        return Asked("failed", f"The stored session file cannot be read: {invalid}", job)
+        return Asked("failed", t.gettext(_UNREADABLE, reason=invalid), job)
     if job is None:
         enqueue(db_session=db_session, kind=kind, items=[(key, payload)])
         job = db_session.scalar(select(Job).where(Job.key == key))
@@ -69,8 +119,9 @@ def ask(
         db_session.execute(update(Job).where(Job.id == job.id, Job.status == "failed").values(**again))
         db_session.refresh(job)
     if job is None:  # deleted between the insert and the read (an erasure): queued again on the next ask
-        return Asked("preparing", f"{noun[0].upper()}{noun[1:]} is queued.", None)
+        return Asked("preparing", t.gettext(words.queued, **params), None)
     if job.status == "failed":
-        words = error_words(job.error) or f"{noun[0].upper()}{noun[1:]} could not be built."
-        return Asked("failed", f"{words} (tried {job.attempts} times)", job)
-    return Asked("preparing", waiting_words(job, noun, utcnow()), job)
+        said = error_words(job.error) or t.gettext(words.not_built, **params)
+        return Asked("failed", t.ngettext("%(reason)s (tried once)", "%(reason)s (tried %(num)d times)",
+                                          job.attempts, reason=said), job)  # fmt: skip
+    return Asked("preparing", waiting_words(job, words, utcnow(), t, **params), job)

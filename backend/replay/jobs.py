@@ -16,6 +16,7 @@ from typing import Any
 from sqlalchemy.orm import Session
 
 from backend.exceptions import InvalidSessionFile
+from backend.i18n import N_, Translator, translator
 from backend.jobs.asking import ask
 from backend.replay import scene, service
 from backend.replay.models import BOTH
@@ -23,6 +24,8 @@ from backend.sessions.models import ExerciseSession
 from backend.sessions.service import require_recording
 
 KIND = "replay"
+ENGLISH = translator("en")
+READY = N_("The replay is ready.")
 
 
 @dataclass(frozen=True)
@@ -40,18 +43,17 @@ def job_key(session_id: int, layers: str = BOTH) -> str:
     return f"{KIND}:{session_id}:{scene.VERSION}{tail}"
 
 
-def request_replay(*, db_session: Session, session_id: int, layers: str = BOTH) -> ReplayState:
+def request_replay(*, db_session: Session, session_id: int, layers: str = BOTH, t: Translator = ENGLISH) -> ReplayState:
     """Returns the state of a session's replay (of the skeletons `layers`), queueing its build when it is neither
     stored nor queued, or when it failed and may be tried again; flushes.
 
     Raises SessionNotFound, or SessionFileRemoved when the retention period removed the recording.
     """
     if service.stored_replay_key(db_session=db_session, session_id=session_id, layers=layers) is not None:
-        return ReplayState("ready", "The replay is ready.")
+        return ReplayState("ready", t.gettext(READY))
     require_recording(db_session=db_session, session_id=session_id)
     payload = {"session_id": session_id, "layers": layers.split(",")}
-    found = ask(db_session=db_session, kind=KIND, key=job_key(session_id, layers), payload=payload,
-                noun="the replay")  # fmt: skip
+    found = ask(db_session=db_session, kind=KIND, key=job_key(session_id, layers), payload=payload, t=t)
     return ReplayState(found.state, found.detail)
 
 

@@ -9,13 +9,13 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from fastapi import APIRouter, Query, Response
+from fastapi import APIRouter, Query, Request, Response
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 from sqlalchemy.orm import Session
 
 from backend.audit.service import record
-from backend.deps import Caller, CurrentCaller, DbSession, require_patient_access
+from backend.deps import Caller, CurrentCaller, DbSession, reader_of, require_patient_access
 from backend.exceptions import (
     AUTH_ERRORS,
     InvalidSessionFile,
@@ -57,12 +57,13 @@ def _visible(session_id: int, caller: Caller, db_session: Session) -> int:
     responses=error_responses(*AUTH_ERRORS, SessionNotFound, SessionFileRemoved),
 )
 def read_replay_state(
-    session_id: IdPath, caller: CurrentCaller, db_session: DbSession, layer: LayerQuery = None
+    session_id: IdPath, request: Request, caller: CurrentCaller, db_session: DbSession, layer: LayerQuery = None
 ) -> ReplayStateOut:
     """Returns whether the session's replay is ready, queueing its build by a worker when it is not (once, however
-    many ask at the same time; again after a failure, a few times)."""
+    many ask at the same time; again after a failure, a few times), in the reader's language."""
     _visible(session_id, caller, db_session)
-    found = jobs.request_replay(db_session=db_session, session_id=session_id, layers=layer or BOTH)
+    found = jobs.request_replay(db_session=db_session, session_id=session_id, layers=layer or BOTH,
+                                t=reader_of(request, caller))  # fmt: skip
     return ReplayStateOut(state=found.state, detail=found.detail)
 
 
@@ -77,6 +78,7 @@ def read_replay_state(
 )
 def read_replay(
     session_id: IdPath,
+    request: Request,
     caller: CurrentCaller,
     db_session: DbSession,
     layer: LayerQuery = None,
@@ -86,7 +88,8 @@ def read_replay(
     patient_id = _visible(session_id, caller, db_session)
     data = service.stored_replay(db_session=db_session, session_id=session_id, layers=layer or BOTH)
     if data is None:
-        found = jobs.request_replay(db_session=db_session, session_id=session_id, layers=layer or BOTH)
+        found = jobs.request_replay(db_session=db_session, session_id=session_id, layers=layer or BOTH,
+                                    t=reader_of(request, caller))  # fmt: skip
         body = ReplayStateOut(state=found.state, detail=found.detail)
         return JSONResponse(body.model_dump(), status_code=202, headers={"Retry-After": RETRY_AFTER_S})
     record(db_session=db_session, caller=caller, action="session.replay.read", object_type="exercise_session",

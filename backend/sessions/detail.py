@@ -13,7 +13,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from backend.analysis import data_quality, work_budget
-from backend.analysis.camera_advice import camera_advice
+from backend.analysis.camera_advice import advice_text, camera_advice
 from backend.analysis.errors import AnalysisError
 from backend.analysis.session_detail import (
     angle_curves,
@@ -25,20 +25,43 @@ from backend.analysis.session_detail import (
 )
 from backend.exceptions import InvalidSessionFile
 from backend.exercises.library import EXERCISES, ExerciseSpec
+from backend.i18n import N_, Translator
 from backend.sessions.models import ExerciseSession
 from kinect_agent.analysis.document import AnalysisReport, RepetitionItem, UnreadableDocument, read_report
 from kinect_agent.analysis.validity import recorded_with, session_validity
 from kinect_agent.formats import session_file
 from kinect_agent.formats.session_file import SessionFileError, SessionPayload
 
-DETAIL_VERSION = 2  # part of a stored detail's inputs (backend.sessions.prepared): bump when the output changes
-UNCERTAINTY_NOTE = (
+DETAIL_VERSION = 3  # part of a stored detail's inputs (backend.sessions.prepared): bump when the output changes
+# the texts of the therapist's session page (catalogue `therapist`): stored in English, written in the reader's
+# language when read (in_language)
+UNCERTAINTY_NOTE = N_(
     "95 % intervals from the per-frame angle SDs the home agent stored (the filter's covariance, calibrated on "
     "simulated sessions with known truth)."
 )
-NO_UNCERTAINTY_NOTE = (
+NO_UNCERTAINTY_NOTE = N_(
     "The session file stores no per-frame uncertainty of the filtered recording (an older agent), "
     "so the numbers are shown without intervals."
+)
+BALANCE_NOT_MEASURED = N_(
+    "this session was analysed before balance was measured in standing phases; a re-analysis measures it"
+)
+# kinect_agent.analysis.validity.REASONS as the pages show them (that layer cannot mark texts): English -> msgid
+VALIDITY_REASONS = (
+    N_(
+        "This angle moves towards and away from the camera. One ordinary camera measures depth poorly, so the angle "
+        "can be off by tens of degrees. Film the exercise from the side to measure it."
+    ),
+    N_(
+        "This angle moves towards and away from the camera. One ordinary camera measures depth poorly, so the angle "
+        "can be off by tens of degrees. Film the exercise from the front to measure it."
+    ),
+    N_("A turn about the arm's own axis cannot be seen in a camera image."),
+    N_("The view could not be told from the recording, so this angle may lie out of the image plane."),
+    N_(
+        "Distances in metres come from an assumed camera and an average body size, not from a depth sensor: compare "
+        "them only between sessions filmed the same way."
+    ),
 )
 
 
@@ -191,6 +214,36 @@ def detail_body(
     }
 
 
+def in_language(body: dict[str, Any], t: Translator) -> dict[str, Any]:
+    """Returns a detail body (keys: SessionDetailOut, as stored in English) with its texts in t's language: the
+    data-quality labels, the camera advice (from its code and params; advice stored before params keeps its text),
+    the uncertainty note, why balance was not measured, and the device's limits."""
+    if t.locale == "en" and not t.therapist:
+        return body
+    quality = dict(body["quality"])
+    quality["parts"] = [p | {"label": data_quality.part_label(p["name"], t)} if p["name"] in data_quality.PARTS
+                        else p for p in quality["parts"]]  # fmt: skip
+    quality["advice"] = [_advice_in(a, t) for a in quality["advice"]]
+    shown = body | {"quality": quality}
+    for key in ("uncertainty_note", "balance_missing"):
+        if body.get(key) in (UNCERTAINTY_NOTE, NO_UNCERTAINTY_NOTE, BALANCE_NOT_MEASURED):
+            shown[key] = t.gettext(body[key])
+    validity = body.get("validity")
+    if isinstance(validity, dict):
+        metrics = [m | {"reason": t.gettext(m["reason"])} if m.get("reason") in VALIDITY_REASONS else m
+                   for m in validity.get("metrics", [])]  # fmt: skip
+        shown["validity"] = validity | {"metrics": metrics}
+    return shown
+
+
+def _advice_in(item: dict[str, Any], t: Translator) -> dict[str, Any]:
+    """Returns one piece of camera advice with its text in t's language (as stored when it cannot be rewritten)."""
+    try:
+        return item | {"text": advice_text(item["code"], item.get("params") or {}, t)}
+    except (KeyError, TypeError, ValueError):
+        return item
+
+
 def _balance(doc: AnalysisReport | None) -> dict[str, Any] | None:
     """Returns the document's balance (keys: BalanceOut) when it holds a measured sway, else None."""
     if doc is None or doc.balance is None:
@@ -202,7 +255,7 @@ def _balance_missing(doc: AnalysisReport | None) -> str:
     """Returns why a document has no balance, in words."""
     if doc is not None and doc.balance_missing:
         return doc.balance_missing
-    return "this session was analysed before balance was measured in standing phases; a re-analysis measures it"
+    return BALANCE_NOT_MEASURED
 
 
 def _uncertainty(doc: AnalysisReport | None) -> dict[str, Any] | None:

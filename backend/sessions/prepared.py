@@ -21,6 +21,7 @@ from sqlalchemy.orm import Session
 
 from backend.database import keep_row
 from backend.exceptions import InvalidSessionFile, SessionNotFound
+from backend.i18n import Translator, translator
 from backend.jobs.asking import ask
 from backend.jobs.models import Job
 from backend.jobs.queue import enqueue
@@ -31,7 +32,7 @@ from backend.storage import get_store
 from backend.storage.base import StoredObject
 
 KIND = "detail"
-NOUN = "the session's detail"
+ENGLISH = translator("en")
 ROW_KEYS = ("session_id", "patient_id", "exercise_slug", "exercise_name", "started_at", "status", "error")
 ROW_PROCESSING = ("version", "params")  # of "processing": the row's, not the file's
 
@@ -92,24 +93,25 @@ def with_row(document: dict[str, Any], row: tuple[Any, ...]) -> dict[str, Any]:
     return document | own | {"processing": processing}
 
 
-def read_detail(*, db_session: Session, row: tuple[Any, ...]) -> dict[str, Any] | DetailState:
+def read_detail(*, db_session: Session, row: tuple[Any, ...], t: Translator = ENGLISH) -> dict[str, Any] | DetailState:
     """Returns the detail body of get_session_row's row when it is stored, else where its build is (queueing it
     when it is neither stored nor queued, or failed and may be tried again); flushes.
 
     Raises SessionFileRemoved when the retention period removed the recording, InvalidSessionFile when its stored
-    file cannot be shown (the build found it so: no retry will change it).
+    file cannot be shown (the build found it so: no retry will change it). t: the reader's language (the body's
+    texts and the state's words).
     """
     session = row[0]
     inputs = _inputs_of_row(row)
     document = _stored_document(db_session, session.id, inputs)
     if document is not None:
-        return with_row(document, row)
+        return detail.in_language(with_row(document, row), t)
     service.require_recording(db_session=db_session, session_id=session.id)
     key = job_key(session.id, inputs)
     done = db_session.scalar(select(Job.result).where(Job.key == key, Job.status == "done"))
     if isinstance(done, dict) and done.get("invalid"):
         raise InvalidSessionFile(str(done["invalid"]))
-    found = ask(db_session=db_session, kind=KIND, key=key, payload={"session_id": session.id}, noun=NOUN)
+    found = ask(db_session=db_session, kind=KIND, key=key, payload={"session_id": session.id}, t=t)
     return DetailState(found.state, found.detail)
 
 

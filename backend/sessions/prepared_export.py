@@ -26,6 +26,7 @@ from sqlalchemy.orm import Session
 
 from backend.database import keep_row
 from backend.exceptions import ExportUnavailable, InvalidSessionFile, SessionNotFound
+from backend.i18n import Translator, translator
 from backend.jobs.asking import ask
 from backend.jobs.models import Job
 from backend.sessions import service
@@ -37,6 +38,7 @@ from kinect_agent.export.fhir import SessionContext
 from kinect_agent.export.files import ExportFile
 
 KIND = "export"
+ENGLISH = translator("en")
 GZIP_LEVEL = 6  # the stored file's compression: built once, handed out as it is to clients that accept gzip
 EXPORT_VERSION = 1  # part of a stored export's inputs: bump when kinect_agent.export's output changes
 NAMES = {"csv": "tables (CSV)", "trc": "OpenSim markers (TRC)", "bvh": "motion (BVH)", "fhir": "health record (FHIR)"}
@@ -101,13 +103,15 @@ def _stored(db_session: Session, session_id: int, fmt: str, inputs: str) -> Stor
     return StoredExport(get_store().get(row.data_key, row.data_hash), row.media_type, row.file_name)
 
 
-def read_export(*, db_session: Session, row: tuple[Any, ...], fmt: str) -> StoredExport | ExportState:
+def read_export(
+    *, db_session: Session, row: tuple[Any, ...], fmt: str, t: Translator = ENGLISH
+) -> StoredExport | ExportState:
     """Returns the stored `fmt` export of get_session_row's row when it is stored for today's inputs, else where
     its build is (queueing it when it is neither stored nor queued, or failed and may be tried again); flushes.
 
     Raises SessionFileRemoved when the retention period removed the recording, InvalidSessionFile when its stored
     file cannot be read and ExportUnavailable when the format needs metrics none can give (the build found it so:
-    no retry will change it).
+    no retry will change it). t: the language the state is said in.
     """
     session = row[0]
     inputs = _inputs_of_row(row, fmt, export_context(db_session=db_session, row=row))
@@ -121,9 +125,8 @@ def read_export(*, db_session: Session, row: tuple[Any, ...], fmt: str) -> Store
         raise InvalidSessionFile(str(done["invalid"]))
     if isinstance(done, dict) and done.get("unavailable"):
         raise ExportUnavailable(str(done["unavailable"]))
-    noun = f"the session's {NAMES.get(fmt, fmt)} file"
     found = ask(db_session=db_session, kind=KIND, key=key, payload={"session_id": session.id, "format": fmt},
-                noun=noun)  # fmt: skip
+                params={"file": NAMES.get(fmt, fmt)}, t=t)  # fmt: skip
     return ExportState(found.state, found.detail)
 
 

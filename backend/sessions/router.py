@@ -21,6 +21,7 @@ from backend.deps import (
     DbSession,
     PatientForRead,
     TherapistOrAdminCaller,
+    reader_of,
     require_patient_access,
 )
 from backend.events.hub import Event, publish
@@ -327,14 +328,14 @@ def read_session(session_id: IdPath, request: Request, caller: CurrentCaller, db
         **error_responses(*AUTH_ERRORS, SessionNotFound, InvalidSessionFile, SessionFileRemoved),
     },
 )
-def read_session_detail(session_id: IdPath, caller: CurrentCaller, db_session: DbSession) -> Any:
+def read_session_detail(session_id: IdPath, request: Request, caller: CurrentCaller, db_session: DbSession) -> Any:
     """Returns the evidence behind a session's numbers: angle curves, repetitions, workspace, data quality; a
-    worker prepares it once (202 with where it is until then)."""
+    worker prepares it once (202 with where it is until then). Its texts are in the reader's language."""
     row = service.get_session_row(db_session=db_session, session_id=session_id)
     patient_id = row[0].patient_id
     require_patient_access(patient_id, caller=caller, db_session=db_session, allow_device=False,
                            hidden_as=service.missing(session_id))  # fmt: skip
-    body = prepared.read_detail(db_session=db_session, row=row)
+    body = prepared.read_detail(db_session=db_session, row=row, t=reader_of(request, caller))
     if isinstance(body, prepared.DetailState):
         state = PreparingOut(state=body.state, detail=body.detail)
         return JSONResponse(state.model_dump(), status_code=202, headers={"Retry-After": DETAIL_RETRY_AFTER_S})
@@ -390,7 +391,7 @@ def export_session(
                                 max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
         _audit(db_session, caller, "session.export.read", session_id, session.patient_id, {"format": format})
         return _download(result.data, result.media_type, result.file_name, None, stored=False)
-    found = prepared_export.read_export(db_session=db_session, row=row, fmt=format)
+    found = prepared_export.read_export(db_session=db_session, row=row, fmt=format, t=reader_of(request, caller))
     if isinstance(found, prepared_export.ExportState):
         state = PreparingOut(state=found.state, detail=found.detail)
         return JSONResponse(state.model_dump(), status_code=202, headers={"Retry-After": EXPORT_RETRY_AFTER_S})

@@ -313,7 +313,7 @@ class QualityPartOut(BaseModel):
     """One part of the data-quality score (backend.analysis.data_quality)."""
 
     name: str = Field(description="'tracked_fraction', 'outlier_fraction' or 'segment_spread_mm'")
-    label: str
+    label: str = Field(description="the part in words, in the reader's language")
     value: float | None = Field(description="fraction 0..1, or millimetres for segment_spread_mm")
     score: int | None = Field(description="0..100")
     weight: float = Field(description="weight in the total score")
@@ -322,8 +322,18 @@ class QualityPartOut(BaseModel):
 class AdviceOut(BaseModel):
     """One piece of camera advice in plain words (backend.analysis.camera_advice)."""
 
-    code: str = Field(examples=["too_close"])
-    text: str
+    code: str = Field(
+        description="too_close, too_far, off_centre, hand_out_of_view, foot_out_of_view or feet_cut_off: stable, "
+        "whatever the language of the text",
+        examples=["too_close"],
+    )
+    params: dict[str, float | str] = Field(
+        default_factory=dict,
+        description="what the advice was found from: distance_m (too_close, too_far, off_centre), sides "
+        "('left', 'right', 'both') and fraction 0..1 (hand/foot_out_of_view); empty for advice stored before them",
+        examples=[{"distance_m": 1.21}],
+    )
+    text: str = Field(description="the advice in the reader's language (Accept-Language; a patient's chosen one)")
 
 
 class OutlierStripOut(BaseModel):

@@ -38,22 +38,22 @@
       resp = await fetch(link.href, { credentials: "same-origin", headers: { Accept: "*/*" } });
     } catch (e) {
       if (waiting) {  // lost while waiting: say so, ask again
-        say("alert", `The server could not be asked whether the ${label} is ready; trying again.`);
+        say("alert", I18n.t("The server could not be asked whether the {file} file is ready; trying again.", { file: label }));
         setTimeout(() => fetchFile(link, label, true), MIN_WAIT_MS * 2);
         return;
       }
-      say("alert", `The ${label} could not be downloaded. ${kindMessage({ status: 0 })}`);
+      say("alert", I18n.t("The {file} file could not be downloaded.", { file: label }) + " " + kindMessage({ status: 0 }));
       busy.delete(link);
       return;
     }
     if (resp.status === 202) {
       const d = await resp.json().catch(() => ({ state: "preparing", detail: "" }));
       if (d.state === "failed") {
-        say("alert", `The ${label} could not be prepared. ${d.detail}`);
+        say("alert", I18n.t("The {file} file could not be prepared.", { file: label }) + " " + d.detail);
         busy.delete(link);
         return;
       }
-      say("note", `The ${label} is being prepared; it will download by itself when it is ready. ${d.detail}`);
+      say("note", I18n.t("The {file} file is being prepared; it will download by itself when it is ready.", { file: label }) + " " + d.detail);
       const wait = Math.max(MIN_WAIT_MS, 1000 * (Number(resp.headers.get("Retry-After")) || 0));
       setTimeout(() => fetchFile(link, label, true), wait);
       return;
@@ -63,15 +63,15 @@
       const data = await resp.json().catch(() => null);
       const err = { status: resp.status, error: data && data.error, detail: (data && data.detail) || resp.statusText };
       if ([400, 409, 410].includes(resp.status) && data && data.detail) {  // the file cannot be made: the server says why
-        say("alert", `The ${label} cannot be made: ${data.detail}`);
+        say("alert", I18n.t("The {file} file cannot be made: {reason}", { file: label, reason: data.detail }));
       } else {
-        say("alert", `The ${label} could not be downloaded. ${kindMessage(err)}`);
+        say("alert", I18n.t("The {file} file could not be downloaded.", { file: label }) + " " + kindMessage(err));
       }
       return;
     }
     const name = fileName(resp.headers.get("Content-Disposition"), label);
     save(await resp.blob(), name);
-    say("note", `The ${label} is ready: ${name} was handed to the browser's downloads.`);
+    say("note", I18n.t("The {file} file is ready: {name} was handed to the browser's downloads.", { file: label, name }));
   }
 
   nav.addEventListener("click", (event) => {
@@ -80,8 +80,8 @@
     event.preventDefault();
     if (busy.has(link)) return;
     busy.add(link);
-    const label = `${link.textContent.trim()} file`;
-    say("note", `Asking for the ${label}…`);
+    const label = link.textContent.trim();  // the format as the page names it: "Motion (BVH)"
+    say("note", I18n.t("Asking for the {file} file…", { file: label }));
     fetchFile(link, label, false);
   });
 })();

@@ -23,8 +23,11 @@
   const stateBox = document.getElementById("replay-state");
   const POLL_MS = 1500;
   let wanted = "";  // the skeleton the checkboxes ask for alone ("raw", "filtered"), or "" for both
-  const what = (layer) => (layer === "raw" ? I18n.t("The 3D replay of the raw skeleton alone")
-    : layer === "filtered" ? I18n.t("The 3D replay of the filtered skeleton alone") : I18n.t("The 3D replay"));
+  // whole sentences per skeleton shown: "the replay" put into a shared sentence does not translate
+  const PREPARING = { raw: I18n.N_("The 3D replay of the raw skeleton alone is being prepared."),
+    filtered: I18n.N_("The 3D replay of the filtered skeleton alone is being prepared."), "": I18n.N_("The 3D replay is being prepared.") };
+  const FAILED = { raw: I18n.N_("The 3D replay of the raw skeleton alone could not be prepared."),
+    filtered: I18n.N_("The 3D replay of the filtered skeleton alone could not be prepared."), "": I18n.N_("The 3D replay could not be prepared.") };
   function say(kind, text) { stateBox.className = kind; stateBox.textContent = text; stateBox.hidden = false; }
   async function show(layer) {
     wanted = layer;
@@ -50,8 +53,8 @@
       viewer.hidden = false;
       return;
     }
-    if (state.state === "failed") { say("alert", `${I18n.t("{what} could not be prepared.", { what: what(layer) })} ${state.detail}`); return; }
-    say("note", `${I18n.t("{what} is being prepared.", { what: what(layer) })} ${state.detail}`);
+    if (state.state === "failed") { say("alert", I18n.t(FAILED[layer]) + " " + state.detail); return; }
+    say("note", I18n.t(PREPARING[layer]) + " " + state.detail);
     setTimeout(() => { if (wanted === layer) show(layer); }, POLL_MS);
   }
   if (viewer.hasAttribute("data-preparing")) show("");

@@ -313,13 +313,13 @@
     try {
       const d = await api(`/sessions/${sid}/detail`);
       if (d.state === "failed") {
-        say("alert", `${I18n.t("The session's curves and numbers could not be prepared.")} ${d.detail}`);
+        say("alert", I18n.t("The session's curves and numbers could not be prepared.") + " " + d.detail);
         document.getElementById("session-sub").textContent = "";
         return;
       }
       if (d.state === "preparing") {
         waiting = true;
-        say("note", `${I18n.t("The session's curves and numbers are being prepared.")} ${d.detail}`);
+        say("note", I18n.t("The session's curves and numbers are being prepared.") + " " + d.detail);
         setTimeout(load, POLL_MS);
         return;
       }

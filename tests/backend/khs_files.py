@@ -41,6 +41,20 @@ def make_khs(
     return sf.encode(payload)
 
 
+def make_khs_at_distance(exercise: str = "squat", reps: int = 3, *, seed: int = 0, z_m: float = 1.1) -> bytes:
+    """Returns a session file of the simulator's truth moved to z_m metres from the camera (the trunk's median):
+    1.1 m is too close (camera advice too_close, and the feet leave the picture)."""
+    from kinect_agent.skeleton import INDEX
+
+    _, truth, _ = simulate(exercise, reps, seed=seed)
+    z = float(np.nanmedian(truth.positions[:, INDEX["ROOT"], 2]))
+    moved = truth.replace(step="test: moved", positions=truth.positions + np.array([0.0, 0.0, z_m - z]),
+                          state=truth.state)  # fmt: skip
+    payload = sf.SessionPayload(session_id=str(uuid.uuid4()), raw=moved, filtered=moved,
+                                created_at="2026-11-20T10:00:00Z")  # fmt: skip
+    return sf.encode(payload)
+
+
 def make_processed_khs(exercise: str = "squat", reps: int = 3, *, seed: int = 0) -> bytes:
     """Returns the session file the home agent makes of a simulated set: raw, filtered by the pipeline, angle SDs."""
     from kinect_agent.capture import make_payload

@@ -1,0 +1,154 @@
+"""The session page and the 3D replay page in the reader's language (issue 23, point 2), in Chromium at 1366 and
+390 px: the replay page of a patient who reads German or French (its texts, checkboxes and legend, the numbers), and
+the session page of a therapist whose browser asks for German or French once the therapist pages have a catalogue
+in that language (a second server on the same database with COACH_LOCALE_DIR: the shipped catalogues plus a
+therapist.po per language translating the session page's server texts and headings). Screenshots in /tmp/shots,
+axe-core 0 serious/critical, no sideways scrolling."""
+
+from __future__ import annotations
+
+import re
+import uuid
+
+import pytest
+from axe_playwright_python.sync_playwright import Axe
+from playwright.sync_api import expect
+
+from backend.demo import DEMO_PASSWORD
+from backend.sessions import detail
+from tests.backend.khs_files import make_khs_at_distance
+from tests.catalogue_copies import copy_with_therapist_catalogues
+from tests.frontend.conftest import (
+    THERAPIST,
+    api_client,
+    open_page,
+    run_server,
+    shot,
+    sign_in,
+    upload_session,
+)
+
+pytestmark = pytest.mark.browser
+HEIGHT = {1366: 900, 390: 844}
+
+# what each language shows: the replay page (messages.po) and the session page's texts (the test's therapist.po and
+# the shipped messages.po: the camera advice)
+REPLAY = {
+    "de": {"back": "← Zurück zu meiner Seite", "raw": "Rohes Skelett", "filtered": "Gefiltertes Skelett",
+           "reps": "3 Wiederholungen", "legend": "Was die Farben zeigen"},
+    "fr": {"back": "← Retour à ma page", "raw": "Squelette brut", "filtered": "Squelette filtré",
+           "reps": "3 répétitions", "legend": "Ce que montrent les couleurs"},
+}  # fmt: skip
+THERAPIST_WORDS = {
+    "de": {"Body seen by the camera": "Vom Körper gesehen", "Tracking errors": "Messfehler",
+           "Steadiness of measured bone lengths": "Stetigkeit der gemessenen Knochenlängen",
+           detail.UNCERTAINTY_NOTE: "95-%-Intervalle aus den von der Heimstation gespeicherten Winkel-SDs je Bild.",
+           detail.NO_UNCERTAINTY_NOTE: "Die Datei speichert keine Unsicherheit je Bild: Zahlen ohne Intervalle.",
+           "Data quality": "Datenqualität", "Camera advice": "Hinweise zur Kamera", "Uncertainty": "Unsicherheit",
+           "Key numbers": "Kennzahlen", "Repetitions": "Wiederholungen"},
+    "fr": {"Body seen by the camera": "Corps vu par la caméra", "Tracking errors": "Erreurs de suivi",
+           "Steadiness of measured bone lengths": "Stabilité des longueurs d’os mesurées",
+           detail.UNCERTAINTY_NOTE: "Intervalles à 95 % tirés des écarts-types d’angle enregistrés à domicile.",
+           detail.NO_UNCERTAINTY_NOTE: "Aucune incertitude par image dans le fichier : chiffres sans intervalle.",
+           "Data quality": "Qualité des données", "Camera advice": "Conseils pour la caméra",
+           "Uncertainty": "Incertitude", "Key numbers": "Chiffres clés", "Repetitions": "Répétitions"},
+}  # fmt: skip
+ADVICE = {"de": "Sie waren etwa 1,1 m von der Kamera entfernt", "fr": "Vous étiez à environ 1,1 m de la caméra"}
+
+
+def _serious(page) -> list[str]:
+    return [v["id"] for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
+
+
+def _fits(page) -> None:
+    scroll, client = page.evaluate("[document.documentElement.scrollWidth, document.documentElement.clientWidth]")
+    assert scroll <= client, f"{page.url} scrolls sideways: {scroll} > {client}"
+
+
+@pytest.fixture(scope="module")
+def readers(live_server):
+    """{locale: (patient e-mail, session id)}: a patient of the demo therapist per language, each with a set filmed
+    too close to the camera (camera advice)."""
+    found = {}
+    admin, headers = api_client(live_server.url, "admin@demo.clinic")
+    try:
+        tara, _ = api_client(live_server.url, THERAPIST)
+        therapist_id = tara.get("/api/v1/users/me").json()["id"]
+        tara.close()
+        for locale in REPLAY:
+            email = f"reads-{locale}-{uuid.uuid4().hex[:8]}@example.org"
+            body = {"email": email, "role": "patient", "password": DEMO_PASSWORD, "full_name": "Léa Lang"}
+            r = admin.post("/api/v1/users", json=body, headers=headers)
+            assert r.status_code == 201, r.text
+            pid = r.json()["id"]
+            assert admin.put(f"/api/v1/patients/{pid}/therapists/{therapist_id}", headers=headers).status_code == 204
+            r = admin.patch(f"/api/v1/patients/{pid}", json={"locale": locale}, headers=headers)
+            assert r.status_code == 200 and r.json()["locale"] == locale, r.text
+            stored = upload_session(live_server.url, email, "squat", 3, seed=7,
+                                    data=make_khs_at_distance("squat", 3, seed=7, z_m=1.1))  # fmt: skip
+            found[locale] = (email, stored["id"])
+    finally:
+        admin.close()
+    return found
+
+
+@pytest.fixture(scope="module")
+def translated_server(live_server, tmp_path_factory):
+    """A second server on the live server's database and object store whose therapist pages come in German and
+    French (COACH_LOCALE_DIR)."""
+    root = tmp_path_factory.mktemp("catalogues")
+    locale_dir = copy_with_therapist_catalogues(root, THERAPIST_WORDS)
+    with run_server(live_server.database_url, root, COACH_STORAGE_DIR=live_server.storage_dir,
+                    COACH_LOCALE_DIR=str(locale_dir)) as base:  # fmt: skip
+        yield base
+
+
+@pytest.mark.parametrize("width", [1366, 390])
+@pytest.mark.parametrize("locale", ["de", "fr"])
+def test_the_patient_sees_the_replay_page_in_their_language(browser, live_server, readers, locale, width):
+    email, session_id = readers[locale]
+    words = REPLAY[locale]
+    with open_page(browser, live_server.url, width, HEIGHT[width]) as page:
+        sign_in(page, email)
+        page.goto(f"/therapist/sessions/{session_id}/replay")
+        expect(page.locator("html")).to_have_attribute("lang", locale)
+        expect(page.locator("#replay-info")).to_contain_text(words["reps"])
+        expect(page.locator("main p a").first).to_have_text(words["back"])
+        expect(page.locator("label", has=page.locator("#show-raw"))).to_have_text(words["raw"])
+        expect(page.locator("label", has=page.locator("#show-filtered"))).to_have_text(words["filtered"])
+        expect(page.locator("ul.legend")).to_have_attribute("aria-label", words["legend"])
+        page.frame_locator("#viewer").locator("canvas").first.wait_for(state="visible", timeout=60_000)
+        page.uncheck("#show-raw")  # the filtered skeleton alone: built by a worker, then played
+        expect(page.locator("#viewer")).to_have_attribute("src", re.compile("layer%3Dfiltered"), timeout=60_000)
+        shot(page, f"replay_{locale}_{width}")
+        assert not _serious(page), f"axe-core on the {locale} replay page at {width} px"
+        _fits(page)
+        assert not page.js_errors, page.js_errors
+
+
+@pytest.mark.parametrize("width", [1366, 390])
+@pytest.mark.parametrize("locale", ["de", "fr"])
+def test_the_therapist_sees_the_session_page_in_their_language(browser, translated_server, readers, locale, width):
+    _, session_id = readers[locale]
+    words = THERAPIST_WORDS[locale]
+    with open_page(browser, translated_server, width, HEIGHT[width], locale=f"{locale}-{locale.upper()}") as page:
+        sign_in(page, THERAPIST)
+        page.goto(f"/therapist/sessions/{session_id}")
+        expect(page.locator("html")).to_have_attribute("lang", locale)
+        expect(page.locator("#quality-h")).to_have_text(words["Data quality"])
+        parts = page.locator("#quality-parts li")
+        expect(parts).to_have_count(3)
+        for i, label in enumerate(
+            ("Body seen by the camera", "Tracking errors", "Steadiness of measured bone lengths")
+        ):
+            expect(parts.nth(i)).to_contain_text(words[label] + ":")
+        advice = page.locator('#advice li[data-code="too_close"]')
+        expect(advice).to_contain_text(ADVICE[locale])
+        expect(page.locator("#advice h3")).to_have_text(words["Camera advice"])
+        page.click("#processing summary")
+        expect(page.locator("#processing-body")).to_contain_text(words[detail.NO_UNCERTAINTY_NOTE])
+        page.locator("#numbers dt").first.wait_for()
+        shot(page, f"session_{locale}_{width}")
+        assert not _serious(page), f"axe-core on the {locale} session page at {width} px"
+        _fits(page)
+        assert not page.js_errors, page.js_errors
