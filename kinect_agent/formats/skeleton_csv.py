@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 import math
 import re
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from itertools import chain
 from operator import itemgetter
 from pathlib import Path
@@ -211,7 +211,8 @@ def _parse_rows(
     n_rows, n_numbers = len(rows), 1 + len(columns["coords"])
     text = list(chain.from_iterable(map(itemgetter(0, *columns["coords"]), rows)))  # row by row, time first
     try:
-        values = np.fromiter(map(float, map(_EMPTY_AS_NAN.get, text, text)), np.float64, len(text))
+        cells: Iterable[str] = map(_EMPTY_AS_NAN.get, text, text)  # get(cell, cell): a str
+        values = np.fromiter(map(float, cells), np.float64, len(text))
     except ValueError:
         values = None
     states = None
