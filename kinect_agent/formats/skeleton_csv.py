@@ -14,7 +14,9 @@ from __future__ import annotations
 import json
 import math
 import re
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
+from itertools import chain
+from operator import itemgetter
 from pathlib import Path
 from typing import Any
 
@@ -31,6 +33,8 @@ DESCRIPTION = "Skeleton CSV interchange format (time + 20 joints x,y,z [+ state]
 META_PREFIX = "# meta: "
 _JOINT_COLUMN = re.compile(r"^([A-Z][A-Z0-9_]*?)_(x|y|z|state)$")
 _AXES = "xyz"
+_EMPTY_AS_NAN = {"": "nan"}  # .get(cell, cell): the text float() reads for a cell
+_STATE_OF = {"0": 0, "1": 1, "2": 2, "": 0}
 
 
 def header() -> list[str]:
@@ -62,25 +66,32 @@ def read(path: Path) -> Recording:
     if first is None:
         raise FormatError(path, "empty file: expected a header line starting with 'time'")
     columns = _parse_header(path, *first)
-    rows, dropped, previous = [], 0, None
+    kept: list[list[str]] = []
+    line_numbers: list[int] = []
+    dropped, previous = 0, None
     for line_no, cells in lines:
         if len(cells) != columns["n"]:
-            cells = _fit_width(path, line_no, cells, columns["n"], lines)
+            try:
+                cells = _fit_width(path, line_no, cells, columns["n"], lines)
+            except FormatError:
+                _parse_rows(path, line_numbers, kept, columns)  # a wrong cell above this line is named first
+                raise
         if cells == previous:
             dropped += 1
             continue
         previous = cells
-        rows.append(_parse_row(path, line_no, cells, columns))
+        kept.append(cells)
+        line_numbers.append(line_no)
     if dropped:
         meta.extra["dropped_duplicate_rows"] = dropped
-    if not rows:
+    if not kept:
         raise FormatError(path, "no frames after the header")
-    t = np.array([r[0] for r in rows])
-    positions = np.array([r[1] for r in rows]).reshape(len(rows), skeleton.J, 3)
-    _check_times(path, t, [r[3] for r in rows])
+    t, coords, states = _parse_rows(path, line_numbers, kept, columns)
+    positions = coords.reshape(len(kept), skeleton.J, 3)
+    _check_times(path, t, line_numbers)
     finite = np.all(np.isfinite(positions), axis=-1)
-    if columns["state"] is not None:
-        state = np.array([r[2] for r in rows], dtype=np.int8)
+    if states is not None:
+        state = states
         state[~finite] = skeleton.NOT_TRACKED
         state[finite & (state == skeleton.NOT_TRACKED)] = skeleton.INFERRED
     else:
@@ -188,9 +199,46 @@ def _fit_width(path: Path, line_no: int, cells: list[str], n: int, rest: Iterato
     return cells
 
 
+def _parse_rows(
+    path: Path, line_numbers: list[int], rows: list[list[str]], columns: dict[str, Any]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Returns t (N,) s, coordinates (N, 3J) m (NaN: empty or nan) and states (N, J) int8 (None without state
+    columns) of N rows of cells; FormatError naming the first wrong cell, as _parse_row would.
+
+    All rows at once when every cell is plain (Python's float of each cell, as _number; an empty cell NaN, a state
+    0, 1, 2 or empty); otherwise, or when a value is not allowed, row by row (_parse_row), which also reads quoted
+    and blank cells and names the first wrong one."""
+    n_rows, n_numbers = len(rows), 1 + len(columns["coords"])
+    text = list(chain.from_iterable(map(itemgetter(0, *columns["coords"]), rows)))  # row by row, time first
+    try:
+        cells: Iterable[str] = map(_EMPTY_AS_NAN.get, text, text)  # get(cell, cell): a str
+        values = np.fromiter(map(float, cells), np.float64, len(text))
+    except ValueError:
+        values = None
+    states = None
+    if values is not None and columns["state"] is not None:
+        state_text = list(chain.from_iterable(map(itemgetter(*columns["state"]), rows)))
+        if set(state_text) <= _STATE_OF.keys():
+            states = np.fromiter(map(_STATE_OF.__getitem__, state_text), np.int8, len(state_text))
+            states = states.reshape(n_rows, len(columns["state"]))
+        else:
+            values = None
+    if values is not None:
+        values = values.reshape(n_rows, n_numbers)
+        if np.all(np.isfinite(values[:, 0])) and not np.any(np.isinf(values[:, 1:])):
+            coords = np.ascontiguousarray(values[:, 1:])
+            coords[np.isnan(coords)] = math.nan  # one NaN for every missing value (float("-nan") has its sign set)
+            return values[:, 0].copy(), coords, states
+    parsed = [_parse_row(path, n, c, columns) for n, c in zip(line_numbers, rows, strict=True)]
+    t = np.array([r[0] for r in parsed])
+    coords = np.array([r[1] for r in parsed], dtype=np.float64).reshape(len(parsed), -1)
+    states = None if columns["state"] is None else np.array([r[2] for r in parsed], dtype=np.int8)
+    return t, coords, states
+
+
 def _parse_row(
     path: Path, line_no: int, cells: list[str], columns: dict[str, Any]
-) -> tuple[float, list[float], list[int], int]:
+) -> tuple[float, list[float], list[int] | None]:
     t = _number(path, line_no, 1, cells[0], "time", allow_empty=False)
     coords = [_number(path, line_no, c + 1, cells[c], "coordinate") for c in columns["coords"]]
     state = None
@@ -201,7 +249,7 @@ def _parse_row(
             if cell not in ("0", "1", "2", ""):
                 raise FormatError(path, f"column {c + 1}: state must be 0, 1 or 2, found {cell!r}", line_no)
             state.append(int(cell or 0))
-    return t, coords, state, line_no
+    return t, coords, state
 
 
 def _number(path: Path, line_no: int, col: int, cell: str, what: str, allow_empty: bool = True) -> float:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from kinect_agent.body import angles
 from kinect_agent.body.angles import ROTATION_MIN_ELEVATION_DEG, joint_angles
 from kinect_agent.body.kinematics import TYPICAL_LENGTHS, forward_kinematics
 from kinect_agent.sources import motions
@@ -29,3 +30,17 @@ def test_rotation_of_a_hanging_arm_is_undefined(abduction_deg):
     """A hanging arm's forearm read anywhere from -150° to 160° under simulated Kinect noise (an idle arm beside a
     shoulder rotation then outweighed the moving one and the count was 10-12 for 8)."""
     assert np.isnan(joint_angles(_pose(abduction_deg, 0.0, 22.0))["shoulder_rotation_L"][0])
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_three_term_dot_adds_as_numpy_sums_a_contiguous_axis(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=(50, 67, 3)) * 10.0 ** rng.integers(-6, 6, size=(50, 67, 3))
+    b = rng.normal(size=(50, 67, 3))
+    for x in (a, b):  # signed zeros: (−0) + (−0) + (−0) reads +0 in np.sum, the case an order without 0 + gets wrong
+        x[rng.random(x.shape) < 0.3] = 0.0
+        x[rng.random(x.shape) < 0.3] = -0.0
+    want = np.sum(a * b, axis=-1)
+    got = angles._dot(a, b)
+    np.testing.assert_array_equal(got.view(np.int64), want.view(np.int64), err_msg="bits of the sums")
+    np.testing.assert_array_equal(angles._dot(a, b[0, 0]), np.sum(a * b[0, 0], axis=-1), err_msg="broadcast")

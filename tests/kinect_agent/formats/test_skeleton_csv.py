@@ -89,6 +89,35 @@ def test_minimal_file_without_state_columns_marks_empty_cells_untracked(tmp_path
     assert rec.state[0, 1] == skeleton.TRACKED
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_all_rows_at_once_read_what_row_by_row_reads(tmp_path: Path, seed: int) -> None:
+    rec = _recording(np.random.default_rng(seed), frames=40)
+    plain = tmp_path / "plain.csv"
+    skeleton_csv.write(rec, plain)
+    lines = plain.read_text().splitlines()
+    lines[7] = lines[7].replace(",", ',"', 1).replace(",", '",', 2).replace('",', ",", 1)  # one quoted cell
+    assert '"' in lines[7]
+    quoted = tmp_path / "quoted.csv"  # a quoted cell: every row read by _parse_row
+    quoted.write_text("\n".join(lines) + "\n")
+    fast, slow = formats.read(plain), formats.read(quoted)
+    for name in ("t", "positions", "state"):
+        a, b = getattr(fast, name), getattr(slow, name)
+        np.testing.assert_array_equal(a, b, err_msg=name)
+        assert a.dtype == b.dtype and a.flags.c_contiguous, name
+
+
+def test_a_wrong_cell_is_named_before_a_wrong_width_below_it(tmp_path: Path) -> None:
+    cols = ",".join(skeleton_csv.header()[: 1 + 3 * skeleton.J])
+    rows = [",".join([f"{i / 30:.4f}"] + ["0.1"] * (3 * skeleton.J)) for i in range(4)]
+    rows[1] = rows[1].replace("0.1", "inf", 1)
+    rows[3] = rows[3][: len(rows[3]) // 2]
+    path = tmp_path / "bad.csv"
+    path.write_text(cols + "\n" + "\n".join(rows) + "\n")
+    with pytest.raises(FormatError, match="must be finite") as err:
+        formats.read(path)
+    assert err.value.line == 3
+
+
 @pytest.mark.parametrize(
     ("mutate", "message", "line"),
     [
