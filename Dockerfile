@@ -23,13 +23,15 @@ ENV PYTHONDONTWRITEBYTECODE=1 \
 WORKDIR /app
 COPY requirements/server.lock ./requirements/
 RUN pip install --require-hashes -r requirements/server.lock
-COPY pyproject.toml README.md ./
+# The server's distribution (packages/server/pyproject.toml): backend, the pages, the migrations, `coach-server`, and
+# the part of kinect_agent the server imports; not the agent's services or CLI.
+COPY packages/server ./packages/server
 COPY kinect_agent ./kinect_agent
 COPY --from=vendor /src/kinect_agent/vendor/files ./kinect_agent/vendor/files
 COPY backend ./backend
 COPY migrations ./migrations
 COPY frontend ./frontend
-RUN pip install --no-deps . && rm -rf /app/*
+RUN pip install --no-deps ./packages/server && rm -rf /app/*
 
 RUN useradd --system --create-home --uid 10001 coach && mkdir -p /data && chown coach /data
 USER coach

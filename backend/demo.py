@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 import errno
+import importlib.util
 import os
 import shutil
 import signal
@@ -132,6 +133,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--agent-interval", type=float, nargs=2, default=(30.0, 60.0), metavar=("MIN", "MAX"),
                         help="seconds between live sessions of the simulated agents (default 30 60)")  # fmt: skip
     args = parser.parse_args(argv)
+    if not args.no_agents and importlib.util.find_spec("kinect_agent.home") is None:
+        print("error: the demo's simulated home agents need the agent installed beside the server (the development "
+              "install: scripts/demo.sh); the server's install alone runs `coach-server demo --no-agents`",
+              file=sys.stderr)  # fmt: skip
+        return 2
     busy = port_in_use(args.host, args.port)
     if busy:
         print(f"error: cannot serve on {args.host}:{args.port}: {busy}; stop what uses it or choose another port "

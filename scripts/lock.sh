@@ -1,14 +1,16 @@
 #!/usr/bin/env bash
-# Regenerates requirements/*.lock from pyproject.toml: every dependency, transitive ones too, pinned with the hashes of
-# all its published files, for every platform (the agent runs on Windows too). Run after changing a pin.
+# Regenerates requirements/*.lock: every dependency, transitive ones too, pinned with the hashes of all its published
+# files, for every platform (the agent runs on Windows too). Run after changing a pin. The two deployables' locks come
+# from their own pyproject.toml (packages/agent, packages/server); the development and test locks from the root's.
 set -euo pipefail
-source "$(dirname "$0")/_venv.sh" test
+source "$(dirname "$0")/_venv.sh" test  # uv: in the test extra
 cd "$ROOT"
-python -m pip install --quiet "uv==0.13.9"
-for extra in agent server dev test; do
-  uv pip compile pyproject.toml --extra "$extra" --generate-hashes --universal --python-version 3.11 \
-    -o "requirements/$extra.lock" --quiet
+compile() { uv pip compile "$@" --generate-hashes --universal --python-version 3.11 --quiet; }
+compile packages/agent/pyproject.toml -o requirements/agent.lock
+compile packages/server/pyproject.toml -o requirements/server.lock
+for extra in dev test; do
+  compile pyproject.toml --extra "$extra" -o "requirements/$extra.lock"
 done
-printf 'mediapipe==1.2.3\nflatbuffers==25.12.19\nnumpy==2.4.6\n' | uv pip compile - --no-deps --generate-hashes \
-  --universal --python-version 3.11 -o requirements/vendor.lock --quiet  # the Dockerfile's pose-asset stage
+printf 'mediapipe==1.2.3\nflatbuffers==25.12.19\nnumpy==2.4.6\n' | compile - --no-deps \
+  -o requirements/vendor.lock  # the Dockerfile's pose-asset stage
 echo "requirements/{agent,server,dev,test,vendor}.lock regenerated" >&2

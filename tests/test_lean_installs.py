@@ -1,6 +1,7 @@
-"""Two lean installs from one repository: the home computer installs the agent (`.[agent]`: the pure core, numba,
-no web server or database), the clinic installs the server (`.[server]`: the pure core and the web stack, no numba).
-Each is proved by running it in a fresh interpreter where the other side's packages cannot be imported."""
+"""Two lean installs from one repository: the home computer installs the agent (packages/agent: the pure core, numba,
+no web server or database), the clinic installs the server (packages/server: the pure core and the web stack, no
+numba). Here each runs from the source tree in a fresh interpreter where the other side's packages cannot be imported;
+tests/test_deployables.py installs each distribution into an environment of its own."""
 
 from __future__ import annotations
 
