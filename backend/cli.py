@@ -209,6 +209,8 @@ def cmd_storage(args: argparse.Namespace) -> int:
     from backend.storage import check
 
     _settings()
+    if args.batch < 1:
+        raise CliError(f"--batch must be at least 1, got {args.batch}")
     if args.action != "init":
         _require_migrated()
     return check.run(args)
@@ -220,6 +222,8 @@ def cmd_retention(args: argparse.Namespace) -> int:
     from backend.records.retention import apply_retention
 
     settings = _settings()
+    if args.days is not None and args.days < 1:
+        raise CliError(f"--days must be at least 1, got {args.days} (retention off: leave COACH_RETENTION_DAYS at 0)")
     days = args.days if args.days is not None else settings.RETENTION_DAYS
     if days <= 0:
         print("retention is off (COACH_RETENTION_DAYS=0): no session file removed")
@@ -238,6 +242,7 @@ def cmd_reanalyze(args: argparse.Namespace) -> int:
     import time
 
     from backend.database import get_sessionmaker
+    from backend.exceptions import InvalidInput, PatientNotFound
     from backend.jobs.queue import progress
     from backend.records.reanalysis import enqueue_reanalysis
 
@@ -250,8 +255,11 @@ def cmd_reanalyze(args: argparse.Namespace) -> int:
         except ValueError:
             raise CliError(f"--since must be a date like 2026-01-31, got {args.since!r}") from None
     with get_sessionmaker()() as session:
-        batch, added = enqueue_reanalysis(db_session=session, patient_id=args.patient, since=since,
-                                          exercise=args.exercise)  # fmt: skip
+        try:
+            batch, added = enqueue_reanalysis(db_session=session, patient_id=args.patient, since=since,
+                                              exercise=args.exercise)  # fmt: skip
+        except (PatientNotFound, InvalidInput) as exc:
+            raise CliError(exc.message) from None
         session.commit()
         print(f"batch {batch}: {added} session(s) queued for re-analysis (run `coach-server worker` to do them)")
         while args.wait and added:

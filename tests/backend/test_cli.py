@@ -49,3 +49,21 @@ def test_every_subcommand_has_help(capsys):
     for command in ("serve", "migrate", "create-user", "seed-demo", "analyze"):
         assert cli.main([command, "--help"]) == 0
         assert "usage: coach-server" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["reanalyze", "--patient", "999"], "no patient with id 999"),
+        (["reanalyze", "--exercise", "squats"], "no exercise 'squats' in the library (known: "),
+        (["retention", "--days", "-5"], "--days must be at least 1, got -5"),
+        (["retention", "--days", "0"], "--days must be at least 1, got 0"),
+        (["storage", "move-out", "--batch", "0"], "--batch must be at least 1, got 0"),
+    ],
+)
+def test_records_commands_refuse_bad_input_in_one_line(cli_db, capsys, argv, says):
+    assert cli.main(["migrate"]) == 0
+    capsys.readouterr()
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("coach-server: error:") and says in err and "\n" not in err, err
