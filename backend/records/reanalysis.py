@@ -41,8 +41,8 @@ def enqueue_reanalysis(
     since: dt.date | None = None,
     exercise: str | None = None,
 ) -> tuple[str, int]:
-    """Queues one job per stored session matching the filters whose document is not of today's version; returns
-    (batch id, jobs added). Flushes.
+    """Queues one job per stored session matching the filters whose document is not of today's version (a job of
+    this version that failed is queued again with fresh tries); returns (batch id, jobs added). Flushes.
 
     Raises PatientNotFound when patient_id names no patient, InvalidInput when exercise is not in the library (a
     typo would otherwise queue nothing and say "0 session(s)", as if the sessions were up to date).
@@ -67,7 +67,7 @@ def enqueue_reanalysis(
     batch = f"reanalyze-{uuid.uuid4().hex[:12]}"
     ids = db_session.scalars(query.order_by(ExerciseSession.id)).all()
     items = ((f"{KIND}:{sid}:{ANALYSIS_VERSION}", {"session_id": sid}) for sid in ids)
-    return batch, enqueue(db_session=db_session, kind=KIND, items=items, batch=batch)
+    return batch, enqueue(db_session=db_session, kind=KIND, items=items, batch=batch, retry_failed=True)
 
 
 def _version(stored: dict[str, Any] | None) -> str:
