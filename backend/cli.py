@@ -236,6 +236,24 @@ def cmd_retention(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_patient_data(args: argparse.Namespace) -> int:
+    """Writes a patient's archive or progress report, or erases the patient, for an admin (backend.records.commands)."""
+    from backend.database import get_sessionmaker
+    from backend.exceptions import AppError
+    from backend.records.commands import run
+
+    _settings()
+    _require_migrated()
+    with get_sessionmaker()() as session:
+        try:
+            said = run(args, session)
+        except AppError as exc:
+            raise CliError(exc.message) from None
+        session.commit()  # an erasure's stored objects are deleted now (backend.records.erasure)
+    print(said)
+    return 0
+
+
 def cmd_reanalyze(args: argparse.Namespace) -> int:
     """Queues the re-analysis of stored sessions (backend.records.reanalysis); `coach-server worker` runs it."""
     import datetime as dt
@@ -341,6 +359,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--kinds", nargs="+", choices=KINDS, default=list(KINDS), metavar="KIND",
                    help=f"run only these kinds of job (default: all of {', '.join(KINDS)})")  # fmt: skip
     p.set_defaults(_run=cmd_worker)
+
+    from backend.records.commands import add_arguments as patient_data_arguments
+
+    p = sub.add_parser("patient-data", help="a patient's archive (zip) or progress report (PDF), or their erasure, "
+                       "done for an admin and audited")  # fmt: skip
+    patient_data_arguments(p)
+    p.set_defaults(_run=cmd_patient_data)
 
     p = sub.add_parser("retention", help="remove session files older than COACH_RETENTION_DAYS (metrics are kept)")
     p.add_argument("--days", type=int, help="this many days instead of COACH_RETENTION_DAYS")
