@@ -209,6 +209,8 @@ def cmd_storage(args: argparse.Namespace) -> int:
     from backend.storage import check
 
     _settings()
+    if args.batch < 1:
+        raise CliError(f"--batch must be at least 1, got {args.batch}")
     if args.action != "init":
         _require_migrated()
     return check.run(args)
@@ -220,6 +222,8 @@ def cmd_retention(args: argparse.Namespace) -> int:
     from backend.records.retention import apply_retention
 
     settings = _settings()
+    if args.days is not None and args.days < 1:
+        raise CliError(f"--days must be at least 1, got {args.days} (retention off: leave COACH_RETENTION_DAYS at 0)")
     days = args.days if args.days is not None else settings.RETENTION_DAYS
     if days <= 0:
         print("retention is off (COACH_RETENTION_DAYS=0): no session file removed")
@@ -232,12 +236,31 @@ def cmd_retention(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_patient_data(args: argparse.Namespace) -> int:
+    """Writes a patient's archive or progress report, or erases the patient, for an admin (backend.records.commands)."""
+    from backend.database import get_sessionmaker
+    from backend.exceptions import AppError
+    from backend.records.commands import run
+
+    _settings()
+    _require_migrated()
+    with get_sessionmaker()() as session:
+        try:
+            said = run(args, session)
+        except AppError as exc:
+            raise CliError(exc.message) from None
+        session.commit()  # an erasure's stored objects are deleted now (backend.records.erasure)
+    print(said)
+    return 0
+
+
 def cmd_reanalyze(args: argparse.Namespace) -> int:
     """Queues the re-analysis of stored sessions (backend.records.reanalysis); `coach-server worker` runs it."""
     import datetime as dt
     import time
 
     from backend.database import get_sessionmaker
+    from backend.exceptions import InvalidInput, PatientNotFound
     from backend.jobs.queue import progress
     from backend.records.reanalysis import enqueue_reanalysis
 
@@ -250,8 +273,11 @@ def cmd_reanalyze(args: argparse.Namespace) -> int:
         except ValueError:
             raise CliError(f"--since must be a date like 2026-01-31, got {args.since!r}") from None
     with get_sessionmaker()() as session:
-        batch, added = enqueue_reanalysis(db_session=session, patient_id=args.patient, since=since,
-                                          exercise=args.exercise)  # fmt: skip
+        try:
+            batch, added = enqueue_reanalysis(db_session=session, patient_id=args.patient, since=since,
+                                              exercise=args.exercise)  # fmt: skip
+        except (PatientNotFound, InvalidInput) as exc:
+            raise CliError(exc.message) from None
         session.commit()
         print(f"batch {batch}: {added} session(s) queued for re-analysis (run `coach-server worker` to do them)")
         while args.wait and added:
@@ -333,6 +359,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--kinds", nargs="+", choices=KINDS, default=list(KINDS), metavar="KIND",
                    help=f"run only these kinds of job (default: all of {', '.join(KINDS)})")  # fmt: skip
     p.set_defaults(_run=cmd_worker)
+
+    from backend.records.commands import add_arguments as patient_data_arguments
+
+    p = sub.add_parser("patient-data", help="a patient's archive (zip) or progress report (PDF), or their erasure, "
+                       "done for an admin and audited")  # fmt: skip
+    patient_data_arguments(p)
+    p.set_defaults(_run=cmd_patient_data)
 
     p = sub.add_parser("retention", help="remove session files older than COACH_RETENTION_DAYS (metrics are kept)")
     p.add_argument("--days", type=int, help="this many days instead of COACH_RETENTION_DAYS")

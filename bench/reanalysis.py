@@ -82,17 +82,24 @@ def _setup(url: str, store_dir: str, n: int, files: list[bytes]) -> None:
     engine.dispose()
 
 
-def _run(url: str, store_dir: str, workers: int, n: int) -> tuple[float, float]:
+def _cpu_s() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _run(url: str, store_dir: str, workers: int, n: int) -> tuple[float, float, float]:
+    """Returns sessions per second (wall), CPU seconds of the workers per session, and the peak RSS in MB."""
     env = os.environ | {"COACH_DATABASE_URL": url, "COACH_STORAGE_DIR": store_dir, "PYTHONPATH": str(ROOT)}
     cli = [sys.executable, "-m", "backend.cli"]
     subprocess.run([*cli, "reanalyze"], env=env, check=True, capture_output=True)
-    t0 = time.perf_counter()
+    cpu0, t0 = _cpu_s(), time.perf_counter()
     procs = [subprocess.Popen([*cli, "worker", "--once"], env=env, stderr=subprocess.DEVNULL) for _ in range(workers)]
     for p in procs:
         p.wait()
     elapsed = time.perf_counter() - t0
+    cpu_per_session = (_cpu_s() - cpu0) / n  # includes each worker's start (imports), about 2-3 s of CPU
     peak_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-    return n / elapsed, peak_mb
+    return n / elapsed, cpu_per_session, peak_mb
 
 
 def main() -> None:
@@ -108,9 +115,10 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as store_dir:
         for w in args.workers:
             _setup(args.database_url, store_dir, args.sessions, files)
-            rate, peak = _run(args.database_url, store_dir, w, args.sessions)
+            rate, cpu, peak = _run(args.database_url, store_dir, w, args.sessions)
             print(f"workers={w}: {rate:.2f} sessions/s, 10 000 sessions in {10000 / rate / 3600:.1f} h, "
-                  f"peak RSS of a worker {peak:.0f} MB", flush=True)  # fmt: skip
+                  f"{cpu:.2f} s CPU per session, peak RSS of a worker {peak:.0f} MB, load {os.getloadavg()[0]:.1f}",
+                  flush=True)  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -201,6 +201,17 @@ def analyze_file(path: str | Path, exercise_slug: str) -> AnalysisReport:
     return analyze_recording(raw, exercise, filtered=filtered, angle_sd=angle_sd)
 
 
+def _balance_line(doc: AnalysisReport) -> str:
+    """Returns the balance in one line: sway velocity with its 95 % interval, or why it was not measured."""
+    b = doc.balance
+    if b is None:
+        return f"balance: not measured: {doc.balance_missing}"
+    interval = "" if b.sway_velocity_95 is None else (
+        f" (95 % {100 * b.sway_velocity_95[0]:.2f}-{100 * b.sway_velocity_95[1]:.2f})"
+    )  # fmt: skip
+    return f"balance: sway {100 * b.sway_velocity_m_s:.2f} cm/s{interval} over {b.standing_s:.1f} s standing"
+
+
 def _summary(doc: AnalysisReport) -> str:
     q = doc.quality
     lines = [
@@ -209,6 +220,7 @@ def _summary(doc: AnalysisReport) -> str:
         f"defining angle {doc.defining_angle}, median amplitude {doc.rom_deg} deg",
         f"quality: {'ok' if q.ok else 'NOT ok'} (tracked {q.tracked_fraction:.0%}, "
         f"outliers {q.outlier_fraction:.1%}){''.join('; ' + r for r in q.reasons)}",
+        _balance_line(doc),
     ]
     lines += [
         f"  #{r.index + 1}: {r.start_s:.2f}-{r.end_s:.2f} s, amplitude {r.amplitude_deg} deg, "

@@ -24,12 +24,20 @@ RETRY_DELAYS_S = (5.0, 30.0, 120.0)
 
 
 def enqueue(
-    *, db_session: Session, kind: str, items: Iterable[tuple[str, dict[str, Any]]], batch: str | None = None
+    *,
+    db_session: Session,
+    kind: str,
+    items: Iterable[tuple[str, dict[str, Any]]],
+    batch: str | None = None,
+    retry_failed: bool = False,
 ) -> int:
     """Adds one job per (key, payload) whose key is not queued yet; returns how many were added. Flushes.
 
     One multi-row INSERT ... ON CONFLICT (key) DO NOTHING per CHUNK items (PostgreSQL and SQLite both have it), so
     10 000 sessions queue in one round trip per thousand and concurrent requests for the same key add one job.
+    retry_failed: a job of the same key that ended `failed` is queued again in this batch with fresh tries (and
+    counted as added), e.g. a re-analysis asked again after the missing file was restored; done, queued and running
+    jobs are left as they are.
     """
     db_session.flush()
     insert = pg_insert if db_session.get_bind().dialect.name == "postgresql" else sqlite_insert
@@ -38,18 +46,31 @@ def enqueue(
         chunk.append({"kind": kind, "key": key, "batch": batch, "payload": payload, "status": "queued", "attempts": 0,
                       "max_attempts": MAX_ATTEMPTS, "run_after": now, "created_at": now})  # fmt: skip
         if len(chunk) == CHUNK:
-            added += _insert_new(db_session, insert, chunk)
+            added += _insert_new(db_session, insert, chunk, retry_failed)
             chunk = []
     if chunk:
-        added += _insert_new(db_session, insert, chunk)
+        added += _insert_new(db_session, insert, chunk, retry_failed)
     return added
 
 
 def _insert_new(
-    db_session: Session, insert: Callable[[type[Job]], PgInsert | SqliteInsert], rows: list[dict[str, Any]]
+    db_session: Session,
+    insert: Callable[[type[Job]], PgInsert | SqliteInsert],
+    rows: list[dict[str, Any]],
+    retry_failed: bool,
 ) -> int:
-    statement = insert(Job).values(rows).on_conflict_do_nothing(index_elements=["key"]).returning(Job.id)
-    return len(db_session.execute(statement).all())  # only the inserted rows come back
+    statement = insert(Job).values(rows)
+    if retry_failed:
+        new = statement.excluded
+        statement = statement.on_conflict_do_update(
+            index_elements=["key"],
+            set_={"status": "queued", "batch": new.batch, "attempts": 0, "run_after": new.run_after, "error": None,
+                  "result": None, "finished_at": None, "locked_by": None, "locked_until": None},
+            where=Job.status == "failed",
+        )  # fmt: skip
+    else:
+        statement = statement.on_conflict_do_nothing(index_elements=["key"])
+    return len(db_session.execute(statement.returning(Job.id)).all())  # only inserted (or re-queued) rows come back
 
 
 def _claimable(now: dt.datetime) -> ColumnElement[bool]:

@@ -12,13 +12,16 @@ from sqlalchemy import or_, select
 from sqlalchemy.orm import Session
 
 from backend.audit.models import AuditEvent
+from backend.camera.models import CameraConsent, CameraSet
 from backend.devices.models import Device
 from backend.exceptions import SessionFileRemoved
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
 from backend.i18n import Translator, translator
+from backend.jobs.models import SessionMetricVersion
 from backend.patients.models import TherapistPatient
 from backend.plans.models import Plan, PlanItem
+from backend.reminders.models import ReminderSent
 from backend.replies.models import AdviceReply
 from backend.sessions import service as sessions
 from backend.sessions.models import ExerciseSession, SessionMetric
@@ -26,9 +29,10 @@ from backend.storage import StorageError
 from backend.suggestions import service as suggestions
 from backend.suggestions.models import Suggestion
 from backend.users.models import User
+from backend.voice.models import VoicePreference
 from kinect_agent.analysis.document import read_if_readable
 
-FORMAT_VERSION = "1"
+FORMAT_VERSION = "2"  # 2: metrics_earlier, settings.json, camera_sets.json, reminders.json
 README = """Kinect Home Coach: all data held about patient {patient_id} ({email})
 Made {made} (UTC) at the request of {who}. Archive format version {version}.
 
@@ -43,11 +47,16 @@ sessions.json     every exercise session: when, which exercise, how long, the fi
 sessions/         the session files themselves (.khs: raw and filtered skeleton, readable with the open-source
                   kinect-agent tool, docs/session-file.md); a file removed by the clinic's retention period, or
                   that could not be read, is listed in sessions.json with "file": null and the reason
+                  "metrics_earlier": the documents a re-analysis replaced, each with its analysis version
 advice.json       suggestions and messages from your therapists and from the system's rules; the advice of a
                   rule is in your language ("text", "locale"), written from what the rule found ("params"),
                   with the words it was first written in ("text_as_first_written")
 replies.json      your replies to that advice, and when your therapist read them
 devices.json      the home computers paired to your account
+settings.json     your spoken-instructions setting and your consent to this computer's camera (null: none given)
+camera_sets.json  the sets recorded with this computer's camera: when, which exercise, how they ended, the session
+                  each became (the camera's landmark batches are kept only until the set ends)
+reminders.json    the reminder e-mails sent to you: the plan, your local day and time, when sent, a failed delivery
 audit.json        every recorded access to or change of your data: who, what, when, from which address
 
 All times are UTC, ISO 8601. JSON files are UTF-8.
@@ -105,6 +114,16 @@ def build_archive(*, db_session: Session, patient: User, requested_by: str) -> I
                 "items": [_row(i, tuple(c.key for c in PlanItem.__table__.columns)) for i in items],
             })  # fmt: skip
         _json(z, "plans.json", plans)
+        earlier: dict[int, list[dict[str, Any]]] = {}
+        for v in db_session.scalars(
+            select(SessionMetricVersion)
+            .join(ExerciseSession, ExerciseSession.id == SessionMetricVersion.session_id)
+            .where(ExerciseSession.patient_id == pid)
+            .order_by(SessionMetricVersion.id)
+        ):
+            earlier.setdefault(v.session_id, []).append(
+                {"analysis_version": v.analysis_version, "replaced_at": _iso(v.replaced_at), "document": v.document}
+            )
         listed = []
         rows = db_session.execute(
             select(ExerciseSession, Exercise.slug, SessionMetric.document, SessionFeeling)
@@ -122,6 +141,7 @@ def build_archive(*, db_session: Session, patient: User, requested_by: str) -> I
             entry["exercise"] = slug
             readable = read_if_readable(doc)  # today's schema; a document no schema reads is kept as stored
             entry["metrics"] = readable.model_dump(mode="json") if readable is not None else doc
+            entry["metrics_earlier"] = earlier.get(s.id, [])
             entry["feeling"] = None if felt is None else {
                 "pain_nrs": felt.pain_nrs, "effort_borg_cr10": felt.effort_cr10, "answered_at": _iso(felt.updated_at)
             }  # fmt: skip
@@ -141,6 +161,25 @@ def build_archive(*, db_session: Session, patient: User, requested_by: str) -> I
         _json(z, "replies.json", [_row(r, tuple(c.key for c in AdviceReply.__table__.columns)) for r in replies])
         devices = db_session.scalars(select(Device).where(Device.patient_id == pid).order_by(Device.id))
         _json(z, "devices.json", [_row(d, ("id", "name", "created_at")) for d in devices])
+        voice, consent = db_session.get(VoicePreference, pid), db_session.get(CameraConsent, pid)
+        _json(z, "settings.json", {
+            "voice": None if voice is None else _row(voice, ("enabled", "volume", "updated_at")),
+            "camera_consent": None if consent is None else _row(consent, ("consent_version", "given_at")),
+        })  # fmt: skip
+        sets = db_session.execute(
+            select(CameraSet, Exercise.slug)
+            .outerjoin(Exercise, Exercise.id == CameraSet.exercise_id)
+            .where(CameraSet.patient_id == pid)
+            .order_by(CameraSet.started_at)
+        ).all()
+        _json(z, "camera_sets.json", [
+            {**_row(c, ("started_at", "ended_at", "status", "end_reason", "target_reps", "n_frames", "session_id",
+                        "error")), "id": str(c.id), "exercise": slug}
+            for c, slug in sets
+        ])  # fmt: skip
+        sent = db_session.scalars(select(ReminderSent).where(ReminderSent.patient_id == pid).order_by(ReminderSent.id))
+        _json(z, "reminders.json", [_row(r, ("plan_id", "local_date", "local_time", "due_at", "sent_at", "error"))
+                                    for r in sent])  # fmt: skip
         audit = db_session.scalars(
             select(AuditEvent)
             .where(or_(AuditEvent.patient_id == pid, AuditEvent.actor_user_id == pid))

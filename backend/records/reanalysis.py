@@ -17,6 +17,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from backend.database import utcnow
+from backend.exceptions import InvalidInput, PatientNotFound
 from backend.exercises.library import EXERCISES
 from backend.exercises.models import Exercise
 from backend.jobs.models import SessionMetricVersion
@@ -25,6 +26,7 @@ from backend.sessions.metrics import ANALYSIS_VERSION, metrics_document, scalar_
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.sessions.service import session_file
 from backend.suggestions.context import plan_targets, session_history
+from backend.users.models import User
 from kinect_agent.analysis.document import read_if_readable
 from kinect_agent.formats import session_file as khs
 
@@ -39,8 +41,20 @@ def enqueue_reanalysis(
     since: dt.date | None = None,
     exercise: str | None = None,
 ) -> tuple[str, int]:
-    """Queues one job per stored session matching the filters whose document is not of today's version; returns
-    (batch id, jobs added). Flushes."""
+    """Queues one job per stored session matching the filters whose document is not of today's version (a job of
+    this version that failed is queued again with fresh tries); returns (batch id, jobs added). Flushes.
+
+    Raises PatientNotFound when patient_id names no patient, InvalidInput when exercise is not in the library (a
+    typo would otherwise queue nothing and say "0 session(s)", as if the sessions were up to date).
+    """
+    if (
+        patient_id is not None
+        and db_session.scalar(select(User.id).where(User.id == patient_id, User.role == "patient")) is None
+    ):
+        raise PatientNotFound(f"no patient with id {patient_id}")
+    if exercise is not None and db_session.scalar(select(Exercise.id).where(Exercise.slug == exercise)) is None:
+        known = ", ".join(db_session.scalars(select(Exercise.slug).order_by(Exercise.slug)))
+        raise InvalidInput(f"no exercise {exercise!r} in the library (known: {known})")
     query = select(ExerciseSession.id).where(
         (ExerciseSession.file_key.is_not(None)) | (ExerciseSession.file_bytes.is_not(None))
     )
@@ -53,7 +67,7 @@ def enqueue_reanalysis(
     batch = f"reanalyze-{uuid.uuid4().hex[:12]}"
     ids = db_session.scalars(query.order_by(ExerciseSession.id)).all()
     items = ((f"{KIND}:{sid}:{ANALYSIS_VERSION}", {"session_id": sid}) for sid in ids)
-    return batch, enqueue(db_session=db_session, kind=KIND, items=items, batch=batch)
+    return batch, enqueue(db_session=db_session, kind=KIND, items=items, batch=batch, retry_failed=True)
 
 
 def _version(stored: dict[str, Any] | None) -> str:

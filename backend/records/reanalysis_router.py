@@ -11,7 +11,7 @@ from sqlalchemy import select
 
 from backend.audit.service import record
 from backend.deps import AdminCaller, CurrentCaller, DbSession, require_patient_access
-from backend.exceptions import AUTH_ERRORS, NotFound, SessionNotFound, error_responses
+from backend.exceptions import AUTH_ERRORS, InvalidInput, NotFound, PatientNotFound, SessionNotFound, error_responses
 from backend.jobs.listing import error_words, list_batches, list_jobs
 from backend.jobs.models import SessionMetricVersion
 from backend.jobs.queue import progress
@@ -147,7 +147,7 @@ def read_jobs(
 
 
 @router.post("/reanalysis", response_model=ProgressOut, status_code=status.HTTP_202_ACCEPTED,
-             responses=error_responses(*AUTH_ERRORS))  # fmt: skip
+             responses=error_responses(*AUTH_ERRORS, PatientNotFound, InvalidInput))  # fmt: skip
 def queue_reanalysis(body: ReanalysisIn, caller: AdminCaller, db_session: DbSession) -> ProgressOut:
     """Queues the re-analysis of the matching stored sessions (admins); workers (`coach-server worker`) run it."""
     batch, _ = enqueue_reanalysis(db_session=db_session, patient_id=body.patient_id, since=body.since,

@@ -27,6 +27,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from backend.analysis.mdc import rom_mdc95
+from backend.exceptions import InvalidInput
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
 from backend.i18n import translator
@@ -53,6 +54,18 @@ class Period:
     def weeks(self) -> float:
         """Returns the length in weeks (days / 7)."""
         return ((self.end - self.start).days + 1) / 7.0
+
+    @classmethod
+    def asked(cls, start: dt.date | None, end: dt.date | None) -> Period:
+        """Returns the period a caller asked for: `end` defaults to today (UTC), `start` to 12 weeks before `end`.
+
+        Raises InvalidInput when it runs backwards or lasts more than 3 years.
+        """
+        end = end or dt.datetime.now(dt.UTC).date()
+        start = start or end - dt.timedelta(weeks=12)
+        if start > end or (end - start).days > 3 * 366:
+            raise InvalidInput(f"the period from={start} to={end} must run forwards and last at most 3 years")
+        return cls(start, end)
 
 
 ENGLISH = translator("en")  # the report's language

@@ -106,13 +106,10 @@ def progress_report(
     patient = require_patient_access(patient_id, caller=caller, db_session=db_session)
     if caller.device is not None:
         raise Forbidden("devices do not read reports")
-    end = end or dt.datetime.now(dt.UTC).date()
-    start = start or end - dt.timedelta(weeks=12)
-    if start > end or (end - start).days > 3 * 366:
-        raise InvalidInput(f"the period from={start} to={end} must run forwards and last at most 3 years")
+    period = Period.asked(start, end)
     who = caller.signed_in_user.full_name or caller.signed_in_user.email
-    record(db_session=db_session, caller=caller, action="patient.report", object_type="patient",
-           object_id=patient_id, patient_id=patient_id, detail={"from": str(start), "to": str(end)})  # fmt: skip
-    pdf = build_report(db_session=db_session, patient=patient, period=Period(start, end), made_by=who, paper=paper)
-    name = f"progress-patient-{patient_id}-{start}-{end}.pdf"
+    record(db_session=db_session, caller=caller, action="patient.report", object_type="patient", object_id=patient_id,
+           patient_id=patient_id, detail={"from": str(period.start), "to": str(period.end)})  # fmt: skip
+    pdf = build_report(db_session=db_session, patient=patient, period=period, made_by=who, paper=paper)
+    name = f"progress-patient-{patient_id}-{period.start}-{period.end}.pdf"
     return Response(pdf, media_type="application/pdf", headers={"Content-Disposition": f'inline; filename="{name}"'})

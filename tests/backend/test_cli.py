@@ -49,3 +49,71 @@ def test_every_subcommand_has_help(capsys):
     for command in ("serve", "migrate", "create-user", "seed-demo", "analyze"):
         assert cli.main([command, "--help"]) == 0
         assert "usage: coach-server" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["reanalyze", "--patient", "999"], "no patient with id 999"),
+        (["reanalyze", "--exercise", "squats"], "no exercise 'squats' in the library (known: "),
+        (["retention", "--days", "-5"], "--days must be at least 1, got -5"),
+        (["retention", "--days", "0"], "--days must be at least 1, got 0"),
+        (["storage", "move-out", "--batch", "0"], "--batch must be at least 1, got 0"),
+    ],
+)
+def test_records_commands_refuse_bad_input_in_one_line(cli_db, capsys, argv, says):
+    assert cli.main(["migrate"]) == 0
+    capsys.readouterr()
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("coach-server: error:") and says in err and "\n" not in err, err
+
+
+def test_patient_data_archive_report_and_erasure_from_the_command_line(cli_db, capsys, tmp_path):
+    import io
+    import zipfile
+
+    import sqlalchemy as sa
+
+    from backend.audit.models import AuditEvent
+    from backend.users.models import User
+
+    assert cli.main(["migrate"]) == 0
+    for email, role in (("boss@clinic.org", "admin"), ("pat@home.org", "patient")):
+        assert cli.main(["create-user", "--email", email, "--password", "0123456789", "--role", role]) == 0
+    with get_sessionmaker()() as s:
+        pid = s.scalar(sa.select(User.id).where(User.email == "pat@home.org"))
+    capsys.readouterr()
+    admin = ["--admin", "boss@clinic.org"]
+    zip_path, pdf_path = tmp_path / "p.zip", tmp_path / "p.pdf"
+    assert cli.main(["patient-data", "archive", str(pid), *admin, "--out", str(zip_path)]) == 0
+    z = zipfile.ZipFile(io.BytesIO(zip_path.read_bytes()))
+    assert (
+        f"patient {pid} (pat@home.org)" in z.read("README.txt").decode()
+        and "admin boss@clinic.org" in z.read("README.txt").decode()
+    )
+    assert cli.main(["patient-data", "archive", str(pid), *admin, "--out", str(zip_path)]) == 2
+    assert "exists already" in capsys.readouterr().err
+    assert cli.main(["patient-data", "report", str(pid), *admin, "--out", str(pdf_path), "--paper", "letter"]) == 0
+    assert pdf_path.read_bytes().startswith(b"%PDF")
+    for argv, says in (
+        (["archive", "99999", *admin, "--out", str(tmp_path / "x.zip")], "patient 99999 does not exist"),
+        (["archive", str(pid), "--admin", "pat@home.org", "--out", str(tmp_path / "x.zip")], "no active admin"),
+        (["report", str(pid), *admin, "--out", str(tmp_path / "x.pdf"), "--from", "2026-02-01", "--to", "2026-01-01"],
+         "must run forwards"),
+        (["erase", str(pid), *admin], "erase needs --confirm-email"),
+        (["erase", str(pid), *admin, "--confirm-email", "other@home.org"], "nothing erased"),
+    ):  # fmt: skip
+        capsys.readouterr()
+        assert cli.main(["patient-data", *argv]) == 2, argv
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("coach-server: error:") and says in err and "\n" not in err, err
+    assert not (tmp_path / "x.zip").exists() and not (tmp_path / "x.pdf").exists()
+    assert cli.main(["patient-data", "erase", str(pid), *admin, "--confirm-email", "PAT@home.org"]) == 0
+    assert f"patient {pid} erased" in capsys.readouterr().out
+    with get_sessionmaker()() as s:
+        assert s.get(User, pid) is None
+        assert s.scalar(sa.select(sa.func.count()).select_from(AuditEvent).where(AuditEvent.patient_id == pid)) == 0
+        erased = s.scalars(sa.select(AuditEvent).where(AuditEvent.action == "patient.erase")).one()
+        boss = s.scalar(sa.select(User.id).where(User.email == "boss@clinic.org"))
+        assert erased.actor_user_id == boss and erased.patient_id is None

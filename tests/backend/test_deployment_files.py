@@ -50,3 +50,12 @@ def test_compose_runs_a_worker_on_the_same_database_and_bucket():
     assert worker["command"] == ["coach-server", "worker"]
     for name in ("COACH_DATABASE_URL", "COACH_STORAGE_BACKEND", "COACH_S3_BUCKET", "COACH_S3_ENDPOINT_URL"):
         assert worker["environment"][name] == server["environment"][name], name
+
+
+def test_the_retention_setting_reaches_the_service_the_daily_command_runs_in():
+    """docs/deployment.md runs `docker compose exec -T server coach-server retention` daily: without the setting in
+    the server's environment it would answer "retention is off" however .env sets it."""
+    services = _compose()["services"]
+    assert "exec -T server coach-server retention" in (ROOT / "docs" / "deployment.md").read_text()
+    for name in ("server", "worker"):
+        assert services[name]["environment"]["COACH_RETENTION_DAYS"] == "${COACH_RETENTION_DAYS:-0}", name

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import time
 from pathlib import Path
 
@@ -152,6 +153,17 @@ def test_cli_summary_names_the_count(tmp_path: Path, capsys) -> None:
     write_payload(SessionPayload(session_id="abc", raw=truth, filtered=truth), path)
     assert cli.main(["analyze", str(path), "--exercise", "squat"]) == 0
     assert "squat: 2 repetitions" in capsys.readouterr().out
+
+
+def test_cli_summary_gives_the_balance_or_why_it_is_missing(tmp_path: Path, capsys) -> None:
+    for slug, says in (("shoulder_abduction", r"balance: sway \d+\.\d\d cm/s \(95 % \d+\.\d\d-\d+\.\d\d\) over "),
+                       ("seated_knee_extension", r"balance: not measured: \w")):  # fmt: skip
+        path = tmp_path / f"{slug}.khs"
+        truth = simulate_truth(slug, 3, seed=2)
+        write_payload(SessionPayload(session_id="abc", raw=truth, filtered=truth), path)
+        assert cli.main(["analyze", str(path), "--exercise", slug]) == 0
+        out = capsys.readouterr().out
+        assert re.search(says, out), out
 
 
 def test_cli_unknown_exercise_exits_2_with_one_line(tmp_path: Path, capsys) -> None:

@@ -86,3 +86,17 @@ def test_errors_are_said_in_words():
                                   "session/ab/abc does not match its sha256")  # fmt: skip
     assert error_words("KeyError: 'rom'\nTraceback") == "The job failed on an unexpected error (KeyError): 'rom'"
     assert error_words(None) is None
+
+
+def test_an_unknown_patient_or_exercise_is_refused_not_queued_as_nothing(client, db_session, make_user, auth_headers):
+    headers = auth_headers(make_user("admin"))
+    therapist = make_user("therapist")
+    db_session.commit()  # the refused requests roll back their own work only
+    for body in ({"patient_id": 987654}, {"patient_id": therapist.id}):
+        response = client.post("/api/v1/reanalysis", json=body, headers=headers)
+        assert response.status_code == 404 and response.json()["error"] == "PatientNotFound", response.text
+        assert response.json()["detail"] == f"no patient with id {body['patient_id']}"
+    response = client.post("/api/v1/reanalysis", json={"exercise": "squats"}, headers=headers)
+    assert response.status_code == 422 and response.json()["error"] == "InvalidInput", response.text
+    assert "no exercise 'squats' in the library" in response.json()["detail"] and "squat," in response.json()["detail"]
+    assert db_session.scalar(sa.select(sa.func.count()).select_from(Job)) == 0

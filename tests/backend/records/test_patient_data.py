@@ -165,3 +165,31 @@ def test_the_archive_says_how_each_set_felt(client, make_user, auth_headers, wit
     assert (felt["pain_nrs"], felt["effort_borg_cr10"]) == (3, 5.5) and felt["answered_at"], felt
     assert by_id[unanswered]["feeling"] is None
     assert "Borg CR10" in z.read("README.txt").decode()
+
+
+def test_the_archive_holds_replaced_metrics_settings_camera_sets_and_reminders(client, db_session, make_user,
+                                                                              auth_headers):  # fmt: skip
+    from backend.camera.models import CameraConsent
+    from backend.jobs.models import SessionMetricVersion
+    from backend.voice.models import VoicePreference
+
+    patient = make_user("patient")
+    headers = auth_headers(patient)
+    sid = _upload(client, headers, 63)
+    db_session.add(SessionMetricVersion(session_id=sid, analysis_version="before 2026.11.27",
+                                        document={"repetitions": 2, "rom_deg": 1.0}))  # fmt: skip
+    db_session.add(VoicePreference(patient_id=patient.id, enabled=False, volume=0.4))
+    db_session.add(CameraConsent(patient_id=patient.id, consent_version="1"))
+    db_session.commit()
+    z = zipfile.ZipFile(io.BytesIO(client.get(f"/api/v1/patients/{patient.id}/archive", headers=headers).content))
+    (session,) = json.loads(z.read("sessions.json"))
+    assert [(m["analysis_version"], m["document"]["rom_deg"]) for m in session["metrics_earlier"]] == [
+        ("before 2026.11.27", 1.0)
+    ]
+    settings = json.loads(z.read("settings.json"))
+    assert (settings["voice"]["enabled"], settings["voice"]["volume"]) == (False, 0.4)
+    assert settings["camera_consent"]["consent_version"] == "1" and settings["camera_consent"]["given_at"]
+    assert json.loads(z.read("camera_sets.json")) == [] and json.loads(z.read("reminders.json")) == []
+    readme = z.read("README.txt").decode()
+    assert all(name in readme for name in ("metrics_earlier", "settings.json", "camera_sets.json", "reminders.json"))
+    assert "Archive format version 2" in readme

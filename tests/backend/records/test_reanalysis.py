@@ -93,3 +93,29 @@ def test_a_failing_job_is_retried_then_recorded(db_session, db_connection, uploa
             job.run_after = utcnow()
             db_session.commit()
     assert job.status == "failed"
+
+
+def test_a_failed_reanalysis_is_queued_again_once_asked_again(db_session, db_connection, upload, client, object_store):
+    """A clinic restores the missing file from its backup and runs `coach-server reanalyze` again: the failed job gets
+    fresh tries in the new batch; a done job is not queued again."""
+    session_id, patient, _ = _old_session(client, db_session, upload)
+    key = db_session.get(ExerciseSession, session_id).file_key
+    data = object_store.get(key, db_session.get(ExerciseSession, session_id).content_hash)
+    object_store.delete(key)
+    first, _ = enqueue_reanalysis(db_session=db_session, patient_id=patient.id)
+    db_session.execute(sa.update(Job).values(max_attempts=1))  # fail at once
+    db_session.commit()
+    assert work(sessionmaker=_sessions(db_connection), settings=SETTINGS, name="w", once=True) == 1
+    assert queue.progress(db_session=db_session, batch=first)["failed"] == 1
+    object_store.put("session", data)  # restored
+    second, added = enqueue_reanalysis(db_session=db_session, patient_id=patient.id)
+    db_session.commit()
+    assert added == 1 and queue.progress(db_session=db_session, batch=second)["queued"] == 1
+    job = db_session.scalar(sa.select(Job).where(Job.batch == second))
+    assert (job.attempts, job.error, job.finished_at) == (0, None, None)
+    assert work(sessionmaker=_sessions(db_connection), settings=SETTINGS, name="w", once=True) == 1
+    db_session.expire_all()
+    assert queue.progress(db_session=db_session, batch=second)["done"] == 1
+    assert db_session.scalar(sa.select(SessionMetric.document).where(SessionMetric.session_id == session_id))[
+        "analysis_version"] == ANALYSIS_VERSION  # fmt: skip
+    assert enqueue_reanalysis(db_session=db_session, patient_id=patient.id)[1] == 0, "done: not queued again"

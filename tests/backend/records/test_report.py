@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import os
+import re
 import subprocess
 from pathlib import Path
 
@@ -21,6 +22,17 @@ def _pdf_text(data: bytes, tmp_path) -> str:
     path = tmp_path / "r.pdf"
     path.write_bytes(data)
     return subprocess.run(["pdftotext", "-layout", str(path), "-"], capture_output=True, text=True, check=True).stdout
+
+
+def _page_sizes(data: bytes, tmp_path) -> set[tuple[int, int]]:
+    """Returns the (width, height) in points, rounded, of every page (pdfinfo)."""
+    path = tmp_path / "sizes.pdf"
+    path.write_bytes(data)
+    out = subprocess.run(["pdfinfo", "-f", "1", "-l", "999", str(path)], capture_output=True, text=True,
+                         check=True).stdout  # fmt: skip
+    found = re.findall(r"Page +\d+ size: +([\d.]+) x ([\d.]+) pts", out)
+    assert found, out
+    return {(round(float(w)), round(float(h))) for w, h in found}
 
 
 @pytest.mark.parametrize(("paper", "size"), [("a4", A4), ("letter", LETTER)])
@@ -45,9 +57,8 @@ def test_report_lists_sessions_plan_and_notes(client, db_session, make_patient_w
                           params={"from": "2026-11-01", "to": str(today), "paper": paper})  # fmt: skip
     assert response.status_code == 200 and response.headers["content-type"] == "application/pdf"
     assert response.content.startswith(b"%PDF")
-    w, h = size
-    assert f"/MediaBox [ 0 0 {w:g} {h:g} ]".encode() in response.content or b"MediaBox" in response.content
     text = _pdf_text(response.content, tmp_path)
+    assert _page_sizes(response.content, tmp_path) == {(round(size[0]), round(size[1]))}, f"every page on {paper}"
     assert "Progress report" in text and patient.email in text
     assert "Plan and adherence" in text and "Knees" in text and "Slowly, no pain." in text
     assert "Deeper squats." in text and "Not recorded" not in text
