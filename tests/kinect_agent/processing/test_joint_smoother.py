@@ -16,7 +16,7 @@ import pytest
 from kinect_agent import skeleton
 from kinect_agent.body.angles import joint_angles
 from kinect_agent.processing.config import config_for_device
-from kinect_agent.processing.joint_smoother import constant_velocity_rts, smooth_joints
+from kinect_agent.processing.joint_smoother import INFERRED_FACTOR, JointFilter, constant_velocity_rts, smooth_joints
 from kinect_agent.processing.label_swaps import MIRROR, body_jumps, labelling_flips
 from kinect_agent.processing.pipeline import process
 from kinect_agent.recording import Metadata, Recording
@@ -25,19 +25,22 @@ from kinect_agent.sources.simulator import simulate_truth
 TOL_DEG = 0.1  # the exact truth has no reference noise: only rounding-level losses are allowed
 
 
-def _textbook_rts(z: np.ndarray, r: float, q: float, dt: float) -> np.ndarray:
-    """One series, one frame at a time, the formulas as printed (Kalman filter, then RTS)."""
-    F = np.array([[1.0, dt], [0.0, 1.0]])
-    Q = q**2 * np.array([[dt**4 / 4, dt**3 / 2], [dt**3 / 2, dt**2]])
+def _textbook_rts(z: np.ndarray, r: float, q: float, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One series, one frame at a time, the formulas as printed: returns (Kalman filter, RTS) positions, NaN before
+    the first measurement (which starts the filter: x = (z, 0), P = diag(r², 4), then its first update)."""
     H = np.array([[1.0, 0.0]])
     k0 = int(np.flatnonzero(np.isfinite(z))[0])
     x, P = np.array([z[k0], 0.0]), np.diag([r**2, 4.0])
-    xs, Ps, xp, Pp = [], [], [], []
-    for k in range(len(z)):
-        if k:
+    xs, Ps, xp, Pp, Fs = [], [], [], [], []
+    for k in range(k0, len(z)):
+        dt = t[k] - t[k - 1] if k > k0 else 0.0
+        F = np.array([[1.0, dt], [0.0, 1.0]])
+        Q = q**2 * np.array([[dt**4 / 4, dt**3 / 2], [dt**3 / 2, dt**2]])
+        if k > k0:
             x, P = F @ x, F @ P @ F.T + Q
         xp.append(x)
         Pp.append(P)
+        Fs.append(F)
         if np.isfinite(z[k]):
             S = H @ P @ H.T + r**2
             K = P @ H.T @ np.linalg.inv(S)
@@ -46,10 +49,18 @@ def _textbook_rts(z: np.ndarray, r: float, q: float, dt: float) -> np.ndarray:
         xs.append(x)
         Ps.append(P)
     out = [xs[-1]]
-    for k in range(len(z) - 2, -1, -1):
-        G = Ps[k] @ F.T @ np.linalg.inv(Pp[k + 1])
-        out.insert(0, xs[k] + G @ (out[0] - xp[k + 1]))
-    return np.array(out)[:, 0]
+    for i in range(len(xs) - 2, -1, -1):
+        G = Ps[i] @ Fs[i + 1].T @ np.linalg.inv(Pp[i + 1])
+        out.insert(0, xs[i] + G @ (out[0] - xp[i + 1]))
+    pad = np.full(k0, np.nan)
+    return np.concatenate([pad, np.array(xs)[:, 0]]), np.concatenate([pad, np.array(out)[:, 0]])
+
+
+def _frame_times(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Returns (n,) s frame times of a browser camera: about 10 a second, irregular, with a gap of 0.8 s."""
+    steps = rng.uniform(0.05, 0.15, n)
+    steps[n // 2] = 0.8
+    return np.cumsum(steps)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -57,9 +68,37 @@ def test_the_vectorised_rts_equals_the_textbook_loop(seed: int) -> None:
     rng = np.random.default_rng(seed)
     z = np.cumsum(rng.normal(0, 0.01, (80, 3)), axis=0)
     z[rng.random(z.shape) < 0.1] = np.nan
-    got = constant_velocity_rts(z, np.array([0.01, 0.02, 0.05]), 30.0, 1 / 30)
+    z[:5, 2] = np.nan  # a series that starts late
+    t = _frame_times(rng, 80)
+    got = constant_velocity_rts(z, np.array([0.01, 0.02, 0.05]), 30.0, t)
     for s, r in enumerate((0.01, 0.02, 0.05)):
-        np.testing.assert_allclose(got[:, s], _textbook_rts(z[:, s], r, 30.0, 1 / 30), atol=1e-10, err_msg=f"{s}")
+        np.testing.assert_allclose(got[:, s], _textbook_rts(z[:, s], r, 30.0, t)[1], atol=1e-10, err_msg=f"{s}")
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_live_filter_is_the_textbook_kalman_filter_frame_by_frame(seed: int) -> None:
+    """The joints filter's causal pass (the webcam's live filter, JointFilter.step) is the smoother's forward pass:
+    each coordinate a textbook Kalman filter, between two restarts."""
+    rng = np.random.default_rng(seed)
+    truth = simulate_truth("squat", 1, seed=seed)
+    n = 60
+    t = _frame_times(rng, n)
+    pos = truth.positions[:n] + rng.normal(0.0, 0.01, (n, skeleton.J, 3))
+    state = truth.state[:n].copy()
+    state[rng.random(state.shape) < 0.1] = skeleton.NOT_TRACKED
+    config = config_for_device("webcam")
+    live = JointFilter(config)
+    got = np.stack([live.step(float(t[k]), pos[k], state[k]) for k in range(n)])
+    assert live.n_restarts == 0
+    r = np.where(state == skeleton.INFERRED, INFERRED_FACTOR, 1.0)[..., None] * np.array(
+        [config.joint_sigma_image_m, config.joint_sigma_image_m, config.joint_sigma_depth_m]
+    )
+    z = np.where((state != skeleton.NOT_TRACKED)[..., None], pos, np.nan)
+    for j in (skeleton.INDEX["KNE_L"], skeleton.INDEX["WRI_R"]):
+        for c in range(3):
+            assert np.all(r[:, j, c] == r[0, j, c]), "the test's joints are tracked, one SD"
+            want = _textbook_rts(z[:, j, c], float(r[0, j, c]), config.joint_accel_sd_mps2, t)[0]
+            np.testing.assert_allclose(got[:, j, c], want, atol=1e-10, err_msg=f"joint {j} axis {c}")
 
 
 def test_mirror_maps_left_to_right_and_keeps_the_trunk() -> None:
