@@ -31,6 +31,9 @@ from kinect_agent.analysis import series
 from kinect_agent.analysis.angles import counting_angles
 from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
 from kinect_agent.body.angles import body_frame, joint_angles
+from kinect_agent.processing.config import config_for_device
+from kinect_agent.processing.joint_smoother import forward_joints
+from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INDEX, NOT_TRACKED
 
 CONTEXT_S = 20.0
@@ -106,6 +109,29 @@ def hint(positions: np.ndarray, state: np.ndarray, limbs: list[int], kind: str |
     return None
 
 
+# Repetition rules of a device where they differ from the live count's (RepetitionParams(rest="start")). The
+# webcam: an excursion of a defining angle under 20 degrees is no repetition (its landmarker's angles wobble by up to
+# 17 degrees on a person standing; bench/README.md, "Webcam counts: the live count and the saved count, one count").
+DEVICE_COUNTING: dict[str, dict[str, float]] = {"webcam": {"min_amplitude_deg": 20.0}}
+
+
+def counting_params(device: str | None) -> RepetitionParams:
+    """Returns the repetition rules of a live count of `device` (kinect_agent.recording.DEVICES; None: Kinect's)."""
+    return RepetitionParams(rest="start", **DEVICE_COUNTING.get(device or "", {}))
+
+
+def counting_positions(recording: Recording) -> np.ndarray | None:
+    """Returns (T, J, 3) m, camera frame, the positions a stored recording's repetitions are counted on when its
+    device's live count runs the joints filter (the webcam: processing.online.live_filter), None otherwise.
+
+    That filter's causal pass over the raw recording: the positions the live count saw frame by frame, so that the
+    stored count and the live count are one count (the same positions, the same rules, rest="start"); the stored
+    angles and ranges still come from the smoothed recording. Other devices are counted on the measured positions.
+    """
+    config = config_for_device(recording.meta.device)
+    return forward_joints(recording, config) if config.offline_filter == "joints" else None
+
+
 class LiveCount:
     """Counts one set's repetitions incrementally; add() takes each frame and returns what to show."""
 
@@ -152,9 +178,10 @@ class LiveCount:
         return self._status
 
     def final(self) -> int:
-        """Returns the count of the whole set so far (evaluated on the newest frames)."""
+        """Returns the count of the whole set (evaluated on the newest frames; the set is over, so an excursion that
+        ended in its last DONE_S counts too, as in the stored recording's count)."""
         if len(self._t) >= 2:
-            self._evaluate()
+            self._evaluate(ended=True)
         return self._status.count
 
     def _window(self) -> int:
@@ -162,7 +189,7 @@ class LiveCount:
         start = self.cut_t - CONTEXT_S
         return int(np.searchsorted(np.asarray(self._t), start))
 
-    def _evaluate(self) -> None:
+    def _evaluate(self, ended: bool = False) -> None:
         first = self._window()
         t = np.asarray(self._t[first:])
         now = float(t[-1])
@@ -175,7 +202,8 @@ class LiveCount:
             ends = np.array([t[0] + r.end_s for r in result.repetitions])
             middles = np.array([t[0] + 0.5 * (r.start_s + r.end_s) for r in result.repetitions])
             after_cut = middles > self.cut_t
-            done = ends < now - DONE_S  # back at rest: an excursion still under way may yet merge or shrink
+            # back at rest (an excursion still under way may yet merge or shrink), or the set is over
+            done = np.full(ends.shape, True) if ended else ends < now - DONE_S
             count = self.frozen + int((after_cut & done).sum())
             angle_name = result.defining_angle or self.names[0]
             y = angles[angle_name]
