@@ -4,7 +4,7 @@ the filtered recording) with the webcam's filter, with the former chain filter, 
     nice -n 10 .venv/bin/python bench/webcam_counts.py [--reps 5] [--seeds 0 1]
 
 Input: every simulated exercise the server knows (kinect_agent.sources.simulator.simulate_truth, the exact motion),
-made webcam-like as the test of the webcam's filter does (tests/kinect_agent/processing/test_joint_smoother.py):
+made webcam-like by tests/webcam_like.py (as the webcam filter's tests do):
 jitter 10 mm across the image and 25 mm in depth, the hips' distance jittering 30 mm, and (second row of each case)
 a sixth of the set where left and right flicker. "live" is the camera set's live count at the set's end (the
 server's path: the webcam's live filter frame by frame on the session file's grid, LiveCount with the webcam's rules,
@@ -17,8 +17,6 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from backend.analysis.report import analyze_recording  # noqa: E402
@@ -26,25 +24,11 @@ from backend.exercises.library import EXERCISES as LIBRARY  # noqa: E402
 from kinect_agent.analysis.live import LiveCount, counting_params  # noqa: E402
 from kinect_agent.formats.session_file import on_grid  # noqa: E402
 from kinect_agent.processing.config import config_for_device  # noqa: E402
-from kinect_agent.processing.label_swaps import MIRROR  # noqa: E402
 from kinect_agent.processing.online import live_filter  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402
-from kinect_agent.recording import Metadata, Recording  # noqa: E402
+from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.sources.simulator import EXERCISES, simulate_truth  # noqa: E402
-
-
-def webcam_like(truth: Recording, seed: int, swaps: bool) -> Recording:
-    """Returns the truth with the webcam's measured errors (module docstring)."""
-    rng = np.random.default_rng(seed)
-    T = truth.n_frames
-    pos = truth.positions + rng.normal(0.0, 1.0, truth.positions.shape) * np.array([0.01, 0.01, 0.025])
-    pos[..., 2] += rng.normal(0.0, 0.03, (T, 1))
-    if swaps:
-        stretch = np.arange(T // 3, T // 3 + T // 6)
-        flicker = stretch[rng.random(stretch.size) < 0.5]
-        pos[flicker] = pos[flicker][:, MIRROR]
-    meta = Metadata(device="webcam", rate_hz=truth.meta.rate_hz, exercise=truth.meta.exercise)
-    return Recording(truth.t.copy(), on_grid(pos), truth.state.copy(), meta)
+from tests.webcam_like import webcam_like  # noqa: E402
 
 
 def live_count(raw: Recording, angles: tuple[str, ...]) -> int:
@@ -73,6 +57,7 @@ def main() -> None:
             truth = simulate_truth(exercise, args.reps, seed=seed)
             for swaps in (False, True):
                 raw = webcam_like(truth, seed, swaps)
+                raw = raw.replace(positions=on_grid(raw.positions))  # as a stored session file holds them
                 counts = []
                 for name, config in methods.items():
                     if config == "live":

@@ -10,6 +10,8 @@ camera tests' clip (Sports2D's demo, looped by Chromium's fake camera) the page 
 
 from __future__ import annotations
 
+import uuid
+
 import numpy as np
 import pytest
 
@@ -19,12 +21,11 @@ from backend.exercises.library import EXERCISES
 from kinect_agent.analysis.live import LiveCount, counting_params
 from kinect_agent.formats.session_file import on_grid
 from kinect_agent.processing.config import config_for_device
-from kinect_agent.processing.label_swaps import MIRROR
 from kinect_agent.processing.online import live_filter
 from kinect_agent.processing.pipeline import process
-from kinect_agent.recording import Metadata, Recording
 from kinect_agent.sources.simulator import simulate_truth
-from tests.backend.camera.landmarks import batch, squats
+from tests.backend.camera.landmarks import batch, frame, squats
+from tests.webcam_like import webcam_like
 
 PER_BATCH = 6
 # BlazePose's 33 landmarks with left and right exchanged (nose 0 stays)
@@ -48,8 +49,6 @@ def webcam_frames(frames: list[dict], seed: int, swaps: bool) -> list[dict]:
 
 def _wobble(seconds: float, seed: int) -> list[dict]:
     """Frames of a person standing whose knees wobble by up to 12 degrees (no repetition), as page frames."""
-    from tests.backend.camera.landmarks import frame
-
     rng = np.random.default_rng(seed)
     n = int(seconds * 30)
     knee = np.abs(np.convolve(rng.normal(0.0, 12.0, n + 30), np.ones(30) / np.sqrt(30), mode="same")[15 : 15 + n])
@@ -70,8 +69,6 @@ def test_the_saved_count_is_the_last_live_count(client, db_session, camera_home,
                         headers=h)  # fmt: skip
         assert r.status_code == 201, r.text
         answers.append(r.json()["count"])
-    import uuid
-
     final = live_count.final_count(uuid.UUID(set_id))
     r = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": len(answers) - 1, "reason": "stop"},
                     headers=h)  # fmt: skip
@@ -80,24 +77,11 @@ def test_the_saved_count_is_the_last_live_count(client, db_session, camera_home,
     assert answers[-1] == final == stored == reps, f"live {answers}, final {final}, stored {stored}, true {reps}"
 
 
-def _webcam_like(exercise: str, seed: int) -> Recording:
-    """Returns a simulated set of 4 repetitions with the webcam's jitter and a sixth of it with flickering swaps."""
-    truth = simulate_truth(exercise, 4, seed=seed)
-    rng = np.random.default_rng(seed)
-    T = truth.n_frames
-    pos = truth.positions + rng.normal(0.0, 1.0, truth.positions.shape) * np.array([0.01, 0.01, 0.025])
-    pos[..., 2] += rng.normal(0.0, 0.03, (T, 1))
-    stretch = np.arange(T // 3, T // 3 + T // 6)
-    flicker = stretch[rng.random(stretch.size) < 0.5]
-    pos[flicker] = pos[flicker][:, MIRROR]
-    meta = Metadata(device="webcam", rate_hz=truth.meta.rate_hz, exercise=exercise)
-    return Recording(truth.t.copy(), on_grid(pos), truth.state.copy(), meta)
-
-
 @pytest.mark.parametrize("seed", [0, 1, 2])
 @pytest.mark.parametrize("exercise", ["squat", "shoulder_abduction", "side_step"])
 def test_the_live_path_and_the_stored_analysis_count_alike(exercise, seed):
-    raw = _webcam_like(exercise, seed)
+    raw = webcam_like(simulate_truth(exercise, 4, seed=seed), seed)
+    raw = raw.replace(positions=on_grid(raw.positions))  # as a stored session file holds them
     spec = EXERCISES[exercise]
     config = config_for_device("webcam")
     filt, counter = live_filter(config), LiveCount(tuple(spec.defining_angles), params=counting_params("webcam"))

@@ -19,8 +19,8 @@ from kinect_agent.processing.config import config_for_device
 from kinect_agent.processing.joint_smoother import INFERRED_FACTOR, JointFilter, constant_velocity_rts, smooth_joints
 from kinect_agent.processing.label_swaps import MIRROR, body_jumps, labelling_flips
 from kinect_agent.processing.pipeline import process
-from kinect_agent.recording import Metadata, Recording
 from kinect_agent.sources.simulator import simulate_truth
+from tests.webcam_like import webcam_like
 
 TOL_DEG = 0.1  # the exact truth has no reference noise: only rounding-level losses are allowed
 
@@ -124,19 +124,6 @@ def test_another_body_is_a_jump_and_walking_is_not() -> None:
     assert np.flatnonzero(body_jumps(pos, truth.t, 2.0, 0.06)).tolist() == [30]
 
 
-def _monocular_like(truth: Recording, seed: int) -> Recording:
-    """The truth with the webcam's measured errors (module docstring)."""
-    rng = np.random.default_rng(seed)
-    T = truth.n_frames
-    pos = truth.positions + rng.normal(0.0, 1.0, truth.positions.shape) * np.array([0.01, 0.01, 0.025])
-    pos[..., 2] += rng.normal(0.0, 0.03, (T, 1))
-    stretch = np.arange(T // 3, T // 3 + T // 6)
-    flicker = stretch[rng.random(stretch.size) < 0.5]
-    pos[flicker] = pos[flicker][:, MIRROR]
-    meta = Metadata(device="webcam", rate_hz=truth.meta.rate_hz)
-    return Recording(truth.t.copy(), pos, truth.state.copy(), meta)
-
-
 def _angle_rmse_change(est: np.ndarray, raw: np.ndarray, truth: np.ndarray) -> dict[str, float]:
     """Returns {angle: RMSE(est) - RMSE(raw)} in degrees against the truth, over the frames all three define."""
     a_est, a_raw, a_true = joint_angles(est), joint_angles(raw), joint_angles(truth)
@@ -152,7 +139,7 @@ def _angle_rmse_change(est: np.ndarray, raw: np.ndarray, truth: np.ndarray) -> d
 @pytest.mark.parametrize(("exercise", "seed"), [("squat", 0), ("shoulder_abduction", 1), ("side_step", 2)])
 def test_the_webcam_pipeline_makes_no_angle_worse_than_its_input(exercise: str, seed: int) -> None:
     truth = simulate_truth(exercise, 2, seed=seed)
-    raw = _monocular_like(truth, seed)
+    raw = webcam_like(truth, seed)
     filtered = process(raw, config=config_for_device("webcam")).filtered.positions
     change = _angle_rmse_change(filtered, raw.positions, truth.positions)
     worse = {k: round(v, 2) for k, v in change.items() if v > TOL_DEG}
@@ -163,7 +150,7 @@ def test_the_webcam_pipeline_makes_no_angle_worse_than_its_input(exercise: str, 
 def test_smoothing_across_the_swaps_would_make_angles_worse() -> None:
     """The property above can fail: without the restarts at label swaps the same filter breaks it."""
     truth = simulate_truth("squat", 2, seed=0)
-    raw = _monocular_like(truth, 0)
+    raw = webcam_like(truth, 0)
     config = config_for_device("webcam").model_copy(update={"joint_split_at_swaps": False})
     filtered, _ = smooth_joints(raw, config)
     change = _angle_rmse_change(filtered, raw.positions, truth.positions)
