@@ -29,7 +29,7 @@ from backend.analysis.sit_to_stand import sit_to_stand
 from backend.exercises.library import EXERCISES, ExerciseSpec
 from kinect_agent.analysis.angles import counting_angles, measured_angles
 from kinect_agent.analysis.document import AnalysisReport, json_ready
-from kinect_agent.analysis.live import counting_params, counting_positions
+from kinect_agent.analysis.live import counting_params, counting_positions, done_repetitions
 from kinect_agent.analysis.repetitions import Repetition, RepetitionParams, count_repetitions
 from kinect_agent.body.angles import body_frame
 from kinect_agent.errors import FormatError
@@ -132,6 +132,8 @@ def analyze_recording(
         repetition_params = device_params if repetition_params is None else dataclasses.replace(
             repetition_params, rest="start", min_amplitude_deg=device_params.min_amplitude_deg)  # fmt: skip
     reps = count_repetitions(t, counted, names, repetition_params)
+    if causal is not None:  # and, as live, only the repetitions back at rest before the set's last frame
+        reps = dataclasses.replace(reps, repetitions=done_repetitions(reps, t))
     rep_list = [r.to_dict() | {"peak_deg": measured_peak(t, clinical, names, r)} for r in reps.repetitions]
     sd = _angle_sd(angle_sd, recording.n_frames) if source == "filtered" else None
     rom = range_of_motion(t, clinical, presmoothed=True)

@@ -29,7 +29,7 @@ import numpy as np
 
 from kinect_agent.analysis import series
 from kinect_agent.analysis.angles import counting_angles
-from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
+from kinect_agent.analysis.repetitions import Repetition, RepetitionParams, RepetitionResult, count_repetitions
 from kinect_agent.body.angles import body_frame, joint_angles
 from kinect_agent.processing.config import config_for_device
 from kinect_agent.processing.joint_smoother import forward_joints
@@ -120,6 +120,12 @@ def counting_params(device: str | None) -> RepetitionParams:
     return RepetitionParams(rest="start", **DEVICE_COUNTING.get(device or "", {}))
 
 
+def done_repetitions(result: RepetitionResult, t: np.ndarray) -> list[Repetition]:
+    """Returns the repetitions of result (counted over frame times t: (T,) s) that ended DONE_S before the newest
+    frame: the patient is back at rest (one still under way may yet merge or shrink, and is not counted yet)."""
+    return [r for r in result.repetitions if t[0] + r.end_s < t[-1] - DONE_S]
+
+
 def counting_positions(recording: Recording) -> np.ndarray | None:
     """Returns (T, J, 3) m, camera frame, the positions a stored recording's repetitions are counted on when its
     device's live count runs the joints filter (the webcam: processing.online.live_filter), None otherwise.
@@ -178,10 +184,9 @@ class LiveCount:
         return self._status
 
     def final(self) -> int:
-        """Returns the count of the whole set (evaluated on the newest frames; the set is over, so an excursion that
-        ended in its last DONE_S counts too, as in the stored recording's count)."""
+        """Returns the count of the whole set so far (evaluated on the newest frames)."""
         if len(self._t) >= 2:
-            self._evaluate(ended=True)
+            self._evaluate()
         return self._status.count
 
     def _window(self) -> int:
@@ -189,7 +194,7 @@ class LiveCount:
         start = self.cut_t - CONTEXT_S
         return int(np.searchsorted(np.asarray(self._t), start))
 
-    def _evaluate(self, ended: bool = False) -> None:
+    def _evaluate(self) -> None:
         first = self._window()
         t = np.asarray(self._t[first:])
         now = float(t[-1])
@@ -202,8 +207,7 @@ class LiveCount:
             ends = np.array([t[0] + r.end_s for r in result.repetitions])
             middles = np.array([t[0] + 0.5 * (r.start_s + r.end_s) for r in result.repetitions])
             after_cut = middles > self.cut_t
-            # back at rest (an excursion still under way may yet merge or shrink), or the set is over
-            done = np.full(ends.shape, True) if ended else ends < now - DONE_S
+            done = np.isin(np.arange(len(result.repetitions)), [r.index for r in done_repetitions(result, t)])
             count = self.frozen + int((after_cut & done).sum())
             angle_name = result.defining_angle or self.names[0]
             y = angles[angle_name]
