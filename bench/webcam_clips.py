@@ -18,11 +18,15 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from kinect_agent.sources.webcam.landmarks import LandmarkBatch  # noqa: E402
-from tests.media import pose2sim_view, sports2d_demo  # noqa: E402
+from tests.media import pose2sim_multi_view, pose2sim_view, sports2d_demo  # noqa: E402
 
 CACHE = REPO / "var" / "bench-cache" / "webcam"
-CLIPS = {"sports2d": sports2d_demo, **{f"pose2sim_cam{c}": (lambda c=c: pose2sim_view(c)) for c in (1, 2, 3, 4)}}
-RATES = {"sports2d": 30.0, **{f"pose2sim_cam{c}": 60.0 for c in (1, 2, 3, 4)}}
+CLIPS = {
+    "sports2d": sports2d_demo,
+    **{f"pose2sim_cam{c}": (lambda c=c: pose2sim_view(c)) for c in (1, 2, 3, 4)},
+    **{f"pose2sim_multi_cam{c}": (lambda c=c: pose2sim_multi_view(c)) for c in (1, 2, 3, 4)},
+}
+RATES = {"sports2d": 30.0, **{f"pose2sim{m}_cam{c}": 60.0 for m in ("", "_multi") for c in (1, 2, 3, 4)}}
 
 
 def landmarks(clip: str, model: str = "lite") -> tuple[LandmarkBatch, float]:

@@ -4,7 +4,8 @@
   filmed from the side, 1768x994, 30 fps, 230 frames (7.7 s);
 - Pose2Sim 0.10.49 (PyPI `pose2sim`, BSD-3-Clause, (c) 2022 perfanalytics): Pose2Sim/Demo_SinglePerson, four
   calibrated views (Calib.qca.txt) of one person walking, 1080x1920, 60 fps, 100 frames, with a second person in
-  the background of cam01.
+  the background of cam01;
+- the same wheel's Pose2Sim/Demo_MultiPerson: two people walking, filmed by the same four calibrated cameras.
 
 Each wheel is fetched once with `pip download --no-deps` into var/test-media/ (git-ignored), checked against its
 pinned SHA-256, and only the named members are unpacked.
@@ -39,6 +40,7 @@ SPORTS2D = Wheel("sports2d", "0.8.34", "733b6db70742636ae9c35d870c22bd416582f579
 POSE2SIM = Wheel("pose2sim", "0.10.49", "403e0dc4065898ba6a595e72a8970950310979253d60e24c2e00b16b36bf21e1",
                  "pose2sim-0.10.49-py3-none-any.whl")  # fmt: skip
 POSE2SIM_DEMO = "Pose2Sim/Demo_SinglePerson"
+POSE2SIM_MULTI = "Pose2Sim/Demo_MultiPerson"
 
 
 def wheel_path(wheel: Wheel) -> Path:
@@ -79,6 +81,11 @@ def sports2d_demo() -> Path:
 def pose2sim_view(camera: int) -> Path:
     """Returns view `camera` (1..4) of Pose2Sim's single-person demo (60 fps)."""
     return member(POSE2SIM, f"{POSE2SIM_DEMO}/videos/cam{camera:02d}.mp4")
+
+
+def pose2sim_multi_view(camera: int) -> Path:
+    """Returns view `camera` (1..4) of Pose2Sim's multi-person demo (two people, the same four cameras, 60 fps)."""
+    return member(POSE2SIM, f"{POSE2SIM_MULTI}/videos/cam{camera:02d}.mp4")
 
 
 def pose2sim_calibration() -> Path:

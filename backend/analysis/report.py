@@ -10,6 +10,7 @@ The document's shape is kinect_agent.analysis.document.AnalysisReport (versioned
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -28,6 +29,7 @@ from backend.analysis.sit_to_stand import sit_to_stand
 from backend.exercises.library import EXERCISES, ExerciseSpec
 from kinect_agent.analysis.angles import counting_angles, measured_angles
 from kinect_agent.analysis.document import AnalysisReport, json_ready
+from kinect_agent.analysis.live import counting_params, counting_positions, done_repetitions
 from kinect_agent.analysis.repetitions import Repetition, RepetitionParams, count_repetitions
 from kinect_agent.body.angles import body_frame
 from kinect_agent.errors import FormatError
@@ -120,8 +122,18 @@ def analyze_recording(
     measured = measured_angles(t, positions)
     smoothed, clinical = measured.positions, measured.angles
     frame = body_frame(smoothed)
-    counted = counting_angles(smoothed, names, clinical, measured.up)
+    causal = counting_positions(recording)
+    if causal is None:
+        counted = counting_angles(smoothed, names, clinical, measured.up)
+    else:  # the webcam: counted as its live count counts, on the same causal pass (live.counting_positions)
+        live = measured_angles(t, causal)
+        counted = counting_angles(live.positions, names, live.angles, live.up)
+        device_params = counting_params(recording.meta.device)
+        repetition_params = device_params if repetition_params is None else dataclasses.replace(
+            repetition_params, rest="start", min_amplitude_deg=device_params.min_amplitude_deg)  # fmt: skip
     reps = count_repetitions(t, counted, names, repetition_params)
+    if causal is not None:  # and, as live, only the repetitions back at rest before the set's last frame
+        reps = dataclasses.replace(reps, repetitions=done_repetitions(reps, t))
     rep_list = [r.to_dict() | {"peak_deg": measured_peak(t, clinical, names, r)} for r in reps.repetitions]
     sd = _angle_sd(angle_sd, recording.n_frames) if source == "filtered" else None
     rom = range_of_motion(t, clinical, presmoothed=True)

@@ -1,13 +1,15 @@
-"""The live count of camera sets: each new batch goes through the online filter and the live count (the same
+"""The live count of camera sets: each new batch goes through the webcam's live filter (processing.online.live_filter:
+the joints filter's causal pass, on the session file's position grid) and the live count (the same
 kinect_agent.processing.online and kinect_agent.analysis.live a home agent runs), and the status goes to the
-patient's pages as the same live.progress event a home agent's set sends.
+patient's pages as the same live.progress event a home agent's set sends. The stored session's count is counted on
+the same causal pass (kinect_agent.analysis.live.counting_positions), so the saved count is the live count's.
 
 The filter's state lives in this process, one per set (at most MAX_SETS, the least recently used dropped). A batch
 that does not follow the state's last batch (a set continued through another worker, a state dropped, a batch
 rolled back) rebuilds the state from the set's stored batches: the count is the same, only slower once.
 
-The filter's numba kernels compile on the first frame a process filters (about half a minute, more on a busy
-machine) or load from numba's on-disk cache (about a second): start_warm_up() does that in a background thread when
+The repetition counter's first evaluations (and, for the chain's filter, its numba kernels) cost most on a
+process's first set: start_warm_up() does that in a background thread when
 the server starts (Settings.LIVE_WARM_UP), so that the first batch of the first set is answered as fast as any.
 """
 
@@ -30,8 +32,10 @@ from backend.camera.schemas import BatchOut
 from backend.camera.skeleton import WEBCAM, camera_frames, pipeline_config
 from backend.events.hub import Event, publish
 from backend.exercises.models import Exercise
-from kinect_agent.analysis.live import LiveCount, LiveStatus
-from kinect_agent.processing.online import OnlineFilter
+from kinect_agent.analysis.live import LiveCount, LiveStatus, counting_params
+from kinect_agent.formats.session_file import on_grid
+from kinect_agent.processing.joint_smoother import JointFilter
+from kinect_agent.processing.online import OnlineFilter, live_filter
 from kinect_agent.sources.simulator import simulate
 from kinect_agent.sources.webcam.landmarks import LandmarkBatch
 
@@ -45,7 +49,7 @@ class _LiveSet:
     """The online filter and live count of one set, after batch `seq`."""
 
     seq: int
-    online: OnlineFilter
+    online: OnlineFilter | JointFilter
     counter: LiveCount
     status: LiveStatus
     t_last: float | None = None
@@ -56,7 +60,12 @@ _LOCK = threading.Lock()
 
 
 def _fresh(angles: tuple[str, ...]) -> _LiveSet:
-    return _LiveSet(-1, OnlineFilter(pipeline_config()), LiveCount(angles), LiveStatus(0, None, None, None, 0.0))
+    return _LiveSet(
+        -1,
+        live_filter(pipeline_config()),
+        LiveCount(angles, params=counting_params(WEBCAM)),
+        LiveStatus(0, None, None, None, 0.0),
+    )
 
 
 def _feed(state: _LiveSet, batch: LandmarkBatch) -> None:
@@ -64,6 +73,7 @@ def _feed(state: _LiveSet, batch: LandmarkBatch) -> None:
     if batch.n_frames == 0:
         return
     positions, tracking = camera_frames(batch)
+    positions = on_grid(positions)  # the numbers the stored session file holds: the stored count sees the same
     for k in range(batch.n_frames):
         t = float(batch.t[k])
         filtered = state.online.step(t, positions[k], tracking[k])
@@ -156,7 +166,7 @@ def forget(set_id: uuid.UUID) -> None:
 
 
 def warm_up() -> float:
-    """Runs the camera sets' live count (OnlineFilter with the webcam's settings, then LiveCount, frame by frame)
+    """Runs the camera sets' live count (live_filter with the webcam's settings, then LiveCount, frame by frame)
     over the first WARM_UP_S seconds of a simulated squat, so that its compiled code is ready; returns the seconds it
     took."""
     started = time.perf_counter()

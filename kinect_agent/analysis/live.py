@@ -29,8 +29,11 @@ import numpy as np
 
 from kinect_agent.analysis import series
 from kinect_agent.analysis.angles import counting_angles
-from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
+from kinect_agent.analysis.repetitions import Repetition, RepetitionParams, RepetitionResult, count_repetitions
 from kinect_agent.body.angles import body_frame, joint_angles
+from kinect_agent.processing.config import config_for_device
+from kinect_agent.processing.joint_smoother import forward_joints
+from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INDEX, NOT_TRACKED
 
 CONTEXT_S = 20.0
@@ -106,6 +109,35 @@ def hint(positions: np.ndarray, state: np.ndarray, limbs: list[int], kind: str |
     return None
 
 
+# Repetition rules of a device where they differ from the live count's (RepetitionParams(rest="start")). The
+# webcam: an excursion of a defining angle under 20 degrees is no repetition (its landmarker's angles wobble by up to
+# 17 degrees on a person standing; bench/README.md, "Webcam counts: the live count and the saved count, one count").
+DEVICE_COUNTING: dict[str, dict[str, float]] = {"webcam": {"min_amplitude_deg": 20.0}}
+
+
+def counting_params(device: str | None) -> RepetitionParams:
+    """Returns the repetition rules of a live count of `device` (kinect_agent.recording.DEVICES; None: Kinect's)."""
+    return RepetitionParams(rest="start", **DEVICE_COUNTING.get(device or "", {}))
+
+
+def done_repetitions(result: RepetitionResult, t: np.ndarray) -> list[Repetition]:
+    """Returns the repetitions of result (counted over frame times t: (T,) s) that ended DONE_S before the newest
+    frame: the patient is back at rest (one still under way may yet merge or shrink, and is not counted yet)."""
+    return [r for r in result.repetitions if t[0] + r.end_s < t[-1] - DONE_S]
+
+
+def counting_positions(recording: Recording) -> np.ndarray | None:
+    """Returns (T, J, 3) m, camera frame, the positions a stored recording's repetitions are counted on when its
+    device's live count runs the joints filter (the webcam: processing.online.live_filter), None otherwise.
+
+    That filter's causal pass over the raw recording: the positions the live count saw frame by frame, so that the
+    stored count and the live count are one count (the same positions, the same rules, rest="start"); the stored
+    angles and ranges still come from the smoothed recording. Other devices are counted on the measured positions.
+    """
+    config = config_for_device(recording.meta.device)
+    return forward_joints(recording, config) if config.offline_filter == "joints" else None
+
+
 class LiveCount:
     """Counts one set's repetitions incrementally; add() takes each frame and returns what to show."""
 
@@ -175,7 +207,7 @@ class LiveCount:
             ends = np.array([t[0] + r.end_s for r in result.repetitions])
             middles = np.array([t[0] + 0.5 * (r.start_s + r.end_s) for r in result.repetitions])
             after_cut = middles > self.cut_t
-            done = ends < now - DONE_S  # back at rest: an excursion still under way may yet merge or shrink
+            done = np.isin(np.arange(len(result.repetitions)), [r.index for r in done_repetitions(result, t)])
             count = self.frozen + int((after_cut & done).sum())
             angle_name = result.defining_angle or self.names[0]
             y = angles[angle_name]

@@ -16,6 +16,8 @@ Per angle:
     5. each excursion is widened to its onset and return: between the neighbouring excursions, the repetition starts
        at the last frame (ends at the first) whose e is within onset_frac·A of that stretch's minimum; excursions
        shorter than min_duration_s are dropped.
+Last, with min_amplitude_deg > 0 (a device's rule: the webcam's, kinect_agent.analysis.live.counting_params), an
+excursion whose amplitude is below it is dropped.
 Amplitude = e at the peak minus the mean rest e just before and after (degrees); peak = the smoothed angle at the
 peak (degrees); side = "left"/"right" from the angle's _L/_R suffix, "center" otherwise; core = the frames around the
 peak where e stays at least half the amplitude above the rest.
@@ -72,6 +74,7 @@ class RepetitionParams:
     shallow_spacing: float = 0.8  # × the median peak-to-peak spacing: the least room between two peaks
     min_duration_s: float = 0.4
     merge_overlap: float = 0.5
+    min_amplitude_deg: float = 0.0  # last: an excursion with a smaller amplitude is no repetition (0: no such rule)
     rest: str = "auto"  # "auto": step 3 of the module doc; "start": where the recording starts (a set counted live)
 
 
@@ -589,6 +592,7 @@ def count_repetitions(
     merged = _drop_off_cadence(_drop_rebounds(_drop_bumps(merged, params), params), params, t.shape[0])
     if dominant is not None:
         merged = _add_shallow(smoothed[dominant], dominant, found[dominant], merged, params)
+    merged = [ev for ev in merged if ev.amplitude >= params.min_amplitude_deg]
     t0 = float(t[0]) if t.shape[0] else 0.0
     reps = [
         Repetition(

@@ -188,6 +188,12 @@ def _angle_sd_block(payload: SessionPayload) -> tuple[list[str], bytes]:
     return names, _shuffle(block)
 
 
+def on_grid(positions: np.ndarray) -> np.ndarray:
+    """Returns positions (any shape) m rounded to the grid a written file stores them on (NaN stays NaN): what a
+    reader of the file gets back, for a live path that must see the same numbers as the stored file."""
+    return np.rint(np.asarray(positions, dtype=np.float64) / GRID_M) * GRID_M
+
+
 def _position_deltas(positions: np.ndarray, state: np.ndarray) -> np.ndarray:
     """Returns (J, 3, T) int32 time deltas of positions in grid units; untracked positions count as 0.
 

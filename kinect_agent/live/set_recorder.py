@@ -1,8 +1,9 @@
 """One set, recorded on the server's command: frames in, live feedback out, the frames kept on disk.
 
-Each frame goes to the journal (disk) first, then through the online filter (OnlineFilter) and the live count
-(kinect_agent.analysis.live.LiveCount, the server's repetition logic run incrementally). Every `every_s` seconds
-a progress message is offered to the publisher (which never blocks). The set ends when
+Each frame goes to the journal (disk) first, then through the online filter (online.live_filter: the chain's, or the
+webcam's joints filter) and the live count (kinect_agent.analysis.live.LiveCount, the server's repetition logic run
+incrementally). Every `every_s` seconds a progress message is offered to the publisher (which never blocks). The
+set ends when
     "target"  the count reached the target and settle_s more seconds were recorded (the return to rest);
     "stop"    stop() was called (the patient pressed Stop, or the agent is shutting down);
     "still"   the defining angle did not move for still_end_s seconds (the patient walked away or gave up);
@@ -20,11 +21,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from kinect_agent.analysis.live import LiveCount, LiveStatus
+from kinect_agent.analysis.live import LiveCount, LiveStatus, counting_params
 from kinect_agent.clock import utc_now_iso
 from kinect_agent.live.journal import Journal
 from kinect_agent.processing.config import config_for_device
-from kinect_agent.processing.online import OnlineFilter
+from kinect_agent.processing.online import live_filter
 from kinect_agent.recording import Recording
 from kinect_agent.sources.base import Source
 
@@ -141,7 +142,10 @@ class SetRecorder:
             meta.exercise = self.command.exercise
             meta.extra["live_set_id"] = self.command.set_id
             journal = Journal(self.journal_dir, self.session_id, meta, created_at)
-            online, counter = OnlineFilter(config_for_device(meta.device)), LiveCount(self.command.angles)
+            online, counter = (
+                live_filter(config_for_device(meta.device)),
+                LiveCount(self.command.angles, params=counting_params(meta.device)),
+            )
             status, reason, t0, target_since, last_sent = None, "source", None, None, -1e9
             for frame in self.source.frames():
                 taken_at = time.time()

@@ -12,6 +12,7 @@ from typing import Literal, get_args
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
 
 Smoother = Literal["four_pass", "urts"]
+OfflineFilter = Literal["chain", "joints"]
 SMOOTHERS: tuple[str, ...] = get_args(Smoother)  # "urts" measured best; "four_pass" is the paper's
 
 
@@ -109,6 +110,17 @@ class PipelineConfig(BaseModel):
     offset_model: bool = Field(
         False, description="subtract Kinect's per-joint body-frame offset (offset_model.py) from the offline output"
     )
+    offline_filter: OfflineFilter = Field(
+        "chain",
+        description='offline: "chain", the four-pass kinematic UKF; "joints", each coordinate smoothed on its own '
+        "(joint_smoother.py: no bone lengths, restarted at left/right label swaps)",
+    )
+    joint_sigma_image_m: float = Field(0.01, gt=0, description="joints filter: measurement SD along x and y, m")
+    joint_sigma_depth_m: float = Field(0.025, gt=0, description="joints filter: measurement SD along z (depth), m")
+    joint_accel_sd_mps2: float = Field(50.0, gt=0, description="joints filter: white acceleration SD, m/s²")
+    joint_split_at_swaps: bool = Field(
+        True, description="joints filter: restart at left/right label swaps and at jumps to another body"
+    )
 
     @field_validator("excursion_max_len_s")
     @classmethod
@@ -122,15 +134,23 @@ class PipelineConfig(BaseModel):
 # The measurement noise of each device where it differs from the defaults (Kinect v2, measured on KERAAL/UI-PRMD):
 # webcam = BlazePose landmarks mapped by kinect_agent.sources.webcam.mapping; jitter and accuracy measured by
 # bench/webcam_noise.py and bench/webcam_accuracy.py (bench/README.md, "Webcam").
-DEVICE_SETTINGS: dict[str, dict[str, float]] = {
-    "webcam": {"sigma_tracked_m": 0.1, "sigma_inferred_m": 0.2, "online_sigma_tracked_m": 0.15},
+# The webcam's offline output comes from the joints filter (bench/README.md, "Webcam angles: why the pipeline made
+# them worse"); its chain settings serve the online filter of the live count.
+DEVICE_SETTINGS: dict[str, dict[str, float | str | bool]] = {
+    "webcam": {
+        "sigma_tracked_m": 0.1,
+        "sigma_inferred_m": 0.2,
+        "online_sigma_tracked_m": 0.15,
+        "offline_filter": "joints",
+        "remove_outliers": False,
+    },
 }
 
 
 def config_for_device(device: str | None) -> PipelineConfig:
     """Returns the pipeline settings for recordings of `device` (kinect_agent.recording.DEVICES; unknown or None:
     the defaults, which were measured on Kinect v2)."""
-    return PipelineConfig(**DEVICE_SETTINGS.get(device or "", {}))
+    return PipelineConfig.model_validate(DEVICE_SETTINGS.get(device or "", {}))
 
 
-__all__ = ["DEVICE_SETTINGS", "SMOOTHERS", "PipelineConfig", "config_for_device"]
+__all__ = ["DEVICE_SETTINGS", "SMOOTHERS", "OfflineFilter", "PipelineConfig", "config_for_device"]

@@ -20,6 +20,7 @@ from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.errors import ProcessingError
 from kinect_agent.processing.excursions import LiveExcursions
 from kinect_agent.processing.ik import inverse_kinematics
+from kinect_agent.processing.joint_smoother import JointFilter
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INFERRED, NOT_TRACKED
 
@@ -160,6 +161,13 @@ class OnlineFilter:
         self.gated_since = np.where(present & ~used, np.fmin(since, t), since)
 
 
+def live_filter(config: PipelineConfig) -> OnlineFilter | JointFilter:
+    """Returns the causal filter a live count runs for recordings with these settings: the joints filter's forward
+    pass where the offline output is the joints filter (the webcam: the live count and the stored count are then
+    counted on the same positions, kinect_agent.analysis.live.counting_positions), else the chain's (OnlineFilter)."""
+    return JointFilter(config) if config.offline_filter == "joints" else OnlineFilter(config)
+
+
 def run_online(
     rec: Recording, config: PipelineConfig, progress: Progress | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, km.ChainModel, dict[str, Any]]:
@@ -197,4 +205,4 @@ def run_online(
     return roots, kf.lengths, thetas, model, {"n_gated": filt.n_gated, "n_held": filt.n_held}
 
 
-__all__ = ["OnlineFilter", "run_online"]
+__all__ = ["OnlineFilter", "live_filter", "run_online"]

@@ -34,6 +34,12 @@ with noise_level.rigid_settings: the chain's misfit as measurement SD and the in
 so that what goes in comes out (the default innovation, z − Σ Wm·h(σ), stretches the chain by 20-30 mm there;
 bench/README.md, "Fed the truth, return the truth").
 
+config.offline_filter = "joints" (the webcam's setting) replaces the four passes offline by joint_smoother.py: each
+joint coordinate smoothed on its own (constant-velocity RTS), restarted at left/right label swaps and body jumps
+(quality["joint_restarts"]); the kinematic
+parameters are then the chain fitted to its output frame by frame, and angle_sd is None (bench/README.md, "Webcam
+angles: why the pipeline made them worse").
+
 Where the parts live: the settings in config.py (PipelineConfig), the chain's UKF (state layout, observation
 function, variance ceiling, gated update, re-acquisition) in chain_filter.py (ChainFilter), the forward pass frame
 by frame for live feedback and process(online=True) in online.py (OnlineFilter, run_online); here the passes,
@@ -59,6 +65,7 @@ from kinect_agent.processing.combined_outliers import remove_outliers_combined
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.errors import FilterDiverged
 from kinect_agent.processing.ik import IKResult, inverse_kinematics
+from kinect_agent.processing.joint_smoother import smooth_joints
 from kinect_agent.processing.online import run_online
 from kinect_agent.processing.params import KinematicParams
 from kinect_agent.processing.ukf import combine_information, unscented_rts
@@ -80,6 +87,8 @@ class PipelineResult:
     passes, smoother, angle_sd: CPU s of each step (steadier than wall time on a shared machine), for benchmarks}.
     segment_noise_mm: the measurement SD the input's segment lengths show (noise_level.segment_noise_m; None: too
     few segments), rigid_input: whether it was below config.rigid_input_sd_m, so filtered as exact (offline only).
+    offline_filter: config.offline_filter (None online); joint_restarts: the frames the joints filter restarted at
+    (label swaps, body jumps; None unless that filter ran).
     angle_sd: {angle of angles.ANGLE_NAMES: (T,) degrees}, the calibrated SD of each clinical angle per frame
     (uncertainty.angle_sd of the smoother's covariance); None online (the forward pass keeps no covariances).
     """
@@ -384,8 +393,17 @@ def _process(
     else:
         clean, prob, outlier = rec, np.where(rec.state == NOT_TRACKED, 1.0, 0.0), np.zeros((T, skeleton.J), bool)
     sd = None
+    smoothed = None
     if online:
         root, lengths, theta, model, info = run_online(clean, config, progress)
+    elif config.offline_filter == "joints":
+        smoothed, restarts = smooth_joints(clean, config)
+        ik = inverse_kinematics(smoothed)
+        root, lengths, theta, model = ik.root, ik.lengths, ik.theta, ik.model
+        info = {"joint_restarts": int(restarts.sum())}
+        stages["joints"] = round(time.process_time() - cpu_started - stages.get("outliers", 0.0), 3)
+        if progress is not None:
+            progress(T, T)
     else:
         ik = inverse_kinematics(clean.positions)
         root, lengths, theta, info = smooth(clean, ik, config, progress, covariances=True)
@@ -394,7 +412,7 @@ def _process(
         sd = uncertainty.angle_sd(model, lengths, theta, info.pop("covariance"))
         info["angle_sd_seconds"] = round(time.perf_counter() - sd_started, 3)
         stages.update(info.pop("stage_cpu_seconds"), angle_sd=round(time.process_time() - sd_cpu, 3))
-    positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta)
+    positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta) if smoothed is None else smoothed
     if not np.all(np.isfinite(positions)):
         bad = np.flatnonzero(~np.isfinite(positions).all(axis=(1, 2)))
         raise FilterDiverged(f"the filter's estimate is not finite in {len(bad)} of {T} frames (first: frame {bad[0]})")
@@ -402,7 +420,7 @@ def _process(
         positions = offset_model.correct(positions)
     observed = clean.state != NOT_TRACKED
     state = np.where(observed, TRACKED, INFERRED).astype(np.int8)
-    mode = "online forward pass" if online else config.smoother
+    mode = "online forward pass" if online else config.smoother if config.offline_filter == "chain" else "joints"
     step = f"{VERSION} ({mode}; {int(outlier.sum())} outliers removed)"
     filtered = rec.replace(step=step, positions=positions, state=state)
     R_world_root, R_local = model.standard_rotations(theta)
@@ -422,6 +440,8 @@ def _process(
         "n_frames": T,
         "online": online,
         "smoother": None if online else config.smoother,
+        "offline_filter": None if online else config.offline_filter,
+        "joint_restarts": info.get("joint_restarts"),
         "n_outliers": int(outlier.sum()),
         "outlier_fraction": {j: float(f) for j, f in zip(skeleton.JOINTS, frac, strict=True)},
         "frames_without_observation": int(np.sum(~observed.any(axis=1))),

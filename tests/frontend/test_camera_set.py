@@ -179,6 +179,9 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         assert counts == sorted(counts) and counts[-1] >= TARGET, counts
         stored = patient_sessions(base, email, pid)
         assert len(stored) == 1 and stored[0]["exercise_slug"] == EXERCISE and stored[0]["device_id"] is None, stored
+        # one count: what the page counted live is what it says was saved (tests/backend/camera/test_camera_count.py)
+        shown = page.evaluate("CameraPage.state().count")
+        assert stored[0]["repetitions"] == shown == counts[-1], (stored[0]["repetitions"], shown, counts)
         payload = session_header(base, email, stored[0]["id"])
         assert payload.raw.meta.device == "webcam", payload.raw.meta
         assert (
@@ -468,5 +471,6 @@ def test_the_landmarker_runs_on_the_page_when_its_worker_cannot_start_or_dies(ca
         wait_phase(page, "stored", "failed", timeout=240_000)
         assert phase(page) == "stored", page.locator("#cam-result-text").inner_text()
         expect(page.locator("#cam-result-text")).to_contain_text(re.compile(r"Saved: all \d+ repetitions"))
-        assert len(patient_sessions(base, email, pid)) == 1
+        stored = patient_sessions(base, email, pid)
+        assert len(stored) == 1 and stored[0]["repetitions"] == page.evaluate("CameraPage.state().count"), stored
         assert not page.js_errors, page.js_errors
