@@ -9,7 +9,8 @@ Per angle:
     3. the rest level is the end (p2 or p98) nearer to the first and the last smoothed value; when those disagree,
        the end the signal spends more time near; when it spends as long near either, the end whose excursions number
        closest to duration / P (P: the autocorrelation's period); with rest="start" (a set still being recorded),
-       the end nearer to the first value. The excursion e(t) = |angle − rest level|, clipped to [0, R]; its cycle
+       the end nearer to the median of its first START_S seconds (a filter started on a mistracked first frame
+       takes a fraction of a second to settle: its first value can lie at the other end). The excursion e(t) = |angle − rest level|, clipped to [0, R]; its cycle
        (cycles.cycle): period P and typical amplitude A = median prominence of the duration/P most prominent peaks
        (R without a period); e is then taken from its lower envelope over 1.5 P (cycles.baseline);
     4. hysteresis: an excursion begins when e rises above enter_frac·A and ends when it falls below exit_frac·A;
@@ -52,6 +53,7 @@ import numpy as np
 from kinect_agent.analysis import cycles, series
 
 TIE_DWELL = 0.05  # |share of time below the middle − 0.5| under which neither end is the rest level
+START_S = 1.0  # rest="start": the start level is the median of this many seconds from the first frame
 
 
 @dataclass(frozen=True)
@@ -154,13 +156,16 @@ def _hysteresis(e: np.ndarray, enter: float, leave: float) -> np.ndarray:
     return mark[idx] == 1  # frames before the first decision read mark[0] = -1: at rest
 
 
-def _rest_is_low(y: np.ndarray, lo: float, hi: float, rest: str = "auto") -> bool | None:
+def _rest_is_low(y: np.ndarray, lo: float, hi: float, rest: str = "auto", start_frames: int = 1) -> bool | None:
     """True when the rest level is the low end: where the recording starts and ends, else where it stays longer
-    (rest="start": where it starts); None when start and end disagree and it stays as long at either end (within
-    TIE_DWELL of half the time: a symmetric oscillation, e.g. shoulder rotation)."""
+    (rest="start": where the median of its first start_frames frames lies); None when start and end disagree and it
+    stays as long at either end (within TIE_DWELL of half the time: a symmetric oscillation, e.g. shoulder
+    rotation)."""
     mid = 0.5 * (lo + hi)
+    if rest == "start":
+        return bool(np.median(y[: max(1, start_frames)]) < mid)
     start_low, end_low = y[0] < mid, y[-1] < mid
-    if start_low == end_low or rest == "start":
+    if start_low == end_low:
         return bool(start_low)
     low_share = float(np.mean(y < mid))
     if abs(low_share - 0.5) < TIE_DWELL:
@@ -203,7 +208,8 @@ def detect_angle(
     lo, hi = bounds if bounds is not None else np.percentile(y, [2.0, 98.0])
     if hi - lo <= 0:
         return AngleExcursions([], 0, True, float(lo))
-    rest_low = _rest_is_low(y, lo, hi, params.rest)
+    start_frames = int(round(START_S / series.frame_interval(t))) if params.rest == "start" else 1
+    rest_low = _rest_is_low(y, lo, hi, params.rest, start_frames)
     if rest_low is not None:
         return _found(_excursions(t, y, name, params, rest_low), rest_low, float(lo if rest_low else hi))
     tries = [_found(_excursions(t, y, name, params, low), low, float(lo if low else hi)) for low in (True, False)]
