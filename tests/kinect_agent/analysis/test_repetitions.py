@@ -209,6 +209,21 @@ def test_rest_start_is_not_taken_from_a_filter_still_settling(seed):
     assert {r.side for r in reps} == {"both"}, [r.side for r in reps]
 
 
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_shallow_repetitions_missed_every_other_slot_are_added(seed):
+    """Three of ten repetitions done at a quarter of the others' depth, each between two full ones: the hysteresis
+    misses them, so the full ones' median spacing doubles and the room where a missed one is searched closed (7
+    counted). The lower tercile of the spacings keeps the cadence's own room (UI-PRMD episode mixes, issue 24)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, 32, 1 / 30)
+    heights = [100, 100, 25, 100, 25, 100, 25, 100, 100, 100]
+    centres = [1.5 + 3.0 * k + rng.uniform(-0.15, 0.15) for k in range(10)]
+    y = _bumps(t, centres, [h * rng.uniform(0.9, 1.1) for h in heights], 2.0) + rng.normal(0, 0.8, t.size)
+    names = ("shoulder_abduction_R",)
+    reps = count_repetitions(t, {names[0]: y}, names).repetitions
+    assert len(reps) == 10, [(round(r.peak_s, 1), round(r.amplitude_deg)) for r in reps]
+
+
 def _bumps(t: np.ndarray, centres_s: list[float], heights_deg: list[float], width_s: float) -> np.ndarray:
     """Returns (T,) degrees: raised-cosine excursions from 0 of the given heights, each width_s wide, at t: (T,) s."""
     y = np.zeros_like(t)
