@@ -547,9 +547,9 @@ def _add_shallow(
     add_spacing_pct percentile of their peak-to-peak spacings from every counted peak is a repetition when e falls
     by shallow_ratio × their median amplitude M on both sides of it, to minima (the stretch's before and after it)
     within onset_frac × M of each other, and its onset and return (the last frame before, the first after, within
-    onset_frac × M of those minima)
-    are at least shallow_duration × the median duration apart. Only the stretches and frames that
-    can hold one are searched, as array operations (no second pass of the detector: 0.1 ms on a 10-minute session).
+    onset_frac × M of those minima) are at least shallow_duration × the median duration apart. Only the stretches
+    and frames that can hold one are searched, as array operations (no second pass of the detector: 0.1 ms on a
+    10-minute session).
     """
     if len(merged) < 3:
         return merged
