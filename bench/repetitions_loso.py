@@ -9,7 +9,14 @@ recordings are counted with them. Prints per held-out subject and movement exact
 thresholds each fold chose, and beside them the shipped defaults on the same recordings. Counted as
 bench/repetitions.py counts (the raw recording's defining angles; --filtered: after the home agent's pipeline).
 
-    python bench/repetitions_loso.py [--data ../shared/data] [--filtered] [--json OUT]
+--rules: the grid is RULE_GRID instead (the rules of issue 24 point 4 on or off: a shallow excursion kept for a
+cadence slot of its own, the spacing percentile of the added shallow repetitions), ties going to the rules as they
+were before (RULE_BEFORE). --mixes N adds, per subject and movement, N recordings of 10 episodes drawn without
+replacement from that subject's 10 correct and 10 incorrect ones (seeded): new sessions of the same people, with
+correct and incorrect repetitions mixed as a patient mixes them, each exactly 10 repetitions; they are reported
+apart (kind "mixed") and count in the choice on the four subjects.
+
+    python bench/repetitions_loso.py [--data ../shared/data] [--filtered] [--rules] [--mixes 20] [--json OUT]
 """
 
 from __future__ import annotations
@@ -33,6 +40,7 @@ from kinect_agent.analysis.angles import counting_angles  # noqa: E402
 from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions  # noqa: E402
 from kinect_agent.formats import ui_prmd  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402
+from kinect_agent.recording import Recording  # noqa: E402
 
 # the thresholds that decide most counts, each with values around its default (fractions of the angle's range)
 GRID: dict[str, tuple[float, ...]] = {
@@ -41,6 +49,12 @@ GRID: dict[str, tuple[float, ...]] = {
     "lone_ratio": (0.5, 0.6, 0.7),
     "min_ratio": (0.3, 0.4, 0.5),
 }
+# --rules: the rules added for issue 24 point 4, on and off
+RULE_GRID: dict[str, tuple[float, ...]] = {
+    "slot_keeps_shallow": (False, True),
+    "add_spacing_pct": (50.0, 33.0, 25.0),
+}
+RULE_BEFORE = RepetitionParams(slot_keeps_shallow=False, add_spacing_pct=50.0)  # the counter before those rules
 
 
 def recordings(data: Path, filtered: bool) -> list[dict]:
@@ -59,18 +73,38 @@ def recordings(data: Path, filtered: bool) -> list[dict]:
     return out
 
 
-def grid_points() -> list[RepetitionParams]:
-    """Returns every RepetitionParams of GRID (the other thresholds at their defaults)."""
-    keys = list(GRID)
+def mixes(data: Path, n: int, filtered: bool) -> list[dict]:
+    """Returns, per subject (s01-s05) and movement, n entries like recordings()'s (kind "mixed"): 10 episodes drawn
+    without replacement from the subject's 10 correct and 10 incorrect ones (seed from subject and movement)."""
+    out = []
+    for subject in sorted(DEVELOPED_ON):
+        for movement in MOVEMENTS:
+            parts = []
+            for folder in KINDS.values():
+                files = (data / "ui-prmd" / folder / "Kinect").rglob(f"{movement}_{subject}_e*_positions*")
+                parts += [ui_prmd.read_episode(path) for path in sorted(files)]
+            rng = np.random.default_rng(1000 * int(subject[1:]) + int(movement[1:]))
+            names = next(s for s in EXERCISES.values() if s.uiprmd_movement == movement).defining_angles
+            for _ in range(n):
+                rec = Recording.concatenate([parts[k] for k in rng.choice(len(parts), TRUE_COUNT, replace=False)])
+                rec = process(rec).filtered if filtered else rec
+                out.append({"kind": "mixed", "subject": subject, "movement": movement, "t": rec.t, "names": names,
+                            "angles": counting_angles(rec.positions, names)})  # fmt: skip
+    return out
+
+
+def grid_points(grid: dict[str, tuple[float, ...]]) -> list[RepetitionParams]:
+    """Returns every RepetitionParams of grid (the other thresholds at their defaults)."""
+    keys = list(grid)
     return [
         replace(RepetitionParams(), **dict(zip(keys, values, strict=True)))
-        for values in itertools.product(*GRID.values())
+        for values in itertools.product(*grid.values())
     ]
 
 
-def _distance(p: RepetitionParams) -> float:
-    default = RepetitionParams()
-    return sum(abs(getattr(p, k) - getattr(default, k)) / getattr(default, k) for k in GRID)
+def _distance(p: RepetitionParams, grid: dict[str, tuple[float, ...]], reference: RepetitionParams) -> float:
+    return sum(abs(float(getattr(p, k)) - float(getattr(reference, k))) / max(abs(float(getattr(reference, k))), 1.0)
+               for k in grid)  # fmt: skip
 
 
 def counts(recs: list[dict], params: RepetitionParams) -> np.ndarray:
@@ -78,54 +112,65 @@ def counts(recs: list[dict], params: RepetitionParams) -> np.ndarray:
     return np.array([len(count_repetitions(r["t"], r["angles"], r["names"], params).repetitions) for r in recs])
 
 
-def loso(recs: list[dict]) -> tuple[list[dict], dict[str, dict]]:
-    """Returns (rows: per recording its held-out count and the default count; per subject the thresholds chosen)."""
-    points = grid_points()
+def loso(
+    recs: list[dict], grid: dict[str, tuple[float, ...]], reference: RepetitionParams
+) -> tuple[list[dict], dict[str, dict]]:
+    """Returns (rows: per recording its held-out count, the default count and the reference's; per subject the
+    settings chosen on the other four: most exact counts there, ties to the point nearest `reference`)."""
+    points = grid_points(grid)
     table = np.stack([counts(recs, p) for p in points])  # (P, N) counts per grid point and recording
-    default = counts(recs, RepetitionParams())
+    default, before = counts(recs, RepetitionParams()), counts(recs, reference)
     subject_of = np.array([r["subject"] for r in recs])
     rows, chosen = [], {}
     for held in sorted(set(subject_of)):
         train = subject_of != held
         exact = (table[:, train] == TRUE_COUNT).sum(axis=1)
-        best = max(range(len(points)), key=lambda i: (exact[i], -_distance(points[i])))
-        chosen[held] = {k: getattr(points[best], k) for k in GRID} | {"exact_on_the_four": int(exact[best])}
+        best = max(range(len(points)), key=lambda i: (exact[i], -_distance(points[i], grid, reference)))
+        chosen[held] = {k: getattr(points[best], k) for k in grid} | {"exact_on_the_four": int(exact[best])}
         for i in np.flatnonzero(~train):
             r = recs[i]
-            rows.append({"kind": r["kind"], "subject": held, "movement": r["movement"],
-                         "held_out": int(table[best, i]), "default": int(default[i])})  # fmt: skip
+            rows.append({"kind": r["kind"], "subject": held, "movement": r["movement"], "held_out": int(table[best, i]),
+                         "default": int(default[i]), "before": int(before[i])})  # fmt: skip
     return rows, chosen
 
 
 def print_report(rows: list[dict], chosen: dict[str, dict]) -> None:
-    """Prints the thresholds per fold, the cases not counted 10, then per kind: per subject and movement."""
-    print("thresholds chosen on the other four subjects:")
+    """Prints the settings per fold, the cases not counted 10, then per kind: per subject and movement."""
+    print("settings chosen on the other four subjects:")
     for subject, c in chosen.items():
         print(f"  without {subject}: " + ", ".join(f"{k} {v}" for k, v in c.items()))
-    print("\ncases not counted 10 (held out | shipped defaults):")
+    print("\nrecordings (not mixes) not counted 10 (held out | shipped defaults | reference):")
     for r in rows:
-        if r["held_out"] != TRUE_COUNT or r["default"] != TRUE_COUNT:
-            print(f"  {r['kind']:<9} {r['subject']} {r['movement']}: {r['held_out']:>2} | {r['default']:>2}")
-    for kind in KINDS:
+        if r["kind"] != "mixed" and {r["held_out"], r["default"], r["before"]} != {TRUE_COUNT}:
+            print(f"  {r['kind']:<9} {r['subject']} {r['movement']}: {r['held_out']:>2} | {r['default']:>2} | "
+                  f"{r['before']:>2}")  # fmt: skip
+    for kind in dict.fromkeys(r["kind"] for r in rows):
         mine = [r for r in rows if r["kind"] == kind]
-        print(f"\n{kind} executions: held out | shipped defaults")
+        print(f"\n{kind} executions: held out | shipped defaults | reference")
         for key in ("subject", "movement"):
             for value in sorted({r[key] for r in mine}):
                 part = [r for r in mine if r[key] == value]
-                print(f"  {value}: {summary([r['held_out'] for r in part])} | {summary([r['default'] for r in part])}")
-        print(f"  all: {summary([r['held_out'] for r in mine])} | {summary([r['default'] for r in mine])}")
+                print(
+                    f"  {value}: "
+                    + " | ".join(summary([r[c] for r in part]) for c in ("held_out", "default", "before"))
+                )
+        print("  all: " + " | ".join(summary([r[c] for r in mine]) for c in ("held_out", "default", "before")))
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--data", type=Path, default=ROOT_DIR.parent / "shared" / "data", help="the shared data")
     parser.add_argument("--filtered", action="store_true", help="count after the home agent's pipeline")
+    parser.add_argument("--rules", action="store_true", help="choose among RULE_GRID instead of GRID")
+    parser.add_argument("--mixes", type=int, default=0, help="episode mixes per subject and movement (0: none)")
     parser.add_argument("--json", type=Path, help="also write the rows and the chosen thresholds to this file")
     args = parser.parse_args(argv)
-    rows, chosen = loso(recordings(args.data, args.filtered))
+    grid, reference = (RULE_GRID, RULE_BEFORE) if args.rules else (GRID, RepetitionParams())
+    recs = recordings(args.data, args.filtered) + mixes(args.data, args.mixes, args.filtered)
+    rows, chosen = loso(recs, grid, reference)
     print_report(rows, chosen)
     if args.json:
-        args.json.write_text(json.dumps({"rows": rows, "chosen": chosen, "grid": GRID,
+        args.json.write_text(json.dumps({"rows": rows, "chosen": chosen, "grid": grid,
                                          "defaults": asdict(RepetitionParams())}, indent=2))  # fmt: skip
     return 0
 

@@ -112,12 +112,12 @@ def hint(positions: np.ndarray, state: np.ndarray, limbs: list[int], kind: str |
 # Repetition rules of a device where they differ from the live count's (RepetitionParams(rest="start")). The
 # webcam: an excursion of a defining angle under 20 degrees is no repetition (its landmarker's angles wobble by up to
 # 17 degrees on a person standing; bench/README.md, "Webcam counts: the live count and the saved count, one count").
-DEVICE_COUNTING: dict[str, dict[str, float]] = {"webcam": {"min_amplitude_deg": 20.0}}
+DEVICE_MIN_AMPLITUDE_DEG: dict[str, float] = {"webcam": 20.0}
 
 
 def counting_params(device: str | None) -> RepetitionParams:
     """Returns the repetition rules of a live count of `device` (kinect_agent.recording.DEVICES; None: Kinect's)."""
-    return RepetitionParams(rest="start", **DEVICE_COUNTING.get(device or "", {}))
+    return RepetitionParams(rest="start", min_amplitude_deg=DEVICE_MIN_AMPLITUDE_DEG.get(device or "", 0.0))
 
 
 def done_repetitions(result: RepetitionResult, t: np.ndarray) -> list[Repetition]:

@@ -9,9 +9,11 @@ Per angle:
     3. the rest level is the end (p2 or p98) nearer to the first and the last smoothed value; when those disagree,
        the end the signal spends more time near; when it spends as long near either, the end whose excursions number
        closest to duration / P (P: the autocorrelation's period); with rest="start" (a set still being recorded),
-       the end nearer to the first value. The excursion e(t) = |angle − rest level|, clipped to [0, R]; its cycle
-       (cycles.cycle): period P and typical amplitude A = median prominence of the duration/P most prominent peaks
-       (R without a period); e is then taken from its lower envelope over 1.5 P (cycles.baseline);
+       the end nearer to the median of its first START_S seconds (a filter started on a mistracked first frame
+       takes a fraction of a second to settle: its first value can lie at the other end). The excursion
+       e(t) = |angle − rest level|, clipped to [0, R]; its cycle (cycles.cycle): period P and typical amplitude
+       A = median prominence of the duration/P most prominent peaks (R without a period); e is then taken from its
+       lower envelope over 1.5 P (cycles.baseline);
     4. hysteresis: an excursion begins when e rises above enter_frac·A and ends when it falls below exit_frac·A;
     5. each excursion is widened to its onset and return: between the neighbouring excursions, the repetition starts
        at the last frame (ends at the first) whose e is within onset_frac·A of that stretch's minimum; excursions
@@ -33,15 +35,18 @@ Several angles (both sides):
     - when at least half of the repetitions are "both", a one-sided excursion counts only if its amplitude reaches
       lone_ratio × the median amplitude of the "both" ones.
 Then, with M the median amplitude, D the median duration and S the median peak-to-peak spacing of the counted ones:
-    - an excursion below min_ratio × M is dropped unless it reaches shallow_ratio × M and lasts shallow_duration × D;
+    - an excursion below min_ratio × M is dropped unless it reaches shallow_ratio × M and lasts shallow_duration × D
+      or (slot_keeps_shallow) peaks at least shallow_spacing × S from every full repetition (≥ min_ratio × M) on
+      each side that has one: a repetition done shallow holds a place of the cadence, a bump at rest does not;
     - an excursion shorter than shallow_duration × D that peaks within shallow_spacing × S of a larger one, or of one
       that lasts at least that long, is dropped;
     - a shallow excursion (below min_ratio × M) is dropped when the full repetitions around it are closer than
       2 × shallow_spacing × S, or, at an end of the set, when it peaks within shallow_spacing × S of both the full
       repetition on its one side and the end of the recording;
     - a shallow repetition the hysteresis missed is added where the cadence has room for one: between counted
-      repetitions, the highest point of the dominant angle's excursion at least shallow_spacing × S from every counted
-      peak, when the excursion falls by shallow_ratio × M to both sides and to one rest level (the two minima within
+      repetitions, the highest point of the dominant angle's excursion at least shallow_spacing × S' from every
+      counted peak (S': the add_spacing_pct percentile of their spacings, not the median, which the missed ones
+      double), when the excursion falls by shallow_ratio × M to both sides and to one rest level (the two minima within
       onset_frac × M), and its onset and return (within onset_frac × M of them) are shallow_duration × D apart.
 """
 
@@ -54,6 +59,7 @@ import numpy as np
 from kinect_agent.analysis import cycles, series
 
 TIE_DWELL = 0.05  # |share of time below the middle − 0.5| under which neither end is the rest level
+START_S = 1.0  # rest="start": the start level is the median of this many seconds from the first frame
 
 
 @dataclass(frozen=True)
@@ -75,6 +81,8 @@ class RepetitionParams:
     min_duration_s: float = 0.4
     merge_overlap: float = 0.5
     min_amplitude_deg: float = 0.0  # last: an excursion with a smaller amplitude is no repetition (0: no such rule)
+    slot_keeps_shallow: bool = False  # a brief shallow excursion with a cadence slot of its own counts (_own_slot)
+    add_spacing_pct: float = 33.0  # percentile of the peak-to-peak spacings that sets the room _add_shallow searches
     rest: str = "auto"  # "auto": step 3 of the module doc; "start": where the recording starts (a set counted live)
 
 
@@ -157,13 +165,16 @@ def _hysteresis(e: np.ndarray, enter: float, leave: float) -> np.ndarray:
     return mark[idx] == 1  # frames before the first decision read mark[0] = -1: at rest
 
 
-def _rest_is_low(y: np.ndarray, lo: float, hi: float, rest: str = "auto") -> bool | None:
+def _rest_is_low(y: np.ndarray, lo: float, hi: float, rest: str = "auto", start_frames: int = 1) -> bool | None:
     """True when the rest level is the low end: where the recording starts and ends, else where it stays longer
-    (rest="start": where it starts); None when start and end disagree and it stays as long at either end (within
-    TIE_DWELL of half the time: a symmetric oscillation, e.g. shoulder rotation)."""
+    (rest="start": where the median of its first start_frames frames lies); None when start and end disagree and it
+    stays as long at either end (within TIE_DWELL of half the time: a symmetric oscillation, e.g. shoulder
+    rotation)."""
     mid = 0.5 * (lo + hi)
+    if rest == "start":
+        return bool(np.median(y[: max(1, start_frames)]) < mid)
     start_low, end_low = y[0] < mid, y[-1] < mid
-    if start_low == end_low or rest == "start":
+    if start_low == end_low:
         return bool(start_low)
     low_share = float(np.mean(y < mid))
     if abs(low_share - 0.5) < TIE_DWELL:
@@ -206,7 +217,8 @@ def detect_angle(
     lo, hi = bounds if bounds is not None else np.percentile(y, [2.0, 98.0])
     if hi - lo <= 0:
         return AngleExcursions([], 0, True, float(lo))
-    rest_low = _rest_is_low(y, lo, hi, params.rest)
+    start_frames = int(round(START_S / series.frame_interval(t))) if params.rest == "start" else 1
+    rest_low = _rest_is_low(y, lo, hi, params.rest, start_frames)
     if rest_low is not None:
         return _found(_excursions(t, y, name, params, rest_low), rest_low, float(lo if rest_low else hi))
     tries = [_found(_excursions(t, y, name, params, low), low, float(lo if low else hi)) for low in (True, False)]
@@ -409,18 +421,37 @@ def _drop_weak_lone(merged: list[RepEvent], lone_ratio: float) -> list[RepEvent]
 
 def _drop_bumps(merged: list[RepEvent], params: RepetitionParams) -> list[RepEvent]:
     """Drops the excursions below min_ratio × the median amplitude, except those above shallow_ratio × it that last
-    at least shallow_duration × the median duration (a shallow repetition takes a repetition's time, a bump not)."""
+    at least shallow_duration × the median duration (a shallow repetition takes a repetition's time, a bump not) or,
+    with slot_keeps_shallow, that have a slot of the cadence of their own (_own_slot)."""
     if not merged:
         return merged
     amplitude = float(np.median([ev.amplitude for ev in merged]))
     duration = float(np.median([ev.end - ev.start for ev in merged]))
     shallow_floor, long_enough = params.shallow_ratio * amplitude, params.shallow_duration * duration
+    slot = _own_slot(merged, params) if params.slot_keeps_shallow else np.zeros(len(merged), dtype=bool)
     return [
         ev
-        for ev in merged
+        for ev, own in zip(merged, slot, strict=True)
         if ev.amplitude >= params.min_ratio * amplitude
-        or (ev.amplitude >= shallow_floor and ev.end - ev.start >= long_enough)
+        or (ev.amplitude >= shallow_floor and (own or ev.end - ev.start >= long_enough))
     ]
+
+
+def _own_slot(merged: list[RepEvent], params: RepetitionParams) -> np.ndarray:
+    """Returns (n,) bool, in merged's order: the excursion peaks at least shallow_spacing × S from the peak of every
+    full repetition (at least min_ratio × the median amplitude; S: their median peak-to-peak spacing), on each side
+    that has one. A repetition done shallow takes a place of the cadence; a bump at rest sits beside a full one.
+    False for all with fewer than three full repetitions."""
+    peaks = np.array([ev.peak for ev in merged])  # (n,) frames
+    amplitude = np.array([ev.amplitude for ev in merged])  # (n,) degrees
+    full_peaks = np.sort(peaks[amplitude >= params.min_ratio * float(np.median(amplitude))])
+    if full_peaks.size < 3:
+        return np.zeros(len(merged), dtype=bool)
+    room = params.shallow_spacing * float(np.median(np.diff(full_peaks)))
+    k = np.searchsorted(full_peaks, peaks)
+    before = np.where(k > 0, peaks - full_peaks[np.maximum(k - 1, 0)], np.inf)
+    after = np.where(k < full_peaks.size, full_peaks[np.minimum(k, full_peaks.size - 1)] - peaks, np.inf)
+    return np.asarray((before >= room) & (after >= room))
 
 
 def _alternates(name: str, dominant: str, events: list[RepEvent], params: RepetitionParams, cycle_deg: float) -> bool:
@@ -515,17 +546,18 @@ def _add_shallow(
     hysteresis missed (module doc).
 
     In each stretch between counted repetitions (and before the first, after the last) at least shallow_duration ×
-    their median duration long, the highest point of e = |y − rest end| at least shallow_spacing × their median
-    peak-to-peak spacing from every counted peak is a repetition when e falls by shallow_ratio × their median
-    amplitude M on both sides of it, to minima (the stretch's before and after it) within onset_frac × M of each
-    other, and its onset and return (the last frame before, the first after, within onset_frac × M of those minima)
-    are at least shallow_duration × the median duration apart. Only the stretches and frames that
-    can hold one are searched, as array operations (no second pass of the detector: 0.1 ms on a 10-minute session).
+    their median duration long, the highest point of e = |y − rest end| at least shallow_spacing × the
+    add_spacing_pct percentile of their peak-to-peak spacings from every counted peak is a repetition when e falls
+    by shallow_ratio × their median amplitude M on both sides of it, to minima (the stretch's before and after it)
+    within onset_frac × M of each other, and its onset and return (the last frame before, the first after, within
+    onset_frac × M of those minima) are at least shallow_duration × the median duration apart. Only the stretches
+    and frames that can hold one are searched, as array operations (no second pass of the detector: 0.1 ms on a
+    10-minute session).
     """
     if len(merged) < 3:
         return merged
     peaks = np.sort([ev.peak for ev in merged])  # (n,) frames
-    room = params.shallow_spacing * float(np.median(np.diff(peaks)))
+    room = params.shallow_spacing * float(np.percentile(np.diff(peaks), params.add_spacing_pct))
     amplitude = float(np.median([ev.amplitude for ev in merged]))
     duration = params.shallow_duration * float(np.median([ev.end - ev.start for ev in merged]))
     near = params.onset_frac * amplitude  # onset and return; and the two sides' rest levels differ by less

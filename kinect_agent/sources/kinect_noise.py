@@ -264,6 +264,18 @@ _SEGMENT_OF_CHILD = {skeleton.INDEX[b]: i for i, (_, b) in enumerate(skeleton.SE
 BONE_SD_UNTABLED_M = 0.01  # length-error SD of the bones the tables do not cover (spine, neck, head, clavicles)
 
 
+# Joints whose offset leans the way their parent's does (not towards their children): the knee and the ankle then err
+# with the hip, and a straight leg stays straight, as Kinect legs do (UI-PRMD s01-s05, Kinect v2: standing knees read
+# 1-6° bent; leaning towards the children, the simulated ones read 26-39°).
+_KEEP_LINE = frozenset(skeleton.INDEX[n] for n in ("KNE_L", "KNE_R", "ANK_L", "ANK_R"))
+
+
+def _side_hint(hint: np.ndarray | None, parent_off: np.ndarray, keep_line: bool) -> np.ndarray:
+    """Returns (T, 3) the direction a child's offset leans to on its circle (see _propagate): its own hint, or its
+    parent's offset direction where it has none or where keep_line."""
+    return parent_off if hint is None or keep_line else hint
+
+
 def _perpendicular_unit(e: np.ndarray, hint: np.ndarray) -> np.ndarray:
     """Returns (T, 3) unit vectors orthogonal to unit e (T, 3): hint (T, 3) made orthogonal, or any when parallel."""
     perp = hint - np.sum(hint * e, axis=-1, keepdims=True) * e
@@ -433,7 +445,7 @@ def _propagate(
         shortfall += float(np.sum(np.abs(wanted - reach)))
         along = np.clip((reach**2 - w_norm**2 - d**2) / (2.0 * w_norm), -d, d)  # component of off_c along w
         w_hat = w / w_norm[:, None]
-        side = _perpendicular_unit(w_hat, hints.get(c, off[:, p]))
+        side = _perpendicular_unit(w_hat, _side_hint(hints.get(c), off[:, p], c in _KEEP_LINE))
         off[:, c] = along[:, None] * w_hat + np.sqrt(np.maximum(d**2 - along**2, 0.0))[:, None] * side
     return off, shortfall
 

@@ -16,10 +16,12 @@ from kinect_agent.skeleton import INDEX
 from kinect_agent.sources.simulator import simulate
 
 SEEDS = (0, 1, 2)
-# The motions these tests were written for. Of the nine UI-PRMD movements the simulator gained on 2026-11-27 the live
-# count is not yet held to the truth: deep_squat at seed 1 showed 10 for 5 (issue 24).
+# The motions these tests were written for, and the deep squat: its live count showed 10 for 5 at seed 1 (one knee's
+# online filter started on a mistracked first frame at 104°, so the rest level taken from the first value was the
+# squat's depth; issue 24). The other eight UI-PRMD movements count 5 of 5 live at seeds 0-2 (bench/README.md) but
+# are left out for the suite's time.
 SIMULATED = ("shoulder_abduction", "shoulder_flexion", "elbow_flexion", "seated_knee_extension", "squat",
-             "sit_to_stand", "standing_leg_raise", "side_step")  # fmt: skip
+             "sit_to_stand", "standing_leg_raise", "side_step", "deep_squat")  # fmt: skip
 REPS = 5
 # Alternating hip abduction on the online filter's output: the detector (not the live count) still miscounts some
 # sets, offline too (seeds 0-2: 7, 4, 5 of 5 counted on the whole set; after the offline pipeline 5, 5, 5):

@@ -13,6 +13,7 @@ from kinect_agent.processing.pipeline import process, smooth
 from kinect_agent.sources.simulator import simulate, simulate_truth
 
 SEEDS = (1, 2, 3)
+STRAIGHT_DEG = 15.0  # a hinge within this of straight
 # Angles defined away from their singular poses in these motions (shoulder rotation needs a bent elbow).
 WELL_DEFINED = ("elbow_flexion_L", "elbow_flexion_R", "knee_flexion_L", "knee_flexion_R", "hip_flexion_L",
                 "hip_flexion_R", "trunk_flexion", "trunk_lateral_flexion")  # fmt: skip
@@ -72,9 +73,13 @@ def test_every_fifth_frame_interpolated_is_close_to_every_frame(seed):
     _, lengths, theta, info = smooth(measured, ik, PipelineConfig(), covariances=True)  # the smoother's own covariances
     every = uncertainty.model_angle_sd(ik.model, lengths, theta, info["covariance"], stride=1)
     fifth = uncertainty.model_angle_sd(ik.model, lengths, theta, info["covariance"], stride=5)
+    # A hinge angle's SD is not smooth where the joint is nearly straight (the end of its domain, 0°): a standing knee
+    # there (the simulated Kinect's standing knee reads 4-9° bent, as real ones do) is left out of the comparison.
+    measured_deg = joint_angles(measured.positions)
     for a, name in enumerate(ANGLE_NAMES):
         if name in WELL_DEFINED:
-            rel = np.abs(fifth[:, a] - every[:, a]) / every[:, a]
+            bent = ~(measured_deg[name] < STRAIGHT_DEG) if name.startswith(("knee", "elbow")) else slice(None)
+            rel = (np.abs(fifth[:, a] - every[:, a]) / every[:, a])[bent]
             assert np.median(rel) < 0.03 and np.percentile(rel, 95) < 0.2, f"{name}, seed {seed}"
 
 

@@ -144,3 +144,21 @@ def test_a_uiprmd_movement_reaches_the_recorded_range_on_its_side(exercise, angl
         other = angles[angle[:-1] + "L"]
         other = other[np.isfinite(other)]  # the rotation of the hanging left arm is undefined (NaN)
         assert other.size == 0 or np.ptp(other) < 10.0, f"{exercise}: the left side moves"
+
+
+STANDING = ("shoulder_abduction", "squat", "side_step", "deep_squat", "hurdle_step", "side_lunge",
+            "standing_shoulder_rotation", "standing_shoulder_scaption")  # fmt: skip
+
+
+@pytest.mark.parametrize("exercise", STANDING)
+def test_a_standing_knee_reads_nearly_straight_through_the_simulated_kinect(exercise):
+    """Before the first repetition (median over the frames, then over 3 seeds). UI-PRMD s01-s05 Kinect v2 standing
+    knees read 1-6°; the simulated Kinect read 26-39° when the knee's and ankle's offsets leaned towards their
+    children instead of with the hip."""
+    medians = []
+    for seed in (0, 1, 2):
+        measured, truth, _ = simulate(exercise, 2, seed=seed)
+        idle = truth.t < min(0.8, truth.meta.extra["rep_bounds_s"][0][0])
+        a = joint_angles(measured.positions)
+        medians.append(np.nanmedian(np.r_[a["knee_flexion_L"][idle], a["knee_flexion_R"][idle]]))
+    assert np.median(medians) < 12.0, f"{exercise}: idle knee {np.round(medians, 1)}°"
