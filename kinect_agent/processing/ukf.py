@@ -290,19 +290,25 @@ def unscented_rts(
             df = fs - x_pred
             P_pred = (df.T * pts.Wc) @ df + Q
             D = ((sig - x).T * pts.Wc) @ df
-        cf, info = _potrf(P_pred, lower=1, clean=0)
-        if info > 0:
-            raise NotPositiveDefinite(f"predicted covariance of frame {k + 1} in the smoother {P_pred.shape}")
-        if info < 0:
-            raise LapackFailed("dpotrf", info)
-        CT, info = _potrs(cf, D.T, lower=1)
-        if info != 0:
-            raise LapackFailed("dpotrs", info)
-        C = CT.T
+        C = _smoother_gain(P_pred, D, k)
         xs_s[k] = x + C @ (xs_s[k + 1] - x_pred)
         Pk = P + C @ (Ps_s[k + 1] - P_pred) @ C.T
         Ps_s[k] = 0.5 * (Pk + Pk.T)
     return xs_s, Ps_s
+
+
+def _smoother_gain(P_pred: np.ndarray, D: np.ndarray, k: int) -> np.ndarray:
+    """Returns the RTS gain C = D P_pred⁻¹ (n, n) of step k (P_pred: the predicted covariance of frame k + 1, D: the
+    cross covariance), by Cholesky; NotPositiveDefinite or LapackFailed when a factorisation fails."""
+    cf, info = _potrf(P_pred, lower=1, clean=0)
+    if info > 0:
+        raise NotPositiveDefinite(f"predicted covariance of frame {k + 1} in the smoother {P_pred.shape}")
+    if info < 0:
+        raise LapackFailed("dpotrf", info)
+    CT, info = _potrs(cf, D.T, lower=1)
+    if info != 0:
+        raise LapackFailed("dpotrs", info)
+    return CT.T
 
 
 def _rts_random_walk(xs: np.ndarray, Ps: np.ndarray, Q: np.ndarray, q_scale: np.ndarray | None) -> None:
@@ -319,15 +325,7 @@ def _rts_random_walk(xs: np.ndarray, Ps: np.ndarray, Q: np.ndarray, q_scale: np.
         else:
             np.multiply(q_scale[k], Q, out=Qk)
             np.add(P, Qk, out=P_pred)
-        cf, info = _potrf(P_pred, lower=1, clean=0)
-        if info > 0:
-            raise NotPositiveDefinite(f"predicted covariance of frame {k + 1} in the smoother {P_pred.shape}")
-        if info < 0:
-            raise LapackFailed("dpotrf", info)
-        CT, info = _potrs(cf, P.T, lower=1)
-        if info != 0:
-            raise LapackFailed("dpotrs", info)
-        C = CT.T
+        C = _smoother_gain(P_pred, P, k)
         np.subtract(xs[k + 1], x, out=dx)
         np.matmul(C, dx, out=Cdx)
         np.add(x, Cdx, out=x)  # xs[k]: x + C (x_{k+1} − x_pred), x_pred = x
