@@ -5,14 +5,13 @@ from __future__ import annotations
 import datetime as dt
 from typing import Any
 
-from pydantic import ValidationError
 from sqlalchemy import Select, or_, select
 from sqlalchemy.orm import Session
 
 from backend.plans.models import Plan, PlanItem
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.suggestions.rules import ROM_BASELINE_WINDOW_DAYS
-from kinect_agent.analysis.document import AnalysisReport, UnreadableDocument, read_report
+from kinect_agent.analysis.document import AnalysisReport, read_if_readable
 
 
 def plan_targets(
@@ -68,14 +67,5 @@ def session_history(
     older = db_session.execute(
         _earlier(session).where(ExerciseSession.started_at < start).order_by(ExerciseSession.started_at.desc()).limit(1)
     ).all()
-    rows = [(t, _readable(doc)) for t, doc in [*older, *recent]]
+    rows: list[tuple[dt.datetime, AnalysisReport | None]] = [(t, read_if_readable(doc)) for t, doc in [*older, *recent]]
     return sorted(rows, key=lambda row: row[0])
-
-
-def _readable(stored: dict[str, Any] | None) -> AnalysisReport | None:
-    if stored is None:
-        return None
-    try:
-        return read_report(stored)
-    except (ValidationError, UnreadableDocument):
-        return None
