@@ -179,9 +179,12 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         assert counts == sorted(counts) and counts[-1] >= TARGET, counts
         stored = patient_sessions(base, email, pid)
         assert len(stored) == 1 and stored[0]["exercise_slug"] == EXERCISE and stored[0]["device_id"] is None, stored
-        # one count: what the page counted live is what it says was saved (tests/backend/camera/test_camera_count.py)
+        # one count (tests/backend/camera/test_camera_count.py): the page's last count is the saved one. The live
+        # count before it is evaluated every 0.25 s of recording, so a repetition finished in the set's last moments
+        # (the clip goes on through the 1.5 s the page records after the target) is counted only by the saved count,
+        # and a flickering label can run the live count one ahead (bench/README.md, "Webcam counts"): never more.
         shown = page.evaluate("CameraPage.state().count")
-        assert stored[0]["repetitions"] == shown == counts[-1], (stored[0]["repetitions"], shown, counts)
+        assert stored[0]["repetitions"] == shown and abs(counts[-1] - shown) <= 1, (stored[0]["repetitions"], shown, counts)
         payload = session_header(base, email, stored[0]["id"])
         assert payload.raw.meta.device == "webcam", payload.raw.meta
         assert (
