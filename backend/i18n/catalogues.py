@@ -9,7 +9,8 @@
   from then on the therapist pages come in that locale (for a browser that asks for it) and check holds it complete.
 - check: exits 1, naming each problem, when a template is not what the code marks today, a therapist template shows
   text that is not marked, or a locale's .po misses a translation, has a fuzzy one, or a translation's placeholders
-  differ from its msgid's. English-only is complete for the therapist domain: it has only its template until a
+  differ from its msgid's, or a French one puts a plain space (or none) before : ; ! ? (French typography: a
+  no-break space, U+00A0 or the narrow U+202F). English-only is complete for the therapist domain: it has only its template until a
   locale's therapist.po is started, and then that .po is checked like messages.po.
 """
 
@@ -55,6 +56,10 @@ SOURCES = (
 JINJA_OPTIONS = {"extensions": "jinja2.ext.i18n", "trimmed": "true"}
 PLURAL_COUNTS = {"n", "num"}  # the count of a plural message: {n} in scripts, %(num)d in Python
 PLACEHOLDER = re.compile(r"%\((\w+)\)[sdif]|\{(\w+)\}")
+# French puts a no-break space (U+00A0) or a narrow one (U+202F) before : ; ! ? used as punctuation (followed by a
+# space, the end, a closing mark or a tag: not 10:30, https:// or Plotly's %{y:.1f}); a plain or no space is a fault
+FRENCH_TIGHT = re.compile(r"(?P<before>.?)(?P<mark>[:;!?])(?=$|[\s»”’\"')…<])", re.S)
+FRENCH_SPACES = ("\u00a0", "\u202f")
 
 
 def pot_path(domain: str = DOMAIN) -> Path:
@@ -317,6 +322,18 @@ def check_locale(locale: str, code: Catalog, catalog: Catalog | None = None, dom
             has = placeholders(string)
             if not (expected - optional <= has <= expected):
                 yield Problem(where, f"{ids[0]!r}: placeholders {sorted(has)} != {sorted(expected)}")
+            if locale == "fr":
+                yield from (Problem(where, f"{ids[0]!r}: {bad}") for bad in french_spacing(string))
+
+
+def french_spacing(text: str) -> list[str]:
+    """Returns what French typography finds wrong in a translation: each : ; ! ? used as punctuation without a
+    no-break space (U+00A0 or the narrow U+202F) before it, said with the words around it."""
+    return [
+        f"no no-break space before {m['mark']!r} in {text[max(0, m.start() - 20) : m.end() + 10]!r}"
+        for m in FRENCH_TIGHT.finditer(text)
+        if m["before"] not in FRENCH_SPACES and m.start("mark") > 0
+    ]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -36,6 +36,26 @@ def test_the_check_names_a_missing_translation_and_different_placeholders():
     assert any("no translation of '{n} set'" in p for p in found), found
 
 
+def test_the_check_holds_french_to_a_no_break_space_before_colon_semicolon_and_marks():
+    code = Catalog()
+    for msgid in ("Saved: {n}", "Well done!", "Ready?", "Rest; then go on", "At 10:30, see %{y:.1f} s", "Today:"):
+        code.add(msgid)
+    po = Catalog(locale="fr")
+    po.add("Saved: {n}", "Enregistré : {n}")  # a plain space
+    po.add("Well done!", "Bravo!")  # no space
+    po.add("Ready?", "Prêt\u202f?")
+    po.add("Rest; then go on", "Reposez-vous\u00a0; puis continuez")
+    po.add("At 10:30, see %{y:.1f} s", "À 10:30, voir %{y:.1f} s")  # a time and Plotly's format are not punctuation
+    po.add("Today:", "Aujourd’hui\u00a0:")
+    found = [str(p) for p in check_locale("fr", code, po)]
+    assert len(found) == 2, found
+    assert "'Saved: {n}': no no-break space before ':'" in found[0], found
+    assert "'Well done!': no no-break space before '!'" in found[1], found
+    german = Catalog(locale="de")
+    german.add("Saved: {n}", "Gespeichert: {n}")
+    assert [str(p) for p in check_locale("de", code, german) if "no-break" in str(p)] == []
+
+
 def test_extraction_finds_python_template_and_script_messages():
     ids = {m.id if isinstance(m.id, str) else m.id[0] for m in extract() if m.id}
     assert "Page not found" in ids  # frontend/pages.py, N_
@@ -215,7 +235,7 @@ def test_the_exercise_library_comes_in_the_asked_language(client, make_user, aut
         ("en", "On Saturday you did 6 of the 10 mini squats in your plan."),
         ("de", "Am Samstag haben Sie bei der Übung „Kleine Kniebeuge“ 6 von 10 Wiederholungen aus Ihrem Plan"),
         ("es", "El sábado hizo 6 de las 10 repeticiones de «Media sentadilla» de su plan."),
-        ("fr", "Samedi, vous avez fait 6 des 10 répétitions de « Petite flexion des genoux » prévues."),
+        ("fr", "Samedi, vous avez fait 6 des 10 répétitions de «\u202fPetite flexion des genoux\u202f» prévues."),
     ],
 )
 def test_advice_is_written_in_the_patient_language(locale, expected):
