@@ -10,8 +10,8 @@
 - check: exits 1, naming each problem, when a template is not what the code marks today, a therapist template shows
   text that is not marked, or a locale's .po misses a translation, has a fuzzy one, or a translation's placeholders
   differ from its msgid's, or a French one puts a plain space (or none) before : ; ! ? (French typography: a
-  no-break space, U+00A0 or the narrow U+202F). English-only is complete for the therapist domain: it has only its template until a
-  locale's therapist.po is started, and then that .po is checked like messages.po.
+  no-break space, U+00A0 or the narrow U+202F). English-only is complete for the therapist domain: it has only its
+  template until a locale's therapist.po is started, and then that .po is checked like messages.po.
 """
 
 from __future__ import annotations
@@ -34,16 +34,25 @@ from backend.i18n import DOMAIN, DOMAINS, LOCALE_DIR, LOCALES, THERAPIST_DOMAIN,
 ROOT = Path(__file__).resolve().parents[2]
 # the files of the pages only therapists (and admins) see: their messages form the therapist domain (the replay page
 # is not one: a patient opens it too, in their language)
-THERAPIST_FILES = frozenset({
-    "frontend/templates/therapist.html", "frontend/templates/patient_detail.html", "frontend/templates/session.html",
-    "frontend/templates/admin_jobs.html",
-    "frontend/static/therapist.js", "frontend/static/patient_detail.js", "frontend/static/session.js",
-    "frontend/static/admin_jobs.js", "frontend/static/records.js",
-    "frontend/static/replies_view.js", "frontend/static/feeling_view.js", "frontend/static/versions.js",
-    "frontend/static/voice_setting.js", "frontend/static/downloads.js",
-    "backend/sessions/triage.py",  # the dashboard's attention reasons and indicator trends
-    "backend/sessions/detail.py", "backend/analysis/data_quality.py",  # the session page's notes and quality labels
-})  # fmt: skip
+THERAPIST_FILES = frozenset(
+    {
+        "frontend/templates/therapist.html",
+        "frontend/templates/patient_detail.html",
+        "frontend/templates/session.html",
+        "frontend/templates/admin_jobs.html",
+        "frontend/static/therapist.js",
+        "frontend/static/patient_detail.js",
+        "frontend/static/session.js",
+        "frontend/static/admin_jobs.js",
+        "frontend/static/records.js",
+        "frontend/static/replies_view.js",
+        "frontend/static/feeling_view.js",
+        "frontend/static/versions.js",
+        "frontend/static/voice_setting.js",
+        "frontend/static/downloads.js",
+        "backend/sessions/triage.py",  # the dashboard's attention reasons and indicator trends
+    }
+)  # fmt: skip (the session detail's notes, quality labels and curve labels are not: a patient reads them in the API)
 PLURAL_FORMS = {"de": "nplurals=2; plural=(n != 1);", "es": "nplurals=2; plural=(n != 1);",
                 "fr": "nplurals=2; plural=(n > 1);"}  # fmt: skip
 # (directory, Babel method map, keywords); the Python keywords are gettext's own plus N_ for lazy marks

@@ -15,7 +15,6 @@ from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
 from backend.demo import DEMO_PASSWORD
-from backend.sessions import detail
 from tests.backend.khs_files import make_khs_at_distance
 from tests.catalogue_copies import copy_with_therapist_catalogues
 from tests.frontend.conftest import (
@@ -40,18 +39,22 @@ REPLAY = {
            "reps": "3 répétitions", "legend": "Ce que montrent les couleurs"},
 }  # fmt: skip
 THERAPIST_WORDS = {
-    "de": {"Body seen by the camera": "Vom Körper gesehen", "Tracking errors": "Messfehler",
-           "Steadiness of measured bone lengths": "Stetigkeit der gemessenen Knochenlängen",
-           detail.UNCERTAINTY_NOTE: "95-%-Intervalle aus den von der Heimstation gespeicherten Winkel-SDs je Bild.",
-           detail.NO_UNCERTAINTY_NOTE: "Die Datei speichert keine Unsicherheit je Bild: Zahlen ohne Intervalle.",
-           "Data quality": "Datenqualität", "Camera advice": "Hinweise zur Kamera", "Uncertainty": "Unsicherheit",
-           "Key numbers": "Kennzahlen", "Repetitions": "Wiederholungen"},
-    "fr": {"Body seen by the camera": "Corps vu par la caméra", "Tracking errors": "Erreurs de suivi",
-           "Steadiness of measured bone lengths": "Stabilité des longueurs d’os mesurées",
-           detail.UNCERTAINTY_NOTE: "Intervalles à 95 % tirés des écarts-types d’angle enregistrés à domicile.",
-           detail.NO_UNCERTAINTY_NOTE: "Aucune incertitude par image dans le fichier : chiffres sans intervalle.",
-           "Data quality": "Qualité des données", "Camera advice": "Conseils pour la caméra",
-           "Uncertainty": "Incertitude", "Key numbers": "Chiffres clés", "Repetitions": "Répétitions"},
+    "de": {"{part}:": "{part}:", "Data quality": "Datenqualität", "Camera advice": "Hinweise zur Kamera",
+           "Uncertainty": "Unsicherheit", "Key numbers": "Kennzahlen", "Repetitions": "Wiederholungen"},
+    "fr": {"{part}:": "{part}\u00a0:", "Data quality": "Qualité des données",
+           "Camera advice": "Conseils pour la caméra", "Uncertainty": "Incertitude", "Key numbers": "Chiffres clés",
+           "Repetitions": "Répétitions"},
+}  # fmt: skip
+# the server's texts of the session page a patient also reads (the shipped messages.po)
+SERVER_WORDS = {
+    "de": {"parts": ("Von der Kamera gesehener Körper", "Erfassungsfehler",
+                     "Gleichmäßigkeit der gemessenen Knochenlängen"),
+           "note": "Die Sitzungsdatei enthält keine Unsicherheit je Bild", "curve": "Beugung des linken Knies (°)",
+           "legend": ("roh", "gefiltert")},
+    "fr": {"parts": ("Corps vu par la caméra", "Erreurs de suivi", "Stabilité des longueurs d’os mesurées"),
+           "note": "Le fichier de la séance ne contient pas l’incertitude par image",
+           "curve": "Flexion du genou gauche (°)",
+           "legend": ("brute", "filtrée")},
 }  # fmt: skip
 ADVICE = {"de": "Sie waren etwa 1,1 m von der Kamera entfernt", "fr": "Vous étiez à environ 1,1 m de la caméra"}
 
@@ -130,7 +133,7 @@ def test_the_patient_sees_the_replay_page_in_their_language(browser, live_server
 @pytest.mark.parametrize("locale", ["de", "fr"])
 def test_the_therapist_sees_the_session_page_in_their_language(browser, translated_server, readers, locale, width):
     _, session_id = readers[locale]
-    words = THERAPIST_WORDS[locale]
+    words, server = THERAPIST_WORDS[locale], SERVER_WORDS[locale]
     with open_page(browser, translated_server, width, HEIGHT[width], locale=f"{locale}-{locale.upper()}") as page:
         sign_in(page, THERAPIST)
         page.goto(f"/therapist/sessions/{session_id}")
@@ -138,15 +141,16 @@ def test_the_therapist_sees_the_session_page_in_their_language(browser, translat
         expect(page.locator("#quality-h")).to_have_text(words["Data quality"])
         parts = page.locator("#quality-parts li")
         expect(parts).to_have_count(3)
-        for i, label in enumerate(
-            ("Body seen by the camera", "Tracking errors", "Steadiness of measured bone lengths")
-        ):
-            expect(parts.nth(i)).to_contain_text(words[label] + ":")
+        for i, label in enumerate(server["parts"]):
+            expect(parts.nth(i)).to_contain_text(label + ("\u00a0:" if locale == "fr" else ":"))
         advice = page.locator('#advice li[data-code="too_close"]')
         expect(advice).to_contain_text(ADVICE[locale])
         expect(page.locator("#advice h3")).to_have_text(words["Camera advice"])
         page.click("#processing summary")
-        expect(page.locator("#processing-body")).to_contain_text(words[detail.NO_UNCERTAINTY_NOTE])
+        expect(page.locator("#processing-body")).to_contain_text(server["note"])
+        chart = page.locator("#curves .js-plotly-plot").first
+        expect(chart.locator(".gtitle")).to_have_text(server["curve"])  # the angle's name, in the reader's words
+        expect(chart.locator(".legendtext")).to_have_text(list(server["legend"]))
         page.locator("#numbers dt").first.wait_for()
         shot(page, f"session_{locale}_{width}")
         assert not _serious(page), f"axe-core on the {locale} session page at {width} px"
