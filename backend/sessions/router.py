@@ -316,7 +316,7 @@ def list_sessions(
     )
     _audit_patients(db_session, caller, "session.list", sorted({r[0].patient_id for r in rows}))
     t = reader_of(request, caller)
-    items = [SessionItemOut(**_item_fields(*r, t=t)) for r in rows]
+    items = [SessionItemOut(**_item_fields(s, slug, reps, rom, ok, t)) for s, slug, reps, rom, ok in rows]
     return Page[SessionItemOut](items=items, total=total, limit=page.limit, offset=page.offset)
 
 
