@@ -172,7 +172,7 @@ def _ids(catalog: Catalog) -> set[tuple[str | tuple[str, ...], str | None]]:
 
 def check(templates: dict[str, Catalog] | None = None) -> list[Problem]:
     """Returns the problems of the catalogues: each domain's .pot against the code, each .po against the code, and
-    the text of the therapist templates that is not marked for translation."""
+    the words of the pages (templates and scripts, the patient's too) that are not marked for translation."""
     problems: list[Problem] = []
     code = extract_all() if templates is None else templates
     for domain in DOMAINS:
@@ -185,10 +185,18 @@ def check(templates: dict[str, Catalog] | None = None) -> list[Problem]:
     for path in sorted(THERAPIST_FILES):
         if not (ROOT / path).is_file():
             problems.append(Problem("backend/i18n/catalogues.py", f"THERAPIST_FILES names {path}, which is not there"))
-        elif path.endswith(".html"):
-            problems.extend(unmarked_template_text(path, (ROOT / path).read_text(encoding="utf-8")))
-        elif path.endswith(".js"):
-            problems.extend(unmarked_script_text(path, (ROOT / path).read_text(encoding="utf-8")))
+    return problems + unmarked_page_text(ROOT)
+
+
+def unmarked_page_text(root: Path) -> list[Problem]:
+    """Returns the words of every page's templates and scripts under root (frontend/templates, frontend/static),
+    the patient's as the therapist's, that are not marked for translation: each would stay English in every locale."""
+    pages = sorted((root / "frontend/templates").glob("*.html")) + sorted((root / "frontend/static").glob("*.js"))
+    problems: list[Problem] = []
+    for page in pages:
+        where = str(page.relative_to(root))
+        find = unmarked_template_text if where.endswith(".html") else unmarked_script_text
+        problems.extend(find(where, page.read_text(encoding="utf-8")))
     return problems
 
 
@@ -243,6 +251,8 @@ def unmarked_template_text(where: str, source: str) -> list[Problem]:
     {% trans %} block): each would stay English in every locale."""
     # blank out the Jinja parts, keeping the line breaks so the line numbers stay right
     plain = _JINJA.sub(lambda m: "\n" * m.group(0).count("\n"), source)
+    for name in _NOT_TEXT:
+        plain = plain.replace(name, " ")
     finder = _TextFinder()
     finder.feed(plain)
     finder.close()
@@ -255,12 +265,15 @@ _PROSE = re.compile(r"[^\W\d_]{2,}[ ’'][^\W\d_]{2,}|^[A-Z][a-z]{2,}$")
 _CODE = re.compile(r"[-_#/=<>\[\]{}]|%\{|^\w+\.\w+$")
 _NOT_TEXT = ("Kinect Home Coach", "use strict")
 _SCRIPT_MARKS = ("I18n.t", "I18n.nt", "I18n.N_")
+NOT_SHOWN = "i18n: not shown"  # a script line's comment: its strings go to the console or compare, never to a page
 
 
 def unmarked_script_text(where: str, source: str) -> list[Problem]:
     """Returns the strings of a page script that read as words but are not marked (I18n.t, I18n.nt, I18n.N_, or
     joined with + to a marked string): each would stay English in every locale. A heuristic for the therapist
-    scripts: CSS classes (after `class:` or `className =`), ids, URLs and Plotly templates are not text."""
+    scripts: CSS classes (after `class:` or `className =`), ids, URLs and Plotly templates are not text, nor the strings
+    of a line that says NOT_SHOWN in a comment (console messages, English-only comparisons)."""
+    lines = source.splitlines()
     tokens = [t for t in tokenize(source, jsx=False, template_string=True) if "comment" not in t.type]
     marked: set[int] = set()
     found = []
@@ -287,6 +300,8 @@ def unmarked_script_text(where: str, source: str) -> list[Problem]:
         if not _PROSE.search(text) or _CODE.search(text):
             continue
         if before[-2:-1] and (before[-2] == "class" or before[-2].endswith("className")):
+            continue
+        if NOT_SHOWN in lines[token.lineno - 1]:
             continue
         found.append(Problem(f"{where}:{token.lineno}", f"text not marked for translation: {token.value[1:-1]!r}"))
     return found

@@ -11,7 +11,7 @@ import pytest
 from babel.messages.catalog import Catalog
 
 from backend.i18n import LOCALES, js_messages, negotiate, normalise, translator
-from backend.i18n.catalogues import check, check_locale, extract, placeholders
+from backend.i18n.catalogues import check, check_locale, extract, placeholders, unmarked_page_text
 from tests.backend.session_rows import report
 
 HTML = {"Accept": "text/html"}
@@ -54,6 +54,20 @@ def test_the_check_holds_french_to_a_no_break_space_before_colon_semicolon_and_m
     german = Catalog(locale="de")
     german.add("Saved: {n}", "Gespeichert: {n}")
     assert [str(p) for p in check_locale("de", code, german) if "no-break" in str(p)] == []
+
+
+def test_the_check_finds_unmarked_words_on_the_patients_pages_too(tmp_path):
+    (tmp_path / "frontend/templates").mkdir(parents=True)
+    (tmp_path / "frontend/static").mkdir(parents=True)
+    (tmp_path / "frontend/templates/patient.html").write_text(
+        '<h1>{{ _("Your exercises this week") }}</h1>\n<p>Kinect Home Coach</p>\n<p>Your next set</p>\n'
+    )
+    (tmp_path / "frontend/static/live.js").write_text(
+        'say(I18n.t("Halfway there"));\nsay("One more to go");\nconsole.warn("worker failed twice");  '
+        "// i18n: not shown\n")  # fmt: skip
+    found = [str(p) for p in unmarked_page_text(tmp_path)]
+    assert found == ["frontend/templates/patient.html:3: text not marked for translation: 'Your next set'",
+                     "frontend/static/live.js:2: text not marked for translation: 'One more to go'"], found  # fmt: skip
 
 
 def test_extraction_finds_python_template_and_script_messages():
