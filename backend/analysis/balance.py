@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from backend.analysis import reasons as why
 from kinect_agent.analysis import series
 from kinect_agent.skeleton import INDEX
 
@@ -147,18 +148,16 @@ def sway(t: np.ndarray, smoothed: np.ndarray, angles: dict[str, np.ndarray]) -> 
 
 
 def missing_reason(t: np.ndarray, smoothed: np.ndarray, angles: dict[str, np.ndarray]) -> str:
-    """Returns, in words, why sway() is None for this recording (the first condition that failed)."""
+    """Returns, in English words (backend.analysis.reasons), why sway() is None for this recording (the first
+    condition that failed)."""
     T = t.shape[0]
     if T < 2:
-        return "the recording is too short"
+        return why.RECORDING_TOO_SHORT.english()
     p = series.smooth_positions(t, smoothed, smooth_s=SWAY_SMOOTH_S)
     floor_y = np.min(p[:, _ANK, 1], axis=1)
     with np.errstate(invalid="ignore"):
         up = p[:, INDEX["ROOT"], 1] - floor_y >= STANDING_HEIGHT_FRAC * _leg_length(p)
     dur = float(t[-1] - t[0])
     if float(np.mean(up)) * dur < MIN_STANDING_S:
-        return "the patient was seated or crouching: balance is measured while standing"
-    return (
-        f"the patient never stood still with both feet down for {MIN_STANDING_S:g} s in total "
-        "(steps, a raised leg or a bent trunk do not count)"
-    )
+        return why.NOT_STANDING.english()
+    return why.NEVER_STILL.english(seconds=MIN_STANDING_S)

@@ -53,6 +53,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
+from backend.analysis import reasons as why
 from backend.analysis.range_of_motion import HIGH_PCT, LOW_PCT
 from kinect_agent import skeleton
 from kinect_agent.analysis import series
@@ -242,7 +243,8 @@ def angle_intervals(
 def withheld_reason(
     name: str, x: np.ndarray, interval: dict[str, list[float]] | None, tracked_fraction: float = 1.0
 ) -> str | None:
-    """Returns why the 95 % intervals of angle `name` are not shown, in words, or None when they are shown.
+    """Returns why the 95 % intervals of angle `name` are not shown, in English words (backend.analysis.reasons), or
+    None when they are shown.
 
     x: (T,) degrees, the measured angle (NaN where undefined). interval: angle_intervals' answer. tracked_fraction:
     the fraction of the angle's joint samples the camera tracked (quality.angle_joints). Withheld: the angles of
@@ -250,21 +252,18 @@ def withheld_reason(
     joints were tracked in under MIN_TRACKED_FRACTION of the samples, and an interval wider than MAX_WIDTH_DEG.
     """
     if name in NO_INTERVAL:
-        return "shoulder rotation is undefined while the elbow is straight, so it has no interval"
+        return why.ROTATION_UNDEFINED.english()
     x = np.asarray(x, dtype=np.float64)
     defined = float(np.isfinite(x).mean()) if x.size else 0.0
     if defined < MIN_DEFINED_FRACTION:
-        return f"the angle is defined in only {defined:.0%} of the frames (the limb was out of its plane)"
+        return why.OUT_OF_PLANE.english(defined=defined)
     if tracked_fraction < MIN_TRACKED_FRACTION:
-        return f"the joints of this angle were tracked in only {tracked_fraction:.0%} of the frames"
+        return why.JOINTS_UNTRACKED.english(tracked=tracked_fraction)
     if interval is None:
-        return "the angle or its uncertainty is unknown in every frame, or it spun through a full turn"
+        return why.UNKNOWN_ANGLE.english()
     widest = max(b - a for a, b in interval.values())
     if widest > MAX_WIDTH_DEG:
-        return (
-            f"the tracking is too uncertain: a 95 % interval would span {widest:.0f}° "
-            f"(at most {MAX_WIDTH_DEG:.0f}° is shown)"
-        )
+        return why.TOO_UNCERTAIN.english(width=widest, most=MAX_WIDTH_DEG)
     return None
 
 

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from backend.analysis import reasons as why
 from kinect_agent.analysis import series
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INDEX, JOINTS, NOT_TRACKED
@@ -78,17 +79,17 @@ def assess(raw: Recording, measured: np.ndarray | None, angle_names: tuple[str, 
         dist = series.norm3(raw.positions[:, joints] - sub)
         far = present & (np.nan_to_num(dist, nan=np.inf) > OUTLIER_M)
         outliers = float(far.sum() / present.sum()) if present.any() else 0.0
-    reasons = []
+    reasons = []  # in English, as the document stores them (backend.analysis.reasons writes them for a reader)
     if raw.n_frames < MIN_FRAMES:
-        reasons.append(f"only {raw.n_frames} frames (at least {MIN_FRAMES} needed)")
+        reasons.append(why.TOO_FEW_FRAMES.english(frames=raw.n_frames, needed=MIN_FRAMES))
     if raw.duration < MIN_DURATION_S:
-        reasons.append(f"only {raw.duration:.1f} s recorded (at least {MIN_DURATION_S:.0f} s needed)")
+        reasons.append(why.TOO_SHORT.english(seconds=raw.duration, needed=MIN_DURATION_S))
     if tracked < MIN_TRACKED:
-        reasons.append(f"the body was tracked in {tracked:.0%} of the samples (at least {MIN_TRACKED:.0%} needed)")
+        reasons.append(why.TOO_LITTLE_TRACKED.english(tracked=tracked, needed=MIN_TRACKED))
     if outliers > MAX_OUTLIERS:
-        reasons.append(f"{outliers:.0%} of the samples were tracking errors (at most {MAX_OUTLIERS:.0%} allowed)")
+        reasons.append(why.TOO_MANY_ERRORS.english(errors=outliers, allowed=MAX_OUTLIERS))
     if not finite:
-        reasons.append("the measured positions have gaps")
+        reasons.append(why.GAPS.english())
     return {
         "ok": not reasons,
         "tracked_fraction": round(tracked, 4),

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from backend.analysis.reachable import hand_path
+from backend.i18n import N_, Translator, translator
 from kinect_agent.analysis import angles as analysis_angles
 from kinect_agent.analysis import series
 from kinect_agent.analysis.document import RepetitionItem
@@ -34,6 +35,22 @@ from kinect_agent.body.angles import body_frame, joint_angles
 MAX_CURVE_POINTS = 1500
 MAX_PATH_POINTS = 600
 ARM_PREFIXES = ("shoulder_", "elbow_")
+ENGLISH = translator("en")
+# each angle of kinect_agent.body.angles.ANGLE_NAMES in words, side included (a whole message each: the side's word
+# agrees with the joint in German, Spanish and French); the curves' labels are written in the reader's language
+ANGLE_WORDS = {
+    "elbow_flexion_L": N_("left elbow flexion"), "elbow_flexion_R": N_("right elbow flexion"),
+    "knee_flexion_L": N_("left knee flexion"), "knee_flexion_R": N_("right knee flexion"),
+    "shoulder_flexion_L": N_("left shoulder flexion"), "shoulder_flexion_R": N_("right shoulder flexion"),
+    "shoulder_abduction_L": N_("left shoulder abduction"), "shoulder_abduction_R": N_("right shoulder abduction"),
+    "shoulder_rotation_L": N_("left shoulder rotation"), "shoulder_rotation_R": N_("right shoulder rotation"),
+    "hip_flexion_L": N_("left hip flexion"), "hip_flexion_R": N_("right hip flexion"),
+    "hip_abduction_L": N_("left hip abduction"), "hip_abduction_R": N_("right hip abduction"),
+    "trunk_flexion": N_("trunk flexion"), "trunk_lateral_flexion": N_("trunk lateral flexion"),
+}  # fmt: skip
+# the curves' kinds in words (TRANSLATORS: said of an angle's curve: "right knee flexion, filtered")
+CURVE_KINDS = {"raw": N_("raw"), "filtered": N_("filtered"), "smoothed": N_("smoothed")}
+CURVE_LABEL = N_("%(angle)s, %(kind)s")  # TRANSLATORS: an angle's curve in a chart's legend: "right knee flexion, raw"
 
 
 def minmax_indices(y: np.ndarray, max_points: int = MAX_CURVE_POINTS) -> np.ndarray:
@@ -88,11 +105,20 @@ def measured_angles(t: np.ndarray, positions: np.ndarray, names: tuple[str, ...]
     return {name: angles[name] for name in names}
 
 
-def angle_label(name: str) -> str:
-    """Returns an angle name in words: "knee_flexion_R" -> "right knee flexion"."""
-    side = {"_L": "left ", "_R": "right "}.get(name[-2:], "")
-    base = name[:-2] if side else name
-    return side + base.replace("_", " ")
+def angle_label(name: str, t: Translator = ENGLISH) -> str:
+    """Returns an angle name in words in t's language: "knee_flexion_R" -> "right knee flexion" ("Beugung des
+    rechten Knies"); a name outside ANGLE_WORDS with its underscores as spaces."""
+    words = ANGLE_WORDS.get(name)
+    return t.gettext(words) if words is not None else name.replace("_", " ")
+
+
+def curve_words(angle: str, kind: str, t: Translator = ENGLISH) -> dict[str, str]:
+    """Returns a curve's words in t's language: {"label": "right knee flexion, raw", "angle_label": "right knee
+    flexion", "kind_label": "raw"}."""
+    angle_words = angle_label(angle, t)
+    kind_words = t.gettext(CURVE_KINDS[kind]) if kind in CURVE_KINDS else kind
+    return {"label": t.gettext(CURVE_LABEL, angle=angle_words, kind=kind_words), "angle_label": angle_words,
+            "kind_label": kind_words}  # fmt: skip
 
 
 def angle_curves(
@@ -102,7 +128,8 @@ def angle_curves(
     names: tuple[str, ...],
     measured_kind: str = "filtered",
 ) -> list[dict[str, Any]]:
-    """Returns [{"angle", "kind", "label", "t_s", "deg"}]: per defining angle, the raw curve then the measured one.
+    """Returns [{"angle", "kind", "label", "angle_label", "kind_label", "t_s", "deg"}]: per defining angle, the raw
+    curve then the measured one (the words in English: curve_words rewrites them for a reader).
 
     t: (T,) s. raw: (T, J, 3) m, camera frame, NaN = untracked. measured_deg: measured_angles' output for the
     same frames. measured_kind names the second curve ("filtered", or "smoothed" when the session has no
@@ -113,8 +140,7 @@ def angle_curves(
     out = []
     for name in names:
         for kind, deg in (("raw", raw_angles[name]), (measured_kind, measured_deg[name])):
-            label = f"{angle_label(name)}, {kind}"
-            out.append({"angle": name, "kind": kind, "label": label, **curve(t_s, deg)})
+            out.append({"angle": name, "kind": kind, **curve_words(name, kind), **curve(t_s, deg)})
     return out
 
 

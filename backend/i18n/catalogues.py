@@ -9,8 +9,9 @@
   from then on the therapist pages come in that locale (for a browser that asks for it) and check holds it complete.
 - check: exits 1, naming each problem, when a template is not what the code marks today, a therapist template shows
   text that is not marked, or a locale's .po misses a translation, has a fuzzy one, or a translation's placeholders
-  differ from its msgid's. English-only is complete for the therapist domain: it has only its template until a
-  locale's therapist.po is started, and then that .po is checked like messages.po.
+  differ from its msgid's, or a French one puts a plain space (or none) before : ; ! ? (French typography: a
+  no-break space, U+00A0 or the narrow U+202F). English-only is complete for the therapist domain: it has only its
+  template until a locale's therapist.po is started, and then that .po is checked like messages.po.
 """
 
 from __future__ import annotations
@@ -33,16 +34,25 @@ from backend.i18n import DOMAIN, DOMAINS, LOCALE_DIR, LOCALES, THERAPIST_DOMAIN,
 ROOT = Path(__file__).resolve().parents[2]
 # the files of the pages only therapists (and admins) see: their messages form the therapist domain (the replay page
 # is not one: a patient opens it too, in their language)
-THERAPIST_FILES = frozenset({
-    "frontend/templates/therapist.html", "frontend/templates/patient_detail.html", "frontend/templates/session.html",
-    "frontend/templates/admin_jobs.html",
-    "frontend/static/therapist.js", "frontend/static/patient_detail.js", "frontend/static/session.js",
-    "frontend/static/admin_jobs.js", "frontend/static/records.js",
-    "frontend/static/replies_view.js", "frontend/static/feeling_view.js", "frontend/static/versions.js",
-    "frontend/static/voice_setting.js", "frontend/static/downloads.js",
-    "backend/sessions/triage.py",  # the dashboard's attention reasons and indicator trends
-    "backend/sessions/detail.py", "backend/analysis/data_quality.py",  # the session page's notes and quality labels
-})  # fmt: skip
+THERAPIST_FILES = frozenset(
+    {
+        "frontend/templates/therapist.html",
+        "frontend/templates/patient_detail.html",
+        "frontend/templates/session.html",
+        "frontend/templates/admin_jobs.html",
+        "frontend/static/therapist.js",
+        "frontend/static/patient_detail.js",
+        "frontend/static/session.js",
+        "frontend/static/admin_jobs.js",
+        "frontend/static/records.js",
+        "frontend/static/replies_view.js",
+        "frontend/static/feeling_view.js",
+        "frontend/static/versions.js",
+        "frontend/static/voice_setting.js",
+        "frontend/static/downloads.js",
+        "backend/sessions/triage.py",  # the dashboard's attention reasons and indicator trends
+    }
+)  # fmt: skip (the session detail's notes, quality labels and curve labels are not: a patient reads them in the API)
 PLURAL_FORMS = {"de": "nplurals=2; plural=(n != 1);", "es": "nplurals=2; plural=(n != 1);",
                 "fr": "nplurals=2; plural=(n > 1);"}  # fmt: skip
 # (directory, Babel method map, keywords); the Python keywords are gettext's own plus N_ for lazy marks
@@ -55,6 +65,10 @@ SOURCES = (
 JINJA_OPTIONS = {"extensions": "jinja2.ext.i18n", "trimmed": "true"}
 PLURAL_COUNTS = {"n", "num"}  # the count of a plural message: {n} in scripts, %(num)d in Python
 PLACEHOLDER = re.compile(r"%\((\w+)\)[sdif]|\{(\w+)\}")
+# French puts a no-break space (U+00A0) or a narrow one (U+202F) before : ; ! ? used as punctuation (followed by a
+# space, the end, a closing mark or a tag: not 10:30, https:// or Plotly's %{y:.1f}); a plain or no space is a fault
+FRENCH_TIGHT = re.compile(r"(?P<before>.?)(?P<mark>[:;!?])(?=$|[\s»”’\"')…<])", re.S)
+FRENCH_SPACES = ("\u00a0", "\u202f")
 
 
 def pot_path(domain: str = DOMAIN) -> Path:
@@ -158,7 +172,7 @@ def _ids(catalog: Catalog) -> set[tuple[str | tuple[str, ...], str | None]]:
 
 def check(templates: dict[str, Catalog] | None = None) -> list[Problem]:
     """Returns the problems of the catalogues: each domain's .pot against the code, each .po against the code, and
-    the text of the therapist templates that is not marked for translation."""
+    the words of the pages (templates and scripts, the patient's too) that are not marked for translation."""
     problems: list[Problem] = []
     code = extract_all() if templates is None else templates
     for domain in DOMAINS:
@@ -171,10 +185,18 @@ def check(templates: dict[str, Catalog] | None = None) -> list[Problem]:
     for path in sorted(THERAPIST_FILES):
         if not (ROOT / path).is_file():
             problems.append(Problem("backend/i18n/catalogues.py", f"THERAPIST_FILES names {path}, which is not there"))
-        elif path.endswith(".html"):
-            problems.extend(unmarked_template_text(path, (ROOT / path).read_text(encoding="utf-8")))
-        elif path.endswith(".js"):
-            problems.extend(unmarked_script_text(path, (ROOT / path).read_text(encoding="utf-8")))
+    return problems + unmarked_page_text(ROOT)
+
+
+def unmarked_page_text(root: Path) -> list[Problem]:
+    """Returns the words of every page's templates and scripts under root (frontend/templates, frontend/static),
+    the patient's as the therapist's, that are not marked for translation: each would stay English in every locale."""
+    pages = sorted((root / "frontend/templates").glob("*.html")) + sorted((root / "frontend/static").glob("*.js"))
+    problems: list[Problem] = []
+    for page in pages:
+        where = str(page.relative_to(root))
+        find = unmarked_template_text if where.endswith(".html") else unmarked_script_text
+        problems.extend(find(where, page.read_text(encoding="utf-8")))
     return problems
 
 
@@ -229,6 +251,8 @@ def unmarked_template_text(where: str, source: str) -> list[Problem]:
     {% trans %} block): each would stay English in every locale."""
     # blank out the Jinja parts, keeping the line breaks so the line numbers stay right
     plain = _JINJA.sub(lambda m: "\n" * m.group(0).count("\n"), source)
+    for name in _NOT_TEXT:
+        plain = plain.replace(name, " ")
     finder = _TextFinder()
     finder.feed(plain)
     finder.close()
@@ -241,12 +265,15 @@ _PROSE = re.compile(r"[^\W\d_]{2,}[ ’'][^\W\d_]{2,}|^[A-Z][a-z]{2,}$")
 _CODE = re.compile(r"[-_#/=<>\[\]{}]|%\{|^\w+\.\w+$")
 _NOT_TEXT = ("Kinect Home Coach", "use strict")
 _SCRIPT_MARKS = ("I18n.t", "I18n.nt", "I18n.N_")
+NOT_SHOWN = "i18n: not shown"  # a script line's comment: its strings go to the console or compare, never to a page
 
 
 def unmarked_script_text(where: str, source: str) -> list[Problem]:
     """Returns the strings of a page script that read as words but are not marked (I18n.t, I18n.nt, I18n.N_, or
     joined with + to a marked string): each would stay English in every locale. A heuristic for the therapist
-    scripts: CSS classes (after `class:` or `className =`), ids, URLs and Plotly templates are not text."""
+    scripts: CSS classes (after `class:` or `className =`), ids, URLs and Plotly templates are not text, nor the strings
+    of a line that says NOT_SHOWN in a comment (console messages, English-only comparisons)."""
+    lines = source.splitlines()
     tokens = [t for t in tokenize(source, jsx=False, template_string=True) if "comment" not in t.type]
     marked: set[int] = set()
     found = []
@@ -273,6 +300,8 @@ def unmarked_script_text(where: str, source: str) -> list[Problem]:
         if not _PROSE.search(text) or _CODE.search(text):
             continue
         if before[-2:-1] and (before[-2] == "class" or before[-2].endswith("className")):
+            continue
+        if NOT_SHOWN in lines[token.lineno - 1]:
             continue
         found.append(Problem(f"{where}:{token.lineno}", f"text not marked for translation: {token.value[1:-1]!r}"))
     return found
@@ -317,6 +346,18 @@ def check_locale(locale: str, code: Catalog, catalog: Catalog | None = None, dom
             has = placeholders(string)
             if not (expected - optional <= has <= expected):
                 yield Problem(where, f"{ids[0]!r}: placeholders {sorted(has)} != {sorted(expected)}")
+            if locale == "fr":
+                yield from (Problem(where, f"{ids[0]!r}: {bad}") for bad in french_spacing(string))
+
+
+def french_spacing(text: str) -> list[str]:
+    """Returns what French typography finds wrong in a translation: each : ; ! ? used as punctuation without a
+    no-break space (U+00A0 or the narrow U+202F) before it, said with the words around it."""
+    return [
+        f"no no-break space before {m['mark']!r} in {text[max(0, m.start() - 20) : m.end() + 10]!r}"
+        for m in FRENCH_TIGHT.finditer(text)
+        if m["before"] not in FRENCH_SPACES and m.start("mark") > 0
+    ]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -71,6 +71,7 @@ WORDS = {
 }
 _TRY_AGAIN = N_("The last try failed; a worker will try again. %(reason)s")
 _UNREADABLE = N_("The stored session file cannot be read: %(reason)s")
+_UNREADABLE_PLAIN = N_("The stored session file cannot be read.")
 
 
 def waiting_words(job: Job, words: Words, now: dt.datetime, t: Translator = ENGLISH, **params: str) -> str:
@@ -78,7 +79,7 @@ def waiting_words(job: Job, words: Words, now: dt.datetime, t: Translator = ENGL
     if job.status == "running":
         return t.gettext(words.building, **params)
     if job.error:
-        return t.gettext(_TRY_AGAIN, reason=error_words(job.error) or "")
+        return t.gettext(_TRY_AGAIN, reason=error_words(job.error, t) or "")
     waited = max(0, int((now - job.run_after).total_seconds()))  # since it was due (queued, or queued again)
     if waited < 10:
         return t.gettext(words.queued, **params)
@@ -100,13 +101,15 @@ def ask(
     A job done whose result is gone (redo_done: a newer build replaced it) is queued afresh, unless its result says
     the file is `invalid` (it cannot be used, said at once); a failed one is queued for one more try while it has had
     fewer than ASK_ATTEMPTS, its last error kept for the words meanwhile. kind: one of WORDS, params its words'
-    placeholders; t: the reader's language (the reasons a job or file gives stay as recorded).
+    placeholders; t: the reader's language (the program's own words about a failure: a clinic's reader only,
+    jobs.listing.error_words).
     """
     words, params = WORDS[kind], params or {}
     job = db_session.scalar(select(Job).where(Job.key == key))
     invalid = job.result.get("invalid") if job is not None and job.status == "done" and job.result else None
-    if invalid:  # the job found the stored file cannot be used: no try changes that
-        return Asked("failed", t.gettext(_UNREADABLE, reason=invalid), job)
+    if invalid:  # the job found the stored file cannot be used: no try changes that (its reason: for the clinic)
+        said = t.gettext(_UNREADABLE, reason=invalid) if t.therapist else t.gettext(_UNREADABLE_PLAIN)
+        return Asked("failed", said, job)
     if job is None:
         enqueue(db_session=db_session, kind=kind, items=[(key, payload)])
         job = db_session.scalar(select(Job).where(Job.key == key))
@@ -121,7 +124,7 @@ def ask(
     if job is None:  # deleted between the insert and the read (an erasure): queued again on the next ask
         return Asked("preparing", t.gettext(words.queued, **params), None)
     if job.status == "failed":
-        said = error_words(job.error) or t.gettext(words.not_built, **params)
+        said = error_words(job.error, t) or t.gettext(words.not_built, **params)
         return Asked("failed", t.ngettext("%(reason)s (tried once)", "%(reason)s (tried %(num)d times)",
                                           job.attempts, reason=said), job)  # fmt: skip
     return Asked("preparing", waiting_words(job, words, utcnow(), t, **params), job)

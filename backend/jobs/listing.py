@@ -1,7 +1,8 @@
 """What the admin page shows of the queue: batches with their progress, recent jobs, and each failure in words.
 
 A job's `error` column keeps the exception's class, message and a short traceback for the logs; people get one
-sentence (`error_words`): what went wrong with that session and what it means, never a traceback.
+sentence (`error_words`) in their language: what went wrong with that session and what it means, never a traceback.
+A failed session's `error` (`AnalysisError: ...`) is said the same way.
 """
 
 from __future__ import annotations
@@ -13,30 +14,49 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from backend.audit.models import AuditEvent
+from backend.i18n import N_, Translator
 from backend.jobs.models import Job
 
-# the exception classes a job meets on stored sessions, said for people (the message follows in brackets)
+# the exception classes a job (or a session's analysis) meets, said for people; in the `messages` catalogue: a
+# patient reads why their replay or session failed
 _KNOWN = {
-    "SessionFileRemoved": "The session's recording was removed under the clinic's retention policy",
-    "StoredObjectMissing": "The session's file is missing from the object store (run `coach-server storage check`)",
-    "StoredObjectCorrupt": "The session's file in the object store is damaged: its checksum does not match",
-    "SessionFileError": "The stored session file cannot be read",
-    "InvalidSessionFile": "The stored session file cannot be read",
-    "AnalysisError": "The analysis could not use this recording",
+    "SessionFileRemoved": N_("The session's recording was removed under the clinic's retention policy"),
+    "StoredObjectMissing": N_("The session's file is missing from the object store"),
+    "StoredObjectCorrupt": N_("The session's file in the object store is damaged: its checksum does not match"),
+    "SessionFileError": N_("The stored session file cannot be read"),
+    "InvalidSessionFile": N_("The stored session file cannot be read"),
+    "AnalysisError": N_("The analysis could not use this recording"),
 }
+_HINTS = {"StoredObjectMissing": " (run `coach-server storage check`)"}  # for the clinic, after the sentence
+_FAILED = N_("The job failed")
+_UNEXPECTED = N_("The job failed on an unexpected error")
+_NAMED = N_("%(what)s (%(name)s)")  # TRANSLATORS: an unexpected error and its exception's name, for the clinic
+_DETAILED = N_("%(what)s: %(detail)s")  # TRANSLATORS: what failed, then the program's own words (English)
+_SENTENCE = N_("%(what)s.")  # TRANSLATORS: what failed, as a sentence
+_NO_REASON = N_("no reason was recorded")
 _STATES = ("queued", "running", "done", "failed")
+CLINIC_ENGLISH = Translator("en", therapist=True)  # the admin page: English, the program's words included
 
 
-def error_words(error: str | None) -> str | None:
-    """Returns a job's error (`Class: message` + traceback) as one sentence for people; None when there is none."""
+def error_words(error: str | None, t: Translator = CLINIC_ENGLISH) -> str | None:
+    """Returns a job's or a session's error (`Class: message`, a traceback after it) as one sentence in t's
+    language; None when there is none. The message after the class is the program's own (English): only a clinic's
+    reader (t.therapist: a therapist or admin) gets it, and the name of an unexpected class; a patient gets the
+    sentence alone, never a traceback."""
     if not error:
         return None
     first = error.strip().splitlines()[0] if error.strip() else ""
     name, _, message = first.partition(": ")
-    if not message or " " in name:  # not "Class: message": say it as it is
-        return f"The job failed: {first or 'no reason was recorded'}"
-    head = _KNOWN.get(name, f"The job failed on an unexpected error ({name})")
-    return f"{head}: {message}" if message else head
+    if not message or " " in name:  # not "Class: message": said as it is, to the clinic
+        what, name, message = _FAILED, "", first or t.gettext(_NO_REASON)
+    else:
+        what = _KNOWN.get(name, _UNEXPECTED)
+    head = t.gettext(what)
+    if not t.therapist:
+        return t.gettext(_SENTENCE, what=head)
+    if what == _UNEXPECTED:
+        head = t.gettext(_NAMED, what=head, name=name)
+    return t.gettext(_DETAILED, what=head + _HINTS.get(name, ""), detail=message)
 
 
 @dataclass(frozen=True)

@@ -12,12 +12,13 @@ from typing import Any
 import numpy as np
 from pydantic import ValidationError
 
-from backend.analysis import data_quality, work_budget
+from backend.analysis import data_quality, reasons, work_budget
 from backend.analysis.camera_advice import advice_text, camera_advice
 from backend.analysis.errors import AnalysisError
 from backend.analysis.session_detail import (
     angle_curves,
     angular_speeds,
+    curve_words,
     hand_paths,
     is_arm_exercise,
     measured_angles,
@@ -26,6 +27,7 @@ from backend.analysis.session_detail import (
 from backend.exceptions import InvalidSessionFile
 from backend.exercises.library import EXERCISES, ExerciseSpec
 from backend.i18n import N_, Translator
+from backend.jobs.listing import error_words
 from backend.sessions.models import ExerciseSession
 from kinect_agent.analysis.document import AnalysisReport, RepetitionItem, UnreadableDocument, read_report
 from kinect_agent.analysis.validity import recorded_with, session_validity
@@ -215,25 +217,43 @@ def detail_body(
 
 
 def in_language(body: dict[str, Any], t: Translator) -> dict[str, Any]:
-    """Returns a detail body (keys: SessionDetailOut, as stored in English) with its texts in t's language: the
-    data-quality labels, the camera advice (from its code and params; advice stored before params keeps its text),
-    the uncertainty note, why balance was not measured, and the device's limits."""
+    """Returns a detail body (keys: SessionDetailOut, as stored in English) with its texts in t's language: why the
+    session failed (the program's own words for a clinic's reader only), the curves' labels, the data-quality
+    labels, the camera advice (from its code and params; advice stored before params keeps its text), the analysis'
+    reasons (backend.analysis.reasons), the uncertainty note, why balance was not measured, and the device's
+    limits."""
+    curves = [c | curve_words(c["angle"], c["kind"], t) for c in body.get("curves", [])]
+    said = {"curves": curves, "error": error_words(body.get("error"), t)}  # in words for every reader
     if t.locale == "en" and not t.therapist:
-        return body
+        return body | said
     quality = dict(body["quality"])
     quality["parts"] = [p | {"label": data_quality.part_label(p["name"], t)} if p["name"] in data_quality.PARTS
                         else p for p in quality["parts"]]  # fmt: skip
     quality["advice"] = [_advice_in(a, t) for a in quality["advice"]]
-    shown = body | {"quality": quality}
-    for key in ("uncertainty_note", "balance_missing"):
-        if body.get(key) in (UNCERTAINTY_NOTE, NO_UNCERTAINTY_NOTE, BALANCE_NOT_MEASURED):
-            shown[key] = t.gettext(body[key])
+    quality["analysis_reasons"] = [reasons.in_language(r, t) for r in quality.get("analysis_reasons", [])]
+    shown = body | said | {"quality": quality}
+    note = body.get("uncertainty_note")
+    if note in (UNCERTAINTY_NOTE, NO_UNCERTAINTY_NOTE):
+        shown["uncertainty_note"] = t.gettext(note)
+    missing = body.get("balance_missing")
+    if isinstance(missing, str):
+        shown["balance_missing"] = t.gettext(missing) if missing == BALANCE_NOT_MEASURED else reasons.in_language(
+            missing, t)  # fmt: skip
+    uncertainty = body.get("uncertainty")
+    if isinstance(uncertainty, dict) and isinstance(uncertainty.get("angles"), dict):
+        angles = {name: a | {"withheld": reasons.in_language(a["withheld"], t)} if a.get("withheld") else a
+                  for name, a in uncertainty["angles"].items()}  # fmt: skip
+        shown["uncertainty"] = uncertainty | {"angles": angles}
     validity = body.get("validity")
     if isinstance(validity, dict):
-        metrics = [m | {"reason": t.gettext(m["reason"])} if m.get("reason") in VALIDITY_REASONS else m
-                   for m in validity.get("metrics", [])]  # fmt: skip
+        metrics = [m | {"reason": _validity_reason(m.get("reason"), t)} for m in validity.get("metrics", [])]
         shown["validity"] = validity | {"metrics": metrics}
     return shown
+
+
+def _validity_reason(reason: str | None, t: Translator) -> str | None:
+    """Returns one of the device's limits (VALIDITY_REASONS) in t's language; any other text as it is."""
+    return t.gettext(reason) if reason in VALIDITY_REASONS else reason
 
 
 def _advice_in(item: dict[str, Any], t: Translator) -> dict[str, Any]:

@@ -11,6 +11,7 @@ from fastapi.responses import JSONResponse
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
+from backend.analysis import reasons
 from backend.audit.service import record, record_patients
 from backend.config import Settings
 from backend.database import utcnow
@@ -42,7 +43,8 @@ from backend.exceptions import (
     error_responses,
 )
 from backend.exercises.service import get_exercise
-from backend.i18n import therapist_translator
+from backend.i18n import Translator, therapist_translator, translator
+from backend.jobs.listing import error_words
 from backend.schemas import DateTimeQuery, IdPath, IdQuery, Page, PageParams, page_params
 from backend.sessions import dashboard, prepared, prepared_export, service
 from backend.sessions.encoding import accepts_gzip
@@ -63,6 +65,7 @@ from backend.suggestions import service as suggestions_service
 from kinect_agent.analysis.document import read_document
 from kinect_agent.export.files import ExportFormat as ExportFormatName
 
+ENGLISH = translator("en")
 router = APIRouter(prefix="/api/v1", tags=["sessions"])
 DETAIL_RETRY_AFTER_S = "2"
 EXPORT_RETRY_AFTER_S = "5"  # a long recording's export takes a worker tens of seconds
@@ -134,18 +137,19 @@ def _upload_patient(caller: Caller, patient_id: int | None, db_session: Session)
     return patient_id
 
 
-def _session_out(db_session: Session, caller: Caller, session_id: int, row: tuple[Any, ...] | None = None,
-                 accept_language: str | None = None) -> SessionOut:  # fmt: skip
-    """Returns the session body; row: get_session_row's answer when the caller already read it; accept_language:
-    the request's, the language of the advice (suggestions.service.reader)."""
+def _session_out(db_session: Session, caller: Caller, session_id: int, t: Translator,
+                 row: tuple[Any, ...] | None = None, accept_language: str | None = None) -> SessionOut:  # fmt: skip
+    """Returns the session body, its failure and the analysis' reasons in t's language; row: get_session_row's
+    answer when the caller already read it; accept_language: the request's, the language of the advice
+    (suggestions.service.reader)."""
     row = row or service.get_session_row(db_session=db_session, session_id=session_id)
     session, slug, reps, rom, quality, document = row
     suggestions = service.session_suggestions(
         db_session=db_session, session_id=session_id, patient_view=_patient_view(caller)
     )
     return SessionOut(
-        **_item_fields(session, slug, reps, rom, quality),
-        metrics=None if document is None else read_document(document),
+        **_item_fields(session, slug, reps, rom, quality, t),
+        metrics=None if document is None else reasons.document_in_language(read_document(document), t),
         suggestions=suggestions_service.suggestion_outs(
             suggestions, db_session=db_session, accept_language=accept_language
         ),  # fmt: skip
@@ -153,8 +157,14 @@ def _session_out(db_session: Session, caller: Caller, session_id: int, row: tupl
 
 
 def _item_fields(
-    session: ExerciseSession, slug: str | None, reps: int | None, rom: float | None, quality: bool | None
+    session: ExerciseSession,
+    slug: str | None,
+    reps: int | None,
+    rom: float | None,
+    quality: bool | None,
+    t: Translator = ENGLISH,
 ) -> dict[str, Any]:
+    """Returns the fields of a session's list item; its failure in t's words (jobs.listing.error_words)."""
     return {
         "id": session.id,
         "client_session_id": session.client_session_id,
@@ -167,7 +177,7 @@ def _item_fields(
         "file_size": session.file_size,
         "content_hash": session.content_hash,
         "status": session.status,
-        "error": session.error,
+        "error": error_words(session.error, t),
         "repetitions": reps,
         "rom_deg": rom,
         "quality_ok": quality,
@@ -184,6 +194,7 @@ def _ingest(
     patient_id: int,
     slug: str | None,
     settings: Settings,
+    t: Translator,
     accept_language: str | None = None,
 ) -> tuple[SessionOut, bool]:
     upload = decode_upload(
@@ -208,7 +219,7 @@ def _ingest(
         prepared.queue_build(db_session=db_session, session_id=row.id)  # the session page's detail, by a worker
         stored = {"session_id": row.id, "client_session_id": str(upload.client_session_id)}  # the live set's session
         publish(db_session, Event("session.stored", patient_id, stored))
-    return _session_out(db_session, caller, row.id, accept_language=accept_language), created
+    return _session_out(db_session, caller, row.id, t, accept_language=accept_language), created
 
 
 @router.post(
@@ -264,6 +275,7 @@ async def upload_session(
         patient_id=target,
         slug=exercise,
         settings=settings,
+        t=reader_of(request, caller),
         accept_language=request.headers.get("accept-language"),
     )
     response.status_code = status.HTTP_201_CREATED if created else status.HTTP_200_OK
@@ -276,6 +288,7 @@ async def upload_session(
     responses=error_responses(*AUTH_ERRORS, PatientNotFound, ExerciseNotFound),
 )
 def list_sessions(
+    request: Request,
     caller: CurrentCaller,
     db_session: DbSession,
     page: Annotated[PageParams, Depends(page_params)],
@@ -302,7 +315,8 @@ def list_sessions(
         offset=page.offset,
     )
     _audit_patients(db_session, caller, "session.list", sorted({r[0].patient_id for r in rows}))
-    items = [SessionItemOut(**_item_fields(*r)) for r in rows]
+    t = reader_of(request, caller)
+    items = [SessionItemOut(**_item_fields(s, slug, reps, rom, ok, t)) for s, slug, reps, rom, ok in rows]
     return Page[SessionItemOut](items=items, total=total, limit=page.limit, offset=page.offset)
 
 
@@ -317,7 +331,8 @@ def read_session(session_id: IdPath, request: Request, caller: CurrentCaller, db
     patient_id = row[0].patient_id
     require_patient_access(patient_id, caller=caller, db_session=db_session, hidden_as=service.missing(session_id))
     _audit(db_session, caller, "session.read", session_id, patient_id)
-    return _session_out(db_session, caller, session_id, row, request.headers.get("accept-language"))
+    t = reader_of(request, caller)
+    return _session_out(db_session, caller, session_id, t, row, request.headers.get("accept-language"))
 
 
 @router.get(

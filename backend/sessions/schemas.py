@@ -265,7 +265,12 @@ class CurveOut(BaseModel):
 
     angle: str = Field(description="clinical angle name (kinect_agent.body.angles)", examples=["knee_flexion_R"])
     kind: str = Field(description="'raw', 'filtered', or 'smoothed' (raw smoothed: the file had no filtered one)")
-    label: str = Field(description="a legend label in words", examples=["right knee flexion, filtered"])
+    label: str = Field(description="a legend label in words, in the reader's language",
+                       examples=["right knee flexion, filtered"])  # fmt: skip
+    angle_label: str = Field(description="the angle in words, in the reader's language",
+                             examples=["right knee flexion"])  # fmt: skip
+    kind_label: str = Field(description="the kind in words, in the reader's language",
+                            examples=["filtered"])  # fmt: skip
     t_s: list[float] = Field(description="seconds from the session's first frame")
     deg: list[float | None] = Field(description="degrees; null where the joints were not tracked")
 
@@ -475,6 +480,8 @@ class SessionDetailOut(BaseModel):
                             "angle": "knee_flexion_R",
                             "kind": "raw",
                             "label": "right knee flexion, raw",
+                            "angle_label": "right knee flexion",
+                            "kind_label": "raw",
                             "t_s": [0.0, 2.1, 4.3],
                             "deg": [4.1, 66.0, None],
                         },
@@ -482,6 +489,8 @@ class SessionDetailOut(BaseModel):
                             "angle": "knee_flexion_R",
                             "kind": "filtered",
                             "label": "right knee flexion, filtered",
+                            "angle_label": "right knee flexion",
+                            "kind_label": "filtered",
                             "t_s": [0.0, 2.1, 4.3],
                             "deg": [3.2, 64.8, 3.9],
                         },

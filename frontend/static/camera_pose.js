@@ -33,7 +33,7 @@ const CameraPose = (() => {
     };
     worker.onerror = (event) => {  // the worker could not start, or died
       event.preventDefault();
-      lose(event.message || "the landmarker's worker failed");
+      lose(event.message || "the landmarker's worker failed");  // i18n: not shown (the console)
     };
     return worker;
   }
@@ -69,7 +69,7 @@ const CameraPose = (() => {
     lastLoad = message;
     let out = onPage ? await onPage.load(message) : await inWorker(message), where = onPage ? "page" : "worker";
     if (out.type !== "loaded" && !onPage) {
-      console.warn(`the pose landmarker runs on the page: its worker failed (${out.error})`);
+      console.warn(`the pose landmarker runs on the page: its worker failed (${out.error})`);  // i18n: not shown
       out = await onThePage(message); where = "page";
     }
     if (out.type !== "loaded") throw new Error(out.error);
@@ -85,12 +85,12 @@ const CameraPose = (() => {
       const out = await onThePage(lastLoad);
       info.where = out.type === "loaded" ? "page" : "failed";
     }
-    if (info.where === "failed") throw new Error("the pose landmarker could not run on this page either");
+    if (info.where === "failed") throw new Error("the pose landmarker could not run on this page either");  // i18n: not shown (the page says T.trackerFailed)
     if (info.where === "loading") return null;
     const frame = await createImageBitmap(video);
     const id = nextId++;
     if (onPage && info.where === "page") return onPage.detect({ id, frame, ms: nowMs }).result;
-    const timer = setTimeout(() => lose(`the landmarker's worker gave no answer in ${SILENT_MS} ms`), SILENT_MS);
+    const timer = setTimeout(() => lose(`the landmarker's worker gave no answer in ${SILENT_MS} ms`), SILENT_MS);  // i18n: not shown
     return new Promise((resolve) => {
       waiting.set(id, (result) => { clearTimeout(timer); resolve(result); });
       try { started().postMessage({ type: "detect", id, frame, ms: nowMs }, [frame]); }

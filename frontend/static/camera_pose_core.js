@@ -30,7 +30,7 @@ export async function load({ base, model, delegates, mode }) {
       return { type: "loaded", model, delegate };
     } catch (err) { last = err; }
   }
-  return { type: "failed", error: String(last || "no delegate") };
+  return { type: "failed", error: String(last || "no delegate") };  // i18n: not shown (the console)
 }
 
 export function detect({ id, frame, ms }) {

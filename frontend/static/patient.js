@@ -21,7 +21,7 @@
   function plural(lib, slug) {
     if (I18n.locale !== "en") return exerciseName(lib, slug);
     const name = exerciseName(lib, slug).toLowerCase();
-    if (name === "sit to stand") return "sit-to-stands";  // the same words as the advice (backend/suggestions/rules.py)
+    if (name === "sit to stand") return "sit-to-stands";  // i18n: not shown (English pages only); the same words as the advice (backend/suggestions/rules.py)
     return name.endsWith("s") ? name : name + "s";
   }
 

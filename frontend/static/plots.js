@@ -100,7 +100,7 @@ const Plots = (() => {
     };
     if (tableSpec) {
       const wrap = el("div", { class: "table-wrap plot-table-wrap", id: `${id}-table`, hidden: true, tabindex: 0,
-        role: "region", "aria-label": tableSpec.caption || title || "chart data" },  // scrollable: keyboard reachable
+        role: "region", "aria-label": tableSpec.caption || title || I18n.t("chart data") },  // scrollable: keyboard reachable
         table({ caption: tableSpec.caption || title, columns: tableSpec.columns, rows: tableSpec.rows }));
       const button = el("button", { type: "button", class: "btn btn-quiet plot-toggle", "aria-expanded": "false", "aria-controls": `${id}-table` }, I18n.t("Show as table"));
       button.addEventListener("click", () => {

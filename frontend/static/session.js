@@ -92,7 +92,7 @@
     const raw = d.curves.find((c) => c.angle === angle && c.kind === "raw");
     const filt = d.curves.find((c) => c.angle === angle && c.kind !== "raw");
     const reps = repsOf(d, angle);
-    const name = raw.label.replace(/, raw$/, "");
+    const name = raw.angle_label;  // the curves' words come in the reader's language
     const shapes = reps.map((r) => ({ type: "rect", xref: "x", yref: "paper", x0: r.start_s, x1: r.end_s, y0: 0, y1: 1,
       fillcolor: "rgba(11, 79, 156, 0.08)", line: { color: "rgba(11, 79, 156, 0.55)", width: 1, dash: "dot" }, layer: "below" }));
     // labels on two staggered rows, so that neighbours do not overlap on a phone (zoom in to separate more)
@@ -101,15 +101,16 @@
     return Plots.figure({
       title: `${name[0].toUpperCase()}${name.slice(1)} (°)`,
       traces: [
-        { x: raw.t_s, y: raw.deg, name: raw.label.replace(/^.*, /, ""), type: "scatter", mode: "lines", line: { color: RAW, width: 1.2 }, opacity: 0.8,
-          hovertemplate: I18n.t("%{x:.1f} s: %{y:.1f}° (raw)") + "<extra></extra>" },
-        { x: filt.t_s, y: filt.deg, name: filt.kind, type: "scatter", mode: "lines", line: { color: FILTERED, width: 2.5 },
-          hovertemplate: `%{x:.1f} s: %{y:.1f}° (${filt.kind})<extra></extra>` },
+        { x: raw.t_s, y: raw.deg, name: raw.kind_label, type: "scatter", mode: "lines", line: { color: RAW, width: 1.2 }, opacity: 0.8,
+          hovertemplate: I18n.t("%{x:.1f} s: %{y:.1f}° ({kind})", { kind: raw.kind_label }) + "<extra></extra>" },
+        { x: filt.t_s, y: filt.deg, name: filt.kind_label, type: "scatter", mode: "lines", line: { color: FILTERED, width: 2.5 },
+          hovertemplate: I18n.t("%{x:.1f} s: %{y:.1f}° ({kind})", { kind: filt.kind_label }) + "<extra></extra>" },
       ],
       layout: { shapes, annotations, margin: { t: 48 }, xaxis: { title: { text: I18n.t("time (s)") } }, yaxis: { title: { text: I18n.t("angle (°)") } },
         legend: { y: -0.28, yanchor: "top" } },
-      table: { caption: I18n.t("{angle}: angle over time, raw and {kind}", { angle: name, kind: filt.kind }),
-        columns: [I18n.t("time (s)"), I18n.t("raw (°)"), `${filt.kind} (°)`], rows: curveTable(raw, filt) },
+      table: { caption: I18n.t("{angle}: angle over time, {raw} and {kind}", { angle: name, raw: raw.kind_label, kind: filt.kind_label }),
+        columns: [I18n.t("time (s)"), I18n.t("{kind} (°)", { kind: raw.kind_label }), I18n.t("{kind} (°)", { kind: filt.kind_label })],
+        rows: curveTable(raw, filt) },
     });
   }
 
@@ -158,7 +159,7 @@
       q.low ? I18n.t("low: the numbers of this session may be off.") : I18n.t("good enough to trust the numbers."));
     document.getElementById("quality-parts").replaceChildren(...q.parts.map((p) => el("li", {},
       el("span", { class: "score" }, el("span", { class: "bar", "aria-hidden": "true" }, el("i", { style: `width:${p.score || 0}%` })),
-        el("span", {}, `${p.label}: `, el("strong", {}, p.name === "segment_spread_mm"
+        el("span", {}, I18n.t("{part}:", { part: p.label }) + " ", el("strong", {}, p.name === "segment_spread_mm"
           ? (p.value === null ? "—" : I18n.t("{length} mm", { length: I18n.number(p.value, 1) })) : pct(p.value)),
           " (", I18n.t("{score} / 100", { score: p.score === null ? "—" : p.score }), ")")))));
     const box = document.getElementById("advice");
@@ -328,7 +329,7 @@
       document.getElementById("session-title").textContent = `${name} · ${fmtDateTime(d.started_at)}`;
       document.title = `${name}, ${fmtDateTime(d.started_at)} · Kinect Home Coach`;
       document.getElementById("session-sub").textContent = d.status === "processed" ? ""
-        : I18n.t("The analysis could not use this recording: {reason}.", { reason: d.error || I18n.t("unknown reason") });
+        : d.error || I18n.t("The analysis could not use this recording.");  // d.error: in the reader's words
       limits(d);
       keyNumbers(d);
       curves(d);

@@ -11,7 +11,7 @@ import pytest
 from babel.messages.catalog import Catalog
 
 from backend.i18n import LOCALES, js_messages, negotiate, normalise, translator
-from backend.i18n.catalogues import check, check_locale, extract, placeholders
+from backend.i18n.catalogues import check, check_locale, extract, placeholders, unmarked_page_text
 from tests.backend.session_rows import report
 
 HTML = {"Accept": "text/html"}
@@ -34,6 +34,40 @@ def test_the_check_names_a_missing_translation_and_different_placeholders():
     assert any("placeholders ['n'] != ['goal', 'n']" in p for p in found), found
     assert any("no translation of 'Nothing here yet'" in p for p in found), found
     assert any("no translation of '{n} set'" in p for p in found), found
+
+
+def test_the_check_holds_french_to_a_no_break_space_before_colon_semicolon_and_marks():
+    code = Catalog()
+    for msgid in ("Saved: {n}", "Well done!", "Ready?", "Rest; then go on", "At 10:30, see %{y:.1f} s", "Today:"):
+        code.add(msgid)
+    po = Catalog(locale="fr")
+    po.add("Saved: {n}", "Enregistré : {n}")  # a plain space
+    po.add("Well done!", "Bravo!")  # no space
+    po.add("Ready?", "Prêt\u202f?")
+    po.add("Rest; then go on", "Reposez-vous\u00a0; puis continuez")
+    po.add("At 10:30, see %{y:.1f} s", "À 10:30, voir %{y:.1f} s")  # a time and Plotly's format are not punctuation
+    po.add("Today:", "Aujourd’hui\u00a0:")
+    found = [str(p) for p in check_locale("fr", code, po)]
+    assert len(found) == 2, found
+    assert "'Saved: {n}': no no-break space before ':'" in found[0], found
+    assert "'Well done!': no no-break space before '!'" in found[1], found
+    german = Catalog(locale="de")
+    german.add("Saved: {n}", "Gespeichert: {n}")
+    assert [str(p) for p in check_locale("de", code, german) if "no-break" in str(p)] == []
+
+
+def test_the_check_finds_unmarked_words_on_the_patients_pages_too(tmp_path):
+    (tmp_path / "frontend/templates").mkdir(parents=True)
+    (tmp_path / "frontend/static").mkdir(parents=True)
+    (tmp_path / "frontend/templates/patient.html").write_text(
+        '<h1>{{ _("Your exercises this week") }}</h1>\n<p>Kinect Home Coach</p>\n<p>Your next set</p>\n'
+    )
+    (tmp_path / "frontend/static/live.js").write_text(
+        'say(I18n.t("Halfway there"));\nsay("One more to go");\nconsole.warn("worker failed twice");  '
+        "// i18n: not shown\n")  # fmt: skip
+    found = [str(p) for p in unmarked_page_text(tmp_path)]
+    assert found == ["frontend/templates/patient.html:3: text not marked for translation: 'Your next set'",
+                     "frontend/static/live.js:2: text not marked for translation: 'One more to go'"], found  # fmt: skip
 
 
 def test_extraction_finds_python_template_and_script_messages():
@@ -215,7 +249,7 @@ def test_the_exercise_library_comes_in_the_asked_language(client, make_user, aut
         ("en", "On Saturday you did 6 of the 10 mini squats in your plan."),
         ("de", "Am Samstag haben Sie bei der Übung „Kleine Kniebeuge“ 6 von 10 Wiederholungen aus Ihrem Plan"),
         ("es", "El sábado hizo 6 de las 10 repeticiones de «Media sentadilla» de su plan."),
-        ("fr", "Samedi, vous avez fait 6 des 10 répétitions de « Petite flexion des genoux » prévues."),
+        ("fr", "Samedi, vous avez fait 6 des 10 répétitions de «\u202fPetite flexion des genoux\u202f» prévues."),
     ],
 )
 def test_advice_is_written_in_the_patient_language(locale, expected):

@@ -1,6 +1,7 @@
 """The texts the server writes for the session page and the replay page, in the reader's language (issue 23, point
-2): camera advice (patient-facing, `messages`, de/es/fr), data-quality labels and notes (therapist pages,
-`therapist`), the states of what a worker prepares; codes and params stay the same in every language."""
+2): camera advice, data-quality labels and notes, the curves' labels, the analysis' reasons and why a session failed
+(a patient reads them: `messages`, de/es/fr), the states of what a worker prepares; codes and params stay the same in
+every language."""
 
 from __future__ import annotations
 
@@ -57,16 +58,12 @@ def test_the_therapist_reads_english_while_the_therapist_pages_have_no_german_ca
 
 @pytest.fixture
 def german_therapist_catalogue(tmp_path, monkeypatch):
-    """The shipped catalogues plus a German therapist.po translating the session page's server texts; the
-    catalogue caches emptied before and after."""
-    words = {"Body seen by the camera": "Vom Körper gesehen", "Tracking errors": "Messfehler",
-             "Steadiness of measured bone lengths": "Stetigkeit der gemessenen Knochenlängen",
-             detail.UNCERTAINTY_NOTE: "95-%-Intervalle aus den Winkel-SDs je Bild",
-             detail.NO_UNCERTAINTY_NOTE: "Ohne Intervalle: die Datei speichert keine Unsicherheit."}  # fmt: skip
-    locale_dir = copy_with_therapist_catalogues(tmp_path, {"de": words})
+    """The shipped catalogues plus a German therapist.po (a heading of the session page: the therapist pages are in
+    German from then on); the catalogue caches emptied before and after."""
+    locale_dir = copy_with_therapist_catalogues(tmp_path, {"de": {"Data quality": "Datenqualität"}})
     i18n.forget_catalogues()
     monkeypatch.setattr(i18n, "LOCALE_DIR", locale_dir)
-    yield words
+    yield
     monkeypatch.undo()
     i18n.forget_catalogues()
 
@@ -74,15 +71,17 @@ def german_therapist_catalogue(tmp_path, monkeypatch):
 def test_a_german_therapist_catalogue_writes_the_session_texts_in_german(
     client, upload, auth_headers, german_therapist_catalogue
 ):
-    words = german_therapist_catalogue
     session_id, _, therapist = upload(make_khs_at_distance(seed=2), "squat")
     body = _detail(client, session_id, auth_headers(therapist) | {"Accept-Language": "de-AT,de;q=0.9"})
     assert [p["label"] for p in body["quality"]["parts"]] == [
-        "Vom Körper gesehen", "Messfehler", "Stetigkeit der gemessenen Knochenlängen"]  # fmt: skip
+        "Von der Kamera gesehener Körper", "Erfassungsfehler",
+        "Gleichmäßigkeit der gemessenen Knochenlängen"]  # fmt: skip
     assert [p["name"] for p in body["quality"]["parts"]] == list(data_quality.PARTS), "the codes stay"
-    assert body["uncertainty_note"] in (words[detail.UNCERTAINTY_NOTE], words[detail.NO_UNCERTAINTY_NOTE])
+    assert body["uncertainty_note"] in (translator("de").gettext(detail.UNCERTAINTY_NOTE),
+                                        translator("de").gettext(detail.NO_UNCERTAINTY_NOTE))  # fmt: skip
     advice = body["quality"]["advice"][0]
     assert advice["code"] == "too_close" and advice["text"].startswith("Sie waren etwa 1,1 m"), "messages' German"
+    assert body["curves"][0]["label"] == "Beugung des linken Knies, roh", body["curves"][0]["label"]
 
 
 def test_the_device_limits_shown_are_the_agents_reasons_marked_for_translation():
@@ -112,7 +111,7 @@ def test_the_replay_state_is_said_in_the_patients_language(client, db_session, u
     db_session.flush()
     state = client.get(f"/api/v1/sessions/{session_id}/replay/state", headers=auth_headers(patient))
     assert state.status_code == 200, state.text
-    said = "La relecture est en file d’attente ; elle sera créée dans un instant."
+    said = "La relecture est en file d’attente\u202f; elle sera créée dans un instant."
     assert state.json() == {"state": "preparing", "detail": said}
 
 
@@ -120,3 +119,135 @@ def test_the_check_finds_a_mark_babel_does_not_extract():
     source = 'say(`${I18n.t("Being prepared.")} ${d.detail}`);\nsay(I18n.t("Fine.") + " " + d.detail);\n'
     problems = marks_in_template_literals("frontend/static/x.js", source)
     assert [p.where for p in problems] == ["frontend/static/x.js:1"], problems
+
+
+@pytest.mark.parametrize(("locale", "raw", "filtered"), [
+    ("de", "Beugung des linken Knies, roh", "Beugung des linken Knies, gefiltert"),
+    ("es", "flexión de la rodilla izquierda, sin filtrar", "flexión de la rodilla izquierda, filtrada"),
+    ("fr", "flexion du genou gauche, brute", "flexion du genou gauche, filtrée"),
+])  # fmt: skip
+def test_a_patient_reads_the_curves_labels_in_their_language(
+    client, db_session, upload, auth_headers, locale, raw, filtered
+):
+    session_id, patient, _ = upload(make_khs_at_distance(seed=1), "squat")
+    english = _detail(client, session_id, auth_headers(patient))["curves"]
+    assert [(c["angle"], c["kind"], c["label"]) for c in english[:2]] == [
+        ("knee_flexion_L", "raw", "left knee flexion, raw"),
+        ("knee_flexion_L", "filtered", "left knee flexion, filtered")]  # fmt: skip
+    patient.locale = locale
+    db_session.flush()
+    curves = _detail(client, session_id, auth_headers(patient))["curves"]
+    assert [c["label"] for c in curves[:2]] == [raw, filtered]
+    assert (curves[0]["angle_label"], curves[1]["kind_label"]) == (raw.rpartition(",")[0], filtered.rpartition(" ")[2])
+    assert [(c["angle"], c["kind"], c["deg"]) for c in curves] == [(c["angle"], c["kind"], c["deg"]) for c in english]
+
+
+@pytest.mark.parametrize("locale", ["de", "es", "fr"])
+def test_every_angle_has_words_in_every_language(locale):
+    from backend.analysis.session_detail import ANGLE_WORDS, angle_label
+    from kinect_agent.body.angles import ANGLE_NAMES
+
+    assert set(ANGLE_WORDS) == set(ANGLE_NAMES), "an angle without words"
+    words = [angle_label(name, translator(locale)) for name in ANGLE_NAMES]
+    assert len(set(words)) == len(words) and not set(words) & {angle_label(n) for n in ANGLE_NAMES}, words
+
+
+def test_a_patient_reads_the_analysis_reasons_of_the_metrics_document_in_their_language(
+    client, db_session, upload, auth_headers
+):
+    from sqlalchemy import select
+
+    from backend.analysis import reasons
+    from backend.sessions.models import SessionMetric
+
+    session_id, patient, therapist = upload(make_khs_at_distance(seed=1), "squat")
+    metric = db_session.scalar(select(SessionMetric).where(SessionMetric.session_id == session_id))
+    doc = dict(metric.document)  # as the analysis stores them: English
+    doc["quality"] = doc["quality"] | {
+        "ok": False,
+        "reasons": [reasons.TOO_LITTLE_TRACKED.english(tracked=0.456, needed=0.6)],
+    }
+    doc["range_of_motion_95_withheld"] = {"knee_flexion_L": reasons.JOINTS_UNTRACKED.english(tracked=0.52)}
+    doc["balance"], doc["balance_missing"] = None, reasons.NOT_STANDING.english()
+    doc["indicators"] = doc["indicators"] | {"balance": doc["indicators"]["balance"] | {
+        "missing": reasons.NOT_STANDING.english(), "value": None, "score": None}}  # fmt: skip
+    metric.document = doc
+    patient.locale = "de"
+    db_session.flush()
+    german = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient)).json()["metrics"]
+    tracked = "der Körper wurde in 46\u00a0% der Messungen erfasst (mindestens 60\u00a0% nötig)"
+    assert german["quality"]["reasons"] == [tracked]
+    assert german["range_of_motion_95_withheld"] == {
+        "knee_flexion_L": "die Gelenke dieses Winkels wurden nur in 52\u00a0% der Bilder erfasst"
+    }
+    standing = "es wurde im Sitzen oder in der Hocke geübt: das Gleichgewicht wird im Stehen gemessen"
+    assert german["balance_missing"] == german["indicators"]["balance"]["missing"] == standing
+    french = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient) | {"Accept-Language": "fr"})
+    assert french.json()["metrics"]["quality"]["reasons"] == [
+        "le corps a été suivi dans 46\u00a0% des mesures (il en faut au moins 60\u00a0%)"
+    ]
+    clinic = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(therapist)).json()["metrics"]
+    assert clinic["quality"]["reasons"] == doc["quality"]["reasons"], "the therapist pages read English today"
+    assert metric.document["quality"]["reasons"] == doc["quality"]["reasons"], "the stored document stays English"
+
+
+def test_the_session_detail_says_the_analysis_reasons_in_the_readers_language():
+    from backend.analysis import reasons
+
+    body = {"curves": [], "error": None, "uncertainty_note": detail.NO_UNCERTAINTY_NOTE,
+            "balance_missing": reasons.NEVER_STILL.english(seconds=2),
+            "quality": {"parts": [], "advice": [], "analysis_reasons": [reasons.GAPS.english()]},
+            "uncertainty": {"angles": {"knee_flexion_L": {"withheld": reasons.OUT_OF_PLANE.english(defined=0.41)}}},
+            "validity": {"metrics": [{"name": "rom", "reason": detail.VALIDITY_REASONS[2]}]}}  # fmt: skip
+    shown = detail.in_language(body, translator("es"))
+    assert shown["quality"]["analysis_reasons"] == ["faltan datos en las posiciones medidas"]
+    assert shown["balance_missing"].startswith("no hubo en total 2 s de pie sin moverse")
+    assert shown["uncertainty"]["angles"]["knee_flexion_L"]["withheld"] == (
+        "el ángulo solo está definido en el 41\u00a0% de las imágenes (el brazo o la pierna salió de su plano)"
+    )
+    assert shown["uncertainty_note"].startswith("El archivo de la sesión no guarda la incertidumbre")
+    assert shown["validity"]["metrics"][0]["reason"] == (
+        "En la imagen de una cámara no se ve un giro del brazo sobre su propio eje."
+    )
+    assert body["quality"]["analysis_reasons"] == ["the measured positions have gaps"], "the stored body is kept"
+
+
+def test_a_patient_reads_why_a_session_failed_in_their_language(client, db_session, upload, auth_headers):
+    from backend.sessions.models import ExerciseSession
+
+    session_id, patient, therapist = upload(make_khs_at_distance(seed=1), "squat")
+    row = db_session.get(ExerciseSession, session_id)
+    row.status, row.error = "failed", "AnalysisError: the recording has 1 frame(s); at least 2 are needed"
+    patient.locale = "fr"
+    db_session.flush()
+    said = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient)).json()["error"]
+    assert said == "L’analyse n’a pas pu utiliser cet enregistrement.", said
+    listed = client.get(f"/api/v1/sessions?patient_id={patient.id}", headers=auth_headers(patient)).json()["items"]
+    assert [s["error"] for s in listed] == [said]
+    assert _detail(client, session_id, auth_headers(patient))["error"] == said
+    clinic = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(therapist)).json()["error"]
+    assert clinic == "The analysis could not use this recording: the recording has 1 frame(s); at least 2 are needed"
+
+
+@pytest.mark.parametrize("locale", ["de", "es", "fr"])
+def test_a_patient_reads_why_the_replay_failed_in_their_language(client, db_session, upload, auth_headers, locale):
+    from backend.jobs.models import Job
+    from backend.replay.jobs import job_key
+
+    session_id, patient, therapist = upload(make_khs_at_distance(seed=1), "squat")
+    trace = "StoredObjectMissing: session/ab12 is not in the store\nTraceback (most recent call last): ..."
+    db_session.add(Job(kind="replay", key=job_key(session_id), payload={"session_id": session_id}, status="failed",
+                       attempts=6, max_attempts=6, error=trace))  # fmt: skip
+    patient.locale = locale
+    db_session.flush()
+    state = client.get(f"/api/v1/sessions/{session_id}/replay/state", headers=auth_headers(patient)).json()
+    t = translator(locale)
+    sentence = t.gettext("%(what)s.", what=t.gettext("The session's file is missing from the object store"))
+    tried = t.ngettext("%(reason)s (tried once)", "%(reason)s (tried %(num)d times)", 6, reason=sentence)
+    assert state == {"state": "failed", "detail": tried}
+    assert "ab12" not in state["detail"] and "Traceback" not in state["detail"], state["detail"]
+    clinic = client.get(f"/api/v1/sessions/{session_id}/replay/state", headers=auth_headers(therapist)).json()
+    assert clinic["detail"] == (
+        "The session's file is missing from the object store (run `coach-server storage "
+        "check`): session/ab12 is not in the store (tried 6 times)"
+    )

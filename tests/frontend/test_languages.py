@@ -18,7 +18,12 @@ HEIGHT = {1366: 900, 390: 844}
 EXPECTED = {
     "de": ("Ihre Übungen diese Woche", "Ratschläge von Ihrem Therapeuten", "Heute:", "Als Tabelle zeigen"),
     "es": ("Sus ejercicios de esta semana", "Consejos de su fisioterapeuta", "Hoy:", "Ver como tabla"),
-    "fr": ("Vos exercices de la semaine", "Conseils de votre kinésithérapeute", "Aujourd’hui :", "Afficher en tableau"),
+    "fr": (
+        "Vos exercices de la semaine",
+        "Conseils de votre kinésithérapeute",
+        "Aujourd’hui\u00a0:",
+        "Afficher en tableau",
+    ),
 }
 # English sentences of the page that must not be left untranslated
 ENGLISH = ("Your exercises this week", "Advice from your therapist", "Today:", "Show as table", "times this week",

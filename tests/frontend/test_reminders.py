@@ -127,7 +127,7 @@ def test_the_unsubscribe_page_works_without_login(browser, live_server, width, h
     token = _unsubscribe_token(live_server, pid)
     with open_page(browser, live_server.url, width, height) as page:  # no login
         page.goto(f"/unsubscribe/{token}")
-        expect(page.locator("h1")).to_have_text("Arrêter les rappels par e-mail ?")
+        expect(page.locator("h1")).to_have_text("Arrêter les rappels par e-mail\u202f?")
         shot(page, f"unsubscribe-fr-{width}")
         bad = [v["id"] for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
         assert not bad, bad

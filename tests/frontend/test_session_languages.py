@@ -1,9 +1,10 @@
 """The session page and the 3D replay page in the reader's language (issue 23, point 2), in Chromium at 1366 and
-390 px: the replay page of a patient who reads German or French (its texts, checkboxes and legend, the numbers), and
-the session page of a therapist whose browser asks for German or French once the therapist pages have a catalogue
-in that language (a second server on the same database with COACH_LOCALE_DIR: the shipped catalogues plus a
-therapist.po per language translating the session page's server texts and headings). Screenshots in /tmp/shots,
-axe-core 0 serious/critical, no sideways scrolling."""
+390 px: the replay page of a patient who reads German, Spanish or French (its texts, checkboxes and legend, the
+numbers), and the session page of a therapist whose browser asks for one of them once the therapist pages have a
+catalogue in that language (a second server on the same database with COACH_LOCALE_DIR: the shipped catalogues plus
+a therapist.po per language translating a few headings): the server's texts a patient also reads (quality labels,
+notes, camera advice, the curves' angle names and kinds) come from the shipped catalogues. Screenshots in
+/tmp/shots, axe-core 0 serious/critical, no sideways scrolling."""
 
 from __future__ import annotations
 
@@ -15,7 +16,6 @@ from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
 from backend.demo import DEMO_PASSWORD
-from backend.sessions import detail
 from tests.backend.khs_files import make_khs_at_distance
 from tests.catalogue_copies import copy_with_therapist_catalogues
 from tests.frontend.conftest import (
@@ -36,24 +36,37 @@ HEIGHT = {1366: 900, 390: 844}
 REPLAY = {
     "de": {"back": "← Zurück zu meiner Seite", "raw": "Rohes Skelett", "filtered": "Gefiltertes Skelett",
            "reps": "3 Wiederholungen", "legend": "Was die Farben zeigen"},
+    "es": {"back": "← Volver a mi página", "raw": "Esqueleto sin filtrar", "filtered": "Esqueleto filtrado",
+           "reps": "3 repeticiones", "legend": "Qué muestran los colores"},
     "fr": {"back": "← Retour à ma page", "raw": "Squelette brut", "filtered": "Squelette filtré",
            "reps": "3 répétitions", "legend": "Ce que montrent les couleurs"},
 }  # fmt: skip
 THERAPIST_WORDS = {
-    "de": {"Body seen by the camera": "Vom Körper gesehen", "Tracking errors": "Messfehler",
-           "Steadiness of measured bone lengths": "Stetigkeit der gemessenen Knochenlängen",
-           detail.UNCERTAINTY_NOTE: "95-%-Intervalle aus den von der Heimstation gespeicherten Winkel-SDs je Bild.",
-           detail.NO_UNCERTAINTY_NOTE: "Die Datei speichert keine Unsicherheit je Bild: Zahlen ohne Intervalle.",
-           "Data quality": "Datenqualität", "Camera advice": "Hinweise zur Kamera", "Uncertainty": "Unsicherheit",
-           "Key numbers": "Kennzahlen", "Repetitions": "Wiederholungen"},
-    "fr": {"Body seen by the camera": "Corps vu par la caméra", "Tracking errors": "Erreurs de suivi",
-           "Steadiness of measured bone lengths": "Stabilité des longueurs d’os mesurées",
-           detail.UNCERTAINTY_NOTE: "Intervalles à 95 % tirés des écarts-types d’angle enregistrés à domicile.",
-           detail.NO_UNCERTAINTY_NOTE: "Aucune incertitude par image dans le fichier : chiffres sans intervalle.",
-           "Data quality": "Qualité des données", "Camera advice": "Conseils pour la caméra",
-           "Uncertainty": "Incertitude", "Key numbers": "Chiffres clés", "Repetitions": "Répétitions"},
+    "de": {"{part}:": "{part}:", "Data quality": "Datenqualität", "Camera advice": "Hinweise zur Kamera",
+           "Uncertainty": "Unsicherheit", "Key numbers": "Kennzahlen", "Repetitions": "Wiederholungen"},
+    "es": {"{part}:": "{part}:", "Data quality": "Calidad de los datos", "Camera advice": "Consejos sobre la cámara",
+           "Uncertainty": "Incertidumbre", "Key numbers": "Cifras clave", "Repetitions": "Repeticiones"},
+    "fr": {"{part}:": "{part}\u00a0:", "Data quality": "Qualité des données",
+           "Camera advice": "Conseils pour la caméra", "Uncertainty": "Incertitude", "Key numbers": "Chiffres clés",
+           "Repetitions": "Répétitions"},
 }  # fmt: skip
-ADVICE = {"de": "Sie waren etwa 1,1 m von der Kamera entfernt", "fr": "Vous étiez à environ 1,1 m de la caméra"}
+# the server's texts of the session page a patient also reads (the shipped messages.po)
+SERVER_WORDS = {
+    "de": {"parts": ("Von der Kamera gesehener Körper", "Erfassungsfehler",
+                     "Gleichmäßigkeit der gemessenen Knochenlängen"),
+           "note": "Die Sitzungsdatei enthält keine Unsicherheit je Bild", "curve": "Beugung des linken Knies (°)",
+           "legend": ("roh", "gefiltert")},
+    "es": {"parts": ("Cuerpo visto por la cámara", "Errores de seguimiento",
+                     "Estabilidad de las longitudes óseas medidas"),
+           "note": "El archivo de la sesión no guarda la incertidumbre por imagen",
+           "curve": "Flexión de la rodilla izquierda (°)", "legend": ("sin filtrar", "filtrada")},
+    "fr": {"parts": ("Corps vu par la caméra", "Erreurs de suivi", "Stabilité des longueurs d’os mesurées"),
+           "note": "Le fichier de la séance ne contient pas l’incertitude par image",
+           "curve": "Flexion du genou gauche (°)",
+           "legend": ("brute", "filtrée")},
+}  # fmt: skip
+ADVICE = {"de": "Sie waren etwa 1,1 m von der Kamera entfernt", "es": "Estaba a unos 1,1 m de la cámara",
+          "fr": "Vous étiez à environ 1,1 m de la caméra"}  # fmt: skip
 
 
 def _serious(page) -> list[str]:
@@ -104,7 +117,7 @@ def translated_server(live_server, tmp_path_factory):
 
 
 @pytest.mark.parametrize("width", [1366, 390])
-@pytest.mark.parametrize("locale", ["de", "fr"])
+@pytest.mark.parametrize("locale", ["de", "es", "fr"])
 def test_the_patient_sees_the_replay_page_in_their_language(browser, live_server, readers, locale, width):
     email, session_id = readers[locale]
     words = REPLAY[locale]
@@ -127,10 +140,10 @@ def test_the_patient_sees_the_replay_page_in_their_language(browser, live_server
 
 
 @pytest.mark.parametrize("width", [1366, 390])
-@pytest.mark.parametrize("locale", ["de", "fr"])
+@pytest.mark.parametrize("locale", ["de", "es", "fr"])
 def test_the_therapist_sees_the_session_page_in_their_language(browser, translated_server, readers, locale, width):
     _, session_id = readers[locale]
-    words = THERAPIST_WORDS[locale]
+    words, server = THERAPIST_WORDS[locale], SERVER_WORDS[locale]
     with open_page(browser, translated_server, width, HEIGHT[width], locale=f"{locale}-{locale.upper()}") as page:
         sign_in(page, THERAPIST)
         page.goto(f"/therapist/sessions/{session_id}")
@@ -138,15 +151,16 @@ def test_the_therapist_sees_the_session_page_in_their_language(browser, translat
         expect(page.locator("#quality-h")).to_have_text(words["Data quality"])
         parts = page.locator("#quality-parts li")
         expect(parts).to_have_count(3)
-        for i, label in enumerate(
-            ("Body seen by the camera", "Tracking errors", "Steadiness of measured bone lengths")
-        ):
-            expect(parts.nth(i)).to_contain_text(words[label] + ":")
+        for i, label in enumerate(server["parts"]):
+            expect(parts.nth(i)).to_contain_text(label + ("\u00a0:" if locale == "fr" else ":"))
         advice = page.locator('#advice li[data-code="too_close"]')
         expect(advice).to_contain_text(ADVICE[locale])
         expect(page.locator("#advice h3")).to_have_text(words["Camera advice"])
         page.click("#processing summary")
-        expect(page.locator("#processing-body")).to_contain_text(words[detail.NO_UNCERTAINTY_NOTE])
+        expect(page.locator("#processing-body")).to_contain_text(server["note"])
+        first = page.locator("#curves figure").first  # the angle's name and the kinds, in the reader's words
+        expect(first.locator("figcaption")).to_have_text(server["curve"])
+        expect(first.locator(".legendtext")).to_have_text(list(server["legend"]))
         page.locator("#numbers dt").first.wait_for()
         shot(page, f"session_{locale}_{width}")
         assert not _serious(page), f"axe-core on the {locale} session page at {width} px"
