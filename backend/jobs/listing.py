@@ -23,6 +23,7 @@ _KNOWN = {
     "SessionFileError": "The stored session file cannot be read",
     "InvalidSessionFile": "The stored session file cannot be read",
     "AnalysisError": "The analysis could not use this recording",
+    "RecordingNotFilterable": "Today's pipeline cannot filter the session's raw recording; the session is unchanged",
 }
 _STATES = ("queued", "running", "done", "failed")
 
