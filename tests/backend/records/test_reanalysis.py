@@ -5,8 +5,10 @@ file, the earlier one kept."""
 from __future__ import annotations
 
 import datetime as dt
+import io
 import json
 import uuid
+import zipfile
 
 import numpy as np
 import sqlalchemy as sa
@@ -18,6 +20,7 @@ from backend.jobs import queue
 from backend.jobs.models import Job, SessionMetricVersion
 from backend.jobs.worker import work
 from backend.records.reanalysis import enqueue_reanalysis
+from backend.records.retention import apply_retention
 from backend.sessions.metrics import ANALYSIS_VERSION
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.storage.check import check
@@ -245,3 +248,35 @@ def test_a_raw_recording_the_pipeline_refuses_fails_the_job_and_leaves_the_sessi
     )
     assert db_session.scalar(sa.select(sa.func.count()).select_from(SessionMetricVersion)
                              .where(SessionMetricVersion.session_id == session_id)) == 0  # fmt: skip
+
+
+def test_earlier_files_go_into_the_archive_and_go_with_an_erasure_or_the_retention_period(
+    client, db_session, db_connection, upload, make_user, auth_headers, object_store
+):
+    data = make_khs("squat", 2, seed=11)
+    session_id, patient, _ = upload(data, "squat")
+    old_key = db_session.get(ExerciseSession, session_id).file_key
+    _pipeline_job(client, db_session, db_connection, make_user, auth_headers, patient.id)
+    new_key = db_session.get(ExerciseSession, session_id).file_key
+    admin = auth_headers(make_user("admin"))
+    z = zipfile.ZipFile(io.BytesIO(client.get(f"/api/v1/patients/{patient.id}/archive", headers=admin).content))
+    (session,) = json.loads(z.read("sessions.json"))
+    (earlier,) = session["metrics_earlier"]
+    assert earlier["file_sha256"] == sf.content_hash(data) and z.read(earlier["file"]) == data
+    assert sf.decode(z.read(session["file"])).params["pipeline"] == VERSION
+    erased = client.post(f"/api/v1/patients/{patient.id}/erasure", json={"confirm_email": patient.email},
+                         headers=admin)  # fmt: skip
+    assert erased.status_code == 200, erased.text
+    assert erased.json()["rows"]["session_metric_version"] == 1
+    assert {old_key, new_key}.isdisjoint(object_store.keys()), "both files of the erased patient are gone"
+
+    kept_id, other, therapist = upload(make_khs("squat", 2, seed=12), "squat")
+    kept_old = db_session.get(ExerciseSession, kept_id).file_key
+    _pipeline_job(client, db_session, db_connection, make_user, auth_headers, other.id)
+    kept_new = db_session.get(ExerciseSession, kept_id).file_key
+    db_session.get(ExerciseSession, kept_id).started_at = dt.datetime(2025, 1, 1, tzinfo=dt.UTC)
+    apply_retention(db_session=db_session, days=365)
+    db_session.commit()
+    assert {kept_old, kept_new}.isdisjoint(object_store.keys()), "the retention period removes the earlier file too"
+    versions = client.get(f"/api/v1/sessions/{kept_id}/metric-versions", headers=auth_headers(therapist)).json()
+    assert [(v["file_kept"], v["file_sha256"] is not None) for v in versions] == [(False, True), (False, True)]
