@@ -102,7 +102,7 @@ def erase_patient(*, db_session: Session, patient: User, caller: Caller) -> Eras
     return Erasure(rows=rows, objects=objects)
 
 
-def earlier_file_keys(db_session: Session, session_ids: Select[tuple[int]] | list[int]) -> set[str]:
+def earlier_file_keys(db_session: Session, session_ids: Select[Any] | list[int]) -> set[str]:
     """Returns the object keys of the earlier session files of these sessions (session_metric_version.file_key: the
     files a re-analysis with the pipeline replaced)."""
     query = select(SessionMetricVersion.file_key).where(SessionMetricVersion.session_id.in_(session_ids),
