@@ -22,6 +22,7 @@ from backend.sessions.metrics import ANALYSIS_VERSION
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.users.models import User
 from kinect_agent.analysis.document import AnalysisDocument, read_document, read_if_readable
+from kinect_agent.processing.pipeline import VERSION as PIPELINE_VERSION
 from kinect_agent.processing.provenance import settings_id
 
 router = APIRouter(prefix="/api/v1", tags=["re-analysis"])
@@ -101,12 +102,14 @@ class BatchOut(BaseModel):
 
 
 class ReanalysisOverviewOut(BaseModel):
-    """The server's analysis version (what a new re-analysis uses) and the newest re-analysis batches."""
+    """The server's analysis and pipeline versions (what a new re-analysis uses) and the newest re-analysis batches."""
 
-    model_config = {"json_schema_extra": {"examples": [{"analysis_version": ANALYSIS_VERSION, "batches": [
+    model_config = {"json_schema_extra": {"examples": [{"analysis_version": ANALYSIS_VERSION,
+                    "pipeline_version": PIPELINE_VERSION, "batches": [
                     BatchOut.model_config["json_schema_extra"]["examples"][0]]}]}}  # type: ignore[index]  # fmt: skip
 
     analysis_version: str
+    pipeline_version: str = Field(PIPELINE_VERSION, description="the pipeline a re-analysis with pipeline=true uses")
     batches: list[BatchOut]
 
 

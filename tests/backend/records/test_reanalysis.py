@@ -21,6 +21,8 @@ from backend.jobs.models import Job, SessionMetricVersion
 from backend.jobs.worker import work
 from backend.records.reanalysis import enqueue_reanalysis
 from backend.records.retention import apply_retention
+from backend.replay.models import SessionReplay
+from backend.replay.service import build_and_store
 from backend.sessions.metrics import ANALYSIS_VERSION
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.storage.check import check
@@ -161,6 +163,10 @@ def test_the_pipeline_filters_a_file_of_no_known_pipeline_again_and_keeps_the_ea
     session_id, patient, therapist = upload(data, "squat")
     before, row = _file(db_session, object_store, session_id)
     old_key, old_hash = row.file_key, row.content_hash
+    build_and_store(db_session=db_session, session_id=session_id, max_frames=SETTINGS.SESSION_MAX_FRAMES,
+                    max_decoded_bytes=SETTINGS.SESSION_MAX_DECODED_BYTES, layers=("filtered",))  # fmt: skip
+    old_replay = db_session.scalar(sa.select(SessionReplay.data_key).where(SessionReplay.session_id == session_id))
+    assert old_replay in object_store.keys()
     (job,) = _pipeline_job(client, db_session, db_connection, make_user, auth_headers, patient.id)
     assert (job["status"], job["changed"]) == ("done", True), job
     after, row = _file(db_session, object_store, session_id)
@@ -176,6 +182,8 @@ def test_the_pipeline_filters_a_file_of_no_known_pipeline_again_and_keeps_the_ea
     moved = np.nanmedian(np.linalg.norm(after.filtered.positions - before.filtered.positions, axis=-1))
     assert moved > 0.002, f"the new filtered recording is the pipeline's, not the truth again ({moved} m)"
     assert row.processing_params["pipeline"] == VERSION
+    assert db_session.scalar(sa.select(SessionReplay.id).where(SessionReplay.session_id == session_id)) is None
+    assert old_replay not in object_store.keys(), "the replay of the earlier file is dropped (rebuilt when asked)"
     (earlier,) = db_session.scalars(
         sa.select(SessionMetricVersion).where(SessionMetricVersion.session_id == session_id)
     )
