@@ -275,11 +275,12 @@ def cmd_reanalyze(args: argparse.Namespace) -> int:
     with get_sessionmaker()() as session:
         try:
             batch, added = enqueue_reanalysis(db_session=session, patient_id=args.patient, since=since,
-                                              exercise=args.exercise)  # fmt: skip
+                                              exercise=args.exercise, pipeline=args.pipeline)  # fmt: skip
         except (PatientNotFound, InvalidInput) as exc:
             raise CliError(exc.message) from None
         session.commit()
-        print(f"batch {batch}: {added} session(s) queued for re-analysis (run `coach-server worker` to do them)")
+        what = "re-analysis with today's pipeline" if args.pipeline else "re-analysis"
+        print(f"batch {batch}: {added} session(s) queued for {what} (run `coach-server worker` to do them)")
         while args.wait and added:
             p = progress(db_session=session, batch=batch)
             session.commit()
@@ -348,6 +349,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--patient", type=int, help="only this patient's sessions")
     p.add_argument("--since", help="only sessions started on or after this date (YYYY-MM-DD)")
     p.add_argument("--exercise", help="only sessions of this exercise (slug, e.g. squat)")
+    p.add_argument("--pipeline", action="store_true",
+                   help="also filter the raw recording again where the stored file was filtered by another pipeline "
+                        "version or other settings, or not at all (a new session file; the earlier one is kept). "
+                        "Default: the metrics only, from the stored filtered recording")  # fmt: skip
     p.add_argument("--wait", action="store_true", help="print the progress until the batch is done")
     p.set_defaults(_run=cmd_reanalyze)
 

@@ -1,13 +1,17 @@
 """Re-analysis throughput: N stored 5-minute sessions re-analysed by 1 and by 2 `coach-server worker` processes.
 
     .venv/bin/python -m bench.reanalysis --database-url postgresql+psycopg://postgres@127.0.0.1:5432/bench_x \
-        [--sessions 200] [--workers 1 2]
+        [--sessions 200] [--workers 1 2] [--pipeline]
 
 Makes --files (4) distinct agent-made 5-minute session files (simulated shoulder abduction through the pipeline, raw +
 filtered + angle SDs, as uploads hold), stores them in a local object store, and inserts N session rows pointing to
 them (round robin) with metrics documents of an older analysis version. Then, per worker count: queue every
 session (coach-server reanalyze) and time until the queue is empty; prints sessions per second and the peak RSS of
 one worker (ru_maxrss of the worker processes). Extrapolate to 10 000 sessions as N / rate.
+
+--pipeline: the files are filtered by the agent with other settings than today's (sigma_tracked_m 0.03 m), and the
+batch is `coach-server reanalyze --pipeline`: each job filters the raw recording again, writes a new file, and
+recomputes the metrics (the cost of a re-analysis after a pipeline change).
 """
 
 from __future__ import annotations
@@ -29,15 +33,18 @@ from sqlalchemy.orm import Session
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def session_files(n: int) -> list[bytes]:
+def session_files(n: int, *, stale: bool = False) -> list[bytes]:
+    """Returns n distinct agent-made 5-minute session files; stale: filtered with other settings than today's."""
     from kinect_agent.capture import make_payload
     from kinect_agent.formats import session_file as sf
+    from kinect_agent.processing.config import PipelineConfig
     from kinect_agent.sources.simulator import simulate
 
+    config = PipelineConfig(sigma_tracked_m=0.03) if stale else None
     out = []
     for seed in range(n):
         measured, _, _ = simulate("shoulder_abduction", 80, seed=seed)  # ~ 290-300 s at 30 Hz
-        out.append(sf.encode(make_payload(measured, created_at="2026-11-20T10:00:00Z")))
+        out.append(sf.encode(make_payload(measured, created_at="2026-11-20T10:00:00Z", config=config)))
     return out
 
 
@@ -87,11 +94,12 @@ def _cpu_s() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-def _run(url: str, store_dir: str, workers: int, n: int) -> tuple[float, float, float]:
+def _run(url: str, store_dir: str, workers: int, n: int, pipeline: bool = False) -> tuple[float, float, float]:
     """Returns sessions per second (wall), CPU seconds of the workers per session, and the peak RSS in MB."""
     env = os.environ | {"COACH_DATABASE_URL": url, "COACH_STORAGE_DIR": store_dir, "PYTHONPATH": str(ROOT)}
     cli = [sys.executable, "-m", "backend.cli"]
-    subprocess.run([*cli, "reanalyze"], env=env, check=True, capture_output=True)
+    subprocess.run([*cli, "reanalyze", *(["--pipeline"] if pipeline else [])], env=env, check=True,
+                   capture_output=True)  # fmt: skip
     cpu0, t0 = _cpu_s(), time.perf_counter()
     procs = [subprocess.Popen([*cli, "worker", "--once"], env=env, stderr=subprocess.DEVNULL) for _ in range(workers)]
     for p in procs:
@@ -109,13 +117,15 @@ def main() -> None:
     ap.add_argument("--sessions", type=int, default=200)
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--files", type=int, default=4, help="distinct session files the rows point to")
+    ap.add_argument("--pipeline", action="store_true", help="stale files, `reanalyze --pipeline` (module doc)")
     args = ap.parse_args()
-    files = session_files(args.files)
-    print(f"session file: {len(files[0]) / 1e6:.2f} MB, {args.sessions} sessions", flush=True)
+    files = session_files(args.files, stale=args.pipeline)
+    mode = "pipeline + metrics" if args.pipeline else "metrics only"
+    print(f"session file: {len(files[0]) / 1e6:.2f} MB, {args.sessions} sessions, {mode}", flush=True)
     with tempfile.TemporaryDirectory() as store_dir:
         for w in args.workers:
             _setup(args.database_url, store_dir, args.sessions, files)
-            rate, cpu, peak = _run(args.database_url, store_dir, w, args.sessions)
+            rate, cpu, peak = _run(args.database_url, store_dir, w, args.sessions, args.pipeline)
             print(f"workers={w}: {rate:.2f} sessions/s, 10 000 sessions in {10000 / rate / 3600:.1f} h, "
                   f"{cpu:.2f} s CPU per session, peak RSS of a worker {peak:.0f} MB, load {os.getloadavg()[0]:.1f}",
                   flush=True)  # fmt: skip

@@ -20,7 +20,8 @@ from kinect_agent.disk_full import is_disk_full, plain_words, write_when_space
 from kinect_agent.formats.session_file import SessionPayload
 from kinect_agent.processing.config import PipelineConfig, config_for_device
 from kinect_agent.processing.errors import ProcessingError
-from kinect_agent.processing.pipeline import VERSION, process
+from kinect_agent.processing.pipeline import process
+from kinect_agent.processing.provenance import pipeline_params
 from kinect_agent.queue import SessionQueue
 from kinect_agent.recording import Recording
 
@@ -100,14 +101,7 @@ def make_payload(
     device's (config_for_device)."""
     config = config or config_for_device(rec.meta.device)
     result = process(rec, config=config)
-    q = result.quality
-    params = {
-        "pipeline": VERSION,
-        "config": config.model_dump(),
-        # no timings here: the same recording must give the same bytes (the server deduplicates on the hash)
-        "quality": {k: q[k] for k in ("n_frames", "n_outliers", "n_gated", "frames_without_observation")},
-        "segment_lengths_m": q["segment_lengths_m"],
-    }
+    params = pipeline_params(config, result)
     payload = SessionPayload(session_id=session_id or str(uuid.uuid4()), raw=rec, filtered=result.filtered,
                              params=params, recorded_by=recorded_by, angle_sd=result.angle_sd)  # fmt: skip
     if created_at is not None:

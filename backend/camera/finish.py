@@ -26,7 +26,8 @@ from backend.sessions import service as sessions_service
 from backend.sessions.ingest import decode_upload
 from kinect_agent.formats import session_file
 from kinect_agent.formats.session_file import SessionPayload
-from kinect_agent.processing.pipeline import VERSION, process
+from kinect_agent.processing.pipeline import process
+from kinect_agent.processing.provenance import pipeline_params
 from kinect_agent.recording import Metadata
 from kinect_agent.sources.webcam.header import webcam_header
 from kinect_agent.vendor import load_lock
@@ -67,16 +68,7 @@ def session_bytes(row: CameraSet, exercise: Exercise, db_session: Session) -> by
     raw = to_recording(batches, meta)
     config = pipeline_config()
     result = process(raw, config=config)
-    q = result.quality
-    params = {
-        "pipeline": VERSION,
-        "device": WEBCAM,
-        "config": config.model_dump(),
-        "model": model,
-        "fps_achieved": fps,
-        "quality": {k: q[k] for k in ("n_frames", "n_outliers", "n_gated", "frames_without_observation")},
-        "segment_lengths_m": q["segment_lengths_m"],
-    }
+    params = {**pipeline_params(config, result), "device": WEBCAM, "model": model, "fps_achieved": fps}
     payload = SessionPayload(
         session_id=str(row.id),
         raw=raw,

@@ -41,7 +41,12 @@ class Job(Base):
 
 
 class SessionMetricVersion(Base):
-    """A metrics document a re-analysis replaced, kept with the analysis version that made it."""
+    """A metrics document a re-analysis replaced, kept with the analysis version that made it and the session file
+    it was computed from: file_key/file_hash (the object store's key and sha256; the session's current file unless a
+    re-analysis filtered the raw recording again, then the earlier file, kept in the store) and processing_params
+    (that file's params: the pipeline version and settings that filtered it). The three are null on rows replaced
+    before migration reanalyzeraw_0018, and file_key is null once the retention period removed the file.
+    document is {"error": ...} (analysis_version NO_METRICS) when the session had no metrics, its analysis failed."""
 
     __tablename__ = "session_metric_version"
 
@@ -50,3 +55,6 @@ class SessionMetricVersion(Base):
     analysis_version: Mapped[str] = mapped_column(String(64))
     document: Mapped[dict[str, Any]] = mapped_column(JSON)
     replaced_at: Mapped[dt.datetime] = mapped_column(default=utcnow)
+    file_key: Mapped[str | None] = mapped_column(String(100))
+    file_hash: Mapped[str | None] = mapped_column(String(64))
+    processing_params: Mapped[dict[str, Any] | None] = mapped_column(JSON)

@@ -112,11 +112,12 @@ def finish(*, db_session: Session, job: Job, result: dict[str, Any]) -> None:
     db_session.commit()
 
 
-def fail(*, db_session: Session, job: Job, error: str) -> None:
-    """Queues the job again after a delay, or marks it failed after max_attempts; commits."""
+def fail(*, db_session: Session, job: Job, error: str, final: bool = False) -> None:
+    """Queues the job again after a delay, or marks it failed after max_attempts (at once when final: a retry
+    cannot succeed); commits."""
     job.error = error[:4000]
     job.locked_by = job.locked_until = None
-    if job.attempts >= job.max_attempts:
+    if final or job.attempts >= job.max_attempts:
         job.status, job.finished_at = "failed", utcnow()
     else:
         job.status = "queued"

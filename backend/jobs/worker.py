@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 from sqlalchemy.orm import Session
 
 from backend.jobs import queue
+from backend.jobs.errors import PermanentJobError
 from backend.jobs.models import Job
 
 if TYPE_CHECKING:
@@ -37,7 +38,8 @@ def run_job(db_session: Session, job: Job, settings: Settings) -> dict[str, Any]
 
         return reanalyze_session(db_session=db_session, session_id=int(job.payload["session_id"]),
                                  max_frames=settings.SESSION_MAX_FRAMES,
-                                 max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
+                                 max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES,
+                                 pipeline=bool(job.payload.get("pipeline", False)))  # fmt: skip
     if job.kind == "replay":
         from backend.replay import jobs, scene
 
@@ -112,7 +114,7 @@ def work(
                 db_session.rollback()
                 job = db_session.merge(job)
                 queue.fail(db_session=db_session, job=job, error=f"{type(exc).__name__}: {exc}\n"
-                           f"{traceback.format_exc(limit=3)}")  # fmt: skip
+                           f"{traceback.format_exc(limit=3)}", final=isinstance(exc, PermanentJobError))  # fmt: skip
             else:
                 queue.finish(db_session=db_session, job=job, result=result)  # commits the work with the job
             ran += 1

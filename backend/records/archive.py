@@ -25,7 +25,7 @@ from backend.reminders.models import ReminderSent
 from backend.replies.models import AdviceReply
 from backend.sessions import service as sessions
 from backend.sessions.models import ExerciseSession, SessionMetric
-from backend.storage import StorageError
+from backend.storage import StorageError, get_store
 from backend.suggestions import service as suggestions
 from backend.suggestions.models import Suggestion
 from backend.users.models import User
@@ -47,7 +47,9 @@ sessions.json     every exercise session: when, which exercise, how long, the fi
 sessions/         the session files themselves (.khs: raw and filtered skeleton, readable with the open-source
                   kinect-agent tool, docs/session-file.md); a file removed by the clinic's retention period, or
                   that could not be read, is listed in sessions.json with "file": null and the reason
-                  "metrics_earlier": the documents a re-analysis replaced, each with its analysis version
+                  "metrics_earlier": the documents a re-analysis replaced, each with its analysis version,
+                  the SHA-256 and params of the session file it came from ("file": that file in sessions/,
+                  session-ID-SHA.khs, when a re-analysis filtered the raw skeleton again into a new file)
 advice.json       suggestions and messages from your therapists and from the system's rules; the advice of a
                   rule is in your language ("text", "locale"), written from what the rule found ("params"),
                   with the words it was first written in ("text_as_first_written")
@@ -61,6 +63,24 @@ audit.json        every recorded access to or change of your data: who, what, wh
 
 All times are UTC, ISO 8601. JSON files are UTF-8.
 """
+
+
+def _earlier_file(z: zipfile.ZipFile, v: SessionMetricVersion, current_sha256: str) -> str | None:
+    """Returns the archive's name of the session file a replaced document came from: the session's own file when it
+    is the current one, else written once as sessions/session-ID-SHA12.khs; None when it is not kept (unknown,
+    removed, or missing from the store)."""
+    if not v.file_key or not v.file_hash:
+        return None
+    if v.file_hash == current_sha256:
+        return f"sessions/session-{v.session_id}.khs"
+    name = f"sessions/session-{v.session_id}-{v.file_hash[:12]}.khs"
+    if name in z.namelist():
+        return name
+    try:
+        z.writestr(name, get_store().get(v.file_key, v.file_hash))
+    except StorageError:
+        return None
+    return name
 
 
 def _iso(t: dt.datetime | None) -> str | None:
@@ -115,15 +135,17 @@ def build_archive(*, db_session: Session, patient: User, requested_by: str) -> I
             })  # fmt: skip
         _json(z, "plans.json", plans)
         earlier: dict[int, list[dict[str, Any]]] = {}
-        for v in db_session.scalars(
-            select(SessionMetricVersion)
+        for v, current in db_session.execute(
+            select(SessionMetricVersion, ExerciseSession.content_hash)
             .join(ExerciseSession, ExerciseSession.id == SessionMetricVersion.session_id)
             .where(ExerciseSession.patient_id == pid)
             .order_by(SessionMetricVersion.id)
-        ):
+        ).all():
             earlier.setdefault(v.session_id, []).append(
-                {"analysis_version": v.analysis_version, "replaced_at": _iso(v.replaced_at), "document": v.document}
-            )
+                {"analysis_version": v.analysis_version, "replaced_at": _iso(v.replaced_at), "document": v.document,
+                 "file_sha256": v.file_hash, "processing_params": v.processing_params,
+                 "file": _earlier_file(z, v, current)}
+            )  # fmt: skip
         listed = []
         rows = db_session.execute(
             select(ExerciseSession, Exercise.slug, SessionMetric.document, SessionFeeling)

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, cast
 
-from sqlalchemy import delete, event, func, or_, select, update
+from sqlalchemy import Select, delete, event, func, or_, select, update
 from sqlalchemy.engine import CursorResult
 from sqlalchemy.orm import Session
 from sqlalchemy.sql import Executable
@@ -14,7 +14,7 @@ from sqlalchemy.sql import Executable
 from backend.audit.models import AuditEvent
 from backend.audit.service import record
 from backend.devices.models import Device, PairingCode
-from backend.jobs.models import Job
+from backend.jobs.models import Job, SessionMetricVersion
 from backend.patients.models import TherapistPatient
 from backend.plans.models import Plan, PlanItem
 from backend.replay.models import SessionReplay
@@ -53,11 +53,15 @@ def erase_patient(*, db_session: Session, patient: User, caller: Caller) -> Eras
     keys = {k for k in db_session.scalars(own_files) if k} | {k for k in db_session.scalars(own_replays) if k}
     own_exports = select(SessionExport.data_key).where(SessionExport.session_id.in_(session_ids))
     keys |= set(db_session.scalars(own_details)) | set(db_session.scalars(own_exports))
+    keys |= earlier_file_keys(db_session, session_ids)
     rows = {
         "session_replay": _count(db_session, delete(SessionReplay).where(SessionReplay.session_id.in_(session_ids))),
         "session_detail": _count(db_session, delete(SessionDetail).where(SessionDetail.session_id.in_(session_ids))),
         "session_export": _count(db_session, delete(SessionExport).where(SessionExport.session_id.in_(session_ids))),
         "session_metric": _count(db_session, delete(SessionMetric).where(SessionMetric.session_id.in_(session_ids))),
+        "session_metric_version": _count(
+            db_session, delete(SessionMetricVersion).where(SessionMetricVersion.session_id.in_(session_ids))
+        ),
         "advice_reply": _count(db_session, delete(AdviceReply).where(AdviceReply.patient_id == pid)),
         "suggestion": _count(db_session, delete(Suggestion).where(Suggestion.patient_id == pid)),
         # queued or finished work on their sessions (replay and detail builds, re-analysis): nothing may name them
@@ -90,11 +94,25 @@ def erase_patient(*, db_session: Session, patient: User, caller: Caller) -> Eras
     still_used |= set(db_session.scalars(select(SessionReplay.data_key).where(SessionReplay.data_key.in_(keys))))
     still_used |= set(db_session.scalars(select(SessionDetail.data_key).where(SessionDetail.data_key.in_(keys))))
     still_used |= set(db_session.scalars(select(SessionExport.data_key).where(SessionExport.data_key.in_(keys))))
+    still_used |= earlier_file_keys_in(db_session, keys)
     objects = sorted(keys - still_used)
     record(db_session=db_session, caller=caller, action="patient.erase", object_type="patient",
            detail={"rows_deleted": sum(rows.values()), "objects_deleted": len(objects)})  # fmt: skip
     delete_after_commit(db_session, objects)
     return Erasure(rows=rows, objects=objects)
+
+
+def earlier_file_keys(db_session: Session, session_ids: Select[Any] | list[int]) -> set[str]:
+    """Returns the object keys of the earlier session files of these sessions (session_metric_version.file_key: the
+    files a re-analysis with the pipeline replaced)."""
+    query = select(SessionMetricVersion.file_key).where(SessionMetricVersion.session_id.in_(session_ids),
+                                                        SessionMetricVersion.file_key.is_not(None))  # fmt: skip
+    return {k for k in db_session.scalars(query) if k}
+
+
+def earlier_file_keys_in(db_session: Session, keys: set[str]) -> set[str]:
+    """Returns those of `keys` a session_metric_version row still names (another session's earlier file)."""
+    return set(db_session.scalars(select(SessionMetricVersion.file_key).where(SessionMetricVersion.file_key.in_(keys))))
 
 
 _PENDING = "records.objects_to_delete"

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, status
 from pydantic import BaseModel, Field
@@ -19,9 +19,11 @@ from backend.records.reanalysis import OLDER, enqueue_reanalysis
 from backend.schemas import IdPath
 from backend.sessions import service
 from backend.sessions.metrics import ANALYSIS_VERSION
-from backend.sessions.models import SessionMetric
+from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.users.models import User
 from kinect_agent.analysis.document import AnalysisDocument, read_document, read_if_readable
+from kinect_agent.processing.pipeline import VERSION as PIPELINE_VERSION
+from kinect_agent.processing.provenance import settings_id
 
 router = APIRouter(prefix="/api/v1", tags=["re-analysis"])
 
@@ -33,10 +35,17 @@ class BatchNotFound(NotFound):
 class ReanalysisIn(BaseModel):
     """Which stored sessions to analyse again (all when every filter is empty)."""
 
-    model_config = {"json_schema_extra": {"examples": [{"patient_id": 3, "since": "2026-01-01", "exercise": "squat"}]}}
+    model_config = {"json_schema_extra": {"examples": [{"patient_id": 3, "since": "2026-01-01", "exercise": "squat",
+                    "pipeline": False}]}}  # fmt: skip
     patient_id: int | None = None
     since: dt.date | None = None
     exercise: str | None = Field(default=None, max_length=64)
+    pipeline: bool = Field(
+        default=False,
+        description="also filter the raw recording again with today's pipeline where the stored file was filtered by "
+        "another pipeline version or other settings, or not at all (a new session file; the earlier one is kept); "
+        "false: the metrics only, from the stored filtered recording",
+    )
 
 
 class ProgressOut(BaseModel):
@@ -54,16 +63,24 @@ class ProgressOut(BaseModel):
 
 
 class MetricVersionOut(BaseModel):
-    """One metrics document of a session with the analysis version that made it (current=True: today's)."""
+    """One metrics document of a session with the analysis version that made it (current=True: today's) and the
+    session file it was computed from: its sha256 and the pipeline that filtered it (null: not recorded)."""
 
     model_config = {"json_schema_extra": {"examples": [{"analysis_version": ANALYSIS_VERSION, "current": True,
-                    "repetitions": 10, "rom_deg": 88.0, "balance_sway_m_s": 0.021, "replaced_at": None}]}}  # fmt: skip
+                    "repetitions": 10, "rom_deg": 88.0, "balance_sway_m_s": 0.021, "replaced_at": None,
+                    "file_sha256": "ab12" + 60 * "0", "pipeline_version": "ukf-4pass v1",
+                    "pipeline_settings": "3f2c0a1b9d8e", "refiltered": None, "file_kept": True}]}}  # fmt: skip
     analysis_version: str
     current: bool
     repetitions: int | None
     rom_deg: float | None
     balance_sway_m_s: float | None
     replaced_at: dt.datetime | None
+    file_sha256: str | None = Field(description="sha256 of the session file these metrics came from (null: unknown)")
+    pipeline_version: str | None = Field(description="the pipeline that filtered that file (params.pipeline)")
+    pipeline_settings: str | None = Field(description="a short name of that pipeline's settings (12 hex digits)")
+    refiltered: str | None = Field(description="why the server filtered the raw recording again to make that file")
+    file_kept: bool = Field(description="whether that file is still stored (false: unknown, or removed)")
 
 
 class BatchOut(BaseModel):
@@ -85,12 +102,14 @@ class BatchOut(BaseModel):
 
 
 class ReanalysisOverviewOut(BaseModel):
-    """The server's analysis version (what a new re-analysis uses) and the newest re-analysis batches."""
+    """The server's analysis and pipeline versions (what a new re-analysis uses) and the newest re-analysis batches."""
 
-    model_config = {"json_schema_extra": {"examples": [{"analysis_version": ANALYSIS_VERSION, "batches": [
+    model_config = {"json_schema_extra": {"examples": [{"analysis_version": ANALYSIS_VERSION,
+                    "pipeline_version": PIPELINE_VERSION, "batches": [
                     BatchOut.model_config["json_schema_extra"]["examples"][0]]}]}}  # type: ignore[index]  # fmt: skip
 
     analysis_version: str
+    pipeline_version: str = Field(PIPELINE_VERSION, description="the pipeline a re-analysis with pipeline=true uses")
     batches: list[BatchOut]
 
 
@@ -151,7 +170,7 @@ def read_jobs(
 def queue_reanalysis(body: ReanalysisIn, caller: AdminCaller, db_session: DbSession) -> ProgressOut:
     """Queues the re-analysis of the matching stored sessions (admins); workers (`coach-server worker`) run it."""
     batch, _ = enqueue_reanalysis(db_session=db_session, patient_id=body.patient_id, since=body.since,
-                                  exercise=body.exercise)  # fmt: skip
+                                  exercise=body.exercise, pipeline=body.pipeline)  # fmt: skip
     record(db_session=db_session, caller=caller, action="reanalysis.queue", object_type="batch", object_id=batch,
            patient_id=body.patient_id, detail=body.model_dump(mode="json"))  # fmt: skip
     return ProgressOut(batch=batch, analysis_version=ANALYSIS_VERSION, **progress(db_session=db_session, batch=batch))
@@ -173,22 +192,36 @@ def _sway(doc: AnalysisDocument | None) -> float | None:
 @router.get("/sessions/{session_id}/metric-versions", response_model=list[MetricVersionOut],
             responses=error_responses(*AUTH_ERRORS, SessionNotFound))  # fmt: skip
 def metric_versions(session_id: IdPath, caller: CurrentCaller, db_session: DbSession) -> list[MetricVersionOut]:
-    """Returns a session's metrics under each analysis version, today's first: what a re-analysis changed."""
+    """Returns a session's metrics under each analysis version, today's first, each with the session file it came
+    from and the pipeline that filtered that file: what a re-analysis changed."""
     patient_id = service.session_patient(db_session=db_session, session_id=session_id)
     require_patient_access(patient_id, caller=caller, db_session=db_session, allow_device=False,
                            hidden_as=service.missing(session_id))  # fmt: skip
     current = db_session.scalar(select(SessionMetric).where(SessionMetric.session_id == session_id))
+    session = db_session.get(ExerciseSession, session_id)
     out = []
-    if current is not None:
+    if current is not None and session is not None:
         doc = read_document(current.document)
+        files = _file_fields(session.content_hash, session.processing_params, kept=session.file_removed_at is None)
         out.append(MetricVersionOut(analysis_version=doc.analysis_version or OLDER, current=True,
                                     repetitions=current.repetitions, rom_deg=current.rom_deg,
-                                    balance_sway_m_s=_sway(doc), replaced_at=None))  # fmt: skip
+                                    balance_sway_m_s=_sway(doc), replaced_at=None, **files))  # fmt: skip
+    newest_first = (SessionMetricVersion.replaced_at.desc(), SessionMetricVersion.id.desc())
     older = db_session.scalars(select(SessionMetricVersion).where(SessionMetricVersion.session_id == session_id)
-                               .order_by(SessionMetricVersion.replaced_at.desc()))  # fmt: skip
+                               .order_by(*newest_first))  # fmt: skip
     for v in older:
         old = read_if_readable(v.document)  # a replaced document may be of any shape the server ever stored
+        files = _file_fields(v.file_hash, v.processing_params, kept=v.file_key is not None)
         out.append(MetricVersionOut(analysis_version=v.analysis_version, current=False,
                                     repetitions=old.repetitions if old else None, rom_deg=old.rom_deg if old else None,
-                                    balance_sway_m_s=_sway(old), replaced_at=v.replaced_at))  # fmt: skip
+                                    balance_sway_m_s=_sway(old), replaced_at=v.replaced_at, **files))  # fmt: skip
     return out
+
+
+def _file_fields(sha256: str | None, params: dict[str, Any] | None, *, kept: bool) -> dict[str, Any]:
+    """Returns the file fields of MetricVersionOut from a file's sha256 and params (None: not recorded)."""
+    params = params if isinstance(params, dict) else {}
+    made_by, again = params.get("pipeline"), params.get("refiltered")
+    return {"file_sha256": sha256, "pipeline_version": made_by if isinstance(made_by, str) else None,
+            "pipeline_settings": settings_id(params.get("config")), "file_kept": kept and sha256 is not None,
+            "refiltered": again.get("reason") if isinstance(again, dict) else None}  # fmt: skip

@@ -17,7 +17,8 @@ from sqlalchemy import delete, or_, select, update
 from sqlalchemy.orm import Session
 
 from backend.audit.service import record
-from backend.records.erasure import delete_after_commit
+from backend.jobs.models import SessionMetricVersion
+from backend.records.erasure import delete_after_commit, earlier_file_keys, earlier_file_keys_in
 from backend.replay.models import SessionReplay
 from backend.sessions.models import ExerciseSession, SessionDetail, SessionExport
 
@@ -59,6 +60,7 @@ def apply_retention(*, db_session: Session, days: int, now: dt.datetime | None =
     }
     keys |= set(db_session.scalars(select(SessionDetail.data_key).where(SessionDetail.session_id.in_(ids))))
     keys |= set(db_session.scalars(select(SessionExport.data_key).where(SessionExport.session_id.in_(ids))))
+    keys |= earlier_file_keys(db_session, ids)  # the files a re-analysis replaced go with the current one
     db_session.execute(delete(SessionReplay).where(SessionReplay.session_id.in_(ids)))
     db_session.execute(delete(SessionDetail).where(SessionDetail.session_id.in_(ids)))  # curves of the recording
     db_session.execute(delete(SessionExport).where(SessionExport.session_id.in_(ids)))  # downloads of the recording
@@ -67,10 +69,14 @@ def apply_retention(*, db_session: Session, days: int, now: dt.datetime | None =
         .where(ExerciseSession.id.in_(ids))
         .values(file_key=None, file_bytes=None, file_removed_at=now)
     )
+    db_session.execute(
+        update(SessionMetricVersion).where(SessionMetricVersion.session_id.in_(ids)).values(file_key=None)
+    )  # their sha256 stays: which file each earlier metrics came from
     still_used = set(db_session.scalars(select(ExerciseSession.file_key).where(ExerciseSession.file_key.in_(keys))))
     still_used |= set(db_session.scalars(select(SessionReplay.data_key).where(SessionReplay.data_key.in_(keys))))
     still_used |= set(db_session.scalars(select(SessionDetail.data_key).where(SessionDetail.data_key.in_(keys))))
     still_used |= set(db_session.scalars(select(SessionExport.data_key).where(SessionExport.data_key.in_(keys))))
+    still_used |= earlier_file_keys_in(db_session, keys)
     objects = sorted(keys - still_used)
     per_patient = dict(Counter(r.patient_id for r in rows))
     for pid, n in per_patient.items():

@@ -15,6 +15,7 @@ from backend.analysis.errors import AnalysisError
 from backend.database import utcnow
 from backend.exceptions import ExerciseNotFound, SessionConflict, SessionFileRemoved, SessionNotFound
 from backend.exercises.models import Exercise
+from backend.jobs.models import SessionMetricVersion
 from backend.patients.models import TherapistPatient
 from backend.patients.service import visible_patients_query
 from backend.sessions.ingest import Upload
@@ -46,9 +47,13 @@ def find_session(*, db_session: Session, patient_id: int, client_session_id: uui
     )
 
 
-def _same_or_conflict(stored: ExerciseSession, upload: Upload) -> ExerciseSession:
-    """Returns the stored session when the upload repeats it byte for byte; raises SessionConflict otherwise."""
-    if stored.content_hash != upload.content_hash:
+def _same_or_conflict(stored: ExerciseSession, upload: Upload, db_session: Session) -> ExerciseSession:
+    """Returns the stored session when the upload repeats it byte for byte, or repeats a file a re-analysis replaced
+    (the agent's own file, sent again after the pipeline filtered it anew on the server); raises SessionConflict
+    otherwise."""
+    earlier = select(SessionMetricVersion.id).where(SessionMetricVersion.session_id == stored.id,
+                                                    SessionMetricVersion.file_hash == upload.content_hash)  # fmt: skip
+    if stored.content_hash != upload.content_hash and db_session.scalar(earlier.limit(1)) is None:
         raise SessionConflict(
             f"session {upload.client_session_id} of patient {stored.patient_id} was already uploaded with different "
             f"content (stored sha256 {stored.content_hash[:16]}..., this upload {upload.content_hash[:16]}...)"
@@ -90,7 +95,7 @@ def store_upload(
     with db_session.no_autoflush:  # reads and analysis first; pending writes wait, so no write lock meanwhile
         stored = find_session(db_session=db_session, patient_id=patient_id, client_session_id=upload.client_session_id)
         if stored is not None:
-            return _same_or_conflict(stored, upload), False
+            return _same_or_conflict(stored, upload, db_session), False
         doc, error = _analyse(db_session=db_session, upload=upload, patient_id=patient_id, exercise=exercise)
     raw = upload.payload.raw
     stored_file = get_store().put("session", upload.data)  # before the row: a row never points to nothing
@@ -119,7 +124,7 @@ def store_upload(
         stored = find_session(db_session=db_session, patient_id=patient_id, client_session_id=upload.client_session_id)
         if stored is None:
             raise
-        return _same_or_conflict(stored, upload), False
+        return _same_or_conflict(stored, upload, db_session), False
     if doc is not None:
         stored_doc = doc.model_dump(mode="json")
         db_session.add(

@@ -18,6 +18,8 @@ _REPLAY = sa.table("session_replay", sa.column("id"), sa.column("session_id"), s
                    sa.column("data_hash"))  # fmt: skip
 _DETAIL = sa.table("session_detail", sa.column("id"), sa.column("session_id"), sa.column("data_key"),
                    sa.column("data_hash"))  # fmt: skip
+_EARLIER = sa.table("session_metric_version", sa.column("id"), sa.column("session_id"), sa.column("file_key"),
+                    sa.column("file_hash"))  # fmt: skip
 _EXPORT = sa.table("session_export", sa.column("id"), sa.column("session_id"), sa.column("format"),
                    sa.column("data_key"), sa.column("data_hash"))  # fmt: skip
 
@@ -54,6 +56,7 @@ def check(conn: Connection, store: ObjectStore) -> CheckReport:
     rows = conn.execute(sa.select(_EXPORT.c.session_id, _EXPORT.c.format, _EXPORT.c.data_key, _EXPORT.c.data_hash)
                         .order_by(_EXPORT.c.id))  # fmt: skip
     targets += [(f"{r.format} export of session {r.session_id}", r.data_key, r.data_hash) for r in rows]
+    targets += _earlier_files(conn, current={key for _, key, _ in targets})
     for what, key, digest in targets:
         referenced.add(key)
         report.checked += 1
@@ -67,6 +70,18 @@ def check(conn: Connection, store: ObjectStore) -> CheckReport:
     )
     report.orphans = sorted(k for k in store.keys() if k not in referenced)
     return report
+
+
+def _earlier_files(conn: Connection, *, current: set[str]) -> list[tuple[str, str, str]]:
+    """Returns (what, key, sha256) of the session files a re-analysis with the pipeline replaced (named beside the
+    metrics they gave in session_metric_version), each once, leaving out keys in `current` (checked already)."""
+    rows = conn.execute(sa.select(_EARLIER.c.session_id, _EARLIER.c.file_key, _EARLIER.c.file_hash)
+                        .where(_EARLIER.c.file_key.is_not(None)).order_by(_EARLIER.c.id))  # fmt: skip
+    found: dict[str, tuple[str, str, str]] = {}
+    for r in rows:
+        if r.file_key not in current:
+            found.setdefault(r.file_key, (f"earlier file of session {r.session_id}", r.file_key, r.file_hash))
+    return list(found.values())
 
 
 def run(args: argparse.Namespace) -> int:

@@ -72,6 +72,10 @@ from kinect_agent.processing.ukf import combine_information, unscented_rts
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INFERRED, NOT_TRACKED, TRACKED
 
+# The pipeline's version: written to every session file's params["pipeline"] (provenance.pipeline_params) and to each
+# filtered recording's history. Raise it when process() gives other output for the same input and settings; a change
+# of a default setting needs no raise (the file's params["config"] is compared too). `coach-server reanalyze
+# --pipeline` filters again every stored session made by another version or other settings (provenance.stale_reason).
 VERSION = "ukf-4pass v1"
 MAX_COORDINATE_M = 100.0  # farther from the camera than this on any axis: not metres (a Kinect sees up to ~8 m)
 Progress = Callable[[int, int], None]

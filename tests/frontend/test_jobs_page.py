@@ -1,7 +1,8 @@
 """The admin's re-analysis page end to end: an admin starts the re-analysis of one patient's sessions, the
 server's worker runs it (COACH_EMBEDDED_WORKER: the loop of `coach-server worker`), the page follows the progress by
 itself and says a failure in words; a therapist gets the 403 page; a session whose recording the retention period
-removed says so on its page. Screenshots at 1366 and 390 px, axe-core 0 serious/critical."""
+removed says so on its page; a session re-analysed with the pipeline names the pipeline of each version. Screenshots
+at 1366 and 390 px, axe-core 0 serious/critical."""
 
 from __future__ import annotations
 
@@ -121,3 +122,37 @@ def test_a_removed_session_says_when_and_why(browser, live_server):
         shot(page, "session_removed_390")
         assert _axe_blocking(page) == []
         assert not page.js_errors, page.js_errors
+
+
+def test_the_session_page_says_which_pipeline_filtered_each_version(browser, live_server):
+    """A session of a file filtered by no known pipeline, re-analysed with today's pipeline (the job a worker runs):
+    its page's table shows today's pipeline beside the earlier file's "not recorded", and why it was filtered again."""
+    from backend.records.reanalysis import reanalyze_session
+    from backend.storage import use_store
+    from kinect_agent.processing.pipeline import VERSION
+
+    stored = upload_session(live_server.url, WALTER, "elbow_flexion", 3, seed=304, created_at="2026-11-23T09:00:00Z")
+    engine = sa.create_engine(live_server.database_url)
+    use_store(LocalStore(live_server.storage_dir))
+    try:
+        with Session(engine) as db, db.begin():
+            result = reanalyze_session(db_session=db, session_id=stored["id"], max_frames=108_000,
+                                       max_decoded_bytes=64 * 2**20, pipeline=True)  # fmt: skip
+        assert result["refiltered"] == "filtered by an unnamed pipeline", result
+        with open_page(browser, live_server.url, 1366, 900) as page:
+            sign_in(page, ADMIN[0])
+            page.goto(f"/therapist/sessions/{stored['id']}")
+            card = page.locator("#versions-card")
+            expect(card).to_be_visible()
+            rows = page.locator("#versions tbody tr")
+            expect(rows).to_have_count(2)
+            expect(rows.nth(0)).to_contain_text(f"{VERSION}, settings ")
+            expect(rows.nth(0)).to_contain_text("(filtered again by the server: filtered by an unnamed pipeline)")
+            expect(rows.nth(1)).to_contain_text("not recorded · file ")
+            card.scroll_into_view_if_needed()
+            shot(page, "session_versions_pipeline_1366")
+            assert _axe_blocking(page) == []
+            assert not page.js_errors, page.js_errors
+    finally:
+        use_store(None)
+        engine.dispose()

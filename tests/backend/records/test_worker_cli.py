@@ -20,17 +20,21 @@ from backend.sessions.metrics import ANALYSIS_VERSION
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.storage.local import LocalStore
 from backend.users.models import User
-from tests.backend.khs_files import make_processed_khs
+from kinect_agent.formats.session_file import content_hash
+from kinect_agent.processing.pipeline import VERSION
+from tests.backend.khs_files import make_khs, make_processed_khs
 
 ROOT = Path(__file__).resolve().parents[3]
 
 
-def test_reanalyze_then_a_worker_process_updates_the_metrics(fresh_engine, tmp_path):
+def _stored_session(fresh_engine, tmp_path, data: bytes) -> tuple[int, dict[str, str]]:
+    """Migrates the fresh SQLite database, stores one elbow_flexion session of `data` with a document of no known
+    analysis version, and returns (its id, the environment of a coach-server process on them)."""
     url = fresh_engine.url.render_as_string(hide_password=False)
     if not url.startswith("sqlite"):
         pytest.skip("the worker process reaches the fresh database by URL: SQLite file here")
     store = LocalStore(tmp_path / "objects")
-    obj = store.put("session", make_processed_khs("elbow_flexion", 3, seed=4))
+    obj = store.put("session", data)
     with fresh_engine.begin() as conn:
         upgrade(conn, "head")
     with Session(fresh_engine) as s, s.begin():
@@ -48,6 +52,11 @@ def test_reanalyze_then_a_worker_process_updates_the_metrics(fresh_engine, tmp_p
         sid = row.id
     env = os.environ | {"COACH_DATABASE_URL": url, "COACH_STORAGE_DIR": str(tmp_path / "objects"),
                         "PYTHONPATH": str(ROOT)}  # fmt: skip
+    return sid, env
+
+
+def test_reanalyze_then_a_worker_process_updates_the_metrics(fresh_engine, tmp_path):
+    sid, env = _stored_session(fresh_engine, tmp_path, make_processed_khs("elbow_flexion", 3, seed=4))
     cli = [sys.executable, "-m", "backend.cli"]
     out = subprocess.run([*cli, "reanalyze"], env=env, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0 and "1 session(s) queued" in out.stdout, out.stderr
@@ -57,3 +66,22 @@ def test_reanalyze_then_a_worker_process_updates_the_metrics(fresh_engine, tmp_p
         doc = s.scalar(sa.select(SessionMetric.document).where(SessionMetric.session_id == sid))
         assert doc["analysis_version"] == ANALYSIS_VERSION and doc["repetitions"] >= 2
         assert s.scalar(sa.text("SELECT status FROM job")) == "done"
+
+
+def test_reanalyze_with_the_pipeline_writes_a_new_file_and_storage_check_sees_both(fresh_engine, tmp_path):
+    data = make_khs("elbow_flexion", 3, seed=5)  # filtered by no known pipeline
+    sid, env = _stored_session(fresh_engine, tmp_path, data)
+    cli = [sys.executable, "-m", "backend.cli"]
+    out = subprocess.run([*cli, "reanalyze", "--pipeline"], env=env, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0 and "1 session(s) queued for re-analysis with today's pipeline" in out.stdout, out
+    out = subprocess.run([*cli, "worker", "--once"], env=env, capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0 and "after 1 job(s)" in out.stderr, out.stderr
+    with Session(fresh_engine) as s:
+        row = s.get(ExerciseSession, sid)
+        assert row.content_hash != content_hash(data) and row.processing_params["pipeline"] == VERSION
+        assert s.scalar(sa.text("SELECT file_hash FROM session_metric_version")) == content_hash(data)
+    out = subprocess.run([*cli, "storage", "check", "--orphans"], env=env, capture_output=True, text=True,
+                         timeout=120)  # fmt: skip
+    assert out.returncode == 0 and "2 object(s) checked, 0 missing, 0 corrupt, 0 not referenced" in out.stdout, out
+    out = subprocess.run([*cli, "reanalyze", "--pipeline"], env=env, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0 and "0 session(s) queued" in out.stdout, "done once: not queued again"
