@@ -14,22 +14,30 @@ import argparse
 import statistics
 import time
 import zlib
+from collections.abc import Callable
+from typing import Any
 
 from backend.exercises.library import EXERCISES
 from backend.sessions.detail import analysis_document, decode_stored
-from kinect_agent.export.files import export
+from kinect_agent.export.files import ExportFile, export
+from kinect_agent.formats.session_file import SessionPayload
 from tests.backend.khs_files import make_khs
 
 LIMITS = {"max_frames": 10**6, "max_decoded_bytes": 1 << 30}
 
 
-def _cpu(fn, repeats: int) -> tuple[float, list]:
-    times, out = [], []
+def _cpu(fn: Callable[[], list[ExportFile]], repeats: int) -> tuple[float, list[ExportFile]]:
+    times: list[float] = []
+    out: list[ExportFile] = []
     for _ in range(repeats):
         t0 = time.process_time()
         out = fn()
         times.append(time.process_time() - t0)
     return statistics.median(times), out
+
+
+def _deflated(files: list[ExportFile]) -> int:
+    return sum(len(zlib.compress(f.data, 6)) for f in files)
 
 
 def main() -> None:
@@ -47,19 +55,18 @@ def main() -> None:
             document, _ = analysis_document(payload, spec, None)
             stored = document.model_dump(mode="json") if document is not None else None
 
-            def kept(data=data, stored=stored) -> list:
+            def kept(data: bytes = data, stored: dict[str, Any] | None = stored) -> list[ExportFile]:
                 p = decode_stored(data, session_id=1, **LIMITS)
                 doc, _ = analysis_document(p, spec, stored)
                 return [export(f, p, document=doc) for f in ("csv", "fhir")]
 
-            def left_out(payload=payload) -> list:
+            def left_out(payload: SessionPayload = payload) -> list[ExportFile]:
                 return [export(f, payload) for f in ("trc", "bvh")]
 
             cpu_kept, files = _cpu(kept, args.repeats)
             cpu_out, others = _cpu(left_out, args.repeats)
-            size = lambda fs: sum(len(zlib.compress(f.data, 6)) for f in fs)  # noqa: E731
-            print(f"{reps} {seed} {payload.raw.n_frames} {len(data)} | {cpu_kept * 1000:.0f} {size(files)} | "
-                  f"{cpu_out * 1000:.0f} {size(others)}")  # fmt: skip
+            print(f"{reps} {seed} {payload.raw.n_frames} {len(data)} | {cpu_kept * 1000:.0f} {_deflated(files)} | "
+                  f"{cpu_out * 1000:.0f} {_deflated(others)}")  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -39,7 +39,7 @@ THERAPIST_FILES = frozenset({
     "frontend/static/therapist.js", "frontend/static/patient_detail.js", "frontend/static/session.js",
     "frontend/static/admin_jobs.js", "frontend/static/records.js",
     "frontend/static/replies_view.js", "frontend/static/feeling_view.js", "frontend/static/versions.js",
-    "frontend/static/voice_setting.js", "frontend/static/downloads.js",
+    "frontend/static/voice_setting.js", "frontend/static/downloads.js", "frontend/static/report_period.js",
     "backend/sessions/triage.py",  # the dashboard's attention reasons and indicator trends
     "backend/sessions/detail.py", "backend/analysis/data_quality.py",  # the session page's notes and quality labels
 })  # fmt: skip

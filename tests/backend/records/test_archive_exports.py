@@ -9,6 +9,7 @@ import io
 import json
 import zipfile
 
+import pytest
 import sqlalchemy as sa
 
 from backend import cli
@@ -16,6 +17,8 @@ from backend.records import commands
 from backend.records.archive import EXPORT_FORMATS, FORMAT_VERSION
 from backend.sessions.models import ExerciseSession
 from tests.backend.khs_files import make_khs
+
+R4B = pytest.importorskip("fhir.resources.R4B.bundle", reason="fhir.resources is in the test extra")
 
 
 def _upload(client, headers, seed: int, exercise: str = "squat") -> int:
@@ -52,6 +55,7 @@ def _check_session_exports(z: zipfile.ZipFile, entry: dict) -> None:
         assert metrics, f"session {sid}: metrics.csv is empty"
     bundle = json.loads(z.read(entry["exports"]["fhir"]))
     assert (bundle["resourceType"], bundle["type"]) == ("Bundle", "collection")
+    R4B.Bundle.model_validate(bundle)  # a Bundle the FHIR R4B models accept
     reps = [v for code, v in _observations(bundle) if code == "repetitions"]
     assert reps == [entry["metrics"]["repetitions"]], (sid, reps)
 
