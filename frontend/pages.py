@@ -7,6 +7,7 @@ page scripts.
 
 from __future__ import annotations
 
+import datetime as dt
 import importlib.util
 import re
 from functools import lru_cache
@@ -40,6 +41,7 @@ from frontend import vendor_assets
 
 HERE = Path(__file__).resolve().parent
 STATIC = HERE / "static"
+REPORT_DEFAULT_DAYS = 28  # the patient page's report form: the last 4 weeks, today included
 
 
 def _package_dir(name: str) -> Path:
@@ -263,7 +265,10 @@ def patient_detail_page(
             N_("There is no patient %(patient_id)s that you may see."),
             params={"patient_id": patient_id},
         )
-    return _page(request, "patient_detail.html", caller, patient_id=patient_id)
+    last = dt.datetime.now(dt.UTC).date()
+    return _page(request, "patient_detail.html", caller, patient_id=patient_id,
+                 report_from=(last - dt.timedelta(days=REPORT_DEFAULT_DAYS - 1)).isoformat(),
+                 report_to=last.isoformat())  # fmt: skip
 
 
 def _visible_session(request: Request, caller: Caller, db_session: Session, session_id: int) -> int | Response:

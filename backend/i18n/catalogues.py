@@ -50,6 +50,7 @@ THERAPIST_FILES = frozenset(
         "frontend/static/versions.js",
         "frontend/static/voice_setting.js",
         "frontend/static/downloads.js",
+        "frontend/static/report_period.js",
         "backend/sessions/triage.py",  # the dashboard's attention reasons and indicator trends
     }
 )  # fmt: skip (the session detail's notes, quality labels and curve labels are not: a patient reads them in the API)

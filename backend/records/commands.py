@@ -16,6 +16,7 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
 from backend.audit.service import record
+from backend.config import get_settings
 from backend.deps import Caller, require_patient_access
 from backend.exceptions import InvalidInput
 from backend.records.archive import build_archive
@@ -57,10 +58,15 @@ def run(args: argparse.Namespace, db_session: Session) -> str:
         out = _new_file(args.out)
         record(db_session=db_session, caller=caller, action="patient.archive", object_type="patient",
                object_id=patient.id, patient_id=patient.id, detail=VIA)  # fmt: skip
-        archive = build_archive(db_session=db_session, patient=patient, requested_by=f"admin {admin.email}")
-        with archive, out.open("wb") as f:
-            shutil.copyfileobj(archive, f)
-        return f"archive of patient {patient.id} written to {out} ({out.stat().st_size} bytes)"
+        built = build_archive(db_session=db_session, patient=patient, requested_by=f"admin {admin.email}",
+                              settings=get_settings())  # fmt: skip
+        with built.file, out.open("wb") as f:
+            shutil.copyfileobj(built.file, f)
+        said = f"archive of patient {patient.id} written to {out} ({out.stat().st_size} bytes)"
+        if built.incomplete:
+            said += (f"; {len(built.incomplete)} session(s) incomplete, named in its README.txt: "
+                     + ", ".join(str(sid) for sid in built.incomplete))  # fmt: skip
+        return said
     if args.action == "report":
         out = _new_file(args.out)
         period = Period.asked(_date("--from", args.start), _date("--to", args.end))

@@ -6,7 +6,7 @@ import datetime as dt
 from collections.abc import Iterator
 from typing import Annotated, Literal
 
-from fastapi import APIRouter, Query, Response, status
+from fastapi import APIRouter, Query, Request, Response, status
 from fastapi.responses import StreamingResponse
 from pydantic import BaseModel, Field
 
@@ -41,12 +41,25 @@ class ErasureOut(BaseModel):
     "/{patient_id}/archive",
     response_class=StreamingResponse,
     responses={
-        200: {"content": {"application/zip": {}}, "description": "a zip of everything held about the patient"},
+        200: {
+            "content": {"application/zip": {}},
+            "description": "a zip of everything held about the patient",
+            "headers": {
+                "X-Archive-Incomplete-Sessions": {
+                    "description": "how many sessions lack their file or an export (named in README.txt)",
+                    "schema": {"type": "integer"},
+                }
+            },
+        },
         **error_responses(*AUTH_ERRORS, PatientNotFound, StorageError),
     },
 )
-def download_archive(patient_id: IdPath, caller: CurrentCaller, db_session: DbSession) -> StreamingResponse:
-    """Returns everything held about a patient as one zip archive with a README (the patient, or an admin)."""
+def download_archive(
+    patient_id: IdPath, request: Request, caller: CurrentCaller, db_session: DbSession
+) -> StreamingResponse:
+    """Returns everything held about a patient as one zip archive with a README and a manifest (the patient, or an
+    admin); each session's file and exports (csv, fhir). A session whose file cannot be read is named in
+    the README and the manifest, and counted in the X-Archive-Incomplete-Sessions header; the rest is still given."""
     patient = require_patient_access(patient_id, caller=caller, db_session=db_session)
     user = caller.user
     if user is None or (user.role != "admin" and user.id != patient_id):
@@ -54,7 +67,9 @@ def download_archive(patient_id: IdPath, caller: CurrentCaller, db_session: DbSe
     who = "the patient" if user.id == patient_id else f"admin {user.email}"
     record(db_session=db_session, caller=caller, action="patient.archive", object_type="patient",
            object_id=patient_id, patient_id=patient_id)  # fmt: skip
-    archive = build_archive(db_session=db_session, patient=patient, requested_by=who)
+    settings = request.app.state.settings
+    built = build_archive(db_session=db_session, patient=patient, requested_by=who, settings=settings)
+    archive = built.file
     name = f"patient-{patient_id}-data-{dt.datetime.now(dt.UTC):%Y%m%d}.zip"
 
     def chunks() -> Iterator[bytes]:
@@ -65,7 +80,8 @@ def download_archive(patient_id: IdPath, caller: CurrentCaller, db_session: DbSe
             archive.close()
 
     return StreamingResponse(chunks(), media_type="application/zip",
-                             headers={"Content-Disposition": f'attachment; filename="{name}"'})  # fmt: skip
+                             headers={"Content-Disposition": f'attachment; filename="{name}"',
+                                      "X-Archive-Incomplete-Sessions": str(len(built.incomplete))})  # fmt: skip
 
 
 @router.post(

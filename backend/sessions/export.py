@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+from dataclasses import dataclass
 from typing import Any
 
 from sqlalchemy.orm import Session
@@ -41,6 +42,49 @@ def export_context(*, db_session: Session, row: tuple[Any, ...]) -> SessionConte
     )
 
 
+@dataclass(frozen=True)
+class SessionExports:
+    """A session's exports in several formats made from one read of its file: `files` by format, and for each
+    format that could not be made, why (`unavailable`, e.g. fhir without metrics)."""
+
+    files: dict[str, ExportFile]
+    unavailable: dict[str, str]
+
+
+def session_exports(
+    *,
+    db_session: Session,
+    row: tuple[Any, ...],
+    formats: tuple[str, ...],
+    max_frames: int,
+    max_decoded_bytes: int,
+    context: SessionContext | None = None,
+    data: bytes | None = None,
+) -> SessionExports:
+    """Returns the session of `row` (service.get_session_row) in each of `formats`, its file read (sha256 checked)
+    and decoded once, with its metrics document: the stored one, else the file analysed again as the session page
+    does (detail.analysis_document, without indicators), and `context` (export_context, read now when None). data:
+    the session file when the caller read it already (service.session_file), else it is read here.
+
+    Raises StorageError when the stored file is missing or corrupt, SessionFileRemoved when the retention period
+    removed it, InvalidSessionFile when it cannot be decoded; a format the session cannot give is in `unavailable`.
+    """
+    session, slug, _reps, _rom, _quality, stored = row
+    context = context or export_context(db_session=db_session, row=row)
+    if data is None:
+        data = service.session_file(db_session=db_session, session_id=session.id)
+    payload = decode_stored(data, session_id=session.id, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
+    document, _ = analysis_document(payload, EXERCISES.get(slug) if slug else None, stored)
+    files: dict[str, ExportFile] = {}
+    unavailable: dict[str, str] = {}
+    for fmt in formats:
+        try:
+            files[fmt] = export(fmt, payload, document=document, context=context, stem=f"session-{session.id}")
+        except ExportError as exc:
+            unavailable[fmt] = f"session {session.id}: {exc}"
+    return SessionExports(files, unavailable)
+
+
 def session_export(
     *,
     db_session: Session,
@@ -50,19 +94,13 @@ def session_export(
     max_decoded_bytes: int,
     context: SessionContext | None = None,
 ) -> ExportFile:
-    """Returns the session of `row` (service.get_session_row) as `fmt`, with its metrics document: the stored one,
-    else the file analysed again as the session page does (detail.analysis_document, without indicators), and
-    `context` (export_context, read now when None).
+    """Returns the session of `row` (service.get_session_row) as `fmt` (session_exports of one format).
 
     Raises InvalidSessionFile when the stored file cannot be decoded, ExportUnavailable when the format needs metrics
     and none can be had (no known exercise, or the analysis fails).
     """
-    session, slug, _reps, _rom, _quality, stored = row
-    context = context or export_context(db_session=db_session, row=row)
-    data = service.session_file(db_session=db_session, session_id=session.id)
-    payload = decode_stored(data, session_id=session.id, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
-    document, _ = analysis_document(payload, EXERCISES.get(slug) if slug else None, stored)
-    try:
-        return export(fmt, payload, document=document, context=context, stem=f"session-{session.id}")
-    except ExportError as exc:
-        raise ExportUnavailable(f"session {session.id}: {exc}") from None
+    built = session_exports(db_session=db_session, row=row, formats=(fmt,), max_frames=max_frames,
+                            max_decoded_bytes=max_decoded_bytes, context=context)  # fmt: skip
+    if fmt in built.unavailable:
+        raise ExportUnavailable(built.unavailable[fmt])
+    return built.files[fmt]

@@ -103,6 +103,14 @@ def _stored(db_session: Session, session_id: int, fmt: str, inputs: str) -> Stor
     return StoredExport(get_store().get(row.data_key, row.data_hash), row.media_type, row.file_name)
 
 
+def stored_for_today(
+    *, db_session: Session, row: tuple[Any, ...], fmt: str, context: SessionContext
+) -> StoredExport | None:
+    """Returns the `fmt` export of get_session_row's row stored for today's inputs (read from the object store, its
+    sha256 checked: raises StorageError when missing or corrupt), else None; queues nothing."""
+    return _stored(db_session, row[0].id, fmt, _inputs_of_row(row, fmt, context))
+
+
 def read_export(
     *, db_session: Session, row: tuple[Any, ...], fmt: str, t: Translator = ENGLISH
 ) -> StoredExport | ExportState:

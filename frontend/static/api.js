@@ -183,6 +183,23 @@ const Coach = (() => {
     return { close: () => { clearTimeout(again); source.close(); }, reconnect: () => { clearTimeout(again); source.close(); connect(); } };
   }
 
+  /** Returns the file name of a Content-Disposition header ('attachment; filename="x.pdf"'), or fallback. */
+  function fileName(disposition, fallback) {
+    const m = /filename="?([^";]+)"?/.exec(disposition || "");
+    return m ? m[1] : fallback;
+  }
+  /** Hands bytes to the browser's downloads under name. */
+  function saveDownload(blob, name) {
+    const a = document.createElement("a");
+    a.href = URL.createObjectURL(blob);
+    a.download = name;
+    a.hidden = true;
+    document.body.append(a);
+    a.click();
+    a.remove();
+    setTimeout(() => URL.revokeObjectURL(a.href), 60_000);
+  }
+
   async function logout() {
     try { await api("/auth/logout", { method: "POST", redirect401: false }); } catch (e) { /* already signed out */ }
     sessionStorage.removeItem("coach_csrf");
@@ -195,5 +212,5 @@ const Coach = (() => {
   });
 
   return { root, url, api, onChange, ApiError, kindMessage, showError, el, fmtDate, fmtDateTime, fmtTime, plainDay, daysAgo, startOfWeekUTC, median,
-           exercises, exerciseName, runningPlan, toLogin, DAY };
+           exercises, exerciseName, runningPlan, toLogin, fileName, saveDownload, DAY };
 })();

@@ -4,7 +4,7 @@
    downloads; a failure is said, never a JSON file saved in place of the download. */
 "use strict";
 (() => {
-  const { kindMessage } = Coach;
+  const { kindMessage, fileName, saveDownload } = Coach;
   const nav = document.getElementById("downloads");
   const stateBox = document.getElementById("download-state");
   if (!nav || !stateBox) return;
@@ -12,24 +12,6 @@
   const busy = new Set();  // links whose file is being asked for
 
   function say(kind, text) { stateBox.className = kind; stateBox.textContent = text; stateBox.hidden = false; }
-
-  /** Returns the file name of a Content-Disposition header ("attachment; filename=..."), or fallback. */
-  function fileName(disposition, fallback) {
-    const m = /filename="?([^";]+)"?/.exec(disposition || "");
-    return m ? m[1] : fallback;
-  }
-
-  /** Hands bytes to the browser's downloads under name. */
-  function save(blob, name) {
-    const a = document.createElement("a");
-    a.href = URL.createObjectURL(blob);
-    a.download = name;
-    a.hidden = true;
-    document.body.append(a);
-    a.click();
-    a.remove();
-    setTimeout(() => URL.revokeObjectURL(a.href), 60_000);
-  }
 
   /** Asks for one link's file; while it is prepared, says so and asks again after the server's Retry-After. */
   async function fetchFile(link, label, waiting) {
@@ -70,7 +52,7 @@
       return;
     }
     const name = fileName(resp.headers.get("Content-Disposition"), label);
-    save(await resp.blob(), name);
+    saveDownload(await resp.blob(), name);
     say("note", I18n.t("The {file} file is ready: {name} was handed to the browser's downloads.", { file: label, name }));
   }
 

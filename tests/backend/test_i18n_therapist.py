@@ -69,7 +69,8 @@ def test_the_check_names_therapist_template_text_that_is_not_marked():
     unmarked = unmarked.replace("placeholder=\"{{ _('e.g. Europe/Berlin') }}\"", 'placeholder="e.g. Europe/Berlin"')
     found = [str(p) for p in unmarked_template_text(path, unmarked)]
     assert len(found) == 2, found
-    assert found[0] == f"{path}:22: text not marked for translation: 'e.g. Europe/Berlin'"
+    line = next(n for n, text in enumerate(source.splitlines(), 1) if "e.g. Europe/Berlin" in text)
+    assert found[0] == f"{path}:{line}: text not marked for translation: 'e.g. Europe/Berlin'"
     assert found[1].startswith(f"{path}:") and found[1].endswith(
         ": text not marked for translation: 'Suggestions to review'"
     )

@@ -192,4 +192,4 @@ def test_the_archive_holds_replaced_metrics_settings_camera_sets_and_reminders(c
     assert json.loads(z.read("camera_sets.json")) == [] and json.loads(z.read("reminders.json")) == []
     readme = z.read("README.txt").decode()
     assert all(name in readme for name in ("metrics_earlier", "settings.json", "camera_sets.json", "reminders.json"))
-    assert "Archive format version 2" in readme
+    assert "Archive format version 3" in readme
