@@ -2,7 +2,8 @@
 
 Each routine is bound by symbol name (llvmlite add_symbol + numba ExternalFunction), so kernels that call it can
 still be cached on disk. The wrappers take C-ordered float64 arrays; Fortran sees each array transposed, so
-comments name both views. Used by the fused UKF step in _fk_numba.py. Only defined when numba is installed.
+comments name both views. Used by the fused UKF step (_ukf_numba.py) and the RTS loop (_rts_numba.py). Only defined
+when numba is installed.
 
 numpy_gemm / numpy_gemv call numpy's own OpenBLAS (its CBLAS, 64-bit integers) with the arguments numpy's matmul
 passes for C-ordered float64 operands, so a kernel's product has the bits of numpy's `@` (SciPy's OpenBLAS is
