@@ -3,8 +3,9 @@
 Runs pipeline.process (offline defaults, the device's settings) on real recordings in ../shared/data (UI-PRMD
 s01-s05 Kinect, KERAAL Kinect of the Vicon pairs, UTKinect s01-s05) and on the outlier-heavy simulated session,
 and either saves every result (filtered positions (T, J, 3) m, outlier probabilities (T, J), segment lengths (19,)
-m, angle SDs {angle: (T,)} degrees) to --save DIR, or compares them with a saved run: --compare DIR prints the
-largest absolute difference per quantity and recording, and exits 1 when any exceeds --tol (default 1e-9).
+m, rotations q_root (T, 4) and q_local (T, 19, 4) wxyz, angle SDs {angle: (T,)} degrees) to --save DIR, or compares
+them with a saved run: --compare DIR prints the largest absolute difference per quantity and recording, and exits 1
+when any exceeds --tol (default 1e-9). A quantity the saved run lacks (saved by an older version) is not compared.
 Run the old code with --save (e.g. from `git archive` of the old commit), the new with --compare.
     python bench/same_results.py --save DIR | --compare DIR [--tol 1e-9] [--quick]
 """
@@ -51,6 +52,8 @@ def results(rec: Recording) -> dict[str, np.ndarray]:
         "positions": r.filtered.positions,
         "outlier_prob": r.params.outlier_prob,
         "segment_lengths": r.params.segment_lengths,
+        "q_root": r.params.q_root,
+        "q_local": r.params.q_local,
     }
     out.update({f"joint_angles/{k}": v for k, v in r.params.joint_angles.items()})
     out.update({f"angle_sd/{k}": v for k, v in (r.angle_sd or {}).items()})

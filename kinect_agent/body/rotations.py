@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+COMPILED_MIN_MATRICES = 4096  # matrix_to_quat of at least this many matrices runs compiled (numba's import is lazy)
+
 
 def quat_normalize(q: np.ndarray) -> np.ndarray:
     """Returns unit quaternions. q: (..., 4) wxyz."""
@@ -43,9 +45,22 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     )
 
 
-def matrix_to_quat(R: np.ndarray) -> np.ndarray:
-    """Returns unit quaternions (..., 4) wxyz with w >= 0 for rotation matrices R (..., 3, 3)."""
+def matrix_to_quat(R: np.ndarray, compiled: bool = True) -> np.ndarray:
+    """Returns unit quaternions (..., 4) wxyz with w >= 0 for rotation matrices R (..., 3, 3).
+
+    compiled: for COMPILED_MIN_MATRICES matrices or more, by _rotations_numba's kernel when numba is installed (the
+    same numbers bit for bit; imported here, so that reading a file does not load numba); False: numpy.
+    """
     R = np.asarray(R, dtype=np.float64)
+    if compiled and R.ndim >= 2 and R.shape[-2:] == (3, 3) and R.size >= 9 * COMPILED_MIN_MATRICES:
+        from kinect_agent.body import _rotations_numba
+
+        if not _rotations_numba.AVAILABLE:
+            return matrix_to_quat(R, compiled=False)
+        flat = np.ascontiguousarray(R.reshape(-1, 3, 3))
+        out = np.empty((flat.shape[0], 4))
+        _rotations_numba.matrix_to_quat(flat, out)
+        return out.reshape(R.shape[:-2] + (4,))
     m00, m11, m22 = R[..., 0, 0], R[..., 1, 1], R[..., 2, 2]
     # Four candidate formulas; pick the numerically largest denominator per element.
     cand = np.stack(

@@ -9,7 +9,10 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
+
 from kinect_agent.analysis.live import LiveCount
+from kinect_agent.body.rotations import COMPILED_MIN_MATRICES, matrix_to_quat
 from kinect_agent.processing.online import OnlineFilter
 from kinect_agent.processing.pipeline import process
 from kinect_agent.sources.simulator import simulate
@@ -34,10 +37,12 @@ def warm_up() -> float:
 
 def warm_up_offline() -> float:
     """Runs the offline pipeline (outlier model and filter passes, whose compiled kernels the live loop does not
-    use) over 2 s of a simulated squat; returns the seconds it took (first run after an install: about 15 s)."""
+    use) over 2 s of a simulated squat, and the compiled matrix_to_quat that longer recordings reach; returns the
+    seconds it took (first run after an install: about 15 s)."""
     started = time.perf_counter()
     rec = simulate(WARMUP_EXERCISE, 1, seed=0)[0]
     process(rec.slice(0, min(rec.n_frames, 60)))
+    matrix_to_quat(np.broadcast_to(np.eye(3), (COMPILED_MIN_MATRICES, 3, 3)))
     return time.perf_counter() - started
 
 

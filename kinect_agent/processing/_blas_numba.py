@@ -2,10 +2,19 @@
 
 Each routine is bound by symbol name (llvmlite add_symbol + numba ExternalFunction), so kernels that call it can
 still be cached on disk. The wrappers take C-ordered float64 arrays; Fortran sees each array transposed, so
-comments name both views. Used by the fused UKF step in _fk_numba.py. Only defined when numba is installed.
+comments name both views. Used by the fused UKF step (_ukf_numba.py) and the RTS loop (_rts_numba.py). Only defined
+when numba is installed.
+
+numpy_gemm / numpy_gemv call numpy's own OpenBLAS (its CBLAS, 64-bit integers) with the arguments numpy's matmul
+passes for C-ordered float64 operands, so a kernel's product has the bits of numpy's `@` (SciPy's OpenBLAS is
+another build: its dgemm is not guaranteed to give them). NUMPY_BLAS is False when that library is not found (numpy
+built against another BLAS); callers then keep numpy.
 """
 
 from __future__ import annotations
+
+import ctypes
+from pathlib import Path
 
 import numpy as np
 
@@ -27,6 +36,56 @@ if AVAILABLE:
     _dpotrf = _t.ExternalFunction("kinect_dpotrf", _t.void(_vp, _vp, _vp, _vp, _vp))
     _dtrsm = _t.ExternalFunction("kinect_dtrsm", _t.void(*([_vp] * 11)))
     _dsyrk = _t.ExternalFunction("kinect_dsyrk", _t.void(*([_vp] * 10)))
+    _llvm.add_symbol("kinect_dpotrs", _address("scipy.linalg.cython_lapack", "dpotrs"))
+    _dpotrs = _t.ExternalFunction("kinect_dpotrs", _t.void(*([_vp] * 8)))
+
+
+def _numpy_cblas() -> tuple[int, int] | None:
+    """Returns the addresses of (cblas_dgemm, cblas_dgemv) in the OpenBLAS that numpy's matmul calls (the wheel's
+    numpy.libs/libscipy_openblas64_*.so, symbols scipy_cblas_*64_), or None when numpy has no such library."""
+    libs = Path(np.__file__).resolve().parent.parent / "numpy.libs"
+    for path in sorted(libs.glob("libscipy_openblas64_*.so")):
+        lib = ctypes.CDLL(str(path))  # already loaded by numpy: the same handle, the same code
+        try:
+            gemm, gemv = lib.scipy_cblas_dgemm64_, lib.scipy_cblas_dgemv64_
+        except AttributeError:
+            continue
+        return ctypes.cast(gemm, ctypes.c_void_p).value or 0, ctypes.cast(gemv, ctypes.c_void_p).value or 0
+    return None
+
+
+_NUMPY_CBLAS = _numpy_cblas() if AVAILABLE else None
+NUMPY_BLAS = _NUMPY_CBLAS is not None and all(_NUMPY_CBLAS)
+ROW_MAJOR, COL_MAJOR, NO_TRANS, TRANS = 101, 102, 111, 112  # CBLAS enums
+if NUMPY_BLAS:
+    _llvm.add_symbol("kinect_numpy_dgemm", _NUMPY_CBLAS[0])  # type: ignore[index]
+    _llvm.add_symbol("kinect_numpy_dgemv", _NUMPY_CBLAS[1])  # type: ignore[index]
+    _i32, _i64, _f64 = _t.int32, _t.int64, _t.float64
+    _ngemm = _t.ExternalFunction("kinect_numpy_dgemm", _t.void(_i32, _i32, _i32, _i64, _i64, _i64, _f64, _vp, _i64,
+                                                               _vp, _i64, _f64, _vp, _i64))  # fmt: skip
+    _ngemv = _t.ExternalFunction("kinect_numpy_dgemv", _t.void(_i32, _i32, _i64, _i64, _f64, _vp, _i64, _vp, _i64,
+                                                               _f64, _vp, _i64))  # fmt: skip
+
+    @numba.njit(cache=True, nogil=True)
+    def numpy_gemm(A, B, transpose_b, out):  # pragma: no cover - compiled
+        """out ← A @ B (transpose_b False) or A @ Bᵀ (True), all (n, n) C order: numpy's matmul for C-ordered A and
+        B (B.T: an F-ordered view), i.e. cblas_dgemm(RowMajor, NoTrans, NoTrans|Trans, n, n, n, 1, A, n, B, n, 0,
+        out, n)."""
+        n = A.shape[0]
+        _ngemm(ROW_MAJOR, NO_TRANS, TRANS if transpose_b else NO_TRANS, n, n, n, 1.0, A.ctypes, n, B.ctypes, n, 0.0,
+               out.ctypes, n)  # fmt: skip
+
+    @numba.njit(cache=True, nogil=True)
+    def numpy_gemv(A, v, out):  # pragma: no cover - compiled
+        """out ← A @ v for A (m, n) C order, v (n,), out (m,) contiguous: numpy's matmul of a matrix and a vector,
+        cblas_dgemv(ColMajor, Trans, n, m, 1, A, n, v, 1, 0, out, 1)."""
+        m, n = A.shape
+        _ngemv(COL_MAJOR, TRANS, n, m, 1.0, A.ctypes, n, v.ctypes, 1, 0.0, out.ctypes, 1)
+
+else:  # pragma: no cover - numpy without its OpenBLAS wheel library
+    numpy_gemm = numpy_gemv = None  # type: ignore[assignment]
+
+if AVAILABLE:
 
     @numba.njit(cache=True, nogil=True)
     def cholesky_lower(A, n):  # pragma: no cover - compiled
@@ -77,5 +136,25 @@ if AVAILABLE:
         _dsyrk(chars[0:].ctypes, chars[1:].ctypes, ints[0:].ctypes, ints[1:].ctypes, ab[0:].ctypes, A.ctypes,
                ints[2:].ctypes, ab[1:].ctypes, C.ctypes, ints[3:].ctypes)  # fmt: skip
 
+    @numba.njit(cache=True, nogil=True)
+    def potrf_lower_f(A, n):  # pragma: no cover - compiled
+        """dpotrf 'L' on A[:n, :n] read as a Fortran array (leading dimension A.shape[1]): what SciPy's
+        lapack.dpotrf(a, lower=1, clean=0) does with a Fortran copy of a, given Aᵀ's C-order buffer. Returns info."""
+        chars = np.array([76], dtype=np.uint8)  # 'L'
+        ints = np.array([n, A.shape[1], 0], dtype=np.int32)
+        _dpotrf(chars.ctypes, ints[0:].ctypes, A.ctypes, ints[1:].ctypes, ints[2:].ctypes)
+        return ints[2]
+
+    @numba.njit(cache=True, nogil=True)
+    def potrs_lower_f(Lf, n, B, nrhs):  # pragma: no cover - compiled
+        """dpotrs 'L' with the factor of potrf_lower_f and B[:nrhs, :n] read as a Fortran (n, nrhs) array: SciPy's
+        lapack.dpotrs(c, b, lower=1) with b's Fortran copy held in B (C order: B = bᵀ). Returns info."""
+        chars = np.array([76], dtype=np.uint8)  # 'L'
+        ints = np.array([n, nrhs, Lf.shape[1], B.shape[1], 0], dtype=np.int32)
+        _dpotrs(chars.ctypes, ints[0:].ctypes, ints[1:].ctypes, Lf.ctypes, ints[2:].ctypes, B.ctypes,
+                ints[3:].ctypes, ints[4:].ctypes)  # fmt: skip
+        return ints[4]
+
 else:  # pragma: no cover - callers check AVAILABLE first
+    potrf_lower_f = potrs_lower_f = None  # type: ignore[assignment]
     cholesky_lower = solve_lower = gram_lower = gram_rows_lower = None  # type: ignore[assignment]

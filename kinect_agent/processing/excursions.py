@@ -30,6 +30,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from kinect_agent import skeleton
+from kinect_agent.processing import _outliers_numba
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import NOT_TRACKED
@@ -62,9 +63,7 @@ def jump_events(t: np.ndarray, p: np.ndarray, speed_limit: float) -> list[tuple[
         speed = np.linalg.norm(np.diff(p, axis=0), axis=1) / np.diff(t)  # (T - 1,) m/s, NaN across gaps
     fast = ok[1:] & ok[:-1] & (speed > speed_limit)
     calm = np.pad(np.where(fast, np.nan, speed), CONTEXT_STEPS, constant_values=np.nan)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # windows with no calm step: no context, any jump counts
-        context = np.nan_to_num(np.nanmedian(sliding_window_view(calm, 2 * CONTEXT_STEPS + 1), axis=1), nan=0.0)
+    context = np.nan_to_num(window_nanmedian(calm, 2 * CONTEXT_STEPS + 1), nan=0.0)  # no calm step: any jump counts
     jumps = np.flatnonzero(fast & (speed > ABRUPTNESS * context)) + 1
     events: list[list[int]] = []
     for i in jumps:
@@ -73,6 +72,20 @@ def jump_events(t: np.ndarray, p: np.ndarray, speed_limit: float) -> list[tuple[
         else:
             events.append([int(i), int(i)])
     return [(a, b) for a, b in events]
+
+
+def window_nanmedian(x: np.ndarray, w: int) -> np.ndarray:
+    """Returns (len(x) − w + 1,): the median of the values of each window of w samples of x that are not NaN (NaN
+    where there are none), as np.nanmedian of sliding_window_view(x, w) along its windows: compiled when numba is
+    installed (_outliers_numba's running median: the same order statistics, their mean as 0.5 · (a + b), the same
+    number as numpy's (a + b) / 2; only a median of two −0 differs, −0 against +0, equal to every comparison)."""
+    if _outliers_numba.AVAILABLE and len(x) >= w:
+        out = np.empty((1, len(x) - w + 1))
+        _outliers_numba.running_median_kernel(np.ascontiguousarray(x, dtype=np.float64)[None, :], w, out)
+        return out[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a window without a value: NaN
+        return np.nanmedian(sliding_window_view(x, w), axis=1)
 
 
 def _is_away(t: np.ndarray, p: np.ndarray, a: int, b: int, speed_limit: float, min_dev_m: float) -> bool:

@@ -23,6 +23,7 @@ from scipy.linalg import cho_factor, cho_solve
 from scipy.linalg.lapack import dpotrf as _potrf
 from scipy.linalg.lapack import dpotrs as _potrs
 
+from kinect_agent.processing import _rts_numba
 from kinect_agent.processing.errors import LapackFailed, NotPositiveDefinite
 
 Fn = Callable[[np.ndarray], np.ndarray]
@@ -253,6 +254,7 @@ def unscented_rts(
     points: MerweScaledSigmaPoints | None = None,
     q_scale: np.ndarray | None = None,
     overwrite: bool = False,
+    compiled: bool = True,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Returns smoothed (xs (T, n), Ps (T, n, n)) from filtered means xs (T, n) and covariances Ps (T, n, n).
 
@@ -265,6 +267,8 @@ def unscented_rts(
     per-call checks, same numbers).
     overwrite: smooth xs and Ps in place (float64, C order) and return them, instead of copies (a 10-minute
     recording's Ps is 190 MB).
+    compiled: for the random walk, the loop in one compiled kernel (_rts_numba) when numba and numpy's OpenBLAS are
+    there: the same operations, the same results bit for bit; False: numpy's loop.
     """
     T, n = xs.shape
     if Ps.shape != (T, n, n):
@@ -276,7 +280,11 @@ def unscented_rts(
     xs_s = xs if in_place else np.array(xs, dtype=np.float64)
     Ps_s = Ps if in_place else np.array(Ps, dtype=np.float64)
     if fx is None and Qs.ndim == 2:
-        _rts_random_walk(xs_s, Ps_s, np.asarray(Qs, dtype=np.float64), q_scale)
+        Q = np.asarray(Qs, dtype=np.float64)
+        if compiled and _rts_numba.AVAILABLE:
+            _rts_random_walk_compiled(xs_s, Ps_s, Q, q_scale)
+        else:
+            _rts_random_walk(xs_s, Ps_s, Q, q_scale)
         return xs_s, Ps_s
     for k in range(T - 2, -1, -1):
         Q = (Qs if q_scale is None else q_scale[k] * Qs) if Qs.ndim == 2 else Qs[k]
@@ -335,6 +343,19 @@ def _rts_random_walk(xs: np.ndarray, Ps: np.ndarray, Q: np.ndarray, q_scale: np.
         np.add(P, Pk, out=Pk)  # P + C (P_{k+1} − P_pred) Cᵀ
         np.add(Pk, Pk.T, out=M)
         np.multiply(0.5, M, out=P)  # Ps[k]: symmetrised
+
+
+def _rts_random_walk_compiled(xs: np.ndarray, Ps: np.ndarray, Q: np.ndarray, q_scale: np.ndarray | None) -> None:
+    """_rts_random_walk in _rts_numba's kernel (xs, Ps float64 and C-ordered, smoothed in place); the same errors."""
+    Q = np.ascontiguousarray(Q)
+    scale = np.zeros(len(xs)) if q_scale is None else np.ascontiguousarray(q_scale, dtype=np.float64)
+    status, k, info = _rts_numba.rts_random_walk(xs, Ps, Q, scale, q_scale is not None)
+    if status == _rts_numba.P_PRED_NOT_POSITIVE:
+        raise NotPositiveDefinite(f"predicted covariance of frame {k + 1} in the smoother {Q.shape}")
+    if status == _rts_numba.POTRF_FAILED:
+        raise LapackFailed("dpotrf", int(info))
+    if status == _rts_numba.POTRS_FAILED:
+        raise LapackFailed("dpotrs", int(info))
 
 
 def combine_information(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
@@ -61,3 +62,28 @@ def test_frame_from_axes_is_a_rotation_with_the_given_y(rng: np.random.Generator
     np.testing.assert_allclose(F @ np.swapaxes(F, -1, -2), np.broadcast_to(np.eye(3), F.shape), atol=1e-12)
     np.testing.assert_allclose(np.linalg.det(F), 1.0, atol=1e-12)
     np.testing.assert_allclose(F[..., :, 1], y / np.linalg.norm(y, axis=-1, keepdims=True), atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_compiled_matrix_to_quat_equals_numpys_bit_for_bit(seed: int) -> None:
+    """Above COMPILED_MIN_MATRICES the kernel runs: the same bits as numpy's, signs of zero included, on rotations,
+    noisy rotations, arbitrary matrices, half turns (ties of the candidates) and a NaN."""
+    rng = np.random.default_rng(seed)
+    n = rot.COMPILED_MIN_MATRICES
+    R = rot.rotvec_to_matrix(2.0 * rng.normal(size=(n, 3)))
+    cases = {
+        "rotations": R,
+        "noisy": R + 1e-3 * rng.normal(size=R.shape),
+        "arbitrary": rng.normal(size=(2, n // 2, 3, 3)),
+        "special": np.concatenate(
+            [
+                np.broadcast_to(np.diag(d), (n // 4, 3, 3))
+                for d in ([1.0, 1, 1], [-1.0, -1, 1], [1.0, -1, -1], [-1.0, 1, -1])
+            ]
+        ),  # fmt: skip
+    }
+    cases["special"][5, 0, 0] = np.nan
+    for name, M in cases.items():
+        got, ref = rot.matrix_to_quat(M), rot.matrix_to_quat(M, compiled=False)
+        np.testing.assert_array_equal(got, ref, err_msg=name)
+        np.testing.assert_array_equal(np.signbit(got), np.signbit(ref), err_msg=name)

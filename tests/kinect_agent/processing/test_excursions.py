@@ -3,16 +3,23 @@
 from __future__ import annotations
 
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
+from numpy.lib.stride_tricks import sliding_window_view
 
 from kinect_agent import formats, skeleton
 from kinect_agent.cli import main
 from kinect_agent.formats import ui_prmd
 from kinect_agent.processing.config import PipelineConfig
-from kinect_agent.processing.excursions import LiveExcursions, excursion_probabilities, find_excursions
+from kinect_agent.processing.excursions import (
+    LiveExcursions,
+    excursion_probabilities,
+    find_excursions,
+    window_nanmedian,
+)
 from kinect_agent.processing.outliers import outlier_probabilities
 from kinect_agent.processing.pipeline import process
 from kinect_agent.recording import Recording
@@ -168,3 +175,21 @@ def test_live_hold_ends_when_the_joint_never_comes_back() -> None:
     swing = np.stack([0.6 * np.sin(2 * np.pi * t), np.zeros_like(t), np.full_like(t, 2.5)], axis=-1)
     positions[:, WRI_R] = swing  # continuous, up to 3.8 m/s
     assert not _held(Recording.from_positions(t, positions))[:, WRI_R].any()
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_window_nanmedian_equals_numpys_nanmedian_of_the_windows(seed: int) -> None:
+    """The jump context's median (compiled when numba is there) is numpy's, with gaps, ties, inf and empty windows."""
+    rng = np.random.default_rng(seed)
+    for trial in range(60):
+        n = int(rng.integers(11, 300))
+        x = rng.exponential(size=n)
+        x[rng.random(n) < rng.uniform(0.0, 0.95)] = np.nan
+        if trial % 3 == 0:
+            x = np.round(x, 1)  # ties
+        if trial % 4 == 0:
+            x[rng.random(n) < 0.05] = np.inf
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            ref = np.nanmedian(sliding_window_view(x, 11), axis=1)
+        np.testing.assert_array_equal(window_nanmedian(x, 11), ref, err_msg=f"seed {seed}, trial {trial}")

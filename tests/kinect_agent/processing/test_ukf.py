@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from kinect_agent.processing import _rts_numba
 from kinect_agent.processing.errors import NotPositiveDefinite, ProcessingError
 from kinect_agent.processing.ukf import (
     MerweScaledSigmaPoints,
@@ -182,16 +183,41 @@ def test_unscented_rts_with_a_noise_scale_per_step_equals_the_stacked_noise(seed
     np.testing.assert_array_equal(got_P, ref_P)
 
 
+@pytest.mark.skipif(not _rts_numba.AVAILABLE, reason="needs numba and numpy's OpenBLAS")
+@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("scaled", [True, False])
+def test_compiled_random_walk_smoother_equals_numpys_bit_for_bit(seed: int, scaled: bool) -> None:
+    """The compiled loop (_rts_numba) gives numpy's loop's very numbers, on the pipeline's state size (36)."""
+    rng = np.random.default_rng(seed)
+    T, n = 200, 36
+    A = 0.1 * rng.normal(size=(T, n, n))
+    Ps = A @ np.swapaxes(A, 1, 2) + 1e-3 * np.eye(n)
+    Ps = 0.5 * (Ps + np.swapaxes(Ps, 1, 2))
+    xs = rng.normal(size=(T, n))
+    Q = np.diag(rng.uniform(1e-4, 1e-2, n))
+    scale = rng.uniform(0.5, 2.0, T) if scaled else None
+    ref_x, ref_P = unscented_rts(xs, Ps, Q, q_scale=scale, compiled=False)
+    got_x, got_P = unscented_rts(xs, Ps, Q, q_scale=scale, compiled=True)
+    np.testing.assert_array_equal(got_x, ref_x)
+    np.testing.assert_array_equal(got_P, ref_P)
+    assert not np.array_equal(ref_P, Ps)  # it smoothed something
+
+
 def test_unscented_rts_refuses_a_noise_scale_of_the_wrong_length() -> None:
     xs, Ps = np.zeros((5, 2)), np.broadcast_to(np.eye(2), (5, 2, 2))
     with pytest.raises(ValueError, match=r"q_scale needs Qs \(2, 2\) and shape \(5,\), got \(2, 2\) and \(4,\)"):
         unscented_rts(xs, Ps, np.eye(2), q_scale=np.ones(4))
 
 
-def test_unscented_rts_reports_a_predicted_covariance_that_is_not_positive_definite() -> None:
+@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("scaled", [True, False])
+def test_unscented_rts_reports_a_predicted_covariance_that_is_not_positive_definite(
+    compiled: bool, scaled: bool
+) -> None:
     xs, Ps = np.zeros((3, 2)), np.broadcast_to(-np.eye(2), (3, 2, 2)).copy()
-    with pytest.raises(NotPositiveDefinite, match="predicted covariance of frame 2 in the smoother"):
-        unscented_rts(xs, Ps, 0.1 * np.eye(2))
+    scale = np.ones(3) if scaled else None
+    with pytest.raises(NotPositiveDefinite, match=r"predicted covariance of frame 2 in the smoother \(2, 2\)"):
+        unscented_rts(xs, Ps, 0.1 * np.eye(2), q_scale=scale, compiled=compiled)
 
 
 def test_combine_information_is_the_information_form(rng: np.random.Generator) -> None:
