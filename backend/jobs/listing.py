@@ -26,7 +26,9 @@ _KNOWN = {
     "SessionFileError": N_("The stored session file cannot be read"),
     "InvalidSessionFile": N_("The stored session file cannot be read"),
     "AnalysisError": N_("The analysis could not use this recording"),
-    "RecordingNotFilterable": N_("Today's pipeline cannot filter the session's raw recording; the session is unchanged"),
+    "RecordingNotFilterable": N_(
+        "Today's pipeline cannot filter the session's raw recording; the session is unchanged"
+    ),
 }
 _HINTS = {"StoredObjectMissing": " (run `coach-server storage check`)"}  # for the clinic, after the sentence
 _FAILED = N_("The job failed")

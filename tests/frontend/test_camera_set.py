@@ -184,7 +184,8 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         # (the clip goes on through the 1.5 s the page records after the target) is counted only by the saved count,
         # and a flickering label can run the live count one ahead (bench/README.md, "Webcam counts"): never more.
         shown = page.evaluate("CameraPage.state().count")
-        assert stored[0]["repetitions"] == shown and abs(counts[-1] - shown) <= 1, (stored[0]["repetitions"], shown, counts)
+        saved = stored[0]["repetitions"]
+        assert saved == shown and abs(counts[-1] - shown) <= 1, (saved, shown, counts)
         payload = session_header(base, email, stored[0]["id"])
         assert payload.raw.meta.device == "webcam", payload.raw.meta
         assert (
