@@ -21,6 +21,7 @@ from backend.exceptions import ExportUnavailable, InvalidSessionFile, SessionFil
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
 from backend.i18n import Translator, translator
+from backend.jobs.listing import error_words
 from backend.jobs.models import SessionMetricVersion
 from backend.patients.models import TherapistPatient
 from backend.plans.models import Plan, PlanItem
@@ -94,6 +95,9 @@ could not be given; ask the clinic about them (their staff check stored files wi
 """
 
 
+_PATIENT_ENGLISH = Translator("en")  # the archive's README and files are in English
+
+
 def _earlier_file(out: _Zip, v: SessionMetricVersion, current_sha256: str) -> str | None:
     """Returns the archive's name of the session file a replaced document came from: the session's own file when it
     is the current one, else written once as sessions/session-ID-SHA12.khs; None when it is not kept (unknown,
@@ -110,6 +114,12 @@ def _earlier_file(out: _Zip, v: SessionMetricVersion, current_sha256: str) -> st
     except StorageError:
         return None
     return name
+
+
+def _said_to_patient(exc: StorageError | SessionFileRemoved) -> str:
+    """Returns why a session's file is not in the archive, as one sentence for its reader (the patient): never the
+    store's own words, which name its folder or bucket (those stay in the server's log and `storage check`)."""
+    return error_words(f"{type(exc).__name__}: {exc.message}", _PATIENT_ENGLISH) or ""
 
 
 def _iso(t: dt.datetime | None) -> str | None:
@@ -254,8 +264,8 @@ def _sessions(
             out.add(name, data)
             entry["file"], entry["file_missing_reason"] = name, None
         except (StorageError, SessionFileRemoved) as exc:
-            entry["file"], entry["file_missing_reason"] = None, exc.message
-            problems.append(f"file: {exc.message}")
+            entry["file"], entry["file_missing_reason"] = None, _said_to_patient(exc)
+            problems.append(f"file: {entry['file_missing_reason']}")
         made = _exports(db_session, s.id, settings, data, entry["file_missing_reason"])
         entry["exports"] = {}
         for fmt, file in made.files.items():

@@ -94,9 +94,14 @@ def test_every_session_has_its_exports_and_a_broken_file_is_named(client, db_ses
         assert api.status_code == 200 and z.read(by_id[sid]["exports"]["csv"]) == api.content, sid
         fhir = client.get(f"/api/v1/sessions/{sid}/export", params={"format": "fhir"}, headers=headers)
         assert _observations(json.loads(z.read(by_id[sid]["exports"]["fhir"]))) == _observations(fhir.json()), sid
-    for sid, says in ((corrupt, "is corrupt"), (missing, "is missing")):
+    for sid, says in ((corrupt, "is damaged"), (missing, "is missing")):
         entry = by_id[sid]
         assert entry["file"] is None and says in entry["file_missing_reason"], entry
+        # the patient reads why, not where the server keeps its files
+        where = str(getattr(with_store, "root", "") or getattr(with_store, "bucket", ""))
+        assert (
+            where and where not in entry["file_missing_reason"] and "stored object" not in entry["file_missing_reason"]
+        )
         assert entry["exports"] == {} and sorted(entry["exports_missing"]) == sorted(EXPORT_FORMATS), entry
         assert entry["metrics"]["repetitions"] >= 0, "the metrics of a session without its file are still given"
     readme = z.read("README.txt").decode()
