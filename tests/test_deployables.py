@@ -1,11 +1,15 @@
 """The two deployables of docs/deployment.md, as a home computer and a clinic get them: each distribution's wheel built
 from this repository (packages/agent, packages/server), installed into a fresh environment of its own from its lock
-file (requirements/agent.lock, requirements/server.lock), and its commands run there. The agent's environment holds
-nothing of the server (no backend, pages or migrations, no web or database package); the server's holds none of the
-agent's services or CLI, and every module of the agent's package that the server imports.
+file (requirements/agent.lock, requirements/server.lock), its commands run there, and a selection of its tests run
+there too, with that environment's Python, from a copy of tests/ beside no source of the repository (the tools from
+requirements/agent-tests.lock, requirements/server-tests.lock). The agent's environment holds nothing of the server
+(no backend, pages or migrations, no web or database package); the server's holds none of the agent's services or CLI,
+and every module of the agent's package that the server imports. A side's code that imports what its distribution
+does not ship fails its tests there.
 
-uv (pinned in the `test` extra, as in scripts/lock.sh) makes the environments: offline from its cache when the cache
-has every file, from the package index otherwise (the first run on a machine)."""
+The two environments are made once for this module (a fixture), side by side. uv (pinned in the `test` extra, as in
+scripts/lock.sh) makes them: offline from its cache when the cache has every file, from the package index otherwise
+(the first run on a machine)."""
 
 from __future__ import annotations
 
@@ -16,12 +20,15 @@ import sqlite3
 import subprocess
 import sys
 import tomllib
+import xml.etree.ElementTree as ET
 import zipfile
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
+from tests.conftest import SHARED
 from tests.test_layers import imports_of, project_modules
 
 pytestmark = pytest.mark.own_database  # each install migrates a SQLite file of its own
@@ -34,6 +41,38 @@ SERVER_ONLY = {"fastapi", "starlette", "uvicorn", "sqlalchemy", "alembic", "psyc
 AGENT_ONLY = {"numba", "llvmlite"}  # (tqdm comes with viser too)
 # the agent's services, its CLI and the accuracy study: kinect_agent's modules the server's wheel must not hold
 AGENT_SIDE = ("cli", "commands", "config", "capture", "home", "live", "pairing", "queue", "upload", "evaluation")
+SIDES = ("agent", "server")
+# Each side's tests that run in its own environment: those that import nothing of the other side, chosen to reach each
+# layer of the side's code for little time (the time it takes: README, "Installing each side").
+# tests/installed_alone.py checks that the run imports the installed distribution and cannot import the other side.
+SIDE_TESTS = {
+    "agent": (
+        "tests/installed_alone.py::test_the_agent_alone",
+        "tests/kinect_agent/test_skeleton.py",  # the body model and the recording contract
+        "tests/kinect_agent/test_recording.py",
+        "tests/kinect_agent/body",  # geometry: rotations, forward kinematics, angles
+        "tests/kinect_agent/formats/test_skeleton_csv.py",  # the interchange format
+        "tests/kinect_agent/formats/test_kinect_v2_tsv.py",  # a Kinect export
+        "tests/kinect_agent/sources/test_simulator.py",  # the simulated camera the demo and the tests record with
+        "tests/kinect_agent/sources/test_commands.py",  # `simulate`, `capture`
+        "tests/kinect_agent/sources/test_device_adapters.py",
+        "tests/kinect_agent/processing/test_filter_command.py",  # the filter: numba's kernels, `filter`
+        "tests/kinect_agent/processing/test_outliers_numba.py",
+        "tests/kinect_agent/live/test_journal.py",  # a live set's frames on disk
+        "tests/kinect_agent/test_queue.py",  # the disk queue, then the upload command's held sessions
+        "tests/kinect_agent/test_held_sessions.py",
+    ),
+    "server": (
+        "tests/installed_alone.py::test_the_server_alone",
+        "tests/backend/test_access_matrix.py",  # every route of the API and the pages against every kind of caller
+        "tests/backend/test_devices.py",  # pairing a home computer
+        "tests/backend/test_sessions_upload.py",  # an agent's upload: stored, analysed by the pure core, refused
+        # but the files of the one below are made by the agent's capture (the two sides together), and the 25 hostile
+        # files of the other take a third of the time: both in the suite's own runs only
+        "--deselect=tests/backend/test_sessions_upload.py::test_a_simulated_uiprmd_set_filtered_by_the_agent",
+        "--deselect=tests/backend/test_sessions_upload.py::test_bad_file_is_400_and_stores_nothing",
+    ),
+}
 
 
 def _uv() -> str:
@@ -88,12 +127,13 @@ def _source_copy(tmp: Path) -> Path:
 
 
 def _install(side: str, wheel: Path, tmp: Path) -> Path:
-    """Returns a fresh environment holding side's lock file and then its wheel (without dependencies)."""
+    """Returns a fresh environment holding side's lock file, its tests' tools and then its wheel (without
+    dependencies)."""
     venv = tmp / side
     _run([_uv(), "venv", "--quiet", "--python", sys.executable, str(venv)], tmp, _env())
     python = str(venv / "bin" / "python")
-    _uv_run(["pip", "install", "--quiet", "--python", python, "--require-hashes", "-r",
-             str(REPO / "requirements" / f"{side}.lock")], tmp)  # fmt: skip
+    locks = [str(REPO / "requirements" / f"{side}.lock"), str(REPO / "requirements" / f"{side}-tests.lock")]
+    _uv_run(["pip", "install", "--quiet", "--python", python, "--require-hashes", "-r", locks[0], "-r", locks[1]], tmp)
     _run([_uv(), "pip", "install", "--quiet", "--python", python, "--no-deps", str(wheel)], tmp, _env())
     return venv
 
@@ -151,63 +191,97 @@ def _names(requirements: list[str]) -> dict[str, str]:
 
 def test_the_deployables_pin_what_the_development_install_pins() -> None:
     root = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
-    for side in ("agent", "server"):
-        project = tomllib.loads((REPO / "packages" / side / "pyproject.toml").read_text())["project"]
+    for side in SIDES:
+        pyproject = tomllib.loads((REPO / "packages" / side / "pyproject.toml").read_text())
+        project = pyproject["project"]
         expected = _names(root["dependencies"] + root["optional-dependencies"][side])
         assert _names(project["dependencies"]) == expected, f"packages/{side}/pyproject.toml and the root's differ"
         for extra, requirements in project.get("optional-dependencies", {}).items():
             assert _names(requirements) == _names(root["optional-dependencies"][extra]), f"{side}'s extra {extra}"
+        tools = _names(pyproject["dependency-groups"]["tests"])
+        test_extra = _names(root["optional-dependencies"]["test"])
+        assert tools.items() <= test_extra.items(), f"packages/{side}'s tests group pins what the test extra does not"
 
 
-def test_each_side_installs_alone_from_its_lock_and_runs_its_commands(tmp_path: Path) -> None:
-    src = _source_copy(tmp_path)
-    dist = tmp_path / "dist"
-    for side in ("agent", "server"):
+@dataclass(frozen=True)
+class Deployable:
+    """One side's wheel, and the fresh environment that holds it (and its tests' tools)."""
+
+    side: str
+    wheel: Path
+    venv: Path
+
+
+@pytest.fixture(scope="module")
+def deployables(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Deployable]:
+    """Builds both wheels from a copy of the sources and installs each into an environment of its own, side by side."""
+    tmp = tmp_path_factory.mktemp("deployables")
+    src = _source_copy(tmp)
+    dist = tmp / "dist"
+    for side in SIDES:
         _uv_run(["build", "--quiet", "--wheel", "-o", str(dist), str(src / "packages" / side)], src)
-    (agent_wheel,) = dist.glob("kinect_home_coach_agent-*.whl")
-    (server_wheel,) = dist.glob("kinect_home_coach_server-*.whl")
+    wheels = {side: next(iter(dist.glob(f"kinect_home_coach_{side}-*.whl"))) for side in SIDES}
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        venvs = dict(zip(SIDES, pool.map(lambda side: _install(side, wheels[side], tmp), SIDES), strict=True))
+    return {side: Deployable(side, wheels[side], venvs[side]) for side in SIDES}
 
-    server_files = set(zipfile.ZipFile(server_wheel).namelist())
+
+def test_each_wheel_ships_its_own_side(deployables: dict[str, Deployable]) -> None:
+    server_files = set(zipfile.ZipFile(deployables["server"].wheel).namelist())
     missing = sorted(m for m in _modules_the_server_imports() if not _files_of(m) & server_files)
     assert not missing, f"the server imports modules its wheel lacks: {missing}"
     agent_side = sorted(f for f in server_files if f.split("/")[0] == "kinect_agent" and _agent_side(f))
     assert not agent_side, f"the server's wheel holds the agent's own modules: {agent_side[:5]}"
-    agent_tops = {f.split("/")[0] for f in zipfile.ZipFile(agent_wheel).namelist()} - {"kinect_agent"}
+    agent_tops = {f.split("/")[0] for f in zipfile.ZipFile(deployables["agent"].wheel).namelist()} - {"kinect_agent"}
     assert [top.endswith(".dist-info") for top in agent_tops] == [True], f"the agent's wheel holds {agent_tops}"
 
-    # the two sides side by side: the agent's first filter compiles numba's kernels on one core for most of a minute
+
+def test_each_side_runs_its_commands_then_its_tests_in_its_own_environment(
+    deployables: dict[str, Deployable], tmp_path: Path
+) -> None:
+    """The two sides side by side, each mostly on one core (the agent's first filter compiles numba's kernels into
+    the environment's cache, which its tests then use; the server's tests migrate and hash passwords)."""
     with ThreadPoolExecutor(max_workers=2) as pool:
-        done = [pool.submit(_check_agent, agent_wheel, tmp_path), pool.submit(_check_server, server_wheel, tmp_path)]
-        for side in done:
-            side.result()
+        running = {side: pool.submit(_check_side, deployables[side], tmp_path / side) for side in SIDES}
+    failed = {}
+    for side, outcome in running.items():
+        try:
+            outcome.result()
+        except AssertionError as exc:
+            failed[side] = str(exc)
+    assert not failed, "\n\n".join(f"the {side}: {why}" for side, why in failed.items())
 
 
-def _check_agent(wheel: Path, tmp: Path) -> None:
-    """Installs the agent alone and runs its commands: simulate a short set, filter it."""
-    agent = _install("agent", wheel, tmp)
+def _check_side(deployable: Deployable, tmp: Path) -> None:
+    """Runs a side's commands, then its tests, in its environment."""
+    work = tmp / "work"
+    work.mkdir(parents=True)
+    (_check_agent if deployable.side == "agent" else _check_server)(deployable.venv, work)
+    _run_side_tests(deployable, tmp / "tests-only")
+
+
+def _check_agent(agent: Path, work: Path) -> None:
+    """Checks the agent's environment holds nothing of the server, and runs its commands: simulate a set, filter it."""
     installed = _distributions(agent)
     assert not installed & SERVER_ONLY, f"the agent's install has server packages: {sorted(installed & SERVER_ONLY)}"
     assert AGENT_ONLY <= installed
     site = _site_packages(agent)
     assert not [n for n in ("backend", "frontend", "migrations") if (site / n).exists()]
     assert not (agent / "bin" / "coach-server").exists()
-    work, env = tmp / "agent-work", _env(agent)
-    work.mkdir()
+    env = _env(agent)
     assert "simulate" in _run(["kinect-agent", "--help"], work, env).stdout
     _run(["kinect-agent", "simulate", "--exercise", "squat", "--reps", "2", "-o", "m.csv"], work, env)
     _run(["kinect-agent", "filter", "m.csv", "-o", "f.csv"], work, env)
     assert (work / "f.csv").stat().st_size > 1000
 
 
-def _check_server(wheel: Path, tmp: Path) -> None:
-    """Installs the server alone and runs its commands: migrate a SQLite file to head; the demo asks for the agent."""
-    server = _install("server", wheel, tmp)
+def _check_server(server: Path, work: Path) -> None:
+    """Checks the server's environment holds nothing of the agent's own, and runs its commands: migrate a SQLite file
+    to head; the demo asks for the agent."""
     installed = _distributions(server)
     assert not installed & AGENT_ONLY, f"the server's install has agent packages: {sorted(installed & AGENT_ONLY)}"
     assert SERVER_ONLY <= installed
     assert not (server / "bin" / "kinect-agent").exists()
-    work = tmp / "server-work"
-    work.mkdir()
     env = {**_env(server), "COACH_DATABASE_URL": f"sqlite:///{work / 'server.db'}", "COACH_ENVIRONMENT": "local"}
     assert "migrate" in _run(["coach-server", "--help"], work, env).stdout
     _run(["coach-server", "migrate"], work, env)
@@ -215,3 +289,24 @@ def _check_server(wheel: Path, tmp: Path) -> None:
         assert db.execute("SELECT version_num FROM alembic_version").fetchall(), "migrate left no revision"
     demo = subprocess.run(["coach-server", "demo", "--port", "1"], cwd=work, env=env, capture_output=True, text=True)
     assert demo.returncode == 2 and "the agent" in demo.stderr, demo.stderr[-2000:]
+
+
+def _run_side_tests(deployable: Deployable, root: Path) -> None:
+    """Runs SIDE_TESTS[side] with the environment's Python from a copy of tests/ (and the root's pytest settings) in
+    root, a folder without the repository's sources, on SQLite and the local object store: every one passes, none
+    skips."""
+    shutil.copytree(REPO / "tests", root / "tests", ignore=shutil.ignore_patterns("__pycache__", ".hypothesis"))
+    shutil.copy(REPO / "pyproject.toml", root)
+    env = {k: v for k, v in _env(deployable.venv).items() if not k.startswith("COACH_TEST_")}
+    env["COACH_SHARED_DIR"] = str(SHARED)
+    report = root / "report.xml"
+    python = str(deployable.venv / "bin" / "python")
+    _run([python, "-m", "pytest", "-q", "-p", "no:cacheprovider", "--basetemp", str(root / "tmp"), "--junit-xml",
+          str(report), *SIDE_TESTS[deployable.side]], root, env)  # fmt: skip
+    cases = {
+        f"{case.get('classname')}.{case.get('name')}": [child.tag for child in case]
+        for case in ET.parse(report).iter("testcase")
+    }
+    assert f"tests.installed_alone.test_the_{deployable.side}_alone" in cases, sorted(cases)[:5]
+    not_passed = {name: tags for name, tags in cases.items() if set(tags) - {"system-out", "system-err"}}
+    assert not not_passed, f"{len(not_passed)} of {len(cases)} did not pass: {sorted(not_passed.items())[:5]}"

@@ -1,6 +1,8 @@
 """The real coaching server for agent tests: the backend's test fixtures, and the app served by uvicorn.
 
-Test modules import these fixtures by name (pytest registers fixtures imported into a test module).
+The test modules that talk to the server import these fixtures (`from tests.kinect_agent._backend import *`: pytest
+registers the fixtures a module imports); the agent's other tests never import the server, and run in the agent's own
+environment too (tests/test_deployables.py).
 """
 
 # ruff: noqa: F811  (pytest fixtures are imported by name and then requested as arguments)
@@ -25,6 +27,10 @@ from tests.backend.conftest import (  # noqa: F401  (fixtures re-exported for th
     settings,
     test_database_url,
 )
+
+# the fixtures a test module gets with `import *`
+__all__ = ["app", "auth_headers", "db_connection", "db_session", "engine", "live_server", "make_patient_with_therapist",
+           "make_user", "pairing_code", "settings", "test_database_url"]  # fmt: skip
 
 
 def free_port() -> int:

@@ -12,6 +12,7 @@ import pytest
 from kinect_agent import cli
 from kinect_agent.config import AgentConfig, ConfigError, config_path, load_config, save_config
 from kinect_agent.queue import SessionQueue
+from tests.kinect_agent._backend import *  # noqa: F403  (the real server's fixtures: pytest registers those imported)
 from tests.kinect_agent._backend import free_port
 
 

@@ -12,6 +12,7 @@ from kinect_agent import cli, clock
 from kinect_agent.config import load_config
 from kinect_agent.formats.session_file import SessionPayload
 from kinect_agent.queue import SessionQueue
+from tests.kinect_agent._backend import *  # noqa: F403  (the real server's fixtures: pytest registers those imported)
 from tests.kinect_agent.test_held_sessions import session_payload
 
 THREE_DAYS = dt.timedelta(days=3)

@@ -11,6 +11,7 @@ import pytest
 from kinect_agent import cli, disk_full, queue
 from kinect_agent.config import AgentConfig, load_config, save_config
 from kinect_agent.queue import SessionQueue
+from tests.kinect_agent._backend import *  # noqa: F403  (the real server's fixtures: pytest registers those imported)
 
 RUN = ["run", "--source", "simulator", "--exercise", "elbow_flexion", "--reps", "2", "--no-upload"]
 

@@ -10,6 +10,7 @@ from kinect_agent import cli
 from kinect_agent.commands import status
 from kinect_agent.config import AgentConfig, save_config
 from kinect_agent.queue import SessionQueue
+from tests.kinect_agent._backend import *  # noqa: F403  (the real server's fixtures: pytest registers those imported)
 from tests.kinect_agent._backend import free_port
 from tests.kinect_agent.test_held_sessions import session_payload
 

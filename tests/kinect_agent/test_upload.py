@@ -14,6 +14,7 @@ from kinect_agent.config import AgentConfig, save_config
 from kinect_agent.queue import SessionQueue
 from kinect_agent.sources.simulator import simulate
 from kinect_agent.upload import RetryPolicy, Uploader, drain
+from tests.kinect_agent._backend import *  # noqa: F403  (the real server's fixtures: pytest registers those imported)
 from tests.kinect_agent._backend import LiveServer, free_port
 
 FAST = RetryPolicy(max_attempts=3, base_delay_s=0.0)
