@@ -7,8 +7,8 @@ Input: every simulated exercise the server knows (kinect_agent.sources.simulator
 made webcam-like by tests/webcam_like.py (as the webcam filter's tests do):
 jitter 10 mm across the image and 25 mm in depth, the hips' distance jittering 30 mm, and (second row of each case)
 a sixth of the set where left and right flicker. "live" is the camera set's live count at the set's end (the
-server's path: the webcam's live filter frame by frame on the session file's grid, LiveCount with the webcam's rules,
-final()); "stored" (the shipped row) must equal it in every set.
+server's path: the webcam's live filter frame by frame on the session file's grid, LiveCount with the webcam's rules
+and its floor measured on the set, final()); "stored" (the shipped row) must equal it in every set.
 
 --cases shallow: the repetition floor's cases (bench/README.md, "Webcam counts: a floor measured on the set"), per
 exercise of SHALLOW_EXERCISES and seed, live / stored count against the truth: SHALLOW repetitions of SHALLOW_DEG
@@ -29,7 +29,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from backend.analysis.report import analyze_recording  # noqa: E402
 from backend.exercises.library import EXERCISES as LIBRARY  # noqa: E402
-from kinect_agent.analysis.live import LiveCount, counting_params  # noqa: E402
+from kinect_agent.analysis.live import LiveCount  # noqa: E402
 from kinect_agent.formats.session_file import on_grid  # noqa: E402
 from kinect_agent.processing.config import config_for_device  # noqa: E402
 from kinect_agent.processing.online import live_filter  # noqa: E402
@@ -53,7 +53,7 @@ SHALLOW_CASES = (
 
 def live_count(raw: Recording, angles: tuple[str, ...]) -> int:
     """Returns the camera set's live count at its end (backend/camera/live_count.py's path, frame by frame)."""
-    filt, counter = live_filter(config_for_device("webcam")), LiveCount(angles, params=counting_params("webcam"))
+    filt, counter = live_filter(config_for_device("webcam")), LiveCount(angles, device="webcam")
     for k in range(raw.n_frames):
         t = float(raw.t[k])
         counter.add(t, raw.positions[k], raw.state[k], filt.step(t, raw.positions[k], raw.state[k]))
