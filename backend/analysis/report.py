@@ -29,7 +29,7 @@ from backend.analysis.sit_to_stand import sit_to_stand
 from backend.exercises.library import EXERCISES, ExerciseSpec
 from kinect_agent.analysis.angles import counting_angles, measured_angles
 from kinect_agent.analysis.document import AnalysisReport, json_ready
-from kinect_agent.analysis.live import counting_params, counting_positions, done_repetitions
+from kinect_agent.analysis.live import amplitude_floor, counting_params, counting_positions, done_repetitions
 from kinect_agent.analysis.repetitions import Repetition, RepetitionParams, count_repetitions
 from kinect_agent.body.angles import body_frame
 from kinect_agent.errors import FormatError
@@ -128,7 +128,8 @@ def analyze_recording(
     else:  # the webcam: counted as its live count counts, on the same causal pass (live.counting_positions)
         live = measured_angles(t, causal)
         counted = counting_angles(live.positions, names, live.angles, live.up)
-        device_params = counting_params(recording.meta.device)
+        floor = amplitude_floor(recording.meta.device, t, causal, names)  # as live measures it, on the same frames
+        device_params = counting_params(recording.meta.device, floor)
         repetition_params = device_params if repetition_params is None else dataclasses.replace(
             repetition_params, rest="start", min_amplitude_deg=device_params.min_amplitude_deg)  # fmt: skip
     reps = count_repetitions(t, counted, names, repetition_params)

@@ -32,7 +32,7 @@ from backend.camera.schemas import BatchOut
 from backend.camera.skeleton import WEBCAM, camera_frames, pipeline_config
 from backend.events.hub import Event, publish
 from backend.exercises.models import Exercise
-from kinect_agent.analysis.live import LiveCount, LiveStatus, counting_params
+from kinect_agent.analysis.live import LiveCount, LiveStatus
 from kinect_agent.formats.session_file import on_grid
 from kinect_agent.processing.joint_smoother import JointFilter
 from kinect_agent.processing.online import OnlineFilter, live_filter
@@ -63,7 +63,7 @@ def _fresh(angles: tuple[str, ...]) -> _LiveSet:
     return _LiveSet(
         -1,
         live_filter(pipeline_config()),
-        LiveCount(angles, params=counting_params(WEBCAM)),
+        LiveCount(angles, device=WEBCAM),
         LiveStatus(0, None, None, None, 0.0),
     )
 

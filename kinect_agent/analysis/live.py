@@ -11,6 +11,9 @@ and that ended DONE_S before the newest frame (a repetition counts once the pati
 window grows longer than window_s, the repetitions that ended more than SETTLE_S ago are frozen and the cut moves
 to the end of the last of them (with none, to 2 × SETTLE_S before now): the cost of an evaluation stays bounded
 (about window_s of frames) however long the set. The shown count never decreases within a set.
+Floor. A device with a NoiseFloor (the webcam) drops excursions smaller than its floor, measured once on the set's
+first START_S seconds (amplitude_floor, from the frames of those seconds only), as soon as they are over; until
+then its bound. The stored count measures it on the same frames (backend/analysis/report.py): one floor.
 Still. still_s counts the seconds since the dominant defining angle last moved: its range over the last
 MOVE_WINDOW_S seconds reached MOVE_DEG.
 Hints. From the raw frames of the last HINT_S seconds, in this order: the trunk (ROOT, SPINE) seen in less than
@@ -22,6 +25,7 @@ LIMB_MISSING of them. The thresholds are those of the server's camera advice aft
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -29,7 +33,13 @@ import numpy as np
 
 from kinect_agent.analysis import series
 from kinect_agent.analysis.angles import counting_angles
-from kinect_agent.analysis.repetitions import Repetition, RepetitionParams, RepetitionResult, count_repetitions
+from kinect_agent.analysis.repetitions import (
+    START_S,
+    Repetition,
+    RepetitionParams,
+    RepetitionResult,
+    count_repetitions,
+)
 from kinect_agent.body.angles import body_frame, joint_angles
 from kinect_agent.processing.config import config_for_device
 from kinect_agent.processing.joint_smoother import forward_joints
@@ -109,15 +119,57 @@ def hint(positions: np.ndarray, state: np.ndarray, limbs: list[int], kind: str |
     return None
 
 
-# Repetition rules of a device where they differ from the live count's (RepetitionParams(rest="start")). The
-# webcam: an excursion of a defining angle under 20 degrees is no repetition (its landmarker's angles wobble by up to
-# 17 degrees on a person standing; bench/README.md, "Webcam counts: the live count and the saved count, one count").
-DEVICE_MIN_AMPLITUDE_DEG: dict[str, float] = {"webcam": 20.0}
+@dataclass(frozen=True)
+class NoiseFloor:
+    """A device's amplitude floor, measured on each set: an excursion of a defining angle below factor × the angle's
+    spread (p90 − p10, degrees) over the set's first START_S seconds (the rest the live count's rest level is taken
+    from), bounded to [min_deg, max_deg], is no repetition; max_deg before that rest has been seen."""
+
+    factor: float
+    min_deg: float
+    max_deg: float
 
 
-def counting_params(device: str | None) -> RepetitionParams:
-    """Returns the repetition rules of a live count of `device` (kinect_agent.recording.DEVICES; None: Kinect's)."""
-    return RepetitionParams(rest="start", min_amplitude_deg=DEVICE_MIN_AMPLITUDE_DEG.get(device or "", 0.0))
+# Devices whose counts have a floor (others: none, 0). The webcam: its landmarker's angles wobble on a person standing
+# by up to 17 degrees when it sees the person poorly, by a few when it sees them well (bench/README.md, "Webcam counts:
+# a floor measured on the set").
+DEVICE_NOISE_FLOOR: dict[str, NoiseFloor] = {"webcam": NoiseFloor(factor=3.0, min_deg=8.0, max_deg=20.0)}
+
+
+def counting_params(device: str | None, floor_deg: float | None = None) -> RepetitionParams:
+    """Returns the repetition rules of a live count of `device` (kinect_agent.recording.DEVICES; None: Kinect's).
+
+    floor_deg: the set's amplitude floor (amplitude_floor); None: its device's before it is measured (max_deg)."""
+    floor = DEVICE_NOISE_FLOOR.get(device or "")
+    if floor is None:
+        return RepetitionParams(rest="start")
+    return RepetitionParams(rest="start", min_amplitude_deg=floor.max_deg if floor_deg is None else floor_deg)
+
+
+def amplitude_floor(device: str | None, t: np.ndarray, positions: np.ndarray, names: tuple[str, ...]) -> float | None:
+    """Returns a set's amplitude floor in degrees (NoiseFloor), 0 for a device without one, None while the set's first
+    START_S seconds are not over (no frame after them yet).
+
+    t: (T,) s; positions: (T, J, 3) m, camera frame, the positions the set is counted on (the live filter's causal
+    pass). Only the frames of the first START_S seconds are read, conditioned on their own (series.smooth_positions,
+    counting_angles), so that the live count, which measures it as soon as they are over, and the stored count,
+    which has the whole set, measure the same numbers.
+    """
+    floor = DEVICE_NOISE_FLOOR.get(device or "")
+    if floor is None:
+        return 0.0
+    n = int(np.searchsorted(t, t[0] + START_S, side="right")) if t.shape[0] else 0
+    if n >= t.shape[0]:
+        return None
+    if n < 2:  # under 2 frames a second: no spread to measure
+        return floor.max_deg
+    smoothed = series.smooth_positions(t[:n], positions[:n])
+    angles = counting_angles(smoothed, names, joint_angles(smoothed), body_frame(smoothed)[0])
+    spreads = [float(np.subtract(*np.percentile(y[np.isfinite(y)], [90.0, 10.0]))) for y in angles.values()
+               if np.isfinite(y).any()]  # fmt: skip
+    if not spreads:
+        return floor.max_deg
+    return float(np.clip(floor.factor * max(spreads), floor.min_deg, floor.max_deg))
 
 
 def done_repetitions(result: RepetitionResult, t: np.ndarray) -> list[Repetition]:
@@ -148,12 +200,16 @@ class LiveCount:
         every_s: float = 0.25,
         window_s: float = 60.0,
         params: RepetitionParams | None = None,
+        device: str | None = None,
     ) -> None:
         if not angle_names:
             raise ValueError("LiveCount needs at least one defining angle")
         self.names = tuple(angle_names)
         self.every_s, self.window_s = every_s, window_s
-        self.params = params or RepetitionParams(rest="start")  # a set starts at rest; its end may be mid-movement
+        self.device = device
+        # a set starts at rest; its end may be mid-movement. A device's floor: its bound until measured (_measure_floor)
+        self.params = params or counting_params(device)
+        self.floor_deg: float | None = None if device in DEVICE_NOISE_FLOOR else 0.0
         self.limbs, self.limb_kind = limb_joints(self.names)
         self._t: list[float] = []
         self._filtered: list[np.ndarray] = []
@@ -178,6 +234,8 @@ class LiveCount:
         self._state.append(np.asarray(raw_state))
         if math.isnan(self.cut_t):
             self.cut_t, self._last_moving, self._next_eval = t, t, t + self.every_s
+        if self.floor_deg is None:
+            self._measure_floor()
         if t >= self._next_eval:
             self._next_eval = t + self.every_s
             self._evaluate()
@@ -188,6 +246,14 @@ class LiveCount:
         if len(self._t) >= 2:
             self._evaluate()
         return self._status.count
+
+    def _measure_floor(self) -> None:
+        """Sets the device's amplitude floor once the set's first START_S seconds are over (amplitude_floor): the
+        frames are all still held then (nothing is frozen before window_s)."""
+        floor = amplitude_floor(self.device, np.asarray(self._t), np.stack(self._filtered), self.names)
+        if floor is not None:
+            self.floor_deg = floor
+            self.params = dataclasses.replace(self.params, min_amplitude_deg=floor)
 
     def _window(self) -> int:
         """Returns the index of the first frame of the evaluation window."""

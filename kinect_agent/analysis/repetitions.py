@@ -18,8 +18,8 @@ Per angle:
     5. each excursion is widened to its onset and return: between the neighbouring excursions, the repetition starts
        at the last frame (ends at the first) whose e is within onset_frac·A of that stretch's minimum; excursions
        shorter than min_duration_s are dropped.
-Last, with min_amplitude_deg > 0 (a device's rule: the webcam's, kinect_agent.analysis.live.counting_params), an
-excursion whose amplitude is below it is dropped.
+Last, with min_amplitude_deg > 0 (a device's floor: the webcam's, measured on each set's first START_S seconds,
+kinect_agent.analysis.live.amplitude_floor), an excursion whose amplitude is below it is dropped.
 Amplitude = e at the peak minus the mean rest e just before and after (degrees); peak = the smoothed angle at the
 peak (degrees); side = "left"/"right" from the angle's _L/_R suffix, "center" otherwise; core = the frames around the
 peak where e stays at least half the amplitude above the rest.

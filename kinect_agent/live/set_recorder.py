@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from kinect_agent.analysis.live import LiveCount, LiveStatus, counting_params
+from kinect_agent.analysis.live import LiveCount, LiveStatus
 from kinect_agent.clock import utc_now_iso
 from kinect_agent.live.journal import Journal
 from kinect_agent.processing.config import config_for_device
@@ -144,7 +144,7 @@ class SetRecorder:
             journal = Journal(self.journal_dir, self.session_id, meta, created_at)
             online, counter = (
                 live_filter(config_for_device(meta.device)),
-                LiveCount(self.command.angles, params=counting_params(meta.device)),
+                LiveCount(self.command.angles, device=meta.device),
             )
             status, reason, t0, target_since, last_sent = None, "source", None, None, -1e9
             for frame in self.source.frames():

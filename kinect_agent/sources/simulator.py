@@ -7,6 +7,7 @@ joint-frames replaced by tracking-loss outliers.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator
 
 import numpy as np
@@ -40,9 +41,20 @@ def _check(exercise: str, reps: int, pose: str | None, rate_hz: float) -> tuple[
 
 
 def _truth(
-    exercise: str, reps: int, pose: str | None, seed: int, rate_hz: float, body: Body | None, view_deg: float
+    exercise: str,
+    reps: int,
+    pose: str | None,
+    seed: int,
+    rate_hz: float,
+    body: Body | None,
+    view_deg: float,
+    amplitude_deg: float | None = None,
 ) -> Recording:
     spec, pose = _check(exercise, reps, pose, rate_hz)
+    if amplitude_deg is not None:
+        if not (np.isfinite(amplitude_deg) and 0.0 <= amplitude_deg <= 180.0):
+            raise SimulationError(f"amplitude must be between 0 and 180 degrees, got {amplitude_deg!r}")
+        spec = dataclasses.replace(spec, amplitude=float(amplitude_deg))
     rng_motion = np.random.default_rng([seed, 0])
     body = body or motions.random_body(np.random.default_rng([seed, 1]))
     sched = motions.schedule(spec, int(reps), rng_motion, float(rate_hz))
@@ -55,7 +67,11 @@ def _truth(
         view_deg=float(view_deg),
         pose=pose,
         source="simulator",
-        history=[f"simulate_truth(exercise={exercise}, reps={reps}, pose={pose}, seed={seed}, rate={rate_hz})"],
+        history=[
+            f"simulate_truth(exercise={exercise}, reps={reps}, pose={pose}, seed={seed}, rate={rate_hz}"
+            + ("" if amplitude_deg is None else f", amplitude={amplitude_deg}")
+            + ")"
+        ],
         extra={
             "rep_bounds_s": [[float(a), float(b)] for a, b in sched.rep_bounds],
             "bone_lengths_m": [float(x) for x in body.lengths],
@@ -74,13 +90,17 @@ def simulate_truth(
     seed: int = 0,
     rate_hz: float = 30.0,
     body: Body | None = None,
+    amplitude_deg: float | None = None,
 ) -> Recording:
     """Returns the exact recording of `reps` repetitions (device "simulator", subject facing the camera).
+
+    amplitude_deg: the peak of the defining movement in degrees instead of the exercise's own (motions.SPECS), e.g. a
+    shallow set (0: the subject stands or sits still, swaying); the same seed gives the same timing and body.
 
     positions: (T, J, 3) metres, camera frame (y up, camera 0.8 m above the floor), FK of the true parameters;
     segment lengths are constant. meta.extra["rep_bounds_s"]: [[start, end], ...] seconds, one per repetition.
     """
-    return _truth(exercise, reps, pose, seed, rate_hz, body, 0.0)
+    return _truth(exercise, reps, pose, seed, rate_hz, body, 0.0, amplitude_deg)
 
 
 def simulate(

@@ -56,14 +56,22 @@ def frame(t: float, knee_deg: float = 0.0, visibility: float = 0.95) -> dict:
             "visibility": [visibility] * 33}  # fmt: skip
 
 
-def squats(reps: int, *, fps: float = 30.0, period_s: float = 2.5, rest_s: float = 1.5, t0: float = 0.0) -> list:
-    """Returns the frames of `reps` squats to 90 degrees of knee flexion with rest_s of standing before and after."""
+def squats(
+    reps: int,
+    *,
+    fps: float = 30.0,
+    period_s: float = 2.5,
+    rest_s: float = 1.5,
+    t0: float = 0.0,
+    depth_deg: float = 90.0,
+) -> list:
+    """Returns the frames of `reps` squats to depth_deg of knee flexion with rest_s of standing before and after."""
     n = int(round((2 * rest_s + reps * period_s) * fps))
     out = []
     for k in range(n):
         t = k / fps
         u = t - rest_s
-        knee = 45.0 * (1 - math.cos(2 * math.pi * u / period_s)) if 0 <= u <= reps * period_s else 0.0
+        knee = 0.5 * depth_deg * (1 - math.cos(2 * math.pi * u / period_s)) if 0 <= u <= reps * period_s else 0.0
         out.append(frame(t0 + t, knee))
     return out
 

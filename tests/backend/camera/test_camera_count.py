@@ -1,7 +1,7 @@
 """A camera set's live count and its saved count are one count: the count the page shows last (the server's live
 path: the webcam's live filter, causal, and LiveCount with the webcam's rules) equals the stored session's
 repetitions (the analysis of the session file), on webcam-like sets with jitter and left/right swaps, with and
-without repetitions (kinect_agent.analysis.live.counting_positions, counting_params).
+without repetitions, shallow ones too (kinect_agent.analysis.live.counting_positions, counting_params, amplitude_floor).
 
 Before (the live count on the chain's online filter, the stored one on the joints smoother's RTS output): on the
 camera tests' clip (Sports2D's demo, looped by Chromium's fake camera) the page counted 1 and then said "Saved: all
@@ -18,7 +18,7 @@ import pytest
 from backend.analysis.report import analyze_recording
 from backend.camera import live_count
 from backend.exercises.library import EXERCISES
-from kinect_agent.analysis.live import LiveCount, counting_params
+from kinect_agent.analysis.live import LiveCount
 from kinect_agent.formats.session_file import on_grid
 from kinect_agent.processing.config import config_for_device
 from kinect_agent.processing.online import live_filter
@@ -56,13 +56,14 @@ def _wobble(seconds: float, seed: int) -> list[dict]:
 
 
 @pytest.mark.parametrize(
-    ("reps", "swaps", "seed"),
-    [(3, False, 0), (3, True, 1), (2, True, 2), (0, True, 3)],
-    ids=["3-squats", "3-squats-swaps", "2-squats-swaps", "standing-wobble-swaps"],
+    ("reps", "swaps", "seed", "depth_deg"),
+    [(3, False, 0, 90.0), (3, True, 1, 90.0), (2, True, 2, 90.0), (0, True, 3, 0.0), (4, False, 4, 16.0)],
+    ids=["3-squats", "3-squats-swaps", "2-squats-swaps", "standing-wobble-swaps", "4-mini-squats-16-degrees"],
 )
-def test_the_saved_count_is_the_last_live_count(client, db_session, camera_home, started, reps, swaps, seed):
+def test_the_saved_count_is_the_last_live_count(client, db_session, camera_home, started, reps, swaps, seed, depth_deg):
+    """The mini squats counted 0 live and 0 saved with the webcam's former fixed floor of 20 degrees."""
     set_id, h = started(seconds_ago=120), camera_home["headers"]
-    frames = webcam_frames(squats(reps) if reps else _wobble(12.0, seed), seed, swaps)
+    frames = webcam_frames(squats(reps, depth_deg=depth_deg) if reps else _wobble(12.0, seed), seed, swaps)
     answers = []
     for seq, k in enumerate(range(0, len(frames), PER_BATCH)):
         r = client.post(f"/api/v1/camera/sets/{set_id}/batches", json=batch(seq, frames[k : k + PER_BATCH]),
@@ -84,7 +85,7 @@ def test_the_live_path_and_the_stored_analysis_count_alike(exercise, seed):
     raw = raw.replace(positions=on_grid(raw.positions))  # as a stored session file holds them
     spec = EXERCISES[exercise]
     config = config_for_device("webcam")
-    filt, counter = live_filter(config), LiveCount(tuple(spec.defining_angles), params=counting_params("webcam"))
+    filt, counter = live_filter(config), LiveCount(tuple(spec.defining_angles), device="webcam")
     for k in range(raw.n_frames):
         t = float(raw.t[k])
         counter.add(t, raw.positions[k], raw.state[k], filt.step(t, raw.positions[k], raw.state[k]))
