@@ -90,12 +90,7 @@ def erase_patient(*, db_session: Session, patient: User, caller: Caller) -> Eras
     db_session.execute(update(AdviceReply).where(AdviceReply.read_by_id == pid).values(read_by_id=None))
     db_session.expunge(patient)
     rows["user"] = _count(db_session, delete(User).where(User.id == pid))
-    still_used = set(db_session.scalars(select(ExerciseSession.file_key).where(ExerciseSession.file_key.in_(keys))))
-    still_used |= set(db_session.scalars(select(SessionReplay.data_key).where(SessionReplay.data_key.in_(keys))))
-    still_used |= set(db_session.scalars(select(SessionDetail.data_key).where(SessionDetail.data_key.in_(keys))))
-    still_used |= set(db_session.scalars(select(SessionExport.data_key).where(SessionExport.data_key.in_(keys))))
-    still_used |= earlier_file_keys_in(db_session, keys)
-    objects = sorted(keys - still_used)
+    objects = unnamed_keys(db_session, keys)
     record(db_session=db_session, caller=caller, action="patient.erase", object_type="patient",
            detail={"rows_deleted": sum(rows.values()), "objects_deleted": len(objects)})  # fmt: skip
     delete_after_commit(db_session, objects)
@@ -110,9 +105,14 @@ def earlier_file_keys(db_session: Session, session_ids: Select[Any] | list[int])
     return {k for k in db_session.scalars(query) if k}
 
 
-def earlier_file_keys_in(db_session: Session, keys: set[str]) -> set[str]:
-    """Returns those of `keys` a session_metric_version row still names (another session's earlier file)."""
-    return set(db_session.scalars(select(SessionMetricVersion.file_key).where(SessionMetricVersion.file_key.in_(keys))))
+def unnamed_keys(db_session: Session, keys: set[str]) -> list[str]:
+    """Returns, sorted, those of the object `keys` that no row names any more (session file, replay, detail, export,
+    earlier session file): the objects that may be deleted once the transaction commits (delete_after_commit)."""
+    named: set[str] = set()
+    for column in (ExerciseSession.file_key, SessionReplay.data_key, SessionDetail.data_key, SessionExport.data_key,
+                   SessionMetricVersion.file_key):  # fmt: skip
+        named |= set(db_session.scalars(select(column).where(column.in_(keys))))
+    return sorted(keys - named)
 
 
 _PENDING = "records.objects_to_delete"

@@ -34,7 +34,7 @@ from backend.exercises.models import Exercise
 from backend.jobs.errors import PermanentJobError
 from backend.jobs.models import SessionMetricVersion
 from backend.jobs.queue import enqueue
-from backend.records.erasure import delete_after_commit
+from backend.records.erasure import delete_after_commit, unnamed_keys
 from backend.replay.models import SessionReplay
 from backend.sessions.metrics import ANALYSIS_VERSION, json_ready, metrics_document, scalar_columns
 from backend.sessions.models import ExerciseSession, SessionMetric
@@ -176,8 +176,7 @@ def _point_at(db_session: Session, session: ExerciseSession, data: bytes, params
     for replay in replays:
         db_session.delete(replay)
     db_session.flush()
-    used = set(db_session.scalars(select(SessionReplay.data_key).where(SessionReplay.data_key.in_(keys))))
-    delete_after_commit(db_session, sorted(keys - used))
+    delete_after_commit(db_session, unnamed_keys(db_session, keys))
 
 
 def _earlier_file(session: ExerciseSession, data: bytes) -> FileRef:

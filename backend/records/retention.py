@@ -18,7 +18,7 @@ from sqlalchemy.orm import Session
 
 from backend.audit.service import record
 from backend.jobs.models import SessionMetricVersion
-from backend.records.erasure import delete_after_commit, earlier_file_keys, earlier_file_keys_in
+from backend.records.erasure import delete_after_commit, earlier_file_keys, unnamed_keys
 from backend.replay.models import SessionReplay
 from backend.sessions.models import ExerciseSession, SessionDetail, SessionExport
 
@@ -72,12 +72,7 @@ def apply_retention(*, db_session: Session, days: int, now: dt.datetime | None =
     db_session.execute(
         update(SessionMetricVersion).where(SessionMetricVersion.session_id.in_(ids)).values(file_key=None)
     )  # their sha256 stays: which file each earlier metrics came from
-    still_used = set(db_session.scalars(select(ExerciseSession.file_key).where(ExerciseSession.file_key.in_(keys))))
-    still_used |= set(db_session.scalars(select(SessionReplay.data_key).where(SessionReplay.data_key.in_(keys))))
-    still_used |= set(db_session.scalars(select(SessionDetail.data_key).where(SessionDetail.data_key.in_(keys))))
-    still_used |= set(db_session.scalars(select(SessionExport.data_key).where(SessionExport.data_key.in_(keys))))
-    still_used |= earlier_file_keys_in(db_session, keys)
-    objects = sorted(keys - still_used)
+    objects = unnamed_keys(db_session, keys)
     per_patient = dict(Counter(r.patient_id for r in rows))
     for pid, n in per_patient.items():
         record(db_session=db_session, caller=None, action="session.files_expired", object_type="patient",
