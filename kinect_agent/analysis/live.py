@@ -234,7 +234,7 @@ class LiveCount:
         self._state.append(np.asarray(raw_state))
         if math.isnan(self.cut_t):
             self.cut_t, self._last_moving, self._next_eval = t, t, t + self.every_s
-        if self.floor_deg is None:
+        if self.floor_deg is None and t > self._t[0] + START_S:  # amplitude_floor's frames are all in
             self._measure_floor()
         if t >= self._next_eval:
             self._next_eval = t + self.every_s
