@@ -473,20 +473,20 @@ def test_the_landmarker_runs_on_the_page_when_its_worker_cannot_start_or_dies(ca
         _start_counting(page, item_id)
         page.wait_for_function("() => CameraPage.state().model.where === 'page'", timeout=60_000)
         assert page.evaluate("CameraPage.state().count") < TARGET  # the repetitions are counted from the page
-        seq_on_page = page.evaluate("CameraPage.state().next_seq")
         said = "gave no answer in 8000 ms" if how == "dies-mid-set" else "the pose landmarker runs on the page"
         assert any(said in w for w in warnings), warnings
         wait_phase(page, "stored", "failed", timeout=240_000)
         assert phase(page) == "stored", page.locator("#cam-result-text").inner_text()
         # The set ends at its target, or when the patient stands still: a page landmarker on a loaded machine may
         # see a few frames a second and miss the clip's one squat-like crouch per pass (CI, 2026-11-27: stored 0).
-        # What must hold: the page's own poses went on reaching the server (batches are sent only with frames in
-        # them), the page's last count is the stored one, and the live count before it differs by at most one (it
+        # What must hold: the page's own poses reached the server (the dying worker answers 30 frames at most, so a
+        # stored frame beyond 30 is the page's; a page landmarker on a machine this loaded sees about 2 frames a
+        # second), the page's last count is the stored one, and the live count before it differs by at most one (it
         # may run one ahead while the landmarker's labels flicker: bench/README.md, "Webcam counts").
         expect(page.locator("#cam-result-text")).to_contain_text(re.compile(r"Saved: (all )?\d+"))
-        assert page.evaluate("CameraPage.state().next_seq") >= seq_on_page + 3
         live = page.evaluate("window.__camCounts")
         stored = patient_sessions(base, email, pid)
+        assert len(stored) == 1 and stored[0]["n_frames"] > 30, stored
         assert len(stored) == 1 and stored[0]["repetitions"] == page.evaluate("CameraPage.state().count"), stored
         assert live and abs(live[-1] - stored[0]["repetitions"]) <= 1, (live, stored)
         assert not page.js_errors, page.js_errors
