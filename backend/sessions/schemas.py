@@ -43,7 +43,9 @@ class SessionOut(SessionItemOut):
     """A stored session with its metrics document and the suggestions it produced that the caller may see."""
 
     metrics: AnalysisDocument | None = Field(
-        description="the analysis document (kinect_agent.analysis.document) with its indicators; null: not analysed"
+        description="the analysis document (kinect_agent.analysis.document) with its indicators, upgraded to today's "
+        "schema_version; each reason (Reason) with its id and params as stored and its text in the reader's language; "
+        "null: not analysed"
     )
     suggestions: list[SuggestionOut]
 
