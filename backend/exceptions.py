@@ -118,6 +118,13 @@ class SessionFileRemoved(AppError):
     status_code = 410
 
 
+class MetricsUnreadable(AppError):
+    """A session's stored metrics document that no schema version reads (e.g. a reason id no message has): the
+    server's data fault, named rather than hidden."""
+
+    status_code = 500
+
+
 class SessionTooLarge(AppError):
     status_code = 413
 
@@ -218,6 +225,8 @@ def error_responses(*errors: type[AppError]) -> dict[int | str, dict[str, Any]]:
 
 
 _EXAMPLE_DETAIL = {
+    "MetricsUnreadable": "the stored metrics document of session 7 cannot be read: quality.reasons.0: unknown reason "
+    "id 'too_blurry'",
     "PatientIdRequired": "a therapist or admin uploads for a patient: name them with ?patient_id=",
     "NotAuthenticated": "missing or invalid credentials",
     "Forbidden": "you may not access patient 12",

@@ -37,8 +37,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.analysis import reasons as why
+from kinect_agent.analysis import reasons as why
 from kinect_agent.analysis import series
+from kinect_agent.analysis.reasons import Reason
 from kinect_agent.skeleton import INDEX
 
 STANDING_HEIGHT_FRAC = 0.85
@@ -147,17 +148,17 @@ def sway(t: np.ndarray, smoothed: np.ndarray, angles: dict[str, np.ndarray]) -> 
     }
 
 
-def missing_reason(t: np.ndarray, smoothed: np.ndarray, angles: dict[str, np.ndarray]) -> str:
-    """Returns, in English words (backend.analysis.reasons), why sway() is None for this recording (the first
+def missing_reason(t: np.ndarray, smoothed: np.ndarray, angles: dict[str, np.ndarray]) -> Reason:
+    """Returns why sway() is None (a Reason of kinect_agent.analysis.reasons) for this recording (the first
     condition that failed)."""
     T = t.shape[0]
     if T < 2:
-        return why.RECORDING_TOO_SHORT.english()
+        return why.RECORDING_TOO_SHORT.reason()
     p = series.smooth_positions(t, smoothed, smooth_s=SWAY_SMOOTH_S)
     floor_y = np.min(p[:, _ANK, 1], axis=1)
     with np.errstate(invalid="ignore"):
         up = p[:, INDEX["ROOT"], 1] - floor_y >= STANDING_HEIGHT_FRAC * _leg_length(p)
     dur = float(t[-1] - t[0])
     if float(np.mean(up)) * dur < MIN_STANDING_S:
-        return why.NOT_STANDING.english()
-    return why.NEVER_STILL.english(seconds=MIN_STANDING_S)
+        return why.NOT_STANDING.reason()
+    return why.NEVER_STILL.reason(seconds=MIN_STANDING_S)

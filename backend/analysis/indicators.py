@@ -18,7 +18,7 @@ change of definition applies to the whole history).
                  score = 100 · clip((POOR_SWAY − value) / (POOR_SWAY − GOOD_SWAY), 0, 1): 100 at ≤ 1 cm/s (quiet
                  standing of healthy adults), 0 at ≥ 6 cm/s; None when the patient did not stand still ≥ 2 s.
                  Also "interval": balance.sway_velocity_95 ([low, high] m/s or None) and "missing": the document's
-                 balance_missing (why there is no value, in words, or None).
+                 balance_missing (why there is no value: a reason id and its numbers, or None).
 """
 
 from __future__ import annotations

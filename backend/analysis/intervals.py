@@ -53,10 +53,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from backend.analysis import reasons as why
 from backend.analysis.range_of_motion import HIGH_PCT, LOW_PCT
 from kinect_agent import skeleton
+from kinect_agent.analysis import reasons as why
 from kinect_agent.analysis import series
+from kinect_agent.analysis.reasons import Reason
 from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
 from kinect_agent.body.angles import DOMAIN_DEG
 
@@ -242,8 +243,8 @@ def angle_intervals(
 
 def withheld_reason(
     name: str, x: np.ndarray, interval: dict[str, list[float]] | None, tracked_fraction: float = 1.0
-) -> str | None:
-    """Returns why the 95 % intervals of angle `name` are not shown, in English words (backend.analysis.reasons), or
+) -> Reason | None:
+    """Returns why the 95 % intervals of angle `name` are not shown (a Reason of kinect_agent.analysis.reasons), or
     None when they are shown.
 
     x: (T,) degrees, the measured angle (NaN where undefined). interval: angle_intervals' answer. tracked_fraction:
@@ -252,18 +253,18 @@ def withheld_reason(
     joints were tracked in under MIN_TRACKED_FRACTION of the samples, and an interval wider than MAX_WIDTH_DEG.
     """
     if name in NO_INTERVAL:
-        return why.ROTATION_UNDEFINED.english()
+        return why.ROTATION_UNDEFINED.reason()
     x = np.asarray(x, dtype=np.float64)
     defined = float(np.isfinite(x).mean()) if x.size else 0.0
     if defined < MIN_DEFINED_FRACTION:
-        return why.OUT_OF_PLANE.english(defined=defined)
+        return why.OUT_OF_PLANE.reason(defined=defined)
     if tracked_fraction < MIN_TRACKED_FRACTION:
-        return why.JOINTS_UNTRACKED.english(tracked=tracked_fraction)
+        return why.JOINTS_UNTRACKED.reason(tracked=tracked_fraction)
     if interval is None:
-        return why.UNKNOWN_ANGLE.english()
+        return why.UNKNOWN_ANGLE.reason()
     widest = max(b - a for a, b in interval.values())
     if widest > MAX_WIDTH_DEG:
-        return why.TOO_UNCERTAIN.english(width=widest, most=MAX_WIDTH_DEG)
+        return why.TOO_UNCERTAIN.reason(width=widest, most=MAX_WIDTH_DEG)
     return None
 
 
@@ -283,7 +284,7 @@ class RomIntervals:
     [lo, hi]}} or None when withheld) and, for each withheld one, why (withheld_reason)."""
 
     intervals: dict[str, dict[str, list[float]] | None]
-    withheld: dict[str, str]
+    withheld: dict[str, Reason]
 
 
 def rom_intervals(
@@ -303,7 +304,7 @@ def rom_intervals(
     yaw = camera_yaw(positions)
     yaw = 90.0 if yaw is None else yaw
     shown: dict[str, dict[str, list[float]] | None] = {}
-    withheld: dict[str, str] = {}
+    withheld: dict[str, Reason] = {}
     for name in angles:
         if name not in sd:
             continue

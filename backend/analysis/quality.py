@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from backend.analysis import reasons as why
+from kinect_agent.analysis import reasons as why
 from kinect_agent.analysis import series
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INDEX, JOINTS, NOT_TRACKED
@@ -79,17 +79,17 @@ def assess(raw: Recording, measured: np.ndarray | None, angle_names: tuple[str, 
         dist = series.norm3(raw.positions[:, joints] - sub)
         far = present & (np.nan_to_num(dist, nan=np.inf) > OUTLIER_M)
         outliers = float(far.sum() / present.sum()) if present.any() else 0.0
-    reasons = []  # in English, as the document stores them (backend.analysis.reasons writes them for a reader)
+    reasons = []  # ids and numbers, as the document stores them (backend.analysis.reasons writes them for a reader)
     if raw.n_frames < MIN_FRAMES:
-        reasons.append(why.TOO_FEW_FRAMES.english(frames=raw.n_frames, needed=MIN_FRAMES))
+        reasons.append(why.TOO_FEW_FRAMES.reason(frames=raw.n_frames, needed=MIN_FRAMES))
     if raw.duration < MIN_DURATION_S:
-        reasons.append(why.TOO_SHORT.english(seconds=raw.duration, needed=MIN_DURATION_S))
+        reasons.append(why.TOO_SHORT.reason(seconds=raw.duration, needed=MIN_DURATION_S))
     if tracked < MIN_TRACKED:
-        reasons.append(why.TOO_LITTLE_TRACKED.english(tracked=tracked, needed=MIN_TRACKED))
+        reasons.append(why.TOO_LITTLE_TRACKED.reason(tracked=tracked, needed=MIN_TRACKED))
     if outliers > MAX_OUTLIERS:
-        reasons.append(why.TOO_MANY_ERRORS.english(errors=outliers, allowed=MAX_OUTLIERS))
+        reasons.append(why.TOO_MANY_ERRORS.reason(errors=outliers, allowed=MAX_OUTLIERS))
     if not finite:
-        reasons.append(why.GAPS.english())
+        reasons.append(why.GAPS.reason())
     return {
         "ok": not reasons,
         "tracked_fraction": round(tracked, 4),

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from backend.analysis import activity, quality
+from backend.analysis import activity, quality, reasons
 from backend.analysis.balance import missing_reason, sway
 from backend.analysis.errors import AnalysisError, UnknownExercise, UnreadableRecording
 from backend.analysis.intervals import count_interval, rom_intervals
@@ -27,6 +27,7 @@ from backend.analysis.range_of_motion import range_of_motion
 from backend.analysis.reachable import reachable_range
 from backend.analysis.sit_to_stand import sit_to_stand
 from backend.exercises.library import EXERCISES, ExerciseSpec
+from backend.i18n import translator
 from kinect_agent.analysis.angles import counting_angles, measured_angles
 from kinect_agent.analysis.document import AnalysisReport, json_ready
 from kinect_agent.analysis.live import amplitude_floor, counting_params, counting_positions, done_repetitions
@@ -35,6 +36,8 @@ from kinect_agent.body.angles import body_frame
 from kinect_agent.errors import FormatError
 from kinect_agent.processing.params import KinematicParams
 from kinect_agent.recording import Recording
+
+ENGLISH = translator("en")  # the command's words (the reasons written from their ids)
 
 
 def get_exercise(slug: str) -> ExerciseSpec:
@@ -218,7 +221,8 @@ def _balance_line(doc: AnalysisReport) -> str:
     """Returns the balance in one line: sway velocity with its 95 % interval, or why it was not measured."""
     b = doc.balance
     if b is None:
-        return f"balance: not measured: {doc.balance_missing}"
+        missing = "" if doc.balance_missing is None else reasons.written(doc.balance_missing, ENGLISH)
+        return f"balance: not measured: {missing}"
     interval = "" if b.sway_velocity_95 is None else (
         f" (95 % {100 * b.sway_velocity_95[0]:.2f}-{100 * b.sway_velocity_95[1]:.2f})"
     )  # fmt: skip
@@ -232,7 +236,7 @@ def _summary(doc: AnalysisReport) -> str:
         f"({doc.n_frames} frames at {doc.rate_hz:.1f} Hz)",
         f"defining angle {doc.defining_angle}, median amplitude {doc.rom_deg} deg",
         f"quality: {'ok' if q.ok else 'NOT ok'} (tracked {q.tracked_fraction:.0%}, "
-        f"outliers {q.outlier_fraction:.1%}){''.join('; ' + r for r in q.reasons)}",
+        f"outliers {q.outlier_fraction:.1%}){''.join('; ' + reasons.written(r, ENGLISH) for r in q.reasons)}",
         _balance_line(doc),
     ]
     lines += [
@@ -273,7 +277,7 @@ def run(args: argparse.Namespace) -> int:
     except AnalysisError as exc:
         print(f"coach-server analyze: error: {exc}", file=sys.stderr)
         return 2
-    document = doc.model_dump(mode="json") | {"source": str(args.file)}
+    document = reasons.with_texts(doc, ENGLISH).model_dump(mode="json") | {"source": str(args.file)}
     print(json.dumps(document, indent=2, allow_nan=False) if args.json else _summary(doc))
     return 0
 

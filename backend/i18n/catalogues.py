@@ -1,7 +1,8 @@
 """Keeps the message catalogues in step with the code: `python -m backend.i18n.catalogues extract|update|check`.
 
 - extract: writes backend/i18n/locale/messages.pot and therapist.pot from the marked texts of the server (Python),
-  the templates (Jinja) and the page scripts (JavaScript), with Babel's extractors. A message goes to therapist.pot
+  the analysis' reasons (kinect_agent/analysis/reasons.py), the templates (Jinja) and the page scripts
+  (JavaScript), with Babel's extractors. A message goes to therapist.pot
   when every place it is used is a file of THERAPIST_FILES (the pages only therapists see), else to messages.pot.
 - update: merges each template into each locale's .po of its domain (new messages empty, changed ones fuzzy, gone
   ones dropped): messages.po of every locale, therapist.po of the locales that have one.
@@ -59,6 +60,7 @@ PLURAL_FORMS = {"de": "nplurals=2; plural=(n != 1);", "es": "nplurals=2; plural=
 # (directory, Babel method map, keywords); the Python keywords are gettext's own plus N_ for lazy marks
 SOURCES = (
     ("backend", [("**.py", "python")], {"_": None, "gettext": None, "ngettext": (1, 2), "N_": None}),
+    ("kinect_agent/analysis", [("reasons.py", "python")], {"N_": None}),  # the analysis' reasons (no server import)
     ("frontend", [("**.py", "python")], {"_": None, "gettext": None, "ngettext": (1, 2), "N_": None}),
     ("frontend/templates", [("**.html", "jinja2")], {"_": None, "gettext": None, "ngettext": (1, 2)}),
     ("frontend/static", [("**.js", "javascript")], {"I18n.t": None, "I18n.nt": (1, 2), "I18n.N_": None}),

@@ -13,6 +13,7 @@ from typing import IO, Any
 from sqlalchemy import or_, select
 from sqlalchemy.orm import Session
 
+from backend.analysis import reasons
 from backend.audit.models import AuditEvent
 from backend.camera.models import CameraConsent, CameraSet
 from backend.config import Settings
@@ -55,7 +56,9 @@ plans.json        your exercise plans, each with its exercises, sets, repetition
 sessions.json     every exercise session: when, which exercise, how long, the file's SHA-256, and the
                   metrics computed from it (repetitions, range of motion, balance, data quality ...) with the
                   version of the analysis that made them, and how each set felt to you ("feeling": pain 0-10,
-                  effort 0-10 on the Borg CR10 scale, null = not answered or skipped)
+                  effort 0-10 on the Borg CR10 scale, null = not answered or skipped); each reason the
+                  analysis gives (why data quality was poor, an interval withheld, balance not measured) has
+                  its "text" in your language, and its "id" and numbers ("params")
                   "metrics_earlier": the documents a re-analysis replaced, each with its analysis version,
                   the SHA-256 and params of the session file it came from ("file": that file in sessions/,
                   session-ID-SHA.khs, when a re-analysis filtered the raw skeleton again into a new file)
@@ -219,9 +222,10 @@ def _asked_of_worker(db_session: Session, row: tuple[Any, ...], fmt: str) -> str
 
 
 def _sessions(
-    db_session: Session, pid: int, out: _Zip, settings: Settings
+    db_session: Session, pid: int, out: _Zip, settings: Settings, reader: Translator
 ) -> tuple[list[dict[str, Any]], dict[int, list[str]]]:
-    """Writes every session's file and exports; returns sessions.json's entries and the incomplete sessions."""
+    """Writes every session's file and exports; returns sessions.json's entries (the metrics' reasons in the
+    reader's language: backend.analysis.reasons) and the incomplete sessions."""
     earlier: dict[int, list[dict[str, Any]]] = {}
     for v, current in db_session.execute(
         select(SessionMetricVersion, ExerciseSession.content_hash)
@@ -251,7 +255,7 @@ def _sessions(
         entry["client_session_id"] = str(s.client_session_id)
         entry["exercise"] = slug
         readable = read_if_readable(doc)  # today's schema; a document no schema reads is kept as stored
-        entry["metrics"] = readable.model_dump(mode="json") if readable is not None else doc
+        entry["metrics"] = doc if readable is None else reasons.with_texts(readable, reader).model_dump(mode="json")
         entry["metrics_earlier"] = earlier.get(s.id, [])
         entry["feeling"] = None if felt is None else {
             "pain_nrs": felt.pain_nrs, "effort_borg_cr10": felt.effort_cr10, "answered_at": _iso(felt.updated_at)
@@ -311,9 +315,9 @@ def build_archive(*, db_session: Session, patient: User, requested_by: str, sett
                 "items": [_row(i, tuple(c.key for c in PlanItem.__table__.columns)) for i in items],
             })  # fmt: skip
         out.json("plans.json", plans)
-        listed, incomplete = _sessions(db_session, pid, out, settings)
-        out.json("sessions.json", listed)
         reader = translator(patient.locale)
+        listed, incomplete = _sessions(db_session, pid, out, settings, reader)
+        out.json("sessions.json", listed)
         advice = db_session.scalars(select(Suggestion).where(Suggestion.patient_id == pid).order_by(Suggestion.id))
         out.json("advice.json", [_advice(a, reader) for a in advice])
         replies = db_session.scalars(select(AdviceReply).where(AdviceReply.patient_id == pid).order_by(AdviceReply.id))

@@ -14,6 +14,7 @@ from typing import Any
 from sqlalchemy import ScalarSelect, func, or_, select
 from sqlalchemy.orm import Session, aliased
 
+from backend.analysis import reasons
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
 from backend.i18n import Translator
@@ -24,18 +25,24 @@ from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.sessions.triage import week_start
 from backend.suggestions.models import Suggestion
 from backend.users.models import User
-from kinect_agent.analysis.document import read_indicators
+from kinect_agent.analysis.document import Indicators, read_indicators
 
 RANKED_PATIENTS_MAX = 500  # the dashboard ranks up to this many visible patients by attention, beyond it pages by id
 
 
 def progress(
-    *, db_session: Session, patient_id: int, exercise_id: int | None, since: dt.datetime | None
+    *,
+    db_session: Session,
+    patient_id: int,
+    exercise_id: int | None,
+    since: dt.datetime | None,
+    t: Translator = triage.ENGLISH,
 ) -> list[dict[str, Any]]:
     """Returns one point per session of the patient (optionally one exercise, since a time), oldest first.
 
-    Each point: session_id, exercise_slug, started_at, repetitions, rom_deg (deg), quality_ok, indicators, and what
-    the patient said after the set: pain_nrs (0-10), effort_cr10 (Borg CR10, 0-10); None = not said.
+    Each point: session_id, exercise_slug, started_at, repetitions, rom_deg (deg), quality_ok, indicators (why
+    balance is missing in t's language), and what the patient said after the set: pain_nrs (0-10), effort_cr10
+    (Borg CR10, 0-10); None = not said.
     """
     query = (
         select(
@@ -62,7 +69,13 @@ def progress(
     rows = db_session.execute(query.order_by(ExerciseSession.started_at, ExerciseSession.id)).all()
     keys = ("session_id", "exercise_slug", "started_at", "repetitions", "rom_deg", "quality_ok", "indicators",
             "pain_nrs", "effort_cr10")  # fmt: skip
-    return [dict(zip(keys, row, strict=True)) | {"indicators": read_indicators(row[6])} for row in rows]
+    return [dict(zip(keys, row, strict=True)) | {"indicators": _indicators(row[6], t)} for row in rows]
+
+
+def _indicators(stored: object, t: Translator) -> Indicators | None:
+    """Returns the stored indicators of a document (any schema version) with their reason in t's language."""
+    indicators = read_indicators(stored)
+    return None if indicators is None else reasons.indicators_with_text(indicators, t)
 
 
 def _newest_session(*, with_metrics: bool) -> ScalarSelect[int]:
@@ -82,9 +95,12 @@ def _newest_session(*, with_metrics: bool) -> ScalarSelect[int]:
     )
 
 
-def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.datetime) -> dict[int, dict[str, Any]]:
-    """Returns per patient (one query): last session (brief), latest indicators, sessions this week, pending advice,
-    unread replies (and how many of them say "It hurt", the latest when), the pain alert level."""
+def _per_patient(
+    db_session: Session, patient_ids: Sequence[int], now: dt.datetime, t: Translator
+) -> dict[int, dict[str, Any]]:
+    """Returns per patient (one query): last session (brief), latest indicators (their reason in t's language),
+    sessions this week, pending advice, unread replies (and how many of them say "It hurt", the latest when), the
+    pain alert level."""
     this_week = (
         select(func.count())
         .select_from(ExerciseSession)
@@ -164,7 +180,7 @@ def _per_patient(db_session: Session, patient_ids: Sequence[int], now: dt.dateti
             "unread_replies": unread or 0,
             "unread_hurt": hurt or 0,
             "last_hurt_at": hurt_at,
-            "latest_indicators": read_indicators(indicators),
+            "latest_indicators": _indicators(indicators, t),
             "pain_alert_above": triage.PAIN_ALERT_ABOVE if alert is None else alert,
         }
         for pid, this_week, pending, unread, hurt, hurt_at, alert, *last, indicators in rows
@@ -242,7 +258,7 @@ def summaries(
     ids = sorted(set(patient_ids))
     if not ids:
         return {}
-    per = _per_patient(db_session, ids, now)
+    per = _per_patient(db_session, ids, now, t)
     plans = _running_plans(db_session, ids, now.astimezone(dt.UTC).date())
     recent = _recent_sessions(db_session, ids, triage.window_start(now))
     empty = {"last_session": None, "sessions_this_week": 0, "pending_suggestions": 0, "unread_replies": 0,

@@ -26,15 +26,17 @@ from backend.analysis.session_detail import (
 )
 from backend.exceptions import InvalidSessionFile
 from backend.exercises.library import EXERCISES, ExerciseSpec
-from backend.i18n import N_, Translator
+from backend.i18n import N_, Translator, translator
 from backend.jobs.listing import error_words
 from backend.sessions.models import ExerciseSession
 from kinect_agent.analysis.document import AnalysisReport, RepetitionItem, UnreadableDocument, read_report
+from kinect_agent.analysis.reasons import Reason
 from kinect_agent.analysis.validity import recorded_with, session_validity
 from kinect_agent.formats import session_file
 from kinect_agent.formats.session_file import SessionFileError, SessionPayload
 
-DETAIL_VERSION = 3  # part of a stored detail's inputs (backend.sessions.prepared): bump when the output changes
+ENGLISH = translator("en")  # the stored detail's words; in_language writes them for each reader
+DETAIL_VERSION = 4  # part of a stored detail's inputs (backend.sessions.prepared): bump when the output changes
 # the texts of the therapist's session page (catalogue `therapist`): stored in English, written in the reader's
 # language when read (in_language)
 UNCERTAINTY_NOTE = N_(
@@ -192,6 +194,9 @@ def detail_body(
         "tempo_s_per_rep": doc.tempo_s_per_rep if doc is not None else None,
         "balance": _balance(doc),
         "balance_missing": None if _balance(doc) is not None else _balance_missing(doc),
+        "balance_missing_reason": _reason_json(
+            None if doc is None or _balance(doc) is not None else doc.balance_missing
+        ),
         "angles": list(spec.defining_angles) if spec is not None else [],
         "curves": evidence["curves"],
         "repetitions": _rep_rows(reps, evidence["peak_speeds"]),
@@ -200,7 +205,8 @@ def detail_body(
         "quality": evidence["quality"]
         | {
             "analysis_ok": quality.ok if quality is not None else None,
-            "analysis_reasons": list(quality.reasons) if quality is not None else [],
+            "analysis_reasons": [reasons.written(r, ENGLISH) for r in quality.reasons] if quality is not None else [],
+            "analysis_reason_items": [_reason_json(r) for r in quality.reasons] if quality is not None else [],
         },
         "processing": {
             "version": session.processing_version or "",
@@ -223,32 +229,60 @@ def in_language(body: dict[str, Any], t: Translator) -> dict[str, Any]:
     reasons (backend.analysis.reasons), the uncertainty note, why balance was not measured, and the device's
     limits."""
     curves = [c | curve_words(c["angle"], c["kind"], t) for c in body.get("curves", [])]
-    said = {"curves": curves, "error": error_words(body.get("error"), t)}  # in words for every reader
+    said: dict[str, Any] = {"curves": curves, "error": error_words(body.get("error"), t)}  # for every reader
+    said |= _reasons_in(body, t)
     if t.locale == "en" and not t.therapist:
         return body | said
-    quality = dict(body["quality"])
+    quality = dict(said["quality"])
     quality["parts"] = [p | {"label": data_quality.part_label(p["name"], t)} if p["name"] in data_quality.PARTS
                         else p for p in quality["parts"]]  # fmt: skip
     quality["advice"] = [_advice_in(a, t) for a in quality["advice"]]
-    quality["analysis_reasons"] = [reasons.in_language(r, t) for r in quality.get("analysis_reasons", [])]
     shown = body | said | {"quality": quality}
     note = body.get("uncertainty_note")
     if note in (UNCERTAINTY_NOTE, NO_UNCERTAINTY_NOTE):
         shown["uncertainty_note"] = t.gettext(note)
-    missing = body.get("balance_missing")
-    if isinstance(missing, str):
-        shown["balance_missing"] = t.gettext(missing) if missing == BALANCE_NOT_MEASURED else reasons.in_language(
-            missing, t)  # fmt: skip
-    uncertainty = body.get("uncertainty")
-    if isinstance(uncertainty, dict) and isinstance(uncertainty.get("angles"), dict):
-        angles = {name: a | {"withheld": reasons.in_language(a["withheld"], t)} if a.get("withheld") else a
-                  for name, a in uncertainty["angles"].items()}  # fmt: skip
-        shown["uncertainty"] = uncertainty | {"angles": angles}
+    if body.get("balance_missing") == BALANCE_NOT_MEASURED:
+        shown["balance_missing"] = t.gettext(BALANCE_NOT_MEASURED)
     validity = body.get("validity")
     if isinstance(validity, dict):
         metrics = [m | {"reason": _validity_reason(m.get("reason"), t)} for m in validity.get("metrics", [])]
         shown["validity"] = validity | {"metrics": metrics}
     return shown
+
+
+def _reason_json(reason: Reason | None) -> dict[str, Any] | None:
+    """Returns a reason as the stored detail keeps it: its id and numbers (or its text when it has no id)."""
+    return None if reason is None else reason.model_dump(mode="json")
+
+
+def _written(stored: object, t: Translator) -> Reason | None:
+    """Returns a stored detail's reason with its text in t's language; None when there is none."""
+    return None if stored is None else reasons.with_text(Reason.model_validate(stored), t)
+
+
+def _reasons_in(body: dict[str, Any], t: Translator) -> dict[str, Any]:
+    """Returns the detail's reasons written in t's language from their ids and numbers: the analysis' quality
+    check (quality.analysis_reasons and its items), why balance was not measured, why an interval is withheld."""
+    quality = dict(body["quality"])
+    items = [_written(r, t) for r in quality.get("analysis_reason_items", [])]
+    quality["analysis_reason_items"] = [r.model_dump(mode="json") for r in items if r is not None]
+    quality["analysis_reasons"] = [r.text for r in items if r is not None]
+    out: dict[str, Any] = {"quality": quality}
+    missing = _written(body.get("balance_missing_reason"), t)
+    if missing is not None:
+        out |= {"balance_missing": missing.text, "balance_missing_reason": missing.model_dump(mode="json")}
+    uncertainty = body.get("uncertainty")
+    if isinstance(uncertainty, dict) and isinstance(uncertainty.get("angles"), dict):
+        angles = {}
+        for name, a in uncertainty["angles"].items():
+            withheld = _written(a.get("withheld_reason"), t)
+            angles[name] = (
+                a
+                if withheld is None
+                else a | {"withheld": withheld.text, "withheld_reason": withheld.model_dump(mode="json")}
+            )
+        out["uncertainty"] = uncertainty | {"angles": angles}
+    return out
 
 
 def _validity_reason(reason: str | None, t: Translator) -> str | None:
@@ -272,9 +306,9 @@ def _balance(doc: AnalysisReport | None) -> dict[str, Any] | None:
 
 
 def _balance_missing(doc: AnalysisReport | None) -> str:
-    """Returns why a document has no balance, in words."""
-    if doc is not None and doc.balance_missing:
-        return doc.balance_missing
+    """Returns why a document has no balance, in English words (in_language writes them for a reader)."""
+    if doc is not None and doc.balance_missing is not None:
+        return reasons.written(doc.balance_missing, ENGLISH)
     return BALANCE_NOT_MEASURED
 
 
@@ -297,7 +331,10 @@ def _uncertainty(doc: AnalysisReport | None) -> dict[str, Any] | None:
                 "max_ci95": iv.max_deg if iv is not None else None,
                 "range_ci95": iv.range_deg if iv is not None else None,
             }
-            | {"withheld": withheld.get(name)}
+            | {
+                "withheld": None if name not in withheld else reasons.written(withheld[name], ENGLISH),
+                "withheld_reason": _reason_json(withheld.get(name)),
+            }
         )
     reps = doc.repetitions_95.model_dump() if doc.repetitions_95 is not None else None
     return {"angles": angles, "repetitions": reps, "peak_end": doc.peak_end}

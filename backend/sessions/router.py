@@ -8,6 +8,7 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Query, Request, Response, status
 from fastapi.responses import JSONResponse
+from pydantic import ValidationError
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
@@ -32,6 +33,7 @@ from backend.exceptions import (
     ExportUnavailable,
     InvalidInput,
     InvalidSessionFile,
+    MetricsUnreadable,
     PatientIdRequired,
     PatientNotFound,
     SessionConflict,
@@ -62,7 +64,7 @@ from backend.sessions.schemas import (
     SummaryOut,
 )
 from backend.suggestions import service as suggestions_service
-from kinect_agent.analysis.document import read_document
+from kinect_agent.analysis.document import AnalysisDocument, UnreadableDocument, read_document
 from kinect_agent.export.files import ExportFormat as ExportFormatName
 
 ENGLISH = translator("en")
@@ -149,11 +151,26 @@ def _session_out(db_session: Session, caller: Caller, session_id: int, t: Transl
     )
     return SessionOut(
         **_item_fields(session, slug, reps, rom, quality, t),
-        metrics=None if document is None else reasons.document_in_language(read_document(document), t),
+        metrics=None if document is None else reasons.with_texts(_metrics(session_id, document), t),
         suggestions=suggestions_service.suggestion_outs(
             suggestions, db_session=db_session, accept_language=accept_language
         ),  # fmt: skip
     )
+
+
+def _metrics(session_id: int, document: dict[str, Any]) -> AnalysisDocument:
+    """Returns a session's stored metrics document as today's model; raises MetricsUnreadable naming what no
+    schema version reads."""
+    try:
+        return read_document(document)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        where = ".".join(str(p) for p in first["loc"])
+        raise MetricsUnreadable(
+            f"the stored metrics document of session {session_id} cannot be read: {where}: {first['msg']}"
+        ) from None
+    except UnreadableDocument as exc:
+        raise MetricsUnreadable(f"the stored metrics document of session {session_id} cannot be read: {exc}") from None
 
 
 def _item_fields(
@@ -323,7 +340,7 @@ def list_sessions(
 @router.get(
     "/sessions/{session_id}",
     response_model=SessionOut,
-    responses=error_responses(*AUTH_ERRORS, SessionNotFound),
+    responses=error_responses(*AUTH_ERRORS, SessionNotFound, MetricsUnreadable),
 )
 def read_session(session_id: IdPath, request: Request, caller: CurrentCaller, db_session: DbSession) -> SessionOut:
     """Returns one session with its metrics document and the suggestions the caller may see."""
@@ -457,14 +474,17 @@ def read_progress(
     patient: PatientForRead,
     caller: CurrentCaller,
     db_session: DbSession,
+    request: Request,
     exercise: SlugQuery = None,
     since: Annotated[DateTimeQuery, Query(description="only sessions started at or after this time")] = None,
 ) -> ProgressOut:
-    """Returns the patient's sessions as a time series (repetitions, range of motion, indicators), oldest first."""
+    """Returns the patient's sessions as a time series (repetitions, range of motion, indicators), oldest first;
+    why balance is missing in the reader's language."""
     exercise_id = service.find_exercise_id(db_session=db_session, slug=exercise) if exercise else None
     points = dashboard.progress(
-        db_session=db_session, patient_id=patient.id, exercise_id=exercise_id, since=_aware(since)
-    )
+        db_session=db_session, patient_id=patient.id, exercise_id=exercise_id, since=_aware(since),
+        t=reader_of(request, caller),
+    )  # fmt: skip
     _audit(db_session, caller, "session.progress.read", None, patient.id, {"exercise": exercise})
     return ProgressOut(patient_id=patient.id, exercise_slug=exercise, points=[ProgressPoint(**p) for p in points])
 

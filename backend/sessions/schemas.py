@@ -11,6 +11,7 @@ from pydantic.config import JsonDict
 
 from backend.suggestions.schemas import SuggestionOut
 from kinect_agent.analysis.document import AnalysisDocument, Indicators
+from kinect_agent.analysis.reasons import Reason
 
 
 class SessionItemOut(BaseModel):
@@ -42,7 +43,9 @@ class SessionOut(SessionItemOut):
     """A stored session with its metrics document and the suggestions it produced that the caller may see."""
 
     metrics: AnalysisDocument | None = Field(
-        description="the analysis document (kinect_agent.analysis.document) with its indicators; null: not analysed"
+        description="the analysis document (kinect_agent.analysis.document) with its indicators, upgraded to today's "
+        "schema_version; each reason (Reason) with its id and params as stored and its text in the reader's language; "
+        "null: not analysed"
     )
     suggestions: list[SuggestionOut]
 
@@ -76,7 +79,11 @@ _INDICATORS_EXAMPLE: JsonDict = {
         "quality_ok": False,
         "previous": 0.021,
         "interval": None,
-        "missing": "the patient was seated or crouching: balance is measured while standing",
+        "missing": {
+            "id": "not_standing",
+            "params": {},
+            "text": "the patient was seated or crouching: balance is measured while standing",
+        },
     },
 }
 
@@ -361,7 +368,12 @@ class DataQualityOut(BaseModel):
     outlier_strip: OutlierStripOut
     advice: list[AdviceOut]
     analysis_ok: bool | None = Field(description="the analysis' own quality check (metrics document), if any")
-    analysis_reasons: list[str] = Field(description="why the analysis' check failed, in words")
+    analysis_reasons: list[str] = Field(description="why the analysis' check failed, in the reader's language")
+    analysis_reason_items: list[Reason] = Field(
+        default_factory=list,
+        description="analysis_reasons for machines, in the same order: each its message id and numbers (id null: a "
+        "text an older analysis stored) with its text",
+    )
 
 
 class ProcessingOut(BaseModel):
@@ -385,7 +397,11 @@ class AngleUncertaintyOut(BaseModel):
     range_ci95: list[float] | None = Field(description="95 % interval of range_deg", examples=[[96.0, 140.8]])
     withheld: str | None = Field(
         default=None,
-        description="why the intervals are not shown (poor tracking, undefined, too wide); null: shown",
+        description="why the intervals are not shown (poor tracking, undefined, too wide), in the reader's language; "
+        "null: shown",
+    )
+    withheld_reason: Reason | None = Field(
+        default=None, description="withheld for machines: its message id and numbers, with its text; null: shown"
     )
 
 
@@ -474,6 +490,11 @@ class SessionDetailOut(BaseModel):
                     "tempo_s_per_rep": 4.8,
                     "balance": None,
                     "balance_missing": "the patient was seated or crouching: balance is measured while standing",
+                    "balance_missing_reason": {
+                        "id": "not_standing",
+                        "params": {},
+                        "text": "the patient was seated or crouching: balance is measured while standing",
+                    },
                     "angles": ["knee_flexion_R"],
                     "curves": [
                         {
@@ -532,6 +553,7 @@ class SessionDetailOut(BaseModel):
                         "advice": [],
                         "analysis_ok": True,
                         "analysis_reasons": [],
+                        "analysis_reason_items": [],
                     },
                     "processing": {
                         "version": "0.4.0",
@@ -591,7 +613,14 @@ class SessionDetailOut(BaseModel):
     rest_time_s: float | None
     tempo_s_per_rep: float | None
     balance: BalanceOut | None = Field(description="trunk-and-hips sway while standing; null: not measured")
-    balance_missing: str | None = Field(description="why balance is not measured, in words; null when it is")
+    balance_missing: str | None = Field(
+        description="why balance is not measured, in the reader's language; null when it is"
+    )
+    balance_missing_reason: Reason | None = Field(
+        default=None,
+        description="balance_missing for machines: the analysis' message id and numbers, with its text; null when "
+        "balance is measured or the document is older than balance in standing phases",
+    )
     angles: list[str] = Field(description="the exercise's defining angles the curves show")
     curves: list[CurveOut]
     repetitions: list[RepetitionDetailOut]

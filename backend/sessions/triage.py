@@ -47,6 +47,7 @@ from dataclasses import dataclass, field
 from statistics import median
 from typing import Any
 
+from backend.analysis import reasons
 from backend.analysis.balance import MIN_STANDING_S
 from backend.exercises.library import EXERCISES
 from backend.i18n import N_, Translator
@@ -370,13 +371,14 @@ def _trend_text(direction: str, label: str, was: str, now: str, weeks: int, t: T
 def balance_missing(
     latest_indicators: Indicators | None, exercise_slug: str | None, t: Translator = ENGLISH
 ) -> str | None:
-    """Returns why the latest indicators have no balance score, in words (t's language), or None when they have
-    one; the analysis's own reason stays as it wrote it."""
+    """Returns why the latest indicators have no balance score, in words (t's language, the analysis' own reason
+    too: backend.analysis.reasons), or None when they have one."""
     if latest_indicators is None:
         return t.gettext("Not measured: no analysed session yet")
     if latest_indicators.balance.score is not None:
         return None
-    reason = latest_indicators.balance.missing
+    missing = latest_indicators.balance.missing
+    reason = None if missing is None else reasons.written(missing, t)
     standing = _number(MIN_STANDING_S, t)
     if exercise_slug:
         name = _name(exercise_slug, t)

@@ -12,18 +12,24 @@ Schema versions (`schema_version`; a document without it is version 1):
        repetitions_95, peak_end, balance_missing, analysis_version; repetitions without peak_s; balance without
        sway_velocity_95, n_windows, method; the balance indicator without interval and missing. Documents of
        2026-11-25 to 2026-11-27 already hold range_of_motion_95 and repetitions_95.
-    2  today: every key present, None where it does not apply.
+    2  2026-11-27: every key present, None where it does not apply; the reasons (quality.reasons,
+       range_of_motion_95_withheld, balance_missing, indicators.balance.missing) in English words.
+    3  today: each reason a Reason (kinect_agent.analysis.reasons): a message id and its numbers, written in the
+       reader's language by the server; an English text of schema 1 or 2 that no message matches stays a text.
 Raise SCHEMA_VERSION and add one step to `upgrade` whenever a key is added, removed or changes its meaning.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-SCHEMA_VERSION = 2
+from kinect_agent.analysis.reasons import MESSAGES, Kind, Message, Reason
+
+SCHEMA_VERSION = 3
 
 
 class _Part(BaseModel):
@@ -126,7 +132,7 @@ class Quality(_Part):
     ok: bool = Field(description="no reason found")
     tracked_fraction: float = Field(description="share of the defining joints' samples tracked, 0..1")
     outlier_fraction: float = Field(description="share of tracked samples far from the filtered body, 0..1")
-    reasons: list[str] = Field(description="why the session is not ok, in words")
+    reasons: list[Reason] = Field(description="why the session is not ok")
 
 
 class Indicator(_Part):
@@ -143,7 +149,7 @@ class BalanceIndicator(Indicator):
     """The balance indicator, with the sway interval and why it is missing."""
 
     interval: list[float] | None = Field(description="balance.sway_velocity_95, [low, high] m/s; None: none")
-    missing: str | None = Field(description="balance_missing when there is no value, in words")
+    missing: Reason | None = Field(description="balance_missing when there is no value")
 
 
 class Indicators(_Part):
@@ -174,8 +180,8 @@ class AnalysisReport(_Part):
     range_of_motion_95: dict[str, AngleRangeInterval | None] | None = Field(
         description="{angle: 95 % intervals or None (withheld)}; None without the agent's angle SDs"
     )
-    range_of_motion_95_withheld: dict[str, str] | None = Field(
-        description="{angle: why its interval is withheld, in words}; None without the agent's angle SDs"
+    range_of_motion_95_withheld: dict[str, Reason] | None = Field(
+        description="{angle: why its interval is withheld}; None without the agent's angle SDs"
     )
     repetitions_95: CountInterval | None = Field(description="None without the agent's angle SDs")
     rom_deg: float | None = Field(description="median repetition amplitude, degrees (0.1); None: no repetition")
@@ -186,7 +192,7 @@ class AnalysisReport(_Part):
     tempo_s_per_rep: float | None = Field(description="median time between repetition starts, s; None: none")
     fatigue: Fatigue
     balance: Balance | None = Field(description="None when the patient did not stand still long enough")
-    balance_missing: str | None = Field(description="why balance is None, in words; None when measured")
+    balance_missing: Reason | None = Field(description="why balance is None; None when measured")
     sit_to_stand: SitToStand | None = Field(description="the sit_to_stand exercise only")
     quality: Quality
 
@@ -237,6 +243,69 @@ def _upgrade_1_to_2(doc: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+# Schema 2 to 3: each English reason text read back as its message (the message a pattern, a named group per number)
+_PATTERN = {"int": r"-?\d+", "percent": r"-?\d+%", "decimal0": r"-?\d+", "decimal1": r"-?\d+\.\d",
+            "general": r"-?\d+(?:\.\d+)?(?:e[-+]?\d+)?"}  # fmt: skip
+_PLACEHOLDER = re.compile(r"%\((\w+)\)s")
+
+
+def _english_pattern(message: Message) -> re.Pattern[str]:
+    """Returns the pattern of a message as schema 1 and 2 wrote it in English: a named group per placeholder."""
+    kinds = dict(message.kinds)
+    parts, last = [], 0
+    for m in _PLACEHOLDER.finditer(message.message):
+        parts += [re.escape(message.message[last : m.start()].replace("%%", "%")),
+                  f"(?P<{m[1]}>{_PATTERN[kinds[m[1]]]})"]  # fmt: skip
+        last = m.end()
+    return re.compile("".join([*parts, re.escape(message.message[last:].replace("%%", "%"))]))
+
+
+_ENGLISH_PATTERNS = tuple((message, _english_pattern(message)) for message in MESSAGES)
+
+
+def _english_number(text: str, kind: Kind) -> int | float:
+    """Returns a number as schema 1 and 2 wrote it in a reason ("46%" is 0.46)."""
+    if kind == "int":
+        return int(text)
+    return float(text[:-1]) / 100 if kind == "percent" else float(text)
+
+
+def reason_of_text(text: object) -> object:
+    """Returns a reason of schema 1 or 2 (English words) as a schema-3 Reason's JSON: the message whose pattern it
+    matches, with its numbers; a text no message matches stays a text (id None); anything else as it is."""
+    if not isinstance(text, str):
+        return text
+    for message, pattern in _ENGLISH_PATTERNS:
+        found = pattern.fullmatch(text)
+        if found is not None:
+            kinds = dict(message.kinds)
+            return {"id": message.id, "params": {k: _english_number(v, kinds[k]) for k, v in found.groupdict().items()}}
+    return {"id": None, "text": text}
+
+
+def _indicators_2_to_3(indicators: object) -> object:
+    """Returns schema-2 indicators in schema 3: the balance indicator's missing a Reason."""
+    if isinstance(indicators, dict) and isinstance(indicators.get("balance"), dict):
+        balance = indicators["balance"]
+        return {**indicators, "balance": {**balance, "missing": reason_of_text(balance.get("missing"))}}
+    return indicators
+
+
+def _upgrade_2_to_3(doc: dict[str, Any]) -> dict[str, Any]:
+    """Returns a schema-2 document in schema 3 (module doc): each reason text a Reason."""
+    out = dict(doc)
+    if isinstance(out.get("quality"), dict) and isinstance(out["quality"].get("reasons"), list):
+        out["quality"] = {**out["quality"], "reasons": [reason_of_text(r) for r in out["quality"]["reasons"]]}
+    withheld = out.get("range_of_motion_95_withheld")
+    if isinstance(withheld, dict):
+        out["range_of_motion_95_withheld"] = {k: reason_of_text(v) for k, v in withheld.items()}
+    out["balance_missing"] = reason_of_text(out.get("balance_missing"))
+    if "indicators" in out:
+        out["indicators"] = _indicators_2_to_3(out["indicators"])
+    out["schema_version"] = 3
+    return out
+
+
 def upgrade(doc: dict[str, Any]) -> dict[str, Any]:
     """Returns a stored document (JSON object) in today's schema; raises UnreadableDocument for an unknown version."""
     version = doc.get("schema_version", 1)
@@ -244,6 +313,8 @@ def upgrade(doc: dict[str, Any]) -> dict[str, Any]:
         raise UnreadableDocument(f"unknown analysis document schema_version {version!r} (1..{SCHEMA_VERSION} known)")
     if version == 1:
         doc = _upgrade_1_to_2(doc)
+    if version <= 2:
+        doc = _upgrade_2_to_3(doc)
     return doc
 
 
@@ -270,7 +341,7 @@ def read_indicators(stored: object) -> Indicators | None:
     if not isinstance(stored, dict):
         return None
     try:
-        return Indicators.model_validate(_indicators_1_to_2(stored))
+        return Indicators.model_validate(_indicators_2_to_3(_indicators_1_to_2(stored)))
     except ValidationError:
         return None
 

@@ -55,7 +55,7 @@ def store_session(
     return row
 
 
-TODAY = Path(__file__).parents[1] / "kinect_agent" / "analysis" / "documents" / "schema2.json"
+TODAY = Path(__file__).parents[1] / "kinect_agent" / "analysis" / "documents" / "schema3.json"
 
 
 def document(*, reps: int, rom: float | None, quality_ok: bool, exercise: str = "shoulder_abduction") -> dict:
@@ -63,7 +63,7 @@ def document(*, reps: int, rom: float | None, quality_ok: bool, exercise: str = 
     rom / 2, the other indicators have no score."""
     doc = json.loads(TODAY.read_text(encoding="utf-8"))
     doc |= {"exercise": exercise, "repetitions": reps, "rom_deg": rom}
-    doc["quality"] |= {"ok": quality_ok, "reasons": [] if quality_ok else ["test: not ok"]}
+    doc["quality"] |= {"ok": quality_ok, "reasons": [] if quality_ok else [{"id": None, "text": "test: not ok"}]}
     for name, item in doc["indicators"].items():
         item["score"] = None if rom is None or name != "flexibility" else rom / 2
     doc["indicators"]["flexibility"] |= {"value": rom, "basis": "test"}

@@ -190,7 +190,9 @@ def test_detail_shows_the_95_percent_intervals_of_an_agent_made_file(client, upl
     assert (stored["range_of_motion_95"][defining] or {}).get("max_deg") == unc["angles"][defining]["max_ci95"], (
         "the intervals are stored with the session's metrics at ingest"
     )
-    assert stored["range_of_motion_95_withheld"].get(defining) == unc["angles"][defining]["withheld"]
+    withheld = stored["range_of_motion_95_withheld"].get(defining)  # the same reason, written for the same reader
+    assert withheld == unc["angles"][defining]["withheld_reason"], f"seed {seed}"
+    assert (withheld or {}).get("text") == unc["angles"][defining]["withheld"], f"seed {seed}"
 
 
 def test_a_file_without_angle_sds_has_no_intervals(client, upload, auth_headers):

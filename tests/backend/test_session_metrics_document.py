@@ -22,8 +22,29 @@ def test_the_api_returns_the_stored_document_unchanged(client, db_session, uploa
     assert stored["schema_version"] == SCHEMA_VERSION and list(stored) == ["schema_version", *list(stored)[1:]]
     response = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(therapist))
     assert response.status_code == 200, response.text
-    assert json.dumps(response.json()["metrics"]) == json.dumps(stored)  # same keys, order and numbers
+    metrics, texts = _without_reason_texts(response.json()["metrics"])
+    assert json.dumps(metrics) == json.dumps(stored)  # same keys, order and numbers; reasons' texts added
+    assert texts and all(isinstance(t, str) and t for t in texts), "each reason in words (English: the therapist's)"
     assert set(stored) == set(AnalysisDocument.model_fields)
+
+
+def _without_reason_texts(metrics: dict) -> tuple[dict, list]:
+    """Returns the metrics with the text of every reason None (as stored), and the texts."""
+    texts: list = []
+
+    def plain(reason: dict) -> dict:
+        texts.append(reason["text"])
+        return reason | {"text": None}
+
+    out = dict(metrics)
+    out["quality"] = out["quality"] | {"reasons": [plain(r) for r in out["quality"]["reasons"]]}
+    withheld = out["range_of_motion_95_withheld"]
+    out["range_of_motion_95_withheld"] = None if withheld is None else {k: plain(v) for k, v in withheld.items()}
+    out["balance_missing"] = None if out["balance_missing"] is None else plain(out["balance_missing"])
+    missing = out["indicators"]["balance"]["missing"]
+    if missing is not None:
+        out["indicators"] = out["indicators"] | {"balance": out["indicators"]["balance"] | {"missing": plain(missing)}}
+    return out, texts
 
 
 def test_a_document_stored_before_schema_versions_is_returned_upgraded(
@@ -53,6 +74,18 @@ def test_progress_reads_the_indicators_of_an_older_document(client, make_user, a
     assert indicators["balance"] == older["indicators"]["balance"] | {"interval": None, "missing": None}
 
 
+def test_progress_says_why_balance_is_missing_in_the_readers_language(client, make_user, auth_headers, exercise, store):
+    english = json.loads((DOCUMENTS / "schema2.json").read_text(encoding="utf-8"))  # before reason ids
+    english["indicators"]["balance"] |= {"missing": "the recording is too short", "score": None, "value": None}
+    patient = make_user("patient")
+    store(patient, exercise, T0, doc=english)
+    response = client.get(f"/api/v1/patients/{patient.id}/progress", headers=auth_headers(patient) | {
+        "Accept-Language": "fr"})  # fmt: skip
+    assert response.status_code == 200, response.text
+    assert response.json()["points"][0]["indicators"]["balance"]["missing"] == {
+        "id": "recording_too_short", "params": {}, "text": "l’enregistrement est trop court"}  # fmt: skip
+
+
 def test_openapi_describes_the_metrics_document(client):
     schemas = client.get("/openapi.json").json()["components"]["schemas"]
     metrics = schemas["SessionOut"]["properties"]["metrics"]
@@ -62,3 +95,17 @@ def test_openapi_describes_the_metrics_document(client):
     assert document["properties"]["duration_s"]["description"].startswith("recording length, s")
     progress = schemas["ProgressPoint"]["properties"]["indicators"]
     assert {"$ref": "#/components/schemas/Indicators"} in progress["anyOf"]
+
+
+def test_a_stored_reason_id_no_message_has_is_named_not_hidden(client, make_user, auth_headers, exercise, store):
+    today = json.loads((DOCUMENTS / "schema3.json").read_text(encoding="utf-8"))
+    today["quality"] |= {"ok": False, "reasons": [{"id": "too_blurry", "params": {}, "text": None}]}
+    patient = make_user("patient")
+    row = store(patient, exercise, T0, doc=today)
+    headers = auth_headers(patient)
+    listed = client.get(f"/api/v1/patients/{patient.id}/progress", headers=headers)
+    assert listed.status_code == 200 and listed.json()["points"][0]["indicators"] is not None, "the rest still reads"
+    response = client.get(f"/api/v1/sessions/{row.id}", headers=headers)
+    assert response.status_code == 500, response.text
+    assert response.json()["error"] == "MetricsUnreadable"
+    assert "quality.reasons.0" in response.json()["detail"] and "'too_blurry'" in response.json()["detail"]

@@ -14,7 +14,7 @@ from backend.i18n import Translator, translator
 from backend.i18n.catalogues import marks_in_template_literals
 from backend.sessions import detail
 from kinect_agent.analysis.validity import REASONS
-from tests.backend.khs_files import make_khs_at_distance
+from tests.backend.khs_files import make_khs_at_distance, make_processed_khs
 from tests.catalogue_copies import copy_with_therapist_catalogues
 
 SEEDS = (1, 2)
@@ -152,64 +152,120 @@ def test_every_angle_has_words_in_every_language(locale):
     assert len(set(words)) == len(words) and not set(words) & {angle_label(n) for n in ANGLE_NAMES}, words
 
 
-def test_a_patient_reads_the_analysis_reasons_of_the_metrics_document_in_their_language(
+def _english_document(document: dict) -> dict:
+    """Returns a stored document as the server stored it before reason ids (schema 2, English texts): a failed
+    quality check (one reason an analysis of before the catalogue wrote, matching no message), a withheld interval
+    and balance not measured."""
+    doc = dict(document) | {"schema_version": 2}
+    doc["quality"] = doc["quality"] | {
+        "ok": False,
+        "reasons": ["the body was tracked in 46% of the samples (at least 60% needed)", OLDER_TEXT],
+    }
+    doc["range_of_motion_95_withheld"] = {"knee_flexion_L": "the joints of this angle were tracked in only 52% of the "
+                                          "frames"}  # fmt: skip
+    doc["balance"], doc["balance_missing"] = None, "the patient was seated or crouching: balance is measured while " \
+        "standing"  # fmt: skip
+    doc["indicators"] = doc["indicators"] | {"balance": doc["indicators"]["balance"] | {
+        "missing": doc["balance_missing"], "value": None, "score": None}}  # fmt: skip
+    return doc
+
+
+OLDER_TEXT = "an analysis of 2026-11-20 wrote this"
+
+
+def test_a_new_document_stores_its_reasons_as_ids_and_numbers_and_the_detail_writes_them(
     client, db_session, upload, auth_headers
 ):
     from sqlalchemy import select
 
-    from backend.analysis import reasons
+    from backend.sessions.models import SessionMetric
+
+    khs = make_processed_khs("seated_knee_extension", 3, seed=3)
+    session_id, patient, _ = upload(khs, "seated_knee_extension")
+    stored = db_session.scalar(select(SessionMetric.document).where(SessionMetric.session_id == session_id))
+    assert stored["schema_version"] == 3
+    not_standing = {"id": "not_standing", "params": {}, "text": None}
+    assert stored["balance_missing"] == stored["indicators"]["balance"]["missing"] == not_standing
+    found = [*stored["quality"]["reasons"], *(stored["range_of_motion_95_withheld"] or {}).values()]
+    assert all(set(r) == {"id", "params", "text"} and r["id"] and r["text"] is None for r in found), found
+    patient.locale = "de"
+    db_session.flush()
+    body = _detail(client, session_id, auth_headers(patient))
+    standing = "es wurde im Sitzen oder in der Hocke geübt: das Gleichgewicht wird im Stehen gemessen"
+    assert body["balance_missing"] == standing
+    assert body["balance_missing_reason"] == not_standing | {"text": standing}
+
+
+def test_a_patient_reads_the_analysis_reasons_of_an_older_english_document_in_their_language(
+    client, db_session, upload, auth_headers
+):
+    from sqlalchemy import select
+
     from backend.sessions.models import SessionMetric
 
     session_id, patient, therapist = upload(make_khs_at_distance(seed=1), "squat")
     metric = db_session.scalar(select(SessionMetric).where(SessionMetric.session_id == session_id))
-    doc = dict(metric.document)  # as the analysis stores them: English
-    doc["quality"] = doc["quality"] | {
-        "ok": False,
-        "reasons": [reasons.TOO_LITTLE_TRACKED.english(tracked=0.456, needed=0.6)],
-    }
-    doc["range_of_motion_95_withheld"] = {"knee_flexion_L": reasons.JOINTS_UNTRACKED.english(tracked=0.52)}
-    doc["balance"], doc["balance_missing"] = None, reasons.NOT_STANDING.english()
-    doc["indicators"] = doc["indicators"] | {"balance": doc["indicators"]["balance"] | {
-        "missing": reasons.NOT_STANDING.english(), "value": None, "score": None}}  # fmt: skip
-    metric.document = doc
+    metric.document = doc = _english_document(metric.document)
     patient.locale = "de"
     db_session.flush()
     german = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient)).json()["metrics"]
-    tracked = "der Körper wurde in 46\u00a0% der Messungen erfasst (mindestens 60\u00a0% nötig)"
-    assert german["quality"]["reasons"] == [tracked]
-    assert german["range_of_motion_95_withheld"] == {
-        "knee_flexion_L": "die Gelenke dieses Winkels wurden nur in 52\u00a0% der Bilder erfasst"
-    }
+    assert german["schema_version"] == 3, "upgraded when read"
+    assert german["quality"]["reasons"] == [
+        {"id": "too_little_tracked", "params": {"tracked": 0.46, "needed": 0.6},
+         "text": "der Körper wurde in 46\u00a0% der Messungen erfasst (mindestens 60\u00a0% nötig)"},
+        {"id": None, "params": {}, "text": OLDER_TEXT},
+    ]  # fmt: skip
+    assert german["range_of_motion_95_withheld"] == {"knee_flexion_L": {
+        "id": "joints_untracked", "params": {"tracked": 0.52},
+        "text": "die Gelenke dieses Winkels wurden nur in 52\u00a0% der Bilder erfasst"}}  # fmt: skip
     standing = "es wurde im Sitzen oder in der Hocke geübt: das Gleichgewicht wird im Stehen gemessen"
-    assert german["balance_missing"] == german["indicators"]["balance"]["missing"] == standing
+    assert german["balance_missing"] == german["indicators"]["balance"]["missing"] == {
+        "id": "not_standing", "params": {}, "text": standing}  # fmt: skip
     french = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient) | {"Accept-Language": "fr"})
-    assert french.json()["metrics"]["quality"]["reasons"] == [
-        "le corps a été suivi dans 46\u00a0% des mesures (il en faut au moins 60\u00a0%)"
-    ]
+    assert [r["text"] for r in french.json()["metrics"]["quality"]["reasons"]] == [
+        "le corps a été suivi dans 46\u00a0% des mesures (il en faut au moins 60\u00a0%)", OLDER_TEXT]  # fmt: skip
+    spanish = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient) | {"Accept-Language": "es"})
+    assert spanish.json()["metrics"]["balance_missing"]["text"] == (
+        "el ejercicio se hizo en posición sentada o agachada: el equilibrio se mide de pie")  # fmt: skip
     clinic = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(therapist)).json()["metrics"]
-    assert clinic["quality"]["reasons"] == doc["quality"]["reasons"], "the therapist pages read English today"
-    assert metric.document["quality"]["reasons"] == doc["quality"]["reasons"], "the stored document stays English"
+    assert [r["text"] for r in clinic["quality"]["reasons"]] == doc["quality"]["reasons"], "English, as it was stored"
+    db_session.refresh(metric)
+    assert metric.document == doc, "reading upgrades the answer, not the stored document"
 
 
 def test_the_session_detail_says_the_analysis_reasons_in_the_readers_language():
-    from backend.analysis import reasons
+    from kinect_agent.analysis import reasons as why
 
+    gaps, still = why.GAPS.reason().model_dump(), why.NEVER_STILL.reason(seconds=2).model_dump()
+    plane = why.OUT_OF_PLANE.reason(defined=0.41).model_dump()
+    older = {"id": None, "params": {}, "text": OLDER_TEXT}
     body = {"curves": [], "error": None, "uncertainty_note": detail.NO_UNCERTAINTY_NOTE,
-            "balance_missing": reasons.NEVER_STILL.english(seconds=2),
-            "quality": {"parts": [], "advice": [], "analysis_reasons": [reasons.GAPS.english()]},
-            "uncertainty": {"angles": {"knee_flexion_L": {"withheld": reasons.OUT_OF_PLANE.english(defined=0.41)}}},
+            "balance_missing": "in English", "balance_missing_reason": still,
+            "quality": {"parts": [], "advice": [], "analysis_reasons": ["in English", OLDER_TEXT],
+                        "analysis_reason_items": [gaps, older]},
+            "uncertainty": {"angles": {"knee_flexion_L": {"withheld": "in English", "withheld_reason": plane},
+                                       "knee_flexion_R": {"withheld": None, "withheld_reason": None}}},
             "validity": {"metrics": [{"name": "rom", "reason": detail.VALIDITY_REASONS[2]}]}}  # fmt: skip
     shown = detail.in_language(body, translator("es"))
-    assert shown["quality"]["analysis_reasons"] == ["faltan datos en las posiciones medidas"]
+    assert shown["quality"]["analysis_reasons"] == ["faltan datos en las posiciones medidas", OLDER_TEXT]
+    assert shown["quality"]["analysis_reason_items"] == [
+        gaps | {"text": "faltan datos en las posiciones medidas"}, older]  # fmt: skip
     assert shown["balance_missing"].startswith("no hubo en total 2 s de pie sin moverse")
-    assert shown["uncertainty"]["angles"]["knee_flexion_L"]["withheld"] == (
-        "el ángulo solo está definido en el 41\u00a0% de las imágenes (el brazo o la pierna salió de su plano)"
-    )
+    assert shown["balance_missing_reason"] == still | {"params": {"seconds": 2.0}, "text": shown["balance_missing"]}
+    withheld = "el ángulo solo está definido en el 41\u00a0% de las imágenes (el brazo o la pierna salió de su plano)"
+    assert shown["uncertainty"]["angles"]["knee_flexion_L"] == {
+        "withheld": withheld,
+        "withheld_reason": plane | {"text": withheld},
+    }
+    assert shown["uncertainty"]["angles"]["knee_flexion_R"] == {"withheld": None, "withheld_reason": None}
     assert shown["uncertainty_note"].startswith("El archivo de la sesión no guarda la incertidumbre")
     assert shown["validity"]["metrics"][0]["reason"] == (
         "En la imagen de una cámara no se ve un giro del brazo sobre su propio eje."
     )
-    assert body["quality"]["analysis_reasons"] == ["the measured positions have gaps"], "the stored body is kept"
+    english = detail.in_language(body, translator("en"))
+    assert english["quality"]["analysis_reasons"] == ["the measured positions have gaps", OLDER_TEXT]
+    assert english["balance_missing"].startswith("the patient never stood still with both feet down for 2 s")
+    assert body["quality"]["analysis_reasons"] == ["in English", OLDER_TEXT], "the stored body is kept"
 
 
 def test_a_patient_reads_why_a_session_failed_in_their_language(client, db_session, upload, auth_headers):

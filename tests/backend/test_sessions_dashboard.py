@@ -9,6 +9,7 @@ from sqlalchemy import event
 
 from backend.database import utcnow
 from backend.exercises.library import EXERCISES
+from backend.i18n import Translator
 from backend.plans.models import Plan, PlanItem
 from backend.sessions import dashboard, triage
 from backend.suggestions.models import Suggestion
@@ -376,9 +377,9 @@ def test_dashboard_queries_do_not_grow_with_patients(client, db_session, make_us
     assert count_selects() == few
 
 
-def test_missing_balance_gives_the_analysis_reason(db_session, make_user, exercise, store):
+def test_missing_balance_gives_the_analysis_reason_in_the_readers_language(db_session, make_user, exercise, store):
     patient = make_user("patient")
-    why = "the patient was seated or crouching: balance is measured while standing"
+    why = {"id": "not_standing", "params": {}, "text": None}  # as schema 3 stores it
     doc = document(reps=5, rom=50.0, quality_ok=True, exercise=exercise.slug) | {
         "balance": None,
         "balance_missing": why,
@@ -386,7 +387,15 @@ def test_missing_balance_gives_the_analysis_reason(db_session, make_user, exerci
     doc["indicators"]["balance"] |= {"score": None, "value": None, "interval": None, "missing": why}
     store(patient, exercise, THURSDAY_NOON - dt.timedelta(hours=1), doc=doc)
     name = triage._name(exercise.slug)  # the library's name, as the triage reasons say it
-    assert _summary(db_session, patient)["balance_missing"] == f"Not measured ({name}): {why}"
+    english = "the patient was seated or crouching: balance is measured while standing"
+    summary = _summary(db_session, patient)
+    assert summary["balance_missing"] == f"Not measured ({name}): {english}"
+    assert summary["latest_indicators"].balance.missing.text == english
+    german = dashboard.summaries(db_session=db_session, patient_ids=[patient.id], now=THURSDAY_NOON,
+                                 t=Translator("de", therapist=True))[patient.id]  # fmt: skip
+    said = "es wurde im Sitzen oder in der Hocke geübt: das Gleichgewicht wird im Stehen gemessen"
+    assert german["balance_missing"].endswith(f": {said}"), "the analysis' reason in the messages' German"
+    assert german["latest_indicators"].balance.missing.text == said
 
 
 def test_advice_to_review_alone_does_not_make_a_patient_soon(db_session, make_patient_with_therapist, exercise, store):

@@ -114,7 +114,7 @@ def test_rom_drop_needs_three_baseline_sessions():
 
 
 def test_rom_drop_ignores_sessions_older_than_four_weeks_and_poor_quality():
-    bad = {"ok": False, "tracked_fraction": 0.5, "outlier_fraction": 0.0, "reasons": ["x"]}
+    bad = {"ok": False, "tracked_fraction": 0.5, "outlier_fraction": 0.0, "reasons": [{"id": None, "text": "x"}]}
     history = [_past(40, rom_deg=200.0), _past(20, rom_deg=200.0, quality=bad), *_rom_history(80.0)]
     assert rules.ROM_DROP in _eval(_doc(rom_deg=67.9), history=history)
     assert rules.ROM_DROP not in _eval(_doc(rom_deg=68.0), history=history)
@@ -152,7 +152,12 @@ def test_too_fast_silent_without_tempo():
 
 
 def _quality(ok=False, tracked=0.99, outliers=0.0):
-    return {"ok": ok, "tracked_fraction": tracked, "outlier_fraction": outliers, "reasons": ["analysis reason"]}
+    return {
+        "ok": ok,
+        "tracked_fraction": tracked,
+        "outlier_fraction": outliers,
+        "reasons": [{"id": None, "text": "analysis reason"}],
+    }
 
 
 def test_poor_quality_low_tracking_asks_to_step_into_view():

@@ -3,7 +3,8 @@
 numbers), and the session page of a therapist whose browser asks for one of them once the therapist pages have a
 catalogue in that language (a second server on the same database with COACH_LOCALE_DIR: the shipped catalogues plus
 a therapist.po per language translating a few headings): the server's texts a patient also reads (quality labels,
-notes, camera advice, the curves' angle names and kinds) come from the shipped catalogues. Screenshots in
+notes, camera advice, the curves' angle names and kinds, the analysis' reasons written from their ids) come from the
+shipped catalogues. Screenshots in
 /tmp/shots, axe-core 0 serious/critical, no sideways scrolling."""
 
 from __future__ import annotations
@@ -16,7 +17,9 @@ from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
 from backend.demo import DEMO_PASSWORD
-from tests.backend.khs_files import make_khs_at_distance
+from backend.i18n import translator
+from kinect_agent.analysis import reasons
+from tests.backend.khs_files import make_khs_at_distance, make_processed_khs
 from tests.catalogue_copies import copy_with_therapist_catalogues
 from tests.frontend.conftest import (
     THERAPIST,
@@ -165,4 +168,27 @@ def test_the_therapist_sees_the_session_page_in_their_language(browser, translat
         shot(page, f"session_{locale}_{width}")
         assert not _serious(page), f"axe-core on the {locale} session page at {width} px"
         _fits(page)
+        assert not page.js_errors, page.js_errors
+
+
+@pytest.fixture(scope="module")
+def seated(live_server, readers):
+    """{locale: session id}: a seated set of each language's patient (balance not measured: not_standing)."""
+    data = make_processed_khs("seated_knee_extension", 3, seed=3)
+    return {locale: upload_session(live_server.url, email, "seated_knee_extension", 3, seed=3, data=data)["id"]
+            for locale, (email, _) in readers.items()}  # fmt: skip
+
+
+@pytest.mark.parametrize("locale", ["de", "es", "fr"])
+def test_the_session_page_says_why_balance_was_not_measured_in_the_readers_language(
+    browser, translated_server, seated, locale
+):
+    said = translator(locale).gettext(reasons.NOT_STANDING.message)
+    assert said != reasons.NOT_STANDING.message, "the shipped catalogue translates it"
+    with open_page(browser, translated_server, 1366, HEIGHT[1366], locale=f"{locale}-{locale.upper()}") as page:
+        sign_in(page, THERAPIST)
+        page.goto(f"/therapist/sessions/{seated[locale]}")
+        expect(page.locator("html")).to_have_attribute("lang", locale)
+        expect(page.locator(".stat .reasons", has_text=said)).to_have_count(1, timeout=60_000)
+        shot(page, f"session_seated_{locale}_1366")
         assert not page.js_errors, page.js_errors

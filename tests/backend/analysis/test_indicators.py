@@ -59,7 +59,7 @@ def test_seated_session_has_no_balance_score() -> None:
     doc = _doc("elbow_flexion", 3, pose="sitting")
     out = indicators(doc, exercise=EXERCISES["elbow_flexion"], target_reps=3, history=[])
     assert out["balance"]["score"] is None and out["balance"]["quality_ok"] is False
-    assert out["balance"]["missing"].startswith("the patient was seated")
+    assert out["balance"]["missing"] == {"id": "not_standing", "params": {}, "text": None}
 
 
 def test_document_of_another_exercise_is_refused() -> None:

@@ -9,6 +9,7 @@ from backend.analysis import intervals
 from backend.exercises.library import EXERCISES
 from kinect_agent.analysis import series
 from kinect_agent.analysis.angles import counting_angles
+from kinect_agent.analysis.reasons import Reason
 from kinect_agent.body.angles import joint_angles
 from kinect_agent.processing.pipeline import process
 from kinect_agent.sources.simulator import simulate
@@ -180,10 +181,14 @@ def test_withheld_intervals_say_why():
     iv = intervals.angle_intervals(t, x, sd, name, yaw_deg=0.0)
     assert intervals.withheld_reason(name, x, iv) is None
     wide = intervals.angle_intervals(t, x, np.full_like(t, 30.0), name, yaw_deg=0.0)
-    assert "too uncertain" in intervals.withheld_reason(name, x, wide)
-    assert "tracked in only 50%" in intervals.withheld_reason(name, x, iv, tracked_fraction=0.5)
+    too_wide = intervals.withheld_reason(name, x, wide)
+    assert too_wide is not None and too_wide.id == "too_uncertain" and too_wide.params["width"] > 60, too_wide
+    assert intervals.withheld_reason(name, x, iv, tracked_fraction=0.5) == Reason(
+        id="joints_untracked", params={"tracked": 0.5})  # fmt: skip
     gappy = np.where(np.arange(t.size) % 3 == 0, x, np.nan)
-    assert "defined in only 33%" in intervals.withheld_reason(name, gappy, iv)
-    assert "undefined while the elbow is straight" in intervals.withheld_reason("shoulder_rotation_L", x, None)
+    defined = intervals.withheld_reason(name, gappy, iv)
+    assert defined is not None and defined.id == "out_of_plane", defined
+    assert defined.params["defined"] == pytest.approx(1 / 3, abs=0.01), defined
+    assert intervals.withheld_reason("shoulder_rotation_L", x, None) == Reason(id="rotation_undefined")
     shown = intervals.rom_intervals(t, {name: x}, {name: np.full_like(t, 30.0)}, np.full((t.size, 20, 3), np.nan))
-    assert shown.intervals == {name: None} and "too uncertain" in shown.withheld[name]
+    assert shown.intervals == {name: None} and shown.withheld[name].id == "too_uncertain"

@@ -12,6 +12,7 @@ import pytest
 
 from backend import cli
 from backend.analysis.errors import UnknownExercise, UnreadableRecording
+from backend.analysis.quality import MIN_TRACKED
 from backend.analysis.report import analyze_file, analyze_recording
 from backend.exercises.library import EXERCISES
 from kinect_agent import formats
@@ -89,7 +90,8 @@ def test_poorly_tracked_recording_is_flagged() -> None:
     rec = Recording.from_positions(truth.t, positions, truth.meta)
     q = analyze_recording(rec, EXERCISES["squat"]).model_dump(mode="json")["quality"]
     assert q["ok"] is False and q["tracked_fraction"] < 0.8
-    assert any("tracked" in r for r in q["reasons"])
+    assert [r["id"] for r in q["reasons"]] == ["too_little_tracked"], q["reasons"]
+    assert q["reasons"][0]["params"] == {"tracked": q["tracked_fraction"], "needed": MIN_TRACKED}
 
 
 def test_ten_minutes_at_30_hz_analyse_fast() -> None:

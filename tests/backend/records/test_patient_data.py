@@ -193,3 +193,26 @@ def test_the_archive_holds_replaced_metrics_settings_camera_sets_and_reminders(c
     readme = z.read("README.txt").decode()
     assert all(name in readme for name in ("metrics_earlier", "settings.json", "camera_sets.json", "reminders.json"))
     assert "Archive format version 3" in readme
+
+
+def test_the_archive_writes_the_analysis_reasons_in_the_patients_language(client, db_session, make_user, auth_headers,
+                                                                           exercise, store):  # fmt: skip
+    import datetime as dt
+    from pathlib import Path
+
+    documents = Path(__file__).parents[2] / "kinect_agent" / "analysis" / "documents"
+    english = json.loads((documents / "schema2.json").read_text(encoding="utf-8"))  # before reason ids
+    english["quality"] |= {"ok": False, "reasons": ["the measured positions have gaps", "an older analysis's words"]}
+    patient = make_user("patient")
+    patient.locale = "es"
+    store(patient, exercise, dt.datetime(2026, 11, 2, 9, 0, tzinfo=dt.UTC), doc=english)
+    db_session.flush()
+    response = client.get(f"/api/v1/patients/{patient.id}/archive", headers=auth_headers(patient))
+    assert response.status_code == 200, response.text
+    (session,) = json.loads(zipfile.ZipFile(io.BytesIO(response.content)).read("sessions.json"))
+    assert session["metrics"]["quality"]["reasons"] == [
+        {"id": "gaps", "params": {}, "text": "faltan datos en las posiciones medidas"},
+        {"id": None, "params": {}, "text": "an older analysis's words"},
+    ]
+    withheld = session["metrics"]["range_of_motion_95_withheld"]["shoulder_abduction_L"]
+    assert withheld["id"] == "too_uncertain" and "218°" in withheld["text"] and "abarcaría" in withheld["text"]

@@ -2,7 +2,9 @@
 
 documents/ holds one stored document of each shape the server has written (backend/analysis/report.py's history):
 schema1_2026-11-23 (01f63ce: the first metrics), schema1_2026-11-25 (c83a249: + 95 % intervals),
-schema1_2026-11-27 (b6dadc9 + d8eeccf: + balance in standing phases, analysis version) and schema2 (today).
+schema1_2026-11-27 (b6dadc9 + d8eeccf: + balance in standing phases, analysis version), schema2 (4bb313d: the
+reasons in English words) and schema3 (today: schema2 as today's analysis writes it, each reason a message id and its
+numbers).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from typing import Any
 import pytest
 from pydantic import ValidationError
 
+from kinect_agent.analysis import reasons
 from kinect_agent.analysis.document import (
     SCHEMA_VERSION,
     AnalysisDocument,
@@ -23,10 +26,13 @@ from kinect_agent.analysis.document import (
     read_if_readable,
     read_indicators,
     read_report,
+    reason_of_text,
 )
+from kinect_agent.analysis.reasons import Reason
 
 DOCUMENTS = Path(__file__).parent / "documents"
 OLDER = ["schema1_2026-11-23", "schema1_2026-11-25", "schema1_2026-11-27"]
+TODAY = "schema3"
 
 
 def _stored(name: str) -> dict[str, Any]:
@@ -34,9 +40,9 @@ def _stored(name: str) -> dict[str, Any]:
 
 
 def test_todays_document_reads_back_to_the_same_json() -> None:
-    stored = _stored("schema2")
+    stored = _stored(TODAY)
     doc = read_document(stored)
-    assert doc.schema_version == SCHEMA_VERSION == 2
+    assert doc.schema_version == SCHEMA_VERSION == 3
     assert json.dumps(doc.model_dump(mode="json")) == json.dumps(stored)  # same keys, same order, same numbers
 
 
@@ -81,26 +87,26 @@ def test_the_balance_shape_keeps_its_intervals_and_version() -> None:
 
 
 def test_a_report_without_indicators_reads_as_a_report() -> None:
-    stored = {k: v for k, v in _stored("schema2").items() if k not in ("indicators", "analysis_version")}
+    stored = {k: v for k, v in _stored(TODAY).items() if k not in ("indicators", "analysis_version")}
     report = read_report(stored | {"source": "session.khs"})  # `coach-server analyze --json` adds "source"
     assert type(report) is AnalysisReport and report.exercise == "shoulder_abduction"
     assert type(read_report(_stored("schema1_2026-11-23"))) is AnalysisDocument
 
 
 def test_an_unknown_schema_version_is_refused_by_name() -> None:
-    with pytest.raises(UnreadableDocument, match="schema_version 3"):
-        read_document(_stored("schema2") | {"schema_version": 3})
+    with pytest.raises(UnreadableDocument, match="schema_version 4"):
+        read_document(_stored(TODAY) | {"schema_version": 4})
 
 
 def test_a_document_missing_a_key_of_its_version_is_refused() -> None:
-    stored = _stored("schema2")
+    stored = _stored(TODAY)
     del stored["peak_end"]
     with pytest.raises(ValidationError, match="peak_end"):
         read_document(stored)
 
 
 def test_an_unknown_key_is_refused() -> None:
-    stored = _stored("schema2")
+    stored = _stored(TODAY)
     stored["quality"]["score"] = 3
     with pytest.raises(ValidationError, match="quality.score"):
         read_document(stored)
@@ -124,3 +130,93 @@ def test_the_openapi_schema_describes_every_field() -> None:
     assert set(schema["required"]) >= set(AnalysisDocument.model_fields) - {"schema_version"}
     assert "degrees" in schema["properties"]["rom_deg"]["description"]
     assert schema["$defs"]["Balance"]["properties"]["sway_velocity_m_s"]["description"].endswith("m/s")
+
+
+# one English text per reason as schema 1 and 2 stored it (backend/analysis before 83dc753 wrote the same words),
+# with the id and numbers schema 3 reads it as
+# fmt: off
+ENGLISH = {
+    "only 12 frames (at least 30 needed)": ("too_few_frames", {"frames": 12, "needed": 30}),
+    "only 1.2 s recorded (at least 3 s needed)": ("too_short", {"seconds": 1.2, "needed": 3.0}),
+    "the body was tracked in 46% of the samples (at least 60% needed)":
+        ("too_little_tracked", {"tracked": 0.46, "needed": 0.6}),
+    "35% of the samples were tracking errors (at most 20% allowed)":
+        ("too_many_errors", {"errors": 0.35, "allowed": 0.2}),
+    "the measured positions have gaps": ("gaps", {}),
+    "shoulder rotation is undefined while the elbow is straight, so it has no interval": ("rotation_undefined", {}),
+    "the angle is defined in only 41% of the frames (the limb was out of its plane)":
+        ("out_of_plane", {"defined": 0.41}),
+    "the joints of this angle were tracked in only 52% of the frames": ("joints_untracked", {"tracked": 0.52}),
+    "the angle or its uncertainty is unknown in every frame, or it spun through a full turn": ("unknown_angle", {}),
+    "the tracking is too uncertain: a 95 % interval would span 74° (at most 60° is shown)":
+        ("too_uncertain", {"width": 74.0, "most": 60.0}),
+    "the recording is too short": ("recording_too_short", {}),
+    "the patient was seated or crouching: balance is measured while standing": ("not_standing", {}),
+    "the patient never stood still with both feet down for 2.5 s in total (steps, a raised leg or a bent trunk do not "
+    "count)": ("never_still", {"seconds": 2.5}),
+}
+# fmt: on
+
+
+def test_every_english_reason_upgrades_to_its_id_and_numbers() -> None:
+    assert {id_ for id_, _ in ENGLISH.values()} == set(reasons.BY_ID), "one example per message"
+    for text, (id_, params) in ENGLISH.items():
+        reason = Reason.model_validate(reason_of_text(text))
+        assert (reason.id, reason.params, reason.text) == (id_, params, None), text
+        assert all(type(v) is int for v in reason.params.values()) == (id_ == "too_few_frames" or not params), reason
+
+
+def test_the_english_document_of_schema_2_reads_with_ids_and_its_other_values_unchanged() -> None:
+    stored = _stored("schema2")
+    doc = read_document(stored)
+    withheld = doc.range_of_motion_95_withheld
+    assert withheld is not None and withheld["shoulder_abduction_L"] == Reason(
+        id="too_uncertain", params={"width": 218, "most": 60})  # fmt: skip
+    assert withheld["shoulder_rotation_L"] == Reason(id="rotation_undefined")
+    dumped = doc.model_dump(mode="json")
+    assert dumped == _stored(TODAY), "schema 2 upgraded is today's document of the same session"
+
+
+def test_reasons_of_schema_2_in_every_place_upgrade_and_unknown_texts_stay_texts() -> None:
+    stored = _stored("schema2")
+    texts = list(ENGLISH)
+    older = "an analysis of 2026-11-20 wrote this"  # matches no message (nor does a reworded one)
+    stored["quality"] = stored["quality"] | {"ok": False, "reasons": [texts[2], older, texts[4]]}
+    stored["balance"], stored["balance_missing"] = None, texts[-1]
+    stored["indicators"]["balance"] |= {"missing": texts[11], "score": None, "value": None}
+    stored["range_of_motion_95_withheld"]["shoulder_abduction_L"] = texts[0].replace("frames", "images")
+    doc = read_document(stored)
+    assert [(r.id, r.params, r.text) for r in doc.quality.reasons] == [
+        ("too_little_tracked", {"tracked": 0.46, "needed": 0.6}, None),
+        (None, {}, older),
+        ("gaps", {}, None),
+    ]
+    assert doc.balance_missing == Reason(id="never_still", params={"seconds": 2.5})
+    assert doc.indicators.balance.missing == Reason(id="not_standing")
+    assert doc.range_of_motion_95_withheld is not None
+    kept = doc.range_of_motion_95_withheld["shoulder_abduction_L"]
+    assert kept.id is None and kept.text == "only 12 images (at least 30 needed)"
+    again = read_document(doc.model_dump(mode="json"))
+    assert again == doc, "a text reason is stored as a text in schema 3"
+
+
+def test_indicators_alone_of_schema_2_read_their_reason() -> None:
+    indicators = _stored("schema2")["indicators"]
+    indicators["balance"] |= {"missing": "the recording is too short", "score": None, "value": None}
+    read = read_indicators(indicators)
+    assert read is not None and read.balance.missing == Reason(id="recording_too_short")
+    assert read_indicators(read.model_dump(mode="json")) == read
+
+
+def test_an_unknown_reason_id_or_wrong_numbers_are_refused_by_name() -> None:
+    stored = _stored(TODAY)
+    stored["quality"]["reasons"] = [{"id": "too_blurry", "params": {}}]
+    with pytest.raises(ValidationError, match="unknown reason id 'too_blurry'"):
+        read_document(stored)
+    stored["quality"]["reasons"] = [{"id": "too_few_frames", "params": {"frames": 3}}]
+    with pytest.raises(ValidationError, match=r"reason 'too_few_frames' needs the numbers \['frames', 'needed'\]"):
+        read_document(stored)
+    stored["quality"]["reasons"] = [{"id": None, "params": {}}]
+    with pytest.raises(ValidationError, match="a reason without an id is a text"):
+        read_document(stored)
+    assert read_if_readable(stored) is None
