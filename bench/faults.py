@@ -96,7 +96,8 @@ class CuttingProxy:
     `cut` bytes of the request reached the server, "response" after the server's whole answer arrived here."""
 
     def __init__(self, server_port: int) -> None:
-        self.server_port, self.mode, self.cut = server_port, None, 0
+        self.server_port, self.cut = server_port, 0
+        self.mode: str | None = None
         self.sock = socket.create_server(("127.0.0.1", 0))
         self.port = self.sock.getsockname()[1]
         threading.Thread(target=self._accept, daemon=True).start()
@@ -154,7 +155,6 @@ class Bench:
         self.patient_id = self._pair()
         self.captured: dict[str, str] = {}  # session id -> exercise, of every set whose raw copy was on disk
         self.broken: set[str] = set()
-        self.rows = Counter()
 
     def _pair(self) -> int:
         from backend.devices.service import create_pairing_code
@@ -181,7 +181,7 @@ class Bench:
 
     # -- the agent -------------------------------------------------------------------------------------------
 
-    def agent(self, *args: str) -> subprocess.Popen:
+    def agent(self, *args: str) -> subprocess.Popen[str]:
         return subprocess.Popen([sys.executable, "-c", AGENT_SCRIPT, str(ROOT_DIR), *args], env=self.env,
                                 stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)  # fmt: skip
 
@@ -284,9 +284,9 @@ class Bench:
         config = load_config()
         queue = queue_module.SessionQueue(config.queue_dir)
         session_id, real = str(uuid.uuid4()), queue_module._write_durably
-        calls = []
+        calls: list[Path] = []
 
-        def full_disk(path, data):
+        def full_disk(path: Path, data: bytes) -> None:
             calls.append(path)
             if path.parent == queue.pending_dir:
                 raise OSError(errno.ENOSPC, "No space left on device", str(path))
@@ -395,7 +395,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     folder = Path(tempfile.mkdtemp(prefix="coach-faults-"))
     bench = Bench(f"sqlite:///{folder / 'faults.db'}", folder, args.seed)
-    per_kind: Counter = Counter()
+    per_kind: Counter[str] = Counter()
     started = time.perf_counter()
     try:
         for k in range(args.trials):

@@ -16,6 +16,7 @@ import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -37,7 +38,7 @@ from kinect_agent.recording import Recording  # noqa: E402
 
 
 @contextmanager
-def busy_cores(n: int):
+def busy_cores(n: int) -> Iterator[None]:
     """Runs n CPU-bound processes (a Python loop each) while the block runs; stops them after."""
     procs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(n)]
     try:
@@ -49,7 +50,7 @@ def busy_cores(n: int):
             proc.wait()
 
 
-def _time_steps(step, z: np.ndarray, repeats: int) -> float:
+def _time_steps(step: Callable[[np.ndarray], object], z: np.ndarray, repeats: int) -> float:
     """Returns the median seconds per step of step(z_t) over all frames of z, over `repeats` runs."""
     for frame in z[:5]:  # warm up (compiled kernels, caches)
         step(frame)
