@@ -63,7 +63,7 @@ def _time_steps(step: Callable[[np.ndarray], object], z: np.ndarray, repeats: in
     return statistics.median(runs)
 
 
-def ukf_step_comparison(rec: Recording, frames: int, repeats: int) -> dict:
+def ukf_step_comparison(rec: Recording, frames: int, repeats: int) -> dict[str, float]:
     """Times one predict+update of this UKF and of filterpy's UKF with the same chain model and data."""
     fit = ik.inverse_kinematics(rec.positions)
     x0 = np.concatenate([fit.root[0], fit.theta[0]])
@@ -94,7 +94,7 @@ def ukf_step_comparison(rec: Recording, frames: int, repeats: int) -> dict:
     return {"state_dim": n, "ours_ms": t_ours * 1e3, "filterpy_ms": t_theirs * 1e3, "speedup": t_theirs / t_ours}
 
 
-def whole_pipeline(rec: Recording, repeats: int) -> dict:
+def whole_pipeline(rec: Recording, repeats: int) -> dict[str, float | list[float]]:
     """Times pipeline.process on the whole recording (offline, default smoother)."""
     runs = []
     for _ in range(repeats):
@@ -104,7 +104,7 @@ def whole_pipeline(rec: Recording, repeats: int) -> dict:
     return {"frames": rec.n_frames, "minutes": rec.duration / 60.0, "median_s": statistics.median(runs), "runs_s": runs}
 
 
-def online_latency(rec: Recording) -> dict:
+def online_latency(rec: Recording) -> dict[str, float]:
     """Times every OnlineFilter.step after the first second; returns median and p99 in ms."""
     live = OnlineFilter()
     times = []

@@ -250,7 +250,7 @@ def fit_device_gain(cases: list[Case]) -> float:
     return float(np.ceil(np.quantile(need, TARGET) * 20.0) / 20.0)
 
 
-def device_study(device: str, reps: int) -> dict:
+def device_study(device: str, reps: int) -> dict[str, object]:
     """Fits DEVICE_GAIN[device] on its own training sessions and prints the held-out coverage with the shipped
     gain and with the fitted one; returns the numbers."""
     train = collect(MOTIONS, TRAIN_VIEWS, DEVICE_TRAIN_SEEDS, reps, device)
@@ -258,7 +258,7 @@ def device_study(device: str, reps: int) -> dict:
     gain = fit_device_gain(train)
     shipped = intervals.DEVICE_GAIN.get(device, 1.0)
     print(f"{device}: gain of b fitted on views {TRAIN_VIEWS}, seeds {DEVICE_TRAIN_SEEDS}: {gain} (shipped {shipped})")
-    report: dict = {"device": device, "fitted_gain": gain, "shipped_gain": shipped}
+    report: dict[str, object] = {"device": device, "fitted_gain": gain, "shipped_gain": shipped}
     for g in sorted({1.0, shipped, gain}):
         intervals.DEVICE_GAIN[device] = g
         for label, cases in (("train", train), ("held-out 0/30", test)):

@@ -319,7 +319,7 @@ def sf_formats() -> tuple[str, ...]:
     return FORMATS
 
 
-def print_table(db: str, rows: list[Measured], info: dict) -> None:
+def print_table(db: str, rows: list[Measured], info: dict[str, float]) -> None:
     """Prints one database's rows."""
     print(f"\nWorst accepted file, db {db}: {info['n_frames']} frames, {info['duration_s']:.0f} s, "
           f"{info['file_mib']:.1f} MiB")  # fmt: skip
@@ -359,7 +359,7 @@ def main() -> int:
     file_frames, file_duration_s = decoded.raw.n_frames, decoded.raw.duration
     info = {"n_frames": file_frames, "duration_s": file_duration_s, "file_mib": len(data) / 2**20}
     print(f"file: {info}", flush=True)
-    databases: dict[str, list[dict]] = {}
+    databases: dict[str, list[dict[str, object]]] = {}
     report, failures = {"file": info, "databases": databases}, []
     with tempfile.TemporaryDirectory() as tmp:
         for db in args.db or ["sqlite"]:
