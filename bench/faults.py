@@ -44,6 +44,7 @@ import time
 import uuid
 from collections import Counter, defaultdict
 from pathlib import Path
+from typing import TypedDict
 
 ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/faults.py` puts bench/ first, not the repository
@@ -86,6 +87,22 @@ else:
     report = upload_queue()
     print("drained", report.remaining, flush=True)
 """
+
+
+class Outcome(TypedDict):
+    """Bench.check: counts of captured and stored sets, the session ids lost, duplicated (and content hashes stored
+    twice), with a receipt whose hash differs from the stored one, set aside ({id: where}), set aside without being
+    broken on purpose, broken on purpose yet stored; how many are still pending."""
+
+    captured: int
+    stored: int
+    lost: list[str]
+    duplicated: list[str]
+    receipt_hash_mismatch: list[str]
+    set_aside: dict[str, str]
+    set_aside_not_broken: list[str]
+    broken_stored: list[str]
+    pending: int
 
 
 # ---------------------------------------------------------------------------------------------- proxy
@@ -333,7 +350,8 @@ class Bench:
             out[str(client_id)].append(content_hash)
         return out
 
-    def check(self) -> dict:
+    def check(self) -> Outcome:
+        """Returns what became of every captured set: stored, lost, duplicated, set aside or still pending."""
         from kinect_agent.config import load_config
         from kinect_agent.queue import SessionQueue
 

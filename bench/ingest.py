@@ -29,7 +29,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from types import ModuleType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypedDict
 
 if TYPE_CHECKING:
     from fastapi import FastAPI
@@ -247,7 +247,26 @@ def time_uploads(client: TestClient, headers: dict[str, str], data: bytes, runs:
     return results
 
 
-def summarise(runs: list[dict[str, float]], size: int, frames: int, db: str) -> dict:
+class IngestReport(TypedDict):
+    """The benchmark's numbers: database, file bytes and frames, runs, total and process CPU seconds, per-stage
+    medians (s), the targets and whether they were met."""
+
+    db: str
+    file_bytes: int
+    frames: int
+    runs: int
+    total_median_s: float
+    total_min_s: float
+    total_max_s: float
+    cpu_median_s: float
+    stage_median_s: dict[str, float]
+    target_s: float
+    target_bytes: int
+    time_pass: bool
+    size_pass: bool
+
+
+def summarise(runs: list[dict[str, float]], size: int, frames: int, db: str) -> IngestReport:
     """Returns the report: file size, median/min/max total, per-stage medians (s), targets and verdicts."""
     totals = [r["total"] for r in runs]
     return {
@@ -267,7 +286,7 @@ def summarise(runs: list[dict[str, float]], size: int, frames: int, db: str) -> 
     }
 
 
-def print_table(report: dict) -> None:
+def print_table(report: IngestReport) -> None:
     """Prints the report as a table."""
     verdict = {True: "PASS", False: "FAIL"}
     st = report["stage_median_s"]
