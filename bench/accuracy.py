@@ -67,7 +67,7 @@ from kinect_agent import skeleton  # noqa: E402
 from kinect_agent.body.angles import joint_angles  # noqa: E402
 from kinect_agent.evaluation.error_parts import ErrorSums, error_sums  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
-from kinect_agent.processing.pipeline import process  # noqa: E402
+from kinect_agent.processing.pipeline import PipelineResult, process  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.skeleton import NOT_TRACKED  # noqa: E402
 from kinect_agent.sources.kinect_noise import SimulationError, add_kinect_noise, load_tables  # noqa: E402
@@ -91,6 +91,8 @@ ANGLES = ("elbow_flexion_L", "elbow_flexion_R", "knee_flexion_L", "knee_flexion_
 BASELINES = ("raw", "butterworth", "holt", "one_euro", "cv_kalman_rts")
 METHODS = (*BASELINES, "pipeline_offline", "pipeline_online")
 SOURCES = ("cmu", "hdm05", "simulator")  # tuning set: simulator + CMU; HDM05 is held out (never tuned on)
+# one mocap clip: (name, t (T,) s, positions (T, J, 3) m in the mocap frame, facing_deg)
+MocapTruth = tuple[str, np.ndarray, np.ndarray, float]
 
 
 @dataclass
@@ -107,7 +109,7 @@ class Case:
 # ----------------------------------------------------------------------------------------------- ground truth
 
 
-def mocap_truths(quick: bool) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
+def mocap_truths(quick: bool) -> list[MocapTruth]:
     """Returns [(name, t (T,) s, positions (T, J, 3) m in the mocap frame, facing_deg)] at 30 Hz: CMU 13_29 and
     HDM05 clips."""
     from kinect_agent.formats import bvh
@@ -123,7 +125,7 @@ def mocap_truths(quick: bool) -> list[tuple[str, np.ndarray, np.ndarray, float]]
     return out
 
 
-def _hdm05_truths(per_subject: int = HDM05_CLIPS) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
+def _hdm05_truths(per_subject: int = HDM05_CLIPS) -> list[MocapTruth]:
     """Returns the first `per_subject` HDM05 clips of each subject (bd, bk) per motion class when
     kinect_agent.formats.amc is there (each clip is one repetition, 1-2.5 s at 30 Hz); else nothing."""
     try:
@@ -147,7 +149,7 @@ def _hdm05_truths(per_subject: int = HDM05_CLIPS) -> list[tuple[str, np.ndarray,
     return out
 
 
-def build_cases(device: str, view: int, mocap: list, quick: bool, seed: int = 0) -> list[Case]:
+def build_cases(device: str, view: int, mocap: list[MocapTruth], quick: bool, seed: int = 0) -> list[Case]:
     """Returns the recordings of one setting: the mocap truths with Kinect errors, then the simulated exercises."""
     cases = []
     for k, (name, t, p, facing) in enumerate(mocap):
@@ -191,12 +193,19 @@ def run_method(name: str, rec: Recording, config: PipelineConfig) -> tuple[np.nd
     if name in ("pipeline_offline", "pipeline_online"):
         online = name == "pipeline_online"
         res = process(rec, online=online, config=config)
-        flags = None if online else (res.params.outlier_prob > config.outlier_threshold) & (rec.state != NOT_TRACKED)
-        return res.filtered.positions, flags
+        return res.filtered.positions, None if online else outlier_flags(res, rec, config)
     raise ValueError(f"unknown method {name!r}; known: {', '.join(METHODS)}")
 
 
 # ----------------------------------------------------------------------------------------------- metrics
+
+
+def outlier_flags(result: PipelineResult, rec: Recording, config: PipelineConfig) -> np.ndarray:
+    """Returns (T, J) bool: the samples of rec the offline pipeline's result removed as outliers (tracked or
+    inferred samples whose outlier probability is over the config's threshold)."""
+    if result.params.outlier_prob is None:
+        raise RuntimeError("the offline pipeline returned no outlier probabilities")
+    return (result.params.outlier_prob > config.outlier_threshold) & (rec.state != NOT_TRACKED)
 
 
 @dataclass
@@ -362,7 +371,9 @@ def judge(m: dict[str, dict], gains: dict[str, dict]) -> dict[str, dict]:
 # ----------------------------------------------------------------------------------------------- running
 
 
-def run_setting(device: str, view: int, mocap: list, quick: bool, config: PipelineConfig, seed: int = 0) -> dict:
+def run_setting(
+    device: str, view: int, mocap: list[MocapTruth], quick: bool, config: PipelineConfig, seed: int = 0
+) -> dict:
     """Runs every method on every recording of one setting; returns its metrics, gains and targets."""
     cases = build_cases(device, view, mocap, quick, seed)
     sums = {name: Sums() for name in METHODS}
@@ -376,6 +387,8 @@ def run_setting(device: str, view: int, mocap: list, quick: bool, config: Pipeli
             sums[name].add(one)
             by_source[source_of(case)][name].add(one)
             if name == "pipeline_offline":
+                if flags is None:
+                    raise RuntimeError("the offline pipeline returned no outlier flags")
                 gains_by_pose.setdefault(case.pose, GainSums()).add(case, flags)
     tables = load_tables()
     gains = {}
@@ -721,6 +734,7 @@ def pipeline_config(overrides: list[str]) -> PipelineConfig:
         if not sep or name not in PipelineConfig.model_fields:
             raise ValueError(f"--set {item!r}: expected NAME=VALUE with NAME a PipelineConfig setting")
         current = getattr(default, name)
+        value: bool | int | float | str | None
         if text == "None":
             value = None
         elif isinstance(current, bool):

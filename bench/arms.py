@@ -46,7 +46,7 @@ DATA_DIR = ROOT_DIR.parent / "shared" / "data"
 HDM05_DIR = DATA_DIR / "hdm05"
 CMU_FILE = DATA_DIR / "cmu-mocap" / "13_29.bvh"
 RATE_HZ = 30.0
-MOTIONS = {  # short name -> HDM05 folder (None: CMU 13_29)
+MOTIONS: dict[str, str | None] = {  # short name -> HDM05 folder (None: CMU 13_29)
     "rotateArms": "rotateArmsBothBackward1Reps",
     "squat": "squat1Reps",
     "kick": "kickLFront1Reps",
@@ -154,7 +154,9 @@ def wrist_lag_frames(est: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
     return peak * energy, energy
 
 
-def clip_sums(est: np.ndarray, flags: np.ndarray | None, truth: np.ndarray, mask: np.ndarray, state: np.ndarray):
+def clip_sums(
+    est: np.ndarray, flags: np.ndarray | None, truth: np.ndarray, mask: np.ndarray, state: np.ndarray
+) -> dict[str, float]:
     """Returns a dict of sums of one method on one clip (pooled over clips by adding)."""
     err = est - truth
     d2 = np.sum(err**2, axis=-1)  # (T, J)
@@ -201,8 +203,8 @@ def run(
     clips: int = 3,
     white_m: float | None = None,
     device: str = "kinect2",
-) -> dict[tuple[str, int], dict[str, dict[str, float]]]:
-    """Returns {(motion, view): {method: {metric: median over seeds}}}."""
+) -> dict[tuple[str, int], dict[str, dict[str, float | list[float]]]]:
+    """Returns {(motion, view): {method: {metric: median over seeds, "rmse_mm_seeds": [RMSE mm of each seed]}}}."""
     clips_all = truths(motions, clips)
     per_seed: dict[tuple[str, int, str], list[dict[str, float]]] = {}
     for view in views:
@@ -218,9 +220,9 @@ def run(
                         acc[key] += float(v)
             for (motion, method), s in sums.items():
                 per_seed.setdefault((motion, view, method), []).append(metrics(s))
-    out: dict[tuple[str, int], dict[str, dict[str, float]]] = {}
+    out: dict[tuple[str, int], dict[str, dict[str, float | list[float]]]] = {}
     for (motion, view, method), runs in per_seed.items():
-        med = {key: float(np.median([r[key] for r in runs])) for key in runs[0]}
+        med: dict[str, float | list[float]] = {key: float(np.median([r[key] for r in runs])) for key in runs[0]}
         med["rmse_mm_seeds"] = [round(r["rmse_mm"], 1) for r in runs]
         out.setdefault((motion, view), {})[method] = med
     return out

@@ -36,8 +36,14 @@ from collections import Counter
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    import httpx
+    from fastapi.testclient import TestClient
+    from sqlalchemy import Engine
 
 ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/attack.py` puts bench/ first, not the repository
@@ -78,6 +84,7 @@ FAMILIES = (
 )
 RANDOM_CASES = 12  # per randomised family (truncated, bit flips, garbage) and seed (--quick: 2)
 INVALID = "InvalidSessionFile"
+Users = dict[str, tuple[int, int, dict[str, str]]]  # "A" and "B": (device id, patient id, upload headers)
 
 
 @dataclass
@@ -169,7 +176,7 @@ def _times(data: bytes, t: np.ndarray, recording: str = "raw") -> bytes:
     return khs_files.with_block(data, index, _time_block(t))
 
 
-def _header_set(path: tuple, value) -> Callable[[dict], None]:
+def _header_set(path: tuple[str, ...], value: object) -> Callable[[dict], None]:
     """Returns a change setting header[path[0]][path[1]]... = value."""
 
     def change(header: dict) -> None:
@@ -290,7 +297,7 @@ def _nan_inf_time(rng: random.Random, data: bytes, n: int, ctx: Context) -> list
     t = np.arange(frames) / 30.0
     k = rng.randrange(frames)
 
-    def at(value, index=k, recording="raw"):
+    def at(value: float, index: int = k, recording: str = "raw") -> bytes:
         changed = t.copy()
         changed[index] = value
         return _times(data, changed, recording)
@@ -314,7 +321,10 @@ def _declared_counts(rng: random.Random, data: bytes, n: int, ctx: Context) -> l
     """Declared frame and joint counts that are absurd or do not match the blocks."""
     frames = n_frames(data)
     other = rng.choice([f for f in range(1, 3 * frames) if f != frames])
-    raw = lambda key, value: with_header(data, _header_set(("recordings", "raw", key), value))  # noqa: E731
+
+    def raw(key: str, value: object) -> bytes:
+        return with_header(data, _header_set(("recordings", "raw", key), value))
+
     variants = {
         "n_frames 10**9": (raw("n_frames", 10**9), ("too_long",)),
         "n_frames 2**64": (raw("n_frames", 2**64), ("too_long",)),
@@ -497,8 +507,13 @@ def _header_types(rng: random.Random, data: bytes, n: int, ctx: Context) -> list
     version, header, blocks = split(data)
     rec = rng.choice(["raw", "filtered"])
     depth = rng.randint(10_000, 1_000_000)
-    meta = lambda key, value: with_header(data, _header_set(("recordings", rec, "meta", key), value))  # noqa: E731
-    top = lambda key, value: with_header(data, _header_set((key,), value))  # noqa: E731
+
+    def meta(key: str, value: object) -> bytes:
+        return with_header(data, _header_set(("recordings", rec, "meta", key), value))
+
+    def top(key: str, value: object) -> bytes:
+        return with_header(data, _header_set((key,), value))
+
     bad = ("bad_header",)
     variants = {
         f"{rec} meta as list": (with_header(data, _header_set(("recordings", rec, "meta"), [1, 2])), bad),
@@ -562,6 +577,7 @@ def _garbage(rng: random.Random, data: bytes, n: int, ctx: Context) -> list[Case
         kind = kinds[i % len(kinds)]
         size = rng.choice([rng.randint(1, 64), rng.randint(65, 4096), rng.randint(4097, 200_000)])
         noise = rng.randbytes(size)
+        expect: tuple[str, ...]
         if kind == "random":
             body, expect = noise, ("bad_magic", "truncated")
         elif kind == "magic + random":
@@ -582,12 +598,14 @@ def _garbage(rng: random.Random, data: bytes, n: int, ctx: Context) -> list[Case
 def _wrong_owner(rng: random.Random, data: bytes, n: int, ctx: Context) -> list[Case]:
     """Files recorded by device A for patient A (or mixed ids), sent with patient B's device token."""
     a, b = (ctx.device_a, ctx.patient_a), (ctx.device_b, ctx.patient_b)
-    owned = lambda device, patient: with_header(  # noqa: E731
-        data, _header_set(("recorded_by",), {"device_id": device, "patient_id": patient})
-    )
+
+    def owned(device: int, patient: int) -> bytes:
+        return with_header(data, _header_set(("recorded_by",), {"device_id": device, "patient_id": patient}))
+
     mismatch = ("SessionOwnerMismatch",)
     unknown = 10**6 + rng.randrange(10**6)
-    variants = [  # (what the file says, device id, patient id, query, expected answer), all sent by device B
+    # (what the file says, device id, patient id, query, expected answer), all sent by device B
+    variants: list[tuple[str, int, int, dict[str, int | str], tuple[str, ...]]] = [
         ("recorded by device A for patient A", *a, {}, mismatch),
         ("recorded by device B for patient A", b[0], a[1], {}, mismatch),
         ("recorded by device A for patient B", a[0], b[1], {}, mismatch),
@@ -628,7 +646,9 @@ def _late_defect(rng: random.Random, data: bytes, n: int, ctx: Context) -> list[
             deltas[joint, axis, last] = int(np.rint(900.0 / sf.GRID_M)) - units[joint, axis]
         return sf._shuffle(deltas)
 
-    pack = lambda raw: khs_files.compress(raw, sf.VERSION)  # noqa: E731
+    def pack(raw: bytes) -> bytes:
+        return khs_files.compress(raw, sf.VERSION)
+
     good = [pack(_time_block(t)), pack(state.tobytes()), pack(positions())]
     late_t, nan_t, bad_state = t.copy(), t.copy(), state.copy()
     late_t[last] = t[last - 1] - 1 / 30.0
@@ -691,7 +711,7 @@ def attack_cases(seed: int, ctx: Context, *, quick: bool = False) -> list[Case]:
 # ---------------------------------------------------------------------------------------------- running
 
 
-def _patients_with_devices(engine) -> dict[str, tuple[int, int, dict[str, str]]]:
+def _patients_with_devices(engine: Engine) -> Users:
     """Creates patients A and B (unique e-mails), each with a paired device; returns
     {"A": (device id, patient id, upload headers), "B": ...}."""
     from sqlalchemy.orm import Session
@@ -700,7 +720,7 @@ def _patients_with_devices(engine) -> dict[str, tuple[int, int, dict[str, str]]]
     from backend.security import DEVICE_TOKEN_PREFIX, new_token, token_hash
     from backend.users.service import create_user
 
-    made = {}
+    made: Users = {}
     with Session(engine) as session, session.begin():
         for who in ("A", "B"):
             token = new_token(DEVICE_TOKEN_PREFIX)
@@ -714,7 +734,7 @@ def _patients_with_devices(engine) -> dict[str, tuple[int, int, dict[str, str]]]
     return made
 
 
-def _reader_headers(engine, patient_id: int) -> dict[str, str]:
+def _reader_headers(engine: Engine, patient_id: int) -> dict[str, str]:
     """Returns the headers of a read token of the patient (the family "file chooses the work" reads with it)."""
     from sqlalchemy.orm import Session
 
@@ -723,11 +743,13 @@ def _reader_headers(engine, patient_id: int) -> dict[str, str]:
 
     with Session(engine) as session, session.begin():
         user = session.get(User, patient_id)
+        if user is None:
+            raise LookupError(f"patient {patient_id} was not created")
         _, token = create_api_token(db_session=session, user=user, name="bench attack", scopes=["read"], days=1)
     return {"Authorization": f"Bearer {token}"}
 
 
-def _stored(engine, patient_ids: list[int], purge: bool = False) -> int:
+def _stored(engine: Engine, patient_ids: list[int], purge: bool = False) -> int:
     """Returns the number of exercise_session rows of the patients; purge: then deletes them (and their metrics)."""
     from sqlalchemy import func, select
     from sqlalchemy.orm import Session
@@ -736,14 +758,14 @@ def _stored(engine, patient_ids: list[int], purge: bool = False) -> int:
 
     with Session(engine) as session, session.begin():
         where = ExerciseSession.patient_id.in_(patient_ids)
-        count = session.scalar(select(func.count()).select_from(ExerciseSession).where(where))
+        count = session.execute(select(func.count()).select_from(ExerciseSession).where(where)).scalar_one()
         if purge and count:
             for row in session.scalars(select(ExerciseSession).where(where)):
                 session.delete(row)
     return count
 
 
-def _answer(response) -> tuple[str, str]:
+def _answer(response: httpx.Response) -> tuple[str, str]:
     try:
         body = response.json()
     except ValueError:
@@ -753,7 +775,7 @@ def _answer(response) -> tuple[str, str]:
     return "", json.dumps(body)[:300]
 
 
-def run_case(client, engine, case: Case, users: dict, patient_ids: list[int]) -> dict:
+def run_case(client: TestClient, engine: Engine, case: Case, users: Users, patient_ids: list[int]) -> dict:
     """Sends one case; returns its record (status, error, detail, elapsed_s, stored, failures, as_expected)."""
     body = case.body() if callable(case.body) else case.body
     headers = {**users[case.device][2], **case.headers}
@@ -793,7 +815,7 @@ def run_case(client, engine, case: Case, users: dict, patient_ids: list[int]) ->
     }
 
 
-def _valid_upload(client, engine, users: dict, patient_ids: list[int]) -> dict:
+def _valid_upload(client: TestClient, engine: Engine, users: Users, patient_ids: list[int]) -> dict:
     """Uploads one valid file with device A: it must be 201 and stored (the harness can store)."""
     created_at = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(time.time() - 3600))
     data = make_khs("squat", 3, seed=12345, session_id=str(uuid.uuid4()), created_at=created_at)

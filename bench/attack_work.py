@@ -20,14 +20,25 @@ import time
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
+from typing import TYPE_CHECKING, TypeVar
 
+import httpx
 import numpy as np
 
 from backend.analysis import work_budget
 from kinect_agent.formats import session_file as sf
 from kinect_agent.recording import Recording
 from kinect_agent.sources.simulator import simulate
+
+if TYPE_CHECKING:
+    from fastapi.testclient import TestClient
+    from sqlalchemy import Engine
+
+    from backend.config import Settings
+
+Sent = TypeVar("Sent")  # what a measured call returns: a response, or the number of jobs a worker ran
 
 FAMILY = "file_chooses_work"
 CREATED_AT = "2025-06-01T10:00:00Z"
@@ -126,7 +137,7 @@ class PeakRss:
         while not self._stop.wait(0.002):
             self.peak = max(self.peak, self.rss())
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self._stop.set()
         if self._thread is not None:
             self._thread.join()
@@ -137,7 +148,7 @@ class PeakRss:
         return self.peak - self.start
 
 
-def _measured(send: Callable[[], object]) -> tuple[object, float, float, int]:
+def _measured(send: Callable[[], Sent]) -> tuple[Sent, float, float, int]:
     """Returns (response, wall s, CPU s, peak bytes) of one request."""
     wall, cpu = time.perf_counter(), time.process_time()
     with PeakRss() as rss:
@@ -145,7 +156,7 @@ def _measured(send: Callable[[], object]) -> tuple[object, float, float, int]:
     return response, time.perf_counter() - wall, time.process_time() - cpu, rss.peak_bytes
 
 
-def jobs_runner(engine, settings) -> Callable[[str], int]:
+def jobs_runner(engine: Engine, settings: Settings) -> Callable[[str], int]:
     """Returns run(kind): a real worker (backend.jobs.worker.work) on engine runs every due job of that kind in this
     process (so _measured counts its CPU and memory) until none is left; returns how many it ran."""
     from sqlalchemy.orm import sessionmaker
@@ -166,7 +177,9 @@ READS = (("detail", "detail", "detail"), ("replay", "replay", "replay"),
          ("export", f"export?format={EXPORT_FORMAT}", "export"))  # fmt: skip
 
 
-def run_work_case(client, case: WorkCase, headers: dict, reader: dict, run_jobs: Callable[[str], int]) -> dict:
+def run_work_case(
+    client: TestClient, case: WorkCase, headers: dict[str, str], reader: dict[str, str], run_jobs: Callable[[str], int]
+) -> dict:
     """Uploads the case's file with a device's headers, asks for its detail, replay and BVH export with the patient's
     (reader) headers (202 while a worker prepares them, or the answer itself), then has a worker build each (run_jobs,
     one kind at a time) and reads each again (200 expected); returns the record: each request's and each build's
@@ -174,21 +187,23 @@ def run_work_case(client, case: WorkCase, headers: dict, reader: dict, run_jobs:
     data = case.make()
     payload = sf.decode(data, max_frames=10**7, max_decoded_bytes=2**31)
     duration = payload.raw.duration
+    requests: list[dict] = []
+    failures: list[str] = []
     record = {"family": FAMILY, "name": case.name, "file_bytes": len(data), "n_frames": payload.raw.n_frames,
-              "duration_s": round(duration, 1), "requests": [], "failures": []}  # fmt: skip
+              "duration_s": round(duration, 1), "requests": requests, "failures": failures}  # fmt: skip
 
-    def measured(name: str, kind: str, send: Callable[[], object], status_of=lambda r: r.status_code) -> object:
+    def measured(name: str, kind: str, send: Callable[[], Sent], status_of: Callable[[Sent], int] = _status) -> Sent:
         response, wall, cpu, peak = _measured(send)
         cpu_budget, bytes_budget = work_budget.budget(duration, kind)
         status = status_of(response)
-        record["requests"].append(_request(name, response, status, wall, cpu, peak) | {"budget_cpu_s": cpu_budget,
-                                  "budget_mib": bytes_budget / 2**20})  # fmt: skip
+        requests.append(_request(name, response, status, wall, cpu, peak) | {"budget_cpu_s": cpu_budget,
+                        "budget_mib": bytes_budget / 2**20})  # fmt: skip
         if status >= 500:
-            record["failures"].append(f"{name} {status}")
+            failures.append(f"{name} {status}")
         if cpu > cpu_budget:
-            record["failures"].append(f"{name} {cpu:.2f} s CPU > {cpu_budget:g} s")
+            failures.append(f"{name} {cpu:.2f} s CPU > {cpu_budget:g} s")
         if peak > bytes_budget:
-            record["failures"].append(f"{name} {peak / 2**20:.0f} MiB > {bytes_budget / 2**20:.0f} MiB")
+            failures.append(f"{name} {peak / 2**20:.0f} MiB > {bytes_budget / 2**20:.0f} MiB")
         return response
 
     upload = measured("upload", "upload", lambda: client.post("/api/v1/sessions", content=data, headers=headers,
@@ -197,18 +212,30 @@ def run_work_case(client, case: WorkCase, headers: dict, reader: dict, run_jobs:
         return record
     base = f"/api/v1/sessions/{upload.json()['id']}"
     for name, path, kind in READS:  # the request: queues the build (202), or answers
-        measured(name, kind, lambda u=f"{base}/{path}": client.get(u, headers=reader))
+        measured(name, kind, partial(client.get, f"{base}/{path}", headers=reader))
     for name, path, kind in READS:  # the worker's build: what the 202 put off
-        measured(f"{name} build", kind, lambda k=kind: run_jobs(k), status_of=lambda ran: 200)
-        again = measured(f"{name} stored", "upload", lambda u=f"{base}/{path}": client.get(u, headers=reader))
+        measured(f"{name} build", kind, partial(run_jobs, kind), status_of=_built)
+        again = measured(f"{name} stored", "upload", partial(client.get, f"{base}/{path}", headers=reader))
         if again.status_code != 200:
-            record["failures"].append(f"{name} still {again.status_code} after the worker ran")
+            failures.append(f"{name} still {again.status_code} after the worker ran")
     return record
 
 
-def _request(name: str, response, status: int, wall: float, cpu: float, peak: int) -> dict:
+def _status(response: Sent) -> int:
+    """Returns the status code of a response (the default status of a measured request)."""
+    if not isinstance(response, httpx.Response):
+        raise TypeError(f"expected a response, got {type(response).__name__}")
+    return response.status_code
+
+
+def _built(ran: int) -> int:
+    """Returns the status of a worker's build: 200 (how many jobs it ran is not its status)."""
+    return 200
+
+
+def _request(name: str, response: object, status: int, wall: float, cpu: float, peak: int) -> dict:
     error = ""
-    if status >= 400:
+    if status >= 400 and isinstance(response, httpx.Response):
         try:
             error = f"{response.json().get('error')}: {str(response.json().get('detail'))[:120]}"
         except ValueError:

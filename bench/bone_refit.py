@@ -115,9 +115,9 @@ def refit_bones(
     rhs = b.reshape(-1) + ridge * v0.reshape(-1)
     free = np.ones(N_V, dtype=bool) if vectors is None else np.isin(np.arange(N_V), vectors)
     f3 = np.repeat(free, 3)
-    v = v0.reshape(-1).copy()
-    v[f3] = np.linalg.solve(A[np.ix_(f3, f3)], rhs[f3] - A[np.ix_(f3, ~f3)] @ v[~f3])
-    v = v.reshape(N_V, 3)
+    v_flat = v0.reshape(-1).copy()
+    v_flat[f3] = np.linalg.solve(A[np.ix_(f3, f3)], rhs[f3] - A[np.ix_(f3, ~f3)] @ v_flat[~f3])
+    v = v_flat.reshape(N_V, 3)
     new_len = np.linalg.norm(v[1:], axis=1)
     keep = ~(np.abs(new_len - lengths) <= max_change * lengths)
     v[1:][keep] = v0[1:][keep]

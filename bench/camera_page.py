@@ -22,6 +22,10 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from playwright.sync_api import Browser
 
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
@@ -51,7 +55,7 @@ def squat_item(base: str) -> int:
     return next(i["id"] for p in plans for i in p["items"] if i["exercise_slug"] == "squat")
 
 
-def one_run(browser, base: str, item: int, model: str, seconds: float, count: bool) -> dict:
+def one_run(browser: Browser, base: str, item: int, model: str, seconds: float, count: bool) -> dict:
     context = browser.new_context(viewport={"width": 1366, "height": 900}, base_url=base)
     page = context.new_page()
     page.set_default_timeout(120_000)

@@ -23,6 +23,7 @@ import tempfile
 import time
 from collections import Counter
 from pathlib import Path
+from typing import TypedDict
 
 import httpx
 from sqlalchemy.engine import make_url
@@ -34,7 +35,15 @@ from bench.dashboard_load import ROOT, free_port, migrate, recreate_database, st
 THERAPIST = "physio@demo.clinic"
 
 
-async def one_crowd(base: str, n: int) -> dict:
+class Crowd(TypedDict):
+    """One crowd: its size, the count of each answer (status code or error name), seconds to the last answer."""
+
+    n: int
+    answers: dict[str, int]
+    last_s: float
+
+
+async def one_crowd(base: str, n: int) -> Crowd:
     """Sends n requests at once as the demo therapist; returns {"n", "answers": {status: count}, "last_s"}."""
     async with httpx.AsyncClient(base_url=base, timeout=120, limits=httpx.Limits(max_connections=n)) as client:
         login = await client.post("/api/v1/auth/login", json={"email": THERAPIST, "password": DEMO_PASSWORD})

@@ -133,8 +133,8 @@ def setup(base: str, session: bytes, long_session: bytes) -> list[Caller]:
     device_token = tokens[own_pid]
     limits = httpx.Limits(max_connections=1000, max_keepalive_connections=1000)
 
-    def client(**kw) -> httpx.AsyncClient:
-        return httpx.AsyncClient(base_url=base, timeout=300, limits=limits, **kw)
+    def client(cookies: dict[str, str] | None = None, headers: dict[str, str] | None = None) -> httpx.AsyncClient:
+        return httpx.AsyncClient(base_url=base, timeout=300, limits=limits, cookies=cookies, headers=headers)
 
     callers = [
         Caller("admin", client(cookies=admin),

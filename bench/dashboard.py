@@ -18,11 +18,12 @@ import sys
 import tempfile
 import time
 import uuid
+from collections.abc import Callable
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from sqlalchemy import create_engine, insert, text  # noqa: E402
+from sqlalchemy import Engine, create_engine, insert, text  # noqa: E402
 from sqlalchemy.orm import Session  # noqa: E402
 
 from backend.analysis.indicators import indicators  # noqa: E402
@@ -40,14 +41,15 @@ from kinect_agent.sources.simulator import simulate  # noqa: E402
 FILE_BYTES = 200_000
 
 
-def _engine(url: str | None):
+def _engine(url: str | None) -> tuple[Engine, Callable[[], None]]:
+    """Returns (engine on an empty schema of url, or on a temporary SQLite file; the cleanup callable)."""
     if url and url.startswith("postgresql"):
         schema = f"bench_dashboard_{os.getpid()}"
         admin = create_engine(url, isolation_level="AUTOCOMMIT")
         with admin.connect() as conn:
             conn.execute(text(f'CREATE SCHEMA "{schema}"'))
 
-        def cleanup():
+        def cleanup() -> None:
             with admin.connect() as conn:
                 conn.execute(text(f'DROP SCHEMA "{schema}" CASCADE'))
 
@@ -56,7 +58,8 @@ def _engine(url: str | None):
     return make_engine(f"sqlite:///{path}"), lambda: path.unlink()
 
 
-def _fill(engine, n_patients: int, n_sessions: int) -> list[int]:
+def _fill(engine: Engine, n_patients: int, n_sessions: int) -> list[int]:
+    """Adds n_patients patients with n_sessions analysed sessions each; returns the patients' ids."""
     measured, truth, _ = simulate("squat", 5, seed=1)
     report = analyze_recording(measured, EXERCISES["squat"], filtered=truth)
     found = indicators(report, exercise=EXERCISES["squat"], target_reps=10, history=[])
@@ -96,7 +99,8 @@ def _fill(engine, n_patients: int, n_sessions: int) -> list[int]:
     return ids
 
 
-def _median_ms(fn, runs: int = 5) -> float:
+def _median_ms(fn: Callable[[], object], runs: int = 5) -> float:
+    """Returns the median milliseconds of `runs` calls of fn."""
     times = []
     for _ in range(runs):
         start = time.perf_counter()

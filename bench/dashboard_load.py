@@ -37,6 +37,11 @@ import sys
 import time
 import uuid
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from kinect_agent.analysis.document import AnalysisReport
+    from kinect_agent.formats.session_file import SessionPayload
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -91,14 +96,14 @@ def migrate(url: str) -> None:
     subprocess.run([str(Path(sys.executable).parent / "coach-server"), "migrate"], env=env, check=True, cwd=ROOT)
 
 
-def _pool(exercises: list[str], per_exercise: int) -> dict[str, list[tuple[bytes, object, dict]]]:
+def _pool(exercises: list[str], per_exercise: int) -> dict[str, list[tuple[bytes, SessionPayload, AnalysisReport]]]:
     """Returns per exercise a list of (.khs bytes, decoded payload, analysis document) of simulated sets."""
     from backend.analysis.report import analyze_recording
     from backend.exercises.library import EXERCISES
     from kinect_agent.formats import session_file as sf
     from kinect_agent.sources.simulator import simulate
 
-    pool: dict[str, list] = {}
+    pool: dict[str, list[tuple[bytes, SessionPayload, AnalysisReport]]] = {}
     for slug in exercises:
         pool[slug] = []
         for k in range(per_exercise):
@@ -174,7 +179,8 @@ def seed(url: str, n_patients: int, n_sessions: int, per_exercise: int) -> dict:
                 [{"plan_id": plan_id, "exercise_id": exercise_ids[slug], "sets": 2, "repetitions": target[slug],
                   "frequency_per_week": 3, "position": j} for j, slug in enumerate(pair)],
             )  # fmt: skip
-            rows, docs, history = [], [], {slug: [] for slug in pair}
+            history: dict[str, list[AnalysisReport]] = {slug: [] for slug in pair}
+            rows, docs = [], []
             for k in range(n_sessions):  # oldest first, about one session a day, the newest a few hours ago
                 slug = pair[k % 2]
                 data, payload, base = pool[slug][rng.randrange(len(pool[slug]))]
@@ -234,7 +240,7 @@ def free_port() -> int:
 START_S = 240  # the server may take minutes to start on the shared 2 cores at load 15
 
 
-def start_server(url: str, port: int, workers: int) -> subprocess.Popen:
+def start_server(url: str, port: int, workers: int) -> subprocess.Popen[bytes]:
     """Starts uvicorn with backend.main:create_app on port; returns once /healthz answers 200."""
     env = {**os.environ, "COACH_DATABASE_URL": url, "COACH_ENVIRONMENT": "local"}
     command = [sys.executable, "-m", "uvicorn", "backend.main:create_app", "--factory", "--host", "127.0.0.1",
@@ -256,7 +262,7 @@ def start_server(url: str, port: int, workers: int) -> subprocess.Popen:
     raise SystemExit(f"server did not answer /healthz within {START_S} s")
 
 
-def stop_server(server: subprocess.Popen) -> None:
+def stop_server(server: subprocess.Popen[bytes]) -> None:
     """Stops the server (SIGTERM, SIGKILL after 15 s)."""
     server.terminate()
     try:
@@ -287,7 +293,7 @@ class Client:
         if not self.patients:
             raise SystemExit(f"{self.email} sees no patients")
 
-    def request(self, name: str) -> tuple[str, dict]:
+    def request(self, name: str) -> tuple[str, dict[str, int]]:
         """Returns (path, query) of one request of kind name."""
         pid = self.rng.choice(self.patients)
         if name == "dashboard":
@@ -303,7 +309,9 @@ class Client:
             return f"/api/v1/sessions/{self.rng.choice(ids)}", {}
         return "/api/v1/sessions", {"patient_id": pid, "limit": 20}
 
-    async def run(self, stop_at: float, think: float, samples: list, errors: list, record: bool) -> None:
+    async def run(
+        self, stop_at: float, think: float, samples: list[tuple[str, float]], errors: list[str], record: bool
+    ) -> None:
         names = [n for n, _ in MIX]
         weights = [w for _, w in MIX]
         while time.monotonic() < stop_at:
@@ -312,15 +320,16 @@ class Client:
             if name == "session" and not path.startswith("/api/v1/sessions/"):
                 name = "sessions"
             start = time.perf_counter()
+            response: httpx.Response | None = None
             try:
                 response = await self.http.get(path, params=query)
-                status = response.status_code
+                status = str(response.status_code)
             except httpx.HTTPError as exc:
-                response, status = None, f"{type(exc).__name__}"
+                status = f"{type(exc).__name__}"
             elapsed = time.perf_counter() - start
             if record:
                 samples.append((name, elapsed))
-            if response is None or not 200 <= status < 300:
+            if response is None or not 200 <= response.status_code < 300:
                 if record:
                     errors.append(f"{name} {path}: {status}")
             elif name == "sessions":
@@ -331,13 +340,15 @@ class Client:
                 await asyncio.sleep(min(self.rng.expovariate(1 / think), max(0.0, stop_at - time.monotonic())))
 
 
-async def run_load(base: str, therapists: list[str], clients: int, duration: float, warmup: float, think: float):
+async def run_load(
+    base: str, therapists: list[str], clients: int, duration: float, warmup: float, think: float
+) -> tuple[list[tuple[str, float]], list[str], float]:
     """Logs clients in, warms up, then measures; returns (samples [(endpoint, seconds)], errors, seconds)."""
     pool = [Client(base, therapists[i % len(therapists)], seed=i) for i in range(clients)]
     for client in pool:  # one after the other: argon2 logins are setup, not the dashboard
         await client.login()
-    samples: list = []
-    errors: list = []
+    samples: list[tuple[str, float]] = []
+    errors: list[str] = []
     try:
         stop = time.monotonic() + warmup
         await asyncio.gather(*(c.run(stop, think, [], [], record=False) for c in pool))
@@ -360,7 +371,7 @@ def percentile(values: list[float], q: float) -> float:
     return ordered[low] + (ordered[high] - ordered[low]) * (pos - low)
 
 
-def stats(samples: list, errors: list, elapsed: float) -> dict:
+def stats(samples: list[tuple[str, float]], errors: list[str], elapsed: float) -> dict:
     """Returns request counts, throughput and latency percentiles (ms) per endpoint and overall."""
 
     def summary(times: list[float]) -> dict:

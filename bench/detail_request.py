@@ -43,7 +43,7 @@ def demo_file(exercise: str, reps: int, seed: int) -> bytes:
     return sf.encode(make_payload(measured, created_at="2026-11-27T05:00:00Z"))
 
 
-def run(url: str, files: list[bytes], runs: int) -> list[dict]:
+def run(url: str, files: list[bytes], runs: int) -> list[dict[str, float]]:
     """Starts the server on url, uploads each file and times its /detail; returns one row per session."""
     port = free_port()
     base = f"http://127.0.0.1:{port}"
@@ -74,9 +74,11 @@ def run(url: str, files: list[bytes], runs: int) -> list[dict]:
                 t0 = time.perf_counter()
                 therapist.get(f"/api/v1/sessions/{sid}/detail").raise_for_status()
                 times.append(time.perf_counter() - t0)
-            row = {"session": sid, "frames": first.json()["n_frames"], "first_200_s": round(ready_s, 3),
-                   "asked": asked, "median_s": round(statistics.median(times), 4),
-                   "min_s": round(min(times), 4), "max_s": round(max(times), 4)}  # fmt: skip
+            row: dict[str, float] = {
+                "session": sid, "frames": first.json()["n_frames"], "first_200_s": round(ready_s, 3), "asked": asked,
+                "median_s": round(statistics.median(times), 4), "min_s": round(min(times), 4),
+                "max_s": round(max(times), 4),
+            }  # fmt: skip
             print(row, flush=True)
             rows.append(row)
     finally:

@@ -44,6 +44,7 @@ import time
 import uuid
 from collections import Counter, defaultdict
 from pathlib import Path
+from typing import TypedDict
 
 ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/faults.py` puts bench/ first, not the repository
@@ -88,6 +89,22 @@ else:
 """
 
 
+class Outcome(TypedDict):
+    """Bench.check: counts of captured and stored sets, the session ids lost, duplicated (and content hashes stored
+    twice), with a receipt whose hash differs from the stored one, set aside ({id: where}), set aside without being
+    broken on purpose, broken on purpose yet stored; how many are still pending."""
+
+    captured: int
+    stored: int
+    lost: list[str]
+    duplicated: list[str]
+    receipt_hash_mismatch: list[str]
+    set_aside: dict[str, str]
+    set_aside_not_broken: list[str]
+    broken_stored: list[str]
+    pending: int
+
+
 # ---------------------------------------------------------------------------------------------- proxy
 
 
@@ -96,7 +113,8 @@ class CuttingProxy:
     `cut` bytes of the request reached the server, "response" after the server's whole answer arrived here."""
 
     def __init__(self, server_port: int) -> None:
-        self.server_port, self.mode, self.cut = server_port, None, 0
+        self.server_port, self.cut = server_port, 0
+        self.mode: str | None = None
         self.sock = socket.create_server(("127.0.0.1", 0))
         self.port = self.sock.getsockname()[1]
         threading.Thread(target=self._accept, daemon=True).start()
@@ -154,7 +172,6 @@ class Bench:
         self.patient_id = self._pair()
         self.captured: dict[str, str] = {}  # session id -> exercise, of every set whose raw copy was on disk
         self.broken: set[str] = set()
-        self.rows = Counter()
 
     def _pair(self) -> int:
         from backend.devices.service import create_pairing_code
@@ -181,7 +198,7 @@ class Bench:
 
     # -- the agent -------------------------------------------------------------------------------------------
 
-    def agent(self, *args: str) -> subprocess.Popen:
+    def agent(self, *args: str) -> subprocess.Popen[str]:
         return subprocess.Popen([sys.executable, "-c", AGENT_SCRIPT, str(ROOT_DIR), *args], env=self.env,
                                 stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)  # fmt: skip
 
@@ -284,9 +301,9 @@ class Bench:
         config = load_config()
         queue = queue_module.SessionQueue(config.queue_dir)
         session_id, real = str(uuid.uuid4()), queue_module._write_durably
-        calls = []
+        calls: list[Path] = []
 
-        def full_disk(path, data):
+        def full_disk(path: Path, data: bytes) -> None:
             calls.append(path)
             if path.parent == queue.pending_dir:
                 raise OSError(errno.ENOSPC, "No space left on device", str(path))
@@ -333,7 +350,8 @@ class Bench:
             out[str(client_id)].append(content_hash)
         return out
 
-    def check(self) -> dict:
+    def check(self) -> Outcome:
+        """Returns what became of every captured set: stored, lost, duplicated, set aside or still pending."""
         from kinect_agent.config import load_config
         from kinect_agent.queue import SessionQueue
 
@@ -395,7 +413,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     folder = Path(tempfile.mkdtemp(prefix="coach-faults-"))
     bench = Bench(f"sqlite:///{folder / 'faults.db'}", folder, args.seed)
-    per_kind: Counter = Counter()
+    per_kind: Counter[str] = Counter()
     started = time.perf_counter()
     try:
         for k in range(args.trials):

@@ -27,6 +27,7 @@ import statistics
 import subprocess
 import sys
 from pathlib import Path
+from typing import TypedDict
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -64,7 +65,16 @@ def empty_cache() -> int:
     return len(files)
 
 
-def run(warm: bool) -> dict:
+class ChildRun(TypedDict):
+    """What CHILD prints: seconds of the warm-up (None: not warmed up), and (Start -> first frame, Start -> 30
+    frames) s of the first and of a later set."""
+
+    warm_up_s: float | None
+    first: list[float]
+    later: list[float]
+
+
+def run(warm: bool) -> ChildRun:
     """Runs CHILD in a fresh process (the environment as it is, the repository on the import path)."""
     done = subprocess.run([sys.executable, "-c", CHILD, "1" if warm else "0"], cwd=ROOT, capture_output=True,
                           text=True, check=True)  # fmt: skip
@@ -75,7 +85,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=3)
     args = parser.parse_args()
-    rows: dict[str, list[tuple[float, float]]] = {"cold": [], "cached": [], "warmed": [], "later set": []}
+    rows: dict[str, list[tuple[float, ...]]] = {"cold": [], "cached": [], "warmed": [], "later set": []}
     warm_ups: list[float] = []
     for _ in range(args.runs):
         empty_cache()
@@ -86,7 +96,10 @@ def main() -> None:
         empty_cache()
         warmed = run(warm=True)
         rows["warmed"].append(tuple(warmed["first"]))
-        warm_ups.append(warmed["warm_up_s"])
+        warm_up_s = warmed["warm_up_s"]
+        if warm_up_s is None:
+            raise RuntimeError("the warmed run reports no warm-up")
+        warm_ups.append(warm_up_s)
     print(f"{'scenario':<10} {'Start -> first frame':>22} {'Start -> 30 frames':>20}   (median of {args.runs})")
     for name, values in rows.items():
         first = statistics.median(v[0] for v in values)

@@ -28,6 +28,13 @@ from collections import defaultdict
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING, TypedDict
+
+if TYPE_CHECKING:
+    from fastapi import FastAPI
+    from fastapi.testclient import TestClient
+    from sqlalchemy import Engine
 
 ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/ingest.py` puts bench/ first, not the repository
@@ -89,7 +96,7 @@ def with_new_session_id(data: bytes) -> bytes:
 # ---------------------------------------------------------------------------------------------- database
 
 
-def open_engine(url: str):
+def open_engine(url: str) -> tuple[Engine, Callable[[], None]]:
     """Returns (engine on an empty migrated database with the exercise library, cleanup callable)."""
     from sqlalchemy import create_engine, text
     from sqlalchemy.orm import Session
@@ -123,7 +130,7 @@ def open_engine(url: str):
     return engine, cleanup
 
 
-def _device_headers(engine) -> dict[str, str]:
+def _device_headers(engine: Engine) -> dict[str, str]:
     """Creates a patient with a paired device; returns the device's Authorization header."""
     from sqlalchemy.orm import Session
 
@@ -140,7 +147,7 @@ def _device_headers(engine) -> dict[str, str]:
     return {"Authorization": f"Bearer {token}", "Content-Type": "application/octet-stream"}
 
 
-def make_app(engine):
+def make_app(engine: Engine) -> FastAPI:
     """Returns the real app with its requests on `engine` (get_db: commit on success, roll back on error)."""
     from backend.config import Settings, get_settings
     from backend.database import db_dependency, get_db
@@ -162,11 +169,11 @@ class StageTimer:
     def __init__(self) -> None:
         self.seconds: dict[str, float] = defaultdict(float)
 
-    def wrap(self, module, name: str, stage: str, minus: str | None = None) -> Callable[[], None]:
+    def wrap(self, module: ModuleType, name: str, stage: str, minus: str | None = None) -> Callable[[], None]:
         """Replaces module.name by a timed wrapper; returns the function that restores it."""
         original = getattr(module, name)
 
-        def timed(*args, **kwargs):
+        def timed(*args: object, **kwargs: object) -> object:
             before = self.seconds[minus] if minus else 0.0
             start = time.perf_counter()
             try:
@@ -184,14 +191,14 @@ class StageTimer:
 
         original = Session.commit
 
-        def commit(session, *args, **kwargs):
+        def commit(session: Session) -> None:
             start = time.perf_counter()
             try:
-                return original(session, *args, **kwargs)
+                original(session)
             finally:
                 self.seconds["commit"] += time.perf_counter() - start
 
-        Session.commit = commit  # type: ignore[method-assign]
+        setattr(Session, "commit", commit)  # noqa: B010 - a method replaced on the class, as the restore does
         return lambda: setattr(Session, "commit", original)
 
 
@@ -204,7 +211,7 @@ def stage_timer() -> Iterator[StageTimer]:
     restore = [
         timer.wrap(router, "decode_upload", "decode"),
         timer.wrap(service, "metrics_document", "metrics"),
-        timer.wrap(router.service, "store_upload", "store", minus="metrics"),
+        timer.wrap(service, "store_upload", "store", minus="metrics"),
         timer.watch_commits(),
     ]
     try:
@@ -217,7 +224,7 @@ def stage_timer() -> Iterator[StageTimer]:
 # ---------------------------------------------------------------------------------------------- benchmark
 
 
-def time_uploads(client, headers: dict, data: bytes, runs: int) -> list[dict[str, float]]:
+def time_uploads(client: TestClient, headers: dict[str, str], data: bytes, runs: int) -> list[dict[str, float]]:
     """Posts `runs` fresh copies of `data`; returns per run {"total", "cpu", stage: s}; checks each is a new insert.
 
     total: wall-clock seconds of the request; cpu: this process's CPU seconds meanwhile (all threads; the
@@ -240,7 +247,26 @@ def time_uploads(client, headers: dict, data: bytes, runs: int) -> list[dict[str
     return results
 
 
-def summarise(runs: list[dict[str, float]], size: int, frames: int, db: str) -> dict:
+class IngestReport(TypedDict):
+    """The benchmark's numbers: database, file bytes and frames, runs, total and process CPU seconds, per-stage
+    medians (s), the targets and whether they were met."""
+
+    db: str
+    file_bytes: int
+    frames: int
+    runs: int
+    total_median_s: float
+    total_min_s: float
+    total_max_s: float
+    cpu_median_s: float
+    stage_median_s: dict[str, float]
+    target_s: float
+    target_bytes: int
+    time_pass: bool
+    size_pass: bool
+
+
+def summarise(runs: list[dict[str, float]], size: int, frames: int, db: str) -> IngestReport:
     """Returns the report: file size, median/min/max total, per-stage medians (s), targets and verdicts."""
     totals = [r["total"] for r in runs]
     return {
@@ -260,7 +286,7 @@ def summarise(runs: list[dict[str, float]], size: int, frames: int, db: str) -> 
     }
 
 
-def print_table(report: dict) -> None:
+def print_table(report: IngestReport) -> None:
     """Prints the report as a table."""
     verdict = {True: "PASS", False: "FAIL"}
     st = report["stage_median_s"]
@@ -277,7 +303,7 @@ def print_table(report: dict) -> None:
         print("note: a shorter session than 10 minutes; the targets are for 10 minutes at 30 Hz")
 
 
-def _profile(client, headers: dict, data: bytes, out: Path) -> None:
+def _profile(client: TestClient, headers: dict[str, str], data: bytes, out: Path) -> None:
     """Profiles the server side (router._ingest) of one fresh upload; writes the stats to `out`, prints the top 30."""
     import cProfile
     import pstats

@@ -34,7 +34,9 @@ def half_widths(movement: str, subject: str) -> dict[str, list[float]]:
     t = result.filtered.t
     smoothed = series.smooth_positions(t, result.filtered.positions)
     out: dict[str, list[float]] = {k: [] for k in KINDS}
-    for intervals in rom_intervals(t, joint_angles(smoothed), result.angle_sd, smoothed).values():
+    if result.angle_sd is None:
+        raise RuntimeError("the offline pipeline returned no angle SDs")
+    for intervals in rom_intervals(t, joint_angles(smoothed), result.angle_sd, smoothed).intervals.values():
         for kind, (lo, hi) in (intervals or {}).items():
             out[kind].append(0.5 * (hi - lo))
     return out

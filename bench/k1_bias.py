@@ -26,6 +26,7 @@ import json
 import sys
 import time
 from pathlib import Path
+from unittest.mock import patch
 
 import numpy as np
 
@@ -33,7 +34,7 @@ ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:
     sys.path.insert(0, str(ROOT_DIR))
 
-from bench.accuracy import RATE_HZ, MotionSums, motion_cases, motions, run_method  # noqa: E402
+from bench.accuracy import RATE_HZ, Case, MotionSums, motion_cases, motions, run_method  # noqa: E402
 from bench.baselines import cv_kalman_rts  # noqa: E402
 from bench.baselines._common import hold_last  # noqa: E402
 from bench.bone_refit import refit_bones  # noqa: E402
@@ -46,12 +47,13 @@ from kinect_agent.processing.combined_outliers import remove_outliers_combined  
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.ik import inverse_kinematics  # noqa: E402
 from kinect_agent.processing.pipeline import observations, smooth  # noqa: E402
+from kinect_agent.recording import Recording  # noqa: E402
 
 ELBOWS = ("elbow_flexion_L", "elbow_flexion_R")
 ROW_METHODS = ("raw", "cv_kalman_rts", "one_euro", "pipeline_offline")
 
 
-def alt_outliers(case) -> np.ndarray:  # noqa: ANN001
+def alt_outliers(case: Case) -> np.ndarray:
     """Returns (T, J, 3) m: the measured positions with every tracking-loss outlier moved by the clean error there."""
     m = case.measured
     shift = clean_error(m.positions, m.state, case.truth, case.mask)
@@ -69,7 +71,7 @@ def study_rows(args: argparse.Namespace) -> list[dict]:
             for seed in args.seeds:
                 sums: dict[str, MotionSums] = {}
 
-                def add(name: str, case, est: np.ndarray, sums: dict = sums) -> None:  # noqa: ANN001
+                def add(name: str, case: Case, est: np.ndarray, sums: dict[str, MotionSums] = sums) -> None:
                     sums.setdefault(name, MotionSums()).add_case(case, est)
 
                 for case in motion_cases(motion, view, seed, args.device):
@@ -139,7 +141,11 @@ _estimated: list[np.ndarray] = []
 _fixed = chain_filter.ChainFilter.with_lengths_fixed
 
 
-def _with_lengths_fixed(self, lengths, config):  # noqa: ANN001, ANN202 - the study swaps the passes-3-4 lengths
+def _with_lengths_fixed(
+    self: chain_filter.ChainFilter, lengths: np.ndarray, config: PipelineConfig
+) -> chain_filter.ChainFilter:
+    """ChainFilter.with_lengths_fixed while study_joints runs: records the lengths of passes 3-4, swaps them for
+    _override["lengths"] when set."""
     _estimated.append(np.array(lengths))
     return _fixed(self, lengths if _override["lengths"] is None else _override["lengths"], config)
 
@@ -149,7 +155,7 @@ def bone_median(positions: np.ndarray) -> np.ndarray:
     return np.nanmedian(skeleton.bone_lengths(positions), axis=0)
 
 
-def offline_variant(rec, config: PipelineConfig, lengths: np.ndarray | None, refit: bool) -> np.ndarray:  # noqa: ANN001
+def offline_variant(rec: Recording, config: PipelineConfig, lengths: np.ndarray | None, refit: bool) -> np.ndarray:
     """Returns (T, J, 3) m: the offline pipeline's positions (offset_model off), with passes 3-4 on `lengths` when
     given and the bone vectors re-fitted afterwards when refit."""
     clean, _ = remove_outliers_combined(rec, config)
@@ -172,7 +178,8 @@ def offline_variant(rec, config: PipelineConfig, lengths: np.ndarray | None, ref
 
 
 def study_joints(args: argparse.Namespace) -> None:
-    chain_filter.ChainFilter.with_lengths_fixed = _with_lengths_fixed
+    swapped = patch.object(chain_filter.ChainFilter, "with_lengths_fixed", _with_lengths_fixed)
+    swapped.start()
     config = PipelineConfig()
     for motion in [m for m in motions() if not args.motions or m.name in args.motions]:
         for view in args.views:
@@ -224,7 +231,7 @@ def study_joints(args: argparse.Namespace) -> None:
             mean = {k: 1e3 * np.nanmean(np.array(v), axis=0) for k, v in lens.items()}
             for k, (_, c) in enumerate(skeleton.BONES):
                 print(f"| {skeleton.JOINTS[c]} | " + " | ".join(f"{mean[n][k]:.0f}" for n in mean) + " |")
-    chain_filter.ChainFilter.with_lengths_fixed = _fixed
+    swapped.stop()
 
 
 def main(argv: list[str] | None = None) -> int:

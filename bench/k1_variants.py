@@ -19,11 +19,21 @@ if str(ROOT_DIR) not in sys.path:
     sys.path.insert(0, str(ROOT_DIR))
 
 from bench.accuracy import MotionSums, motion_cases, motions, pipeline_config, run_method  # noqa: E402
+from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 
 
-def parse_variant(text: str):  # noqa: ANN201
+def parse_variant(text: str) -> tuple[str, PipelineConfig]:
+    """Returns (name, PipelineConfig) of a variant "NAME:SETTING=VALUE,SETTING=VALUE"."""
     name, _, sets = text.partition(":")
     return name, pipeline_config([s for s in sets.split(",") if s])
+
+
+def _rmse_mm(metrics: dict[str, float | None]) -> float:
+    """Returns the RMSE (mm) of a method's MotionSums.metrics()."""
+    rmse = metrics["rmse_mm"]
+    if rmse is None:
+        raise ValueError("no joint-frames were measured")
+    return rmse
 
 
 def main() -> None:
@@ -52,8 +62,8 @@ def main() -> None:
                 m = {n: s.metrics() for n, s in sums.items()}
                 cells = [f"{m[n]['rmse_mm']:.1f} ({m[n]['bias_mm']:.1f}/{m[n]['random_mm']:.1f}) "
                          f"{m[n]['angle_rmse_deg']:.2f}°" for n in names]  # fmt: skip
-                cv, euro = m["cv_kalman_rts"]["rmse_mm"], m["one_euro"]["rmse_mm"]
-                margins = [f"{m[f'off:{n}']['rmse_mm'] - cv:+.1f}/{m[f'off:{n}']['rmse_mm'] - euro:+.1f}"
+                cv, euro = _rmse_mm(m["cv_kalman_rts"]), _rmse_mm(m["one_euro"])
+                margins = [f"{_rmse_mm(m[f'off:{n}']) - cv:+.1f}/{_rmse_mm(m[f'off:{n}']) - euro:+.1f}"
                            for n, _ in variants]  # fmt: skip
                 print(f"| {motion.name} | {view}° | {seed} | " + " | ".join(cells) + " | " + "; ".join(margins) + " |",
                       flush=True)  # fmt: skip

@@ -46,8 +46,20 @@ import tempfile
 import threading
 import time
 import uuid
+from collections.abc import Coroutine
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, TypeVar
+
+if TYPE_CHECKING:
+    from multiprocessing.queues import Queue
+    from multiprocessing.synchronize import Event
+
+    from playwright.sync_api import Browser, Page
+
+    from kinect_agent.live.channel import CommandStream
+
+Result = TypeVar("Result")
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -259,7 +271,7 @@ def progress(set_id: str, session_id: str, k: int, rate: float, taken_at: float)
             "angle_name": "elbow_flexion_left", "angle_deg": 40.0 + 2.5 * (k % 20), "hint": None}  # fmt: skip
 
 
-def hold_commands(base: str, token: str, stop: threading.Event):
+def hold_commands(base: str, token: str, stop: threading.Event) -> CommandStream:
     """Starts a thread holding the device's command stream as the agent does; returns the CommandStream."""
     from kinect_agent.live.channel import CommandStream
 
@@ -273,7 +285,9 @@ def hold_commands(base: str, token: str, stop: threading.Event):
     return stream
 
 
-def latency_agent(base: str, token: str, set_id: str, n: int, rate: float, connected, go, out) -> None:
+def latency_agent(
+    base: str, token: str, set_id: str, n: int, rate: float, connected: Event, go: Event, out: Queue[dict]
+) -> None:
     """The home agent of the measured patient, in a process of its own: holds the command stream, sets `connected`,
     waits for `go`, sends n progress messages at rate Hz through the Publisher and puts its records on `out`."""
     from kinect_agent.live.channel import Publisher
@@ -349,12 +363,12 @@ class Pages:
         self.connected = self.reconnects = self.errors = 0
         self.progress_events = self.other_events = 0
         self._clients: list[httpx.AsyncClient] = []
-        self._tasks: list[asyncio.Task] = []
+        self._tasks: list[asyncio.Task[None]] = []
         self._loop = asyncio.new_event_loop()
         self._thread = threading.Thread(target=self._loop.run_forever, name="pages", daemon=True)
         self._thread.start()
 
-    def _call(self, coro, timeout: float):
+    def _call(self, coro: Coroutine[object, object, Result], timeout: float) -> Result:
         return asyncio.run_coroutine_threadsafe(coro, self._loop).result(timeout)
 
     def login(self) -> float:
@@ -430,7 +444,7 @@ class Pages:
 # ------------------------------------------------------------------------------------------------ browser
 
 
-def open_patient_page(browser, base: str, patient: dict):
+def open_patient_page(browser: Browser, base: str, patient: dict) -> Page:
     """Signs in as the patient through the login form at /; returns their page once its event stream is open."""
     context = browser.new_context(viewport={"width": 1280, "height": 900})
     context.add_init_script(EVENTSOURCE_PROBE)
@@ -444,14 +458,14 @@ def open_patient_page(browser, base: str, patient: dict):
     return page
 
 
-def wait_stream_open(page) -> None:
+def wait_stream_open(page: Page) -> None:
     """Waits until the page's event stream is open and the page has asked for the agent's state."""
     page.wait_for_function("() => window.__es && window.__es.opens.length > 0", timeout=30_000)
     page.wait_for_function("() => ['online', 'offline', 'unpaired'].includes(document.getElementById('agent-status')"
                            ".dataset.state)", timeout=30_000)  # fmt: skip
 
 
-def latency_run(page, base: str, patient: dict, n: int, rate: float, usage: Usage) -> dict:
+def latency_run(page: Page, base: str, patient: dict, n: int, rate: float, usage: Usage) -> dict:
     """Measures frame-to-screen latency of n messages from the patient's agent to their open page."""
     ctx = mp.get_context("spawn")
     connected, go, out = ctx.Event(), ctx.Event(), ctx.Queue()
@@ -481,7 +495,7 @@ def latency_run(page, base: str, patient: dict, n: int, rate: float, usage: Usag
     return account(record, shown, es, opens_before) | {"cpu": cpu}
 
 
-def account(record: dict, shown: list, es: dict, opens_before: int) -> dict:
+def account(record: dict, shown: list[tuple[float, float, float | None]], es: dict, opens_before: int) -> dict:
     """Returns the fate of every message of a run and the latency statistics of those shown (ms)."""
     frames, posts = record["frames"], record["posts"]
     posted = {p[0]: p for p in posts}

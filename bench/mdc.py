@@ -44,6 +44,8 @@ def session(exercise: str, patient: int, k: int, reps: int) -> tuple[dict[str, f
     body = motions.random_body(np.random.default_rng([patient, 1]))
     seed = 1000 * patient + k
     truth = simulate_truth(exercise, reps, seed=seed, body=body)
+    if truth.meta.pose is None:
+        raise ValueError(f"the simulated {exercise} has no pose")
     measured, _ = add_kinect_noise(
         truth, device="kinect2", view_deg=0, pose=truth.meta.pose, rng=np.random.default_rng([seed, 2])
     )

@@ -65,8 +65,8 @@ def _clips(motion: str, view: int, seed: int, white: float | None) -> list[tuple
             measured = truth.replace(step=f"white noise {white} m", positions=noisy)
         return [(measured, truth.positions)]
     out = []
-    for k, truth in enumerate(truths([motion], 2)):
-        measured, true, _ = measure(truth, k, view, seed, white_m=white)
+    for k, clip in enumerate(truths([motion], 2)):
+        measured, true, _ = measure(clip, k, view, seed, white_m=white)
         out.append((measured, true))
     return out
 

@@ -25,6 +25,7 @@ if str(ROOT_DIR) not in sys.path:  # `python bench/offline_vs_online_real.py` pu
 
 from bench import offset_model as om  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
+from kinect_agent.evaluation.pairs import joint_mask  # noqa: E402
 from kinect_agent.formats import ui_prmd, ui_prmd_vicon  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402
@@ -56,8 +57,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--set", nargs="*", default=[], help="PipelineConfig overrides NAME=VALUE")
     args = parser.parse_args(argv)
     config = PipelineConfig(**{k: ast.literal_eval(v) for k, v in (s.split("=", 1) for s in args.set)})
-    joints = om.joint_mask(om.UI_JOINTS)
-    total = {m: [] for m in METHODS}
+    joints = joint_mask(om.UI_JOINTS)
+    total: dict[str, list[np.ndarray]] = {m: [] for m in METHODS}
     lost_rows, accepted, tried = 0, 0, 0
     print(f"offline vs online per joint, UI-PRMD s{args.subjects} e{args.episodes}, overrides {args.set or 'none'}")
     for move in range(1, 11):

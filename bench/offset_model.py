@@ -51,9 +51,10 @@ if str(ROOT_DIR) not in sys.path:
 
 from bench import real_pairs as rp  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
-from kinect_agent.evaluation.align import measured, rms_lag  # noqa: E402
+from kinect_agent.evaluation.align import interpolate, measured, rms_lag  # noqa: E402
 from kinect_agent.evaluation.error_parts import JointErrorSums  # noqa: E402
-from kinect_agent.evaluation.pairs import UI_PRMD_JOINTS, joint_mask  # noqa: E402
+from kinect_agent.evaluation.pairs import UI_PRMD_JOINTS, joint_mask, well_estimated  # noqa: E402
+from kinect_agent.evaluation.register import robust_kabsch  # noqa: E402
 from kinect_agent.processing import offset_model as om  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402
@@ -106,7 +107,7 @@ def make_pair(name: str, dataset: str, group: str, kinect: Recording, vicon: Rec
               check: bool) -> Pair:  # fmt: skip
     """Aligns vicon onto kinect's frames; check: also the independent RMS lag and the acceptance rule."""
     al = rp.align(kinect, vicon, joints, max_lag_s=MAX_LAG_S if check else rp.MAX_LAG_S)
-    v = rp.interpolate(vicon.t, vicon.positions, kinect.t + al.lag_s)
+    v = interpolate(vicon.t, vicon.positions, kinect.t + al.lag_s)
     v[:, ~joints] = np.nan
     lag_rms = lag_by_rms(kinect, vicon, joints) if check else al.lag_s
     ok = abs(lag_rms - al.lag_s) <= LAG_AGREE_S + 1e-9 and al.xcorr >= MIN_XCORR and al.rms_m <= MAX_RMS_M
@@ -118,7 +119,7 @@ def keraal_pairs() -> list[Pair]:
     out = []
     for path in rp.pair_paths():
         kinect, vicon = rp.read_pair(path)
-        joints = rp.well_estimated(vicon.meta.extra.get("fallback_joints", []))
+        joints = well_estimated(vicon.meta.extra.get("fallback_joints", []))
         name = kinect.meta.exercise or path.stem
         out.append(make_pair(name, "KERAAL", name, kinect, vicon, joints, check=False))
     return out
@@ -148,7 +149,7 @@ def uiprmd_pairs(episodes: range) -> list[Pair]:
 def register(estimate: np.ndarray, vicon: np.ndarray, joints: np.ndarray) -> np.ndarray:
     """Returns the Vicon joints (T, J, 3) in the camera frame of estimate by the estimate's own trimmed rigid fit;
     NaN where not scored. estimate, vicon: (T, J, 3) m; joints (J,) bool."""
-    R, t, _ = rp.robust_kabsch(vicon[:, joints].reshape(-1, 3), estimate[:, joints].reshape(-1, 3))
+    R, t, _ = robust_kabsch(vicon[:, joints].reshape(-1, 3), estimate[:, joints].reshape(-1, 3))
     return vicon @ R.T + t
 
 
@@ -288,7 +289,7 @@ def print_report(res: dict) -> None:
 
 def alignment_summary(ui_all: list[Pair]) -> dict:
     kept = [p for p in ui_all if p.accepted]
-    per_movement = {}
+    per_movement: dict[str, list[int]] = {}
     for p in ui_all:
         per_movement.setdefault(p.group, [0, 0])[0] += int(p.accepted)
         per_movement[p.group][1] += 1

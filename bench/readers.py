@@ -18,6 +18,7 @@ import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
 ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/readers.py` puts bench/ first, not the repository
@@ -25,10 +26,14 @@ if str(ROOT_DIR) not in sys.path:  # `python bench/readers.py` puts bench/ first
 
 from kinect_agent import formats  # noqa: E402
 from kinect_agent.formats import keraal, kinect_v2_tsv, skeleton_csv, utkinect  # noqa: E402
+from kinect_agent.recording import Recording  # noqa: E402
 
 DATA = ROOT_DIR.parent / "shared" / "data"
 KINECT_FRAMES = 18_000  # 10 min at 30 Hz
 UI_PRMD = DATA / "ui-prmd" / "Segmented Movements"
+
+
+Row = TypeVar("Row", str, bytes)  # a line of a text or of a binary file
 
 
 def _lines(source: Path) -> list[bytes]:
@@ -37,7 +42,7 @@ def _lines(source: Path) -> list[bytes]:
     return [line for line in raw.splitlines() if line.strip()]
 
 
-def _repeat(rows: list[bytes], n: int) -> list[bytes]:
+def _repeat(rows: list[Row], n: int) -> list[Row]:
     return [rows[i % len(rows)] for i in range(n)]
 
 
@@ -107,7 +112,7 @@ def build(out: Path) -> dict[str, Callable[[], Path]]:
     }
 
 
-def _write(path: Path, writer: Callable) -> Path:
+def _write(path: Path, writer: Callable[[Recording, Path], None]) -> Path:
     rec = keraal.read(_keraal(path.parent)) if path.suffix == ".tsv" else utkinect.read(_utkinect(path.parent))
     writer(rec, path)
     return path

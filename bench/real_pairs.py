@@ -49,7 +49,7 @@ ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:
     sys.path.insert(0, str(ROOT_DIR))
 
-from bench.accuracy import METHODS, pipeline_config, run_method  # noqa: E402
+from bench.accuracy import METHODS, outlier_flags, pipeline_config, run_method  # noqa: E402
 from bench.accuracy_tables import cell  # noqa: E402
 from kinect_agent import skeleton  # noqa: E402
 from kinect_agent.body.angles import joint_angles  # noqa: E402
@@ -125,8 +125,7 @@ def evaluate_pair(kinect: Recording, vicon: Recording, methods: tuple[str, ...] 
         if name == "pipeline_offline":
             flags = f
     if flags is None:  # the gain still needs the pipeline's outlier flags
-        res = process(kinect, config=config)
-        flags = (res.params.outlier_prob > config.outlier_threshold) & (kinect.state != NOT_TRACKED)
+        flags = outlier_flags(process(kinect, config=config), kinect, config)
     return {
         "name": kinect.meta.extra.get("recording", "pair"), "alignment": al, "good": good, "truth": truth,
         "overlap": overlap, "est": est, "flags": flags, "seconds": seconds, "kinect": kinect,
@@ -179,8 +178,9 @@ def summarise(pairs: list[dict], methods: tuple[str, ...], config: PipelineConfi
             "median_mm": {m: _stats(offsets(p, m)[:, p["good"]].ravel())["median_mm"] for m in methods},
         })  # fmt: skip
     for name in (*methods, "vicon"):
-        pooled, per_joint = [], {j: [] for j in skeleton.JOINTS}
-        per_joint_all = {j: [] for j in skeleton.JOINTS}
+        pooled: list[np.ndarray] = []
+        per_joint: dict[str, list[np.ndarray]] = {j: [] for j in skeleton.JOINTS}
+        per_joint_all: dict[str, list[np.ndarray]] = {j: [] for j in skeleton.JOINTS}
         arm_pooled = []
         seg_sd, ang_sq = [], []
         for p in pairs:
@@ -219,11 +219,9 @@ def summarise(pairs: list[dict], methods: tuple[str, ...], config: PipelineConfi
             else:
                 out["per_joint"][name][jn] = {**_stats(np.concatenate(per_joint_all[jn])), "well": 0}
     # the paper's outlier-removal gain on raw offsets (present joint-frames of the well-estimated joints)
-    before, after, oracle = (
-        {j: [] for j in skeleton.JOINTS},
-        {j: [] for j in skeleton.JOINTS},
-        {j: [] for j in skeleton.JOINTS},
-    )
+    before: dict[str, list[np.ndarray]] = {j: [] for j in skeleton.JOINTS}
+    after: dict[str, list[np.ndarray]] = {j: [] for j in skeleton.JOINTS}
+    oracle: dict[str, list[np.ndarray]] = {j: [] for j in skeleton.JOINTS}
     n_flag = n_oracle = n_all = 0
     for p in pairs:
         ov = p["overlap"]

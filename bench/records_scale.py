@@ -28,6 +28,8 @@ import sys
 import tempfile
 import time
 import uuid
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 import sqlalchemy as sa
@@ -89,7 +91,8 @@ def seed(engine: sa.Engine, store_dir: str, files: list[bytes], sessions: int, p
     return time.perf_counter() - t0
 
 
-def _median_ms(fn, n: int) -> float:
+def _median_ms(fn: Callable[[], object], n: int) -> float:
+    """Returns the median milliseconds of n calls of fn."""
     times = []
     for _ in range(n):
         t0 = time.perf_counter()
@@ -124,7 +127,7 @@ def api_times(url: str, engine: sa.Engine, batch: str) -> dict[str, float]:
                            ("GET /sessions/{id}/replay/state", f"/api/v1/sessions/{sid}/replay/state")):  # fmt: skip
             r = client.get(path, headers=headers)
             assert r.status_code == 200, r.text
-            out[name] = _median_ms(lambda p=path: client.get(p, headers=headers), 7)
+            out[name] = _median_ms(partial(client.get, path, headers=headers), 7)
     return out
 
 
@@ -150,8 +153,9 @@ def throughput(url: str, store_dir: str, engine: sa.Engine, workers: int, window
     """Runs `workers` worker processes for window_s on the queue; returns (jobs done, sessions/s, peak RSS MB)."""
     from backend.jobs.models import Job
 
+    done_jobs = sa.select(sa.func.count()).select_from(Job).where(Job.status == "done")
     with engine.connect() as conn:
-        before = conn.scalar(sa.select(sa.func.count()).select_from(Job).where(Job.status == "done"))
+        before = conn.execute(done_jobs).scalar_one()
     env = os.environ | {"COACH_DATABASE_URL": url, "COACH_STORAGE_DIR": store_dir, "PYTHONPATH": str(ROOT)}
     cli = [sys.executable, "-m", "backend.cli", "worker"]
     t0 = time.perf_counter()
@@ -163,7 +167,7 @@ def throughput(url: str, store_dir: str, engine: sa.Engine, workers: int, window
         p.wait()
     elapsed = time.perf_counter() - t0
     with engine.connect() as conn:
-        done = conn.scalar(sa.select(sa.func.count()).select_from(Job).where(Job.status == "done")) - before
+        done = conn.execute(done_jobs).scalar_one() - before
         failed = conn.scalar(sa.select(sa.func.count()).select_from(Job).where(Job.status == "failed"))
         twice = conn.scalar(sa.select(sa.func.count()).select_from(Job).where(Job.attempts > 1))
     assert failed == 0 and twice == 0, f"{failed} failed, {twice} taken twice"

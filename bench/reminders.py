@@ -20,10 +20,13 @@ import tempfile
 import threading
 import time
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
 
 from aiosmtpd.controller import Controller
-from sqlalchemy import create_engine, text
+from aiosmtpd.smtp import SMTP, Envelope
+from aiosmtpd.smtp import Session as SMTPSession
+from sqlalchemy import Engine, create_engine, text
 from sqlalchemy.orm import Session, sessionmaker
 
 from backend.config import Settings
@@ -44,12 +47,13 @@ class Inbox:
     def __init__(self) -> None:
         self.recipients: Counter[str] = Counter()
 
-    async def handle_DATA(self, server, session, envelope) -> str:  # noqa: N802 (aiosmtpd's hook name)
+    async def handle_DATA(self, server: SMTP, session: SMTPSession, envelope: Envelope) -> str:  # noqa: N802 (aiosmtpd's hook name)
         self.recipients.update(envelope.rcpt_tos)
         return "250 OK"
 
 
-def _engine(url: str | None, folder: Path):
+def _engine(url: str | None, folder: Path) -> tuple[Engine, Callable[[], None]]:
+    """Returns (engine on a SQLite file in folder, or on a fresh schema of url; the cleanup callable)."""
     if url is None:
         return make_engine(f"sqlite:///{folder / 'bench.db'}"), lambda: None
     admin = create_engine(url, isolation_level="AUTOCOMMIT")
@@ -66,7 +70,7 @@ def _engine(url: str | None, folder: Path):
     return engine, drop
 
 
-def _seed(engine, patients: int) -> int:
+def _seed(engine: Engine, patients: int) -> int:
     """Adds the patients and plans; returns how many 08:00 reminders are due at NOW."""
     with Session(engine) as db:
         users = [User(email=f"p{k}@bench.example.org", role="patient", time_zone=ZONES[k % len(ZONES)])
@@ -157,7 +161,7 @@ class socket_port:  # noqa: N801 (used as a context manager like a function)
             s.bind(("127.0.0.1", 0))
             return s.getsockname()[1]
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         return None
 
 

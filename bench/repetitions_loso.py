@@ -25,7 +25,7 @@ import argparse
 import itertools
 import json
 import sys
-from dataclasses import asdict, replace
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -97,7 +97,8 @@ def grid_points(grid: dict[str, tuple[float, ...]]) -> list[RepetitionParams]:
     """Returns every RepetitionParams of grid (the other thresholds at their defaults)."""
     keys = list(grid)
     return [
-        replace(RepetitionParams(), **dict(zip(keys, values, strict=True)))
+        # the defaults with this point's values (an unknown name raises TypeError, as in dataclasses.replace)
+        RepetitionParams(**(asdict(RepetitionParams()) | dict(zip(keys, values, strict=True))))
         for values in itertools.product(*grid.values())
     ]
 

@@ -48,6 +48,8 @@ def recordings(quick: bool) -> dict[str, Recording]:
 def results(rec: Recording) -> dict[str, np.ndarray]:
     """Returns the pipeline's numeric results of one recording, flat {quantity: array}."""
     r = process(rec, config=config_for_device(rec.meta.device))
+    if r.params.outlier_prob is None:
+        raise RuntimeError("the offline pipeline returned no outlier probabilities")
     out = {
         "positions": r.filtered.positions,
         "outlier_prob": r.params.outlier_prob,
@@ -74,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
         file = (args.save or args.compare) / (name.replace("/", "__") + ".npz")
         if args.save:
             file.parent.mkdir(parents=True, exist_ok=True)
-            np.savez_compressed(file, **got)
+            np.savez_compressed(file, allow_pickle=True, **got)  # the default, named: numpy's stub matches **got to it
             print(f"saved {name}: {rec.n_frames} frames", flush=True)
             continue
         saved = np.load(file)

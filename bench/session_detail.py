@@ -25,6 +25,7 @@ ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/session_detail.py` puts bench/ first, not the repository
     sys.path.insert(0, str(ROOT_DIR))
 
+from backend.exercises.library import EXERCISES  # noqa: E402
 from backend.sessions import detail, prepared  # noqa: E402
 from backend.sessions.metrics import json_ready  # noqa: E402
 from backend.sessions.models import ExerciseSession  # noqa: E402
@@ -42,7 +43,7 @@ def main(argv: list[str] | None = None) -> int:
                               status="processed", processing_version="bench", processing_params={})  # fmt: skip
     limits = {"max_frames": 10**6, "max_decoded_bytes": 2**30}
     payload = detail.decode_stored(data, session_id=1, **limits)
-    spec = detail.EXERCISES["squat"]
+    spec = EXERCISES["squat"]
     started = time.perf_counter()
     report, _ = detail.analysis_document(payload, spec, None)
     stored = report.model_dump(mode="json") if report is not None else None

@@ -16,7 +16,8 @@ HARD_WILD_M = (0.3, 1.5)  # a wild joint lands this far from where the Kinect pu
 def squat_session(minutes: float, seed: int = 1) -> Recording:
     """Returns a simulated Kinect 2 recording (30° view, standing) of `minutes` minutes at 30 Hz: sets of 10 squats
     back to back, cut at `minutes` (at least 2 frames), meta.exercise = "squat"."""
-    parts, total = [], 0.0
+    parts: list[Recording] = []
+    total = 0.0
     while total < minutes * 60.0:
         measured, _, _ = simulate("squat", 10, device="kinect2", view_deg=30, pose="standing", seed=seed + len(parts))
         parts.append(measured)

@@ -16,6 +16,7 @@ import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -37,7 +38,7 @@ from kinect_agent.recording import Recording  # noqa: E402
 
 
 @contextmanager
-def busy_cores(n: int):
+def busy_cores(n: int) -> Iterator[None]:
     """Runs n CPU-bound processes (a Python loop each) while the block runs; stops them after."""
     procs = [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(n)]
     try:
@@ -49,7 +50,7 @@ def busy_cores(n: int):
             proc.wait()
 
 
-def _time_steps(step, z: np.ndarray, repeats: int) -> float:
+def _time_steps(step: Callable[[np.ndarray], object], z: np.ndarray, repeats: int) -> float:
     """Returns the median seconds per step of step(z_t) over all frames of z, over `repeats` runs."""
     for frame in z[:5]:  # warm up (compiled kernels, caches)
         step(frame)
@@ -62,7 +63,7 @@ def _time_steps(step, z: np.ndarray, repeats: int) -> float:
     return statistics.median(runs)
 
 
-def ukf_step_comparison(rec: Recording, frames: int, repeats: int) -> dict:
+def ukf_step_comparison(rec: Recording, frames: int, repeats: int) -> dict[str, float]:
     """Times one predict+update of this UKF and of filterpy's UKF with the same chain model and data."""
     fit = ik.inverse_kinematics(rec.positions)
     x0 = np.concatenate([fit.root[0], fit.theta[0]])
@@ -93,7 +94,7 @@ def ukf_step_comparison(rec: Recording, frames: int, repeats: int) -> dict:
     return {"state_dim": n, "ours_ms": t_ours * 1e3, "filterpy_ms": t_theirs * 1e3, "speedup": t_theirs / t_ours}
 
 
-def whole_pipeline(rec: Recording, repeats: int) -> dict:
+def whole_pipeline(rec: Recording, repeats: int) -> dict[str, float | list[float]]:
     """Times pipeline.process on the whole recording (offline, default smoother)."""
     runs = []
     for _ in range(repeats):
@@ -103,7 +104,7 @@ def whole_pipeline(rec: Recording, repeats: int) -> dict:
     return {"frames": rec.n_frames, "minutes": rec.duration / 60.0, "median_s": statistics.median(runs), "runs_s": runs}
 
 
-def online_latency(rec: Recording) -> dict:
+def online_latency(rec: Recording) -> dict[str, float]:
     """Times every OnlineFilter.step after the first second; returns median and p99 in ms."""
     live = OnlineFilter()
     times = []

@@ -21,6 +21,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import TypedDict
 
 ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/speed_hard.py` puts bench/ first, not the repository
@@ -66,7 +67,16 @@ def stage_seconds(path: Path, out: Path) -> dict[str, float]:
     return timings
 
 
-def measure(path: Path, work: Path, repeats: int) -> dict:
+class CommandTimes(TypedDict):
+    """Medians of the filter command: wall s (and each run's), CPU s, and every stage's (stage_seconds)."""
+
+    command_s: float
+    command_runs_s: list[float]
+    command_cpu_s: float
+    stages: dict[str, float]
+
+
+def measure(path: Path, work: Path, repeats: int) -> CommandTimes:
     """Returns the medians over `repeats` runs of the command (wall, CPU) and of every stage."""
     runs, cpus, stages = [], [], []
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -88,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--minutes", type=float, default=10.0)
     parser.add_argument("--json", help="also write the numbers to this file")
     args = parser.parse_args(argv)
-    results = {}
+    results: dict[str, CommandTimes] = {}
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         files = {"clean": squat_session(args.minutes), "hard": outlier_heavy_session(args.minutes)}
@@ -99,8 +109,8 @@ def main(argv: list[str] | None = None) -> int:
         for name in files:
             r = measure(work / f"{name}.csv", work, args.repeats)
             results[name] = r
-            verdict = ", ".join(f"{what} {'PASS' if r[key] <= TARGET_S else 'FAIL'}"
-                                for what, key in (("wall", "command_s"), ("CPU", "command_cpu_s")))  # fmt: skip
+            measured = (("wall", r["command_s"]), ("CPU", r["command_cpu_s"]))
+            verdict = ", ".join(f"{what} {'PASS' if seconds <= TARGET_S else 'FAIL'}" for what, seconds in measured)
             runs = ", ".join(f"{s:.2f}" for s in r["command_runs_s"])
             print(f"{name}: kinect-agent filter, {args.minutes:g} min: median {r['command_s']:.2f} s wall ({runs}), "
                   f"{r['command_cpu_s']:.2f} s CPU (target <= {TARGET_S:g} s: {verdict}); "

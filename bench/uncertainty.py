@@ -71,6 +71,9 @@ def simulate_case(motion: str, view: int, seed: int, reps: int, device: str = "k
     est = joint_angles(smoothed)
     true = joint_angles(series.smooth_positions(truth.t, truth.positions))
     yaw = intervals.camera_yaw(smoothed)
+    yaw = 90.0 if yaw is None else yaw  # no frame with both shoulders: side on, as intervals.rom_intervals takes it
+    if result.angle_sd is None:
+        raise RuntimeError("the offline pipeline returned no angle SDs")
     return Case(motion, view, seed, measured.t, est, true, result.angle_sd, yaw, device)
 
 
@@ -96,13 +99,21 @@ def frame_inflation(cases: list[Case]) -> dict[str, float]:
     return out
 
 
+def true_rom(case: Case, name: str) -> dict[str, float] | None:
+    """Returns {kind of KINDS: degrees} of one angle's true series, or None when it has no defined value
+    (range_of_motion gives the three numbers or none)."""
+    rom = range_of_motion(case.t, {name: case.truth[name]}, presmoothed=True)[name]
+    values = {kind: value for kind, value in rom.items() if value is not None}
+    return values if len(values) == len(rom) else None
+
+
 def metric_errors(case: Case, name: str) -> dict[str, tuple[float, float, float, float]] | None:
     """Returns {kind: (estimate, truth, σ_frames, τ the tail)} of one angle, or None when either series is
     unusable."""
     e = intervals.edges(case.t, case.est[name], case.sd[name])
-    true = range_of_motion(case.t, {name: case.truth[name]}, presmoothed=True)[name]
+    true = true_rom(case, name)
     iv = intervals.angle_intervals(case.t, case.est[name], case.sd[name], name, yaw_deg=case.yaw)
-    if e is None or iv is None or true["range_deg"] is None or true["range_deg"] >= intervals.MAX_RANGE_DEG:
+    if e is None or iv is None or true is None or true["range_deg"] >= intervals.MAX_RANGE_DEG:
         return None
     return {
         "min_deg": (e.low, true["min_deg"], e.sd_low, e.tail_low),
@@ -152,9 +163,9 @@ def needs(cases: list[Case]) -> Needs:
                 b2 = (_error(est, true, kind) / intervals.Z95) ** 2 - sigma**2
                 row = (f"{_pair(name)}|{kind}", f"{c.motion}@{c.view}", np.sqrt(max(b2, 0.0)), tail, c.yaw, sigma)
                 rows.append(row)
-    key, family, b, tail, yaw, sigma = zip(*rows, strict=True)
-    sin_yaw = np.abs(np.sin(np.radians(yaw)))
-    return Needs(np.array(key), np.array(family), np.array(b), np.array(tail), sin_yaw, np.array(sigma))
+    keys, families, bs, tails, yaws, sigmas = zip(*rows, strict=True)
+    sin_yaw = np.abs(np.sin(np.radians(yaws)))
+    return Needs(np.array(keys), np.array(families), np.array(bs), np.array(tails), sin_yaw, np.array(sigmas))
 
 
 def _gains(n: Needs, tail_gain: tuple[float, float, float]) -> np.ndarray:
@@ -206,7 +217,7 @@ def fit_systematic(
     fams = np.unique(n.family)
     fits = []
     for yg in YAW_GAINS:
-        for tg in itertools.product(TAIL_GAINS, repeat=3):
+        for tg in itertools.product(TAIL_GAINS, TAIL_GAINS, TAIL_GAINS):
             table = _fit_table(n, yg, tg)
             hits = _hits(n, yg, tg, table)
             rms = float(np.sqrt(np.mean([(np.mean(hits[n.family == f]) - 0.95) ** 2 for f in fams])))
@@ -239,7 +250,7 @@ def fit_device_gain(cases: list[Case]) -> float:
     return float(np.ceil(np.quantile(need, TARGET) * 20.0) / 20.0)
 
 
-def device_study(device: str, reps: int) -> dict:
+def device_study(device: str, reps: int) -> dict[str, object]:
     """Fits DEVICE_GAIN[device] on its own training sessions and prints the held-out coverage with the shipped
     gain and with the fitted one; returns the numbers."""
     train = collect(MOTIONS, TRAIN_VIEWS, DEVICE_TRAIN_SEEDS, reps, device)
@@ -247,7 +258,7 @@ def device_study(device: str, reps: int) -> dict:
     gain = fit_device_gain(train)
     shipped = intervals.DEVICE_GAIN.get(device, 1.0)
     print(f"{device}: gain of b fitted on views {TRAIN_VIEWS}, seeds {DEVICE_TRAIN_SEEDS}: {gain} (shipped {shipped})")
-    report: dict = {"device": device, "fitted_gain": gain, "shipped_gain": shipped}
+    report: dict[str, object] = {"device": device, "fitted_gain": gain, "shipped_gain": shipped}
     for g in sorted({1.0, shipped, gain}):
         intervals.DEVICE_GAIN[device] = g
         for label, cases in (("train", train), ("held-out 0/30", test)):
@@ -268,8 +279,8 @@ def coverage_table(cases: list[Case]) -> dict[str, dict[str, float]]:
         fam = f"{c.motion}@{c.view}"
         for name in ANGLE_NAMES:
             iv = intervals.angle_intervals(c.t, c.est[name], c.sd[name], name, yaw_deg=c.yaw, device=c.device)
-            true = range_of_motion(c.t, {name: c.truth[name]}, presmoothed=True)[name]
-            if iv is None or true["range_deg"] is None or true["range_deg"] >= intervals.MAX_RANGE_DEG:
+            true = true_rom(c, name)
+            if iv is None or true is None or true["range_deg"] >= intervals.MAX_RANGE_DEG:
                 continue
             for kind in KINDS:
                 ok = intervals.covers(iv[kind], true[kind], kind)

@@ -57,14 +57,20 @@ ANGLES = ("knee_flexion_L", "knee_flexion_R", "hip_flexion_L", "hip_flexion_R", 
 CV_TO_KINECT = np.array([-1.0, -1.0, 1.0])  # OpenCV camera (x right, y down, z forward) -> Kinect (x left, y up)
 
 
+def _child(element: ET.Element, tag: str) -> ET.Element:
+    """Returns the first child `tag` of a .qca element."""
+    child = element.find(tag)
+    if child is None:
+        raise ValueError(f"a .qca camera without <{tag}>")
+    return child
+
+
 def read_qca(path: Path) -> list[dict]:
     """Returns per camera {K (3,3) px, R (3,3), t (3,) m}: world -> OpenCV camera, as Pose2Sim converts a .qca."""
     root = ET.parse(path).getroot()
     out = []
     for cam in root.findall("cameras/camera"):
-        fov = cam.find("fov_video").attrib
-        intr = cam.find("intrinsic").attrib
-        tr = cam.find("transform").attrib
+        fov, intr, tr = (_child(cam, tag).attrib for tag in ("fov_video", "intrinsic", "transform"))
         K = np.array([[float(intr["focalLengthU"]) / 64, 0, float(intr["centerPointU"]) / 64 - float(fov["left"])],
                       [0, float(intr["focalLengthV"]) / 64, float(intr["centerPointV"]) / 64 - float(fov["top"])],
                       [0, 0, 1]])  # fmt: skip

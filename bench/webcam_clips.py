@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import sys
 import time
+from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -21,10 +23,10 @@ from kinect_agent.sources.webcam.landmarks import LandmarkBatch  # noqa: E402
 from tests.media import pose2sim_multi_view, pose2sim_view, sports2d_demo  # noqa: E402
 
 CACHE = REPO / "var" / "bench-cache" / "webcam"
-CLIPS = {
+CLIPS: dict[str, Callable[[], Path]] = {
     "sports2d": sports2d_demo,
-    **{f"pose2sim_cam{c}": (lambda c=c: pose2sim_view(c)) for c in (1, 2, 3, 4)},
-    **{f"pose2sim_multi_cam{c}": (lambda c=c: pose2sim_multi_view(c)) for c in (1, 2, 3, 4)},
+    **{f"pose2sim_cam{c}": partial(pose2sim_view, c) for c in (1, 2, 3, 4)},
+    **{f"pose2sim_multi_cam{c}": partial(pose2sim_multi_view, c) for c in (1, 2, 3, 4)},
 }
 RATES = {"sports2d": 30.0, **{f"pose2sim{m}_cam{c}": 60.0 for m in ("", "_multi") for c in (1, 2, 3, 4)}}
 
@@ -34,7 +36,8 @@ def landmarks(clip: str, model: str = "lite") -> tuple[LandmarkBatch, float]:
     path = CACHE / f"{clip}-{model}.npz"
     if path.is_file():
         z = np.load(path)
-        batch = LandmarkBatch(z["t"], z["world"], z["image"], z["visibility"], tuple(int(v) for v in z["size"]))
+        width, height = (int(v) for v in z["size"])
+        batch = LandmarkBatch(z["t"], z["world"], z["image"], z["visibility"], (width, height))
         return batch, float(z["fps"])
     from kinect_agent.sources.webcam.source import WebcamSource
 

@@ -35,7 +35,7 @@ from backend.analysis.report import analyze_recording  # noqa: E402
 from backend.exercises.library import EXERCISES as LIBRARY  # noqa: E402
 from kinect_agent.analysis.live import LiveCount  # noqa: E402
 from kinect_agent.formats.session_file import on_grid  # noqa: E402
-from kinect_agent.processing.config import config_for_device  # noqa: E402
+from kinect_agent.processing.config import PipelineConfig, config_for_device  # noqa: E402
 from kinect_agent.processing.online import live_filter  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
@@ -104,7 +104,13 @@ def main() -> None:
         return
     webcam = config_for_device("webcam")
     chain = webcam.model_copy(update={"offline_filter": "chain", "remove_outliers": True})
-    methods = {"raw": None, "chain (before)": chain, "stored (shipped)": webcam, "live": "live"}
+    # method -> the offline filter's settings of its stored count (None: the raw recording), or "live"
+    methods: dict[str, PipelineConfig | str | None] = {
+        "raw": None,
+        "chain (before)": chain,
+        "stored (shipped)": webcam,
+        "live": "live",
+    }
     if args.quick:  # the stored count does not depend on the offline filter's output (module docstring)
         methods = {"stored (shipped)": None} if args.no_live else {"stored (shipped)": None, "live": "live"}
     off = {(m, s): 0 for m in methods for s in (False, True)}
@@ -117,13 +123,13 @@ def main() -> None:
             for swaps in (False, True):
                 raw = webcam_like(truth, seed, swaps)
                 raw = raw.replace(positions=on_grid(raw.positions))  # as a stored session file holds them
-                counts = []
+                counts: list[int] = []
                 for name, config in methods.items():
                     if config == "live":
                         n = live_count(raw, tuple(LIBRARY[exercise].defining_angles))
                         differ += int(n != counts[-1])
                     else:
-                        filtered = None if config is None else process(raw, config=config).filtered
+                        filtered = process(raw, config=config).filtered if isinstance(config, PipelineConfig) else None
                         n = int(analyze_recording(raw, LIBRARY[exercise], filtered=filtered).repetitions)
                         if args.quick:
                             print(f"{exercise:36s} seed {seed} {'swaps' if swaps else '     '}: stored {n}", end="")

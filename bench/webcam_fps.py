@@ -30,7 +30,7 @@ def frames(size: tuple[int, int], n: int) -> list[np.ndarray]:
 
     cap = cv2.VideoCapture(str(sports2d_demo()))
     cap.set(cv2.CAP_PROP_POS_FRAMES, 30)
-    out = []
+    out: list[np.ndarray] = []
     while len(out) < n:
         ok, bgr = cap.read()
         if not ok:
@@ -64,8 +64,8 @@ def main() -> None:
     parser.add_argument("--size", default="640x360")
     parser.add_argument("--people", type=int, nargs="+", default=[1, 2])
     args = parser.parse_args()
-    size = tuple(int(v) for v in args.size.split("x"))
-    images = frames(size, args.frames)
+    width, height = (int(v) for v in args.size.split("x"))
+    images = frames((width, height), args.frames)
     print(f"MediaPipe Python runtime, {args.frames} frames of {args.size}, median of {args.runs} runs")
     for model in ("lite", "full"):
         for people in args.people:

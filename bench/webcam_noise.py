@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +29,15 @@ from kinect_agent.sources.webcam.mapping import to_skeletons  # noqa: E402
 WINDOW_S = 0.3
 MAX_HIP_STEP = 0.03  # image widths per frame: a larger jump of the hips is a switch of person or a lost track
 SPORTS2D_FRAMES = 150  # Sports2D's demo: after ~5 s the subject jumps off the hut and a second person is followed
+
+
+@dataclass(frozen=True)
+class ClipJitter:
+    """One clip's jitter SDs (J, 3) m of its tracked and its inferred joints, and its number of frames."""
+
+    tracked: np.ndarray
+    inferred: np.ndarray
+    frames: int
 
 
 def jitter(positions: np.ndarray, state: np.ndarray, t: np.ndarray, rate: float, want_state: int,
@@ -68,7 +78,7 @@ def main() -> None:
     parser.add_argument("--model", default="lite", choices=("lite", "full"))
     parser.add_argument("--json", type=Path)
     args = parser.parse_args()
-    rows = {}
+    rows: dict[str, ClipJitter] = {}
     for clip in CLIPS:
         batch, _ = landmarks(clip, args.model)
         if clip == "sports2d":
@@ -79,12 +89,12 @@ def main() -> None:
         hips = batch.image[:, [23, 24], :2].mean(axis=1)
         tracked = jitter(mapped.positions, mapped.state, batch.t, RATES[clip], skeleton.TRACKED, hips)
         inferred = jitter(mapped.positions, mapped.state, batch.t, RATES[clip], skeleton.INFERRED, hips)
-        rows[clip] = {"tracked": tracked, "inferred": inferred, "frames": batch.n_frames}
+        rows[clip] = ClipJitter(tracked, inferred, batch.n_frames)
     print(f"jitter SD (mm), {args.model} model, local quadratic over {WINDOW_S} s; median over joints")
     print(f"{'clip':16s} {'x':>6s} {'y':>6s} {'z':>6s}  {'3D/axis':>7s}  {'inferred 3D/axis':>16s}  frames")
     summary = {}
     for clip, r in rows.items():
-        tr, inf = r["tracked"], r["inferred"]
+        tr, inf = r.tracked, r.inferred
         per_axis = np.nanmedian(tr, axis=0) * 1000
         rms = float(np.sqrt(np.nanmean(np.nanmedian(tr, axis=0) ** 2)) * 1000)
         with np.errstate(all="ignore"):
@@ -92,10 +102,10 @@ def main() -> None:
                 float(np.sqrt(np.nanmean(np.nanmedian(inf, axis=0) ** 2)) * 1000) if np.isfinite(inf).any() else np.nan
             )
         summary[clip] = {"x_mm": per_axis[0], "y_mm": per_axis[1], "z_mm": per_axis[2], "rms_axis_mm": rms,
-                         "inferred_rms_axis_mm": rms_inf, "frames": r["frames"]}  # fmt: skip
+                         "inferred_rms_axis_mm": rms_inf, "frames": r.frames}  # fmt: skip
         print(f"{clip:16s} {per_axis[0]:6.1f} {per_axis[1]:6.1f} {per_axis[2]:6.1f}  {rms:7.1f}  {rms_inf:16.1f}  "
-              f"{r['frames']}")  # fmt: skip
-    all_tracked = np.stack([r["tracked"] for r in rows.values()])  # (clips, J, 3)
+              f"{r.frames}")  # fmt: skip
+    all_tracked = np.stack([r.tracked for r in rows.values()])  # (clips, J, 3)
     per_joint = np.nanmedian(all_tracked, axis=0) * 1000  # (J, 3)
     med = np.nanmedian(np.nanmedian(all_tracked, axis=1), axis=0) * 1000  # median joint, median clip, per axis
     print(

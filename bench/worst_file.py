@@ -38,6 +38,7 @@ import time
 import uuid
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from functools import partial
 from pathlib import Path
 
 import httpx
@@ -147,7 +148,9 @@ class Measured:
         return out
 
 
-def measure(endpoint: str, meter: ProcessMeter, budget: tuple[float, int], send: Callable[[], httpx.Response]):
+def measure(
+    endpoint: str, meter: ProcessMeter, budget: tuple[float, int], send: Callable[[], httpx.Response]
+) -> tuple[Measured, httpx.Response]:
     """Returns (Measured, response) of one request whose work runs in meter's process."""
     t0 = time.perf_counter()
     meter.start()
@@ -244,15 +247,15 @@ def run(url: str, data: bytes, duration_s: float, n_frames: int, only: list[str]
             path = f"{s}/export?format={fmt}"
             if small:  # built in the request, every time: held to the request's own bound
                 rows.append(_repeated(f"GET /export?format={fmt} (in the request)", on_server,
-                                      work_budget.EXPORT_IN_REQUEST, lambda u=path: patient.get(u),
+                                      work_budget.EXPORT_IN_REQUEST, partial(patient.get, path),
                                       repeat))  # fmt: skip
                 continue
             row, _ = measure(f"export?format={fmt} build (worker job)", on_exporter, budget("export"),
-                             lambda u=path: _export_built(patient, u))  # fmt: skip
+                             partial(_export_built, patient, path))  # fmt: skip
             rows.append(row)
             print(row, flush=True)
             rows.append(_repeated(f"GET /export?format={fmt} (stored)", on_server, budget("detail"),
-                                  lambda u=path: patient.get(u), repeat))  # fmt: skip
+                                  partial(patient.get, path), repeat))  # fmt: skip
         reads = [
             ("GET /sessions/{id}", patient, s, "detail"),
             ("GET /detail (stored)", patient, f"{s}/detail", "detail"),
@@ -263,7 +266,7 @@ def run(url: str, data: bytes, duration_s: float, n_frames: int, only: list[str]
         ]
         reads = [r for r in reads if not only or any(o in r[0] for o in only)]
         for name, client, path, kind in reads:
-            row, _ = measure(name, on_server, budget(kind), lambda c=client, u=path: c.get(u))
+            row, _ = measure(name, on_server, budget(kind), partial(client.get, path))
             rows.append(row)
             print(row, flush=True)
         if only and not any("replay" in o for o in only):
@@ -271,11 +274,11 @@ def run(url: str, data: bytes, duration_s: float, n_frames: int, only: list[str]
         for layer in ("raw", ""):
             what = "replay?layer=raw" if layer else "replay"
             row, _ = measure(f"{what} build (worker job)", on_worker, budget("replay"),
-                             lambda la=layer: _replay_built(patient, sid, la))  # fmt: skip
+                             partial(_replay_built, patient, sid, layer))  # fmt: skip
             rows.append(row)
             print(row, flush=True)
             path = f"{s}/replay" + (f"?layer={layer}" if layer else "")
-            row, _ = measure(f"GET /{what} (stored)", on_server, budget("detail"), lambda u=path: patient.get(u))
+            row, _ = measure(f"GET /{what} (stored)", on_server, budget("detail"), partial(patient.get, path))
             rows.append(row)
             print(row, flush=True)
     finally:
@@ -316,7 +319,7 @@ def sf_formats() -> tuple[str, ...]:
     return FORMATS
 
 
-def print_table(db: str, rows: list[Measured], info: dict) -> None:
+def print_table(db: str, rows: list[Measured], info: dict[str, float]) -> None:
     """Prints one database's rows."""
     print(f"\nWorst accepted file, db {db}: {info['n_frames']} frames, {info['duration_s']:.0f} s, "
           f"{info['file_mib']:.1f} MiB")  # fmt: skip
@@ -353,16 +356,18 @@ def main() -> int:
         args.cache.write_bytes(worst_file(n_frames, duration_s * (n_frames - 1) / n_frames))
     data = args.cache.read_bytes()
     decoded = sf.decode(data, max_frames=n_frames, max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)
-    info = {"n_frames": decoded.raw.n_frames, "duration_s": decoded.raw.duration, "file_mib": len(data) / 2**20}
+    file_frames, file_duration_s = decoded.raw.n_frames, decoded.raw.duration
+    info = {"n_frames": file_frames, "duration_s": file_duration_s, "file_mib": len(data) / 2**20}
     print(f"file: {info}", flush=True)
-    report, failures = {"file": info, "databases": {}}, []
+    databases: dict[str, list[dict[str, object]]] = {}
+    report, failures = {"file": info, "databases": databases}, []
     with tempfile.TemporaryDirectory() as tmp:
         for db in args.db or ["sqlite"]:
             url = demo_clinic(None if db == "sqlite" else db, Path(tmp))
             label = "SQLite" if db == "sqlite" else "PostgreSQL"
-            rows = run(url, data, info["duration_s"], info["n_frames"], args.only, args.repeat)
+            rows = run(url, data, file_duration_s, file_frames, args.only, args.repeat)
             print_table(label, rows, info)
-            report["databases"][label] = [asdict(r) for r in rows]
+            databases[label] = [asdict(r) for r in rows]
             failures += [f"{label}: {f}" for r in rows for f in r.failures]
     if args.json:
         args.json.write_text(json.dumps(report, indent=1))

@@ -14,6 +14,8 @@ Missing samples (NaN) skip the update. Noise from the data, per coordinate:
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from bench.baselines._common import check_input
@@ -54,27 +56,54 @@ def _initial(x: np.ndarray, r: np.ndarray, P0: np.ndarray | None) -> tuple[np.nd
     return s0, P
 
 
-def kalman_forward(
-    t: np.ndarray, x: np.ndarray, q: np.ndarray, r: np.ndarray, P0: np.ndarray | None = None, store: bool = True
-) -> tuple[np.ndarray | None, ...]:
-    """Runs the CV Kalman filter over x (T, C) m with q (C,) m²/s³ and r (C,) m.
+@dataclass(frozen=True)
+class ForwardPass:
+    """A forward pass of the CV Kalman filter: predicted and filtered states (T, C, 2) [m, m/s] and covariances
+    (T, C, 2, 2), and the (capped) innovation log-likelihood (C,) per channel."""
 
-    Returns (s_pred (T, C, 2), P_pred (T, C, 2, 2), s_filt, P_filt, loglik (C,)); the arrays are None when
-    store is False. P0: (2, 2) or (C, 2, 2) initial covariance (default: 4r² and (1 m/s)²) at the first frame.
+    s_pred: np.ndarray
+    P_pred: np.ndarray
+    s_filt: np.ndarray
+    P_filt: np.ndarray
+    loglik: np.ndarray
+
+
+def kalman_forward(
+    t: np.ndarray, x: np.ndarray, q: np.ndarray, r: np.ndarray, P0: np.ndarray | None = None
+) -> ForwardPass:
+    """Runs the CV Kalman filter over x (T, C) m with q (C,) m²/s³ and r (C,) m; returns every step's states.
+
+    P0: (2, 2) or (C, 2, 2) initial covariance (default: 4r² and (1 m/s)²) at the first frame.
     """
+    T, C = x.shape
+    arrays = [np.empty((T, C, 2)), np.empty((T, C, 2, 2)), np.empty((T, C, 2)), np.empty((T, C, 2, 2))]
+    ll = _filter(t, x, q, r, P0, arrays)
+    s_pred, P_pred, s_filt, P_filt = arrays
+    return ForwardPass(s_pred, P_pred, s_filt, P_filt, ll)
+
+
+def kalman_loglik(
+    t: np.ndarray, x: np.ndarray, q: np.ndarray, r: np.ndarray, P0: np.ndarray | None = None
+) -> np.ndarray:
+    """Returns the (capped) innovation log-likelihood (C,) of the CV Kalman filter over x (T, C) m (as
+    kalman_forward, without keeping the states)."""
+    return _filter(t, x, q, r, P0, None)
+
+
+def _filter(
+    t: np.ndarray, x: np.ndarray, q: np.ndarray, r: np.ndarray, P0: np.ndarray | None, arrays: list[np.ndarray] | None
+) -> np.ndarray:
+    """Runs the filter; writes s_pred, P_pred, s_filt, P_filt into `arrays` unless None; returns loglik (C,)."""
     T, C = x.shape
     s, P = _initial(x, r, P0)
     R = r**2
     ll = np.zeros(C)
-    arrays = (
-        [np.empty((T, C, 2)), np.empty((T, C, 2, 2)), np.empty((T, C, 2)), np.empty((T, C, 2, 2))] if store else None
-    )
     for k in range(T):
         if k:
             F, Qu = _transition(float(t[k] - t[k - 1]))
             s = s @ F.T
             P = F @ P @ F.T + q[:, None, None] * Qu
-        if store:
+        if arrays is not None:
             arrays[0][k], arrays[1][k] = s, P
         z = x[k]
         ok = np.isfinite(z)
@@ -85,11 +114,9 @@ def kalman_forward(
         P_upd = P - K[:, :, None] * P[:, None, 0, :]
         P = np.where(ok[:, None, None], 0.5 * (P_upd + np.swapaxes(P_upd, 1, 2)), P)
         ll += np.where(ok & (k > 0), -0.5 * (np.log(2.0 * np.pi * S) + np.minimum(nu**2 / S, INNOVATION_CAP)), 0.0)
-        if store:
+        if arrays is not None:
             arrays[2][k], arrays[3][k] = s, P
-    if not store:
-        return None, None, None, None, ll
-    return (*arrays, ll)
+    return ll
 
 
 def rts_smooth(
@@ -115,7 +142,7 @@ def choose_q(t: np.ndarray, x: np.ndarray, r: np.ndarray, grid: np.ndarray = Q_G
     C, G = x.shape[1], len(grid)
     xx = np.repeat(x, G, axis=1)  # channel-major: channel c, grid g at c·G + g
     qq = np.tile(grid, C)
-    *_, ll = kalman_forward(t, xx, qq, np.repeat(r, G), store=False)
+    ll = kalman_loglik(t, xx, qq, np.repeat(r, G))
     return grid[np.argmax(ll.reshape(C, G), axis=1)]
 
 
@@ -138,8 +165,8 @@ def cv_kalman_rts(
     q_arr = choose_q(t, x, r_arr) if q is None else np.broadcast_to(np.asarray(q, dtype=np.float64), (C,)).copy()
     if np.any(r_arr <= 0) or np.any(q_arr < 0):
         raise ValueError("r must be > 0 m and q >= 0 m²/s³")
-    s_pred, P_pred, s_filt, P_filt, _ = kalman_forward(t, x, q_arr, r_arr, P0)
-    s_s, _ = rts_smooth(t, s_pred, P_pred, s_filt, P_filt)
+    fwd = kalman_forward(t, x, q_arr, r_arr, P0)
+    s_s, _ = rts_smooth(t, fwd.s_pred, fwd.P_pred, fwd.s_filt, fwd.P_filt)
     out = s_s[..., 0]
     out[:, ~np.isfinite(x).any(axis=0)] = np.nan
     return out.reshape(shape)

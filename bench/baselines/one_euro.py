@@ -27,7 +27,8 @@ BETA_S_PER_M = 0.1
 D_CUTOFF_HZ = 1.0
 
 
-def _alpha(cutoff_hz: np.ndarray, te: float) -> np.ndarray:
+def _alpha(cutoff_hz: float | np.ndarray, te: np.ndarray) -> np.ndarray:
+    """Returns the smoothing factor for a cutoff (Hz, scalar or per coordinate) over steps te (s, per coordinate)."""
     tau = 1.0 / (2.0 * np.pi * cutoff_hz)
     return 1.0 / (1.0 + tau / te)
 
