@@ -33,6 +33,7 @@ from backend.i18n import (
     translations,
     translator,
 )
+from backend.records import report
 from backend.reminders.service import UNSUBSCRIBE_PATH, patient_of_token, unsubscribe
 from backend.reminders.times import zone_names
 from backend.schemas import IdPath
@@ -41,7 +42,6 @@ from frontend import vendor_assets
 
 HERE = Path(__file__).resolve().parent
 STATIC = HERE / "static"
-REPORT_DEFAULT_DAYS = 28  # the patient page's report form: the last 4 weeks, today included
 
 
 def _package_dir(name: str) -> Path:
@@ -267,7 +267,7 @@ def patient_detail_page(
         )
     last = dt.datetime.now(dt.UTC).date()
     return _page(request, "patient_detail.html", caller, patient_id=patient_id,
-                 report_from=(last - dt.timedelta(days=REPORT_DEFAULT_DAYS - 1)).isoformat(),
+                 report_from=(last - dt.timedelta(days=report.DEFAULT_DAYS - 1)).isoformat(),
                  report_to=last.isoformat())  # fmt: skip
 
 

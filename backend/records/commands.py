@@ -21,7 +21,7 @@ from backend.deps import Caller, require_patient_access
 from backend.exceptions import InvalidInput
 from backend.records.archive import build_archive
 from backend.records.erasure import erase_patient
-from backend.records.report import Period, build_report
+from backend.records.report import DEFAULT_DAYS, Period, build_report
 from backend.users.models import User
 
 VIA = {"via": "coach-server"}
@@ -101,7 +101,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("patient_id", type=int, help="the patient's id")
     p.add_argument("--admin", required=True, help="e-mail of the admin this is done for (written to the audit log)")
     p.add_argument("--out", help="archive, report: the new file to write")
-    p.add_argument("--from", dest="start", help="report: first day, YYYY-MM-DD (default: 12 weeks before --to)")
+    p.add_argument(
+        "--from",
+        dest="start",
+        help=f"report: first day, YYYY-MM-DD (default: the {DEFAULT_DAYS} days up to --to, both included)",
+    )
     p.add_argument("--to", dest="end", help="report: last day, YYYY-MM-DD (default: today, UTC)")
     p.add_argument("--paper", choices=("a4", "letter"), default="a4", help="report: paper size (default a4)")
     p.add_argument("--confirm-email", help="erase: the patient's e-mail address, typed again")

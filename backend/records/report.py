@@ -39,6 +39,7 @@ from backend.users.models import User
 from kinect_agent.analysis.document import read_if_readable
 
 PAPERS = {"a4": A4, "letter": LETTER}
+DEFAULT_DAYS = 28  # a period nobody chose: the last 4 weeks, its last day included (API, CLI and the page's form)
 MARKERS = ("FilledCircle", "FilledSquare", "FilledTriangle", "Cross", "FilledDiamond", "Circle")
 DASHES = (None, (4, 2), (1, 2), (6, 2, 1, 2), (2, 2), (8, 3))
 
@@ -57,12 +58,13 @@ class Period:
 
     @classmethod
     def asked(cls, start: dt.date | None, end: dt.date | None) -> Period:
-        """Returns the period a caller asked for: `end` defaults to today (UTC), `start` to 12 weeks before `end`.
+        """Returns the period a caller asked for: `end` defaults to today (UTC), `start` to DEFAULT_DAYS days up to
+        `end` (both included).
 
         Raises InvalidInput when it runs backwards or lasts more than 3 years.
         """
         end = end or dt.datetime.now(dt.UTC).date()
-        start = start or end - dt.timedelta(weeks=12)
+        start = start or end - dt.timedelta(days=DEFAULT_DAYS - 1)
         if start > end or (end - start).days > 3 * 366:
             raise InvalidInput(f"the period from={start} to={end} must run forwards and last at most 3 years")
         return cls(start, end)

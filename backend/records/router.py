@@ -15,7 +15,7 @@ from backend.deps import AdminCaller, CurrentCaller, DbSession, require_patient_
 from backend.exceptions import AUTH_ERRORS, Forbidden, InvalidInput, PatientNotFound, error_responses
 from backend.records.archive import build_archive
 from backend.records.erasure import erase_patient
-from backend.records.report import Period, build_report
+from backend.records.report import DEFAULT_DAYS, Period, build_report
 from backend.schemas import IdPath
 from backend.storage import StorageError
 
@@ -113,7 +113,8 @@ def progress_report(
     caller: CurrentCaller,
     db_session: DbSession,
     start: Annotated[
-        dt.date | None, Query(alias="from", description="first day (default: 12 weeks before `to`)")
+        dt.date | None,
+        Query(alias="from", description=f"first day (default: the {DEFAULT_DAYS} days up to `to`, both included)"),
     ] = None,
     end: Annotated[dt.date | None, Query(alias="to", description="last day (default: today, UTC)")] = None,
     paper: Literal["a4", "letter"] = "a4",

@@ -75,3 +75,18 @@ def test_a_backwards_period_is_a_clear_422(client, make_patient_with_therapist, 
     response = client.get(f"/api/v1/patients/{patient.id}/report.pdf", headers=auth_headers(therapist),
                           params={"from": "2026-11-20", "to": "2026-11-01"})  # fmt: skip
     assert response.status_code == 422 and "must run forwards" in response.json()["detail"]
+
+
+def test_a_period_nobody_chose_is_the_last_4_weeks_as_on_the_page(client, make_patient_with_therapist, auth_headers,
+                                                                   tmp_path):  # fmt: skip
+    """The API (and the CLI, which reads its period the same way) and the patient page's form start from the same
+    period: the 28 days up to today, both included."""
+    patient, therapist = make_patient_with_therapist()
+    response = client.get(f"/api/v1/patients/{patient.id}/report.pdf", headers=auth_headers(therapist))
+    assert response.status_code == 200, response.text
+    today = dt.datetime.now(dt.UTC).date()
+    first = today - dt.timedelta(days=27)
+    text = " ".join(_pdf_text(response.content, tmp_path).split())
+    assert f"Period {first:%d %b %Y} to {today:%d %b %Y} (4.0 weeks)" in text, text
+    page = client.get(f"/therapist/patients/{patient.id}", headers=auth_headers(therapist))
+    assert page.status_code == 200 and f'value="{first.isoformat()}"' in page.text, "the page's form starts there too"
