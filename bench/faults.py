@@ -18,7 +18,8 @@ Each trial records one simulated set (2-3 repetitions) and delivers it through o
     cut_request        the proxy closes the connection after a random part of the request
     lost_response      the proxy lets the server store the set and answer, then closes before the answer arrives
     sent_twice         the same file delivered again from a second queue (a restored backup, a second agent)
-    disk_full          writing the filtered set to the queue fails with ENOSPC; the raw copy stays; next start
+    disk_full          writing the filtered set to the queue fails with ENOSPC once or twice: the agent says so, keeps
+                       the set in memory and writes it once there is room again (every RETRY_S, 10 s); then uploads
     broken_file        a file truncated on purpose: it must end in rejected/, not stored
 Checked by content, after every trial and at the end: each captured set is stored exactly once, with the SHA-256 of
 the file the agent sent (its receipt), no session id or content stored twice, and only the broken files set aside.
@@ -293,7 +294,8 @@ class Bench:
             drain(second, uploader)
 
     def _record_onto_a_full_disk(self) -> None:
-        """Records one set in this process whose queue write of the filtered set fails with ENOSPC."""
+        """Records one set in this process whose queue write of the filtered set fails with ENOSPC once or twice
+        (the family frees space meanwhile); the agent must say so and queue the set once there is room."""
         import kinect_agent.queue as queue_module
         from kinect_agent.capture import capture, queue_session
         from kinect_agent.config import load_config
@@ -302,22 +304,22 @@ class Bench:
         queue = queue_module.SessionQueue(config.queue_dir)
         session_id, real = str(uuid.uuid4()), queue_module._write_durably
         calls: list[Path] = []
+        refusals, told = self.rng.randint(1, 2), []
 
         def full_disk(path: Path, data: bytes) -> None:
             calls.append(path)
-            if path.parent == queue.pending_dir:
+            if path.parent == queue.pending_dir and sum(p.parent == queue.pending_dir for p in calls) <= refusals:
                 raise OSError(errno.ENOSPC, "No space left on device", str(path))
             real(path, data)
 
         queue_module._write_durably = full_disk
         try:
             rec = capture("simulator", exercise=self.rng.choice(EXERCISES), reps=2, seed=self.rng.randint(0, 10**6))
-            try:
-                queue_session(queue, rec, session_id=session_id, recorded_by=config.recorded_by)
-            except OSError:
-                pass
+            queue_session(queue, rec, session_id=session_id, recorded_by=config.recorded_by, say=told.append)
         finally:
             queue_module._write_durably = real
+        if not any("disk of this computer is full" in t for t in told):
+            raise RuntimeError(f"disk_full: the agent did not say the disk was full (said {told})")
         if any(p.parent == queue.captured_dir for p in calls):
             self.captured[session_id] = "disk_full"
         for lock in queue._locks.values():  # this "process" is gone: its locks with it
@@ -410,6 +412,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--trials", type=int, default=200)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--json", type=Path)
+    parser.add_argument("--kinds", nargs="+", choices=KINDS, default=list(KINDS), help="the faults to draw from")
     args = parser.parse_args(argv)
     folder = Path(tempfile.mkdtemp(prefix="coach-faults-"))
     bench = Bench(f"sqlite:///{folder / 'faults.db'}", folder, args.seed)
@@ -417,7 +420,7 @@ def main(argv: list[str] | None = None) -> int:
     started = time.perf_counter()
     try:
         for k in range(args.trials):
-            kind = bench.rng.choice(KINDS)
+            kind = bench.rng.choice(args.kinds)
             per_kind[kind] += 1
             bench.trial(kind)
             if (k + 1) % 20 == 0:
