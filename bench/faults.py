@@ -304,7 +304,7 @@ class Bench:
         queue = queue_module.SessionQueue(config.queue_dir)
         session_id, real = str(uuid.uuid4()), queue_module._write_durably
         calls: list[Path] = []
-        refusals, told = self.rng.randint(1, 2), []
+        refusals, told = self.rng.randint(1, 2), list[str]()
 
         def full_disk(path: Path, data: bytes) -> None:
             calls.append(path)
