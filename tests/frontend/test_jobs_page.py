@@ -75,7 +75,8 @@ def test_an_admin_reanalyses_one_patient_and_follows_it(browser, live_server):
             # two tries instead of three for this job (its own max_attempts column, as a job's row allows): it fails
             # after the 5 s retry, not 30 s later; the delays and the attempt limit are tests/backend/records' part
             with Session(engine) as db, db.begin():
-                db.execute(sa.update(Job).where(Job.key.like(f"{KIND}:{lost['id']}:%")).values(max_attempts=2))
+                two = db.execute(sa.update(Job).where(Job.key.like(f"{KIND}:{lost['id']}:%")).values(max_attempts=2))
+            assert two.rowcount == 1, f"{two.rowcount} jobs of session {lost['id']}"
             expect(row).to_contain_text("Finished, 1 failed", timeout=90_000)  # the page polled by itself
             failed = page.locator(f'#jobs tr[data-status="failed"]:has(a[href$="/sessions/{lost["id"]}"])')
             expect(failed).to_contain_text("The session's file is missing from the object store")
