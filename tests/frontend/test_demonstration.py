@@ -8,6 +8,7 @@ import re
 
 import pytest
 from axe_playwright_python.sync_playwright import Axe
+from playwright.sync_api import TimeoutError as PlaywrightTimeout
 from playwright.sync_api import expect
 
 from tests.frontend.conftest import (
@@ -22,6 +23,17 @@ from tests.frontend.conftest import (
 )
 
 pytestmark = pytest.mark.browser
+MOVES_MS = 5_000  # how long a looping figure may take to draw another frame on a loaded machine
+
+
+def _moves(canvas, slug: str) -> None:
+    """Asserts that the figure draws a different picture within MOVES_MS (a figure that does not move never does)."""
+    first = canvas.evaluate("(c) => c.toDataURL()")
+    try:
+        canvas.page.wait_for_function("([c, first]) => c.toDataURL() !== first", arg=[canvas.element_handle(), first],
+                                      timeout=MOVES_MS, polling=100)  # fmt: skip
+    except PlaywrightTimeout:
+        pytest.fail(f"the figure of {slug} does not move")
 
 
 @pytest.mark.parametrize("width,height", [(1366, 900), (768, 1024), (390, 844)])
@@ -47,9 +59,7 @@ def test_each_exercise_shows_a_moving_figure_its_instructions_and_the_week_badge
             expect(li.locator(".week-label")).to_have_text("this week")
             expect(li.locator(".tick")).to_have_text(re.compile(r"^(\d+×|✓)$"))
             expect(canvas).to_have_attribute("aria-label", re.compile(f"^How to do {library[slug]['name']}"))
-            first = canvas.evaluate("(c) => c.toDataURL()")
-            page.wait_for_timeout(700)
-            assert canvas.evaluate("(c) => c.toDataURL()") != first, f"the figure of {slug} does not move"
+            _moves(canvas, slug)
         shot(page, f"demonstration-{width}")
         bad = [v["id"] for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
         assert not bad, bad
@@ -114,9 +124,7 @@ def test_every_uiprmd_movement_shows_a_moving_figure_in_the_view_it_needs(browse
             canvas = li.locator("canvas.demo-figure")
             expect(canvas).to_have_attribute("data-view", UI_PRMD_VIEWS[slug])
             assert int(canvas.get_attribute("data-frames")) >= 30, slug
-            first = canvas.evaluate("(c) => c.toDataURL()")
-            page.wait_for_timeout(700)
-            assert canvas.evaluate("(c) => c.toDataURL()") != first, f"the figure of {slug} does not move"
+            _moves(canvas, slug)
         shot(page, f"demonstration-uiprmd-{width}")
         assert not page.js_errors, page.js_errors
     with open_page(browser, live_server.url, width, height, reduced_motion="reduce") as page:  # still, at the peak

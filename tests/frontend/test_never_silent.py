@@ -152,7 +152,9 @@ def test_server_and_agent_stopped_and_restarted_under_the_page(browser, live_ser
             )  # back on the same address
             server.__enter__()
             expect(banner).to_contain_text("The connection is back", timeout=15_000)
-            # the agent's stream was open when the server stopped: the page never says "ready" from that record
+            # the agent's stream was open when the server stopped: the page never says "ready" from that record.
+            # Most of this test's time is this wait: the record turns stale backend.live.service.STALE_S (45 s, no
+            # setting) after the agent's last heartbeat, however fast the restart (timed: 48 s online to offline)
             expect(status).to_have_attribute("data-state", "offline", timeout=60_000)
             assert "online" not in page.evaluate("window.statesSeen"), page.evaluate("window.statesSeen")
             expect(start).to_be_hidden()
