@@ -25,8 +25,8 @@ PAIRING_CODE_LENGTH = 8
 MAX_CONCURRENT_HASHES = 2
 HASH_WAIT_S = 10.0  # a request waits this long for a slot, then gets 503 PasswordCheckBusy with Retry-After
 
-_hasher = PasswordHasher()  # argon2id with the library's current recommended parameters
-_DUMMY_HASH = _hasher.hash("not-a-real-password")
+PASSWORD_HASHER = PasswordHasher()  # argon2id, the library's recommended parameters (tests/backend/test_security.py)
+DUMMY_HASH = PASSWORD_HASHER.hash("not-a-real-password")  # checked when there is no user, so that it takes as long
 _hash_slots = threading.BoundedSemaphore(MAX_CONCURRENT_HASHES)
 T = TypeVar("T")
 
@@ -46,7 +46,7 @@ def with_hash_slot(work: Callable[[], T]) -> T:
 
 def hash_password(password: str) -> str:
     """Returns the argon2id hash of a password."""
-    return with_hash_slot(lambda: _hasher.hash(password))
+    return with_hash_slot(lambda: PASSWORD_HASHER.hash(password))
 
 
 def verify_password(password_hash: str | None, password: str) -> bool:
@@ -54,7 +54,7 @@ def verify_password(password_hash: str | None, password: str) -> bool:
 
     def check() -> bool:
         try:
-            return _hasher.verify(password_hash or _DUMMY_HASH, password) and password_hash is not None
+            return PASSWORD_HASHER.verify(password_hash or DUMMY_HASH, password) and password_hash is not None
         except (VerificationError, InvalidHashError):
             return False
 

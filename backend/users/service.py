@@ -46,8 +46,17 @@ def get_user_by_email(*, db_session: Session, email: str) -> User | None:
     return db_session.scalar(select(User).where(User.email == email.strip().lower()))
 
 
-def create_user(*, db_session: Session, email: str, password: str | None, role: str, full_name: str = "") -> User:
-    """Creates a user; raises EmailAlreadyRegistered when the e-mail is taken."""
+def create_user(
+    *,
+    db_session: Session,
+    email: str,
+    password: str | None,
+    role: str,
+    full_name: str = "",
+    password_hash: str | None = None,
+) -> User:
+    """Creates a user with the hash of password, or with password_hash (one made by hash_password) when password is
+    None; raises EmailAlreadyRegistered when the e-mail is taken."""
     email = email.strip().lower()
     if get_user_by_email(db_session=db_session, email=email) is not None:
         raise EmailAlreadyRegistered(f"a user with email {email} exists")
@@ -55,7 +64,7 @@ def create_user(*, db_session: Session, email: str, password: str | None, role: 
         email=email,
         full_name=full_name,
         role=role,
-        password_hash=hash_password(password) if password else None,
+        password_hash=hash_password(password) if password else password_hash,
         is_active=True,
         created_at=utcnow(),
     )

@@ -11,11 +11,13 @@ import os
 from collections.abc import Iterator
 
 import pytest
+from argon2 import PasswordHasher
 from fastapi.testclient import TestClient
 from sqlalchemy import create_engine, event, select, text
 from sqlalchemy.engine import Connection, Engine
 from sqlalchemy.orm import Session
 
+from backend import security
 from backend.config import Settings, get_settings
 from backend.database import get_db, import_all_models, make_engine, request_session, utcnow
 from backend.devices.models import Device
@@ -30,6 +32,22 @@ from backend.users.service import create_api_token
 import_all_models()
 
 PASSWORD = "correct horse battery"
+# argon2id at its cheapest (1 pass over 1 MiB, one lane: under 1 ms of CPU instead of about 0.25 s): the same code
+# path and hash format as the product's, for a suite that hashes and checks hundreds of passwords (Django's test
+# settings pick a fast hasher the same way). tests/backend/test_security.py holds the product's own hasher to the
+# library's recommended parameters.
+TEST_PASSWORD_HASHER = PasswordHasher(time_cost=1, memory_cost=1024, parallelism=1)
+
+
+@pytest.fixture(scope="session", autouse=True)
+def fast_password_hashing() -> Iterator[None]:
+    """Makes backend.security hash and check passwords with TEST_PASSWORD_HASHER for the run (its dummy hash too, so
+    that a login without a user costs what one with a user does); tests/frontend/conftest.py imports it for the demo
+    clinic it seeds."""
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(security, "PASSWORD_HASHER", TEST_PASSWORD_HASHER)
+        patch.setattr(security, "DUMMY_HASH", TEST_PASSWORD_HASHER.hash("not-a-real-password"))
+        yield
 
 
 def _pg_engine(url: str, schema: str) -> Engine:

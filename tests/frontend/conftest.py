@@ -27,7 +27,7 @@ from sqlalchemy.orm import Session
 from backend.database import import_all_models
 from backend.demo import DEMO_PASSWORD, seed_demo
 from backend.migrate import upgrade
-from tests.backend.conftest import build_engine
+from tests.backend.conftest import build_engine, fast_password_hashing  # noqa: F401  (the seeded users' hashes)
 from tests.backend.khs_files import make_khs
 
 import_all_models()
