@@ -8,10 +8,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from kinect_agent.blas_threads import one_blas_thread
+
 REPO = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("COACH_SHARED_DIR", REPO.parent / "shared"))
 DATA = SHARED / "data"
 REFERENCE = SHARED / "reference"
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _one_blas_thread() -> None:
+    """BLAS on one thread for the whole run, as the agent and the server run it (kinect_agent.blas_threads). Else a
+    test's speed depended on whether an earlier test had created the app (create_app sets it for the process): the
+    online filter alone stepped 10x slower on a busy machine (628 frames: 21.6 s instead of 2.2 s, 2026-11-27)."""
+    one_blas_thread()
 
 
 @pytest.fixture

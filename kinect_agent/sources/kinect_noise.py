@@ -29,8 +29,8 @@ Known limit, gross excursions of the Gaussian component: 0.5-1.7 % of the clean 
     errors off the table, so it was not kept. bench/accuracy.py reports them (precision_incl_gross).
 Bone-length errors (see gaussian_offsets): each bone aims at true length + a commanded error (mean + SD · AR(1));
     a greedy pass down the tree puts each child where its distance sphere meets the wanted-length sphere around the
-    measured parent, then alternating projections (_refine) trade the errors between neighbouring bones while every
-    joint stays exactly on its distance sphere. Where the spheres cannot carry the tabled error, the achieved mean
+    measured parent, then alternating projections (refine_offsets) trade the errors between neighbouring bones while
+    every joint stays exactly on its distance sphere. Where the spheres cannot carry the tabled error, the achieved mean
     falls short; a few calibration rounds on a subsample (_commanded_errors) aim past the table so the achieved mean
     and SD match it. Measured on 4 min of simulated squats: 10-14 of the 14 segments within 15 % in mean and SD for
     every setting. Known limits: Kinect 1 PELVIC (the tabled ROOT/HIP offsets and an 89 mm pelvis cannot both shorten
@@ -55,6 +55,7 @@ from kinect_agent import skeleton
 from kinect_agent.errors import AgentError
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INFERRED, NOT_TRACKED, TRACKED
+from kinect_agent.sources import _kinect_noise_numba
 
 CALIBRATION_DIR = Path(__file__).parent / "calibration"
 TABLE_FILES = (
@@ -323,7 +324,7 @@ def gaussian_offsets(
     best = candidates[int(np.argmin(shortfall))]
     off = _propagate(pos, dist, zeta, R_world_pelvis @ best, bone_mean, bone_sd)[0]
     delta, sd = _commanded_errors(pos, dist, zeta, off, bone_mean, bone_sd)
-    return _refine(pos, dist, off, skeleton.bone_lengths(pos) + delta + sd * zeta)
+    return refine_offsets(pos, dist, off, skeleton.bone_lengths(pos) + delta + sd * zeta)
 
 
 REFINE_SWEEPS = 25
@@ -336,8 +337,9 @@ def _commanded_errors(
     pos: np.ndarray, dist: np.ndarray, zeta: np.ndarray, off: np.ndarray, bone_mean: np.ndarray, bone_sd: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Returns (delta (19,), sd (19,)) m: the bone-length errors to aim at so that the achieved ones have the tabled
-    mean and SD. Where the distance spheres cannot carry the tabled error, _refine falls short by a roughly constant
-    amount; a few rounds on a subsample of frames measure that shortfall and aim past it (bounded to 3 tabled SDs)."""
+    mean and SD. Where the distance spheres cannot carry the tabled error, refine_offsets falls short by a roughly
+    constant amount; a few rounds on a subsample of frames measure that shortfall and aim past it (bounded to 3
+    tabled SDs)."""
     seg_bone = np.array([k for k, (_, c) in enumerate(skeleton.BONES) if c in _SEGMENT_OF_CHILD])
     seg_index = np.array([_SEGMENT_OF_CHILD[skeleton.BONES[k][1]] for k in seg_bone])
     target_mean, target_sd = bone_mean[seg_index], bone_sd[seg_index]
@@ -349,7 +351,8 @@ def _commanded_errors(
     true_len = skeleton.bone_lengths(p)
     for _ in range(CALIBRATION_ROUNDS):
         achieved = (
-            skeleton.bone_lengths(p + _refine(p, d, o, true_len + delta + sd * z))[:, seg_bone] - true_len[:, seg_bone]
+            skeleton.bone_lengths(p + refine_offsets(p, d, o, true_len + delta + sd * z))[:, seg_bone]
+            - true_len[:, seg_bone]
         )
         step = np.clip(target_mean - achieved.mean(axis=0), -3 * target_sd, 3 * target_sd)
         delta[seg_bone] = np.clip(delta[seg_bone] + step, target_mean - 3 * target_sd, target_mean + 3 * target_sd)
@@ -358,18 +361,29 @@ def _commanded_errors(
     return delta, sd
 
 
-def _refine(pos: np.ndarray, dist: np.ndarray, off: np.ndarray, wanted: np.ndarray) -> np.ndarray:
+def refine_offsets(
+    pos: np.ndarray, dist: np.ndarray, off: np.ndarray, wanted: np.ndarray, *, compiled: bool = True
+) -> np.ndarray:
     """Returns offsets (T, J, 3) m closer to the wanted bone lengths (T, 19) with |offset| = dist (T, J) exactly.
 
     Alternating projections (position-based-dynamics style), vectorised over frames: each sweep moves both ends of
     every bone towards its wanted length, then puts every joint back on its distance sphere around the truth.
+    compiled: the sweeps in _kinect_noise_numba's kernel when numba is installed (the same offsets bit for bit as
+    numpy's, compiled=False).
     """
     truth = np.ascontiguousarray(pos.transpose(1, 0, 2))  # (J, T, 3): one contiguous block per joint
     m = truth + off.transpose(1, 0, 2)
-    radius = dist.T[..., None]  # (J, T, 1)
     wanted_by_bone = np.ascontiguousarray(wanted.T)  # (19, T)
     parents, children = skeleton.PARENT[1:], np.arange(1, skeleton.J)
     gain = [0.5 if c in _SEGMENT_OF_CHILD else UNTABLED_GAIN for c in children]
+    if compiled and _kinect_noise_numba.AVAILABLE:
+        radius_jt = np.ascontiguousarray(dist.T, dtype=np.float64)  # (J, T)
+        _kinect_noise_numba.refine_sweeps(
+            truth, m, radius_jt, wanted_by_bone, np.ascontiguousarray(parents, dtype=np.int64),
+            children.astype(np.int64), np.array(gain), REFINE_SWEEPS,
+        )  # fmt: skip
+        return (m - truth).transpose(1, 0, 2)
+    radius = dist.T[..., None]  # (J, T, 1)
     for _ in range(REFINE_SWEEPS):
         for k in range(len(skeleton.BONES)):
             p, c = parents[k], children[k]

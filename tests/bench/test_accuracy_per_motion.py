@@ -8,6 +8,8 @@ ideal 2 Hz low-pass of the error stays above it), and the elbow/knee target on C
 UI-PRMD m01 at 60° (off by 0.1-2.6° on one to three seeds).
 """
 
+import copy
+
 import pytest
 
 from bench import accuracy
@@ -22,14 +24,16 @@ KNOWN_LOSSES = {("hdm05_squat1Reps", 60, 2, "cv_kalman_rts"): 2.0, ("ui_prmd_m01
 
 
 @pytest.fixture(scope="module")
-def rows() -> dict[tuple[str, int, int], dict]:
-    """{(motion, view, seed): bench/accuracy.py's result row}: the quick motions, every view and seed."""
-    config = accuracy.PipelineConfig()
-    out = {}
-    for motion in accuracy.motions(quick=True):
-        for view in accuracy.MOTION_VIEWS:
-            for seed in SEEDS:
-                out[motion.name, view, seed] = accuracy.run_motion(motion, view, seed, config)
+def rows(quick_accuracy: dict) -> dict[tuple[str, int, int], dict]:
+    """{(motion, view, seed): bench/accuracy.py's result row}: the quick motions, every view and seed, with the default
+    PipelineConfig: the rows of the quick run's results file (tests/bench/conftest.py), which computes exactly these
+    (accuracy.run_motions over motions(quick=True), MOTION_VIEWS and the default seeds)."""
+    motions = quick_accuracy["motions"]
+    assert quick_accuracy["config_overrides"] == [] and motions["device"] == accuracy.MOTION_DEVICE
+    assert tuple(motions["seeds"]) == SEEDS and tuple(motions["views_deg"]) == accuracy.MOTION_VIEWS
+    out = {(r["motion"], r["view_deg"], r["seed"]): copy.deepcopy(r) for r in motions["rows"]}
+    expected = {(m.name, v, s) for m in accuracy.motions(quick=True) for v in accuracy.MOTION_VIEWS for s in SEEDS}
+    assert set(out) == expected, sorted(set(out) ^ expected)
     return out
 
 
