@@ -317,11 +317,14 @@
       let session = null;
       try { session = await api(`/sessions/${row.session_id}`); } catch (err) { session = null; }
       const reps = session ? session.repetitions : null;
-      if (reps !== null) count = reps;  // the set's last count is the stored one (a flickering label can run one ahead)
+      // the set's last count is the stored one; when it differs from the one shown (a flickering label can run the
+      // live count ahead; a slow page sees few pictures), the page says so rather than change the number silently
+      const recount = reps !== null && reps !== count ? T.recounted(count, reps) : "";
+      if (reps !== null) count = reps;
       $("cam-result-text").textContent = T.result(reps, row.target_reps);
       $("cam-result-text").dataset.sessionId = row.session_id;
       const rom = session && session.rom_deg ? T.resultRom(session.rom_deg) : "";
-      $("cam-result-more").textContent = [T.ended[reason] || "", rom].filter(Boolean).join(" ");
+      $("cam-result-more").textContent = [T.ended[reason] || "", recount, rom].filter(Boolean).join(" ");
       status(T.result(reps, row.target_reps));
     }
     await CameraBuffer.dropSet(pid, row.set_id);

@@ -49,6 +49,9 @@ const CameraText = Object.freeze({
     : reps >= target ? I18n.nt("Saved: all {n} repetition — well done!", "Saved: all {n} repetitions — well done!", reps)
       : I18n.t("Saved: {done} of {goal} repetitions. Good effort!", { done: reps, goal: target })),
   resultRom: (deg) => I18n.t("You moved through {rom} degrees.", { rom: Math.round(deg) }),
+  /** The saved count differs from the last one shown during the set (counted again over the whole set): said. */
+  recounted: (shown, saved) => I18n.t("While you exercised we counted {shown}. Counted again over the whole set, it is {saved}.",
+    { shown, saved }),
   ended: { target: I18n.t("You reached your goal."), stop: I18n.t("You stopped the set."),
     still: I18n.t("The set ended because you did not move for a while."), limit: I18n.t("The set reached its time limit."),
     error: I18n.t("The set stopped because of a problem.") },

@@ -182,10 +182,12 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         # one count (tests/backend/camera/test_camera_count.py): the page's last count is the saved one. The live
         # count before it is evaluated every 0.25 s of recording, so a repetition finished in the set's last moments
         # (the clip goes on through the 1.5 s the page records after the target) is counted only by the saved count,
-        # and a flickering label can run the live count one ahead (bench/README.md, "Webcam counts"): never more.
+        # and a flickering label can run the live count ahead (bench/README.md, "Webcam counts"); a page on a loaded
+        # machine may see too few pictures of a repetition. A change is said, never made silently.
         shown = page.evaluate("CameraPage.state().count")
         saved = stored[0]["repetitions"]
-        assert saved == shown and abs(counts[-1] - shown) <= 1, (saved, shown, counts)
+        assert saved == shown, (saved, shown, counts)
+        _says_the_recount(page, counts[-1], saved)
         payload = session_header(base, email, stored[0]["id"])
         assert payload.raw.meta.device == "webcam", payload.raw.meta
         assert (
@@ -200,6 +202,18 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         violations = page.evaluate("window.__csp")
         assert all(d == "connect-src" and not u.startswith(base) for d, u in violations), violations
         assert not page.js_errors, page.js_errors
+
+
+def _says_the_recount(page, live: int, saved: int) -> None:
+    """Holds that the result says the saved count differs from the last live one when it does, and only then.
+
+    How far apart they may be on this clip is not held here: its one squat-like crouch per pass is counted 0 to 2
+    times live as labels flicker (CI and this machine, 2026-11-27: live 2 saved 0 at 2 pictures a second, live 4 saved
+    2 at 12), the open point of issue 22; tests/backend/camera/test_camera_count.py holds the live and saved counts
+    together on sets of known counts."""
+    more = page.locator("#cam-result-more").inner_text()
+    said = f"While you exercised we counted {live}. Counted again over the whole set, it is {saved}."
+    assert (said in more) == (live != saved) and ("counted" in more) == (live != saved), (live, saved, more)
 
 
 def _start_counting(page, item_id: int, agree: bool = True) -> None:
@@ -475,18 +489,24 @@ def test_the_landmarker_runs_on_the_page_when_its_worker_cannot_start_or_dies(ca
         assert page.evaluate("CameraPage.state().count") < TARGET  # the repetitions are counted from the page
         said = "gave no answer in 8000 ms" if how == "dies-mid-set" else "the pose landmarker runs on the page"
         assert any(said in w for w in warnings), warnings
-        wait_phase(page, "stored", "failed", timeout=240_000)
+        # The page's poses go out in batches of at least one pose each; after 31 of them the patient stops, unless
+        # the set ended before (its target). Waiting for the set to end by itself is not enough on a loaded machine:
+        # a page landmarker that sees about 2 pictures a second may miss the clip's one squat-like crouch per pass,
+        # so the set neither reaches its target nor stands still (it ran into a 240 s timeout here).
+        seq = page.evaluate("CameraPage.state().next_seq || 0")
+        sent_or_ended = "(s) => CameraPage.state().phase !== 'counting' || CameraPage.state().next_seq >= s + 31"
+        page.wait_for_function(sent_or_ended, arg=seq, timeout=180_000)
+        if page.evaluate("CameraPage.state().phase") == "counting":
+            page.click("#cam-stop")
+        wait_phase(page, "stored", "failed", timeout=120_000)
         assert phase(page) == "stored", page.locator("#cam-result-text").inner_text()
-        # The set ends at its target, or when the patient stands still: a page landmarker on a loaded machine may
-        # see a few frames a second and miss the clip's one squat-like crouch per pass (CI, 2026-11-27: stored 0).
         # What must hold: the page's own poses reached the server (the dying worker answers 30 frames at most, so a
-        # stored frame beyond 30 is the page's; a page landmarker on a machine this loaded sees about 2 frames a
-        # second), the page's last count is the stored one, and the live count before it differs by at most one (it
-        # may run one ahead while the landmarker's labels flicker: bench/README.md, "Webcam counts").
+        # stored frame beyond 30 is the page's), the page's last count is the stored one, and a recount is said.
         expect(page.locator("#cam-result-text")).to_contain_text(re.compile(r"Saved: (all )?\d+"))
         live = page.evaluate("window.__camCounts")
         stored = patient_sessions(base, email, pid)
         assert len(stored) == 1 and stored[0]["n_frames"] > 30, stored
         assert len(stored) == 1 and stored[0]["repetitions"] == page.evaluate("CameraPage.state().count"), stored
-        assert live and abs(live[-1] - stored[0]["repetitions"]) <= 1, (live, stored)
+        assert live
+        _says_the_recount(page, live[-1], stored[0]["repetitions"])
         assert not page.js_errors, page.js_errors
