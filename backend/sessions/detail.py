@@ -173,6 +173,7 @@ def detail_body(
     reps = doc.repetition_list if doc is not None else []
     evidence = file_evidence(analysed, tuple(spec.defining_angles) if spec is not None else (), reps)
     quality = doc.quality if doc is not None else None
+    balance = _balance(doc)
     raw, filtered = payload.raw, payload.filtered
     return {
         "session_id": session.id,
@@ -192,11 +193,9 @@ def detail_body(
         "moving_time_s": doc.moving_time_s if doc is not None else None,
         "rest_time_s": doc.rest_time_s if doc is not None else None,
         "tempo_s_per_rep": doc.tempo_s_per_rep if doc is not None else None,
-        "balance": _balance(doc),
-        "balance_missing": None if _balance(doc) is not None else _balance_missing(doc),
-        "balance_missing_reason": _reason_json(
-            None if doc is None or _balance(doc) is not None else doc.balance_missing
-        ),
+        "balance": balance,
+        "balance_missing": None if balance is not None else _balance_missing(doc),
+        "balance_missing_reason": _reason_json(None if doc is None or balance is not None else doc.balance_missing),
         "angles": list(spec.defining_angles) if spec is not None else [],
         "curves": evidence["curves"],
         "repetitions": _rep_rows(reps, evidence["peak_speeds"]),
