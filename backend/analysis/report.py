@@ -27,7 +27,7 @@ from backend.analysis.range_of_motion import range_of_motion
 from backend.analysis.reachable import reachable_range
 from backend.analysis.sit_to_stand import sit_to_stand
 from backend.exercises.library import EXERCISES, ExerciseSpec
-from backend.i18n import translator
+from backend.i18n import ENGLISH
 from kinect_agent.analysis.angles import counting_angles, measured_angles
 from kinect_agent.analysis.document import AnalysisReport, json_ready
 from kinect_agent.analysis.live import amplitude_floor, counting_params, counting_positions, done_repetitions
@@ -36,8 +36,6 @@ from kinect_agent.body.angles import body_frame
 from kinect_agent.errors import FormatError
 from kinect_agent.processing.params import KinematicParams
 from kinect_agent.recording import Recording
-
-ENGLISH = translator("en")  # the command's words (the reasons written from their ids)
 
 
 def get_exercise(slug: str) -> ExerciseSpec:

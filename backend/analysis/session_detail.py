@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from backend.analysis.reachable import hand_path
-from backend.i18n import N_, Translator, translator
+from backend.i18n import ENGLISH, N_, Translator
 from kinect_agent.analysis import angles as analysis_angles
 from kinect_agent.analysis import series
 from kinect_agent.analysis.document import RepetitionItem
@@ -35,7 +35,6 @@ from kinect_agent.body.angles import body_frame, joint_angles
 MAX_CURVE_POINTS = 1500
 MAX_PATH_POINTS = 600
 ARM_PREFIXES = ("shoulder_", "elbow_")
-ENGLISH = translator("en")
 # each angle of kinect_agent.body.angles.ANGLE_NAMES in words, side included (a whole message each: the side's word
 # agrees with the joint in German, Spanish and French); the curves' labels are written in the reader's language
 ANGLE_WORDS = {

@@ -146,6 +146,9 @@ def translator(locale: str | None) -> Translator:
     return Translator(locale if locale in LOCALES else DEFAULT_LOCALE)
 
 
+ENGLISH = translator("en")  # the patients' catalogue in English: stored texts, commands, reports, jobs' words
+
+
 def therapist_translator(accept_language: str | None) -> Translator:
     """Returns the Translator of a therapist's request: the locale of its Accept-Language among the therapist pages'
     locales (therapist_locales; English until a therapist.po exists)."""

@@ -16,12 +16,11 @@ from sqlalchemy import select, update
 from sqlalchemy.orm import Session
 
 from backend.database import utcnow
-from backend.i18n import N_, Translator, translator
+from backend.i18n import ENGLISH, N_, Translator
 from backend.jobs.listing import error_words
 from backend.jobs.models import Job
 from backend.jobs.queue import enqueue
 
-ENGLISH = translator("en")
 ASK_ATTEMPTS = 6  # tries of one job in all, the queue's own retries and one more per ask after it failed
 
 

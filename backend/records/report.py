@@ -30,7 +30,7 @@ from backend.analysis.mdc import rom_mdc95
 from backend.exceptions import InvalidInput
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
-from backend.i18n import translator
+from backend.i18n import ENGLISH
 from backend.plans.models import Plan, PlanItem
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.suggestions import service as suggestions
@@ -68,9 +68,6 @@ class Period:
         if start > end or (end - start).days > 3 * 366:
             raise InvalidInput(f"the period from={start} to={end} must run forwards and last at most 3 years")
         return cls(start, end)
-
-
-ENGLISH = translator("en")  # the report's language
 
 
 def _p(text: str, style: Any) -> Paragraph:

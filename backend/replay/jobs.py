@@ -16,7 +16,7 @@ from typing import Any
 from sqlalchemy.orm import Session
 
 from backend.exceptions import InvalidSessionFile
-from backend.i18n import N_, Translator, translator
+from backend.i18n import ENGLISH, N_, Translator
 from backend.jobs.asking import ask
 from backend.replay import scene, service
 from backend.replay.models import BOTH
@@ -24,7 +24,6 @@ from backend.sessions.models import ExerciseSession
 from backend.sessions.service import require_recording
 
 KIND = "replay"
-ENGLISH = translator("en")
 READY = N_("The replay is ready.")
 
 

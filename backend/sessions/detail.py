@@ -26,7 +26,7 @@ from backend.analysis.session_detail import (
 )
 from backend.exceptions import InvalidSessionFile
 from backend.exercises.library import EXERCISES, ExerciseSpec
-from backend.i18n import N_, Translator, translator
+from backend.i18n import ENGLISH, N_, Translator
 from backend.jobs.listing import error_words
 from backend.sessions.models import ExerciseSession
 from kinect_agent.analysis.document import AnalysisReport, RepetitionItem, UnreadableDocument, read_report
@@ -35,7 +35,6 @@ from kinect_agent.analysis.validity import recorded_with, session_validity
 from kinect_agent.formats import session_file
 from kinect_agent.formats.session_file import SessionFileError, SessionPayload
 
-ENGLISH = translator("en")  # the stored detail's words; in_language writes them for each reader
 DETAIL_VERSION = 4  # part of a stored detail's inputs (backend.sessions.prepared): bump when the output changes
 # the texts of the therapist's session page (catalogue `therapist`): stored in English, written in the reader's
 # language when read (in_language)

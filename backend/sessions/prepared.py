@@ -21,7 +21,7 @@ from sqlalchemy.orm import Session
 
 from backend.database import keep_row
 from backend.exceptions import InvalidSessionFile, SessionNotFound
-from backend.i18n import Translator, translator
+from backend.i18n import ENGLISH, Translator
 from backend.jobs.asking import ask
 from backend.jobs.models import Job
 from backend.jobs.queue import enqueue
@@ -32,7 +32,6 @@ from backend.storage import get_store
 from backend.storage.base import StoredObject
 
 KIND = "detail"
-ENGLISH = translator("en")
 ROW_KEYS = ("session_id", "patient_id", "exercise_slug", "exercise_name", "started_at", "status", "error")
 ROW_PROCESSING = ("version", "params")  # of "processing": the row's, not the file's
 

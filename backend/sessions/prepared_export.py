@@ -26,7 +26,7 @@ from sqlalchemy.orm import Session
 
 from backend.database import keep_row
 from backend.exceptions import ExportUnavailable, InvalidSessionFile, SessionNotFound
-from backend.i18n import Translator, translator
+from backend.i18n import ENGLISH, Translator
 from backend.jobs.asking import ask
 from backend.jobs.models import Job
 from backend.sessions import service
@@ -38,7 +38,6 @@ from kinect_agent.export.fhir import SessionContext
 from kinect_agent.export.files import ExportFile
 
 KIND = "export"
-ENGLISH = translator("en")
 GZIP_LEVEL = 6  # the stored file's compression: built once, handed out as it is to clients that accept gzip
 EXPORT_VERSION = 1  # part of a stored export's inputs: bump when kinect_agent.export's output changes
 NAMES = {"csv": "tables (CSV)", "trc": "OpenSim markers (TRC)", "bvh": "motion (BVH)", "fhir": "health record (FHIR)"}

@@ -45,7 +45,7 @@ from backend.exceptions import (
     error_responses,
 )
 from backend.exercises.service import get_exercise
-from backend.i18n import Translator, therapist_translator, translator
+from backend.i18n import ENGLISH, Translator, therapist_translator
 from backend.jobs.listing import error_words
 from backend.schemas import DateTimeQuery, IdPath, IdQuery, Page, PageParams, page_params
 from backend.sessions import dashboard, prepared, prepared_export, service
@@ -67,7 +67,6 @@ from backend.suggestions import service as suggestions_service
 from kinect_agent.analysis.document import AnalysisDocument, UnreadableDocument, read_document
 from kinect_agent.export.files import ExportFormat as ExportFormatName
 
-ENGLISH = translator("en")
 router = APIRouter(prefix="/api/v1", tags=["sessions"])
 DETAIL_RETRY_AFTER_S = "2"
 EXPORT_RETRY_AFTER_S = "5"  # a long recording's export takes a worker tens of seconds

@@ -19,10 +19,9 @@ from typing import Any, Literal, TypeVar
 from pydantic import BaseModel, ConfigDict, Field
 
 from backend.exercises.library import EXERCISES
-from backend.i18n import N_, Translator, translator
+from backend.i18n import ENGLISH, N_, Translator
 from kinect_agent.analysis.document import AnalysisReport
 
-ENGLISH = translator("en")
 # the day of a session in the advice ("on 14 November"), per locale; with " y" appended in another year
 DATE_PATTERNS = {"en": "d MMMM", "de": "d. MMMM", "es": "d 'de' MMMM", "fr": "d MMMM"}
 YEAR_PATTERNS = {"en": " y", "de": " y", "es": " 'de' y", "fr": " y"}
