@@ -37,6 +37,10 @@ PASSWORD = NEW_PATIENT_PASSWORD
 EXERCISE, TARGET = "squat", 2
 WIDTHS = ((1366, 900), (768, 1024), (390, 844))
 PAGE = "/patient/camera"
+SLOW_SAID_OR_FAST = (
+    "() => CameraPage.state().fps >= 10 || "
+    "document.getElementById('cam-note').textContent.includes('This computer is slow')"
+)
 WATCH_CSP = ("window.__csp = []; document.addEventListener('securitypolicyviolation', "
              "(e) => __csp.push([e.effectiveDirective, e.blockedURI]))")  # fmt: skip
 
@@ -168,8 +172,9 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         assert size >= 96, f"the live count is {size} px; it must be at least 96 px"
         page.wait_for_function("() => +document.querySelector('#cam-count .n').textContent >= 1", timeout=180_000)
         fps = page.evaluate("CameraPage.state().fps")
-        if fps is not None and fps < 10:  # this machine: the page says so
-            expect(page.locator("#cam-note")).to_contain_text("This computer is slow")
+        if fps is not None and fps < 10:  # this machine: the page says so, unless it is back to 10 a second (the page
+            # says it only after 3 s of counting; a sample in those seconds may be slower than the pace after them)
+            page.wait_for_function(SLOW_SAID_OR_FAST, timeout=15_000)
         _shots(page, "counting")
         wait_phase(page, "stored", "failed", timeout=120_000)  # the target ends the set by itself
         assert phase(page) == "stored", page.locator("#cam-result-text").inner_text()
