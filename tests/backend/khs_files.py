@@ -10,6 +10,7 @@ import lzma
 import struct
 import uuid
 import zlib
+from typing import Any
 
 import numpy as np
 
@@ -63,7 +64,7 @@ def make_processed_khs(exercise: str = "squat", reps: int = 3, *, seed: int = 0)
     return sf.encode(make_payload(measured, created_at="2026-11-20T10:00:00Z"))
 
 
-def split(data: bytes) -> tuple[int, dict, list[bytes]]:
+def split(data: bytes) -> tuple[int, dict[str, Any], list[bytes]]:
     """Returns (version, JSON header, compressed blocks) of a valid file."""
     _, version, _, header_len, _ = _FIXED.unpack_from(data)
     header = json.loads(data[_FIXED.size : _FIXED.size + header_len])
@@ -75,7 +76,7 @@ def split(data: bytes) -> tuple[int, dict, list[bytes]]:
     return version, header, blocks
 
 
-def join(header: dict, blocks: list[bytes], version: int = sf.VERSION) -> bytes:
+def join(header: dict[str, Any], blocks: list[bytes], version: int = sf.VERSION) -> bytes:
     """Returns a file with a correct length and checksum around any header and blocks."""
     return join_text(json.dumps(header, separators=(",", ":")), blocks, version)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import uuid
 from pathlib import Path
+from typing import Any
 
 from backend.sessions.metrics import indicator_scores
 from backend.sessions.models import ExerciseSession, SessionMetric
@@ -58,7 +59,7 @@ def store_session(
 TODAY = Path(__file__).parents[1] / "kinect_agent" / "analysis" / "documents" / "schema3.json"
 
 
-def document(*, reps: int, rom: float | None, quality_ok: bool, exercise: str = "shoulder_abduction") -> dict:
+def document(*, reps: int, rom: float | None, quality_ok: bool, exercise: str = "shoulder_abduction") -> dict[str, Any]:
     """Returns a stored metrics document of today's schema with these numbers; its flexibility indicator scores
     rom / 2, the other indicators have no score."""
     doc = json.loads(TODAY.read_text(encoding="utf-8"))

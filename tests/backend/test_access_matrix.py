@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import uuid
 from dataclasses import dataclass
+from typing import Any
 
 import pytest
 from fastapi.routing import iter_route_contexts
@@ -65,7 +66,7 @@ class Raw:
     """A non-JSON request body (e.g. a session file) and its query parameters."""
 
     content: bytes
-    params: dict
+    params: dict[str, Any]
 
 
 # (method, path) -> (allowed callers, body factory or None); a factory returns JSON data or a Raw

@@ -9,6 +9,7 @@ import io
 import json
 import subprocess
 import zipfile
+from typing import Any
 
 import pytest
 
@@ -40,7 +41,7 @@ def _set_locale(client, patient, therapist, auth_headers, locale) -> None:
     assert r.status_code == 200 and r.json()["locale"] == locale, r.text
 
 
-def _advice(client, patient, headers) -> list[dict]:
+def _advice(client, patient, headers) -> list[dict[str, Any]]:
     r = client.get(f"/api/v1/patients/{patient.id}/suggestions", headers=headers)
     assert r.status_code == 200, r.text
     return r.json()["items"]

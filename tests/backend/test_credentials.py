@@ -4,6 +4,7 @@ keeps them), tokens expire (default and maximum documented), and a token made wi
 from __future__ import annotations
 
 import datetime as dt
+from typing import Any
 
 import pytest
 from sqlalchemy import update
@@ -15,13 +16,13 @@ from tests.backend.conftest import PASSWORD
 NEW_PASSWORD = "a brand new passphrase"
 
 
-def _cookie_login(client, user) -> dict:
+def _cookie_login(client, user) -> dict[str, Any]:
     r = client.post("/api/v1/auth/login", json={"email": user.email, "password": PASSWORD})
     assert r.status_code == 200, r.text
     return {"X-CSRF-Token": r.json()["csrf_token"]}
 
 
-def _token(client, headers, **body) -> dict:
+def _token(client, headers, **body) -> dict[str, Any]:
     r = client.post("/api/v1/tokens", json={"name": "t", "scopes": ["read", "write"]} | body, headers=headers)
     assert r.status_code == 201, r.text
     return r.json()

@@ -84,7 +84,7 @@ def crowd_server(crowd_engine, settings) -> Iterator[tuple[str, dict[str, str]]]
 def test_a_crowd_of_simultaneous_requests_is_answered(crowd_server) -> None:
     url, headers = crowd_server
 
-    async def crowd() -> Counter:
+    async def crowd() -> Counter[int]:
         async with httpx.AsyncClient(base_url=url, headers=headers, timeout=60,
                                      limits=httpx.Limits(max_connections=CROWD)) as client:  # fmt: skip
             answers = await asyncio.gather(

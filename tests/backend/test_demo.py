@@ -8,6 +8,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import httpx
 import pytest
@@ -94,7 +95,7 @@ def test_demo_agents_upload_backdated_and_live_sessions(demo_server, tmp_path: P
         login = client.post("/api/v1/auth/login", json={"email": "admin@demo.clinic", "password": demo.DEMO_PASSWORD})
         assert login.status_code == 200, login.text
         deadline = time.monotonic() + 240
-        sessions: list[dict] = []
+        sessions: list[dict[str, Any]] = []
         while time.monotonic() < deadline and len(sessions) < 2:
             r = client.get("/api/v1/sessions", params={"limit": 100})
             assert r.status_code == 200, r.text
@@ -123,7 +124,7 @@ def test_demo_agents_upload_backdated_and_live_sessions(demo_server, tmp_path: P
     assert "history 1/" in out, "the backfill prints its progress"
 
 
-def _start_demo(tmp_path: Path, *args: str) -> tuple[subprocess.Popen, str]:
+def _start_demo(tmp_path: Path, *args: str) -> tuple[subprocess.Popen[str], str]:
     port = _free_port()
     proc = subprocess.Popen([sys.executable, "-m", "backend.cli", "demo", "--port", str(port), "--no-agents",
                              "--db", str(tmp_path / "demo.db"), *args],
@@ -142,7 +143,7 @@ def _start_demo(tmp_path: Path, *args: str) -> tuple[subprocess.Popen, str]:
     pytest.fail("demo server did not answer /healthz within 30 s")
 
 
-def _stop(proc: subprocess.Popen) -> str:
+def _stop(proc: subprocess.Popen[str]) -> str:
     proc.terminate()
     return proc.communicate(timeout=20)[0]
 

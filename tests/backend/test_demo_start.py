@@ -29,7 +29,7 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def _demo(tmp_path: Path, port: int, *extra: str, log: str = "demo.log") -> subprocess.Popen:
+def _demo(tmp_path: Path, port: int, *extra: str, log: str = "demo.log") -> subprocess.Popen[str]:
     """Starts `coach-server demo` in a process group of its own (as a terminal runs it), output to tmp_path/log."""
     out = open(tmp_path / log, "w")  # noqa: SIM115 - the child holds it
     return subprocess.Popen(
@@ -38,7 +38,7 @@ def _demo(tmp_path: Path, port: int, *extra: str, log: str = "demo.log") -> subp
     )  # fmt: skip
 
 
-def _wait_healthy(base: str, proc: subprocess.Popen, log: Path) -> None:
+def _wait_healthy(base: str, proc: subprocess.Popen[str], log: Path) -> None:
     for _ in range(240):
         try:
             if httpx.get(f"{base}/healthz", timeout=1).status_code == 200:
@@ -64,7 +64,7 @@ def _server(tmp_path: Path, port: int, log: str):
         proc.wait(timeout=30)
 
 
-def _agents(server: str, home: Path, *extra: str) -> subprocess.CompletedProcess:
+def _agents(server: str, home: Path, *extra: str) -> subprocess.CompletedProcess[str]:
     command = [sys.executable, "-m", "backend.demo_agents", "--server", server, "--home", str(home), "--no-live",
                "--history-weeks", "0", "--min-interval", "0.1", "--max-interval", "0.2", *extra]  # fmt: skip
     return subprocess.run(command, capture_output=True, text=True, timeout=600)

@@ -7,6 +7,8 @@ as a therapist with one assigned patient; a few hundred requests in all. Runs in
 
 from __future__ import annotations
 
+from typing import Any
+
 import schemathesis
 from hypothesis import HealthCheck, given, settings
 from schemathesis import GenerationMode
@@ -30,7 +32,7 @@ CHECKS = [
 ]
 
 
-def _fuzz(operation, mode, callers: list[dict], failures: list[str], sent: list[int]) -> None:
+def _fuzz(operation, mode, callers: list[dict[str, Any]], failures: list[str], sent: list[int]) -> None:
     """Sends EXAMPLES_PER_OPERATION generated cases of one operation as every caller; records answers that fail a
     check."""
 

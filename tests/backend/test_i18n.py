@@ -6,6 +6,7 @@ from __future__ import annotations
 import datetime as dt
 import json
 import re
+from typing import Any
 
 import pytest
 from babel.messages.catalog import Catalog
@@ -130,7 +131,7 @@ def test_script_messages_are_only_those_of_scripts():
     assert js_messages("en") == {"locale": "en", "plural": "n != 1", "messages": {}}
 
 
-def _page_messages(html: str) -> dict:
+def _page_messages(html: str) -> dict[str, Any]:
     found = re.search(r'<script type="application/json" id="i18n-messages">(.*?)</script>', html, re.S)
     assert found, "the page carries no messages for its scripts"
     return json.loads(found.group(1))

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from typing import Any
 
-def _has_example(schema: dict, components: dict) -> bool:
+
+def _has_example(schema: dict[str, Any], components: dict[str, Any]) -> bool:
     ref = schema.get("$ref") or schema.get("items", {}).get("$ref")
     if ref is None:
         return True  # plain JSON (e.g. a list of strings) or a binary body

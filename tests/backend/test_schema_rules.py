@@ -4,6 +4,7 @@ sends (refused by backend.request_limits), the e-mail format of a new user, and 
 from __future__ import annotations
 
 import re
+from typing import Any
 
 import pytest
 
@@ -22,7 +23,7 @@ def _strings(node, where="#"):
             yield from _strings(value, f"{where}/{i}")
 
 
-def _request_side(document: dict) -> list[tuple[str, dict]]:
+def _request_side(document: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
     """Returns the string schemas of every parameter and request body, following $refs into the components."""
     components = document["components"]["schemas"]
     found, seen = [], set()
@@ -108,7 +109,7 @@ def test_a_pairing_code_that_pairs_nothing_is_a_refused_credential_not_bad_input
 PLAN_OPERATIONS = [("post", "/api/v1/patients/{patient_id}/plans"), ("put", "/api/v1/plans/{plan_id}")]
 
 
-def _documented_refusal(document: dict, method: str, path: str, rule: str) -> dict:
+def _documented_refusal(document: dict[str, Any], method: str, path: str, rule: str) -> dict[str, Any]:
     answer = document["paths"][path][method]["responses"]["422"]
     assert rule in answer["description"], answer
     return answer["content"]["application/json"]["examples"][rule]["value"]
@@ -133,7 +134,9 @@ def test_an_end_date_before_the_start_is_the_documented_422(client, make_patient
     assert same_day.is_success, same_day.text
 
 
-def _send_generated_plans(operation, path: str, ids: dict, headers: dict, refusal: dict, seen: dict) -> None:
+def _send_generated_plans(
+    operation, path: str, ids: dict[str, Any], headers: dict[str, Any], refusal: dict[str, Any], seen: dict[str, int]
+) -> None:
     """Sends 25 plans schemathesis writes for one operation (without items), each as written and with its dates
     swapped."""
     from hypothesis import HealthCheck, Phase, given, settings

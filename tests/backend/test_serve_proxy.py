@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import asyncio
+from typing import Any
 
 from uvicorn.middleware.proxy_headers import ProxyHeadersMiddleware
 
@@ -24,7 +25,7 @@ def _client_seen(trusted: str, peer: str, forwarded: str) -> str:
     return seen["client"]
 
 
-def _options(argv: list[str], **env: str) -> dict:
+def _options(argv: list[str], **env: str) -> dict[str, Any]:
     return cli.serve_options(cli.build_parser().parse_args(["serve", *argv]), Settings(**env))
 
 

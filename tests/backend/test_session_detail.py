@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import uuid
+from typing import Any
 
 import numpy as np
 import pytest
@@ -19,11 +20,11 @@ from tests.backend.khs_files import make_khs, make_processed_khs
 T0 = dt.datetime(2026, 11, 2, 9, 0, tzinfo=dt.UTC)
 
 
-def _detail(client, session_id: int, headers: dict):
+def _detail(client, session_id: int, headers: dict[str, Any]):
     return client.get(f"/api/v1/sessions/{session_id}/detail", headers=headers)
 
 
-def _prepared(client, run_jobs, session_id: int, headers: dict):
+def _prepared(client, run_jobs, session_id: int, headers: dict[str, Any]):
     """Asks for a stored row's detail (not uploaded: nothing queued yet), lets a worker build it, asks again."""
     first = _detail(client, session_id, headers)
     assert first.status_code == 202 and first.json()["state"] == "preparing", first.text

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import uuid
+from typing import Any
 
 import numpy as np
 
@@ -33,7 +34,7 @@ def _khs(device: str, *, side: bool, seed: int = 3) -> bytes:
     return sf.encode(payload)
 
 
-def _detail(client, upload, auth_headers, data: bytes) -> dict:
+def _detail(client, upload, auth_headers, data: bytes) -> dict[str, Any]:
     session_id, _, therapist = upload(data, "squat")
     response = client.get(f"/api/v1/sessions/{session_id}/detail", headers=auth_headers(therapist))
     assert response.status_code == 200, response.text

@@ -6,6 +6,7 @@ import datetime as dt
 import io
 import json
 import zipfile
+from typing import Any
 
 import numpy as np
 import pytest
@@ -21,7 +22,7 @@ T0 = dt.datetime(2026, 11, 2, 9, 0, tzinfo=dt.UTC)
 R4B = pytest.importorskip("fhir.resources.R4B.bundle", reason="fhir.resources is in the test extra")
 
 
-def _export(client, session_id: int, fmt: str, headers: dict):
+def _export(client, session_id: int, fmt: str, headers: dict[str, Any]):
     return client.get(f"/api/v1/sessions/{session_id}/export", params={"format": fmt}, headers=headers)
 
 
@@ -149,7 +150,7 @@ def test_corrupt_stored_file_is_a_typed_400(client, store, make_patient_with_the
     assert "checksum_mismatch" in response.json()["detail"]
 
 
-def _answer(client, session_id: int, patient_headers: dict, pain, effort) -> None:
+def _answer(client, session_id: int, patient_headers: dict[str, Any], pain, effort) -> None:
     r = client.put(f"/api/v1/sessions/{session_id}/feeling", json={"pain": pain, "effort": effort},
                    headers=patient_headers)  # fmt: skip
     assert r.status_code == 200, r.text

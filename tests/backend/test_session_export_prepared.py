@@ -9,6 +9,7 @@ import datetime as dt
 import gzip
 import json
 import re
+from typing import Any
 
 import pytest
 from sqlalchemy import func, select
@@ -48,7 +49,7 @@ def stored(db_session, store, make_patient_with_therapist):
     return make
 
 
-def _export(client, session_id: int, fmt: str, headers: dict):
+def _export(client, session_id: int, fmt: str, headers: dict[str, Any]):
     return client.get(f"/api/v1/sessions/{session_id}/export", params={"format": fmt}, headers=headers)
 
 
@@ -102,7 +103,7 @@ def test_a_long_session_answers_202_then_the_file_a_worker_stored(
     assert run_jobs() == 0 and _export(client, session_id, "bvh", th).content == ready.content
 
 
-def _fhir_without_fresh_ids(body: bytes) -> dict:
+def _fhir_without_fresh_ids(body: bytes) -> dict[str, Any]:
     """Returns a FHIR bundle with its urn:uuid ids numbered in order and its timestamp dropped (both new each build)."""
     seen: dict[str, str] = {}
     text = re.sub(r"urn:uuid:[0-9a-f-]{36}", lambda m: seen.setdefault(m.group(0), f"urn:{len(seen)}"), body.decode())
@@ -212,7 +213,7 @@ def test_a_removed_recording_is_410_and_queues_nothing(client, make_user, auth_h
     assert _count(db_session, Job, Job.kind == "export") == 0
 
 
-def _stored_export(client, db_session, run_jobs, session_id: int, headers: dict) -> str:
+def _stored_export(client, db_session, run_jobs, session_id: int, headers: dict[str, Any]) -> str:
     """Has a worker build the session's BVH; returns its object key."""
     assert _export(client, session_id, "bvh", headers).status_code == 202 and run_jobs() == 1
     return db_session.scalar(select(SessionExport.data_key).where(SessionExport.session_id == session_id))

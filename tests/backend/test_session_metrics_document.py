@@ -5,6 +5,7 @@ from __future__ import annotations
 import datetime as dt
 import json
 from pathlib import Path
+from typing import Any
 
 import sqlalchemy as sa
 
@@ -28,11 +29,11 @@ def test_the_api_returns_the_stored_document_unchanged(client, db_session, uploa
     assert set(stored) == set(AnalysisDocument.model_fields)
 
 
-def _without_reason_texts(metrics: dict) -> tuple[dict, list]:
+def _without_reason_texts(metrics: dict[str, Any]) -> tuple[dict[str, Any], list[Any]]:
     """Returns the metrics with the text of every reason None (as stored), and the texts."""
-    texts: list = []
+    texts: list[Any] = []
 
-    def plain(reason: dict) -> dict:
+    def plain(reason: dict[str, Any]) -> dict[str, Any]:
         texts.append(reason["text"])
         return reason | {"text": None}
 

@@ -5,6 +5,8 @@ every language."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 
 import backend.i18n as i18n
@@ -20,7 +22,7 @@ from tests.catalogue_copies import copy_with_therapist_catalogues
 SEEDS = (1, 2)
 
 
-def _detail(client, session_id: int, headers: dict) -> dict:
+def _detail(client, session_id: int, headers: dict[str, Any]) -> dict[str, Any]:
     response = client.get(f"/api/v1/sessions/{session_id}/detail", headers=headers)
     assert response.status_code == 200, response.text
     return response.json()
@@ -152,7 +154,7 @@ def test_every_angle_has_words_in_every_language(locale):
     assert len(set(words)) == len(words) and not set(words) & {angle_label(n) for n in ANGLE_NAMES}, words
 
 
-def _english_document(document: dict) -> dict:
+def _english_document(document: dict[str, Any]) -> dict[str, Any]:
     """Returns a stored document as the server stored it before reason ids (schema 2, English texts): a failed
     quality check (one reason an analysis of before the catalogue wrote, matching no message), a withheld interval
     and balance not measured."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+from typing import Any
 
 import pytest
 from sqlalchemy import event
@@ -234,7 +235,7 @@ def _on_plan_history(store, patient, exercise, *, recent_rom: float = 90.0, rece
         store(patient, exercise, monday + dt.timedelta(days=day, hours=10), rom=recent_rom, reps=recent_reps)
 
 
-def _summary(db_session, patient, now=THURSDAY_NOON) -> dict:
+def _summary(db_session, patient, now=THURSDAY_NOON) -> dict[str, Any]:
     return dashboard.summaries(db_session=db_session, patient_ids=[patient.id], now=now)[patient.id]
 
 

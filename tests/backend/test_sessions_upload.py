@@ -5,6 +5,7 @@ from __future__ import annotations
 import datetime as dt
 import hashlib
 import uuid
+from typing import Any
 
 import pytest
 from sqlalchemy import func, select
@@ -127,10 +128,10 @@ def test_same_session_id_for_two_patients_is_two_sessions(post, make_user, auth_
     assert post(khs, auth_headers(admin), patient_id=b.id).status_code == 201
 
 
-def _miss_first_lookup(monkeypatch) -> list:
+def _miss_first_lookup(monkeypatch) -> list[Any]:
     """Makes the first find_session answer None, as if a concurrent request stored the session just after it."""
     real_find = service.find_session
-    calls: list = []
+    calls: list[Any] = []
 
     def find_late(**kwargs):
         calls.append(kwargs)

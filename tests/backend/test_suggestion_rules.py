@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import re
+from typing import Any
 
 import pytest
 
@@ -86,7 +87,7 @@ def test_fewer_reps_zero_says_none_counted():
 # --- range of motion against the last weeks ---
 
 
-def _rom_history(median: float = 80.0) -> list:
+def _rom_history(median: float = 80.0) -> list[Any]:
     return [_past(20, rom_deg=median - 10), _past(15, rom_deg=median), _past(6, rom_deg=median + 10)]
 
 
@@ -197,7 +198,7 @@ def test_poor_quality_suppresses_measurement_rules():
 # --- missed days ---
 
 
-def _sessions_on(days_ago: list[int]) -> list:
+def _sessions_on(days_ago: list[int]) -> list[Any]:
     return [_past(d) for d in days_ago]
 
 

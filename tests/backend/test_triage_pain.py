@@ -4,6 +4,7 @@ words: high pain at once, a rising median over the weeks (backend.sessions.triag
 from __future__ import annotations
 
 import datetime as dt
+from typing import Any
 
 import pytest
 
@@ -121,7 +122,7 @@ def test_it_hurt_adds_to_high_pain():
     assert len(found.reasons) == 2 and any("It hurt" in r for r in found.reasons), found.reasons
 
 
-def _dashboard_row(client, headers, patient_id: int) -> dict:
+def _dashboard_row(client, headers, patient_id: int) -> dict[str, Any]:
     r = client.get("/api/v1/dashboard", headers=headers)
     assert r.status_code == 200, r.text
     return next(row for row in r.json()["items"] if row["patient_id"] == patient_id)

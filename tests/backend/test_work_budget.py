@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import time
 import tracemalloc
+from typing import Any
 
 import numpy as np
 import pytest
@@ -19,8 +20,8 @@ from tests.backend.khs_files import make_khs, n_frames, with_header, with_time
 HOSTILE_CONFIG = {"outlier_threshold": 0.5, "outlier_iterations": 200, "outlier_window_s": 100.0}
 
 
-def _with_config(data: bytes, config: dict) -> bytes:
-    def change(header: dict) -> None:
+def _with_config(data: bytes, config: dict[str, Any]) -> bytes:
+    def change(header: dict[str, Any]) -> None:
         header["params"] = {"config": config}
 
     return with_header(data, change)

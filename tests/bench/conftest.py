@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from typing import Any
 
 import pytest
 
@@ -10,7 +11,7 @@ from bench import accuracy
 
 
 @pytest.fixture(scope="session")
-def quick_accuracy(tmp_path_factory: pytest.TempPathFactory) -> dict:
+def quick_accuracy(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     """The results file of `bench/accuracy.py --quick` (default settings and seeds), run once for the session: its
     per-motion rows are the ones test_accuracy_per_motion.py judges, and computing them twice cost ~45 s a run."""
     out = tmp_path_factory.mktemp("acc") / "quick.json"

@@ -9,6 +9,7 @@ UI-PRMD m01 at 60° (off by 0.1-2.6° on one to three seeds).
 """
 
 import copy
+from typing import Any
 
 import pytest
 
@@ -23,8 +24,11 @@ SEEDS = (1, 2, 3)  # never one seed: a gain that holds on one draw only is no ga
 KNOWN_LOSSES = {("hdm05_squat1Reps", 60, 2, "cv_kalman_rts"): 2.0, ("ui_prmd_m01", 0, 2, "cv_kalman_rts"): 0.2}
 
 
+Rows = dict[tuple[str, int, int], dict[str, Any]]
+
+
 @pytest.fixture(scope="module")
-def rows(quick_accuracy: dict) -> dict[tuple[str, int, int], dict]:
+def rows(quick_accuracy: dict[str, Any]) -> Rows:
     """{(motion, view, seed): bench/accuracy.py's result row}: the quick motions, every view and seed, with the default
     PipelineConfig: the rows of the quick run's results file (tests/bench/conftest.py), which computes exactly these
     (accuracy.run_motions over motions(quick=True), MOTION_VIEWS and the default seeds)."""
@@ -38,7 +42,7 @@ def rows(quick_accuracy: dict) -> dict[tuple[str, int, int], dict]:
 
 
 @pytest.mark.shared_data
-def test_one_motion_per_source(rows: dict) -> None:
+def test_one_motion_per_source(rows: Rows) -> None:
     sources = {row["source"] for row in rows.values()}
     assert sources == {"cmu", "hdm05", "ui_prmd_vicon"}, sources
     for (motion, view, seed), row in rows.items():
@@ -51,7 +55,7 @@ def test_one_motion_per_source(rows: dict) -> None:
 
 @pytest.mark.shared_data
 @pytest.mark.parametrize("baseline", ["cv_kalman_rts", "one_euro"])
-def test_offline_position_rmse_is_below_the_baseline(rows: dict, baseline: str) -> None:
+def test_offline_position_rmse_is_below_the_baseline(rows: Rows, baseline: str) -> None:
     losses = {}
     for (motion, view, seed), row in rows.items():
         off, base = row["methods"]["pipeline_offline"]["rmse_mm"], row["methods"][baseline]["rmse_mm"]
@@ -64,7 +68,7 @@ def test_offline_position_rmse_is_below_the_baseline(rows: dict, baseline: str) 
 
 @pytest.mark.shared_data
 @pytest.mark.parametrize("baseline", ["cv_kalman_rts", "one_euro"])
-def test_offline_random_part_is_below_the_baseline(rows: dict, baseline: str) -> None:
+def test_offline_random_part_is_below_the_baseline(rows: Rows, baseline: str) -> None:
     for (motion, view, seed), row in rows.items():
         off, base = row["methods"]["pipeline_offline"]["random_mm"], row["methods"][baseline]["random_mm"]
         assert off < base, f"{motion} {view}° seed {seed}: offline random part {off:.1f} mm vs {baseline} {base:.1f} mm"
@@ -73,7 +77,7 @@ def test_offline_random_part_is_below_the_baseline(rows: dict, baseline: str) ->
 @pytest.mark.shared_data
 @pytest.mark.parametrize(("motion", "view"), [("ui_prmd_m01", 0), ("hdm05_squat1Reps", 60)])
 @pytest.mark.parametrize("baseline", ["cv_kalman_rts", "one_euro"])
-def test_offline_elbow_knee_rmse_is_below_the_baseline(rows: dict, motion: str, view: int, baseline: str) -> None:
+def test_offline_elbow_knee_rmse_is_below_the_baseline(rows: Rows, motion: str, view: int, baseline: str) -> None:
     for seed in SEEDS:
         m = rows[motion, view, seed]["methods"]
         off, base = m["pipeline_offline"]["angle_rmse_deg"], m[baseline]["angle_rmse_deg"]

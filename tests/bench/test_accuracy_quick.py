@@ -2,6 +2,7 @@
 
 import copy
 import json
+from typing import Any
 
 import pytest
 
@@ -9,13 +10,13 @@ from bench import accuracy
 
 
 @pytest.fixture(scope="module")
-def results(quick_accuracy: dict) -> dict:
+def results(quick_accuracy: dict[str, Any]) -> dict[str, Any]:
     """The quick run's results file (tests/bench/conftest.py), a copy: a test that edits it leaves the others' alone."""
     return copy.deepcopy(quick_accuracy)
 
 
 @pytest.mark.shared_data
-def test_structure(results: dict) -> None:
+def test_structure(results: dict[str, Any]) -> None:
     assert results["quick"] is True
     assert results["mocap"] == ["cmu_13_29"], "CMU 13_29 from ../shared/data must be part of the quick run"
     (setting,) = results["settings"]
@@ -37,7 +38,7 @@ def test_structure(results: dict) -> None:
 
 
 @pytest.mark.shared_data
-def test_pipeline_beats_raw(results: dict) -> None:
+def test_pipeline_beats_raw(results: dict[str, Any]) -> None:
     m = results["summary"]["methods"]
     for name in ("pipeline_offline", "pipeline_online"):
         assert m["raw"]["rmse_mm"] > m[name]["rmse_mm"], f"raw {m['raw']['rmse_mm']:.1f} mm vs {name}"
@@ -45,7 +46,7 @@ def test_pipeline_beats_raw(results: dict) -> None:
 
 
 @pytest.mark.shared_data
-def test_readme_tables_from_the_results_file(results: dict, tmp_path, capsys) -> None:
+def test_readme_tables_from_the_results_file(results: dict[str, Any], tmp_path, capsys) -> None:
     from bench import accuracy_tables
 
     path = tmp_path / "quick.json"

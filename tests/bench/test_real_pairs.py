@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -57,7 +58,7 @@ def test_robust_kabsch_ignores_a_few_gross_outliers(rng: np.random.Generator) ->
 
 
 @pytest.fixture(scope="module")
-def keraal_pair() -> dict:
+def keraal_pair() -> dict[str, Any]:
     data = Path(real_pairs.PAIRS_DIR)
     paths = sorted(data.glob("G3-Kinect-CTK-*.txt"))
     if not paths:
@@ -65,20 +66,20 @@ def keraal_pair() -> dict:
     return real_pairs.evaluate_pair(*real_pairs.read_pair(paths[0]), methods=("raw", "pipeline_offline"))
 
 
-def _arm_median_mm(pair: dict, method: str) -> float:
+def _arm_median_mm(pair: dict[str, Any], method: str) -> float:
     d = real_pairs.offsets(pair, method)
     arm = [j for j in ARM if pair["good"][j]]
     return 1e3 * float(np.median(d[:, arm]))
 
 
-def test_registered_raw_kinect_arm_joints_are_near_vicon(data_dir: Path, keraal_pair: dict) -> None:
+def test_registered_raw_kinect_arm_joints_are_near_vicon(data_dir: Path, keraal_pair: dict[str, Any]) -> None:
     assert keraal_pair["alignment"].xcorr > 0.8, "speed cross-correlation too weak for a trustworthy lag"
     assert keraal_pair["overlap"].mean() > 0.9
     median = _arm_median_mm(keraal_pair, "raw")
     assert median < 100.0, f"raw Kinect arm joints {median:.0f} mm from Vicon (median), expected < 100 mm"
 
 
-def test_pipeline_does_not_move_arm_joints_away_from_vicon(data_dir: Path, keraal_pair: dict) -> None:
+def test_pipeline_does_not_move_arm_joints_away_from_vicon(data_dir: Path, keraal_pair: dict[str, Any]) -> None:
     raw, offline = _arm_median_mm(keraal_pair, "raw"), _arm_median_mm(keraal_pair, "pipeline_offline")
     assert offline <= raw + 5.0, f"pipeline offline {offline:.1f} mm vs raw {raw:.1f} mm (median arm offset)"
     d_raw, d_off = (real_pairs.offsets(keraal_pair, m) for m in ("raw", "pipeline_offline"))

@@ -18,6 +18,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import httpx
 import pytest
@@ -70,7 +71,7 @@ def _server_url(url: str, schema: str | None) -> str:
     return f"{url}{'&' if '?' in url else '?'}options=-csearch_path%3D{schema}"
 
 
-def _login(client: httpx.Client, email: str) -> dict:
+def _login(client: httpx.Client, email: str) -> dict[str, Any]:
     r = client.post("/api/v1/auth/login", json={"email": email, "password": DEMO_PASSWORD})
     r.raise_for_status()
     return r.json()
@@ -86,7 +87,7 @@ def api_client(base: str, email: str) -> tuple[httpx.Client, dict[str, str]]:
 NEW_PATIENT_PASSWORD = "new-patient-password-2026"
 
 
-def plan_item(exercise: str, repetitions: int, sets: int = 2) -> dict:
+def plan_item(exercise: str, repetitions: int, sets: int = 2) -> dict[str, Any]:
     """One item of a plan as the API takes it (3 times a week)."""
     return {"exercise_slug": exercise, "sets": sets, "repetitions": repetitions, "frequency_per_week": 3}
 
@@ -101,9 +102,9 @@ class NewPatient:
     pairing_code: str | None  # a fresh code for a home agent, when asked for
 
 
-def create_patient(base: str, prefix: str, full_name: str, *, items: list[dict] | None = None,
-                   plan: dict | None = None, settings: dict | None = None, therapist: str | None = None,
-                   pairing_code: bool = False) -> NewPatient:  # fmt: skip
+def create_patient(base: str, prefix: str, full_name: str, *, items: list[dict[str, Any]] | None = None,
+                   plan: dict[str, Any] | None = None, settings: dict[str, Any] | None = None,
+                   therapist: str | None = None, pairing_code: bool = False) -> NewPatient:  # fmt: skip
     """Creates a patient as the demo admin: optional patient settings (PATCH), a therapist assigned (by e-mail), a
     plan of `items` starting today (`plan` adds or overrides fields), and a pairing code."""
     email = f"{prefix}-{uuid.uuid4().hex[:8]}@example.org"
@@ -139,7 +140,7 @@ def create_patient(base: str, prefix: str, full_name: str, *, items: list[dict] 
 
 
 def upload_session(base: str, email: str, exercise: str, reps: int, *, seed: int,
-                   created_at: str = "2026-11-20T10:00:00Z", data: bytes | None = None) -> dict:  # fmt: skip
+                   created_at: str = "2026-11-20T10:00:00Z", data: bytes | None = None) -> dict[str, Any]:  # fmt: skip
     """Uploads a simulated set (tests.backend.khs_files.make_khs, or the file `data`) as the demo patient `email`;
     returns the stored session (201 asserted)."""
     client, headers = api_client(base, email)

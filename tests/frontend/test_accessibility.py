@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from contextlib import ExitStack
 from dataclasses import dataclass
+from typing import Any
 
 import pytest
 from axe_playwright_python.sync_playwright import Axe
@@ -67,12 +68,12 @@ def role_pages(browser, live_server):
         yield pages
 
 
-def _violations(page) -> list[dict]:
+def _violations(page) -> list[dict[str, Any]]:
     results = Axe().run(page)
     return [v for v in results.response["violations"] if v["impact"] in BLOCKING]
 
 
-def _describe(violations: list[dict]) -> str:
+def _describe(violations: list[dict[str, Any]]) -> str:
     lines = []
     for v in violations:
         lines.append(f"{v['id']} ({v['impact']}): {v['help']}")

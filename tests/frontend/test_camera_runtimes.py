@@ -24,6 +24,7 @@ import base64
 import json
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -81,7 +82,7 @@ def _people(result_landmarks, world_landmarks, getter) -> list[dict[str, np.ndar
     return people
 
 
-def browser_landmarks(page, images: list[np.ndarray], model: str, mode: str) -> list[list[dict]]:
+def browser_landmarks(page, images: list[np.ndarray], model: str, mode: str) -> list[list[dict[str, Any]]]:
     """Runs the images through the app's worker in the page (CPU delegate; mode "IMAGE", or "VIDEO" at 30 images a
     second); returns the people of each image."""
     loaded = page.evaluate(LOAD_JS, {"model": model, "mode": mode})
@@ -102,7 +103,7 @@ def frame_ms(i: int) -> int:
     return round(i * 1000 / 30)
 
 
-def python_landmarks(images: list[np.ndarray], model: str, mode: str) -> list[list[dict]]:
+def python_landmarks(images: list[np.ndarray], model: str, mode: str) -> list[list[dict[str, Any]]]:
     """Runs the images through the agent's Python runtime (mode "IMAGE", or "VIDEO" at 30 images a second); returns
     the people of each image."""
     from kinect_agent.sources.webcam.source import import_runtime, landmarker_options
@@ -120,7 +121,7 @@ def python_landmarks(images: list[np.ndarray], model: str, mode: str) -> list[li
     return out
 
 
-def paired(a: list[dict], b: list[dict]) -> list[tuple[dict, dict]]:
+def paired(a: list[dict[str, Any]], b: list[dict[str, Any]]) -> list[tuple[dict[str, Any], dict[str, Any]]]:
     """Pairs the people of two results of one image by the distance of their hips in the image (greedy)."""
     hips = lambda p: p["image"][[23, 24], :2].mean(axis=0)  # noqa: E731
     pairs, left = [], list(range(len(b)))
@@ -133,7 +134,7 @@ def paired(a: list[dict], b: list[dict]) -> list[tuple[dict, dict]]:
     return pairs
 
 
-def patient_only(people_per_image: list[list[dict]]) -> list[list[dict]]:
+def patient_only(people_per_image: list[list[dict[str, Any]]]) -> list[list[dict[str, Any]]]:
     """Returns, per image, the person the agent would record (kinect_agent.sources.webcam.source.choose_person: the
     largest at first, then the one nearest to where the patient's hips were), or nobody."""
     from kinect_agent.sources.webcam.source import choose_person
@@ -149,7 +150,7 @@ def patient_only(people_per_image: list[list[dict]]) -> list[list[dict]]:
     return out
 
 
-def differences(browser: list[list[dict]], python: list[list[dict]]) -> dict[str, np.ndarray]:
+def differences(browser: list[list[dict[str, Any]]], python: list[list[dict[str, Any]]]) -> dict[str, np.ndarray]:
     """Returns the absolute differences of every paired person's landmarks: "image_xy" (P, 33, 2) normalised,
     "world" (P, 33) 3-D distance in m, "visibility" (P, 33)."""
     image, world, vis = [], [], []

@@ -14,6 +14,7 @@ import re
 from collections.abc import Iterator
 from contextlib import closing, contextmanager
 from pathlib import Path
+from typing import Any
 
 import httpx
 import pytest
@@ -108,7 +109,7 @@ def new_patient(base: str, exercise: str = EXERCISE, target: int = TARGET) -> tu
     return new.email, new.id, new.item_ids[0]
 
 
-def patient_sessions(base: str, email: str, pid: int) -> list[dict]:
+def patient_sessions(base: str, email: str, pid: int) -> list[dict[str, Any]]:
     with httpx.Client(base_url=base, timeout=30) as c:
         c.post("/api/v1/auth/login", json={"email": email, "password": PASSWORD}).raise_for_status()
         return c.get("/api/v1/sessions", params={"patient_id": pid, "limit": 50}).json()["items"]

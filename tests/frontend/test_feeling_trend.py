@@ -4,6 +4,7 @@ pain (0-10) and effort (Borg CR10) said after each set; the therapist sets the p
 from __future__ import annotations
 
 import datetime as dt
+from typing import Any
 
 import httpx
 import pytest
@@ -40,7 +41,7 @@ def _patient_who_said_how_it_felt(base: str) -> tuple[str, int]:
     return email, pid
 
 
-def _traces(page, figure) -> list[dict]:
+def _traces(page, figure) -> list[dict[str, Any]]:
     """Returns the Plotly traces drawn in a figure: name and y values."""
     return figure.evaluate("(f) => f.plot.data.map((t) => ({ name: t.name, y: [...t.y] }))")
 

@@ -18,6 +18,7 @@ import time
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import httpx
 import numpy as np
@@ -105,7 +106,7 @@ def agent(home: Home, seed: int = 0):
         log.close()
 
 
-def _sessions(base: str, home: Home) -> list[dict]:
+def _sessions(base: str, home: Home) -> list[dict[str, Any]]:
     with httpx.Client(base_url=base, timeout=30) as c:
         c.post("/api/v1/auth/login", json={"email": home.email, "password": PASSWORD}).raise_for_status()
         return c.get("/api/v1/sessions", params={"patient_id": home.patient_id, "limit": 50}).json()["items"]

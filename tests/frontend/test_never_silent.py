@@ -18,6 +18,7 @@ import threading
 import time
 import uuid
 from contextlib import closing
+from typing import Any
 
 import httpx
 import pytest
@@ -53,7 +54,7 @@ class AgentLink:
 
     def __init__(self, base: str, token: str) -> None:
         self.client = httpx.Client(base_url=base, headers={"Authorization": f"Bearer {token}"}, timeout=30)
-        self.commands: queue.Queue[dict] = queue.Queue()
+        self.commands: queue.Queue[dict[str, Any]] = queue.Queue()
         self._thread: threading.Thread | None = None
         self._closing = threading.Event()
 
@@ -75,18 +76,18 @@ class AgentLink:
             if not self._closing.is_set():
                 raise
 
-    def command(self, timeout: float = 15) -> dict:
+    def command(self, timeout: float = 15) -> dict[str, Any]:
         """Returns the next command the server sent (start or stop)."""
         return self.commands.get(timeout=timeout)
 
-    def progress(self, start: dict, state: str, count: int, session_id: str, **extra) -> None:
+    def progress(self, start: dict[str, Any], state: str, count: int, session_id: str, **extra) -> None:
         """Posts one progress message of the set `start` (a start command)."""
         body = {"set_id": start["set_id"], "exercise_slug": start["exercise_slug"], "state": state, "count": count,
                 "target": start["target_reps"], "session_id": session_id, "sent_at": time.time()} | extra  # fmt: skip
         r = self.client.post("/api/v1/live/progress", json=body)
         assert r.status_code == 204, r.text
 
-    def upload(self, data: bytes) -> dict:
+    def upload(self, data: bytes) -> dict[str, Any]:
         """Uploads a session file; returns the stored session."""
         r = self.client.post(f"/api/v1/sessions?exercise={EXERCISE}", content=data,
                              headers={"Content-Type": "application/octet-stream"})  # fmt: skip

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import time
 from concurrent.futures import ThreadPoolExecutor
+from typing import Any
 
 import httpx
 import pytest
@@ -41,7 +42,7 @@ def test_many_requests_at_once_queue_one_build(live_server):
                          created_at="2026-11-18T08:00:00Z")["id"]  # fmt: skip
     clients = [api_client(live_server.url, ADMIN[0]) for _ in range(8)]
 
-    def ask(pair: tuple[httpx.Client, dict]) -> int:
+    def ask(pair: tuple[httpx.Client, dict[str, Any]]) -> int:
         return pair[0].get(f"/api/v1/sessions/{sid}/replay").status_code
 
     try:

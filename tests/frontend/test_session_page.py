@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import re
 import time
+from typing import Any
 
 import pytest
 import sqlalchemy as sa
@@ -28,7 +29,7 @@ def arm_session(live_server) -> int:
                           created_at="2026-11-19T09:30:00Z")["id"]  # fmt: skip
 
 
-def _plots(page, selector: str) -> list[dict]:
+def _plots(page, selector: str) -> list[dict[str, Any]]:
     """Returns [{names, shapes, annotations}] of the Plotly graph divs under selector."""
     return page.eval_on_selector_all(
         f"{selector} .js-plotly-plot",
@@ -75,7 +76,7 @@ def _open_from_patient_page(page, live_server) -> None:
     page.locator("#curves .js-plotly-plot").first.wait_for()
 
 
-def _detail_when_ready(page, sid: int) -> dict:
+def _detail_when_ready(page, sid: int) -> dict[str, Any]:
     """Returns the session's detail once a worker has prepared it (the server's embedded worker; 202 until then)."""
     deadline = time.monotonic() + 60
     while True:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 from playwright.sync_api import expect
 
@@ -11,7 +13,7 @@ from tests.frontend.conftest import THERAPIST, login, shot
 pytestmark = pytest.mark.browser
 
 
-def _dashboard(page) -> list[dict]:
+def _dashboard(page) -> list[dict[str, Any]]:
     """Returns the rows the dashboard API gives the logged-in therapist, in its order."""
     return page.evaluate("async () => (await (await fetch(Coach.url('/api/v1/dashboard?limit=200'))).json()).items")
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 import uuid
+from typing import Any
 
 import httpx
 import pytest
@@ -33,7 +34,7 @@ if (window.speechSynthesis) {
 """
 
 
-def _spoken(page) -> list[dict]:
+def _spoken(page) -> list[dict[str, Any]]:
     return page.evaluate("window.__spoken")
 
 
@@ -47,7 +48,7 @@ def voice_page(browser, live_server):
         yield page
 
 
-def _voice(base: str, email: str, pid: int) -> dict:
+def _voice(base: str, email: str, pid: int) -> dict[str, Any]:
     with httpx.Client(base_url=base, timeout=30) as c:
         c.post("/api/v1/auth/login", json={"email": email, "password": PASSWORD}).raise_for_status()
         return c.get(f"/api/v1/patients/{pid}/voice").json()

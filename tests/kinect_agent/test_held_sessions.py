@@ -10,6 +10,7 @@ import sys
 import textwrap
 import uuid
 from pathlib import Path
+from typing import Any
 
 import httpx
 import numpy as np
@@ -51,7 +52,7 @@ def _queue_three(tmp_path: Path) -> tuple[SessionQueue, list[Path]]:
     return queue, [queue.enqueue(session_payload(seed)) for seed in range(3)]
 
 
-def _passes(queue: SessionQueue, server: Server, n: int) -> list:
+def _passes(queue: SessionQueue, server: Server, n: int) -> list[Any]:
     reports = []
     for _ in range(n):
         with Uploader("http://coach.test", "khd_x", transport=server, policy=FAST, sleep=lambda s: None) as up:

@@ -7,6 +7,7 @@ camera). image: (33, 3), x and y normalised to a 640 x 480 picture of a camera 2
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -49,7 +50,7 @@ def image_of(world: np.ndarray) -> np.ndarray:
     return np.stack([x, y, world[:, 2] - world[23:25, 2].mean()], axis=1)
 
 
-def frame(t: float, knee_deg: float = 0.0, visibility: float = 0.95) -> dict:
+def frame(t: float, knee_deg: float = 0.0, visibility: float = 0.95) -> dict[str, Any]:
     """Returns one frame as the page sends it (JSON-ready)."""
     w = body(knee_deg)
     return {"t": round(t, 4), "world": w.round(5).tolist(), "image": image_of(w).round(5).tolist(),
@@ -64,7 +65,7 @@ def squats(
     rest_s: float = 1.5,
     t0: float = 0.0,
     depth_deg: float = 90.0,
-) -> list:
+) -> list[Any]:
     """Returns the frames of `reps` squats to depth_deg of knee flexion with rest_s of standing before and after."""
     n = int(round((2 * rest_s + reps * period_s) * fps))
     out = []
@@ -76,6 +77,6 @@ def squats(
     return out
 
 
-def batch(seq: int, frames: list) -> dict:
+def batch(seq: int, frames: list[Any]) -> dict[str, Any]:
     """Returns a batch body of the frames as the page sends it."""
     return {"seq": seq, "version": 1, "image_size": IMAGE_SIZE, "frames": frames}

@@ -11,6 +11,7 @@ camera tests' clip (Sports2D's demo, looped by Chromium's fake camera) the page 
 from __future__ import annotations
 
 import uuid
+from typing import Any
 
 import numpy as np
 import pytest
@@ -32,7 +33,7 @@ PER_BATCH = 6
 BLAZE_MIRROR = [0, 4, 5, 6, 1, 2, 3, 8, 7, 10, 9] + [i + 1 if i % 2 else i - 1 for i in range(11, 33)]
 
 
-def webcam_frames(frames: list[dict], seed: int, swaps: bool) -> list[dict]:
+def webcam_frames(frames: list[dict[str, Any]], seed: int, swaps: bool) -> list[dict[str, Any]]:
     """Returns page frames with the webcam's measured jitter (10 mm across the image, 25 mm in depth) and, with swaps,
     a sixth of the set whose left and right labels flicker (the side view's swaps; bench/README.md, "Webcam")."""
     rng = np.random.default_rng(seed)
@@ -47,7 +48,7 @@ def webcam_frames(frames: list[dict], seed: int, swaps: bool) -> list[dict]:
     return out
 
 
-def _wobble(seconds: float, seed: int) -> list[dict]:
+def _wobble(seconds: float, seed: int) -> list[dict[str, Any]]:
     """Frames of a person standing whose knees wobble by up to 12 degrees (no repetition), as page frames."""
     rng = np.random.default_rng(seed)
     n = int(seconds * 30)

@@ -5,6 +5,7 @@ re-sent batches or a rebuilt live state never count or store twice."""
 from __future__ import annotations
 
 import uuid
+from typing import Any
 
 from sqlalchemy import func, select
 
@@ -20,7 +21,7 @@ from tests.backend.camera.landmarks import batch, squats
 PER_BATCH = 6  # frames per batch: 0.2 s at 30 fps
 
 
-def _send_all(client, set_id, frames, headers) -> list[dict]:
+def _send_all(client, set_id, frames, headers) -> list[dict[str, Any]]:
     answers = []
     for seq, k in enumerate(range(0, len(frames), PER_BATCH)):
         r = client.post(f"/api/v1/camera/sets/{set_id}/batches", json=batch(seq, frames[k : k + PER_BATCH]),

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import uuid
+from typing import Any
 
 from sqlalchemy import func, select
 
@@ -15,7 +16,7 @@ from tests.backend.camera.landmarks import batch, frame
 LITE = "pose_landmarker_lite"
 
 
-def _batch(seq: int, t0: float = 0.0, n: int = 3) -> dict:
+def _batch(seq: int, t0: float = 0.0, n: int = 3) -> dict[str, Any]:
     return batch(seq, [frame(t0 + k / 30) for k in range(n)])
 
 
@@ -86,7 +87,7 @@ def test_a_cookie_login_needs_the_csrf_header(client, camera_home, started):
     client.cookies.clear()
 
 
-def _hostile(client, set_id, headers, raw: str) -> dict:
+def _hostile(client, set_id, headers, raw: str) -> dict[str, Any]:
     r = client.post(f"/api/v1/camera/sets/{set_id}/batches", content=raw,
                     headers=headers | {"Content-Type": "application/json"})  # fmt: skip
     assert 400 <= r.status_code < 500, r.text

@@ -5,17 +5,18 @@ the stream itself ends within 2 s on a real server)."""
 from __future__ import annotations
 
 import asyncio
+from typing import Any
 
 from backend.devices.service import revoke
 from backend.events.hub import ACCESS_ENDED, Hub, pending
 from backend.users.service import create_api_token, revoke_api_token, update_user
 
 
-def _pending_ends(db_session) -> list:
+def _pending_ends(db_session) -> list[Any]:
     return [ev for ev in pending(db_session) if ev.kind == ACCESS_ENDED]
 
 
-def _ended(streams: dict, events: list) -> set[str]:
+def _ended(streams: dict[str, Any], events: list[Any]) -> set[str]:
     """Returns the names of the streams (name -> subscribe kwargs) that the events end."""
 
     async def run():

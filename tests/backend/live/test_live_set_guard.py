@@ -5,11 +5,12 @@ patient's pages."""
 from __future__ import annotations
 
 import uuid
+from typing import Any
 
 from backend.live import service
 
 
-def _recording(set_id: str, count: int = 1) -> dict:
+def _recording(set_id: str, count: int = 1) -> dict[str, Any]:
     return {"set_id": set_id, "exercise_slug": "squat", "state": "recording", "count": count, "target": 8}
 
 

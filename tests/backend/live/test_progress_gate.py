@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 
 from backend.live.progress_gate import MAX_PER_WINDOW, LiveProgressTooFast, ProgressGate
 
 
-def _msg(count: int = 1, state: str = "recording", set_id: str = "s") -> dict:
+def _msg(count: int = 1, state: str = "recording", set_id: str = "s") -> dict[str, Any]:
     return {"set_id": set_id, "exercise_slug": "squat", "state": state, "count": count}
 
 

@@ -8,6 +8,7 @@ import hashlib
 import io
 import json
 import zipfile
+from typing import Any
 
 import pytest
 import sqlalchemy as sa
@@ -29,7 +30,7 @@ def _upload(client, headers, seed: int, exercise: str = "squat") -> int:
     return response.json()["id"]
 
 
-def _observations(bundle: dict) -> list[tuple[str, object]]:
+def _observations(bundle: dict[str, Any]) -> list[tuple[str, object]]:
     """Returns (code, value) of every Observation of a FHIR Bundle (its entries' fullUrls are new uuids each time)."""
     out = []
     for entry in bundle["entry"]:
@@ -42,7 +43,7 @@ def _observations(bundle: dict) -> list[tuple[str, object]]:
     return sorted(out, key=repr)
 
 
-def _check_session_exports(z: zipfile.ZipFile, entry: dict) -> None:
+def _check_session_exports(z: zipfile.ZipFile, entry: dict[str, Any]) -> None:
     """Asserts a session's entry names an export of each format and that each parses and fits the session."""
     assert sorted(entry["exports"]) == sorted(EXPORT_FORMATS) and entry["exports_missing"] == {}, entry
     sid = entry["id"]
@@ -60,7 +61,7 @@ def _check_session_exports(z: zipfile.ZipFile, entry: dict) -> None:
     assert reps == [entry["metrics"]["repetitions"]], (sid, reps)
 
 
-def _check_manifest(z: zipfile.ZipFile, listed: list[dict]) -> dict:
+def _check_manifest(z: zipfile.ZipFile, listed: list[dict[str, Any]]) -> dict[str, Any]:
     manifest = json.loads(z.read("manifest.json"))
     assert manifest["format_version"] == FORMAT_VERSION == "3"
     members = {m["name"]: m for m in manifest["files"]}

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import datetime as dt
 import uuid
+from typing import Any
 
 import pytest
 from fastapi.testclient import TestClient
@@ -19,7 +20,7 @@ from backend.users.models import User
 from tests.backend.reminders.conftest import mail_settings
 
 
-def _plan(exercise, **more) -> dict:
+def _plan(exercise, **more) -> dict[str, Any]:
     item = {"exercise_slug": exercise.slug, "sets": 1, "repetitions": 5, "frequency_per_week": 2}
     return {"title": "p", "start_date": "2026-11-01", "items": [item]} | more
 

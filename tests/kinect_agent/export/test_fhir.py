@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from typing import Any
 
 import pytest
 
@@ -14,7 +15,7 @@ from tests.kinect_agent.export.conftest import session  # noqa: E402
 CONTEXT = fhir.SessionContext(session_id="abc", start="2026-11-20T10:00:00Z", patient_id=7, device_id=3)
 
 
-def _observations(bundle: dict) -> dict[str, dict]:
+def _observations(bundle: dict[str, Any]) -> dict[str, dict[str, Any]]:
     return {
         e["resource"]["code"]["coding"][0]["code"]: e["resource"]
         for e in bundle["entry"]

@@ -6,6 +6,7 @@ import importlib.util
 import json
 import subprocess
 import sys
+from typing import Any
 
 import numpy as np
 import pytest
@@ -74,7 +75,7 @@ needs_opensim = pytest.mark.skipif(
 )
 
 
-def opensim_read(path) -> dict:
+def opensim_read(path) -> dict[str, Any]:
     """Returns what OpenSim's TRC reader makes of `path`: labels, units, times (T,), columns (M, T, 3) mm, NaN =
     missing. OpenSim runs in a child process: its bundled BLAS would otherwise join this process's thread pools."""
     done = subprocess.run([sys.executable, "-c", _OPENSIM_READ, str(path)], capture_output=True, text=True, check=True)

@@ -102,7 +102,7 @@ def _bad(tmp_path: Path, lines: list[str]) -> Path:
     return path
 
 
-def _assert_format_error(path: Path, line: int, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+def _assert_format_error(path: Path, line: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(FormatError) as info:
         bvh.read(path)
     assert info.value.path == str(path) and info.value.line == line, str(info.value)
@@ -112,18 +112,18 @@ def _assert_format_error(path: Path, line: int, tmp_path: Path, capsys: pytest.C
     assert not out.exists() and not list(tmp_path.glob("*.part"))
 
 
-def test_truncated_in_motion(bvh_path: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+def test_truncated_in_motion(bvh_path: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     lines = _lines(bvh_path)
     cut = _motion_line(lines) + 3 + 100  # keep 100 frames
     _assert_format_error(_bad(tmp_path, lines[:cut]), cut, tmp_path, capsys)
 
 
-def test_missing_motion(bvh_path: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+def test_missing_motion(bvh_path: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     lines = _lines(bvh_path)[: _motion_line(_lines(bvh_path))]
     _assert_format_error(_bad(tmp_path, lines), len(lines), tmp_path, capsys)
 
 
-def test_row_with_wrong_count(bvh_path: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+def test_row_with_wrong_count(bvh_path: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     lines = _lines(bvh_path)
     k = _motion_line(lines) + 3 + 10
     lines[k] = " ".join(lines[k].split()[:-1]) + "\n"

@@ -12,6 +12,7 @@ import struct
 import uuid
 import zlib
 from datetime import datetime, timedelta
+from typing import Any
 
 import numpy as np
 import pytest
@@ -49,12 +50,12 @@ def realistic(rng: np.random.Generator, n_frames: int, noise_m: float = 0.015) -
     return raw, filtered
 
 
-def header_of(data: bytes) -> dict:
+def header_of(data: bytes) -> dict[str, Any]:
     _, _, _, n, _ = struct.unpack_from("<8sHHIQ", data)
     return json.loads(data[24 : 24 + n])
 
 
-def rebuild(header: dict, blocks: list[bytes], version: int = sf.VERSION) -> bytes:
+def rebuild(header: dict[str, Any], blocks: list[bytes], version: int = sf.VERSION) -> bytes:
     """Builds session bytes by hand from a header dict and compressed blocks, with a correct checksum."""
     head = json.dumps(header).encode()
     body = b"".join(struct.pack("<I", len(b)) + b for b in blocks)
@@ -226,7 +227,7 @@ def test_bad_header_json(rng):
     expect("bad_header", rebuild(header, blocks_of(data)))
 
 
-def _header(n: int, version: int) -> dict:
+def _header(n: int, version: int) -> dict[str, Any]:
     codec, grid = {1: ("zlib", GRID_V1), 2: ("xz", GRID)}[version]
     return {
         "format": "kinect-home-session",

@@ -116,7 +116,7 @@ def _data_lines(text: bytes) -> tuple[list[bytes], int]:
     return lines, 0
 
 
-def _on_numbers(edit: Callable[[re.Match], bytes]) -> Callable[[bytes], bytes]:
+def _on_numbers(edit: Callable[[re.Match[bytes]], bytes]) -> Callable[[bytes], bytes]:
     def apply(text: bytes) -> bytes:
         lines, start = _data_lines(text)
         return b"".join(lines[:start] + [_NUMBER.sub(edit, line) for line in lines[start:]])

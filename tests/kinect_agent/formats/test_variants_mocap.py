@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -131,7 +132,7 @@ def test_bvh_xyz_channel_order(cmu, tmp_path: Path) -> None:
     _same(out, clean, "XYZ order", atol=1e-7)
 
 
-def _with_positions_everywhere(joints: list[bvh.Joint], motion: np.ndarray, values) -> tuple[list, np.ndarray]:
+def _with_positions_everywhere(joints: list[bvh.Joint], motion: np.ndarray, values) -> tuple[list[Any], np.ndarray]:
     """Gives every joint with rotations three position channels first, filled with values(joint) (3,)."""
     new, columns, first = [], [], 0
     for joint in joints:

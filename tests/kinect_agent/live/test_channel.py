@@ -5,13 +5,14 @@ from __future__ import annotations
 import json
 import threading
 import time
+from typing import Any
 
 import httpx
 
 from kinect_agent.live.channel import CommandStream, Publisher, parse_events
 
 
-def _sse(*events: tuple[str, dict]) -> str:
+def _sse(*events: tuple[str, dict[str, Any]]) -> str:
     body = "retry: 3000\n: connected\n\n"
     for name, data in events:
         body += f"event: {name}\ndata: {json.dumps(data)}\n\n"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import uuid
+from typing import Any
 
 import numpy as np
 import pytest
@@ -28,7 +29,7 @@ def _command(exercise: str, target: int) -> SetCommand:
 def _record(tmp_path, rec, command, limits=None, on_message=None):
     messages = []
 
-    def publish(message: dict, keep: bool) -> None:
+    def publish(message: dict[str, Any], keep: bool) -> None:
         messages.append((message, keep))
         if on_message:
             on_message(message)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 from pydantic import ValidationError
 
@@ -33,7 +35,7 @@ BAD = [
 
 
 @pytest.mark.parametrize(("field", "changes"), BAD, ids=[f"{f}={c}" for f, c in BAD])
-def test_a_value_out_of_range_is_refused_naming_the_field(field: str, changes: dict) -> None:
+def test_a_value_out_of_range_is_refused_naming_the_field(field: str, changes: dict[str, Any]) -> None:
     with pytest.raises(ValidationError) as refused:
         PipelineConfig(**changes)
     assert [e["loc"] for e in refused.value.errors()] == [(field,)]

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -25,7 +26,7 @@ MEDIAN_DEG, RMS_DEG, MIN_R = 5.0, 20.0, 0.95
 
 
 @lru_cache(maxsize=4)
-def _angles(data_dir: Path, movement: str, subject: str) -> tuple[dict, dict]:
+def _angles(data_dir: Path, movement: str, subject: str) -> tuple[dict[str, Any], dict[str, Any]]:
     """Returns (raw, filtered) joint angles (degrees) of the 10 joined episodes of one movement and subject."""
     rec = ui_prmd.read_episodes(data_dir / KINECT, movement=movement, subject=subject)
     return joint_angles(rec.positions), joint_angles(process(rec).filtered.positions)

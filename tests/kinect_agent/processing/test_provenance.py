@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import json
+from typing import Any
 
 from kinect_agent.processing.config import config_for_device
 from kinect_agent.processing.pipeline import VERSION
 from kinect_agent.processing.provenance import settings_id, stale_reason, todays_id
 
 
-def _params(device: str | None) -> dict:
+def _params(device: str | None) -> dict[str, Any]:
     return {"pipeline": VERSION, "config": json.loads(json.dumps(config_for_device(device).model_dump()))}
 
 

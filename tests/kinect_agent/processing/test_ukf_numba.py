@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -31,7 +33,7 @@ def _recording(rng: np.random.Generator, frames: int = 60) -> Recording:
     return inject_outliers(rec, rng, rate=0.02)[0]
 
 
-def _filters(rec: Recording, fixed: bool, at_mean: bool = False) -> tuple:
+def _filters(rec: Recording, fixed: bool, at_mean: bool = False) -> tuple[Any, ...]:
     """Returns (fast, reference) filters with the same chain and start; the reference uses numpy throughout."""
     fit = inverse_kinematics(rec.positions)
     lengths = fit.lengths if fixed else None

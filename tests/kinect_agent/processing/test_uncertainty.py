@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -21,7 +23,7 @@ WELL_DEFINED = ("elbow_flexion_L", "elbow_flexion_R", "knee_flexion_L", "knee_fl
 NON_NEGATIVE = ("elbow_flexion_L", "elbow_flexion_R", "knee_flexion_L", "knee_flexion_R", "trunk_flexion")
 
 
-def _frames(seed: int, n: int = 6) -> tuple:
+def _frames(seed: int, n: int = 6) -> tuple[Any, ...]:
     truth = simulate_truth("squat", 1, seed=seed)
     ik = inverse_kinematics(truth.positions)
     k = np.linspace(0, truth.n_frames - 1, n).astype(int)

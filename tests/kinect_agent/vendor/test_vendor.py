@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import zipfile
+from typing import Any
 
 import pytest
 
@@ -13,7 +14,7 @@ from kinect_agent.vendor.tflite_metadata import ZIP_ALIGNMENT, ImageInput, pack_
 
 
 @pytest.fixture(scope="module")
-def lock() -> dict:
+def lock() -> dict[str, Any]:
     lk = vendor.load_lock()
     if not install.is_installed(lk):
         pytest.fail(f"the pose assets are not installed: {vendor.INSTALL_HINT}")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import json
+from typing import Any
 
 import numpy as np
 import pytest
@@ -19,7 +20,7 @@ def make_batch(rng: np.random.Generator, n: int = 5, t0: float = 100.0) -> Landm
 
 
 @pytest.fixture
-def doc(rng) -> dict:
+def doc(rng) -> dict[str, Any]:
     return json.loads(json.dumps(make_batch(rng).to_json()))
 
 
@@ -32,7 +33,7 @@ def test_a_batch_reads_back_as_written(seed) -> None:
     assert back.image_size == (640, 480) and back.n_frames == 7
 
 
-def _broken(doc: dict, change) -> dict:
+def _broken(doc: dict[str, Any], change) -> dict[str, Any]:
     bad = copy.deepcopy(doc)
     change(bad)
     return bad
