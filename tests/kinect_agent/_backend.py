@@ -64,6 +64,7 @@ class LiveServer:
     def stop(self) -> None:
         if self._server is not None:
             self._server.should_exit = True
+            assert self._thread is not None  # started with the server
             self._thread.join(timeout=20)
             self._server = None
 

@@ -206,6 +206,7 @@ def test_run_replays_a_file_into_the_queue(home, tmp_path) -> None:
     assert cli.main(["run", "--source", "replay", str(recording), "--exercise", "squat", "--no-upload"]) == 0
     (path,) = SessionQueue(config.queue_dir).pending()
     payload = read_payload(path)
+    assert payload.filtered is not None
     assert payload.raw.meta.exercise == "squat" and payload.filtered.n_frames == payload.raw.n_frames
 
 

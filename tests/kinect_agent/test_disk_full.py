@@ -28,7 +28,8 @@ def paired(tmp_path, monkeypatch) -> SessionQueue:
 def _disk_full_for(monkeypatch, n_writes: int, folder: str = "/") -> list[str]:
     """Makes the queue's next n_writes writes into folder fail with ENOSPC (then the disk has room again); returns
     the paths that were refused."""
-    real, refused = queue._write_durably, []
+    real = queue._write_durably
+    refused: list[str] = []
 
     def write(path, data) -> None:
         if len(refused) < n_writes and folder in str(path):

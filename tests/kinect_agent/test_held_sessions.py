@@ -4,6 +4,7 @@ its session is already queued or stored."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import subprocess
 import sys
@@ -18,7 +19,7 @@ import pytest
 
 from kinect_agent import skeleton
 from kinect_agent.formats.session_file import SessionPayload
-from kinect_agent.queue import HOLD_AFTER_SERVER_ERRORS, SessionQueue, fcntl
+from kinect_agent.queue import HOLD_AFTER_SERVER_ERRORS, SessionQueue
 from kinect_agent.recording import Metadata, Recording
 from kinect_agent.upload import RetryPolicy, Uploader, drain
 
@@ -37,7 +38,8 @@ class Server(httpx.BaseTransport):
     """A server that answers `failing` bodies with `status` and stores every other one (201)."""
 
     def __init__(self, failing: set[bytes], status: int) -> None:
-        self.failing, self.status, self.stored = failing, status, []
+        self.failing, self.status = failing, status
+        self.stored: list[bytes] = []
 
     def handle_request(self, request: httpx.Request) -> httpx.Response:
         body = request.read()
@@ -131,7 +133,7 @@ def test_a_raw_copy_whose_process_died_is_queued_at_once(tmp_path) -> None:
     assert recovered == [root / "pending" / held.name] and not held.exists()
 
 
-@pytest.mark.skipif(fcntl is None, reason="flock: POSIX only")
+@pytest.mark.skipif(importlib.util.find_spec("fcntl") is None, reason="flock: POSIX only")
 def test_a_raw_copy_a_living_process_is_filtering_stays_with_it(tmp_path) -> None:
     root = tmp_path / "queue"
     working = SessionQueue(root)

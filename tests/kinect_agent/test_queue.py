@@ -103,6 +103,7 @@ def test_mark_sent_writes_the_receipt_then_removes_the_file(tmp_path) -> None:
     queue.mark_sent(path, {"status_code": 201, "server_session_id": 7})
     assert not path.exists() and queue.pending() == []
     receipt = queue.receipt(payload.session_id)
+    assert receipt is not None
     assert receipt["server_session_id"] == 7 and receipt["status_code"] == 201
     assert queue.counts().sent == 1
 
@@ -121,7 +122,8 @@ def test_mark_rejected_keeps_file_and_error_and_requeue_brings_it_back(tmp_path)
     target = queue.mark_rejected(path, {"status_code": 400, "detail": "InvalidSessionFile: bad_magic: ..."})
     assert target.read_bytes() == encode(payload)
     assert queue.pending() == [] and queue.counts().rejected == 1
-    assert queue.rejection(payload.session_id)["status_code"] == 400
+    rejection = queue.rejection(payload.session_id)
+    assert rejection is not None and rejection["status_code"] == 400
     assert queue.requeue_rejected() == [path]
     assert queue.pending() == [path] and queue.rejection(payload.session_id) is None
 

@@ -24,7 +24,8 @@ class LoseFirstResponses(httpx.BaseTransport):
     """Forwards each request to the server, but throws away the first `n` responses after the server handled them."""
 
     def __init__(self, n: int) -> None:
-        self.inner, self.n, self.statuses = httpx.HTTPTransport(), n, []
+        self.inner, self.n = httpx.HTTPTransport(), n
+        self.statuses: list[int] = []
 
     def handle_request(self, request: httpx.Request) -> httpx.Response:
         response = self.inner.handle_request(request)
@@ -80,7 +81,8 @@ def test_lost_response_is_retried_and_the_session_is_stored_once(
     assert result.response["client_session_id"] == session_payload.session_id
     assert result.response["patient_id"] == patient.id
     assert not path.exists() and report.remaining == 0
-    assert queue.receipt(session_payload.session_id)["server_session_id"] == result.response["id"]
+    receipt = queue.receipt(session_payload.session_id)
+    assert receipt is not None and receipt["server_session_id"] == result.response["id"]
     assert _stored(db_session, _client_id(session_payload.session_id)) == 1
 
 
@@ -118,6 +120,7 @@ def test_invalid_file_is_moved_to_rejected_with_the_server_error(tmp_path, live_
     assert result.outcome == "rejected" and result.status_code == 400 and result.attempts == 1
     assert not path.exists() and (tmp_path / "q" / "rejected" / path.name).exists()
     error = queue.rejection(path.stem)
+    assert error is not None
     assert error["status_code"] == 400 and error["response"]["error"] == "InvalidSessionFile"
     assert "bad_magic" in error["detail"]
 

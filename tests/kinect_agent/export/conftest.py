@@ -6,7 +6,7 @@ import pytest
 
 from backend.analysis.report import get_exercise
 from backend.sessions.metrics import metrics_document
-from kinect_agent.analysis.document import AnalysisDocument
+from kinect_agent.analysis.document import AnalysisDocument, AnalysisReport
 from kinect_agent.formats import session_file as sf
 from kinect_agent.sources.simulator import simulate
 
@@ -18,7 +18,7 @@ def session(exercise: str, reps: int, seed: int) -> tuple[sf.SessionPayload, Ana
                                 recorded_by={"device_id": 3, "patient_id": 7})  # fmt: skip
     payload = sf.decode(sf.encode(payload))
     # a history with one earlier session gives every indicator a score
-    history = [metrics_document(payload, get_exercise(exercise), target_reps=None, history=[])]
+    history: list[AnalysisReport] = [metrics_document(payload, get_exercise(exercise), target_reps=None, history=[])]
     return payload, metrics_document(payload, get_exercise(exercise), target_reps=reps, history=history)
 
 

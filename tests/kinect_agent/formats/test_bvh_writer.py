@@ -37,6 +37,7 @@ def test_round_trip_of_the_stored_filtered_recording_stays_within_its_grid(tmp_p
     constant lengths reproduce those positions to well under 1 mm RMS and within the grid's diagonal at worst."""
     _, truth, _ = simulate("squat", 2, seed=seed)
     stored = sf.decode(sf.encode(sf.SessionPayload(session_id="s", raw=truth, filtered=truth))).filtered
+    assert stored is not None
     back = _round_trip(tmp_path, stored.t, stored.positions)
     err_mm = np.linalg.norm(back.positions - stored.positions, axis=-1) * 1000
     assert np.sqrt(np.mean(err_mm**2)) < 0.6, f"RMS {np.sqrt(np.mean(err_mm**2)):.3f} mm"

@@ -182,4 +182,4 @@ def test_reads_an_export_with_a_key_value_header_21_joints_and_irregular_16_hz(d
     np.testing.assert_allclose(rec.positions, ref.positions, atol=1e-6, equal_nan=True)
     header = rec.meta.extra["header"]
     assert header["sensorid"] == "Kinect-2 0042" and header["daterecording"] == "2025-03-14 10:22:05"
-    assert 14 < rec.meta.rate_hz < 18
+    assert rec.meta.rate_hz is not None and 14 < rec.meta.rate_hz < 18

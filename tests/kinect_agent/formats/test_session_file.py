@@ -23,7 +23,11 @@ from kinect_agent.recording import Metadata, Recording
 
 GRID = sf.GRID_M  # version 2: 2**-10 m
 GRID_V1 = 2.0**-13
-XZ = {"format": lzma.FORMAT_XZ, "check": lzma.CHECK_NONE}
+
+
+def xz(data: bytes) -> bytes:
+    """Returns data compressed as the session file's blocks are (XZ, no integrity check)."""
+    return lzma.compress(data, format=lzma.FORMAT_XZ, check=lzma.CHECK_NONE)
 
 
 def realistic(rng: np.random.Generator, n_frames: int, noise_m: float = 0.015) -> tuple[Recording, Recording]:
@@ -92,6 +96,7 @@ def test_round_trip_exact_to_the_grid(rng):
     assert (header_of(data)["codec"], header_of(data)["grid_m"]) == ("xz", 2.0**-10)
     back = sf.decode(data)
     for a, b in ((payload.raw, back.raw), (payload.filtered, back.filtered)):
+        assert a is not None and b is not None
         tracked = a.state != skeleton.NOT_TRACKED
         np.testing.assert_array_equal(b.positions[tracked] / GRID, np.rint(a.positions[tracked] / GRID))
 
@@ -101,6 +106,7 @@ def test_round_trip_within_grid(rng):
     back = sf.decode(sf.encode(payload))
     assert (back.session_id, back.params, back.created_at) == ("abc", payload.params, payload.created_at)
     for a, b in ((payload.raw, back.raw), (payload.filtered, back.filtered)):
+        assert a is not None and b is not None
         np.testing.assert_allclose(b.t, a.t, rtol=0, atol=1e-9)
         np.testing.assert_array_equal(b.state, a.state)
         np.testing.assert_array_equal(np.isnan(b.positions), np.isnan(a.positions))
@@ -136,7 +142,8 @@ def test_two_minutes_simulated_and_filtered_within_a_fifth_of_2mb():
 
     data = sf.encode(make_payload(squat_session(2.0), created_at="2026-11-20T10:00:00Z"))
     assert len(data) <= 2_000_000 / 5, f"{len(data)} bytes"
-    assert sf.decode(data).filtered.n_frames >= 3600
+    filtered = sf.decode(data).filtered
+    assert filtered is not None and filtered.n_frames >= 3600
 
 
 def test_file_round_trip_and_hash(rng, tmp_path):
@@ -256,12 +263,13 @@ def _one_recording_v2(t: np.ndarray, units: np.ndarray, state: np.ndarray) -> by
     """Hand-built version-2 bytes: float64 t deltas, int8 state, int32 grid-unit position deltas (shuffled), xz."""
     deltas = np.diff(units.transpose(1, 2, 0), axis=-1, prepend=0).astype("<i4")
     blocks = [_dt(t), state.astype(np.int8).tobytes(), sf._shuffle(deltas)]
-    return rebuild(_header(len(t), 2), [lzma.compress(b, **XZ) for b in blocks])
+    return rebuild(_header(len(t), 2), [xz(b) for b in blocks])
 
 
 def v1_encode(payload: sf.SessionPayload) -> bytes:
     """The version-1 writer: grid 2**-13 m, float32 position deltas in metres, zlib level 6."""
-    blocks, described = [], {}
+    blocks: list[bytes] = []
+    described: dict[str, dict[str, object] | None] = {}
     for name, rec in (("raw", payload.raw), ("filtered", payload.filtered)):
         if rec is None:
             described[name] = None
@@ -301,6 +309,7 @@ def test_version_1_file_still_decodes(rng):
     back = sf.decode(data)
     assert (back.session_id, back.params, back.created_at) == ("abc", payload.params, payload.created_at)
     for a, b in ((payload.raw, back.raw), (payload.filtered, back.filtered)):
+        assert a is not None and b is not None
         np.testing.assert_allclose(b.t, a.t, rtol=0, atol=1e-9)
         np.testing.assert_array_equal(b.state, a.state)
         np.testing.assert_allclose(b.positions, a.positions, rtol=0, atol=GRID_V1 / 2 + 1e-12, equal_nan=True)
@@ -365,7 +374,7 @@ def test_zlib_bomb_refused_in_version_1(rng):
 @pytest.fixture(scope="module")
 def xz_bomb() -> bytes:
     """64 MiB of zeros as one xz stream (about 10 kB)."""
-    return lzma.compress(bytes(64 * 2**20), **XZ, preset=1)
+    return lzma.compress(bytes(64 * 2**20), format=lzma.FORMAT_XZ, check=lzma.CHECK_NONE, preset=1)
 
 
 def test_xz_bomb_refused(rng, xz_bomb):
@@ -380,7 +389,7 @@ def test_xz_bomb_refused(rng, xz_bomb):
 def test_xz_block_one_byte_larger_than_declared(rng):
     data = sf.encode(small_payload(rng, 10))
     blocks = blocks_of(data)
-    blocks[1] = lzma.compress(bytes(201), **XZ)  # state block: 10 frames x 20 joints = 200 bytes declared
+    blocks[1] = xz(bytes(201))  # state block: 10 frames x 20 joints = 200 bytes declared
     expect("too_large", rebuild(header_of(data), blocks))
 
 
@@ -404,7 +413,7 @@ def test_xz_memory_limit(rng, monkeypatch):
     [
         lambda b: b[:-10],  # stream cut short
         lambda b: b + b"\0" * 4,  # bytes after the stream (xz stream padding)
-        lambda b: b + lzma.compress(b"", **XZ),  # a second stream
+        lambda b: b + xz(b""),  # a second stream
         lambda b: zlib.compress(lzma.decompress(b)),  # a zlib block in a version-2 file
         lambda b: b"\xfd7zXZ\0" + bytes(len(b) - 6),  # corrupt stream
     ],
@@ -419,7 +428,7 @@ def test_bad_xz_block(rng, damage):
 def test_xz_block_of_wrong_size(rng):
     data = sf.encode(small_payload(rng, 10))
     blocks = blocks_of(data)
-    blocks[2] = lzma.compress(bytes(2399), **XZ)
+    blocks[2] = xz(bytes(2399))
     expect("bad_header", rebuild(header_of(data), blocks))
 
 
@@ -480,6 +489,7 @@ def test_decode_equals_reference_on_simulated_session(version):
     reference = _reference_positions if version == 1 else _reference_positions_v2
     back = sf.decode(data)
     for index, rec in enumerate((back.raw, back.filtered)):
+        assert rec is not None
         expected = reference(data, index, rec.n_frames, rec.state)
         np.testing.assert_array_equal(rec.positions, expected, err_msg=f"recording {index}")
         assert rec.positions.flags.c_contiguous
@@ -519,6 +529,7 @@ def _with_sd(rng: np.random.Generator, n_frames: int = 120) -> sf.SessionPayload
 def test_angle_sds_round_trip_to_their_step(rng):
     payload = _with_sd(rng)
     back = sf.decode(sf.encode(payload))
+    assert back.angle_sd is not None and payload.angle_sd is not None
     assert set(back.angle_sd) == set(payload.angle_sd)
     for name, sd in payload.angle_sd.items():
         np.testing.assert_allclose(back.angle_sd[name], sd, atol=sf.ANGLE_SD_STEP_DEG / 2 + 1e-9, err_msg=name)
@@ -531,6 +542,7 @@ def test_a_file_without_angle_sds_reads_none(rng):
 
 def test_angle_sds_need_the_filtered_recording_and_its_frame_count(rng):
     payload = _with_sd(rng)
+    assert payload.angle_sd is not None
     payload.angle_sd["elbow_flexion_L"] = payload.angle_sd["elbow_flexion_L"][:-1]
     with pytest.raises(ValueError, match="shape"):
         sf.encode(payload)
@@ -539,6 +551,7 @@ def test_angle_sds_need_the_filtered_recording_and_its_frame_count(rng):
     with pytest.raises(ValueError, match="filtered"):
         sf.encode(payload)
     payload = _with_sd(rng)
+    assert payload.angle_sd is not None
     payload.angle_sd["wrist_twist"] = np.ones(payload.raw.n_frames)
     with pytest.raises(ValueError, match="unknown"):
         sf.encode(payload)

@@ -67,7 +67,7 @@ def test_publisher_drops_messages_when_the_server_is_down():
     def handler(request: httpx.Request) -> httpx.Response:
         raise httpx.ConnectError("down")
 
-    logged = []
+    logged: list[str] = []
     pub = Publisher("http://coach.test", "khd_x", log=logged.append, transport=httpx.MockTransport(handler))
     pub.offer({"count": 1})
     pub.offer({"state": "ended"}, keep=True)

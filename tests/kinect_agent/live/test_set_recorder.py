@@ -32,11 +32,9 @@ def _record(tmp_path, rec, command, limits=None, on_message=None):
     def publish(message: dict[str, Any], keep: bool) -> None:
         messages.append((message, keep))
         if on_message:
-            on_message(message)
+            on_message(message, recorder)
 
     recorder = SetRecorder(command, _source(tmp_path, rec), tmp_path / "recording", publish, limits)
-    if on_message:
-        on_message.recorder = recorder
     return recorder.run(), messages
 
 
@@ -66,9 +64,9 @@ def test_a_set_ends_after_a_stretch_without_movement(tmp_path):
 def test_stop_ends_the_set_and_keeps_what_was_recorded(tmp_path):
     rec = simulate("shoulder_abduction", 4, seed=2)[0]
 
-    def on_message(message):
+    def on_message(message, recorder):
         if message["state"] == "recording" and message["elapsed_s"] >= 4.0:
-            on_message.recorder.stop()
+            recorder.stop()
 
     result, messages = _record(tmp_path, rec, _command("shoulder_abduction", 10), SetLimits(every_s=0.0), on_message)
     assert result.reason == "stop" and 4.0 <= result.recording.duration < 5.0

@@ -52,7 +52,7 @@ def test_optional_settings_accept_none_and_the_limits_accept_values_inside() -> 
 def test_settings_are_frozen_and_variants_are_new_objects() -> None:
     config = PipelineConfig()
     with pytest.raises(ValidationError):
-        config.smoother = "four_pass"
+        config.smoother = "four_pass"  # type: ignore[misc]  # frozen: the assignment is refused, as tested
     variant = config.model_copy(update={"smoother": "four_pass"})
     assert variant.smoother == "four_pass" and config.smoother == "urts"
     assert PipelineConfig(**config.model_dump()) == config  # what a session file stores reads back the same

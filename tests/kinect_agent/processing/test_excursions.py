@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 import warnings
 from pathlib import Path
 
@@ -12,6 +11,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from kinect_agent import formats, skeleton
 from kinect_agent.cli import main
+from kinect_agent.evaluation.pairs import well_estimated
 from kinect_agent.formats import ui_prmd
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.excursions import (
@@ -24,7 +24,6 @@ from kinect_agent.processing.outliers import outlier_probabilities
 from kinect_agent.processing.pipeline import process
 from kinect_agent.recording import Recording
 
-REPO = Path(__file__).resolve().parents[3]
 KINECT = Path("ui-prmd") / "Segmented Movements" / "Kinect"
 WRI_R, HAN_R = skeleton.INDEX["WRI_R"], skeleton.INDEX["HAN_R"]
 
@@ -84,14 +83,11 @@ def test_real_leg_raise_travelling_away_is_not_an_excursion(data_dir: Path) -> N
 
 @pytest.mark.shared_data
 def test_flags_on_real_pair_sit_far_from_vicon(data_dir: Path) -> None:
-    sys.path.insert(0, str(REPO / "bench"))
-    try:
-        import real_pairs as rp
-    finally:
-        sys.path.remove(str(REPO / "bench"))
+    from bench import real_pairs as rp
+
     kinect_path = next(p for p in rp.pair_paths() if "-ELK-" in p.name)
     kinect, vicon = rp.read_pair(kinect_path)
-    good = rp.well_estimated(vicon.meta.extra.get("fallback_joints", []))
+    good = well_estimated(vicon.meta.extra.get("fallback_joints", []))
     truth = rp.registered_truth(kinect, vicon, rp.align(kinect, vicon, good))
     offset = np.linalg.norm(kinect.positions - truth, axis=-1)[:, good]  # (T, G) m
     flags = (excursion_probabilities(kinect) > 0.95)[:, good]

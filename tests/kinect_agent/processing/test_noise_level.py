@@ -54,7 +54,9 @@ def test_real_kinect_recordings_are_not_rigid(data_dir: Path) -> None:
     """Real Kinect recordings read ≥ 2 × rigid_input_sd_m, so the exact-input settings never touch them: the
     lowest of all 119 shared recordings (UI-PRMD s01 m09, deep squats, 1.13 mm; bench/README.md, "Fed the truth,
     return the truth"), the KERAAL pairs and a UTKinect clip."""
-    limit = 2 * PipelineConfig().rigid_input_sd_m
+    sd = PipelineConfig().rigid_input_sd_m
+    assert sd is not None, "the default configuration has a rigid input sd"
+    limit = 2 * sd
     kinect = data_dir / "ui-prmd" / "Segmented Movements" / "Kinect"
     recordings = {"ui-prmd s01 m09": ui_prmd.read_episodes(kinect, movement="m09", subject="s01")}
     for path in sorted((data_dir / "keraal" / "kinect_vicon_pairs").glob("G3-Kinect-*.txt")):

@@ -116,6 +116,7 @@ def test_online_filter_tracks_frame_by_frame(rng: np.random.Generator) -> None:
     err = np.sqrt(np.mean(np.sum((out[60:] - truth[60:]) ** 2, axis=-1)))
     raw = np.sqrt(np.mean(np.sum((rec.positions[60:] - truth[60:]) ** 2, axis=-1)))
     assert err < raw, f"online RMSE {err * 1000:.1f} mm vs noise {raw * 1000:.1f} mm"
+    assert filt.kf is not None and filt.kf.lengths is not None
     np.testing.assert_allclose(skeleton.bone_lengths(out[-1]), filt.kf.lengths, atol=1e-9)
 
 

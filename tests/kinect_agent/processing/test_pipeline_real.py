@@ -31,6 +31,13 @@ def _real(data_dir: Path, name: str, frames: int = FRAMES) -> Recording:
     return rec.slice(0, min(frames, rec.n_frames))
 
 
+def _outlier_prob(rec: Recording) -> np.ndarray:
+    """Returns the pipeline's outlier probabilities of rec's samples, (T, J) in [0, 1]."""
+    prob = process(rec).params.outlier_prob
+    assert prob is not None, "the pipeline returned no outlier probabilities"
+    return prob
+
+
 @pytest.mark.parametrize("name", sorted(RECORDINGS))
 def test_real_recording_comes_out_complete_with_steadier_segments(data_dir: Path, name: str) -> None:
     rec = _real(data_dir, name)
@@ -55,8 +62,8 @@ def test_outliers_injected_into_a_real_recording_are_found(data_dir: Path, name:
     assert injected.sum() >= 30, "too few outliers injected to measure"
     threshold = PipelineConfig().outlier_threshold
     present = bad.state != skeleton.NOT_TRACKED
-    found = (process(bad).params.outlier_prob > threshold) & present
-    native = (process(rec).params.outlier_prob > threshold) & present & ~injected
+    found = (_outlier_prob(bad) > threshold) & present
+    native = (_outlier_prob(rec) > threshold) & present & ~injected
     hits = int((found & injected).sum())
     recall = hits / int(injected.sum())
     precision = hits / max(int((found & ~native).sum()), 1)

@@ -2,18 +2,16 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
 
 from kinect_agent import skeleton
+from kinect_agent.evaluation.pairs import well_estimated
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.segment_outliers import segment_outlier_probabilities
 from kinect_agent.recording import Recording
-
-REPO = Path(__file__).resolve().parents[3]
 
 # A standing pose, m (x side, y up, z depth), one row per joint in skeleton.JOINTS order.
 POSE = np.array([
@@ -54,15 +52,12 @@ def test_sustained_wrist_loss_is_flagged_and_clean_frames_are_not(rng: np.random
 
 
 def test_flagged_joint_frames_of_real_pair_are_farther_from_vicon(data_dir: Path) -> None:
-    sys.path.insert(0, str(REPO / "bench"))
-    try:
-        import real_pairs as rp
-    finally:
-        sys.path.remove(str(REPO / "bench"))
+    from bench import real_pairs as rp
+
     kinect_path = next((p for p in rp.pair_paths() if "-ELK-" in p.name), None)
     assert kinect_path is not None, f"no KERAAL ELK pair under {data_dir}"
     kinect, vicon = rp.read_pair(kinect_path)
-    good = rp.well_estimated(vicon.meta.extra.get("fallback_joints", []))
+    good = well_estimated(vicon.meta.extra.get("fallback_joints", []))
     truth = rp.registered_truth(kinect, vicon, rp.align(kinect, vicon, good))
     offset = np.linalg.norm(kinect.positions - truth, axis=-1)[:, good]  # (T, G) m
     flags = (segment_outlier_probabilities(kinect, PipelineConfig()) > 0.95)[:, good]

@@ -23,11 +23,11 @@ def _linear_problem(rng: np.random.Generator, steps: int = 40):
     H = rng.normal(size=(3, 4))
     Q = np.diag([1e-4, 1e-4, 1e-2, 1e-2])
     R = np.diag([0.04, 0.09, 0.01])
-    x, zs = np.array([0.0, 0.0, 1.0, -0.5]), []
+    x, z_list = np.array([0.0, 0.0, 1.0, -0.5]), []
     for _ in range(steps):
         x = F @ x + rng.multivariate_normal(np.zeros(4), Q)
-        zs.append(H @ x + rng.multivariate_normal(np.zeros(3), R))
-    zs = np.array(zs)
+        z_list.append(H @ x + rng.multivariate_normal(np.zeros(3), R))
+    zs = np.array(z_list)
     observed = rng.random(zs.shape) > 0.3
     observed[5] = False  # a frame with nothing observed
     return F, H, Q, R, zs, observed

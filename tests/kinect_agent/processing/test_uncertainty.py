@@ -89,6 +89,7 @@ def test_every_fifth_frame_interpolated_is_close_to_every_frame(seed):
 def test_the_pipeline_returns_finite_sds_of_every_angle(seed):
     measured, _, _ = simulate("elbow_flexion", 3, seed=seed)
     result = process(measured)
+    assert result.angle_sd is not None
     assert set(result.angle_sd) == set(ANGLE_NAMES)
     for name in WELL_DEFINED:
         sd = result.angle_sd[name]

@@ -20,6 +20,7 @@ import pytest
 from kinect_agent import skeleton
 from kinect_agent.errors import DeviceUnavailable
 from kinect_agent.formats import keraal
+from kinect_agent.recording import Recording
 from kinect_agent.sources import azure_kinect, kinect_v2
 from kinect_agent.sources.body_choice import STABLE_FRAMES
 
@@ -30,7 +31,7 @@ BYSTANDER_OFFSET = np.array([1.3, 0.0, 1.1])  # m: on the sofa to the side, behi
 TICKS_PER_FRAME = 333_333  # 100 ns ticks at 30 Hz
 
 
-def _recording(data_dir: Path) -> tuple[np.ndarray, np.ndarray, object]:
+def _recording(data_dir: Path) -> tuple[np.ndarray, np.ndarray, Recording]:
     """Returns the first KERAAL Kinect pair file as (25-joint xyz (T, 25, 3) m, states (T, 25), its reading)."""
     path = sorted((data_dir / "keraal" / "kinect_vicon_pairs").glob("*Kinect*.txt"))[0]
     values = np.loadtxt(path).reshape(-1, 25, 7)[:, :, :3]
@@ -58,15 +59,15 @@ class _V2Body:
     def __init__(self, tracking_id: int, xyz: np.ndarray | None, state: np.ndarray | None) -> None:
         self.is_tracked = xyz is not None
         self.tracking_id = tracking_id if self.is_tracked else -1
-        if self.is_tracked:
+        if xyz is not None and state is not None:
             self.joints = [_V2Joint(xyz[k], int(state[k])) for k in range(25)]
 
 
 def _v2_modules(values: np.ndarray, state: np.ndarray) -> dict[str, types.ModuleType]:
     """pykinect2024's two modules: the wrapper's constants and a runtime whose body frames replay the recording
     (six body slots as the SDK gives them; the bystander in the first slot, the patient in the fourth)."""
-    wrapper = types.ModuleType("pykinect2024.PyKinect2024")
-    wrapper.FrameSourceTypes_Body, wrapper.JointType_Count = 32, 25
+    body_source = 32  # FrameSourceTypes_Body
+    wrapper = _module("pykinect2024.PyKinect2024", FrameSourceTypes_Body=body_source, JointType_Count=25)
     frames = []
     for i in range(len(values)):
         slots = [_V2Body(0, None, None) for _ in range(6)]
@@ -79,7 +80,7 @@ def _v2_modules(values: np.ndarray, state: np.ndarray) -> dict[str, types.Module
 
     class PyKinectRuntime:
         def __init__(self, frame_source_types: int) -> None:
-            assert frame_source_types == wrapper.FrameSourceTypes_Body
+            assert frame_source_types == body_source
             self.queue = list(frames)
 
         def has_new_body_frame(self) -> bool:
@@ -91,10 +92,16 @@ def _v2_modules(values: np.ndarray, state: np.ndarray) -> dict[str, types.Module
         def close(self) -> None:
             self.queue = []
 
-    runtime = types.ModuleType("pykinect2024.PyKinectRuntime")
-    runtime.PyKinectRuntime = PyKinectRuntime
+    runtime = _module("pykinect2024.PyKinectRuntime", PyKinectRuntime=PyKinectRuntime)
     return {"pykinect2024": types.ModuleType("pykinect2024"), "pykinect2024.PyKinect2024": wrapper,
             "pykinect2024.PyKinectRuntime": runtime}  # fmt: skip
+
+
+def _module(name: str, **attributes: object) -> types.ModuleType:
+    """Returns a module named `name` holding `attributes` (a fake of one of an SDK's modules)."""
+    module = types.ModuleType(name)
+    module.__dict__.update(attributes)
+    return module
 
 
 def _install(monkeypatch, modules: dict[str, types.ModuleType]) -> None:
@@ -117,7 +124,7 @@ def _expected(reading, i: int) -> tuple[np.ndarray, np.ndarray]:
 def test_kinect_v2_maps_joints_states_and_sensor_time_and_follows_the_patient(data_dir, monkeypatch) -> None:
     values, state, reading = _recording(data_dir)
     _install(monkeypatch, _v2_modules(values, state))
-    monkeypatch.setattr(kinect_v2.sys, "platform", "win32")
+    monkeypatch.setattr(sys, "platform", "win32")  # kinect_v2 reads sys.platform
     n = 120
     frames = _take(kinect_v2.KinectV2Source(), n)
     assert len(frames) == n
@@ -143,7 +150,7 @@ def test_only_the_broken_pykinect2_says_which_package_works(monkeypatch, tmp_pat
     for name in [m for m in sys.modules if m.startswith(("pykinect2", "pykinect2024"))]:
         monkeypatch.delitem(sys.modules, name)
     monkeypatch.setitem(sys.modules, "pykinect2024", None)  # not installed
-    monkeypatch.setattr(kinect_v2.sys, "platform", "win32")
+    monkeypatch.setattr(sys, "platform", "win32")  # kinect_v2 reads sys.platform
     with pytest.raises(DeviceUnavailable) as refused:
         kinect_v2.KinectV2Source().open()
     message = str(refused.value)
@@ -218,14 +225,15 @@ def _azure_modules(reading, count: int = 1) -> dict[str, types.ModuleType]:
     queue = list(frames)
     device = types.SimpleNamespace(update=lambda: None, close=lambda: None)
     tracker = types.SimpleNamespace(update=lambda: BodyFrame(*queue.pop(0)), destroy=lambda: None)
-    pykinect = types.ModuleType("pykinect_azure")
-    pykinect.K4A_DEPTH_MODE_NFOV_UNBINNED = 2
-    pykinect.default_configuration = types.SimpleNamespace(depth_mode=0)
-    pykinect.initialize_libraries = lambda track_body=False: None
-    pykinect.start_device = lambda device_index=0, config=None: device
-    pykinect.start_body_tracker = lambda: tracker
-    pyk4a = types.ModuleType("pyk4a")
-    pyk4a.connected_device_count = lambda: count
+    pykinect = _module(
+        "pykinect_azure",
+        K4A_DEPTH_MODE_NFOV_UNBINNED=2,
+        default_configuration=types.SimpleNamespace(depth_mode=0),
+        initialize_libraries=lambda track_body=False: None,
+        start_device=lambda device_index=0, config=None: device,
+        start_body_tracker=lambda: tracker,
+    )
+    pyk4a = _module("pyk4a", connected_device_count=lambda: count)
     return {"pykinect_azure": pykinect, "pyk4a": pyk4a}
 
 
@@ -267,5 +275,7 @@ def test_a_stable_patient_is_not_taken_over_by_someone_more_centred(data_dir) ->
         bodies = [Body(2, p + BYSTANDER_OFFSET, np.full(20, 2)), Body(1, p, reading.state[i])]
         if i >= STABLE_FRAMES + 5:
             bodies.append(Body(3, p - p[0] + [0.0, 0.0, 1.0], np.full(20, 2)))
-        assert chooser.choose(bodies).tracking_id == 1, i
-    assert chooser.choose([Body(2, p + BYSTANDER_OFFSET, np.full(20, 2))]).tracking_id == 2  # the patient left
+        chosen = chooser.choose(bodies)
+        assert chosen is not None and chosen.tracking_id == 1, i
+    chosen = chooser.choose([Body(2, p + BYSTANDER_OFFSET, np.full(20, 2))])
+    assert chosen is not None and chosen.tracking_id == 2  # the patient left
