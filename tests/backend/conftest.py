@@ -8,7 +8,7 @@ runs start empty.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import pytest
 from argon2 import PasswordHasher
@@ -54,7 +54,7 @@ def _pg_engine(url: str, schema: str) -> Engine:
     return create_engine(url, connect_args={"options": f"-csearch_path={schema}"})
 
 
-def build_engine(url: str, name: str) -> tuple[Engine, object]:
+def build_engine(url: str, name: str) -> tuple[Engine, Callable[[], None]]:
     """Returns (engine on an empty database or schema, cleanup callable) for a test database URL."""
     if url.startswith("postgresql"):
         schema = f"{name}_{os.getpid()}"
@@ -317,9 +317,11 @@ def _s3_endpoint():
 def object_store(tmp_path_factory, request):
     """The object store of this test run (backend.storage.use_store), local or S3 by COACH_TEST_STORAGE."""
     from backend.storage import use_store
+    from backend.storage.base import ObjectStore
     from tests.backend.object_stores import local_store, s3_store
 
     kind = os.environ.get("COACH_TEST_STORAGE", "local")
+    store: ObjectStore
     if kind == "s3":
         store = s3_store(request.getfixturevalue("_s3_endpoint"))
     else:

@@ -204,8 +204,9 @@ def world(db_session, make_user, make_patient_with_therapist, auth_headers, devi
     enqueue(db_session=db_session, kind="reanalyze", items=[("matrix", {"session_id": session.id})], batch="matrix")
     from backend.reminders.service import DueReminder, claim
 
-    _, unsubscribe_token = claim(db_session=db_session, reminder=DueReminder(plan.id, own.id, utcnow().date(), "08:00",
-                                                                             utcnow()))  # fmt: skip
+    claimed = claim(db_session=db_session, reminder=DueReminder(plan.id, own.id, utcnow().date(), "08:00", utcnow()))
+    assert claimed is not None
+    _, unsubscribe_token = claimed
     headers = {
         "anonymous": {},
         "patient_own": auth_headers(own),
@@ -249,6 +250,7 @@ def _api_routes(app) -> list[tuple[str, str]]:
     """Returns (method, path) of every route of the app, included routers flattened, docs and HTML pages left out."""
     out = []
     for ctx in iter_route_contexts(app.routes):
+        assert ctx.path is not None, ctx
         if ctx.path in DOC_PATHS or not ctx.methods or not getattr(ctx.route, "include_in_schema", True):
             continue
         out += [(m, ctx.path) for m in sorted(set(ctx.methods) - {"HEAD"})]

@@ -169,12 +169,16 @@ CASES = {  # one document per text of every session rule: (doc, prescribed_reps,
 @pytest.mark.parametrize("written_in", LOCALES)
 def test_what_a_rule_found_writes_its_advice_in_every_language(case, written_in):
     doc, reps, days, per_week, today = CASES[case]
-    history = [(NOW - dt.timedelta(days=d), _doc()) for d in days]
-    kw = {"prescribed_reps": reps, "history": history, "expected_per_week": per_week, "now": NOW, "today": today}
-    drafts = evaluate(doc, t=translator(written_in), **kw)
+    history: list[tuple[dt.datetime, AnalysisReport | None]] = [(NOW - dt.timedelta(days=d), _doc()) for d in days]
+
+    def written(locale: str) -> list[rules.SuggestionDraft]:
+        return evaluate(doc, t=translator(locale), prescribed_reps=reps, history=history, expected_per_week=per_week,
+                        now=NOW, today=today)  # fmt: skip
+
+    drafts = written(written_in)
     assert drafts, case
     for locale in LOCALES:
-        direct = {d.rule: d.text for d in evaluate(doc, t=translator(locale), **kw)}
+        direct = {d.rule: d.text for d in written(locale)}
         for draft in drafts:
             stored = AdviceParams.model_validate(draft.params.model_dump(mode="json"))  # as the database keeps it
             assert advice_text(draft.rule, draft.metric, stored, translator(locale)) == direct[draft.rule], (
@@ -189,6 +193,7 @@ def test_the_pain_rules_write_their_advice_in_every_language(locale):
     rising = rules.pain_rising([(NOW - dt.timedelta(days=d), p) for d, p in ((20, 2), (10, 3), (1, 6))], NOW,
                                translator("en"))  # fmt: skip
     assert high is not None and rising is not None
-    assert advice_text(high.rule, high.metric, high.params, t) == rules.pain_high(7, 5, "squat", day, t).text
+    high_again = rules.pain_high(7, 5, "squat", day, t)
+    assert high_again is not None and advice_text(high.rule, high.metric, high.params, t) == high_again.text
     again = rules.pain_rising([(NOW - dt.timedelta(days=d), p) for d, p in ((20, 2), (10, 3), (1, 6))], NOW, t)
     assert again is not None and advice_text(rising.rule, rising.metric, rising.params, t) == again.text

@@ -84,12 +84,14 @@ def test_old_advice_is_upgraded_only_when_recognised_for_certain(fresh_engine):
               None if p is None else AdviceParams.model_validate(p) for i, (_, p) in got.items()}  # fmt: skip
     assert {i for i, p in params.items() if p is not None} == {1, 2, 3}, got
     assert all(got[i][0] == rows[i][6] for i in rows), "every text is kept"
-    assert params[1].session_on == STARTED.date() and params[1].written_on == WRITTEN.date()
-    assert (params[1].repetitions, params[1].goal, params[1].exercise) == (6.0, 10, "squat")
-    assert advice_text("pain_high", "pain_nrs", params[2], translator("en")).startswith(
+    first, second, third = params[1], params[2], params[3]
+    assert first is not None and second is not None and third is not None
+    assert first.session_on == STARTED.date() and first.written_on == WRITTEN.date()
+    assert (first.repetitions, first.goal, first.exercise) == (6.0, 10, "squat")
+    assert advice_text("pain_high", "pain_nrs", second, translator("en")).startswith(
         "On Monday you said your pain was 8 of 10 after your mini squats."
     )
-    assert "etwa 5 von 10" in advice_text("pain_rising", "pain_nrs_median_7d", params[3], translator("de"))
+    assert "etwa 5 von 10" in advice_text("pain_rising", "pain_nrs_median_7d", third, translator("de"))
     with fresh_engine.begin() as conn:
         downgrade(conn, BEFORE)
     with fresh_engine.connect() as conn:

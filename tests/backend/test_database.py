@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import datetime as dt
+from collections.abc import Generator
 
 import pytest
 from sqlalchemy import select
@@ -14,6 +15,7 @@ from backend.users.models import LoginAttempt, User
 
 def _run(db_session, error: BaseException | None) -> None:
     gen = request_session(db_session)
+    assert isinstance(gen, Generator)  # FastAPI throws a request's error into it
     session = next(gen)
     session.add(LoginAttempt(email="x@example.org", ip="1.2.3.4", succeeded=False))
     session.flush()

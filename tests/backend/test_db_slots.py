@@ -41,6 +41,7 @@ def test_a_request_that_waits_too_long_is_told_the_server_is_busy(fresh_engine) 
     slots = DbSlots(lambda: fresh_engine, wait_s=0.05)
 
     async def crowd() -> list[str]:
+        assert slots.capacity is not None
         held = [await slots.acquire() for _ in range(slots.capacity)]
         try:
             await slots.acquire()

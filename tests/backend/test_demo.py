@@ -36,6 +36,7 @@ def demo_server(tmp_path: Path, demo_args: list[str]):
          *demo_args],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=tmp_path,
     )  # fmt: skip
+    assert proc.stdout is not None  # stdout=PIPE
     base = f"http://127.0.0.1:{port}"
     try:
         for _ in range(120):
@@ -129,6 +130,7 @@ def _start_demo(tmp_path: Path, *args: str) -> tuple[subprocess.Popen[str], str]
     proc = subprocess.Popen([sys.executable, "-m", "backend.cli", "demo", "--port", str(port), "--no-agents",
                              "--db", str(tmp_path / "demo.db"), *args],
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=tmp_path)  # fmt: skip
+    assert proc.stdout is not None  # stdout=PIPE
     base = f"http://127.0.0.1:{port}"
     for _ in range(120):
         try:

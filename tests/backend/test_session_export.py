@@ -66,6 +66,7 @@ def test_bvh_reproduces_the_stored_filtered_recording(client, upload, auth_heade
     path = tmp_path / "s.bvh"
     path.write_bytes(_export(client, session_id, "bvh", auth_headers(therapist)).content)
     filtered = sf.decode(data).filtered
+    assert filtered is not None
     err_mm = np.linalg.norm(bvh.read(path).positions - filtered.positions, axis=-1) * 1000
     assert np.sqrt(np.mean(err_mm**2)) < 0.6, err_mm.max()
 

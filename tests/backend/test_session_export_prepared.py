@@ -67,10 +67,12 @@ def test_accept_encoding_allows_gzip_only_when_listed_with_a_weight(header, gzip
 
 
 def test_the_request_builds_only_a_recording_short_in_both_duration_and_frames():
-    limits = {"max_s": 300.0, "max_frames": 9000}
-    assert in_request(duration_s=300.0, n_frames=9000, **limits)
-    assert not in_request(duration_s=7200.0, n_frames=9000, **limits), "few frames over two hours: the worker"
-    assert not in_request(duration_s=60.0, n_frames=216_000, **limits), "many frames in a minute: the worker"
+    def within(duration_s: float, n_frames: int) -> bool:
+        return in_request(duration_s=duration_s, n_frames=n_frames, max_s=300.0, max_frames=9000)
+
+    assert within(300.0, 9000)
+    assert not within(7200.0, 9000), "few frames over two hours: the worker"
+    assert not within(60.0, 216_000), "many frames in a minute: the worker"
 
 
 def test_a_long_session_answers_202_then_the_file_a_worker_stored(

@@ -95,7 +95,7 @@ def test_the_device_limits_shown_are_the_agents_reasons_marked_for_translation()
 @pytest.mark.parametrize("locale", ["de", "es", "fr"])
 def test_every_piece_of_advice_is_written_in_every_language(locale):
     t = translator(locale)
-    cases = [("too_close", {"distance_m": 1.21}), ("too_far", {"distance_m": 4.46}),
+    cases: list[tuple[str, dict[str, Any]]] = [("too_close", {"distance_m": 1.21}), ("too_far", {"distance_m": 4.46}),
              ("off_centre", {"distance_m": 0.95}), ("feet_cut_off", {})]  # fmt: skip
     cases += [(f"{limb}_out_of_view", {"sides": s, "fraction": 0.354}) for limb in ("hand", "foot")
               for s in ("left", "right", "both")]  # fmt: skip
@@ -186,7 +186,7 @@ def test_a_new_document_stores_its_reasons_as_ids_and_numbers_and_the_detail_wri
     session_id, patient, _ = upload(khs, "seated_knee_extension")
     stored = db_session.scalar(select(SessionMetric.document).where(SessionMetric.session_id == session_id))
     assert stored["schema_version"] == 3
-    not_standing = {"id": "not_standing", "params": {}, "text": None}
+    not_standing: dict[str, Any] = {"id": "not_standing", "params": {}, "text": None}
     assert stored["balance_missing"] == stored["indicators"]["balance"]["missing"] == not_standing
     found = [*stored["quality"]["reasons"], *(stored["range_of_motion_95_withheld"] or {}).values()]
     assert all(set(r) == {"id", "params", "text"} and r["id"] and r["text"] is None for r in found), found
@@ -240,8 +240,8 @@ def test_the_session_detail_says_the_analysis_reasons_in_the_readers_language():
 
     gaps, still = why.GAPS.reason().model_dump(), why.NEVER_STILL.reason(seconds=2).model_dump()
     plane = why.OUT_OF_PLANE.reason(defined=0.41).model_dump()
-    older = {"id": None, "params": {}, "text": OLDER_TEXT}
-    body = {"curves": [], "error": None, "uncertainty_note": detail.NO_UNCERTAINTY_NOTE,
+    older: dict[str, Any] = {"id": None, "params": {}, "text": OLDER_TEXT}
+    body: dict[str, Any] = {"curves": [], "error": None, "uncertainty_note": detail.NO_UNCERTAINTY_NOTE,
             "balance_missing": "in English", "balance_missing_reason": still,
             "quality": {"parts": [], "advice": [], "analysis_reasons": ["in English", OLDER_TEXT],
                         "analysis_reason_items": [gaps, older]},

@@ -19,10 +19,8 @@ from tests.backend.session_rows import document
 
 def test_week_start_is_monday_midnight_utc():
     sunday_evening = dt.datetime(2026, 11, 22, 23, 30, tzinfo=dt.UTC)
-    assert dashboard.week_start(sunday_evening) == dt.datetime(2026, 11, 16, tzinfo=dt.UTC)
-    assert dashboard.week_start(dt.datetime(2026, 11, 23, 0, 0, tzinfo=dt.UTC)) == dt.datetime(
-        2026, 11, 23, tzinfo=dt.UTC
-    )
+    assert triage.week_start(sunday_evening) == dt.datetime(2026, 11, 16, tzinfo=dt.UTC)
+    assert triage.week_start(dt.datetime(2026, 11, 23, 0, 0, tzinfo=dt.UTC)) == dt.datetime(2026, 11, 23, tzinfo=dt.UTC)
 
 
 def test_progress_is_oldest_first_per_exercise(client, make_user, auth_headers, exercise, other_exercise, store):
@@ -75,7 +73,7 @@ def test_summary_counts_this_week_against_the_plan(
 ):
     patient, therapist = make_patient_with_therapist()
     now = utcnow()
-    monday = dashboard.week_start(now)
+    monday = triage.week_start(now)
     store(patient, exercise, monday - dt.timedelta(days=1))  # last week
     store(patient, exercise, monday + dt.timedelta(minutes=1), rom=70.0)
     newest = store(patient, other_exercise, monday + dt.timedelta(minutes=2), reps=9, rom=60.0)
@@ -227,7 +225,7 @@ def _plan(db_session, patient, therapist, exercise, start: dt.date, per_week: in
 
 def _on_plan_history(store, patient, exercise, *, recent_rom: float = 90.0, recent_reps: int = 10) -> None:
     """Monday, Wednesday and Friday sessions for five weeks before THURSDAY_NOON's week, then Mon and Wed of it."""
-    monday = dashboard.week_start(THURSDAY_NOON)
+    monday = triage.week_start(THURSDAY_NOON)
     for week in range(5, 0, -1):
         for day in (0, 2, 4):
             store(patient, exercise, monday - week * dt.timedelta(days=7) + dt.timedelta(days=day, hours=10))
@@ -303,7 +301,7 @@ def test_a_new_patient_without_sessions_is_not_now_but_an_absent_one_is(
 def test_monday_morning_is_not_behind_the_plan(db_session, make_patient_with_therapist, exercise, store):
     patient, therapist = make_patient_with_therapist()
     _plan(db_session, patient, therapist, exercise, THURSDAY_NOON.date() - dt.timedelta(days=40), per_week=6)
-    monday_morning = dashboard.week_start(THURSDAY_NOON) + dt.timedelta(hours=8)
+    monday_morning = triage.week_start(THURSDAY_NOON) + dt.timedelta(hours=8)
     store(patient, exercise, monday_morning - dt.timedelta(days=2))
     row = _summary(db_session, patient, now=monday_morning)
     assert (row["attention_score"], row["attention_reasons"]) == (0, [])
@@ -380,7 +378,7 @@ def test_dashboard_queries_do_not_grow_with_patients(client, db_session, make_us
 
 def test_missing_balance_gives_the_analysis_reason_in_the_readers_language(db_session, make_user, exercise, store):
     patient = make_user("patient")
-    why = {"id": "not_standing", "params": {}, "text": None}  # as schema 3 stores it
+    why: dict[str, Any] = {"id": "not_standing", "params": {}, "text": None}  # as schema 3 stores it
     doc = document(reps=5, rom=50.0, quality_ok=True, exercise=exercise.slug) | {
         "balance": None,
         "balance_missing": why,

@@ -61,7 +61,12 @@ def test_replay_flags_outliers_with_the_servers_settings(monkeypatch):
     payload = sf.decode(_with_config(make_khs("squat", 2, seed=5), HOSTILE_CONFIG))
     used = []
     real = scene.outlier_flags
-    monkeypatch.setattr(scene, "outlier_flags", lambda raw, config=None: used.append(config) or real(raw, config))
+
+    def outlier_flags(raw, config=None):
+        used.append(config)
+        return real(raw, config)
+
+    monkeypatch.setattr(scene, "outlier_flags", outlier_flags)
     scene.build(payload, "sagittal")
     assert used == [work_budget.SERVER_PIPELINE]
 

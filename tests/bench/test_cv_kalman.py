@@ -31,18 +31,21 @@ def test_matches_batch_generalised_least_squares() -> None:
     W0 = np.linalg.inv(np.linalg.cholesky(P0))
     A = np.zeros((2, 2 * T))
     A[:, :2] = W0
-    rows.append(A), rhs.append(W0 @ s0)
+    rows.append(A)
+    rhs.append(W0 @ s0)
     Wq = np.linalg.inv(np.linalg.cholesky(Q))
     for k in range(1, T):
         A = np.zeros((2, 2 * T))
         A[:, 2 * k : 2 * k + 2] = Wq
         A[:, 2 * k - 2 : 2 * k] = -Wq @ F
-        rows.append(A), rhs.append(np.zeros(2))
+        rows.append(A)
+        rhs.append(np.zeros(2))
     for k in range(T):
         if np.isfinite(z[k]):
             A = np.zeros((1, 2 * T))
             A[0, 2 * k] = 1 / r
-            rows.append(A), rhs.append(np.array([z[k] / r]))
+            rows.append(A)
+            rhs.append(np.array([z[k] / r]))
     sol = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]
     y = cv_kalman_rts(t, z[:, None], q=q, r=r, P0=P0)
     np.testing.assert_allclose(y[:, 0], sol[0::2], atol=1e-9, err_msg="RTS vs batch GLS")

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from bench.accuracy import cv_kalman_rts, hold_last
+from bench.baselines import cv_kalman_rts
+from bench.baselines._common import hold_last
 from kinect_agent.processing.pipeline import process
 from kinect_agent.sources.simulator import simulate
 

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 from bench import offset_model as bench
-from bench import real_pairs
 from kinect_agent.body.rotations import axis_rotation
+from kinect_agent.evaluation.align import interpolate
+from kinect_agent.evaluation.pairs import joint_mask
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.pipeline import process
 from kinect_agent.recording import Recording
@@ -43,13 +44,13 @@ def _episode_pair(seed: int, lag_s: float, other_seed: int | None = None) -> tup
         _, p_v, _ = smooth_motion(400, np.random.default_rng(other_seed), rate_hz=100.0)
     t_k = np.arange(0.0, 2.5, 1.0 / 30.0)
     R = axis_rotation(1, np.radians(20.0))
-    p_k = real_pairs.interpolate(t_v, p_v, t_k + lag_s) @ R.T + [0.2, -0.1, 0.3]
+    p_k = interpolate(t_v, p_v, t_k + lag_s) @ R.T + [0.2, -0.1, 0.3]
     return Recording.from_positions(t_k, p_k + rng.normal(0.0, 0.005, p_k.shape)), vicon
 
 
 @pytest.mark.parametrize("seed", (1, 2, 3))
 def test_episode_alignment_keeps_a_true_pair_with_its_lag_and_drops_a_wrong_one(seed: int) -> None:
-    joints = bench.joint_mask(bench.UI_JOINTS)
+    joints = joint_mask(bench.UI_JOINTS)
     kinect, vicon = _episode_pair(seed, lag_s=0.6)
     pair = bench.make_pair("x", "UI-PRMD", "m01", kinect, vicon, joints, check=True)
     assert pair.accepted, f"seed {seed}: lag {pair.lag_s:.3f} / {pair.lag_rms_s:.3f} s, r {pair.xcorr:.2f}"

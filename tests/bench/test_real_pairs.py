@@ -11,6 +11,8 @@ import pytest
 from bench import real_pairs
 from kinect_agent import skeleton
 from kinect_agent.body.rotations import axis_rotation
+from kinect_agent.evaluation.align import interpolate
+from kinect_agent.evaluation.register import robust_kabsch, rotation_deg
 from kinect_agent.recording import Recording
 
 ARM = [skeleton.INDEX[j] for j in real_pairs.ARM_JOINTS]
@@ -32,7 +34,7 @@ def _synthetic_pair(rng: np.random.Generator, lag_s: float, R0: np.ndarray, t0: 
     t_v = np.arange(0.0, 8.0, 1.0 / 60.0)
     vicon = Recording.from_positions(t_v, _motion(t_v, rng))
     t_k = np.arange(0.0, 6.0, 1.0 / 30.0)
-    p_k = real_pairs.interpolate(t_v, vicon.positions, t_k + lag_s) @ R0.T + t0
+    p_k = interpolate(t_v, vicon.positions, t_k + lag_s) @ R0.T + t0
     return Recording.from_positions(t_k, p_k + rng.normal(0.0, noise_m, p_k.shape)), vicon
 
 
@@ -42,7 +44,7 @@ def test_align_recovers_an_injected_lag_and_rigid_transform(rng: np.random.Gener
     kinect, vicon = _synthetic_pair(rng, 0.35, R0, t0)
     al = real_pairs.align(kinect, vicon, np.ones(skeleton.J, bool))
     assert abs(al.lag_s - 0.35) <= 1.0 / 60.0, f"lag {al.lag_s:.3f} s, injected 0.35 s"
-    assert real_pairs.rotation_deg(al.R.T @ R0) < 0.5, f"rotation error {real_pairs.rotation_deg(al.R.T @ R0):.2f} deg"
+    assert rotation_deg(al.R.T @ R0) < 0.5, f"rotation error {rotation_deg(al.R.T @ R0):.2f} deg"
     np.testing.assert_allclose(al.t, t0, atol=0.01, err_msg="translation not recovered")
 
 
@@ -51,8 +53,8 @@ def test_robust_kabsch_ignores_a_few_gross_outliers(rng: np.random.Generator) ->
     R0, t0 = axis_rotation(2, np.radians(40.0)), np.array([0.5, -0.2, 1.0])
     dst = src @ R0.T + t0 + rng.normal(0.0, 0.003, src.shape)
     dst[:20] += rng.uniform(0.3, 0.8, size=(20, 3))  # 5 % tracking-loss-like errors
-    R, t, rms = real_pairs.robust_kabsch(src, dst)
-    assert real_pairs.rotation_deg(R.T @ R0) < 0.3
+    R, t, rms = robust_kabsch(src, dst)
+    assert rotation_deg(R.T @ R0) < 0.3
     np.testing.assert_allclose(t, t0, atol=0.005, err_msg="translation pulled by the outliers")
     assert rms < 0.006, f"trimmed RMS {rms:.4f} m"
 

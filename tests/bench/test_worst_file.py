@@ -16,6 +16,7 @@ BURN = "import time\nx = bytearray(200 * 2**20)\nfor i in range(0, len(x), 4096)
 
 def test_worst_file_spreads_its_frames_over_the_duration_with_noise_and_outliers():
     payload = sf.decode(worst_file(3000, 100.0), max_frames=3000, max_decoded_bytes=2**26)
+    assert payload.filtered is not None
     assert payload.raw.n_frames == payload.filtered.n_frames == 3000
     np.testing.assert_allclose(payload.raw.duration, 100.0 * 2999 / 3000, rtol=1e-6)
     error = np.linalg.norm(payload.raw.positions - payload.filtered.positions, axis=2)  # (T, J) m, NaN = untracked

@@ -40,6 +40,7 @@ def test_tempo_is_the_median_start_interval() -> None:
 def test_fatigue_slopes_in_percent_per_repetition() -> None:
     reps = [_rep(i, 3.0 * i, 2.0 + 0.1 * i, 100.0 - 2.0 * i) for i in range(5)]
     f = activity.fatigue(reps)
+    assert f["amplitude_slope_pct_per_rep"] is not None and f["duration_slope_pct_per_rep"] is not None, f
     np.testing.assert_allclose(f["amplitude_slope_pct_per_rep"], -2.0 / 96.0 * 100, atol=0.01)
     np.testing.assert_allclose(f["duration_slope_pct_per_rep"], 0.1 / 2.2 * 100, atol=0.01)
     assert activity.fatigue(reps[:2]) == {"amplitude_slope_pct_per_rep": None, "duration_slope_pct_per_rep": None}

@@ -33,6 +33,7 @@ def test_every_indicator_has_score_value_basis_quality() -> None:
     lo, hi = out["balance"]["interval"]
     assert lo <= out["balance"]["value"] <= hi and out["balance"]["missing"] is None
     assert out["endurance"]["score"] == 60.0 and out["endurance"]["value"] == 6
+    assert doc.rom_deg is not None
     assert out["flexibility"]["score"] == pytest.approx(100 * doc.rom_deg / 180, abs=0.1)
     assert out["balance"]["score"] is not None and out["balance"]["quality_ok"]
     assert out["strength"]["score"] is None  # no history to compare the movement speed with
@@ -50,6 +51,7 @@ def test_history_is_the_reference_without_a_target() -> None:
 def test_sit_to_stand_strength_comes_from_the_rise_time() -> None:
     doc = _doc("sit_to_stand", 4, seed=2)
     out = indicators(doc, exercise=EXERCISES["sit_to_stand"], target_reps=5, history=[])
+    assert doc.sit_to_stand is not None
     rise = doc.sit_to_stand.mean_s
     assert out["strength"]["value"] == rise
     assert out["strength"]["score"] == pytest.approx(100 * (2.0 - rise) / 1.5, abs=0.1)

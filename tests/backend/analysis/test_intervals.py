@@ -32,6 +32,15 @@ def _expected_b(x: np.ndarray, name: str, yaw_deg: float) -> tuple[float, float,
     return tuple(gain * np.hypot(b, k * tau) for b, k, tau in zip(B, intervals.TAIL_GAIN, tails, strict=True))
 
 
+def _intervals(
+    t: np.ndarray, x: np.ndarray, sd: np.ndarray, name: str, *, yaw_deg: float, device: str = "kinect2"
+) -> dict[str, list[float]]:
+    """Returns intervals.angle_intervals of an angle that has them."""
+    iv = intervals.angle_intervals(t, x, sd, name, yaw_deg=yaw_deg, device=device)
+    assert iv is not None, name
+    return iv
+
+
 @pytest.mark.parametrize("seed", SEEDS)
 @pytest.mark.parametrize("yaw", (0.0, 30.0, 60.0))
 def test_widths_follow_the_per_frame_sd_and_the_systematic_part(seed, yaw):
@@ -39,7 +48,7 @@ def test_widths_follow_the_per_frame_sd_and_the_systematic_part(seed, yaw):
     x = x - 60.0  # ±40°, inside the angle's domain (±90°)
     sd = np.full_like(t, 2.0)
     name = "trunk_lateral_flexion"  # B = (6.2, 2.5, 0.0)
-    iv = intervals.angle_intervals(t, x, sd, name, yaw_deg=yaw)
+    iv = _intervals(t, x, sd, name, yaw_deg=yaw)
     b_min, b_max, b_range = _expected_b(x, name, yaw)
     lo, hi = np.percentile(x, [1, 99])
     msg = f"seed {seed}, yaw {yaw}"
@@ -53,7 +62,7 @@ def test_widths_follow_the_per_frame_sd_and_the_systematic_part(seed, yaw):
 def test_a_turned_body_and_a_spiky_edge_widen_the_intervals(seed):
     t, x = _sine(seed)
     sd = np.full_like(t, 1.0)
-    width = {yaw: np.diff(intervals.angle_intervals(t, x, sd, "knee_flexion_L", yaw_deg=yaw)["max_deg"])[0]
+    width = {yaw: np.diff(_intervals(t, x, sd, "knee_flexion_L", yaw_deg=yaw)["max_deg"])[0]
              for yaw in (0.0, 30.0, 60.0)}  # fmt: skip
     assert width[0.0] < width[30.0] < width[60.0], f"seed {seed}: {width}"
     # A still angle whose top 3 % of the frames jump 20° (a filter excursion) has a long upper tail: its peak
@@ -62,8 +71,8 @@ def test_a_turned_body_and_a_spiky_edge_widen_the_intervals(seed):
     still = 10.0 + rng.normal(0.0, 0.5, t.size)
     spiky = still.copy()
     spiky[rng.choice(t.size, t.size * 3 // 100, replace=False)] += 20.0
-    calm = intervals.angle_intervals(t, still, sd, "knee_flexion_L", yaw_deg=0.0)
-    spike = intervals.angle_intervals(t, spiky, sd, "knee_flexion_L", yaw_deg=0.0)
+    calm = _intervals(t, still, sd, "knee_flexion_L", yaw_deg=0.0)
+    spike = _intervals(t, spiky, sd, "knee_flexion_L", yaw_deg=0.0)
     assert np.diff(spike["max_deg"])[0] > np.diff(calm["max_deg"])[0] + 20.0, f"seed {seed}: {spike} vs {calm}"
     np.testing.assert_allclose(np.diff(spike["min_deg"]), np.diff(calm["min_deg"]), atol=1.0)
 
@@ -75,12 +84,13 @@ def test_a_kinect1_session_gets_its_device_gain(seed):
     t, x = _sine(seed)
     sd = np.full_like(t, 1.0)
     e = intervals.edges(t, x, sd)
+    assert e is not None
     b2 = intervals.systematic("knee_flexion_L", e, 30.0, "kinect2")
     b1 = intervals.systematic("knee_flexion_L", e, 30.0, "kinect1")
     np.testing.assert_allclose(b1, np.multiply(b2, intervals.DEVICE_GAIN["kinect1"]))
     assert intervals.systematic("knee_flexion_L", e, 30.0, "azure_kinect") == b2
-    wide = intervals.angle_intervals(t, x, sd, "knee_flexion_L", yaw_deg=30.0, device="kinect1")["max_deg"]
-    narrow = intervals.angle_intervals(t, x, sd, "knee_flexion_L", yaw_deg=30.0)["max_deg"]
+    wide = _intervals(t, x, sd, "knee_flexion_L", yaw_deg=30.0, device="kinect1")["max_deg"]
+    narrow = _intervals(t, x, sd, "knee_flexion_L", yaw_deg=30.0)["max_deg"]
     assert np.diff(wide)[0] > np.diff(narrow)[0], f"seed {seed}: {wide} vs {narrow}"
 
 
@@ -94,9 +104,11 @@ def _rotated(positions: np.ndarray, yaw_deg: float) -> np.ndarray:
 def test_camera_yaw_reads_a_turned_skeleton(yaw):
     _, truth, _ = simulate("squat", 2, seed=1)  # the true body faces the camera; its shoulders sway about 1°
     front = intervals.camera_yaw(truth.positions)
-    assert front < 2.0
+    assert front is not None and front < 2.0
     for turn in (yaw, -yaw):
-        np.testing.assert_allclose(intervals.camera_yaw(_rotated(truth.positions, turn)), yaw, atol=front + 0.5)
+        turned = intervals.camera_yaw(_rotated(truth.positions, turn))
+        assert turned is not None, turn
+        np.testing.assert_allclose(turned, yaw, atol=front + 0.5)
 
 
 @pytest.mark.parametrize("seed", SEEDS)
@@ -104,7 +116,8 @@ def test_camera_yaw_reads_a_turned_skeleton(yaw):
 def test_camera_yaw_reads_the_view_of_a_simulated_kinect_session(seed, view):
     measured, _, _ = simulate("shoulder_abduction", 3, view_deg=view, seed=seed)
     smoothed = series.smooth_positions(measured.t, process(measured).filtered.positions)
-    assert abs(intervals.camera_yaw(smoothed) - view) < 8.0, f"view {view}, seed {seed}"
+    yaw = intervals.camera_yaw(smoothed)
+    assert yaw is not None and abs(yaw - view) < 8.0, f"view {view}, seed {seed}"
 
 
 def test_camera_yaw_without_shoulders_and_bad_shapes():
@@ -132,7 +145,7 @@ def test_no_interval_for_shoulder_rotation_or_a_spinning_angle():
 
 def test_a_range_never_goes_below_zero():
     t = np.arange(300) / 30.0
-    iv = intervals.angle_intervals(t, np.full_like(t, 10.0), np.full_like(t, 5.0), "elbow_flexion_L", yaw_deg=0.0)
+    iv = _intervals(t, np.full_like(t, 10.0), np.full_like(t, 5.0), "elbow_flexion_L", yaw_deg=0.0)
     assert iv["range_deg"][0] == 0.0
 
 
@@ -155,6 +168,7 @@ def test_the_count_interval_holds_the_true_count_of_a_clean_session(seed):
     names = EXERCISES["elbow_flexion"].defining_angles
     smoothed = series.smooth_positions(measured.t, result.filtered.positions)
     angles = counting_angles(smoothed, names, joint_angles(smoothed))
+    assert result.angle_sd is not None
     ci = intervals.count_interval(measured.t, angles, result.angle_sd, names)
     assert ci.low <= 6 <= ci.high, f"seed {seed}: {ci}"
     assert ci.high - ci.low <= 2, f"seed {seed}: {ci}"
@@ -168,7 +182,7 @@ def test_intervals_stay_in_the_domain_and_consistent(seed):
     t = np.arange(600) / 30.0
     rng = np.random.default_rng(seed)
     x = np.clip(87.5 + 90.0 * np.sin(2 * np.pi * t / 4.0 + rng.uniform(0, 6)), 0.0, 175.0)
-    iv = intervals.angle_intervals(t, x, np.full_like(t, 15.0), "knee_flexion_L", yaw_deg=30.0)
+    iv = _intervals(t, x, np.full_like(t, 15.0), "knee_flexion_L", yaw_deg=30.0)
     (a, b), (c, d), (e, f) = iv["min_deg"], iv["max_deg"], iv["range_deg"]
     assert 0.0 <= a <= b <= d <= 180.0 and a <= c <= d, f"seed {seed}: {iv}"
     assert 0.0 <= e <= f <= d - a, f"seed {seed}: {iv}"

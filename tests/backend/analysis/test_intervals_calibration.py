@@ -40,13 +40,18 @@ def _hits(motion: str, view: int, seed: int, device: str = "kinect2") -> list[bo
     smoothed = series.smooth_positions(measured.t, result.filtered.positions)
     est = joint_angles(smoothed)
     yaw = intervals.camera_yaw(smoothed)
+    assert yaw is not None and result.angle_sd is not None
     true = range_of_motion(truth.t, joint_angles(series.smooth_positions(truth.t, truth.positions)), presmoothed=True)
     hits = []
     for name in ANGLE_NAMES:
         iv = intervals.angle_intervals(measured.t, est[name], result.angle_sd[name], name, yaw_deg=yaw, device=device)
-        if iv is None or true[name]["range_deg"] is None or true[name]["range_deg"] >= intervals.MAX_RANGE_DEG:
+        ends = true[name]
+        if iv is None or ends["range_deg"] is None or ends["range_deg"] >= intervals.MAX_RANGE_DEG:
             continue
-        hits += [intervals.covers(iv[kind], true[name][kind], kind) for kind in KINDS]
+        for kind in KINDS:
+            end = ends[kind]
+            assert end is not None, f"{name}: a true range without its {kind}"
+            hits.append(intervals.covers(iv[kind], end, kind))
     return hits
 
 

@@ -102,6 +102,7 @@ def _session(slug: str, n_frames: int) -> ExerciseSession:
 
 
 def _filtered_csv(payload: session_file.SessionPayload) -> dict[str, np.ndarray]:
+    assert payload.filtered is not None
     rows = list(csv.reader(io.StringIO(tables.angles_csv(payload.filtered, measured=True))))
     body = np.array([[float(c) if c else np.nan for c in r] for r in rows[1:]])
     return {name[: -len("_deg")]: body[:, k] for k, name in enumerate(rows[0]) if name != "time_s"}

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from backend.analysis.reachable import reachable_range
@@ -25,7 +27,7 @@ def _sweep_hand(rng: np.random.Generator, reach: float) -> np.ndarray:
     a = (l1**2 - (l2 + l3) ** 2 + dist**2) / (2 * dist)  # elbow's offset along d (triangle l1, l2 + l3, dist)
     normal = np.cross(d, [0.0, 0.0, 1.0])
     normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    p_elb = sho + a * d + np.sqrt(max(l1**2 - a**2, 0.0)) * normal
+    p_elb = sho + a * d + np.sqrt(np.maximum(l1**2 - a**2, 0.0)) * normal
     p_han = sho + dist * d
     p[:, INDEX["ELB_L"]] = p_elb
     p[:, INDEX["WRI_L"]] = p_elb + l2 / (l2 + l3) * (p_han - p_elb)
@@ -33,25 +35,32 @@ def _sweep_hand(rng: np.random.Generator, reach: float) -> np.ndarray:
     return p
 
 
+def _side(positions: np.ndarray, side: str) -> dict[str, Any]:
+    """Returns reachable_range's summary of one side, which these bodies always have."""
+    found = reachable_range(positions)[side]
+    assert found is not None, side
+    return found
+
+
 def test_hand_sweeping_the_whole_frontal_hemisphere_covers_it(rng: np.random.Generator) -> None:
-    left = reachable_range(_sweep_hand(rng, 1.0))["left"]
+    left = _side(_sweep_hand(rng, 1.0), "left")
     assert left["area_ratio"] > 0.97 and left["volume_ratio"] > 0.95
     assert all(q > 0.95 for q in left["quadrants"].values())
 
 
 def test_reach_of_0_6_arm_lengths_gives_0_6_cubed_of_the_volume(rng: np.random.Generator) -> None:
-    left = reachable_range(_sweep_hand(rng, 0.6))["left"]
+    left = _side(_sweep_hand(rng, 0.6), "left")
     assert left["area_ratio"] > 0.97
     np.testing.assert_allclose(left["volume_ratio"], 0.6**3, atol=0.01)
 
 
 def test_hand_close_to_the_shoulder_sweeps_nothing(rng: np.random.Generator) -> None:
-    assert reachable_range(_sweep_hand(rng, 0.4))["left"]["area_ratio"] == 0.0
+    assert _side(_sweep_hand(rng, 0.4), "left")["area_ratio"] == 0.0
 
 
 def test_arm_raised_sideways_reaches_the_lateral_quadrants_only() -> None:
     truth = simulate_truth("shoulder_abduction", 3, seed=1)
-    right = reachable_range(truth.positions)["right"]
+    right = _side(truth.positions, "right")
     q = right["quadrants"]
     assert q["upper_lateral"] > 0.05 and q["lower_lateral"] > 0.05
     assert q["upper_medial"] == 0 and q["lower_medial"] == 0

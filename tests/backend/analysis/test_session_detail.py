@@ -100,6 +100,13 @@ def _rep(start_s: float, end_s: float, side: str) -> RepetitionItem:
                           peak_deg=0.0, side=side, peak_s=None)  # fmt: skip
 
 
+def _known(speeds: list[float | None]) -> list[float]:
+    """Returns peak speeds that are all known (each repetition here moves its angle)."""
+    known = [s for s in speeds if s is not None]
+    assert len(known) == len(speeds), speeds
+    return known
+
+
 @pytest.mark.parametrize("seed", SEEDS)
 def test_peak_speeds_are_those_of_a_known_sine(seed: int) -> None:
     rng = np.random.default_rng(seed)
@@ -107,7 +114,7 @@ def test_peak_speeds_are_those_of_a_known_sine(seed: int) -> None:
     t = np.arange(0, 3 * period, 1 / 30)
     angle = amplitude / 2 * (1 - np.cos(2 * np.pi * t / period))
     reps = [_rep(k * period, (k + 1) * period, "left") for k in range(3)]
-    speeds = peak_speeds(t, angular_speeds(t, {"knee_flexion_L": angle}), reps)
+    speeds = _known(peak_speeds(t, angular_speeds(t, {"knee_flexion_L": angle}), reps))
     expected = np.pi * amplitude / period
     np.testing.assert_allclose(speeds, expected, rtol=0.05, err_msg=f"seed {seed}")
 
@@ -116,7 +123,7 @@ def test_peak_speed_of_a_side_reads_that_side_only() -> None:
     t = np.arange(0, 4, 1 / 30)
     still, moving = np.zeros_like(t), 40 * np.sin(np.pi * t / 4)
     speeds = angular_speeds(t, {"knee_flexion_L": still, "knee_flexion_R": moving})
-    left, right, both = peak_speeds(t, speeds, [_rep(0.0, 4.0, s) for s in ("left", "right", "both")])
+    left, right, both = _known(peak_speeds(t, speeds, [_rep(0.0, 4.0, s) for s in ("left", "right", "both")]))
     assert left == pytest.approx(0.0, abs=0.1) and right == both > 20
 
 
@@ -126,7 +133,7 @@ def test_peak_speeds_of_simulated_repetitions_are_positive(seed: int) -> None:
     spec = EXERCISES["squat"]
     doc = analyze_recording(measured, spec, filtered=truth)
     angles = measured_angles(truth.t, truth.positions, spec.defining_angles)
-    speeds = peak_speeds(truth.t, angular_speeds(truth.t, angles), doc.repetition_list)
+    speeds = _known(peak_speeds(truth.t, angular_speeds(truth.t, angles), doc.repetition_list))
     assert len(speeds) == 3 and all(20 < s < 400 for s in speeds), f"seed {seed}: {speeds}"
 
 
@@ -141,7 +148,9 @@ def test_hand_path_of_abduction_rises_sideways_within_one_arm_length(seed: int) 
     _, truth = noisy("shoulder_abduction", 3, seed)
     paths = hand_paths(truth.positions, truth.t)
     for side in ("left", "right"):
-        out, up, fwd = (np.array(paths[side][k]) for k in ("outward", "up", "forward"))
+        path = paths[side]
+        assert path is not None, f"seed {seed}: no {side} hand path"
+        out, up, fwd = (np.array(path[k]) for k in ("outward", "up", "forward"))
         assert len(out) <= 600
         assert up.min() < -0.8 and up.max() > 0.5, f"seed {seed} {side}: the hand hangs, then rises"
         assert np.all(np.sqrt(out**2 + up**2 + fwd**2) < 1.05), f"seed {seed} {side}"
@@ -157,7 +166,9 @@ def test_uiprmd_shoulder_abduction_curves_and_speeds(data_dir: Path) -> None:
     curves = angle_curves(rec.t, rec.positions, angles, spec.defining_angles, "smoothed")
     right = next(c for c in curves if c["angle"] == "shoulder_abduction_R" and c["kind"] == "smoothed")
     assert len(right["t_s"]) <= MAX_CURVE_POINTS and max(right["deg"]) > 60, "the right arm is raised sideways"
-    speeds = peak_speeds(rec.t, angular_speeds(rec.t, angles), doc.repetition_list)
+    speeds = _known(peak_speeds(rec.t, angular_speeds(rec.t, angles), doc.repetition_list))
     assert len(speeds) == 10 and all(30 < s < 600 for s in speeds), speeds
     paths = hand_paths(rec.positions, rec.t)
-    assert max(paths["right"]["up"]) > max(paths["left"]["up"]) + 0.3, "only the right hand rises"
+    right_path, left_path = paths["right"], paths["left"]
+    assert right_path is not None and left_path is not None, paths.keys()
+    assert max(right_path["up"]) > max(left_path["up"]) + 0.3, "only the right hand rises"

@@ -19,6 +19,7 @@ def test_linear_rises_have_known_20_80_times() -> None:
 def test_simulated_sit_to_stand_counts_every_rise() -> None:
     truth = simulate_truth("sit_to_stand", 5, seed=3)
     result = sit_to_stand(truth.t, truth.positions)
+    assert result is not None
     assert result["count"] == 5 and 0.2 < result["mean_s"] < 2.0
 
 

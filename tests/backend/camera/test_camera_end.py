@@ -93,7 +93,7 @@ def test_a_lost_live_state_is_rebuilt_from_the_stored_batches_with_the_same_coun
         r = client.post(f"/api/v1/camera/sets/{set_id}/batches", json=batch(seq, frames[k : k + PER_BATCH]), headers=h)
         assert r.status_code == 201, r.text
         last, seq = r.json(), seq + 1
-    assert last["count"] == 2, last
+    assert last is not None and last["count"] == 2, last
 
 
 def test_the_end_waits_for_batches_the_page_sent_and_a_too_short_set_stores_nothing(client, db_session, camera_home,

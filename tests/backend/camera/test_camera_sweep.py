@@ -82,7 +82,7 @@ def test_an_abandoned_set_too_short_to_analyse_is_failed_and_its_batches_deleted
     assert run_jobs() == 1
     row = _row(db_session, set_id)
     assert (row.status, row.end_reason, row.session_id) == ("failed", "abandoned", None)
-    assert "only 5 frames" in row.error, row.error
+    assert row.error is not None and "only 5 frames" in row.error, row.error
     assert _count(db_session, CameraBatch, CameraBatch.set_id == row.id) == 0
     assert _count(db_session, ExerciseSession, ExerciseSession.patient_id == camera_home["patient"].id) == 0
 
@@ -96,7 +96,7 @@ def test_an_abandoned_set_the_server_refuses_is_failed_with_the_reason(client, d
     assert run_jobs() == 1
     row = _row(db_session, set_id)
     assert (row.status, row.session_id) == ("failed", None), row.error
-    assert "could not be stored" in row.error and "50" in row.error, row.error
+    assert row.error is not None and "could not be stored" in row.error and "50" in row.error, row.error
     assert _count(db_session, CameraBatch, CameraBatch.set_id == row.id) == 0
     assert _count(db_session, ExerciseSession, ExerciseSession.patient_id == camera_home["patient"].id) == 0
 

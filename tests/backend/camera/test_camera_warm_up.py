@@ -15,7 +15,12 @@ from kinect_agent.processing.joint_smoother import JointFilter
 def test_the_server_warms_the_live_filter_up_at_start_up_once(monkeypatch):
     monkeypatch.setitem(live_count._WARMING, "thread", None)  # as in a process that never warmed up
     made = []
-    monkeypatch.setattr(live_count, "live_filter", lambda config: made.append(JointFilter(config)) or made[-1])
+
+    def live_filter(config):
+        made.append(JointFilter(config))
+        return made[-1]
+
+    monkeypatch.setattr(live_count, "live_filter", live_filter)
     settings = Settings(ENVIRONMENT="local", CHECK_MIGRATIONS=False, DATABASE_URL="sqlite://", LIVE_WARM_UP=True)
     with TestClient(create_app(settings)):
         thread = live_count._WARMING["thread"]

@@ -27,7 +27,7 @@ def test_each_caller_listens_to_the_patients_they_may_see(db_session, make_user,
     mine, therapist = make_patient_with_therapist()
     other = make_user("patient")
     admin = make_user("admin")
-    assert visible_patients(Caller(via="token", user=mine), db_session, None) == {mine.id}
-    assert visible_patients(Caller(via="token", user=therapist), db_session, None) == {mine.id}
+    assert visible_patients(Caller(via="token", user=mine), db_session, None) == frozenset({mine.id})
+    assert visible_patients(Caller(via="token", user=therapist), db_session, None) == frozenset({mine.id})
     assert visible_patients(Caller(via="token", user=admin), db_session, None) is None
-    assert visible_patients(Caller(via="token", user=admin), db_session, other.id) == {other.id}
+    assert visible_patients(Caller(via="token", user=admin), db_session, other.id) == frozenset({other.id})

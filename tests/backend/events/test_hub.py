@@ -58,7 +58,7 @@ def test_the_end_of_a_login_reaches_only_its_own_streams():
 
 def _received(sub, timeout: float = 5.0) -> list[Event]:
     async def drain():
-        out = []
+        out: list[Event] = []
         try:
             while True:
                 out.append(await asyncio.wait_for(sub.queue.get(), timeout=timeout if not out else 0.3))

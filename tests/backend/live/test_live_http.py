@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import uuid
+from typing import Any
 
 import pytest
 
@@ -115,7 +116,11 @@ def _started(db_session, device) -> str:
 
 
 def test_progress_reaches_the_patient_and_names_its_device(client, db_session, home, events):
-    msg = {"set_id": _started(db_session, home["device"]), "exercise_slug": "squat", "state": "recording"}
+    msg: dict[str, Any] = {
+        "set_id": _started(db_session, home["device"]),
+        "exercise_slug": "squat",
+        "state": "recording",
+    }
     msg |= {"count": 3, "target": 8}
     msg |= {"angle_name": "knee_flexion_L", "angle_deg": 87.5, "hint": "Step back a little", "sent_at": 1.8e9}
     r = client.post("/api/v1/live/progress", json=msg, headers=home["device_hdr"])

@@ -7,7 +7,7 @@ from __future__ import annotations
 import uuid
 from typing import Any
 
-from backend.live import service
+from backend.database import utcnow
 
 
 def _recording(set_id: str, count: int = 1) -> dict[str, Any]:
@@ -17,7 +17,7 @@ def _recording(set_id: str, count: int = 1) -> dict[str, Any]:
 def _start(client, db_session, home) -> str:
     """Connects the home's device and presses Start as the patient; returns the set id the server made."""
     home["device"].live_stream_id = str(uuid.uuid4())
-    home["device"].last_seen_at = service.utcnow()
+    home["device"].last_seen_at = utcnow()
     db_session.flush()
     r = client.post("/api/v1/live/start", json={"plan_item_id": home["item"].id}, headers=home["patient_hdr"])
     assert r.status_code == 202, r.text

@@ -64,7 +64,7 @@ def test_reanalyze_then_a_worker_process_updates_the_metrics(fresh_engine, tmp_p
     assert out.returncode == 0 and "after 1 job(s)" in out.stderr, out.stderr
     with Session(fresh_engine) as s:
         doc = s.scalar(sa.select(SessionMetric.document).where(SessionMetric.session_id == sid))
-        assert doc["analysis_version"] == ANALYSIS_VERSION and doc["repetitions"] >= 2
+        assert doc is not None and doc["analysis_version"] == ANALYSIS_VERSION and doc["repetitions"] >= 2
         assert s.scalar(sa.text("SELECT status FROM job")) == "done"
 
 
@@ -78,6 +78,7 @@ def test_reanalyze_with_the_pipeline_writes_a_new_file_and_storage_check_sees_bo
     assert out.returncode == 0 and "after 1 job(s)" in out.stderr, out.stderr
     with Session(fresh_engine) as s:
         row = s.get(ExerciseSession, sid)
+        assert row is not None
         assert row.content_hash != content_hash(data) and row.processing_params["pipeline"] == VERSION
         assert s.scalar(sa.text("SELECT file_hash FROM session_metric_version")) == content_hash(data)
     out = subprocess.run([*cli, "storage", "check", "--orphans"], env=env, capture_output=True, text=True,

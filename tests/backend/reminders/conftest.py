@@ -30,7 +30,7 @@ class Inbox:
     async def handle_DATA(self, server, session, envelope) -> str:  # noqa: N802 (aiosmtpd's hook name)
         parsed = email.message_from_bytes(envelope.content, policy=email.policy.default)
         with self._lock:
-            self.messages.append(parsed)  # type: ignore[arg-type]
+            self.messages.append(parsed)
             self.recipients.append(list(envelope.rcpt_tos))
         return "250 OK"
 

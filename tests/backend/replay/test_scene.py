@@ -8,6 +8,7 @@ import pytest
 from backend.replay import scene
 from kinect_agent import skeleton
 from kinect_agent.formats.session_file import SessionPayload
+from kinect_agent.recording import Recording
 from kinect_agent.sources.simulator import simulate
 from tests.backend.analysis._data import uiprmd
 from tests.backend.replay.viser_file import node_points, read_viser
@@ -18,6 +19,11 @@ SEEDS = (1, 2, 3)
 def _payload(exercise: str, seed: int, *, filtered: bool = True) -> SessionPayload:
     measured, truth, _ = simulate(exercise, 2, seed=seed)
     return SessionPayload(session_id=f"s{seed}", raw=measured, filtered=truth if filtered else None)
+
+
+def _filtered(payload: SessionPayload) -> Recording:
+    assert payload.filtered is not None, "a payload made with its filtered recording"
+    return payload.filtered
 
 
 def test_bone_points_pairs_parent_and_child_joints():
@@ -36,7 +42,7 @@ def test_bone_points_refuses_a_wrong_shape():
 @pytest.mark.parametrize("seed", SEEDS)
 def test_ground_frame_puts_feet_on_the_floor_and_root_above_the_origin(seed):
     payload = _payload("squat", seed)
-    shifted = payload.filtered.positions - scene.ground_frame(payload.filtered.positions)
+    shifted = _filtered(payload).positions - scene.ground_frame(_filtered(payload).positions)
     feet = shifted[:, [skeleton.INDEX["FOO_L"], skeleton.INDEX["FOO_R"]], 1]
     assert abs(np.nanpercentile(feet, 2)) < 1e-9
     root = np.nanmedian(shifted[:, skeleton.INDEX["ROOT"]], axis=0)
@@ -46,7 +52,7 @@ def test_ground_frame_puts_feet_on_the_floor_and_root_above_the_origin(seed):
 
 @pytest.mark.parametrize("seed", SEEDS)
 def test_camera_looks_from_the_side_for_sagittal_and_from_the_front_otherwise(seed):
-    positions = _payload("squat", seed).filtered.positions
+    positions = _filtered(_payload("squat", seed)).positions
     positions = positions - scene.ground_frame(positions)
     sho_axis = np.nanmedian(positions[:, skeleton.INDEX["SHO_R"]] - positions[:, skeleton.INDEX["SHO_L"]], axis=0)
     sho_axis = sho_axis / np.linalg.norm(sho_axis)
@@ -95,11 +101,11 @@ def test_recording_plays_both_skeletons_frame_by_frame(seed):
         frames = node_points(doc, name)
         assert len(frames) >= 0.95 * replay.n_frames, f"{name}: {len(frames)} updates for {replay.n_frames} frames"
     # the filtered joints played at time t are the stored filtered positions of the frame at t, in the ground frame
-    shift = scene.ground_frame(payload.filtered.positions)
+    shift = scene.ground_frame(_filtered(payload).positions)
     times, points = zip(*node_points(doc, "/filtered/joints"), strict=True)
     k = len(times) // 2
     frame = int(np.argmin(np.abs((payload.raw.t - payload.raw.t[0]) - times[k])))
-    np.testing.assert_allclose(points[k], payload.filtered.positions[frame] - shift, atol=2e-3,
+    np.testing.assert_allclose(points[k], _filtered(payload).positions[frame] - shift, atol=2e-3,
                                err_msg="filtered joints at mid-session")  # fmt: skip
     camera = [m for _, m in doc["messages"] if m["type"] == "SetCameraPositionMessage"]
     assert camera, "the recording sets the default camera"
@@ -110,7 +116,7 @@ def test_outliers_are_marked_on_the_raw_skeleton_when_flagged():
     hand = skeleton.INDEX["HAN_L"]
     payload.raw.positions[90:95, hand] += np.array([0.0, 0.8, -0.5])
     doc = read_viser(scene.build(payload, "sagittal").data)
-    shift = scene.ground_frame(payload.filtered.positions)
+    shift = scene.ground_frame(_filtered(payload).positions)
     t = payload.raw.t - payload.raw.t[0]
     hits = 0
     for when, points in node_points(doc, "/raw/outliers"):

@@ -42,7 +42,8 @@ def node_points(doc: dict[str, Any], name: str) -> list[tuple[float, np.ndarray]
     """Returns (time s, points (N, 3) float, or (N, 2, 3) for line segments) each time node `name` is shown with
     new points: its creation and its point updates while visible."""
     out: list[tuple[float, np.ndarray]] = []
-    visible, latest = True, None
+    visible = True
+    latest: np.ndarray | None = None
     for t, m in doc["messages"]:
         if m.get("name") != name:
             continue

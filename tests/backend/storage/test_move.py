@@ -5,11 +5,13 @@ from __future__ import annotations
 import datetime as dt
 import hashlib
 import uuid
+from collections.abc import Iterator
 
 import pytest
 import sqlalchemy as sa
 
 from backend.migrate import downgrade, upgrade
+from backend.storage.base import ObjectStore, StoredObject
 from backend.storage.check import check
 from backend.storage.move import move_out
 
@@ -67,17 +69,35 @@ def test_upgrade_moves_every_blob_out_and_downgrade_brings_it_back(fresh_engine,
     assert blobs == FILES
 
 
-class _CrashingStore:
+class _CrashingStore(ObjectStore):
     """Wraps a store and fails on the n-th write, as a server killed mid-move would."""
 
-    def __init__(self, store, fail_at: int) -> None:
+    def __init__(self, store: ObjectStore, fail_at: int) -> None:
         self.store, self.fail_at, self.puts = store, fail_at, 0
 
-    def put(self, kind, data):
+    def put(self, kind: str, data: bytes) -> StoredObject:
         self.puts += 1
         if self.puts == self.fail_at:
             raise OSError("killed")
         return self.store.put(kind, data)
+
+    def _put(self, key: str, data: bytes, sha256: str) -> None:
+        self.store._put(key, data, sha256)
+
+    def _get(self, key: str) -> bytes:
+        return self.store._get(key)
+
+    def exists(self, key: str) -> bool:
+        return self.store.exists(key)
+
+    def delete(self, key: str) -> None:
+        self.store.delete(key)
+
+    def keys(self) -> Iterator[str]:
+        return self.store.keys()
+
+    def describe(self) -> str:
+        return self.store.describe()
 
 
 def test_a_deferred_move_resumes_after_a_crash_without_repeating(fresh_engine, with_store, monkeypatch):
