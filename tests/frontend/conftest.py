@@ -18,7 +18,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import httpx
 import pytest
@@ -290,9 +290,18 @@ def browser(playwright_session):
     b.close()
 
 
+if TYPE_CHECKING:
+
+    class CheckedPage(Page):
+        """The page open_page yields: a Playwright page that also holds the script errors it had (page.js_errors),
+        oldest first."""
+
+        js_errors: list[str]
+
+
 @contextmanager
 def open_page(browser, base_url: str | None = None, width: int = 1280, height: int = 900, *,
-              init_script: str | None = None, **context_options) -> Iterator[Page]:  # fmt: skip
+              init_script: str | None = None, **context_options) -> Iterator[CheckedPage]:  # fmt: skip
     """Yields a page of a fresh browser context (no cookies) with a `width` x `height` px window at base_url;
     waits up to PAGE_TIMEOUT_MS, runs init_script before each document's scripts, collects script errors in
     page.js_errors; closes the context on exit. context_options go to Browser.new_context (ignore_https_errors=...).

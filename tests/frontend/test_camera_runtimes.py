@@ -139,7 +139,8 @@ def patient_only(people_per_image: list[list[dict[str, Any]]]) -> list[list[dict
     largest at first, then the one nearest to where the patient's hips were), or nobody."""
     from kinect_agent.sources.webcam.source import choose_person
 
-    out, hips = [], None
+    out: list[list[dict[str, Any]]] = []
+    hips = None
     for people in people_per_image:
         if not people:
             out.append([])

@@ -14,12 +14,12 @@ import re
 from collections.abc import Iterator
 from contextlib import closing, contextmanager
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import httpx
 import pytest
 from axe_playwright_python.sync_playwright import Axe
-from playwright.sync_api import Page, expect
+from playwright.sync_api import expect
 
 from kinect_agent.formats import session_file
 from tests.frontend.conftest import (
@@ -32,6 +32,9 @@ from tests.frontend.conftest import (
     plan_item,
     shot,
 )
+
+if TYPE_CHECKING:
+    from tests.frontend.conftest import CheckedPage
 
 pytestmark = pytest.mark.browser
 PASSWORD = NEW_PATIENT_PASSWORD
@@ -124,12 +127,10 @@ def session_header(base: str, email: str, session_id: int):
 
 
 @contextmanager
-def camera_page(browser, base: str) -> Iterator[Page]:
+def camera_page(browser, base: str) -> Iterator[CheckedPage]:
     """Yields a 1366 x 900 page at base (conftest.open_page) that also keeps the CSP violations in window.__csp
-    ([directive, blocked URI] pairs) and the URLs it requested in page.requests."""
+    ([directive, blocked URI] pairs)."""
     with open_page(browser, base, 1366, 900, init_script=WATCH_CSP) as page:
-        page.requests = []
-        page.on("request", lambda req, requests=page.requests: requests.append(req.url))
         yield page
 
 
@@ -146,6 +147,8 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
     base = live_server.url
     email, pid, item_id = new_patient(base)
     with camera_page(cam_browser, base) as page:
+        requested: list[str] = []
+        page.on("request", lambda request: requested.append(request.url))
         login(page, email, PASSWORD)
         page.wait_for_url("**/patient")
         start = page.locator("a.cam-start")
@@ -201,7 +204,7 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
             and len(payload.params["model"]["sha256"]) == 64
         )
         assert payload.params["fps_achieved"] and payload.params["fps_achieved"] > 1, payload.params
-        off_origin = [u for u in page.requests if not u.startswith(base) and not u.startswith(("data:", "blob:"))]
+        off_origin = [u for u in requested if not u.startswith(base) and not u.startswith(("data:", "blob:"))]
         assert not off_origin, off_origin
         # the WebAssembly compiled under the page's CSP; only connections off the origin (MediaPipe's metrics) may be
         # refused by it

@@ -52,9 +52,10 @@ def test_each_exercise_shows_a_moving_figure_its_instructions_and_the_week_badge
         for i in range(items.count()):
             li = items.nth(i)
             slug = li.get_attribute("data-exercise")
+            assert slug is not None
             canvas = li.locator("canvas.demo-figure")
             expect(canvas).to_have_attribute("data-view", "side")
-            assert int(canvas.get_attribute("data-frames")) >= 30
+            assert int(canvas.get_attribute("data-frames") or 0) >= 30
             expect(li.locator(".demo-instructions")).to_have_text(library[slug]["instructions"])
             expect(li.locator(".week-label")).to_have_text("this week")
             expect(li.locator(".tick")).to_have_text(re.compile(r"^(\d+×|✓)$"))
@@ -121,9 +122,10 @@ def test_every_uiprmd_movement_shows_a_moving_figure_in_the_view_it_needs(browse
         for i in range(items.count()):
             li = items.nth(i)
             slug = li.get_attribute("data-exercise")
+            assert slug is not None
             canvas = li.locator("canvas.demo-figure")
             expect(canvas).to_have_attribute("data-view", UI_PRMD_VIEWS[slug])
-            assert int(canvas.get_attribute("data-frames")) >= 30, slug
+            assert int(canvas.get_attribute("data-frames") or 0) >= 30, slug
             _moves(canvas, slug)
         shot(page, f"demonstration-uiprmd-{width}")
         assert not page.js_errors, page.js_errors

@@ -16,6 +16,7 @@ import pytest
 import sqlalchemy as sa
 from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
+from sqlalchemy.engine import CursorResult
 from sqlalchemy.orm import Session
 
 from backend.demo import ADMIN
@@ -52,6 +53,7 @@ def test_an_admin_reanalyses_one_patient_and_follows_it(browser, live_server):
             doc.pop("analysis_version", None), doc.pop("schema_version", None)  # made before versions (schema 1)
             metric.document = doc
         lost_key = db.scalar(sa.select(ExerciseSession.file_key).where(ExerciseSession.id == lost["id"]))
+    assert lost_key is not None
     LocalStore(live_server.storage_dir).delete(lost_key)  # its file is gone from the store: that job fails
 
     try:
@@ -76,6 +78,7 @@ def test_an_admin_reanalyses_one_patient_and_follows_it(browser, live_server):
             # after the 5 s retry, not 30 s later; the delays and the attempt limit are tests/backend/records' part
             with Session(engine) as db, db.begin():
                 two = db.execute(sa.update(Job).where(Job.key.like(f"{KIND}:{lost['id']}:%")).values(max_attempts=2))
+            assert isinstance(two, CursorResult)  # an UPDATE's result
             assert two.rowcount == 1, f"{two.rowcount} jobs of session {lost['id']}"
             expect(row).to_contain_text("Finished, 1 failed", timeout=90_000)  # the page polled by itself
             failed = page.locator(f'#jobs tr[data-status="failed"]:has(a[href$="/sessions/{lost["id"]}"])')

@@ -32,7 +32,8 @@ ENGLISH = ("Your exercises this week", "Advice from your therapist", "Today:", "
 
 @pytest.fixture(scope="module")
 def patient_page(browser, live_server):
-    """Rose's page in a logged-in context; her language is set back to the browser's afterwards."""
+    """(Rose's page in a logged-in context, the setter of her language); her language is set back to the browser's
+    afterwards."""
     with open_page(browser, live_server.url, 1366, 900) as page:
         csrf = sign_in(page, PATIENT)
 
@@ -41,8 +42,7 @@ def patient_page(browser, live_server):
                                                 data={"locale": locale}, headers={"X-CSRF-Token": csrf})  # fmt: skip
             assert answer.ok, answer.text()
 
-        page.set_locale = set_locale
-        yield page
+        yield page, set_locale
         set_locale(None)
 
 
@@ -58,8 +58,8 @@ def _load(page, width: int) -> None:
 @pytest.mark.parametrize("width", (1366, 390))
 @pytest.mark.parametrize("locale", ("de", "es", "fr"))
 def test_patient_page_in_each_language(patient_page, locale, width):
-    page = patient_page
-    page.set_locale(locale)
+    page, set_locale = patient_page
+    set_locale(locale)
     _load(page, width)
     shot(page, f"patient_{locale}_{width}")
     assert page.get_attribute("html", "lang") == locale
@@ -78,8 +78,8 @@ def test_patient_page_in_each_language(patient_page, locale, width):
 
 
 def test_the_language_select_changes_the_page_and_is_kept(patient_page):
-    page = patient_page
-    page.set_locale(None)
+    page, set_locale = patient_page
+    set_locale(None)
     _load(page, 390)
     select = page.locator("header #language")
     box = select.bounding_box()

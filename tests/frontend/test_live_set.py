@@ -77,6 +77,7 @@ def new_home(base: str, agent_base: str, tmp: Path) -> Home:
     new = create_patient(base, "live", "Lena Live", items=[plan_item(EXERCISE, TARGET)], plan={"title": "Arms"},
                          pairing_code=True)  # fmt: skip
     email, pid, code = new.email, new.id, new.pairing_code
+    assert code is not None, "a patient made with a pairing code"
     home = Home(email, pid, tmp / "agent", tmp / "agent.log")
     done = subprocess.run([sys.executable, "-m", "kinect_agent.cli", "pair", "--server", agent_base, "--code", code],
                           env=_agent_env(home), cwd=ROOT, capture_output=True, text=True, timeout=60)  # fmt: skip

@@ -17,7 +17,7 @@ import re
 import threading
 import time
 import uuid
-from contextlib import closing
+from contextlib import AbstractContextManager, closing
 from typing import Any
 
 import httpx
@@ -128,6 +128,7 @@ STATES_SEEN = """() => {
 
 def test_server_and_agent_stopped_and_restarted_under_the_page(browser, live_server, tmp_path):
     port = free_port()
+    server: AbstractContextManager[str] | None
     server = run_server(live_server.database_url, tmp_path, port=port, COACH_STORAGE_DIR=live_server.storage_dir)
     base = server.__enter__()
     try:

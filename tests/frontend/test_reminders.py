@@ -113,6 +113,7 @@ def _unsubscribe_token(live_server, pid: int) -> str:
     try:
         with Session(engine, expire_on_commit=False) as db:
             plan_id = db.scalar(select(Plan.id).where(Plan.patient_id == pid))
+            assert plan_id is not None
             now = dt.datetime.now(dt.UTC)
             claimed = claim(db_session=db, reminder=DueReminder(plan_id, pid, now.date(), "11:00", now))
             assert claimed is not None

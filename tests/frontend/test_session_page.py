@@ -228,7 +228,10 @@ def test_a_session_filtered_at_home_shows_its_95_percent_intervals_or_why_not(pa
         assert found, f"{label}: no value and interval in {text!r}"
         value, low, high = (float(x) for x in found.groups())
         assert low - 0.5 <= value <= high + 0.5 and high > low, f"{label}: {text!r}"  # the interval is rounded
-    peak = float(re.search(r"(-?[\d.]+)°", stats.filter(has_text="Peak angle").inner_text()).group(1))
+    peak_text = stats.filter(has_text="Peak angle").inner_text()
+    found_peak = re.search(r"(-?[\d.]+)°", peak_text)
+    assert found_peak, f"no peak angle in {peak_text!r}"
+    peak = float(found_peak.group(1))
     end = body["uncertainty"]["peak_end"]
     assert peak == pytest.approx(angle[f"{end}_deg"], abs=0.05), f"peak {peak}, {end} of {angle}"
     shot(page, f"session_intervals_{exercise}_1366")
@@ -272,7 +275,13 @@ def test_a_session_whose_data_cannot_load_shows_the_error_alone(page, live_serve
 def test_session_page_stays_on_the_origin_and_its_data_needs_a_login(page, browser, live_server):
     requests: list[str] = []
     reads: list[str] = []
-    page.on("request", lambda r: (requests.append(r.url), r.method == "GET" and reads.append(r.url)))
+
+    def on_request(r):
+        requests.append(r.url)
+        if r.method == "GET":
+            reads.append(r.url)
+
+    page.on("request", on_request)
     page.on("websocket", lambda ws: requests.append(ws.url))
     _open_from_patient_page(page, live_server)
     page.wait_for_load_state("networkidle")
@@ -290,7 +299,9 @@ def test_therapist_downloads_every_export_from_the_session_page(page, live_serve
     _open_from_patient_page(page, live_server)
     links = page.locator("#downloads a")
     expect(links).to_have_count(4)
-    session_id = re.search(r"/therapist/sessions/(\d+)$", page.url).group(1)
+    found = re.search(r"/therapist/sessions/(\d+)$", page.url)
+    assert found, page.url
+    session_id = found.group(1)
     starts = {"csv": b"PK", "trc": b"PathFileType", "bvh": b"HIERARCHY", "fhir": b"{"}
     for k, (fmt, start) in enumerate(starts.items()):
         link = links.nth(k)

@@ -68,7 +68,7 @@ def test_the_therapist_sees_the_patients_language_and_that_free_text_is_not_tran
         expect(advice_note).to_have_text(
             "Not translated: the patient reads Deutsch, and sees your advice exactly as you type it."
         )
-        assert "suggestion-free-text" in page.locator("#suggestion-text").get_attribute("aria-describedby")
+        assert "suggestion-free-text" in (page.locator("#suggestion-text").get_attribute("aria-describedby") or "")
         expect(page.locator("#pending-language")).to_contain_text(
             "you see them in English, the patient reads them in Deutsch"
         )
@@ -78,7 +78,7 @@ def test_the_therapist_sees_the_patients_language_and_that_free_text_is_not_tran
         plan_note = page.locator("#plan-free-text")
         expect(plan_note).to_be_visible()
         expect(plan_note).to_contain_text("the patient reads Deutsch, and sees the plan's title, note and hints")
-        assert "plan-free-text" in page.locator("#plan-notes").get_attribute("aria-describedby")
+        assert "plan-free-text" in (page.locator("#plan-notes").get_attribute("aria-describedby") or "")
         for width in (1366, 390):
             page.set_viewport_size({"width": width, "height": HEIGHT[width]})
             page.locator("#patient-reads").scroll_into_view_if_needed()
