@@ -39,6 +39,7 @@ from backend.reminders.times import zone_names
 from backend.schemas import IdPath
 from backend.users.models import User
 from frontend import vendor_assets
+from frontend.replay_viewer import viewer_html
 
 HERE = Path(__file__).resolve().parent
 STATIC = HERE / "static"
@@ -324,8 +325,9 @@ def replay_page(session_id: IdPath, request: Request, caller: OptionalCaller, db
 
 @router.get("/replay/viewer/", response_class=HTMLResponse)
 def replay_viewer(request: Request, caller: OptionalCaller) -> Response:
-    """Returns viser's own web client (bundled in the pinned viser wheel), for signed-in users; the replay page
-    opens it with ?playbackPath= pointing to the session's recording in the API.
+    """Returns viser's own web client (bundled in the pinned viser wheel) in the reader's language where the app can
+    say it (frontend/replay_viewer.py), for signed-in users; the replay page opens it with ?playbackPath= pointing to
+    the session's recording in the API.
 
     Any other query is the 404 page: the client would fetch a recording from any URL in playbackPath, or connect
     to any server in ?websocket=, and run the JavaScript a recording carries (viser's RunJavascriptMessage) on
@@ -335,7 +337,9 @@ def replay_viewer(request: Request, caller: OptionalCaller) -> Response:
         return _sign_in_first(request)
     if not is_replay_recording(request, request.url.query):
         return error_page(request, 404)
-    return FileResponse(VISER_CLIENT, media_type="text/html; charset=utf-8", headers={"Cache-Control": "no-cache"})
+    user = caller.user
+    html = viewer_html(VISER_CLIENT, page_locale(request, user), user.role in THERAPIST_ROLES, _root(request))
+    return HTMLResponse(html, headers={"Cache-Control": "private, no-cache"})
 
 
 def is_replay_recording(request: Request, query: str) -> bool:

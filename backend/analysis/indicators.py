@@ -1,8 +1,9 @@
 """The four indicators of the paper (flexibility, endurance, strength, balance) from one analysis document.
 
 Each indicator (kinect_agent.analysis.document.Indicator) is {"score": 0..100 or None, "value": the measured
-number or None, "basis": how it was scored, "quality_ok": the document's quality ok and the value present,
-"previous": median value of the history or None}.
+number or None, "basis": how it was scored (a Basis: a message of kinect_agent.analysis.reasons.BASES and its
+numbers, written in the reader's language by backend.analysis.reasons), "quality_ok": the document's quality ok and
+the value present, "previous": median value of the history or None}.
 history = earlier documents of the same patient and exercise, oldest first (their own values are re-read, so a
 change of definition applies to the whole history).
     flexibility  value = rom_deg (median repetition amplitude of the defining angle, degrees);
@@ -28,7 +29,9 @@ from collections.abc import Callable
 import numpy as np
 
 from backend.exercises.library import ExerciseSpec
+from kinect_agent.analysis import reasons as why
 from kinect_agent.analysis.document import AnalysisReport, BalanceIndicator, Indicator, Indicators
+from kinect_agent.analysis.reasons import Basis
 
 FAST_RISE_S, SLOW_RISE_S = 0.5, 2.0
 GOOD_SWAY, POOR_SWAY = 0.01, 0.06
@@ -52,7 +55,7 @@ def _previous(previous: list[float]) -> float | None:
 
 
 def _indicator(
-    score: float | None, value: float | None, basis: str, doc: AnalysisReport, previous: list[float]
+    score: float | None, value: float | None, basis: Basis, doc: AnalysisReport, previous: list[float]
 ) -> Indicator:
     return Indicator(score=score, value=value, basis=basis, quality_ok=doc.quality.ok and value is not None,
                      previous=_previous(previous))  # fmt: skip
@@ -84,7 +87,10 @@ def flexibility(doc: AnalysisReport, exercise: ExerciseSpec, history: list[Analy
     lo, hi = exercise.normal_range_deg
     value = _rom(doc)
     score = _clip100(100.0 * value / (hi - lo)) if value is not None and hi > lo else None
-    basis = f"median amplitude of {doc.defining_angle} against the normal range {lo:g}..{hi:g} deg"
+    if doc.defining_angle is None:
+        basis = why.BASIS_FLEXIBILITY_NO_ANGLE.basis(low=lo, high=hi)
+    else:
+        basis = why.BASIS_FLEXIBILITY.basis(angle=doc.defining_angle, low=lo, high=hi)
     return _indicator(score, value, basis, doc, _values(history, _rom))
 
 
@@ -94,12 +100,12 @@ def endurance(doc: AnalysisReport, target_reps: int | None, history: list[Analys
     previous = _values(history, _reps)
     score: float | None
     if target_reps:
-        score, basis = _clip100(100.0 * value / target_reps), f"repetitions against the target of {target_reps}"
+        score, basis = _clip100(100.0 * value / target_reps), why.BASIS_ENDURANCE_TARGET.basis(target=target_reps)
     elif previous and np.median(previous) > 0:
         ref = float(np.median(previous))
-        score, basis = _clip100(100.0 * value / ref), f"repetitions against the usual {ref:g} of earlier sessions"
+        score, basis = _clip100(100.0 * value / ref), why.BASIS_ENDURANCE_USUAL.basis(usual=ref)
     else:
-        score, basis = None, "repetitions; no target and no earlier session to compare with"
+        score, basis = None, why.BASIS_ENDURANCE_NONE.basis()
     return _indicator(score, value, basis, doc, previous)
 
 
@@ -110,17 +116,17 @@ def strength(doc: AnalysisReport, exercise: ExerciseSpec, history: list[Analysis
         score = None
         if value is not None:
             score = _clip100(100.0 * (SLOW_RISE_S - value) / (SLOW_RISE_S - FAST_RISE_S))
-        basis = f"sit-to-stand rise time (20-80 %), {FAST_RISE_S:g} s scores 100, {SLOW_RISE_S:g} s scores 0"
+        basis = why.BASIS_STRENGTH_RISE.basis(fast=FAST_RISE_S, slow=SLOW_RISE_S)
         return _indicator(score, value, basis, doc, _values(history, _rise))
     value = _speed(doc)
     previous = _values(history, _speed)
     if value is not None and previous and max(previous) > 0:
         score, basis = (
             _clip100(100.0 * value / max(previous)),
-            "movement speed (deg/s) against the best earlier session",
+            why.BASIS_STRENGTH_SPEED.basis(),
         )
     else:
-        score, basis = None, "movement speed (deg/s); no earlier session to compare with"
+        score, basis = None, why.BASIS_STRENGTH_SPEED_NONE.basis()
     return _indicator(score, value, basis, doc, previous)
 
 
@@ -130,7 +136,7 @@ def balance(doc: AnalysisReport, history: list[AnalysisReport]) -> BalanceIndica
     score = None
     if value is not None:
         score = _clip100(100.0 * (POOR_SWAY - value) / (POOR_SWAY - GOOD_SWAY))
-    basis = f"trunk-and-hips sway while standing, {GOOD_SWAY * 100:g} cm/s scores 100, {POOR_SWAY * 100:g} cm/s 0"
+    basis = why.BASIS_BALANCE_SWAY.basis(good=round(GOOD_SWAY * 100, 4), poor=round(POOR_SWAY * 100, 4))  # cm/s
     common = _indicator(score, value, basis, doc, _values(history, _sway))
     interval = doc.balance.sway_velocity_95 if doc.balance is not None else None
     missing = doc.balance_missing if value is None else None

@@ -4,24 +4,30 @@ angle's 95 % interval is withheld (intervals.withheld_reason) and why balance wa
 
 The metrics document stores each reason as a message id and its numbers (kinect_agent.analysis.reasons.Reason,
 document schema 3; an older document's English text is read back as one when it matches a message, else kept as a
-text). `written` writes a reason in a Translator's language with the locale's numbers; `with_texts` fills the
-`text` of every reason of a document for an API answer, a page or an export.
+text). The indicators' bases (how each was scored, kinect_agent.analysis.reasons.BASES, document schema 4) are
+stored and written the same way, an angle in the reader's words (session_detail.ANGLE_WORDS). `written` writes a
+reason or a basis in a Translator's language with the locale's numbers; `with_texts` fills the `text` of every
+reason and basis of a document for an API answer, a page or an export.
 """
 
 from __future__ import annotations
 
 from typing import TypeVar
 
+from backend.analysis.session_detail import angle_label
 from backend.i18n import Translator
-from kinect_agent.analysis.document import AnalysisDocument, AnalysisReport, Indicators
-from kinect_agent.analysis.reasons import BY_ID, MESSAGES, Kind, Reason, UnknownReason
+from kinect_agent.analysis.document import INDICATOR_NAMES, AnalysisDocument, AnalysisReport, Indicators
+from kinect_agent.analysis.reasons import MESSAGES, Kind, Reason, UnknownReason, message_of
 
 __all__ = ["MESSAGES", "indicators_with_text", "with_text", "with_texts", "written"]
 D = TypeVar("D", bound=AnalysisReport)
+R = TypeVar("R", bound=Reason)
 
 
-def _number(value: float, kind: Kind, t: Translator) -> str:
-    """Returns one number of a reason as t's locale writes it."""
+def _number(value: float | str, kind: Kind, t: Translator) -> str:
+    """Returns one value of a reason as t's locale writes it: a number with the locale's digits, an angle in words."""
+    if isinstance(value, str) or kind == "angle":
+        return angle_label(str(value), t)
     if kind == "percent":
         return t.format_percent(value)
     if kind == "general":
@@ -31,18 +37,19 @@ def _number(value: float, kind: Kind, t: Translator) -> str:
 
 
 def written(reason: Reason, t: Translator) -> str:
-    """Returns a reason in t's language: its message with the locale's numbers, or a stored text as it is (raises
-    UnknownReason for an id no message has: a document validates its ids, so only a reason built unchecked)."""
+    """Returns a reason (or a basis) in t's language: its message with the locale's numbers, or a stored text as it
+    is (raises UnknownReason for an id no message has: a document validates its ids, so only a reason built
+    unchecked)."""
     if reason.id is None:
         return reason.text or ""
-    message = BY_ID.get(reason.id)
+    message = message_of(reason.id)
     if message is None:
         raise UnknownReason(f"unknown reason id {reason.id!r}")
     kinds = dict(message.kinds)
     return t.gettext(message.message, **{k: _number(v, kinds[k], t) for k, v in reason.params.items()})
 
 
-def with_text(reason: Reason, t: Translator) -> Reason:
+def with_text(reason: R, t: Translator) -> R:
     """Returns a reason with its text in t's language (id and params as stored)."""
     return reason.model_copy(update={"text": written(reason, t)})
 
@@ -62,9 +69,12 @@ def with_texts(doc: D, t: Translator) -> D:
 
 
 def indicators_with_text(indicators: Indicators, t: Translator) -> Indicators:
-    """Returns the indicators with the text of why balance is missing (their one reason) in t's language."""
-    balance = indicators.balance
-    if balance.missing is None:
-        return indicators
-    missing = with_text(balance.missing, t)
-    return indicators.model_copy(update={"balance": balance.model_copy(update={"missing": missing})})
+    """Returns the indicators with the texts of their bases and of why balance is missing in t's language."""
+    update = {}
+    for name in INDICATOR_NAMES:
+        item = getattr(indicators, name)
+        update[name] = item.model_copy(update={"basis": with_text(item.basis, t)})
+    balance = update["balance"]
+    if indicators.balance.missing is not None:
+        update["balance"] = balance.model_copy(update={"missing": with_text(indicators.balance.missing, t)})
+    return indicators.model_copy(update=update)

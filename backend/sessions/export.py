@@ -8,9 +8,11 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
+from backend.analysis import reasons
 from backend.exceptions import ExportUnavailable
 from backend.exercises.library import EXERCISES
 from backend.feeling.service import get_feeling
+from backend.i18n import ENGLISH
 from backend.sessions import service
 from backend.sessions.detail import analysis_document, decode_stored
 from kinect_agent.export.fhir import Feeling, SessionContext
@@ -75,6 +77,8 @@ def session_exports(
         data = service.session_file(db_session=db_session, session_id=session.id)
     payload = decode_stored(data, session_id=session.id, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
     document, _ = analysis_document(payload, EXERCISES.get(slug) if slug else None, stored)
+    if document is not None:  # the FHIR notes say how each indicator was scored, in English
+        document = reasons.with_texts(document, ENGLISH)
     files: dict[str, ExportFile] = {}
     unavailable: dict[str, str] = {}
     for fmt in formats:

@@ -39,7 +39,8 @@ from kinect_agent.export.files import ExportFile
 
 KIND = "export"
 GZIP_LEVEL = 6  # the stored file's compression: built once, handed out as it is to clients that accept gzip
-EXPORT_VERSION = 1  # part of a stored export's inputs: bump when kinect_agent.export's output changes
+# part of a stored export's inputs: bump when kinect_agent.export's output changes (2: FHIR notes from basis ids)
+EXPORT_VERSION = 2
 NAMES = {"csv": "tables (CSV)", "trc": "OpenSim markers (TRC)", "bvh": "motion (BVH)", "fhir": "health record (FHIR)"}
 
 

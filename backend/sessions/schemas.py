@@ -44,8 +44,8 @@ class SessionOut(SessionItemOut):
 
     metrics: AnalysisDocument | None = Field(
         description="the analysis document (kinect_agent.analysis.document) with its indicators, upgraded to today's "
-        "schema_version; each reason (Reason) with its id and params as stored and its text in the reader's language; "
-        "null: not analysed"
+        "schema_version; each reason (Reason) and each indicator's basis (Basis) with its id and params as stored "
+        "and its text in the reader's language; null: not analysed"
     )
     suggestions: list[SuggestionOut]
 
@@ -54,28 +54,41 @@ _INDICATORS_EXAMPLE: JsonDict = {
     "flexibility": {
         "score": 60.7,
         "value": 82.0,
-        "basis": "median amplitude of knee_flexion_R against the normal range 0..135 deg",
+        "basis": {
+            "id": "flexibility_normal_range",
+            "params": {"angle": "knee_flexion_R", "low": 0, "high": 135},
+            "text": "median amplitude of the right knee flexion over the repetitions, against its normal range of 0 "
+            "to 135°",
+        },
         "quality_ok": True,
         "previous": 58.1,
     },
     "endurance": {
         "score": 80.0,
         "value": 8,
-        "basis": "repetitions against the target of 10",
+        "basis": {"id": "endurance_target", "params": {"target": 10}, "text": "repetitions against the target of 10"},
         "quality_ok": True,
         "previous": 9.0,
     },
     "strength": {
         "score": 64.0,
         "value": 26.5,
-        "basis": "movement speed (deg/s) against the best earlier session",
+        "basis": {
+            "id": "strength_speed_best",
+            "params": {},
+            "text": "movement speed (°/s) against the best earlier session",
+        },
         "quality_ok": True,
         "previous": 30.1,
     },
     "balance": {
         "score": None,
         "value": None,
-        "basis": "trunk-and-hips sway while standing, 1 cm/s scores 100, 6 cm/s 0",
+        "basis": {
+            "id": "balance_sway",
+            "params": {"good": 1, "poor": 6},
+            "text": "sway of the trunk and hips while standing: 1 cm/s scores 100, 6 cm/s scores 0",
+        },
         "quality_ok": False,
         "previous": 0.021,
         "interval": None,

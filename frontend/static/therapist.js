@@ -40,7 +40,7 @@
     const label = INDICATOR_LABELS[name];
     if (!ind || ind.score === null || ind.score === undefined) {
       const why = name === "balance" && missing ? el("span", { class: "reasons why-missing" }, missing) : null;
-      return el("td", { class: "indicator", "data-label": label }, el("span", { class: "muted", title: ind ? ind.basis : I18n.t("no data") }, "—"), tr, why);
+      return el("td", { class: "indicator", "data-label": label }, el("span", { class: "muted", title: ind && ind.basis ? ind.basis.text : I18n.t("no data") }, "—"), tr, why);
     }
     const flag = ind.quality_ok === false ? el("span", { class: "flag", title: I18n.t("data quality: the recording was poor; treat this score with care") }, "⚠") : null;
     const prev = ind.previous !== null && ind.previous !== undefined
@@ -49,7 +49,7 @@
     const iv = name === "balance" && ind.interval && ind.value !== null
       ? el("span", { class: "reasons" }, I18n.t("{speed} cm/s (95 % {low}–{high})",
         { speed: cms(ind.value), low: cms(ind.interval[0]), high: cms(ind.interval[1]) })) : null;
-    return el("td", { class: "indicator", "data-label": label, title: `${ind.basis || ""}${prev}` },
+    return el("td", { class: "indicator", "data-label": label, title: `${ind.basis ? ind.basis.text : ""}${prev}` },
       el("span", { class: "score" }, el("span", { class: "bar", "aria-hidden": "true" }, el("i", { style: `width:${Math.round(ind.score)}%` })),
         I18n.number(ind.score), flag), tr, iv);
   }

@@ -14,8 +14,12 @@ Schema versions (`schema_version`; a document without it is version 1):
        2026-11-25 to 2026-11-27 already hold range_of_motion_95 and repetitions_95.
     2  2026-11-27: every key present, None where it does not apply; the reasons (quality.reasons,
        range_of_motion_95_withheld, balance_missing, indicators.balance.missing) in English words.
-    3  today: each reason a Reason (kinect_agent.analysis.reasons): a message id and its numbers, written in the
-       reader's language by the server; an English text of schema 1 or 2 that no message matches stays a text.
+    3  2026-11-27: each reason a Reason (kinect_agent.analysis.reasons): a message id and its numbers, written in
+       the reader's language by the server; an English text of schema 1 or 2 that no message matches stays a text.
+       The indicators' basis in English words.
+    4  today: each indicator's basis a Basis (kinect_agent.analysis.reasons.BASES): a message id, its numbers and
+       angle, written in the reader's language by the server; an English basis of schema 1 to 3 that no message
+       matches (the wordings before 2026-11-24) stays a text.
 Raise SCHEMA_VERSION and add one step to `upgrade` whenever a key is added, removed or changes its meaning.
 """
 
@@ -27,9 +31,10 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from kinect_agent.analysis.reasons import MESSAGES, Kind, Message, Reason
+from kinect_agent.analysis import reasons
+from kinect_agent.analysis.reasons import MESSAGES, Basis, Kind, Message, Reason
 
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 
 
 class _Part(BaseModel):
@@ -140,7 +145,10 @@ class Indicator(_Part):
 
     score: float | None = Field(description="0..100; None when it cannot be scored")
     value: int | float | None = Field(description="the measured number it scores (unit in basis); None: missing")
-    basis: str = Field(description="how it was scored, in words")
+    basis: Basis = Field(
+        description="how it was scored: a message id and its numbers; in an API answer with its text "
+        "in the reader's language"
+    )
     quality_ok: bool = Field(description="the document's quality ok and the value present")
     previous: float | None = Field(description="median value of the patient's earlier sessions; None: none")
 
@@ -306,6 +314,64 @@ def _upgrade_2_to_3(doc: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+# Schema 3 to 4: each English basis read back as its message. The patterns are those of the English words
+# backend.analysis.indicators wrote from 2026-11-24 to schema 3 (not the messages' words, which are new)
+_NUMBER = r"-?\d+(?:\.\d+)?(?:e[-+]?\d+)?"
+_RANGE = rf"against the normal range (?P<low>{_NUMBER})\.\.(?P<high>{_NUMBER}) deg"
+_ENGLISH_BASES = tuple((message, re.compile(pattern)) for message, pattern in (
+    (reasons.BASIS_FLEXIBILITY_NO_ANGLE,
+     rf"median amplitude of None {_RANGE}"),
+    (reasons.BASIS_FLEXIBILITY,
+     rf"median amplitude of (?P<angle>[A-Za-z]\w*) {_RANGE}"),
+    (reasons.BASIS_ENDURANCE_TARGET, r"repetitions against the target of (?P<target>\d+)"),
+    (reasons.BASIS_ENDURANCE_USUAL, rf"repetitions against the usual (?P<usual>{_NUMBER}) of earlier sessions"),
+    (reasons.BASIS_ENDURANCE_NONE, r"repetitions; no target and no earlier session to compare with"),
+    (reasons.BASIS_STRENGTH_RISE,
+     rf"sit-to-stand rise time \(20-80 %\), (?P<fast>{_NUMBER}) s scores 100, (?P<slow>{_NUMBER}) s scores 0"),
+    (reasons.BASIS_STRENGTH_SPEED, r"movement speed \(deg/s\) against the best earlier session"),
+    (reasons.BASIS_STRENGTH_SPEED_NONE, r"movement speed \(deg/s\); no earlier session to compare with"),
+    (reasons.BASIS_BALANCE_SWAY,
+     rf"trunk-and-hips sway while standing, (?P<good>{_NUMBER}) cm/s scores 100, (?P<poor>{_NUMBER}) cm/s 0"),
+))  # fmt: skip
+
+
+def basis_of_text(text: object) -> object:
+    """Returns an indicator's basis of schema 1 to 3 (English words) as a schema-4 Basis' JSON: the message whose
+    pattern it matches, with its numbers and angle; a text no message matches stays a text (id None); anything else
+    (a schema-4 basis) as it is."""
+    if not isinstance(text, str):
+        return text
+    for message, pattern in _ENGLISH_BASES:
+        found = pattern.fullmatch(text)
+        if found is not None:
+            kinds = dict(message.kinds)
+            params = {
+                k: v if kinds[k] == "angle" else _english_number(v, kinds[k]) for k, v in found.groupdict().items()
+            }
+            return {"id": message.id, "params": params}
+    return {"id": None, "text": text}
+
+
+INDICATOR_NAMES = ("flexibility", "endurance", "strength", "balance")
+
+
+def _indicators_3_to_4(indicators: object) -> object:
+    """Returns indicators of schema 1 to 3 in schema 4: each basis a Basis (a schema-4 basis stays as it is)."""
+    if not isinstance(indicators, dict):
+        return indicators
+    return {name: {**item, "basis": basis_of_text(item.get("basis"))} if name in INDICATOR_NAMES
+            and isinstance(item, dict) else item for name, item in indicators.items()}  # fmt: skip
+
+
+def _upgrade_3_to_4(doc: dict[str, Any]) -> dict[str, Any]:
+    """Returns a schema-3 document in schema 4 (module doc): each indicator's basis a Basis."""
+    out = dict(doc)
+    if "indicators" in out:
+        out["indicators"] = _indicators_3_to_4(out["indicators"])
+    out["schema_version"] = 4
+    return out
+
+
 def upgrade(doc: dict[str, Any]) -> dict[str, Any]:
     """Returns a stored document (JSON object) in today's schema; raises UnreadableDocument for an unknown version."""
     version = doc.get("schema_version", 1)
@@ -315,6 +381,8 @@ def upgrade(doc: dict[str, Any]) -> dict[str, Any]:
         doc = _upgrade_1_to_2(doc)
     if version <= 2:
         doc = _upgrade_2_to_3(doc)
+    if version <= 3:
+        doc = _upgrade_3_to_4(doc)
     return doc
 
 
@@ -341,7 +409,7 @@ def read_indicators(stored: object) -> Indicators | None:
     if not isinstance(stored, dict):
         return None
     try:
-        return Indicators.model_validate(_indicators_2_to_3(_indicators_1_to_2(stored)))
+        return Indicators.model_validate(_indicators_3_to_4(_indicators_2_to_3(_indicators_1_to_2(stored))))
     except ValidationError:
         return None
 

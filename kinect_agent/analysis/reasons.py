@@ -1,6 +1,7 @@
 """The analysis' reasons: why a session's quality check failed (backend.analysis.quality.assess), why an angle's
 95 % interval is withheld (backend.analysis.intervals.withheld_reason) and why balance was not measured
-(backend.analysis.balance.missing_reason).
+(backend.analysis.balance.missing_reason); and the indicators' bases: how each indicator was scored
+(backend.analysis.indicators, BASES, stored as a `Basis` from schema 4 on).
 
 The analysis document (schema 3, kinect_agent.analysis.document) stores a reason as a `Reason`: the id of one of
 MESSAGES and its numbers; the server writes it in the reader's language from them (backend.analysis.reasons). Each
@@ -11,12 +12,14 @@ that text (id None).
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
-from typing import Literal
+from typing import ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-Kind = Literal["int", "percent", "decimal0", "decimal1", "general"]
+Kind = Literal["int", "percent", "decimal0", "decimal1", "general", "angle"]
+_ANGLE_ID = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,63}")
 
 
 def N_(message: str) -> str:  # noqa: N802 (the gettext convention)
@@ -32,7 +35,8 @@ class UnknownReason(ValueError):
 class Message:
     """One reason's message (%(name)s placeholders, English) and the kind of number each placeholder holds:
     int, percent (a fraction 0..1, written as a whole percent), decimal0 / decimal1 (0 or 1 decimal), general (as
-    few decimals as the number needs)."""
+    few decimals as the number needs), angle (not a number: an angle's name, kinect_agent.body.angles, written in the
+    reader's words)."""
 
     id: str
     message: str
@@ -43,13 +47,31 @@ class Message:
         extra)."""
         return Reason(id=self.id, params=values)
 
-    def checked(self, params: dict[str, float]) -> dict[str, float]:
-        """Returns params as this message stores them (ints for int placeholders, other numbers to 4 decimals);
-        raises UnknownReason when they are not one number per placeholder."""
+    def basis(self, **values: float | str) -> Basis:
+        """Returns this indicator basis with its numbers and angle (one per placeholder; pydantic.ValidationError
+        when one is missing or extra)."""
+        return Basis(id=self.id, params=values)
+
+    def checked(self, params: dict[str, float | str]) -> dict[str, float | str]:
+        """Returns params as this message stores them (ints for int placeholders, an angle's name as it is, other
+        numbers to 4 decimals); raises UnknownReason when they are not one value of its kind per placeholder."""
         kinds = dict(self.kinds)
-        if set(params) != set(kinds) or any(isinstance(v, bool) for v in params.values()):
-            raise UnknownReason(f"reason {self.id!r} needs the numbers {sorted(kinds)}, got {sorted(params)}")
-        return {k: int(v) if kinds[k] == "int" else round(float(v), 4) for k, v in params.items()}
+        if set(params) != set(kinds) or any(not _fits(v, kinds[k]) for k, v in params.items()):
+            raise UnknownReason(f"reason {self.id!r} needs the numbers {sorted(kinds)}, got {params!r}")
+        return {k: _stored(v, kinds[k]) for k, v in params.items()}
+
+
+def _fits(value: object, kind: Kind) -> bool:
+    """Returns whether a value can fill a placeholder of this kind (a number, or for an angle its name)."""
+    if kind == "angle":
+        return isinstance(value, str) and _ANGLE_ID.fullmatch(value) is not None
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _stored(value: float | str, kind: Kind) -> float | str:
+    if isinstance(value, str):
+        return value
+    return int(value) if kind == "int" else round(float(value), 4)
 
 
 class Reason(BaseModel):
@@ -59,8 +81,9 @@ class Reason(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     id: str | None = Field(description="the message's id (kinect_agent.analysis.reasons.MESSAGES); None: a text")
-    params: dict[str, int | float] = Field(
-        default_factory=dict, description="the message's numbers by placeholder (fractions 0..1, seconds, degrees)"
+    params: dict[str, int | float | str] = Field(
+        default_factory=dict,
+        description="the message's numbers by placeholder (fractions 0..1, seconds, degrees; an angle by its name)",
     )
     text: str | None = Field(
         default=None,
@@ -73,11 +96,29 @@ class Reason(BaseModel):
             if not self.text or self.params:
                 raise UnknownReason("a reason without an id is a text, with no numbers")
             return self
-        message = BY_ID.get(self.id)
+        known = self._known_messages()
+        message = known.get(self.id)
         if message is None:
-            raise UnknownReason(f"unknown reason id {self.id!r} (known: {', '.join(sorted(BY_ID))})")
+            raise UnknownReason(f"unknown {self.word} id {self.id!r} (known: {', '.join(sorted(known))})")
         self.params = message.checked(self.params)
         return self
+
+    word: ClassVar[str] = "reason"  # what an unknown id is said to be
+
+    @classmethod
+    def _known_messages(cls) -> dict[str, Message]:
+        return BY_ID
+
+
+class Basis(Reason):
+    """How one indicator was scored (schema 4 on): a message of BASES and its numbers (and angle), or (id None) a
+    text no message matches that an older analysis stored."""
+
+    word: ClassVar[str] = "basis"
+
+    @classmethod
+    def _known_messages(cls) -> dict[str, Message]:
+        return BASES_BY_ID
 
 
 # quality.assess: why a session is not ok
@@ -124,3 +165,48 @@ NEVER_STILL = Message(
 MESSAGES = (TOO_FEW_FRAMES, TOO_SHORT, TOO_LITTLE_TRACKED, TOO_MANY_ERRORS, GAPS, ROTATION_UNDEFINED, OUT_OF_PLANE,
             JOINTS_UNTRACKED, UNKNOWN_ANGLE, TOO_UNCERTAIN, RECORDING_TOO_SHORT, NOT_STANDING, NEVER_STILL)  # fmt: skip
 BY_ID = {m.id: m for m in MESSAGES}
+
+# backend.analysis.indicators: how each indicator was scored (the indicator's "basis")
+BASIS_FLEXIBILITY = Message(
+    "flexibility_normal_range",
+    N_("median amplitude of the %(angle)s over the repetitions, against its normal range of %(low)s to %(high)s°"),
+    (("angle", "angle"), ("low", "general"), ("high", "general")),
+)
+BASIS_FLEXIBILITY_NO_ANGLE = Message(
+    "flexibility_no_angle",
+    N_("median amplitude over the repetitions against the normal range of %(low)s to %(high)s°; no angle moved enough "
+       "to count repetitions"),
+    (("low", "general"), ("high", "general")),
+)  # fmt: skip
+BASIS_ENDURANCE_TARGET = Message(
+    "endurance_target", N_("repetitions against the target of %(target)s"), (("target", "int"),)
+)
+BASIS_ENDURANCE_USUAL = Message(
+    "endurance_usual", N_("repetitions against the usual %(usual)s of earlier sessions"), (("usual", "general"),)
+)
+BASIS_ENDURANCE_NONE = Message(
+    "endurance_no_reference", N_("repetitions; no target and no earlier session to compare with")
+)
+BASIS_STRENGTH_RISE = Message(
+    "strength_rise_time",
+    N_("sit-to-stand rise time (from 20 to 80 %% of the rise): %(fast)s s scores 100, %(slow)s s scores 0"),
+    (("fast", "general"), ("slow", "general")),
+)
+BASIS_STRENGTH_SPEED = Message("strength_speed_best", N_("movement speed (°/s) against the best earlier session"))
+BASIS_STRENGTH_SPEED_NONE = Message(
+    "strength_speed_no_reference", N_("movement speed (°/s); no earlier session to compare with")
+)
+BASIS_BALANCE_SWAY = Message(
+    "balance_sway",
+    N_("sway of the trunk and hips while standing: %(good)s cm/s scores 100, %(poor)s cm/s scores 0"),
+    (("good", "general"), ("poor", "general")),
+)
+BASES = (BASIS_FLEXIBILITY, BASIS_FLEXIBILITY_NO_ANGLE, BASIS_ENDURANCE_TARGET, BASIS_ENDURANCE_USUAL,
+         BASIS_ENDURANCE_NONE, BASIS_STRENGTH_RISE, BASIS_STRENGTH_SPEED, BASIS_STRENGTH_SPEED_NONE,
+         BASIS_BALANCE_SWAY)  # fmt: skip
+BASES_BY_ID = {m.id: m for m in BASES}
+
+
+def message_of(id_: str) -> Message | None:
+    """Returns the message of a reason's or a basis' id (None: no message has it)."""
+    return BY_ID.get(id_) or BASES_BY_ID.get(id_)

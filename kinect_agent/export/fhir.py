@@ -173,8 +173,8 @@ def _indicator_observations(document: AnalysisReport, common: dict[str, Any]) ->
                     "valueQuantity": {"value": item.value},
                 }
             ]
-        if item.basis:
-            fields["note"] = [{"text": item.basis}]
+        if item.basis.text:  # written by the server (English in its exports); a document read unwritten has none
+            fields["note"] = [{"text": item.basis.text}]
         out.append(_observation(common, code, "exam", **fields))
     return out
 

@@ -56,7 +56,7 @@ def store_session(
     return row
 
 
-TODAY = Path(__file__).parents[1] / "kinect_agent" / "analysis" / "documents" / "schema3.json"
+TODAY = Path(__file__).parents[1] / "kinect_agent" / "analysis" / "documents" / "schema4.json"
 
 
 def document(*, reps: int, rom: float | None, quality_ok: bool, exercise: str = "shoulder_abduction") -> dict[str, Any]:
@@ -67,7 +67,7 @@ def document(*, reps: int, rom: float | None, quality_ok: bool, exercise: str = 
     doc["quality"] |= {"ok": quality_ok, "reasons": [] if quality_ok else [{"id": None, "text": "test: not ok"}]}
     for name, item in doc["indicators"].items():
         item["score"] = None if rom is None or name != "flexibility" else rom / 2
-    doc["indicators"]["flexibility"] |= {"value": rom, "basis": "test"}
+    doc["indicators"]["flexibility"] |= {"value": rom, "basis": {"id": None, "params": {}, "text": "test"}}
     return doc
 
 

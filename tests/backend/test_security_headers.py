@@ -54,7 +54,7 @@ def test_replay_viewer_refuses_a_recording_from_anywhere_but_a_session_replay(cl
 
 def test_replay_viewer_serves_viser_for_a_session_replay(client, therapist_headers):
     r = _viewer(client, therapist_headers, "playbackPath=" + quote("/api/v1/sessions/12/replay", safe=""))
-    assert r.status_code == 200 and "<title>Viser</title>" in r.text
+    assert r.status_code == 200 and "<title>Session replay</title>" in r.text, "viser's client, in the reader's words"
     assert r.headers["content-security-policy"] == VIEWER_POLICY
 
 
@@ -67,6 +67,7 @@ def test_replay_viewer_behind_a_prefix_wants_the_prefixed_path(db_session, make_
         prefixed = _viewer(client, headers, "playbackPath=" + quote("/clinic/api/v1/sessions/3/replay", safe=""))
         bare = _viewer(client, headers, "playbackPath=" + quote("/api/v1/sessions/3/replay", safe=""))
     assert (prefixed.status_code, bare.status_code) == (200, 404)
+    assert '<script src="/clinic/static/replay_viewer.js"></script>' in prefixed.text, "its scripts under the prefix"
 
 
 def test_viewer_policy_keeps_connections_on_this_origin():
@@ -182,7 +183,7 @@ def test_replay_viewer_serves_one_skeleton_of_a_session_replay(client, therapist
     r = _viewer(
         client, therapist_headers, "playbackPath=" + quote(f"/api/v1/sessions/12/replay?layer={layer}", safe="")
     )
-    assert r.status_code == 200 and "<title>Viser</title>" in r.text
+    assert r.status_code == 200 and "<title>Session replay</title>" in r.text
 
 
 @pytest.mark.parametrize("tail", ["?layer=both", "?layer=raw&x=1", "?layer=raw#", "?other=raw", "?layer="])

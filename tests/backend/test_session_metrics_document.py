@@ -30,7 +30,7 @@ def test_the_api_returns_the_stored_document_unchanged(client, db_session, uploa
 
 
 def _without_reason_texts(metrics: dict[str, Any]) -> tuple[dict[str, Any], list[Any]]:
-    """Returns the metrics with the text of every reason None (as stored), and the texts."""
+    """Returns the metrics with the text of every reason and indicator basis None (as stored), and the texts."""
     texts: list[Any] = []
 
     def plain(reason: dict[str, Any]) -> dict[str, Any]:
@@ -42,6 +42,7 @@ def _without_reason_texts(metrics: dict[str, Any]) -> tuple[dict[str, Any], list
     withheld = out["range_of_motion_95_withheld"]
     out["range_of_motion_95_withheld"] = None if withheld is None else {k: plain(v) for k, v in withheld.items()}
     out["balance_missing"] = None if out["balance_missing"] is None else plain(out["balance_missing"])
+    out["indicators"] = {name: item | {"basis": plain(item["basis"])} for name, item in out["indicators"].items()}
     missing = out["indicators"]["balance"]["missing"]
     if missing is not None:
         out["indicators"] = out["indicators"] | {"balance": out["indicators"]["balance"] | {"missing": plain(missing)}}
@@ -71,8 +72,14 @@ def test_progress_reads_the_indicators_of_an_older_document(client, make_user, a
     response = client.get(f"/api/v1/patients/{patient.id}/progress", headers=auth_headers(patient))
     assert response.status_code == 200, response.text
     indicators = response.json()["points"][0]["indicators"]
-    assert indicators["flexibility"] == older["indicators"]["flexibility"]
-    assert indicators["balance"] == older["indicators"]["balance"] | {"interval": None, "missing": None}
+    flexibility = {"id": "flexibility_normal_range", "params": {"angle": "shoulder_abduction_L", "low": 0, "high": 180},
+                   "text": "median amplitude of the left shoulder abduction over the repetitions, against its normal "
+                   "range of 0 to 180°"}  # fmt: skip
+    assert indicators["flexibility"] == older["indicators"]["flexibility"] | {"basis": flexibility}
+    balance = {"id": "balance_sway", "params": {"good": 1, "poor": 6},
+               "text": "sway of the trunk and hips while standing: 1 cm/s scores 100, 6 cm/s scores 0"}  # fmt: skip
+    assert indicators["balance"] == older["indicators"]["balance"] | {"interval": None, "missing": None,
+                                                                        "basis": balance}  # fmt: skip
 
 
 def test_progress_says_why_balance_is_missing_in_the_readers_language(client, make_user, auth_headers, exercise, store):
@@ -99,7 +106,7 @@ def test_openapi_describes_the_metrics_document(client):
 
 
 def test_a_stored_reason_id_no_message_has_is_named_not_hidden(client, make_user, auth_headers, exercise, store):
-    today = json.loads((DOCUMENTS / "schema3.json").read_text(encoding="utf-8"))
+    today = json.loads((DOCUMENTS / "schema4.json").read_text(encoding="utf-8"))
     today["quality"] |= {"ok": False, "reasons": [{"id": "too_blurry", "params": {}, "text": None}]}
     patient = make_user("patient")
     row = store(patient, exercise, T0, doc=today)

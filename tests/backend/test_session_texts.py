@@ -185,7 +185,7 @@ def test_a_new_document_stores_its_reasons_as_ids_and_numbers_and_the_detail_wri
     khs = make_processed_khs("seated_knee_extension", 3, seed=3)
     session_id, patient, _ = upload(khs, "seated_knee_extension")
     stored = db_session.scalar(select(SessionMetric.document).where(SessionMetric.session_id == session_id))
-    assert stored["schema_version"] == 3
+    assert stored["schema_version"] == 4
     not_standing: dict[str, Any] = {"id": "not_standing", "params": {}, "text": None}
     assert stored["balance_missing"] == stored["indicators"]["balance"]["missing"] == not_standing
     found = [*stored["quality"]["reasons"], *(stored["range_of_motion_95_withheld"] or {}).values()]
@@ -211,7 +211,7 @@ def test_a_patient_reads_the_analysis_reasons_of_an_older_english_document_in_th
     patient.locale = "de"
     db_session.flush()
     german = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient)).json()["metrics"]
-    assert german["schema_version"] == 3, "upgraded when read"
+    assert german["schema_version"] == 4, "upgraded when read"
     assert german["quality"]["reasons"] == [
         {"id": "too_little_tracked", "params": {"tracked": 0.46, "needed": 0.6},
          "text": "der Körper wurde in 46\u00a0% der Messungen erfasst (mindestens 60\u00a0% nötig)"},
@@ -309,3 +309,76 @@ def test_a_patient_reads_why_the_replay_failed_in_their_language(client, db_sess
         "The session's file is missing from the object store (run `coach-server storage "
         "check`): session/ab12 is not in the store (tried 6 times)"
     )
+
+
+def test_a_patient_reads_how_each_indicator_was_scored_in_their_language(client, db_session, upload, auth_headers):
+    from sqlalchemy import select
+
+    from backend.sessions.models import SessionMetric
+
+    session_id, patient, _ = upload(make_processed_khs("seated_knee_extension", 3, seed=3), "seated_knee_extension")
+    stored = db_session.scalar(select(SessionMetric.document).where(SessionMetric.session_id == session_id))
+    assert stored["schema_version"] == 4
+    assert all(i["basis"]["id"] and i["basis"]["text"] is None for i in stored["indicators"].values()), "ids stored"
+    english = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient)).json()["metrics"]
+    patient.locale = "de"
+    db_session.flush()
+    german = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient)).json()["metrics"]
+    french = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient) | {"Accept-Language": "fr"})
+    french = french.json()["metrics"]
+    for name in ("flexibility", "endurance", "strength", "balance"):
+        en, de, fr = (doc["indicators"][name]["basis"] for doc in (english, german, french))
+        assert (de["id"], de["params"]) == (fr["id"], fr["params"]) == (en["id"], en["params"]), name
+        assert len({en["text"], de["text"], fr["text"]}) == 3, (name, en, de, fr)
+    flexibility = german["indicators"]["flexibility"]["basis"]
+    assert flexibility["id"] == "flexibility_normal_range" and flexibility["params"]["angle"] in detail_angles()
+    assert flexibility["text"].startswith(angle_words(flexibility["params"]["angle"], "de") + ": mittlere"), flexibility
+    assert french["indicators"]["balance"]["basis"]["text"] == (
+        "oscillation du buste et des hanches en position debout\u00a0: 1 cm/s donnent 100 points, 6 cm/s en donnent 0"
+    )
+    progress = client.get(f"/api/v1/patients/{patient.id}/progress", headers=auth_headers(patient)).json()
+    assert progress["points"][-1]["indicators"]["endurance"]["basis"] == german["indicators"]["endurance"]["basis"]
+
+
+def test_an_english_basis_stored_before_ids_is_read_in_the_readers_language(client, db_session, upload, auth_headers):
+    from sqlalchemy import select
+
+    from backend.sessions.models import SessionMetric
+
+    session_id, patient, therapist = upload(make_processed_khs("seated_knee_extension", 3, seed=3),
+                                            "seated_knee_extension")  # fmt: skip
+    metric = db_session.scalar(select(SessionMetric).where(SessionMetric.session_id == session_id))
+    doc = dict(metric.document) | {"schema_version": 3}
+    doc["indicators"] = {name: item | {"basis": text} for (name, item), text in zip(doc["indicators"].items(), (
+        "median amplitude of knee_flexion_R against the normal range 0..90 deg", "repetitions against the target of 3",
+        "movement speed (deg/s); no earlier session to compare with", OLDER_TEXT), strict=True)}  # fmt: skip
+    metric.document = doc
+    patient.locale = "de"
+    db_session.flush()
+    german = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient)).json()["metrics"]
+    bases = {name: item["basis"] for name, item in german["indicators"].items()}
+    assert bases["flexibility"] == {"id": "flexibility_normal_range",
+                                    "params": {"angle": "knee_flexion_R", "low": 0, "high": 90},
+                                    "text": "Beugung des rechten Knies: mittlere Bewegungsweite (Median der "
+                                    "Wiederholungen) im Vergleich zum Normalbereich von 0 bis 90°"}  # fmt: skip
+    assert bases["endurance"] == {"id": "endurance_target", "params": {"target": 3},
+                                  "text": "Wiederholungen im Vergleich zum Ziel von 3"}  # fmt: skip
+    assert bases["balance"] == {"id": None, "params": {}, "text": OLDER_TEXT}, "a text no message matches stays"
+    clinic = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(therapist)).json()["metrics"]
+    assert (
+        clinic["indicators"]["strength"]["basis"]["text"] == "movement speed (°/s); no earlier session to compare with"
+    )
+    db_session.refresh(metric)
+    assert metric.document == doc, "reading upgrades the answer, not the stored document"
+
+
+def detail_angles() -> set[str]:
+    from backend.analysis.session_detail import ANGLE_WORDS
+
+    return set(ANGLE_WORDS)
+
+
+def angle_words(angle: str, locale: str) -> str:
+    from backend.analysis.session_detail import angle_label
+
+    return angle_label(angle, translator(locale))

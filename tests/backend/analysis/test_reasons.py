@@ -82,3 +82,22 @@ def test_a_reason_refuses_missing_or_extra_numbers():
         why.TOO_FEW_FRAMES.reason(frames=3)
     with pytest.raises(ValidationError, match="needs the numbers"):
         why.GAPS.reason(frames=3)
+
+
+# one basis per message, with values as backend.analysis.indicators writes them
+BASES = [why.BASIS_FLEXIBILITY.basis(angle="hip_abduction_L", low=0, high=45),
+         why.BASIS_FLEXIBILITY_NO_ANGLE.basis(low=0, high=45), why.BASIS_ENDURANCE_TARGET.basis(target=12),
+         why.BASIS_ENDURANCE_USUAL.basis(usual=8.5), why.BASIS_ENDURANCE_NONE.basis(),
+         why.BASIS_STRENGTH_RISE.basis(fast=0.5, slow=2), why.BASIS_STRENGTH_SPEED.basis(),
+         why.BASIS_STRENGTH_SPEED_NONE.basis(), why.BASIS_BALANCE_SWAY.basis(good=1, poor=6)]  # fmt: skip
+
+
+@pytest.mark.parametrize("locale", LOCALES)
+def test_every_basis_is_written_in_every_language_with_the_angle_in_words(locale):
+    assert {b.id for b in BASES} == set(why.BASES_BY_ID), "one example per message"
+    t, english = translator(locale), [reasons.written(b, translator("en")) for b in BASES]
+    written = [reasons.written(b, t) for b in BASES]
+    assert not set(written) & set(english) and len(set(written)) == len(written), written
+    assert "hip_abduction_L" not in written[0] and "left hip abduction" in english[0], (english[0], written[0])
+    assert "8,5" in written[3], written[3]
+    assert "0,5 s" in written[5], written[5]

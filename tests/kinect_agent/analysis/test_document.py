@@ -3,8 +3,9 @@
 documents/ holds one stored document of each shape the server has written (backend/analysis/report.py's history):
 schema1_2026-11-23 (01f63ce: the first metrics), schema1_2026-11-25 (c83a249: + 95 % intervals),
 schema1_2026-11-27 (b6dadc9 + d8eeccf: + balance in standing phases, analysis version), schema2 (4bb313d: the
-reasons in English words) and schema3 (today: schema2 as today's analysis writes it, each reason a message id and its
-numbers).
+reasons in English words), schema3 (schema2 as the analysis of 2026-11-27 wrote it, each reason a message id and its
+numbers, the indicators' bases in English words) and schema4 (today: schema3 as today's analysis writes it, each basis
+a message id and its numbers).
 """
 
 from __future__ import annotations
@@ -22,17 +23,18 @@ from kinect_agent.analysis.document import (
     AnalysisDocument,
     AnalysisReport,
     UnreadableDocument,
+    basis_of_text,
     read_document,
     read_if_readable,
     read_indicators,
     read_report,
     reason_of_text,
 )
-from kinect_agent.analysis.reasons import Reason
+from kinect_agent.analysis.reasons import Basis, Reason
 
 DOCUMENTS = Path(__file__).parent / "documents"
 OLDER = ["schema1_2026-11-23", "schema1_2026-11-25", "schema1_2026-11-27"]
-TODAY = "schema3"
+TODAY = "schema4"
 
 
 def _stored(name: str) -> dict[str, Any]:
@@ -42,7 +44,7 @@ def _stored(name: str) -> dict[str, Any]:
 def test_todays_document_reads_back_to_the_same_json() -> None:
     stored = _stored(TODAY)
     doc = read_document(stored)
-    assert doc.schema_version == SCHEMA_VERSION == 3
+    assert doc.schema_version == SCHEMA_VERSION == 4
     assert json.dumps(doc.model_dump(mode="json")) == json.dumps(stored)  # same keys, same order, same numbers
 
 
@@ -60,7 +62,9 @@ def test_an_older_stored_document_reads_with_its_values(name: str) -> None:
     assert all(r.peak_s is None for r in doc.repetition_list)
     dumped = doc.model_dump(mode="json")
     assert set(dumped) == set(AnalysisDocument.model_fields)
-    assert _holds(dumped, stored)  # every stored value is still there; upgrading only adds keys
+    bases = {name: item | {"basis": basis_of_text(item["basis"])} for name, item in stored["indicators"].items()}
+    # every stored value is still there (each basis as its message); upgrading only adds keys
+    assert _holds(dumped, stored | {"indicators": bases})
 
 
 def _holds(upgraded: Any, stored: Any) -> bool:
@@ -94,8 +98,8 @@ def test_a_report_without_indicators_reads_as_a_report() -> None:
 
 
 def test_an_unknown_schema_version_is_refused_by_name() -> None:
-    with pytest.raises(UnreadableDocument, match="schema_version 4"):
-        read_document(_stored(TODAY) | {"schema_version": 4})
+    with pytest.raises(UnreadableDocument, match="schema_version 5"):
+        read_document(_stored(TODAY) | {"schema_version": 5})
 
 
 def test_a_document_missing_a_key_of_its_version_is_refused() -> None:
@@ -116,7 +120,9 @@ def test_indicators_alone_read_from_any_shape() -> None:
     older = _stored("schema1_2026-11-23")["indicators"]
     indicators = read_indicators(older)
     assert indicators is not None and indicators.balance.interval is None
-    assert indicators.endurance.model_dump() == older["endurance"]
+    assert indicators.endurance.model_dump(exclude={"basis"}) == {k: v for k, v in older["endurance"].items()
+                                                                  if k != "basis"}  # fmt: skip
+    assert indicators.endurance.basis == Basis(id="endurance_target", params={"target": 3})
     assert read_indicators({"flexibility": {"score": 1}}) is None and read_indicators(None) is None
 
 
@@ -197,7 +203,7 @@ def test_reasons_of_schema_2_in_every_place_upgrade_and_unknown_texts_stay_texts
     kept = doc.range_of_motion_95_withheld["shoulder_abduction_L"]
     assert kept.id is None and kept.text == "only 12 images (at least 30 needed)"
     again = read_document(doc.model_dump(mode="json"))
-    assert again == doc, "a text reason is stored as a text in schema 3"
+    assert again == doc, "a text reason is stored as a text in schema 3 and 4"
 
 
 def test_indicators_alone_of_schema_2_read_their_reason() -> None:
@@ -220,3 +226,51 @@ def test_an_unknown_reason_id_or_wrong_numbers_are_refused_by_name() -> None:
     with pytest.raises(ValidationError, match="a reason without an id is a text"):
         read_document(stored)
     assert read_if_readable(stored) is None
+
+
+# one English basis per message as schema 1 to 3 stored it (backend/analysis/indicators.py from 2026-11-24 to schema 3
+# wrote these words), with the id and values schema 4 reads it as
+ENGLISH_BASES = {
+    "median amplitude of knee_flexion_R against the normal range 0..135 deg": (
+        "flexibility_normal_range", {"angle": "knee_flexion_R", "low": 0, "high": 135}),
+    "median amplitude of None against the normal range -10..90.5 deg": ("flexibility_no_angle", {"low": -10,
+                                                                                                  "high": 90.5}),
+    "repetitions against the target of 12": ("endurance_target", {"target": 12}),
+    "repetitions against the usual 8.5 of earlier sessions": ("endurance_usual", {"usual": 8.5}),
+    "repetitions; no target and no earlier session to compare with": ("endurance_no_reference", {}),
+    "sit-to-stand rise time (20-80 %), 0.5 s scores 100, 2 s scores 0": ("strength_rise_time", {"fast": 0.5,
+                                                                                                 "slow": 2}),
+    "movement speed (deg/s) against the best earlier session": ("strength_speed_best", {}),
+    "movement speed (deg/s); no earlier session to compare with": ("strength_speed_no_reference", {}),
+    "trunk-and-hips sway while standing, 1 cm/s scores 100, 6 cm/s 0": ("balance_sway", {"good": 1, "poor": 6}),
+}  # fmt: skip
+
+
+def test_every_english_basis_upgrades_to_its_id_and_values() -> None:
+    assert {id_ for id_, _ in ENGLISH_BASES.values()} == set(reasons.BASES_BY_ID), "one example per message"
+    for text, (id_, params) in ENGLISH_BASES.items():
+        basis = Basis.model_validate(basis_of_text(text))
+        assert (basis.id, basis.params, basis.text) == (id_, params, None), text
+
+
+def test_the_bases_of_schema_3_upgrade_and_older_wordings_stay_texts() -> None:
+    stored = _stored("schema3")
+    older = "body-centre sway while standing still, 1 cm/s scores 100, 6 cm/s 0"  # 2026-11-23's balance, another method
+    stored["indicators"]["balance"]["basis"] = older
+    doc = read_document(stored)
+    assert doc.indicators.flexibility.basis == Basis(
+        id="flexibility_normal_range", params={"angle": "shoulder_abduction_L", "low": 0, "high": 180})  # fmt: skip
+    assert doc.indicators.balance.basis == Basis(id=None, text=older)
+    assert read_document(doc.model_dump(mode="json")) == doc, "a text basis is stored as a text in schema 4"
+    assert read_indicators(stored["indicators"]) == doc.indicators, "the dashboard reads the indicators alone the same"
+
+
+def test_a_reason_is_no_basis_and_a_basis_needs_its_angle_by_name() -> None:
+    stored = _stored(TODAY)
+    stored["indicators"]["endurance"]["basis"] = {"id": "too_short", "params": {"seconds": 1, "needed": 3}}
+    with pytest.raises(ValidationError, match="unknown basis id 'too_short'"):
+        read_document(stored)
+    stored["indicators"]["endurance"]["basis"] = {"id": "flexibility_normal_range",
+                                                  "params": {"angle": 3, "low": 0, "high": 90}}  # fmt: skip
+    with pytest.raises(ValidationError, match="flexibility_normal_range"):
+        read_document(stored)

@@ -1,0 +1,21 @@
+"""The replay viewer's page (frontend.pages.replay_viewer) in the reader's language: a patient's chosen one, a
+therapist's pages' (English until a therapist.po exists)."""
+
+from __future__ import annotations
+
+from urllib.parse import quote
+
+
+def test_a_german_patient_gets_the_viewer_in_german_and_a_therapist_in_english(
+    client, db_session, make_patient_with_therapist, auth_headers
+):
+    patient, therapist = make_patient_with_therapist()
+    patient.locale = "de"
+    db_session.flush()
+    query = "/replay/viewer/?playbackPath=" + quote("/api/v1/sessions/12/replay", safe="")
+    german = client.get(query, headers=auth_headers(patient) | {"Accept": "text/html"})
+    english = client.get(query, headers=auth_headers(therapist) | {"Accept": "text/html", "Accept-Language": "de"})
+    assert german.status_code == english.status_code == 200
+    assert '<html lang="de">' in german.text and "<title>Wiedergabe der Sitzung</title>" in german.text
+    assert '<html lang="en">' in english.text, "the therapist pages are English until a therapist.po exists"
+    assert german.headers["cache-control"] == "private, no-cache"
