@@ -44,6 +44,7 @@ def test_the_patient_sees_the_replay_and_its_player_in_their_language(browser, l
             pause_button = viewer.locator("button:has(.tabler-icon-player-pause-filled)")
             expect(pause_button).to_have_attribute("aria-label", pause, timeout=30_000)
             frame = page.locator("#viewer").element_handle().content_frame()
+            assert frame is not None
             assert frame.evaluate("document.documentElement.lang") == locale
             assert frame.title() == translator(locale).gettext("Session replay") != "Session replay", frame.title()
             expect(viewer.locator(f'input[aria-label="{speed}"]')).to_have_count(1)

@@ -196,7 +196,7 @@ def test_withheld_intervals_say_why():
     assert intervals.withheld_reason(name, x, iv) is None
     wide = intervals.angle_intervals(t, x, np.full_like(t, 30.0), name, yaw_deg=0.0)
     too_wide = intervals.withheld_reason(name, x, wide)
-    assert too_wide is not None and too_wide.id == "too_uncertain" and too_wide.params["width"] > 60, too_wide
+    assert too_wide is not None and too_wide.id == "too_uncertain" and float(too_wide.params["width"]) > 60, too_wide
     assert intervals.withheld_reason(name, x, iv, tracked_fraction=0.5) == Reason(
         id="joints_untracked", params={"tracked": 0.5})  # fmt: skip
     gappy = np.where(np.arange(t.size) % 3 == 0, x, np.nan)

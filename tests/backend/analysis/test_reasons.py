@@ -68,7 +68,7 @@ def test_the_analysis_stores_ids_and_numbers():
     rng = np.random.default_rng(3)
     x = np.where(rng.random(200) < 0.3, rng.normal(40, 5, 200), np.nan)
     said = intervals.withheld_reason("knee_flexion_L", x, None)
-    assert said is not None and said.id == "out_of_plane" and 0.2 < said.params["defined"] < 0.4, said
+    assert said is not None and said.id == "out_of_plane" and 0.2 < float(said.params["defined"]) < 0.4, said
     wide = intervals.withheld_reason("knee_flexion_L", np.full(50, 30.0), {"min_deg": [0.0, 80.0]})
     assert wide == Reason(id="too_uncertain", params={"width": 80.0, "most": intervals.MAX_WIDTH_DEG})
     assert intervals.withheld_reason("shoulder_rotation_L", x, None) == Reason(id="rotation_undefined")
