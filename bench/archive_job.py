@@ -23,17 +23,22 @@ import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, TypeVar
 
 import sqlalchemy as sa
 from fastapi.testclient import TestClient
 from sqlalchemy.orm import Session, sessionmaker
 
+if TYPE_CHECKING:
+    from backend.config import Settings
+
+T = TypeVar("T")
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 
-def _timed(fn: Callable[[], object]) -> tuple[float, float, object]:
+def _timed(fn: Callable[[], T]) -> tuple[float, float, T]:
     """Returns (wall s, CPU s of this process, fn's result)."""
     w0, c0 = time.perf_counter(), time.process_time()
     out = fn()
@@ -114,7 +119,7 @@ def main() -> None:
     _after(client, base, headers, make, settings, args, (wall, cpu))
 
 
-def _after(client: TestClient, base: str, headers: dict[str, str], make: Callable[[], Session], settings: object,
+def _after(client: TestClient, base: str, headers: dict[str, str], make: Callable[[], Session], settings: Settings,
            args: argparse.Namespace, first_get: tuple[float, float]) -> None:  # fmt: skip
     from backend.jobs.models import Job
     from backend.jobs.worker import work

@@ -22,9 +22,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from sqlalchemy import Select, func, select, update
+from sqlalchemy import func, select, update
 from sqlalchemy.orm import Session
-from sqlalchemy.sql import ColumnElement
+from sqlalchemy.sql import ColumnElement, Executable
 
 from backend.camera.models import CameraConsent, CameraSet
 from backend.config import Settings
@@ -67,7 +67,7 @@ class ArchiveState:
     progress: tuple[int, int] | None = None
 
 
-def _rows(db_session: Session, query: Select[Any]) -> list[list[Any]]:
+def _rows(db_session: Session, query: Executable) -> list[list[Any]]:
     return [list(r) for r in db_session.execute(query).all()]
 
 

@@ -76,8 +76,12 @@ class ArchiveOut(BaseModel):
     size: int | None = Field(description="bytes of the kept archive's zip")
 
 
-_READY_STATE = {200: {"model": ArchiveOut, "description": "the kept archive covers today's data: download_url"}}
-_ASKED_STATE = {202: {"model": ArchiveOut, "description": "being made by a worker (Retry-After), or failed (detail)"}}
+_READY_STATE: dict[int | str, dict[str, Any]] = {
+    200: {"model": ArchiveOut, "description": "the kept archive covers today's data: download_url"}
+}
+_ASKED_STATE: dict[int | str, dict[str, Any]] = {
+    202: {"model": ArchiveOut, "description": "being made by a worker (Retry-After), or failed (detail)"}
+}
 ARCHIVE_RETRY_AFTER_S = "3"
 
 
