@@ -16,6 +16,9 @@ from backend.jobs.queue import LEASE
 from backend.records import prepared_archive
 from backend.records.archive import build_archive
 from backend.records.models import PatientArchive
+from backend.records.retention import apply_retention
+from backend.sessions.models import ExerciseSession
+from backend.storage.check import check
 from tests.backend.khs_files import make_khs
 
 
@@ -195,3 +198,20 @@ def test_a_running_build_reports_progress_and_renews_its_lease(db_session, make_
     assert job.locked_until > dt.datetime.now(dt.UTC) + LEASE - dt.timedelta(minutes=1)
     state = prepared_archive._job_state(job, prepared_archive.ENGLISH, None)
     assert state.state == "preparing" and state.progress == (40, 120)
+
+
+def test_storage_check_reads_the_kept_archive_and_retention_deletes_it(
+    client, db_session, run_jobs, with_store, patient_with_sessions
+):
+    patient, _, headers, ids = patient_with_sessions
+    assert client.post(f"/api/v1/patients/{patient.id}/archive", headers=headers).status_code == 202 and run_jobs() == 1
+    (key,) = _archive_keys(with_store)
+    report = check(db_session.connection(), with_store)
+    assert report.ok and key not in report.orphans, "the archive's object is named by its row and checked"
+    old = db_session.get(ExerciseSession, ids[0])
+    old.started_at = dt.datetime(2025, 1, 1, tzinfo=dt.UTC)
+    db_session.flush()
+    apply_retention(db_session=db_session, days=365, now=dt.datetime(2026, 11, 27, tzinfo=dt.UTC))
+    db_session.commit()
+    assert _archive_keys(with_store) == [] and _count(db_session, PatientArchive) == 0, "it held the removed file"
+    assert client.get(f"/api/v1/patients/{patient.id}/archive/status", headers=headers).json()["state"] == "none"
