@@ -139,13 +139,13 @@ def archive_state(*, db_session: Session, patient: User, t: Translator = ENGLISH
         return ArchiveState("ready", "", kept, current=True)
     job = db_session.scalar(select(Job).where(Job.key == job_key(patient.id, covers)))
     if job is not None and job.status in ("queued", "running", "failed"):
-        return _job_state(job, t, kept)
+        return job_state(job, t, kept)
     if kept is not None:
         return ArchiveState("ready", "", kept, current=False)
     return ArchiveState("none", "")
 
 
-def _job_state(job: Job, t: Translator, kept: PatientArchive | None) -> ArchiveState:
+def job_state(job: Job, t: Translator, kept: PatientArchive | None) -> ArchiveState:
     """Returns where a queued, running or failed build is, in the words an ask gives (jobs.asking)."""
     if job.status == "failed":
         reason = error_words(job.error, t) or t.gettext(WORDS[KIND].not_built)
@@ -174,7 +174,7 @@ def read_archive(archive: PatientArchive) -> bytes:
     return get_store().get(archive.data_key, archive.data_hash)
 
 
-def _reporter(db_session: Session, job_id: int | None) -> Callable[[int, int], None]:
+def progress_reporter(db_session: Session, job_id: int | None) -> Callable[[int, int], None]:
     """Returns progress(done, total): every PROGRESS_EVERY_S (and at the start) writes it on the job and renews the
     job's lease, committing (the build itself writes nothing until it stores the zip)."""
     last = [float("-inf")]
@@ -206,7 +206,7 @@ def run(*, db_session: Session, patient_id: int, requested_by: str, settings: Se
     old_key = before.data_key if before is not None else None
     made_at = dt.datetime.now(dt.UTC)
     built = build_archive(db_session=db_session, patient=patient, requested_by=requested_by, settings=settings,
-                          progress=_reporter(db_session, job_id), made_at=made_at)  # fmt: skip
+                          progress=progress_reporter(db_session, job_id), made_at=made_at)  # fmt: skip
     try:
         data = built.file.read()
     finally:

@@ -191,12 +191,12 @@ def test_a_running_build_reports_progress_and_renews_its_lease(db_session, make_
     db_session.add(job)
     db_session.flush()
     monkeypatch.setattr(prepared_archive, "PROGRESS_EVERY_S", 0.0)
-    progress = prepared_archive._reporter(db_session, job.id)
+    progress = prepared_archive.progress_reporter(db_session, job.id)
     progress(40, 120)
     db_session.refresh(job)
     assert job.result == {"progress": {"done": 40, "total": 120}}
     assert job.locked_until > dt.datetime.now(dt.UTC) + LEASE - dt.timedelta(minutes=1)
-    state = prepared_archive._job_state(job, prepared_archive.ENGLISH, None)
+    state = prepared_archive.job_state(job, prepared_archive.ENGLISH, None)
     assert state.state == "preparing" and state.progress == (40, 120)
 
 
