@@ -161,6 +161,7 @@ def import_all_models() -> None:
     import backend.jobs.models  # noqa: F401
     import backend.patients.models  # noqa: F401
     import backend.plans.models  # noqa: F401
+    import backend.records.models  # noqa: F401
     import backend.reminders.models  # noqa: F401
     import backend.replay.models  # noqa: F401
     import backend.replies.models  # noqa: F401

@@ -118,6 +118,12 @@ class SessionFileRemoved(AppError):
     status_code = 410
 
 
+class ArchiveReplaced(AppError):
+    """The patient's archive asked for by its sha256 was replaced by a newer one (or erased): ask again."""
+
+    status_code = 410
+
+
 class MetricsUnreadable(AppError):
     """A session's stored metrics document that no schema version reads (e.g. a reason id no message has): the
     server's data fault, named rather than hidden."""

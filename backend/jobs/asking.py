@@ -67,6 +67,12 @@ WORDS = {
         N_("The session's %(file)s file has waited %(seconds)s s for a worker; is `coach-server worker` running?"),
         N_("The session's %(file)s file could not be built."),
     ),
+    "archive": Words(  # all of a patient's data in one zip (backend.records.prepared_archive)
+        N_("A worker is making the archive of all the data."),
+        N_("The archive of all the data is queued; a worker will make it in a moment."),
+        N_("The archive of all the data has waited %(seconds)s s for a worker; is `coach-server worker` running?"),
+        N_("The archive of all the data could not be made."),
+    ),
 }
 _TRY_AGAIN = N_("The last try failed; a worker will try again. %(reason)s")
 _UNREADABLE = N_("The stored session file cannot be read: %(reason)s")

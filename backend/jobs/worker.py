@@ -1,7 +1,8 @@
 """`coach-server worker`: takes jobs from the queue (re-analysis, replay builds, session details, long sessions'
-exports, ending abandoned camera sets) and runs them, one at a time, until stopped (or --once); EmbeddedWorker runs
-the same loop in a thread of a server process (COACH_EMBEDDED_WORKER). Every COACH_CAMERA_SWEEP_S (and when it
-starts) the loop also queues the end of camera sets idle for COACH_CAMERA_SET_IDLE_HOURS (backend.camera.sweep)."""
+exports, patients' archives, ending abandoned camera sets) and runs them, one at a time, until stopped (or --once);
+EmbeddedWorker runs the same loop in a thread of a server process (COACH_EMBEDDED_WORKER). Every
+COACH_CAMERA_SWEEP_S (and when it starts) the loop also queues the end of camera sets idle for
+COACH_CAMERA_SET_IDLE_HOURS (backend.camera.sweep)."""
 
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ from backend.jobs.models import Job
 if TYPE_CHECKING:
     from backend.config import Settings
 
-KINDS = ("reanalyze", "replay", "detail", "export", "camera_end")
+KINDS = ("reanalyze", "replay", "detail", "export", "archive", "camera_end")
 
 log = logging.getLogger(__name__)
 
@@ -58,6 +59,12 @@ def run_job(db_session: Session, job: Job, settings: Settings) -> dict[str, Any]
         return prepared_export.run(db_session=db_session, session_id=int(job.payload["session_id"]),
                                    fmt=str(job.payload["format"]), max_frames=settings.SESSION_MAX_FRAMES,
                                    max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES)  # fmt: skip
+    if job.kind == "archive":
+        from backend.records import prepared_archive
+
+        return prepared_archive.run(db_session=db_session, patient_id=int(job.payload["patient_id"]),
+                                    requested_by=str(job.payload.get("requested_by") or "the patient"),
+                                    settings=settings, job_id=job.id)  # fmt: skip
     if job.kind == "camera_end":
         import uuid
 

@@ -7,6 +7,7 @@ import hashlib
 import json
 import tempfile
 import zipfile
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import IO, Any
 
@@ -18,7 +19,7 @@ from backend.audit.models import AuditEvent
 from backend.camera.models import CameraConsent, CameraSet
 from backend.config import Settings
 from backend.devices.models import Device
-from backend.exceptions import ExportUnavailable, InvalidSessionFile, SessionFileRemoved
+from backend.exceptions import InvalidSessionFile, SessionFileRemoved
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
 from backend.i18n import Translator, translator
@@ -45,7 +46,6 @@ FORMAT_VERSION = "3"  # 2: metrics_earlier, settings.json, camera_sets.json, rem
 # the skeleton the .khs file already holds, for motion software, and would add 1.7-1.9 s of CPU and 2.1-2.2 MB (4 times
 # the .khs) per 4.5-minute session (bench/README.md); the session page still downloads them.
 EXPORT_FORMATS = ("csv", "fhir")
-PREPARING = "being prepared by the server's worker (a long recording): download the archive again in a few minutes"
 README = """Kinect Home Coach: all data held about patient {patient_id} ({email})
 Made {made} (UTC) at the request of {who}. Archive format version {version}.
 
@@ -72,9 +72,7 @@ exports/session-N/  each session in the formats other software reads, as the ses
   session-N-fhir.json  an HL7 FHIR R4 Bundle of Observations (duration, repetitions, range of motion,
                        indicators, pain and effort) for a health record
                   (the OpenSim and animation files, .trc and .bvh, are made from the .khs file by the
-                  session page's downloads or `kinect-agent export`). A long recording's exports are made by
-                  the server in the background: an archive asked for before they are ready says so, and the
-                  next one holds them
+                  session page's downloads or `kinect-agent export`)
 advice.json       suggestions and messages from your therapists and from the system's rules; the advice of a
                   rule is in your language ("text", "locale"), written from what the rule found ("params"),
                   with the words it was first written in ("text_as_first_written")
@@ -165,23 +163,26 @@ class _Zip:
 
 @dataclass(frozen=True)
 class Archive:
-    """A built archive: `file` (a zip positioned at 0; the caller closes it) and the sessions it holds incomplete,
-    each with what is missing and why (`incomplete`: session id -> reasons, also in README.txt and manifest.json)."""
+    """A built archive: `file` (a zip positioned at 0; the caller closes it), how many sessions it holds, and those
+    it holds incomplete, each with what is missing and why (`incomplete`: session id -> reasons, also in README.txt
+    and manifest.json)."""
 
     file: IO[bytes]
+    sessions: int
     incomplete: dict[int, list[str]]
+
+
+Progress = Callable[[int, int], None]  # (sessions written, sessions in all), called before each session and at the end
 
 
 def _exports(
     db_session: Session, session_id: int, settings: Settings, file: bytes | None, lost: str | None
 ) -> SessionExports:
     """Returns a session's exports in EXPORT_FORMATS and why any is missing. One stored for today's inputs is read
-    from the object store (sha256 checked); a short recording's others are built from its file (`file`, read and
-    checked by the caller; None when it could not be, `lost` saying why); a long one's (beyond the server's limits
-    for building a download in the request) are asked of the worker as the session page asks for them, and missing
-    until it stored them."""
+    from the object store (sha256 checked); the others are built from its file (`file`, read and checked by the
+    caller; None when it could not be, `lost` saying why), a long recording's too: the archive is built by a
+    job-queue worker or the admin's command, never in a request (backend.records.prepared_archive)."""
     row = sessions.get_session_row(db_session=db_session, session_id=session_id)
-    session = row[0]
     context = export_context(db_session=db_session, row=row)
     files: dict[str, ExportFile] = {}
     for fmt in EXPORT_FORMATS:
@@ -196,10 +197,6 @@ def _exports(
         return SessionExports(files, {})
     if file is None:
         return SessionExports(files, dict.fromkeys(wanted, f"the session file could not be read: {lost}"))
-    if not prepared_export.in_request(duration_s=session.duration_s, n_frames=session.n_frames,
-                                      max_s=settings.EXPORT_DIRECT_MAX_S,
-                                      max_frames=settings.EXPORT_DIRECT_MAX_FRAMES):  # fmt: skip
-        return SessionExports(files, {fmt: _asked_of_worker(db_session, row, fmt) for fmt in wanted})
     try:
         built = session_exports(db_session=db_session, row=row, formats=wanted, max_frames=settings.SESSION_MAX_FRAMES,
                                 max_decoded_bytes=settings.SESSION_MAX_DECODED_BYTES, context=context,
@@ -209,20 +206,8 @@ def _exports(
     return SessionExports(files | built.files, built.unavailable)
 
 
-def _asked_of_worker(db_session: Session, row: tuple[Any, ...], fmt: str) -> str:
-    """Returns why a long recording's `fmt` export is not in the archive, having queued its build when it may be
-    built (prepared_export.read_export)."""
-    try:
-        found = prepared_export.read_export(db_session=db_session, row=row, fmt=fmt)
-    except (StorageError, SessionFileRemoved, InvalidSessionFile, ExportUnavailable) as exc:
-        return exc.message
-    if isinstance(found, prepared_export.ExportState) and found.state == "failed":
-        return found.detail
-    return f"{PREPARING} ({found.detail})" if isinstance(found, prepared_export.ExportState) else PREPARING
-
-
 def _sessions(
-    db_session: Session, pid: int, out: _Zip, settings: Settings, reader: Translator
+    db_session: Session, pid: int, out: _Zip, settings: Settings, reader: Translator, progress: Progress
 ) -> tuple[list[dict[str, Any]], dict[int, list[str]]]:
     """Writes every session's file and exports; returns sessions.json's entries (the metrics' reasons in the
     reader's language: backend.analysis.reasons) and the incomplete sessions."""
@@ -248,7 +233,8 @@ def _sessions(
         .where(ExerciseSession.patient_id == pid)
         .order_by(ExerciseSession.started_at, ExerciseSession.id)
     ).all()
-    for s, slug, doc, felt in rows:
+    for n, (s, slug, doc, felt) in enumerate(rows):
+        progress(n, len(rows))
         entry = _row(s, ("id", "client_session_id", "started_at", "duration_s", "n_frames", "file_format",
                          "file_size", "content_hash", "processing_version", "processing_params", "status",
                          "error", "created_at"))  # fmt: skip
@@ -280,21 +266,31 @@ def _sessions(
         if problems:
             incomplete[s.id] = problems
         listed.append(entry)
+    progress(len(rows), len(rows))
     return listed, incomplete
 
 
-def build_archive(*, db_session: Session, patient: User, requested_by: str, settings: Settings) -> Archive:
+def build_archive(
+    *,
+    db_session: Session,
+    patient: User,
+    requested_by: str,
+    settings: Settings,
+    progress: Progress = lambda done, total: None,
+    made_at: dt.datetime | None = None,
+) -> Archive:
     """Returns the zip archive of everything about `patient` (README.txt and manifest.json inside).
 
     Session files are read from the object store, checked; each session is exported in EXPORT_FORMATS. A session
     whose file is missing, corrupt or removed, or that cannot give an export (e.g. fhir without metrics), does not
     stop the archive: its metrics are still in it, and it is named with the reason in sessions.json, README.txt,
-    manifest.json and Archive.incomplete. A long recording's exports are built by the job-queue worker, as its
-    downloads on the session page are: the first archive asks for them, a later one holds them. settings: the limits
-    a session file is decoded within and a download is built in the request within.
+    manifest.json and Archive.incomplete. Minutes of CPU for years of sessions: called by a job-queue worker
+    (backend.records.prepared_archive) and the admin's command, never in a request. settings: the limits a session
+    file is decoded within; progress(done, total): told before each session and at the end; made_at: the time
+    the README and manifest give (default now).
     """
     pid = patient.id
-    made = _iso(dt.datetime.now(dt.UTC))
+    made = _iso(made_at or dt.datetime.now(dt.UTC))
     tmp = tempfile.SpooledTemporaryFile(max_size=64 * 1024 * 1024)
     with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as z:
         out = _Zip(z)
@@ -316,7 +312,7 @@ def build_archive(*, db_session: Session, patient: User, requested_by: str, sett
             })  # fmt: skip
         out.json("plans.json", plans)
         reader = translator(patient.locale)
-        listed, incomplete = _sessions(db_session, pid, out, settings, reader)
+        listed, incomplete = _sessions(db_session, pid, out, settings, reader, progress)
         out.json("sessions.json", listed)
         advice = db_session.scalars(select(Suggestion).where(Suggestion.patient_id == pid).order_by(Suggestion.id))
         out.json("advice.json", [_advice(a, reader) for a in advice])
@@ -360,4 +356,4 @@ def build_archive(*, db_session: Session, patient: User, requested_by: str, sett
             "incomplete_sessions": [{"id": sid, "reasons": why} for sid, why in incomplete.items()],
         }, indent=2, ensure_ascii=False))  # fmt: skip
     tmp.seek(0)
-    return Archive(tmp, incomplete)
+    return Archive(tmp, len(listed), incomplete)

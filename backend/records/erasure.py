@@ -17,6 +17,7 @@ from backend.devices.models import Device, PairingCode
 from backend.jobs.models import Job, SessionMetricVersion
 from backend.patients.models import TherapistPatient
 from backend.plans.models import Plan, PlanItem
+from backend.records.models import PatientArchive
 from backend.replay.models import SessionReplay
 from backend.replies.models import AdviceReply
 from backend.sessions.models import ExerciseSession, SessionDetail, SessionExport, SessionMetric
@@ -42,9 +43,9 @@ def _count(db_session: Session, stmt: Executable) -> int:
 
 def erase_patient(*, db_session: Session, patient: User, caller: Caller) -> Erasure:
     """Deletes every row about `patient` (sessions, metrics, replays, plans, advice, devices, links, logins,
-    tokens, audit entries about or by them, the account) and records one audit row "patient.erase" with no
-    patient id, name or e-mail. The stored objects are deleted after the transaction commits (a rollback keeps
-    them); an object another patient's row still points to is kept. Flushes, never commits."""
+    tokens, audit entries about or by them, their built archive, the account) and records one audit row
+    "patient.erase" with no patient id, name or e-mail. The stored objects are deleted after the transaction
+    commits (a rollback keeps them); an object another patient's row still points to is kept. Flushes, never commits."""
     pid, email = patient.id, patient.email
     session_ids = select(ExerciseSession.id).where(ExerciseSession.patient_id == pid)
     own_files = select(ExerciseSession.file_key).where(ExerciseSession.patient_id == pid)
@@ -54,6 +55,7 @@ def erase_patient(*, db_session: Session, patient: User, caller: Caller) -> Eras
     own_exports = select(SessionExport.data_key).where(SessionExport.session_id.in_(session_ids))
     keys |= set(db_session.scalars(own_details)) | set(db_session.scalars(own_exports))
     keys |= earlier_file_keys(db_session, session_ids)
+    keys |= set(db_session.scalars(select(PatientArchive.data_key).where(PatientArchive.patient_id == pid)))
     rows = {
         "session_replay": _count(db_session, delete(SessionReplay).where(SessionReplay.session_id.in_(session_ids))),
         "session_detail": _count(db_session, delete(SessionDetail).where(SessionDetail.session_id.in_(session_ids))),
@@ -67,7 +69,11 @@ def erase_patient(*, db_session: Session, patient: User, caller: Caller) -> Eras
         # queued or finished work on their sessions (replay and detail builds, re-analysis): nothing may name them
         # afterwards
         "job": _count(db_session, delete(Job).where(Job.payload["session_id"].as_integer().in_(session_ids))),
+        # their archive and its build (asked, running or done): a build that finishes after this keeps nothing
+        "patient_archive": _count(db_session, delete(PatientArchive).where(PatientArchive.patient_id == pid)),
     }
+    rows["job"] += _count(db_session, delete(Job).where(Job.kind == "archive",
+                                                         Job.payload["patient_id"].as_integer() == pid))  # fmt: skip
     rows["exercise_session"] = _count(db_session, delete(ExerciseSession).where(ExerciseSession.patient_id == pid))
     plan_ids = select(Plan.id).where(Plan.patient_id == pid)
     rows["plan_item"] = _count(db_session, delete(PlanItem).where(PlanItem.plan_id.in_(plan_ids)))
@@ -107,10 +113,11 @@ def earlier_file_keys(db_session: Session, session_ids: Select[Any] | list[int])
 
 def unnamed_keys(db_session: Session, keys: set[str]) -> list[str]:
     """Returns, sorted, those of the object `keys` that no row names any more (session file, replay, detail, export,
-    earlier session file): the objects that may be deleted once the transaction commits (delete_after_commit)."""
+    earlier session file, patient's archive): the objects that may be deleted once the transaction commits
+    (delete_after_commit)."""
     named: set[str] = set()
     for column in (ExerciseSession.file_key, SessionReplay.data_key, SessionDetail.data_key, SessionExport.data_key,
-                   SessionMetricVersion.file_key):  # fmt: skip
+                   SessionMetricVersion.file_key, PatientArchive.data_key):  # fmt: skip
         named |= set(db_session.scalars(select(column).where(column.in_(keys))))
     return sorted(keys - named)
 

@@ -19,6 +19,7 @@ from sqlalchemy.orm import Session
 from backend.audit.service import record
 from backend.jobs.models import SessionMetricVersion
 from backend.records.erasure import delete_after_commit, earlier_file_keys, unnamed_keys
+from backend.records.models import PatientArchive
 from backend.replay.models import SessionReplay
 from backend.sessions.models import ExerciseSession, SessionDetail, SessionExport
 
@@ -39,7 +40,8 @@ class RetentionReport:
 
 
 def apply_retention(*, db_session: Session, days: int, now: dt.datetime | None = None) -> RetentionReport:
-    """Removes the files and replays of sessions started more than `days` days before now; flushes, never commits.
+    """Removes the files and replays of sessions started more than `days` days before now, and the built archives
+    of their patients (which hold the files; the next ask builds one without them); flushes, never commits.
 
     Raises ValueError when days < 1 (retention off is 0: the caller does not call this).
     """
@@ -61,6 +63,9 @@ def apply_retention(*, db_session: Session, days: int, now: dt.datetime | None =
     keys |= set(db_session.scalars(select(SessionDetail.data_key).where(SessionDetail.session_id.in_(ids))))
     keys |= set(db_session.scalars(select(SessionExport.data_key).where(SessionExport.session_id.in_(ids))))
     keys |= earlier_file_keys(db_session, ids)  # the files a re-analysis replaced go with the current one
+    holders = PatientArchive.patient_id.in_({r.patient_id for r in rows})  # their archives hold the removed files
+    keys |= set(db_session.scalars(select(PatientArchive.data_key).where(holders)))
+    db_session.execute(delete(PatientArchive).where(holders))
     db_session.execute(delete(SessionReplay).where(SessionReplay.session_id.in_(ids)))
     db_session.execute(delete(SessionDetail).where(SessionDetail.session_id.in_(ids)))  # curves of the recording
     db_session.execute(delete(SessionExport).where(SessionExport.session_id.in_(ids)))  # downloads of the recording

@@ -10,8 +10,8 @@ from dataclasses import dataclass
 
 from backend.storage.errors import StoredObjectCorrupt
 
-KINDS = ("session", "replay", "detail", "export")
-_KEY = re.compile(r"^(session|replay|detail|export)/[0-9a-f]{2}/[0-9a-f]{64}$")
+KINDS = ("session", "replay", "detail", "export", "archive")
+_KEY = re.compile(r"^(session|replay|detail|export|archive)/[0-9a-f]{2}/[0-9a-f]{64}$")
 
 
 def sha256_hex(data: bytes) -> str:
@@ -20,8 +20,8 @@ def sha256_hex(data: bytes) -> str:
 
 
 def object_key(kind: str, sha256: str) -> str:
-    """Returns the key of an object of `kind` ("session" file, "replay", session "detail", "export" download) with
-    this sha256: kind/ab/abcd…."""
+    """Returns the key of an object of `kind` ("session" file, "replay", session "detail", "export" download,
+    patient's "archive") with this sha256: kind/ab/abcd…."""
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {KINDS}, got {kind!r}")
     return f"{kind}/{sha256[:2]}/{sha256}"

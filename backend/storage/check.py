@@ -20,6 +20,8 @@ _DETAIL = sa.table("session_detail", sa.column("id"), sa.column("session_id"), s
                    sa.column("data_hash"))  # fmt: skip
 _EARLIER = sa.table("session_metric_version", sa.column("id"), sa.column("session_id"), sa.column("file_key"),
                     sa.column("file_hash"))  # fmt: skip
+_ARCHIVE = sa.table("patient_archive", sa.column("id"), sa.column("patient_id"), sa.column("data_key"),
+                    sa.column("data_hash"))  # fmt: skip
 _EXPORT = sa.table("session_export", sa.column("id"), sa.column("session_id"), sa.column("format"),
                    sa.column("data_key"), sa.column("data_hash"))  # fmt: skip
 
@@ -56,6 +58,9 @@ def check(conn: Connection, store: ObjectStore) -> CheckReport:
     rows = conn.execute(sa.select(_EXPORT.c.session_id, _EXPORT.c.format, _EXPORT.c.data_key, _EXPORT.c.data_hash)
                         .order_by(_EXPORT.c.id))  # fmt: skip
     targets += [(f"{r.format} export of session {r.session_id}", r.data_key, r.data_hash) for r in rows]
+    rows = conn.execute(sa.select(_ARCHIVE.c.patient_id, _ARCHIVE.c.data_key, _ARCHIVE.c.data_hash)
+                        .order_by(_ARCHIVE.c.id))  # fmt: skip
+    targets += [(f"archive of patient {r.patient_id}", r.data_key, r.data_hash) for r in rows]
     targets += _earlier_files(conn, current={key for _, key, _ in targets})
     for what, key, digest in targets:
         referenced.add(key)

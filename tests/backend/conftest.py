@@ -192,6 +192,22 @@ def run_jobs(db_session, db_connection, settings):
 
 
 @pytest.fixture
+def fetch_archive(client, run_jobs):
+    """Callable: fetch_archive(patient_id, headers) -> the GET /patients/{id}/archive response once a worker made the
+    archive the first ask queued (a 202, then run_jobs, then the download)."""
+
+    def fetch(patient_id: int, headers: dict[str, str]):
+        response = client.get(f"/api/v1/patients/{patient_id}/archive", headers=headers)
+        if response.status_code == 202:
+            run_jobs()
+            response = client.get(f"/api/v1/patients/{patient_id}/archive", headers=headers)
+        assert response.status_code == 200, response.text
+        return response
+
+    return fetch
+
+
+@pytest.fixture
 def client(app) -> Iterator[TestClient]:
     """An httpx-based client of the ASGI app (no lifespan: the migration check is tested separately)."""
     with TestClient(app, raise_server_exceptions=False) as c:

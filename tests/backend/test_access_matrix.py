@@ -147,6 +147,8 @@ ROUTES = {
     ("POST", "/api/v1/camera/sets/{set_id}/batches"): ({"patient_own"}, lambda w: _camera_batch()),
     ("POST", "/api/v1/camera/sets/{set_id}/end"): ({"patient_own"}, lambda w: {"last_seq": -1}),
     ("GET", "/api/v1/patients/{patient_id}/archive"): ({"patient_own", "admin"}, None),  # the patient, or an admin
+    ("POST", "/api/v1/patients/{patient_id}/archive"): ({"patient_own", "admin"}, None),
+    ("GET", "/api/v1/patients/{patient_id}/archive/status"): ({"patient_own", "admin"}, None),
     ("POST", "/api/v1/patients/{patient_id}/erasure"): (ADMIN, lambda w: {"confirm_email": w["own_email"]}),
     ("GET", "/api/v1/patients/{patient_id}/report.pdf"): (CARE, None),
     ("POST", "/api/v1/reanalysis"): (ADMIN, lambda w: {"patient_id": w["params"]["patient_id"]}),

@@ -114,12 +114,12 @@ def test_the_reply_shows_the_advice_in_the_readers_language(
 
 
 def test_the_archive_has_the_advice_in_the_patients_language_now(
-    client, db_session, make_patient_with_therapist, auth_headers, exercise, store
+    fetch_archive, client, db_session, make_patient_with_therapist, auth_headers, exercise, store
 ):
     patient, therapist = make_patient_with_therapist()
     row = _pain_advice(client, db_session, patient, therapist, auth_headers, exercise, store)
     _set_locale(client, patient, therapist, auth_headers, "fr")
-    response = client.get(f"/api/v1/patients/{patient.id}/archive", headers=auth_headers(patient))
+    response = fetch_archive(patient.id, auth_headers(patient))
     assert response.status_code == 200, response.text
     (advice,) = json.loads(zipfile.ZipFile(io.BytesIO(response.content)).read("advice.json"))
     assert advice["locale"] == "fr" and advice["text_as_first_written"] == row.text, advice

@@ -13,13 +13,28 @@ pytestmark = pytest.mark.browser
 ADMIN = "admin@demo.clinic"
 
 
-def test_the_patient_downloads_all_their_data(page, live_server):
+def test_the_patient_asks_for_all_their_data_sees_progress_then_downloads_it(page, live_server):
     login(page, PATIENT)
     page.wait_for_url("**/patient")
+    ask = page.get_by_role("button", name="Prepare all my data for download")
+    ask.click()  # a worker makes the archive (the server's embedded worker here); the page says where it is
+    state = page.locator("#archive-state")
+    state.wait_for(state="visible")
+    shot(page, "archive-asked")
     link = page.get_by_role("link", name="Download all my data")
+    link.wait_for(state="visible", timeout=180_000)
+    assert "Made " in state.inner_text() and "sessions" in state.inner_text(), state.inner_text()
+    href = link.get_attribute("href")
+    assert href.startswith(f"/api/v1/patients/{live_server.patient_id}/archive?sha256="), "relative, same origin"
+    shot(page, "archive-ready")
     with page.expect_download() as info:
         link.click()
     assert info.value.suggested_filename.startswith(f"patient-{live_server.patient_id}-data-")
+    page.reload()  # the archive is kept: the page shows it at once, without asking again
+    page.get_by_role("link", name="Download all my data").wait_for(state="visible")
+    assert not page.get_by_role("button", name="Prepare all my data for download").is_visible()
+    violations = [v for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
+    assert not violations, violations
     assert not page.js_errors
 
 

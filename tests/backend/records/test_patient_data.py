@@ -43,10 +43,11 @@ def _patient_with_data(client, make_patient_with_therapist, auth_headers, seed, 
     return patient, ids
 
 
-def test_the_archive_holds_everything_with_a_readme(client, make_patient_with_therapist, auth_headers, with_store,
-                                                    run_jobs):  # fmt: skip
+def test_the_archive_holds_everything_with_a_readme(
+    fetch_archive, client, make_patient_with_therapist, auth_headers, with_store, run_jobs
+):
     patient, ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=51, run_jobs=run_jobs)
-    response = client.get(f"/api/v1/patients/{patient.id}/archive", headers=auth_headers(patient))
+    response = fetch_archive(patient.id, auth_headers(patient))
     assert response.status_code == 200 and response.headers["content-type"] == "application/zip"
     z = zipfile.ZipFile(io.BytesIO(response.content))
     names = set(z.namelist())
@@ -103,13 +104,14 @@ def _mentions(db_session, patient_id: int, email: str, session_ids: list[int]) -
     return found
 
 
-def test_erasure_leaves_only_an_audit_entry(client, db_session, make_patient_with_therapist, make_user, auth_headers,
-                                            with_store, run_jobs):  # fmt: skip
+def test_erasure_leaves_only_an_audit_entry(
+    fetch_archive, client, db_session, make_patient_with_therapist, make_user, auth_headers, with_store, run_jobs
+):
     patient, ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=61, run_jobs=run_jobs)
     other, other_ids = _patient_with_data(client, make_patient_with_therapist, auth_headers, seed=71, run_jobs=run_jobs)
     admin = make_user("admin")
     headers = auth_headers(admin)
-    assert client.get(f"/api/v1/patients/{patient.id}/archive", headers=headers).status_code == 200
+    assert fetch_archive(patient.id, headers).status_code == 200
     kept = {k for k in with_store.keys()}
     others = set(db_session.scalars(sa.select(ExerciseSession.file_key).where(ExerciseSession.id.in_(other_ids))))
     pid, email = patient.id, patient.email
@@ -118,15 +120,16 @@ def test_erasure_leaves_only_an_audit_entry(client, db_session, make_patient_wit
     assert set(with_store.keys()) == kept
     response = client.post(f"/api/v1/patients/{pid}/erasure", json={"confirm_email": email.upper()}, headers=headers)
     assert response.status_code == 200, response.text
-    # 2 files, 1 replay, 2 details
-    assert response.json()["rows"]["exercise_session"] == 2 and response.json()["objects"] == 5
+    # 2 files, 1 replay, 2 details, the archive
+    assert response.json()["rows"]["exercise_session"] == 2 and response.json()["objects"] == 6
+    assert response.json()["rows"]["patient_archive"] == 1
     assert response.json()["rows"]["advice_reply"] == 1
     db_session.expire_all()
     assert _mentions(db_session, pid, email, ids) == []
-    assert others <= set(with_store.keys()) and len(set(with_store.keys())) == len(kept) - 5
+    assert others <= set(with_store.keys()) and len(set(with_store.keys())) == len(kept) - 6
     events = db_session.scalars(sa.select(AuditEvent).where(AuditEvent.action == "patient.erase")).all()
     assert len(events) == 1 and events[0].actor_user_id == admin.id and events[0].patient_id is None
-    assert client.get(f"/api/v1/patients/{other.id}/archive", headers=headers).status_code == 200
+    assert fetch_archive(other.id, headers).status_code == 200
 
 
 def test_retention_removes_old_files_and_keeps_metrics(client, db_session, make_patient_with_therapist, auth_headers,
@@ -153,13 +156,13 @@ def test_retention_removes_old_files_and_keeps_metrics(client, db_session, make_
     assert audit.patient_id == patient.id and audit.detail["files"] == 1
 
 
-def test_the_archive_says_how_each_set_felt(client, make_user, auth_headers, with_store):
+def test_the_archive_says_how_each_set_felt(fetch_archive, client, make_user, auth_headers, with_store):
     patient = make_user("patient")
     headers = auth_headers(patient)
     answered, unanswered = _upload(client, headers, 61), _upload(client, headers, 62)
     r = client.put(f"/api/v1/sessions/{answered}/feeling", json={"pain": 3, "effort": 5.5}, headers=headers)
     assert r.status_code == 200, r.text
-    z = zipfile.ZipFile(io.BytesIO(client.get(f"/api/v1/patients/{patient.id}/archive", headers=headers).content))
+    z = zipfile.ZipFile(io.BytesIO(fetch_archive(patient.id, headers).content))
     by_id = {s["id"]: s for s in json.loads(z.read("sessions.json"))}
     felt = by_id[answered]["feeling"]
     assert (felt["pain_nrs"], felt["effort_borg_cr10"]) == (3, 5.5) and felt["answered_at"], felt
@@ -167,8 +170,9 @@ def test_the_archive_says_how_each_set_felt(client, make_user, auth_headers, wit
     assert "Borg CR10" in z.read("README.txt").decode()
 
 
-def test_the_archive_holds_replaced_metrics_settings_camera_sets_and_reminders(client, db_session, make_user,
-                                                                              auth_headers):  # fmt: skip
+def test_the_archive_holds_replaced_metrics_settings_camera_sets_and_reminders(
+    fetch_archive, client, db_session, make_user, auth_headers
+):
     from backend.camera.models import CameraConsent
     from backend.jobs.models import SessionMetricVersion
     from backend.voice.models import VoicePreference
@@ -181,7 +185,7 @@ def test_the_archive_holds_replaced_metrics_settings_camera_sets_and_reminders(c
     db_session.add(VoicePreference(patient_id=patient.id, enabled=False, volume=0.4))
     db_session.add(CameraConsent(patient_id=patient.id, consent_version="1"))
     db_session.commit()
-    z = zipfile.ZipFile(io.BytesIO(client.get(f"/api/v1/patients/{patient.id}/archive", headers=headers).content))
+    z = zipfile.ZipFile(io.BytesIO(fetch_archive(patient.id, headers).content))
     (session,) = json.loads(z.read("sessions.json"))
     assert [(m["analysis_version"], m["document"]["rom_deg"]) for m in session["metrics_earlier"]] == [
         ("before 2026.11.27", 1.0)
@@ -195,8 +199,9 @@ def test_the_archive_holds_replaced_metrics_settings_camera_sets_and_reminders(c
     assert "Archive format version 3" in readme
 
 
-def test_the_archive_writes_the_analysis_reasons_in_the_patients_language(client, db_session, make_user, auth_headers,
-                                                                           exercise, store):  # fmt: skip
+def test_the_archive_writes_the_analysis_reasons_in_the_patients_language(
+    fetch_archive, client, db_session, make_user, auth_headers, exercise, store
+):
     import datetime as dt
     from pathlib import Path
 
@@ -207,7 +212,7 @@ def test_the_archive_writes_the_analysis_reasons_in_the_patients_language(client
     patient.locale = "es"
     store(patient, exercise, dt.datetime(2026, 11, 2, 9, 0, tzinfo=dt.UTC), doc=english)
     db_session.flush()
-    response = client.get(f"/api/v1/patients/{patient.id}/archive", headers=auth_headers(patient))
+    response = fetch_archive(patient.id, auth_headers(patient))
     assert response.status_code == 200, response.text
     (session,) = json.loads(zipfile.ZipFile(io.BytesIO(response.content)).read("sessions.json"))
     assert session["metrics"]["quality"]["reasons"] == [

@@ -259,7 +259,7 @@ def test_a_raw_recording_the_pipeline_refuses_fails_the_job_and_leaves_the_sessi
 
 
 def test_earlier_files_go_into_the_archive_and_go_with_an_erasure_or_the_retention_period(
-    client, db_session, db_connection, upload, make_user, auth_headers, object_store
+    fetch_archive, client, db_session, db_connection, upload, make_user, auth_headers, object_store
 ):
     data = make_khs("squat", 2, seed=11)
     session_id, patient, _ = upload(data, "squat")
@@ -267,7 +267,7 @@ def test_earlier_files_go_into_the_archive_and_go_with_an_erasure_or_the_retenti
     _pipeline_job(client, db_session, db_connection, make_user, auth_headers, patient.id)
     new_key = db_session.get(ExerciseSession, session_id).file_key
     admin = auth_headers(make_user("admin"))
-    z = zipfile.ZipFile(io.BytesIO(client.get(f"/api/v1/patients/{patient.id}/archive", headers=admin).content))
+    z = zipfile.ZipFile(io.BytesIO(fetch_archive(patient.id, admin).content))
     (session,) = json.loads(z.read("sessions.json"))
     (earlier,) = session["metrics_earlier"]
     assert earlier["file_sha256"] == sf.content_hash(data) and z.read(earlier["file"]) == data
