@@ -11,6 +11,7 @@ import zipfile
 import pytest
 import sqlalchemy as sa
 
+from backend.i18n import ENGLISH
 from backend.jobs.models import Job
 from backend.jobs.queue import LEASE
 from backend.records import prepared_archive
@@ -195,8 +196,9 @@ def test_a_running_build_reports_progress_and_renews_its_lease(db_session, make_
     progress(40, 120)
     db_session.refresh(job)
     assert job.result == {"progress": {"done": 40, "total": 120}}
+    assert job.locked_until is not None
     assert job.locked_until > dt.datetime.now(dt.UTC) + LEASE - dt.timedelta(minutes=1)
-    state = prepared_archive.job_state(job, prepared_archive.ENGLISH, None)
+    state = prepared_archive.job_state(job, ENGLISH, None)
     assert state.state == "preparing" and state.progress == (40, 120)
 
 
