@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -78,7 +79,18 @@ def clip_landmarks(rate: float, passes: int) -> LandmarkBatch:
     return batch
 
 
-def live_and_stored(batch: LandmarkBatch) -> dict[str, object]:
+@dataclass(frozen=True)
+class ClipCounts:
+    """One looped set's counts: the largest shown, the live count at the end, the saved one; the delay (s) of each
+    saved repetition's display (None: shown only by the end's count)."""
+
+    shown: int
+    final: int
+    stored: int
+    delays: list[float | None]
+
+
+def live_and_stored(batch: LandmarkBatch) -> ClipCounts:
     """Returns the set's shown, final and stored counts and the delay (s) of each stored repetition's display."""
     spec = EXERCISES[EXERCISE]
     positions, tracking = camera_frames(batch)
@@ -92,11 +104,11 @@ def live_and_stored(batch: LandmarkBatch) -> dict[str, object]:
     meta = Metadata(device="webcam", rate_hz=float(1 / np.median(np.diff(batch.t))), exercise=EXERCISE)
     report = analyze_recording(to_recording([batch], meta), spec)
     ends = [float(batch.t[0]) + r.end_s for r in report.repetition_list]
-    delays = []
+    delays: list[float | None] = []
     for i, end in enumerate(ends, start=1):
         reached = np.flatnonzero(shown >= i)
         delays.append(float(batch.t[reached[0]]) - end if reached.size else None)
-    return {"shown": int(shown.max(initial=0)), "final": final, "stored": report.repetitions, "delays": delays}
+    return ClipCounts(int(shown.max(initial=0)), final, report.repetitions, delays)
 
 
 def main() -> None:
@@ -108,9 +120,9 @@ def main() -> None:
         for passes in args.passes:
             batch = clip_landmarks(rate, passes)
             out = live_and_stored(batch)
-            delays = ", ".join("-" if d is None else f"{d:+.2f}" for d in out["delays"])  # type: ignore[union-attr]
-            print(f"{rate:4g} fps, {passes} passes ({batch.n_frames} frames with the person): shown {out['shown']}, "
-                  f"final {out['final']}, stored {out['stored']}; delay s per stored repetition: {delays}",
+            delays = ", ".join("-" if d is None else f"{d:+.2f}" for d in out.delays)
+            print(f"{rate:4g} fps, {passes} passes ({batch.n_frames} frames with the person): shown {out.shown}, "
+                  f"final {out.final}, stored {out.stored}; delay s per stored repetition: {delays}",
                   flush=True)  # fmt: skip
 
 
