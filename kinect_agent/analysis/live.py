@@ -11,6 +11,13 @@ and that ended DONE_S before the newest frame (a repetition counts once the pati
 window grows longer than window_s, the repetitions that ended more than SETTLE_S ago are frozen and the cut moves
 to the end of the last of them (with none, to 2 × SETTLE_S before now): the cost of an evaluation stays bounded
 (about window_s of frames) however long the set. The shown count never decreases within a set.
+Confirmed. Each evaluation re-decides the whole window (the counter's rules are relative: min_ratio × the median
+amplitude, the median spacing), so where the view is unsteady (left and right labels flickering) a pass over part of
+the set can count fragments of one repetition that the pass over the whole set drops. An evaluation that counts fewer
+than the one before, or more than one more (repetitions found in frames already seen), re-decides; for UNSETTLED_S
+after one, a count is shown only once every evaluation of the last CONFIRM_S seconds (at least two) reached it.
+Otherwise (the evaluations agree) a new repetition is shown at once. final() shows the whole set's count as it is
+(a repetition the counter recognises late is never lost).
 Floor. A device with a NoiseFloor (the webcam) drops excursions smaller than its floor, measured once on the set's
 first START_S seconds (amplitude_floor, from the frames of those seconds only), as soon as they are over; until
 then its bound. The stored count measures it on the same frames (backend/analysis/report.py): one floor.
@@ -49,6 +56,8 @@ from kinect_agent.skeleton import INDEX, NOT_TRACKED
 CONTEXT_S = 20.0
 SETTLE_S = 5.0
 DONE_S = 0.2
+CONFIRM_S = 1.0  # s: while unsettled, a count is shown once every evaluation of this many seconds reached it
+UNSETTLED_S = 5.0  # s after an evaluation that re-decided (module doc, "Confirmed")
 MOVE_WINDOW_S = 2.0
 MOVE_DEG = 10.0
 HINT_S = 1.0
@@ -218,6 +227,8 @@ class LiveCount:
         self.frozen = 0
         self.cut_t = math.nan  # s; the first frame's time until a window is frozen (NaN: no frame yet)
         self.shown = 0
+        self._recent: list[tuple[float, int]] = []  # (s, count) of the evaluations of the last CONFIRM_S seconds
+        self._redecided_t = -math.inf  # s, the last evaluation that re-decided (module doc, "Confirmed")
         self._next_eval = math.nan  # s
         self._last_moving = math.nan  # s
         self._status = LiveStatus(0, None, None, None, 0.0)
@@ -242,9 +253,9 @@ class LiveCount:
         return self._status
 
     def final(self) -> int:
-        """Returns the count of the whole set so far (evaluated on the newest frames)."""
+        """Returns the count of the whole set so far (evaluated on the newest frames, shown without confirmation)."""
         if len(self._t) >= 2:
-            self._evaluate()
+            self._evaluate(final=True)
         return self._status.count
 
     def _measure_floor(self) -> None:
@@ -260,7 +271,7 @@ class LiveCount:
         start = self.cut_t - CONTEXT_S
         return int(np.searchsorted(np.asarray(self._t), start))
 
-    def _evaluate(self) -> None:
+    def _evaluate(self, final: bool = False) -> None:
         first = self._window()
         t = np.asarray(self._t[first:])
         now = float(t[-1])
@@ -284,11 +295,24 @@ class LiveCount:
                 self._last_moving = now
             if now - self.cut_t > self.window_s:
                 self._freeze(ends[after_cut], now)
+            if not final:
+                count = self._confirmed(now, count)
         self.shown = max(self.shown, count)
         k = min(max(0, len(self._t) - int(round(HINT_S * self._rate()))), len(self._t) - 1)  # < 1 fps: the newest
         raw, state = np.stack(self._raw[k:]), np.stack(self._state[k:])
         self._status = LiveStatus(self.shown, angle_name, angle_deg, hint(raw, state, self.limbs, self.limb_kind),
                                   now - self._last_moving)  # fmt: skip
+
+    def _confirmed(self, now: float, count: int) -> int:
+        """Returns the count an evaluation at `now` (s) that counted `count` may show (module doc, "Confirmed"): the
+        count itself while the evaluations agree, else the least count of the last CONFIRM_S seconds' evaluations."""
+        previous = self._recent[-1][1] if self._recent else None
+        if previous is not None and not previous <= count <= previous + 1:
+            self._redecided_t = now
+        self._recent = [(t, c) for t, c in self._recent if t >= now - CONFIRM_S] + [(now, count)]
+        if now - self._redecided_t > UNSETTLED_S:
+            return count
+        return min(c for _, c in self._recent) if len(self._recent) >= 2 else self.shown
 
     def _freeze(self, ends: np.ndarray, now: float) -> None:
         """Freezes the window's repetitions that ended more than SETTLE_S ago and moves the cut past them."""
