@@ -10,8 +10,8 @@ thresholds each fold chose, and beside them the shipped defaults on the same rec
 bench/repetitions.py counts (the raw recording's defining angles; --filtered: after the home agent's pipeline).
 
 --rules: the grid is RULE_GRID instead (the rules of issue 24 point 4 on or off: a shallow excursion kept for a
-cadence slot of its own, the spacing percentile of the added shallow repetitions, an added one timed from a tenth of
-its own rise), ties going to the rules as they were before (RULE_BEFORE). --mixes N adds, per subject and movement,
+cadence slot of its own, the spacing percentile of the added shallow repetitions, an added one timed by its width at
+half its own rise), ties going to the rules as they were before (RULE_BEFORE). --mixes N adds, per subject and movement,
 N recordings of 10 episodes drawn without replacement from that subject's 10 correct and 10 incorrect ones (seeded;
 --mix-seed K draws another N): new sessions of the same people, with correct and incorrect repetitions mixed as a
 patient mixes them, each exactly 10 repetitions; they are reported apart (kind "mixed") and count in the choice on
@@ -55,10 +55,10 @@ GRID: dict[str, tuple[float, ...]] = {
 RULE_GRID: dict[str, tuple[float, ...]] = {
     "slot_keeps_shallow": (False, True),
     "add_spacing_pct": (50.0, 33.0, 25.0),
-    "add_own_level": (False, True),
+    "add_half_width": (False, True),
 }
 # the counter before those rules
-RULE_BEFORE = RepetitionParams(slot_keeps_shallow=False, add_spacing_pct=50.0, add_own_level=False)
+RULE_BEFORE = RepetitionParams(slot_keeps_shallow=False, add_spacing_pct=50.0, add_half_width=False)
 
 
 def recordings(data: Path, filtered: bool) -> list[dict]:
