@@ -10,13 +10,15 @@ thresholds each fold chose, and beside them the shipped defaults on the same rec
 bench/repetitions.py counts (the raw recording's defining angles; --filtered: after the home agent's pipeline).
 
 --rules: the grid is RULE_GRID instead (the rules of issue 24 point 4 on or off: a shallow excursion kept for a
-cadence slot of its own, the spacing percentile of the added shallow repetitions), ties going to the rules as they
-were before (RULE_BEFORE). --mixes N adds, per subject and movement, N recordings of 10 episodes drawn without
-replacement from that subject's 10 correct and 10 incorrect ones (seeded): new sessions of the same people, with
-correct and incorrect repetitions mixed as a patient mixes them, each exactly 10 repetitions; they are reported
-apart (kind "mixed") and count in the choice on the four subjects.
+cadence slot of its own, the spacing percentile of the added shallow repetitions, an added one timed by its width at
+half its own rise), ties going to the rules as they were before (RULE_BEFORE). --mixes N adds, per subject and movement,
+N recordings of 10 episodes drawn without replacement from that subject's 10 correct and 10 incorrect ones (seeded;
+--mix-seed K draws another N): new sessions of the same people, with correct and incorrect repetitions mixed as a
+patient mixes them, each exactly 10 repetitions; they are reported apart (kind "mixed") and count in the choice on
+the four subjects.
 
-    python bench/repetitions_loso.py [--data ../shared/data] [--filtered] [--rules] [--mixes 20] [--json OUT]
+    python bench/repetitions_loso.py [--data ../shared/data] [--filtered] [--rules] [--mixes 20] [--mix-seed 0]
+                                     [--json OUT]
 """
 
 from __future__ import annotations
@@ -53,8 +55,10 @@ GRID: dict[str, tuple[float, ...]] = {
 RULE_GRID: dict[str, tuple[float, ...]] = {
     "slot_keeps_shallow": (False, True),
     "add_spacing_pct": (50.0, 33.0, 25.0),
+    "add_half_width": (False, True),
 }
-RULE_BEFORE = RepetitionParams(slot_keeps_shallow=False, add_spacing_pct=50.0)  # the counter before those rules
+# the counter before those rules
+RULE_BEFORE = RepetitionParams(slot_keeps_shallow=False, add_spacing_pct=50.0, add_half_width=False)
 
 
 def recordings(data: Path, filtered: bool) -> list[dict]:
@@ -73,9 +77,10 @@ def recordings(data: Path, filtered: bool) -> list[dict]:
     return out
 
 
-def mixes(data: Path, n: int, filtered: bool) -> list[dict]:
+def mixes(data: Path, n: int, filtered: bool, seed: int = 0) -> list[dict]:
     """Returns, per subject (s01-s05) and movement, n entries like recordings()'s (kind "mixed"): 10 episodes drawn
-    without replacement from the subject's 10 correct and 10 incorrect ones (seed from subject and movement)."""
+    without replacement from the subject's 10 correct and 10 incorrect ones (seed from subject, movement and `seed`;
+    seed 0 draws the mixes of 2026-11-27)."""
     out = []
     for subject in sorted(DEVELOPED_ON):
         for movement in MOVEMENTS:
@@ -83,7 +88,7 @@ def mixes(data: Path, n: int, filtered: bool) -> list[dict]:
             for folder in KINDS.values():
                 files = (data / "ui-prmd" / folder / "Kinect").rglob(f"{movement}_{subject}_e*_positions*")
                 parts += [ui_prmd.read_episode(path) for path in sorted(files)]
-            rng = np.random.default_rng(1000 * int(subject[1:]) + int(movement[1:]))
+            rng = np.random.default_rng(1000 * int(subject[1:]) + int(movement[1:]) + 100_000 * seed)
             names = next(s for s in EXERCISES.values() if s.uiprmd_movement == movement).defining_angles
             for _ in range(n):
                 rec = Recording.concatenate([parts[k] for k in rng.choice(len(parts), TRUE_COUNT, replace=False)])
@@ -164,10 +169,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--filtered", action="store_true", help="count after the home agent's pipeline")
     parser.add_argument("--rules", action="store_true", help="choose among RULE_GRID instead of GRID")
     parser.add_argument("--mixes", type=int, default=0, help="episode mixes per subject and movement (0: none)")
+    parser.add_argument("--mix-seed", type=int, default=0, help="which draw of the mixes (0: those of 2026-11-27)")
     parser.add_argument("--json", type=Path, help="also write the rows and the chosen thresholds to this file")
     args = parser.parse_args(argv)
     grid, reference = (RULE_GRID, RULE_BEFORE) if args.rules else (GRID, RepetitionParams())
-    recs = recordings(args.data, args.filtered) + mixes(args.data, args.mixes, args.filtered)
+    recs = recordings(args.data, args.filtered) + mixes(args.data, args.mixes, args.filtered, args.mix_seed)
     rows, chosen = loso(recs, grid, reference)
     print_report(rows, chosen)
     if args.json:

@@ -47,7 +47,10 @@ Then, with M the median amplitude, D the median duration and S the median peak-t
       repetitions, the highest point of the dominant angle's excursion at least shallow_spacing × S' from every
       counted peak (S': the add_spacing_pct percentile of their spacings, not the median, which the missed ones
       double), when the excursion falls by shallow_ratio × M to both sides and to one rest level (the two minima within
-      onset_frac × M), and its onset and return (within onset_frac × M of them) are shallow_duration × D apart.
+      onset_frac × M), and it lasts a repetition's time: (add_half_width) its width at half its own rise is at least
+      shallow_duration × the counted ones' median core (their width at half theirs); without add_half_width, its
+      onset and return within onset_frac × M of those minima are shallow_duration × D apart — timed a tenth of the
+      full ones' rise above rest (40 % of its own height), a shallow one looked half as long as it is.
 """
 
 from __future__ import annotations
@@ -83,6 +86,7 @@ class RepetitionParams:
     min_amplitude_deg: float = 0.0  # last: an excursion with a smaller amplitude is no repetition (0: no such rule)
     slot_keeps_shallow: bool = False  # a brief shallow excursion with a cadence slot of its own counts (_own_slot)
     add_spacing_pct: float = 33.0  # percentile of the peak-to-peak spacings that sets the room _add_shallow searches
+    add_half_width: bool = True  # _add_shallow: a missed shallow one's width at half its rise against the cores
     rest: str = "auto"  # "auto": step 3 of the module doc; "start": where the recording starts (a set counted live)
 
 
@@ -549,9 +553,12 @@ def _add_shallow(
     their median duration long, the highest point of e = |y − rest end| at least shallow_spacing × the
     add_spacing_pct percentile of their peak-to-peak spacings from every counted peak is a repetition when e falls
     by shallow_ratio × their median amplitude M on both sides of it, to minima (the stretch's before and after it)
-    within onset_frac × M of each other, and its onset and return (the last frame before, the first after, within
-    onset_frac × M of those minima) are at least shallow_duration × the median duration apart. Only the stretches
-    and frames that can hold one are searched, as array operations (no second pass of the detector: 0.1 ms on a
+    within onset_frac × M of each other, and its width at half its rise (frames) is at least shallow_duration × the
+    median core of the counted ones (without add_half_width: its onset and return, the last frame before and the
+    first after within onset_frac × M of those minima, are at least shallow_duration × the median duration apart).
+    Half heights, not a level common to all: the bar and the candidate are then timed alike whatever their heights,
+    and half a shallow rise stands clear of the noise at rest, which a tenth of it does not. Only the stretches and
+    frames that can hold one are searched, as array operations (no second pass of the detector: 0.1 ms on a
     10-minute session).
     """
     if len(merged) < 3:
@@ -560,7 +567,8 @@ def _add_shallow(
     room = params.shallow_spacing * float(np.percentile(np.diff(peaks), params.add_spacing_pct))
     amplitude = float(np.median([ev.amplitude for ev in merged]))
     duration = params.shallow_duration * float(np.median([ev.end - ev.start for ev in merged]))
-    near = params.onset_frac * amplitude  # onset and return; and the two sides' rest levels differ by less
+    near = params.onset_frac * amplitude  # degrees: onset and return; and the two sides' rest levels differ by less
+    core = params.shallow_duration * float(np.median([ev.core[1] - ev.core[0] for ev in merged]))  # frames
     spans = np.array([(ev.start, ev.end) for ev in merged])  # (n, 2) frames, inclusive
     depth = np.zeros(y.shape[0] + 3, dtype=np.int64)  # counted repetitions over each frame, padded by one each side
     np.add.at(depth, spans[:, 0] + 1, 1)
@@ -582,13 +590,21 @@ def _add_shallow(
         base0, base1 = float(e[: p + 1].min()), float(e[p:].min())
         if e[p] - max(base0, base1) < params.shallow_ratio * amplitude or abs(base0 - base1) > near:
             continue
+        rise = float(e[p] - 0.5 * (base0 + base1))
         onset = int(np.flatnonzero(e[: p + 1] <= base0 + near)[-1])
         back = p + int(np.flatnonzero(e[p:] <= base1 + near)[0])
-        if back - onset < duration:
+        if (_half_width(e, p, rise) < core) if params.add_half_width else (back - onset < duration):
             continue
-        rise = float(e[p] - 0.5 * (base0 + base1))
         extra.append(RepEvent(a + onset, a + p, a + back, rise, float(y[a + p]), side_of(name), (name,)))
     return sorted(merged + extra, key=lambda ev: ev.start) if extra else merged
+
+
+def _half_width(e: np.ndarray, p: int, rise: float) -> int:
+    """Returns the frames between the last frame before the peak p and the first after it where e: (T,) degrees is
+    below e[p] − rise / 2 (e falls below that on both sides of p: the caller's rise test), minus one: the width at
+    half its rise, as RepEvent.core measures a counted one."""
+    half = e[p] - 0.5 * rise
+    return int(np.flatnonzero(e[p:] < half)[0]) + int(p - np.flatnonzero(e[: p + 1] < half)[-1]) - 2
 
 
 def count_repetitions(

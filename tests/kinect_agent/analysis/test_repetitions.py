@@ -234,6 +234,43 @@ def _bumps(t: np.ndarray, centres_s: list[float], heights_deg: list[float], widt
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_shallow_repetition_shorter_than_the_others_is_timed_at_its_own_height(seed: int) -> None:
+    """Ten shoulder abductions every 3 s: eight of 160° over 2.2 s, two of 40° over 1.7 s (UI-PRMD s04 incorrect:
+    45° over 1.8 s among 170° over 2.2-2.3 s). Its width at half its own rise against the full ones' at half theirs,
+    a shallow one lasts a repetition's time; timed from a level common to all (a tenth of the full ones' rise, 16°:
+    40 % of its height) it looked half as long as they and was dropped (8 counted)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, 32, 1 / 30)
+    centres = [1.5 + 3.0 * k + rng.uniform(-0.1, 0.1) for k in range(10)]
+    heights, widths = [160.0] * 10, [2.2] * 10
+    for k in (3, 7):
+        heights[k], widths[k] = 40.0, 1.7
+    y = 5.0 + rng.normal(0, 1.0, t.size)
+    for c, h, w in zip(centres, heights, widths, strict=True):
+        y += _bumps(t, [c], [h * rng.uniform(0.95, 1.05)], w)
+    names = ("shoulder_abduction_R",)
+    reps = count_repetitions(t, {names[0]: y}, names).repetitions
+    assert len(reps) == 10, [(round(r.peak_s, 1), round(r.amplitude_deg)) for r in reps]
+    before = count_repetitions(t, {names[0]: y}, names, RepetitionParams(add_half_width=False)).repetitions
+    assert len(before) == 8  # the rule this test holds: without it, both shallow ones are dropped
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_brief_bump_in_an_empty_slot_is_not_timed_into_a_repetition(seed: int) -> None:
+    """Ten 160° repetitions every 3 s with one slot empty, where the arm bumps by 40° for 0.6 s: at half its height
+    it is a quarter as wide as a repetition at half of theirs, and is not counted, even with 5° of noise at rest
+    (timed from a tenth of its own rise, it was, in 5 of 30 such sets)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, 35, 1 / 30)
+    centres = [1.5 + 3.0 * k for k in range(11)]
+    y = _bumps(t, centres[:5] + centres[6:], [160.0] * 10, 2.2) + _bumps(t, [centres[5]], [40.0], 0.6)
+    names = ("shoulder_abduction_R",)
+    for noise_deg in (1.0, 5.0):
+        reps = count_repetitions(t, {names[0]: 5.0 + y + rng.normal(0, noise_deg, t.size)}, names).repetitions
+        assert len(reps) == 10, [(round(r.peak_s, 1), round(r.amplitude_deg)) for r in reps]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
 def test_a_shallow_repetition_in_its_place_in_the_cadence_is_counted(seed: int) -> None:
     """Nine 100° repetitions every 3 s and, in the cadence, one of 25° that takes a repetition's time (UI-PRMD
     incorrect executions: a first or a late repetition at a quarter to a third of the others' amplitude)."""
