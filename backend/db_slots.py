@@ -3,9 +3,8 @@
 Why. A sync route and its sync dependencies run in worker threads (anyio: 40 per process), each taking its turn for
 a thread, and the request's session holds a pooled connection from its first query to its commit. With more
 requests in flight than threads plus connections, every thread can end up waiting for a connection while every
-connection belongs to a request that waits for a thread: nothing moves until the pool's 30 s timeout answers 500.
-Measured before this module (SQLite, one worker, the pool's 5 + 10 connections): 60 simultaneous dashboard and
-patient-list requests gave 40 × 500 after 30 s; 300 gave 4 answers.
+connection belongs to a request that waits for a thread: nothing moves until the pool's 30 s timeout answers 500
+(bench/README.md, "A crowd of simultaneous requests").
 
 How. Every HTTP request except the static files waits here (in the event loop, holding neither a thread nor a
 connection) for one of `capacity` slots, the pool's size plus its overflow, and gives the slot back when its

@@ -6,15 +6,15 @@ who validated Kinect trunk/pelvis sway against a force plate in quiet standing):
                       60 % of the body mass and move with the whole body when it sways at the ankles; the arms,
                       head and legs are left out because an arm exercise moves them on purpose;
                       positions (T, J, 3) m, camera frame, smoothed again with a Gaussian of SD SWAY_SMOOTH_S
-                      (0.2 s, passing the 0.1-1 Hz band of postural sway and removing most sensor jitter);
+                      (0.3 s, removing most sensor jitter; why: bench/README.md, "Balance");
     floor plane     = the camera's x–z plane (y is up; a Kinect mounted level sees the floor horizontal);
     standing phase  = frames where the pelvis is at least STANDING_HEIGHT_FRAC (0.85) of the legs' length above
                       the lower ankle (neither seated nor squatting; no knee angle is used, Kinect's knee angles
                       being biased by 10-25° in quiet standing), both hips flexed less than STANDING_HIP_DEG (30°)
                       (not bent forward, no leg raised in front), both ankles within FOOT_LIFT_M (5 cm) of the same
-                      height (no foot lifted), both ankles slower than FEET_STILL_M_S (0.1 m/s) and the centre of
-                      mass slower than STILL_M_S (0.1 m/s) (no step, no shift of weight); only runs of at least
-                      MIN_RUN_S (1 s) count, each measured on its own;
+                      height (no foot lifted), both ankles (smoothed with SD FEET_SMOOTH_S, 0.5 s) slower than
+                      FEET_STILL_M_S (0.1 m/s) and the centre of mass slower than STILL_M_S (0.1 m/s) (no step, no
+                      shift of weight); only runs of at least MIN_RUN_S (1 s) count, each measured on its own;
     sway_path_m     = Σ over standing runs of the horizontal distance the centre of mass travels, m;
     sway_area_m2    = area of the 95 % confidence ellipse of the horizontal positions, each run about its own
                       mean, pooled: π · χ²₂(0.95) · √(λ₁λ₂) with λ the covariance eigenvalues, m²;
@@ -28,9 +28,9 @@ None when the patient stood less than MIN_STANDING_S (2 s) in total; missing_rea
 
 Limits: the trunk-and-hips point is not the whole-body centre of mass (a lean of the head and arms is not seen) and
 the camera measures no centre of pressure; the sensor's residual jitter after the agent's filter adds about
-1.2-1.6 cm/s to a true sway of 0.85 cm/s (simulated Kinect v2, `bench/balance.py`, bench/README.md "Balance"), so
-the value compares sessions of one patient on one camera rather than force-plate norms, and differences under
-about 1 cm/s are not meaningful; a camera that is not level tilts the floor plane (cos of the tilt on one axis).
+1.2-1.6 cm/s (bench/README.md, "Balance"), so the value compares sessions of one patient on one camera rather than
+force-plate norms, and differences under about 1 cm/s are not meaningful; a camera that is not level tilts the floor
+plane (cos of the tilt on one axis).
 """
 
 from __future__ import annotations

@@ -14,9 +14,8 @@ A session file is written by whoever uploads it, so nothing in it may choose the
 With both, a request's work is linear in the recording's duration and bounded by its frame count. The budget,
 checked by bench/attack.py (family "file chooses the work") on SQLite and PostgreSQL, is BUDGETS[request]: CPU
 seconds and bytes of memory per started BUDGET_PER_S (10 minutes) of recording. It is about twice what an ordinary
-10-minute 30 Hz set costs (measured on the shared 2-core machine: detail 4.4 s CPU and 247 MiB, most of it the
-outlier model; replay 10.4 s and 207 MiB, most of it viser's per-frame messages; upload 0.3 s and 32 MiB), so any
-file that asks for more than its duration is worth fails the check.
+10-minute 30 Hz set costs (bench/README.md, "File chooses the work"), so any file that asks for more than its
+duration is worth fails the check.
 """
 
 from __future__ import annotations

@@ -14,8 +14,8 @@ while the thigh moves in the sagittal (frontal) plane. Its sign is the sign of t
 frames where the thigh is raised more than 20°. The counter's signal only: the repetitions' peaks are reported on the
 measured angles (backend.analysis.report.measured_peak). The shoulder angles stay planar: there the elevation would
 count the idle arm's sideways drift (UI-PRMD shoulder extension), the plane does not; they are counted also where the
-arm is out of their plane (joint_angles(mask_off_plane=False)), where the measured angle is undefined: filling those
-frames by interpolation changed the idle arm's drift and the count (UI-PRMD m08 s01 raw: 17 instead of 10).
+arm is out of their plane (joint_angles(mask_off_plane=False)), where the measured angle is undefined (why:
+bench/README.md, "Clinical angles: why each convention").
 """
 
 from __future__ import annotations

@@ -2,55 +2,39 @@
 angle away from its rest level and back. Why each rule is there, with the recordings that asked for it:
 bench/README.md, "Repetition counter: why each rule".
 
-Per angle:
+Per angle (detect_angle):
     1. the series is conditioned (series.smooth: gaps filled, unwrapped, median then Gaussian smoothed);
     2. its range R = p98 − p2; an angle with R < min_range_deg, or below side_ratio × the largest R among the
        exercise's angles, yields no repetitions;
     3. the rest level is the end (p2 or p98) nearer to the first and the last smoothed value; when those disagree,
        the end the signal spends more time near; when it spends as long near either, the end whose excursions number
        closest to duration / P (P: the autocorrelation's period); with rest="start" (a set still being recorded),
-       the end nearer to the median of its first START_S seconds (a filter started on a mistracked first frame
-       takes a fraction of a second to settle: its first value can lie at the other end). The excursion
-       e(t) = |angle − rest level|, clipped to [0, R]; its cycle (cycles.cycle): period P and typical amplitude
-       A = median prominence of the duration/P most prominent peaks (R without a period); e is then taken from its
-       lower envelope over 1.5 P (cycles.baseline);
+       the end nearer to the median of its first START_S seconds. The excursion e(t) = |angle − rest level|,
+       clipped to [0, R]; its cycle (cycles.cycle): period P and typical amplitude A (R without a period); e is
+       then taken from its lower envelope over 1.5 P (cycles.baseline);
     4. hysteresis: an excursion begins when e rises above enter_frac·A and ends when it falls below exit_frac·A;
     5. each excursion is widened to its onset and return: between the neighbouring excursions, the repetition starts
        at the last frame (ends at the first) whose e is within onset_frac·A of that stretch's minimum; excursions
        shorter than min_duration_s are dropped.
-Last, with min_amplitude_deg > 0 (a device's floor: the webcam's, measured on each set's first START_S seconds,
-kinect_agent.analysis.live.amplitude_floor), an excursion whose amplitude is below it is dropped.
 Amplitude = e at the peak minus the mean rest e just before and after (degrees); peak = the smoothed angle at the
 peak (degrees); side = "left"/"right" from the angle's _L/_R suffix, "center" otherwise; core = the frames around the
 peak where e stays at least half the amplitude above the rest.
 
-Several angles (both sides):
-    - repetitions of different angles that overlap by more than merge_overlap of the shorter one, and whose cores
-      meet, are one repetition (side "both", amplitude and peak averaged);
-    - the dominant side is the one whose excursions add up to the most degrees (Σ amplitude); a one-sided repetition
-      counts when its side is the dominant one, or alternates with it: at most alternate_shared of its excursions
-      (those reaching min_ratio × its A) have a core overlapping a dominant core by more than alternate_overlap;
-    - an angle without a period of its own beside a dominant angle that has one, whose autocorrelation at the
-      dominant's period is below cycles.MIN_CORRELATION, is dropped before the sides are merged;
-    - when at least half of the repetitions are "both", a one-sided excursion counts only if its amplitude reaches
-      lone_ratio × the median amplitude of the "both" ones.
-Then, with M the median amplitude, D the median duration and S the median peak-to-peak spacing of the counted ones:
-    - an excursion below min_ratio × M is dropped unless it reaches shallow_ratio × M and lasts shallow_duration × D
-      or (slot_keeps_shallow) peaks at least shallow_spacing × S from every full repetition (≥ min_ratio × M) on
-      each side that has one: a repetition done shallow holds a place of the cadence, a bump at rest does not;
-    - an excursion shorter than shallow_duration × D that peaks within shallow_spacing × S of a larger one, or of one
-      that lasts at least that long, is dropped;
-    - a shallow excursion (below min_ratio × M) is dropped when the full repetitions around it are closer than
-      2 × shallow_spacing × S, or, at an end of the set, when it peaks within shallow_spacing × S of both the full
-      repetition on its one side and the end of the recording;
-    - a shallow repetition the hysteresis missed is added where the cadence has room for one: between counted
-      repetitions, the highest point of the dominant angle's excursion at least shallow_spacing × S' from every
-      counted peak (S': the add_spacing_pct percentile of their spacings, not the median, which the missed ones
-      double), when the excursion falls by shallow_ratio × M to both sides and to one rest level (the two minima within
-      onset_frac × M), and it lasts a repetition's time: (add_half_width) its width at half its own rise is at least
-      shallow_duration × the counted ones' median core (their width at half theirs); without add_half_width, its
-      onset and return within onset_frac × M of those minima are shallow_duration × D apart — timed a tenth of the
-      full ones' rise above rest (40 % of its own height), a shallow one looked half as long as it is.
+Several angles (count_repetitions), in this order; M, D: the median amplitude and duration of the excursions still
+counted; each rule's exact form is the docstring of the function named:
+    - the dominant angle is the one whose excursions add up to the most degrees (Σ amplitude); an angle without a
+      period of its own whose autocorrelation at the dominant's period is below cycles.MIN_CORRELATION idles
+      (_repeating);
+    - excursions of different angles that overlap and whose cores meet are one repetition, side "both" (merge_events);
+    - a one-sided repetition counts on the dominant side or a side that alternates with it (_alternates); when at
+      least half are "both", only if it reaches lone_ratio × their median amplitude (_drop_weak_lone);
+    - below min_ratio × M is a bump, unless it reaches shallow_ratio × M and lasts shallow_duration × D (_drop_bumps);
+    - a brief excursion that peaks close to a larger one is a rebound (_drop_rebounds); a shallow one with no slot of
+      the cadence of its own is dropped (_drop_off_cadence); a shallow repetition the hysteresis missed is added where
+      the cadence has room for one and it lasts a repetition's time, measured at half its own rise
+      (_add_shallow, add_half_width);
+    - last, with min_amplitude_deg > 0 (a device's floor, kinect_agent.analysis.live.amplitude_floor), an excursion
+      with a smaller amplitude is dropped.
 """
 
 from __future__ import annotations

@@ -15,29 +15,23 @@ Conventions (0 = anatomical neutral, standing with arms hanging and legs straigh
                            90 arm forward horizontal, 180 overhead, negative = extension
     shoulder_abduction_L/R upper arm in the frontal plane (up, outward side): atan2(out, -up);
                            90 arm out sideways, 180 overhead
-    shoulder_rotation_L/R  forearm WRI-ELB about the upper arm axis, measured from the forward
-                           direction towards up-in-body terms: 0 forearm pointing forward, +90 pointing
-                           up (external rotation with abducted arm), -90 down; NaN-free only when
-                           the elbow is bent; NaN while the upper arm hangs within ROTATION_MIN_ELEVATION_DEG
-                           of straight down (then "up" no longer tells the sign: an idle arm's reading
-                           flipped between ±150° on simulated Kinect noise)
+    shoulder_rotation_L/R  forearm WRI-ELB about the upper arm axis, from the forward direction towards up:
+                           0 forearm pointing forward, +90 pointing up (external rotation with abducted arm),
+                           -90 down; defined only when the elbow is bent; NaN while the upper arm hangs within
+                           ROTATION_MIN_ELEVATION_DEG of straight down (there "up" does not tell the sign)
     hip_flexion_L/R     thigh KNE-HIP in the sagittal plane: atan2(fwd, -up); 90 seated
     hip_abduction_L/R   thigh out of the sagittal plane: arcsin(thigh (unit) . out); the frontal-plane angle
                         atan2(out, -up) while the thigh moves in that plane, but, unlike it, blind to hip flexion
-                        (a thigh pointing forward in a squat projects to a point on the frontal plane and read
-                        90-150° there)
-
-Domains (DOMAIN_DEG). Every angle lies in the interval its definition allows, and the planar angles, which come
-from atan2, are wrapped into [PLANAR_SEAM_DEG, PLANAR_SEAM_DEG + 360) with the seam at −120°: a limb pointing
-backwards and 30° above the horizontal, a direction no shoulder or hip reaches (extension ends near −60° and
-−30°), so an arm raised overhead reads 180° ± its sway and never jumps to −180°. Nothing downstream unwraps
-(series), so a smoothed or percentile value stays in the domain too. A planar angle is NaN (undefined) in a
-frame where its limb lies more than 60° out of the angle's plane (the in-plane part below PLANE_MIN_FRACTION of
-the limb's length): there the projection is dominated by noise and read anything (shoulder flexion during a
-shoulder abduction swept 700°).
     trunk_flexion       angle between NECK-ROOT and the world vertical +y; 0 upright
     trunk_lateral_flexion  tilt of the trunk towards the subject's left hip (+) or right hip (−):
                            arcsin of NECK-ROOT (unit) along the HIP_R->HIP_L direction
+
+Domains (DOMAIN_DEG): every angle lies in the interval its definition allows; the planar angles (atan2) are wrapped
+into [PLANAR_SEAM_DEG, PLANAR_SEAM_DEG + 360) with the seam at −120° (a limb pointing backwards 30° above the
+horizontal, a direction no shoulder or hip reaches), so an arm overhead reads 180° ± its sway. Nothing downstream
+unwraps (series), so a smoothed or percentile value stays in the domain too. A planar angle is NaN in a frame where
+its limb lies more than 60° out of the angle's plane (the in-plane part below PLANE_MIN_FRACTION of the limb's
+length). Why each rule: bench/README.md, "Clinical angles: why each convention".
 """
 
 from __future__ import annotations

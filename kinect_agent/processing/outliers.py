@@ -10,20 +10,16 @@ per joint by maximum likelihood (EM) to a 3-D residual e (metres) computed from 
               (config.outlier_iterations = 2 refinements)
 
 The median survives bursts shorter than half the window but clips turning points; the leave-one-out quadratic
-follows turning points and is no longer pulled by the outliers stage 0 found. Chosen by measurement: on simulated
-motion with 3 % burst outliers, the median alone gave precision 0.63-0.87, with the quadratic stages 0.97-1.00
-(recall 1.00); a 1-D mixture on |e| (the Gaussian fits a Maxwell-shaped distance badly) gave 0.70-0.78.
+follows turning points and is not pulled by the outliers stage 0 found (why: bench/README.md, "Tuning history of the
+pipeline defaults", `outlier_iterations`).
 Kinect's own random error sets a floor on σ (config.outlier_min_sigma_m, 15 mm per axis) and the uniform box is at
 least config.outlier_min_range_m (1 m) per axis, so that clean stretches cannot make ordinary motion look like
 tracking loss. The SDK tracking state enters as a prior: not tracked (0) = missing (probability 1, never used);
 tracked (2) and inferred (1) samples get separate mixing weights ρ_2, ρ_1 (both fitted, both ≥ 0.5), so inferred
 joints lean towards the outlier component when they misbehave more often. A sample is an outlier when its posterior
 probability of the uniform component exceeds config.outlier_threshold: 0.95, not the maximum-a-posteriori 0.5, so
-that it "belongs to the uniform component" with confidence. Tuned on simulator + CMU only (HDM05 is held out), with
-the tracking-loss law of kinect_noise.outlier_law (2-5 % of joint-frames, calibrated on the paper's gain table):
-window 0.5 s and threshold 0.95 gave precision 0.92 / recall 0.97, window 0.7 s and 0.5 gave 0.83 / 0.99 (fast
-motion's turning points flagged). Most remaining false alarms are the simulator's gross excursions of the Gaussian
-component (bench/accuracy.py, gross_jumps), which no reference-free residual can tell from tracking loss.
+that it "belongs to the uniform component" with confidence. Window and threshold were tuned on simulator + CMU only
+(HDM05 held out): bench/README.md, "Tuning history of the pipeline defaults", `outlier_window_s`, `outlier_threshold`.
 """
 
 from __future__ import annotations

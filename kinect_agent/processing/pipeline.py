@@ -5,40 +5,35 @@
         ──ik.inverse_kinematics────> personalised chain + start values
         ──pass 1 forward UKF, pass 2 backward UKF (state: root, 19 lengths, 33 joint angles; x(t) = x(t±1) + δ)
         ──lengths fixed (removed from the state: covariance and process noise zero)
-        ──pass 3 forward UKF, then either (config.smoother)
-              "urts" (default): the unscented RTS smoother (Särkkä 2008) run backwards over pass 3's estimates; for
-                           the random-walk transition it is exact. Measured better than "four_pass" on simulated
-                           motion with known truth (RMSE 15.5 vs 16.5-17.5 mm at 30 Hz, 1.5 cm noise).
+        ──pass 3 forward UKF, then either (config.smoother; why: bench/README.md, "Tuning history of the pipeline
+          defaults", `smoother`)
+              "urts" (default): the unscented RTS smoother (Särkkä 2008) run backwards over pass 3's estimates
+                           (exact for the random-walk transition);
               "four_pass": the paper's pass 4, a backward UKF started from pass 3's end. Output (four_pass_combine):
                            "last" = pass 4 itself (default), or "information" = per frame the information-weighted
-                           mean of passes 3 and 4 (P = (P3⁻¹ + P4⁻¹)⁻¹, x = P (P3⁻¹ x3 + P4⁻¹ x4)); the latter is
-                           slightly better on simulated motion but unstable on real recordings where the two passes
-                           settle on different but equivalent joint-angle branches (averaging angles then fails).
+                           mean of passes 3 and 4 (P = (P3⁻¹ + P4⁻¹)⁻¹, x = P (P3⁻¹ x3 + P4⁻¹ x4)).
         ──forward kinematics──> filtered Recording (every joint of every frame) + KinematicParams + quality.
 
 State per frame (ChainModel of kinematics.py): root position (3, m), segment lengths (19, m; passes 1-2 only) and
 33 joint angles (rad): rotation vectors relative to per-sequence reference rotations for the 3-DoF joints, hinge
-angles for elbows/knees, two angles for wrists/ankles. Observation: the 20 joint positions (60 values); per frame
-only observed joints enter (rows of z and R selected), tracked joints with SD sigma_tracked_m per axis, inferred
-joints with sigma_inferred_m. Process noise is a random walk scaled with the frame interval: Q = q² · dt · rate_ref
-(offline: offline_q_rot_rad / offline_q_root_m in place of q_rot_rad / q_root_m),
-with a variance ceiling (the initial variance) so that directions no joint observes cannot spread the sigma points
-over several radians. Joints whose innovation is improbable (d² > gate_chi2 for one joint) are skipped in that step.
-A joint skipped for reacquire_s without a break has lost track rather than met an outlier (the gate is relative to
-the state's own spread, so a limb that once outruns the random walk, e.g. a knee at 20-30°/frame in a deep squat,
-would stay gated for good): the angles that place it restart from inverse kinematics of that frame with the initial
-variance, and the gate admits it again.
+angles for elbows/knees, two angles for wrists/ankles. Observation: the 20 joint positions (60 values, m, camera
+frame); per frame only observed joints enter (rows of z and R selected), tracked joints with SD sigma_tracked_m per
+axis, inferred joints with sigma_inferred_m. Process noise is a random walk scaled with the frame interval:
+Q = q² · dt · rate_ref (offline: offline_q_rot_rad / offline_q_root_m in place of q_rot_rad / q_root_m), with a
+variance ceiling (the initial variance) so that directions no joint observes cannot spread the sigma points over
+several radians. Joints whose innovation is improbable (d² > gate_chi2 for one joint) are skipped in that step; a
+joint skipped for reacquire_s without a break has lost track: the angles that place it restart from inverse
+kinematics of that frame with the initial variance, and the gate admits it again (why: bench/README.md, "Tuning
+history of the pipeline defaults", `reacquire_s`).
 Passes 1-2 use the first length_pass_max_frames frames of longer recordings (they only estimate the lengths).
 An exact input (segment lengths rigid to below rigid_input_sd_m: mocap, a filtered recording fed again) is filtered
 with noise_level.rigid_settings: the chain's misfit as measurement SD and the innovation at the mean state's joints,
-so that what goes in comes out (the default innovation, z − Σ Wm·h(σ), stretches the chain by 20-30 mm there;
-bench/README.md, "Fed the truth, return the truth").
+so that what goes in comes out (why: bench/README.md, "Fed the truth, return the truth").
 
 config.offline_filter = "joints" (the webcam's setting) replaces the four passes offline by joint_smoother.py: each
 joint coordinate smoothed on its own (constant-velocity RTS), restarted at left/right label swaps and body jumps
-(quality["joint_restarts"]); the kinematic
-parameters are then the chain fitted to its output frame by frame, and angle_sd is None (bench/README.md, "Webcam
-angles: why the pipeline made them worse").
+(quality["joint_restarts"]); the kinematic parameters are then the chain fitted to its output frame by frame, and
+angle_sd is None (why: bench/README.md, "Webcam angles: why the pipeline made them worse").
 
 Where the parts live: the settings in config.py (PipelineConfig), the chain's UKF (state layout, observation
 function, variance ceiling, gated update, re-acquisition) in chain_filter.py (ChainFilter), the forward pass frame

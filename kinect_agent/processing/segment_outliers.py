@@ -1,10 +1,9 @@
 """Outlier probability from segment-length deviation (Wang et al., section 3.2, with a non-temporal residual).
 
 The temporal residual of kinect_agent.processing.outliers judges a joint against its own 0.5 s neighbourhood, so a
-tracking failure that holds a joint off for longer than the window looks smooth and passes. Real Kinect failures do
-exactly that (KERAAL pairs, bench/real_pairs.py: an elbow or wrist 0.3-0.9 m off for 1-1.3 s, the Kinect forearm
-stretching from 256 to 348 mm while Vicon's stays 244 mm). Bones, however, have constant length, so a joint that
-sits in the wrong place stretches or shrinks the bones that touch it for as long as the failure lasts:
+tracking failure that holds a joint off for longer than the window looks smooth and passes. Bones have constant
+length, so a joint that sits in the wrong place stretches or shrinks the bones that touch it for as long as the
+failure lasts:
 
     d[t, b] = L_b(t) − median_t L_b          signed deviation of bone b = (parent p, child c) from the recording's
                                              robust length, metres (skeleton.BONES, all 19 bones)
@@ -13,8 +12,7 @@ Attribution. A deviating bone has two ends; the culprit is the end whose *other*
 both adjacent bones are off is the one misplaced; the neighbour that shares one bad bone with it has its other bones
 intact). With z[t, b] = |d[t, b]| / s_b (s_b the bone's robust SD, 1.4826·MAD, floored at config.outlier_min_sigma_m)
 and a_k(b) = (max over the other bones b' of joint k of z[t, b'] / Z_OTHER)² (unclipped, so the end with the worse
-other bones wins; clipped at 1 it leaked blame to the neighbours of simulated outliers), the end k ∈ {p, c} gets the
-share, with π = DISTAL_PRIOR,
+other bones wins), the end k ∈ {p, c} gets the share, with π = DISTAL_PRIOR,
 
     share_c = (a_c + π) / (a_c + a_p + π),     share_p = a_p / (a_c + a_p + π)
 
@@ -25,13 +23,9 @@ Gaussian + uniform mixture as the temporal residual (outliers.fit_mixture, per j
 classes) gives P(uniform | e). A limb moved rigidly (e.g. wrist and hand together) keeps the hand's bone length, so
 the hand is not found here; the temporal residual and the UKF's gate remain for it.
 
-Combination with the temporal probability (combined_outliers.py, PipelineConfig.outlier_segment): "max" and
-"or" flag the same joint-frames at threshold 0.95 on the KERAAL pairs; "max" is the stricter. Measured (2026-11-23):
-real pairs (bench/real_pairs.py) flags 50 -> 92 of 3 477 joint-frames, outlier gain SD 3.2 -> 12.3 % (pooled SD 110 ->
-69 mm), offline RMSE 129.2 -> 123.5 mm, but elbow angle RMSE 32.2 -> 35.1 deg; simulated loss (bench/accuracy.py
---quick) recall 0.967 -> 0.982 but precision 0.761 -> 0.682 (incl. gross 0.924 -> 0.828): most added false alarms
-are neighbours of a simulated outlier whose other bones the simulator's heavy AR(1) noise makes look off.
-So the pipeline default is off (None).
+Combination with the temporal probability (combined_outliers.py, PipelineConfig.outlier_segment): "max" or "or";
+off by default (None): it gains on real pairs but lowers precision on simulated loss (why: bench/README.md, "Real
+Kinect against Vicon", segment-length residual).
 """
 
 from __future__ import annotations

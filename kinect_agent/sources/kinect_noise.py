@@ -13,30 +13,22 @@ Model of the offset of joint j (the Gaussian component of the paper's mixture), 
     so its mean and SD equal the table (all tabled SD/mean ratios are below the folded normal's limit of 0.756). The
     direction is chosen so that the segments carry the tabled length errors (below); it never changes the distance.
 Tracking loss (the uniform component): bursts of 0.07-0.2 s in which a joint jumps, every frame anew, to a
-    random direction at a distance uniform over an interval beyond its tabled mean offset. The paper gives no loss
-    rate and no outlier size, only the mean and SD gains of removing the outliers (outlier_removal_gain_pct.csv);
-    per joint and setting, both are solved from these two gains (outlier_law): 2-6 % of the joint-frames, 0.1-1 m
-    beyond the mean offset (joints with a large tabled SD jump further), in non-overlapping bursts covering exactly
-    that fraction (_exact_bursts). On 20-repetition sessions the oracle removal gain then comes out within 1.2
-    points of the table in SD and 0-0.8 points below it in mean, in all 12 settings. Inferred joints (state 1)
-    carry an extra offset of 1.5 table SDs; not-tracked joints (state 0) are NaN.
-Known limit, gross excursions of the Gaussian component: 0.5-1.7 % of the clean joint-frames (elbows, wrists, hands,
-    knees; most at Kinect 1 / 60°) sit more than 0.1 m from their 11-frame running median. 0.01-0.4 % come from the
-    tabled distance itself (AR(1) jitter with SDs up to 0.1 m), the rest from direction swings of the per-frame
-    geometry below where it is ill-conditioned (a side hint nearly parallel to its bone). They are not tracking
-    loss by the paper's definition (their distance follows the Gaussian law), so they are not in the outlier mask;
-    smoothing the directions in time (tried 2026-11-23) removed only part of them and moved the segment-length
-    errors off the table, so it was not kept. bench/accuracy.py reports them (precision_incl_gross).
+    random direction at a distance uniform over an interval beyond its tabled mean offset. Rate and distance are
+    solved per joint and setting from the paper's mean and SD gains of removing the outliers
+    (outlier_removal_gain_pct.csv; outlier_law): 2-6 % of the joint-frames, 0.1-1 m beyond the mean offset, in
+    non-overlapping bursts covering exactly that fraction (_exact_bursts). Inferred joints (state 1) carry an extra
+    offset of 1.5 table SDs; not-tracked joints (state 0) are NaN.
 Bone-length errors (see gaussian_offsets): each bone aims at true length + a commanded error (mean + SD · AR(1));
     a greedy pass down the tree puts each child where its distance sphere meets the wanted-length sphere around the
     measured parent, then alternating projections (refine_offsets) trade the errors between neighbouring bones while
-    every joint stays exactly on its distance sphere. Where the spheres cannot carry the tabled error, the achieved mean
-    falls short; a few calibration rounds on a subsample (_commanded_errors) aim past the table so the achieved mean
-    and SD match it. Measured on 4 min of simulated squats: 10-14 of the 14 segments within 15 % in mean and SD for
-    every setting. Known limits: Kinect 1 PELVIC (the tabled ROOT/HIP offsets and an 89 mm pelvis cannot both shorten
-    by the tabled 28-41 mm: about half of it is reached) and a few segments with up to 2x the tabled SD (ARM_UP_L for
-    Kinect 2, the feet for Kinect 1 standing). bone_length_error() computes the simulated statistic;
-    tests/kinect_agent/sources/test_bone_length_error.py checks it per setting.
+    every joint stays exactly on its distance sphere. A few calibration rounds on a subsample (_commanded_errors) aim
+    past the table where the spheres cannot carry the tabled error, so the achieved mean and SD match it.
+    bone_length_error() computes the simulated statistic; tests/kinect_agent/sources/test_bone_length_error.py
+    checks it per setting.
+Known limits: gross excursions of the Gaussian component (clean joint-frames far from their running median, not in
+    the outlier mask: bench/accuracy.py reports them as precision_incl_gross), and a few segments that miss the
+    table (Kinect 1 PELVIC). How well each part matches the tables: bench/README.md, "The simulator's calibration
+    (kinect_noise)".
 """
 
 from __future__ import annotations
