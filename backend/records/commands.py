@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
-import shutil
 from pathlib import Path
 
 from sqlalchemy import func, select
@@ -19,7 +18,7 @@ from backend.audit.service import record
 from backend.config import get_settings
 from backend.deps import Caller, require_patient_access
 from backend.exceptions import InvalidInput
-from backend.records.archive import build_archive
+from backend.records import prepared_archive
 from backend.records.erasure import erase_patient
 from backend.records.report import DEFAULT_DAYS, Period, build_report
 from backend.users.models import User
@@ -58,15 +57,7 @@ def run(args: argparse.Namespace, db_session: Session) -> str:
         out = _new_file(args.out)
         record(db_session=db_session, caller=caller, action="patient.archive", object_type="patient",
                object_id=patient.id, patient_id=patient.id, detail=VIA)  # fmt: skip
-        built = build_archive(db_session=db_session, patient=patient, requested_by=f"admin {admin.email}",
-                              settings=get_settings())  # fmt: skip
-        with built.file, out.open("wb") as f:
-            shutil.copyfileobj(built.file, f)
-        said = f"archive of patient {patient.id} written to {out} ({out.stat().st_size} bytes)"
-        if built.incomplete:
-            said += (f"; {len(built.incomplete)} session(s) incomplete, named in its README.txt: "
-                     + ", ".join(str(sid) for sid in built.incomplete))  # fmt: skip
-        return said
+        return _write_archive(db_session, patient, f"admin {admin.email}", out)
     if args.action == "report":
         out = _new_file(args.out)
         period = Period.asked(_date("--from", args.start), _date("--to", args.end))
@@ -82,6 +73,26 @@ def run(args: argparse.Namespace, db_session: Session) -> str:
     result = erase_patient(db_session=db_session, patient=patient, caller=caller)
     return (f"patient {args.patient_id} erased: {sum(result.rows.values())} row(s), {len(result.objects)} stored "
             "object(s) (deleted once committed); the audit log keeps one patient.erase row")  # fmt: skip
+
+
+def _write_archive(db_session: Session, patient: User, requested_by: str, out: Path) -> str:
+    """Writes the patient's kept archive to `out`, built here first (and kept, as a worker keeps it) unless the kept
+    one covers today's data; returns what it did. Built in the command, not queued: an admin on the server has no
+    proxy timeout to fear and gets the file without a worker running; kept, so the next ask from the page (or from
+    here) does not build it again."""
+    made = prepared_archive.run(db_session=db_session, patient_id=patient.id, requested_by=requested_by,
+                                settings=get_settings())  # fmt: skip
+    kept = prepared_archive.kept_archive(db_session=db_session, patient_id=patient.id)
+    if kept is None:  # run keeps one for an existing patient, or raises
+        raise InvalidInput(f"the archive of patient {patient.id} could not be kept")
+    out.write_bytes(prepared_archive.read_archive(kept))
+    how = "made now" if made["built"] else f"the kept one of {kept.made_at:%Y-%m-%d %H:%M} UTC, still current"
+    said = f"archive of patient {patient.id} ({how}) written to {out} ({kept.size} bytes)"
+    if kept.incomplete:
+        ids = made.get("incomplete_sessions")
+        said += (f"; {kept.incomplete} session(s) incomplete, named in its README.txt"
+                 + (": " + ", ".join(str(sid) for sid in ids) if ids else ""))  # fmt: skip
+    return said
 
 
 def _date(flag: str, value: str | None) -> dt.date | None:

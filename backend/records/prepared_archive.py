@@ -9,7 +9,8 @@ at it, replacing the one before (whose object is deleted after the commit). `cov
 patient's data the archive is made from (`covers_of`): a new session, a re-analysis, a new plan, advice or reply
 makes the kept archive stale, and the next ask builds a new one. While it runs the job reports how many sessions
 are written (`Job.result["progress"]`) and renews its lease, so a long build is neither shown as stuck nor taken
-by a second worker.
+by a second worker. `coach-server patient-data archive` (backend.records.commands) calls `run` itself, for an admin on
+the server, and keeps what it builds the same way.
 """
 
 from __future__ import annotations
@@ -220,4 +221,10 @@ def run(*, db_session: Session, patient_id: int, requested_by: str, settings: Se
     if kept_archive(db_session=db_session, patient_id=patient_id) is None:  # erased meanwhile: nothing may stay
         stale.add(obj.key)
     delete_after_commit(db_session, unnamed_keys(db_session, stale))
-    return done | {"built": True, "size": obj.size, "sessions": built.sessions, "incomplete": len(built.incomplete)}
+    return done | {
+        "built": True,
+        "size": obj.size,
+        "sessions": built.sessions,
+        "incomplete": len(built.incomplete),
+        "incomplete_sessions": list(built.incomplete),
+    }

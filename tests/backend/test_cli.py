@@ -69,6 +69,22 @@ def test_records_commands_refuse_bad_input_in_one_line(cli_db, capsys, argv, say
     assert err.startswith("coach-server: error:") and says in err and "\n" not in err, err
 
 
+def _admin_and_patient(capsys) -> int:
+    """Migrates, creates the admin boss@clinic.org and the patient pat@home.org; returns the patient's id."""
+    import sqlalchemy as sa
+
+    from backend.users.models import User
+
+    assert cli.main(["migrate"]) == 0
+    for email, role in (("boss@clinic.org", "admin"), ("pat@home.org", "patient")):
+        assert cli.main(["create-user", "--email", email, "--password", "0123456789", "--role", role]) == 0
+    with get_sessionmaker()() as s:
+        pid = s.scalar(sa.select(User.id).where(User.email == "pat@home.org"))
+    capsys.readouterr()
+    assert pid is not None
+    return pid
+
+
 def test_patient_data_archive_report_and_erasure_from_the_command_line(cli_db, capsys, tmp_path):
     import io
     import zipfile
@@ -78,12 +94,7 @@ def test_patient_data_archive_report_and_erasure_from_the_command_line(cli_db, c
     from backend.audit.models import AuditEvent
     from backend.users.models import User
 
-    assert cli.main(["migrate"]) == 0
-    for email, role in (("boss@clinic.org", "admin"), ("pat@home.org", "patient")):
-        assert cli.main(["create-user", "--email", email, "--password", "0123456789", "--role", role]) == 0
-    with get_sessionmaker()() as s:
-        pid = s.scalar(sa.select(User.id).where(User.email == "pat@home.org"))
-    capsys.readouterr()
+    pid = _admin_and_patient(capsys)
     admin = ["--admin", "boss@clinic.org"]
     zip_path, pdf_path = tmp_path / "p.zip", tmp_path / "p.pdf"
     assert cli.main(["patient-data", "archive", str(pid), *admin, "--out", str(zip_path)]) == 0
@@ -117,3 +128,31 @@ def test_patient_data_archive_report_and_erasure_from_the_command_line(cli_db, c
         erased = s.scalars(sa.select(AuditEvent).where(AuditEvent.action == "patient.erase")).one()
         boss = s.scalar(sa.select(User.id).where(User.email == "boss@clinic.org"))
         assert erased.actor_user_id == boss and erased.patient_id is None
+
+
+def test_patient_data_archive_keeps_what_it_builds_and_reuses_the_kept_one(cli_db, capsys, tmp_path, monkeypatch):
+    import sqlalchemy as sa
+
+    from backend.records import prepared_archive
+    from backend.records.models import PatientArchive
+    from backend.users.models import User
+
+    pid = _admin_and_patient(capsys)
+    argv = ["patient-data", "archive", str(pid), "--admin", "boss@clinic.org", "--out"]
+    assert cli.main([*argv, str(tmp_path / "first.zip")]) == 0
+    assert "(made now)" in capsys.readouterr().out
+    with get_sessionmaker()() as s:
+        kept = s.scalars(sa.select(PatientArchive).where(PatientArchive.patient_id == pid)).one()
+        patient = s.get(User, pid)
+        assert patient is not None
+        state = prepared_archive.archive_state(db_session=s, patient=patient)
+        assert state.state == "ready" and state.current, "the page's next ask gets it without a build"
+        assert (tmp_path / "first.zip").stat().st_size == kept.size
+
+    def no_build(**kw):
+        raise AssertionError("the kept archive covers today's data: nothing to build")
+
+    monkeypatch.setattr(prepared_archive, "build_archive", no_build)
+    assert cli.main([*argv, str(tmp_path / "second.zip")]) == 0
+    assert "still current" in capsys.readouterr().out
+    assert (tmp_path / "second.zip").read_bytes() == (tmp_path / "first.zip").read_bytes()
