@@ -52,7 +52,8 @@ from backend.voice.models import VoicePreference
 
 KIND = "archive"
 PROGRESS_EVERY_S = 5.0  # how often a running build writes its progress and renews its lease
-_NOT_MADE = N_("Your archive could not be made: %(reason)s")
+_NOT_MADE = N_("Your archive could not be made: %(reason)s")  # the patient reads it
+_NOT_MADE_CLINIC = N_("The archive of this patient's data could not be made: %(reason)s")  # an admin reads it
 
 
 @dataclass(frozen=True)
@@ -146,11 +147,17 @@ def archive_state(*, db_session: Session, patient: User, t: Translator = ENGLISH
     return ArchiveState("none", "")
 
 
+def _not_made(t: Translator, reason: str) -> str:
+    """Returns why the archive is not made, worded for its reader: the patient ("your"), or an admin of the clinic
+    (t.therapist: the translator of a therapist's or admin's request, backend.i18n.reader_translator)."""
+    return t.gettext(_NOT_MADE_CLINIC if t.therapist else _NOT_MADE, reason=reason)
+
+
 def job_state(job: Job, t: Translator, kept: PatientArchive | None) -> ArchiveState:
     """Returns where a queued, running or failed build is, in the words an ask gives (jobs.asking)."""
     if job.status == "failed":
         reason = error_words(job.error, t) or t.gettext(WORDS[KIND].not_built)
-        return ArchiveState("failed", t.gettext(_NOT_MADE, reason=reason), kept)
+        return ArchiveState("failed", _not_made(t, reason), kept)
     return ArchiveState("preparing", waiting_words(job, WORDS[KIND], utcnow(), t), kept, progress=_progress(job))
 
 
@@ -165,7 +172,7 @@ def ask_archive(*, db_session: Session, patient: User, requested_by: str, t: Tra
     asked = ask(db_session=db_session, kind=KIND, key=job_key(patient.id, covers),
                 payload={"patient_id": patient.id, "requested_by": requested_by}, t=t)  # fmt: skip
     if asked.state == "failed":
-        return ArchiveState("failed", t.gettext(_NOT_MADE, reason=asked.detail), kept)
+        return ArchiveState("failed", _not_made(t, asked.detail), kept)
     return ArchiveState("preparing", asked.detail, kept, progress=_progress(asked.job))
 
 

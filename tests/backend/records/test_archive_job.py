@@ -157,7 +157,7 @@ def test_a_build_for_a_patient_who_no_longer_exists_keeps_nothing(db_session, wi
 
 
 def test_a_failing_build_is_said_and_asked_again(
-    client, db_session, run_jobs, with_store, patient_with_sessions, monkeypatch
+    client, db_session, run_jobs, with_store, patient_with_sessions, monkeypatch, auth_headers, make_user
 ):
     patient, _, headers, _ = patient_with_sessions
     base = f"/api/v1/patients/{patient.id}/archive"
@@ -178,6 +178,9 @@ def test_a_failing_build_is_said_and_asked_again(
     assert failed.status_code == 200 and failed.json()["state"] == "failed", failed.text
     detail = failed.json()["detail"]
     assert detail.startswith("Your archive could not be made: ") and "disk" not in detail, "a patient: no internals"
+    by_admin = client.get(f"{base}/status", headers=auth_headers(make_user("admin"))).json()["detail"]
+    assert by_admin.startswith("The archive of this patient's data could not be made: "), by_admin
+    assert "the disk is full" in by_admin, "an admin: the program's own words"
     assert _count(db_session, PatientArchive) == 0 and _archive_keys(with_store) == [], "nothing kept"
     monkeypatch.undo()
     again = client.post(base, headers=headers)
