@@ -3,11 +3,12 @@ the reader's language where the app can say it.
 
 The client is one HTML file whose application is a compressed inline bundle: its own words are English and cannot be
 changed in the file (docs/languages.md names them). Served here, the file gets, per reader: `<html lang>` of the
-reader's language, its `<title>` and `<noscript>` text from the catalogues, and before `</head>` the page scripts'
-messages (JSON, as every page carries them) with two scripts of this origin: static/i18n.js and
-static/replay_viewer.js, which puts viser's playback-bar words in the reader's language as they appear and names the
-controls viser leaves unnamed. The bundle and its inline script are not changed, so the viewer's policy
-(backend/security_headers.py: scripts of this origin, connections to this origin only) is the same.
+reader's language, its `<title>` and `<noscript>` text from the catalogues, and before `</head>` the messages of
+static/replay_viewer.js only (JSON, as every page carries its scripts' messages; the player needs a few dozen, not
+every page's) with two scripts of this origin: static/i18n.js and static/replay_viewer.js, which puts viser's
+playback-bar words in the reader's language as they appear and names the controls viser leaves unnamed. The bundle
+and its inline script are not changed, so the viewer's policy (backend/security_headers.py: scripts of this origin,
+connections to this origin only) is the same.
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ _LANG = '<html lang="en">'
 _TITLE = "<title>Viser</title>"
 _NO_SCRIPT = "<noscript>You need to enable JavaScript to run this app.</noscript>"
 _HEAD_END = "</head>"
+# the scripts the viewer loads that say something (i18n.js says nothing itself): the page carries their messages only
+VIEWER_SCRIPTS = ("frontend/static/replay_viewer.js",)
 
 
 class ViewerChanged(RuntimeError):
@@ -50,7 +53,7 @@ def viewer_html(client: Path, locale: str, therapist: bool, root: str) -> str:
     """Returns viser's client page (the file `client`) for a reader of `locale` (a therapist's: their pages'
     catalogues), its scripts under the app's path `root` (the public URL's prefix, "" at the origin's root)."""
     t = Translator(locale, therapist=therapist)
-    messages = json.dumps(js_messages(locale, therapist), ensure_ascii=False).replace("<", "\\u003c")
+    messages = json.dumps(js_messages(locale, therapist, VIEWER_SCRIPTS), ensure_ascii=False).replace("<", "\\u003c")
     scripts = (f'<script type="application/json" id="i18n-messages">{messages}</script>'
                f'<script src="{escape(root)}/static/i18n.js"></script>'
                f'<script src="{escape(root)}/static/replay_viewer.js"></script>')  # fmt: skip

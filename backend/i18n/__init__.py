@@ -206,26 +206,30 @@ def is_script_message(locations: Sequence[tuple[str, int | None]]) -> bool:
     return any(path.endswith(SCRIPT_SUFFIXES) for path, _ in locations)
 
 
-@lru_cache(maxsize=2 * len(LOCALES))
-def js_messages(locale: str, therapist: bool = False) -> dict[str, Any]:
+@lru_cache(maxsize=4 * len(LOCALES))
+def js_messages(locale: str, therapist: bool = False, scripts: tuple[str, ...] | None = None) -> dict[str, Any]:
     """Returns the page scripts' messages of a locale, the JSON that frontend/static/i18n.js reads:
     {"locale", "plural": "n != 1" | "n > 1", "messages": {msgid: msgstr, "singular\\u0004plural": [forms]}}.
 
     Only messages used in a .js file and translated (not fuzzy) are sent; a missing one shows its English msgid.
-    A therapist page gets the messages domain's and, where the locale has one, its therapist.po's.
+    A therapist page gets the messages domain's and, where the locale has one, its therapist.po's. scripts: only the
+    messages used in these files (paths from the repository's root, "frontend/static/replay_viewer.js"), for a page
+    that loads no other script with messages; None: every script's.
     """
     if locale not in LOCALES or locale == DEFAULT_LOCALE:
         return {"locale": DEFAULT_LOCALE, "plural": "n != 1", "messages": {}}
-    messages = _script_messages(_catalog(locale))
+    messages = _script_messages(_catalog(locale), scripts)
     if therapist and locale in therapist_locales():
-        messages |= _script_messages(_catalog(locale, THERAPIST_DOMAIN))
+        messages |= _script_messages(_catalog(locale, THERAPIST_DOMAIN), scripts)
     return {"locale": locale, "plural": plural_rule(locale), "messages": messages}
 
 
-def _script_messages(catalog: Catalog) -> dict[str, str | list[str]]:
+def _script_messages(catalog: Catalog, scripts: tuple[str, ...] | None = None) -> dict[str, str | list[str]]:
     messages: dict[str, str | list[str]] = {}
     for message in catalog:
         if not message.id or message.fuzzy or not is_script_message(message.locations):
+            continue
+        if scripts is not None and not any(path in scripts for path, _ in message.locations):
             continue
         if isinstance(message.id, str):
             if isinstance(message.string, str) and message.string:
