@@ -35,6 +35,19 @@
       sparkline(t.weekly_median), el("span", { class: "arrow" }, ARROWS[t.direction]));
   }
 
+  /** Returns an indicator's measured number in the page's language with its unit (backend/analysis/indicators.py):
+   *  flexibility degrees, endurance repetitions, strength s (sit-to-stand rise time) or °/s, balance m/s said in cm/s. */
+  function measured(name, ind, v) {
+    if (v === null || v === undefined) return "—";
+    if (name === "flexibility") return I18n.t("{angle}°", { angle: I18n.number(v, 1) });
+    if (name === "endurance") return I18n.number(v, 1);
+    if (name === "strength") {
+      return ind.basis && ind.basis.id === "strength_rise_time" ? I18n.t("{seconds} s", { seconds: I18n.number(v, 2) })
+        : I18n.t("{speed} °/s", { speed: I18n.number(v, 1) });
+    }
+    return I18n.t("{speed} cm/s", { speed: I18n.number(100 * v, 1) });
+  }
+
   function indicatorCell(name, ind, t, missing) {
     const tr = trend(t);
     const label = INDICATOR_LABELS[name];
@@ -44,7 +57,8 @@
     }
     const flag = ind.quality_ok === false ? el("span", { class: "flag", title: I18n.t("data quality: the recording was poor; treat this score with care") }, "⚠") : null;
     const prev = ind.previous !== null && ind.previous !== undefined
-      ? I18n.t("; value {value}, earlier median {previous}", { value: ind.value, previous: ind.previous }) : "";
+      ? I18n.t("; value {value}, earlier median {previous}",
+        { value: measured(name, ind, ind.value), previous: measured(name, ind, ind.previous) }) : "";
     const cms = (v) => I18n.number(100 * v, 1);
     const iv = name === "balance" && ind.interval && ind.value !== null
       ? el("span", { class: "reasons" }, I18n.t("{speed} cm/s (95 % {low}–{high})",

@@ -65,3 +65,59 @@ def test_dashboard_fits_the_width(page, live_server, width):
     page_scroll = page.evaluate("document.documentElement.scrollWidth - document.documentElement.clientWidth")
     assert page_scroll <= 0, f"the page scrolls sideways by {page_scroll} px at {width} px"
     shot(page, f"triage_dashboard_{width}")
+
+
+def _number(x: float, digits: int, locale: str) -> str:
+    """Returns x as Intl.NumberFormat(tag, {maximumFractionDigits: digits}) writes it (half away from zero, grouped)."""
+    import decimal
+
+    from babel.numbers import format_decimal
+
+    with decimal.localcontext() as ctx:
+        ctx.rounding = decimal.ROUND_HALF_UP
+        return format_decimal(decimal.Decimal(x), format="#,##0." + "#" * digits if digits else "#,##0",
+                              locale=locale)  # fmt: skip
+
+
+def _measured(name: str, ind: dict[str, Any], v: float, locale: str) -> str:
+    """Returns what the tooltip says of an indicator's value (frontend/static/therapist.js measured)."""
+    if name == "flexibility":
+        return f"{_number(v, 1, locale)}°"
+    if name == "endurance":
+        return _number(v, 1, locale)
+    if name == "strength":
+        rise = (ind.get("basis") or {}).get("id") == "strength_rise_time"
+        return f"{_number(v, 2, locale)} s" if rise else f"{_number(v, 1, locale)} °/s"
+    return f"{_number(100 * v, 1, locale)} cm/s"
+
+
+@pytest.mark.parametrize("locale", ["en", "de"])
+def test_indicator_tooltips_give_value_and_earlier_median_in_the_pages_number_format(page, live_server, locale):
+    """The tooltip's value and earlier median with their unit, written as the page's language writes numbers
+    (German: the page's locale set in its messages JSON, as a German therapist.po would give it)."""
+    import re
+
+    def as_locale(route):
+        body = route.fetch().text()
+        route.fulfill(body=re.sub(r'"locale": "en"', f'"locale": "{locale}"', body, count=1),
+                      headers={"content-type": "text/html; charset=utf-8"})  # fmt: skip
+
+    page.route(re.compile(r".*/therapist$"), as_locale)
+    login(page, THERAPIST)
+    page.wait_for_url("**/therapist")
+    page.locator("#patients tbody tr[data-patient-id]").first.wait_for()
+    assert page.evaluate("I18n.locale") == locale
+    cldr = {"en": "en_GB", "de": "de"}[locale]
+    checked = 0
+    for r in _dashboard(page):
+        for k, ind in (r["latest_indicators"] or {}).items():
+            if not ind or ind.get("score") is None or ind.get("previous") is None:
+                continue
+            title = page.locator(f'tr[data-patient-id="{r["patient_id"]}"] td.indicator').nth(
+                ["flexibility", "endurance", "strength", "balance"].index(k)).get_attribute("title")  # fmt: skip
+            value, previous = (_measured(k, ind, ind[v], cldr) for v in ("value", "previous"))
+            said = f"; value {value}, earlier median {previous}"
+            assert title is not None and title.endswith(said), (k, title, said)
+            checked += 1
+    assert checked >= 3, "the demo has earlier sessions to compare with"
+    assert not page.js_errors
