@@ -17,7 +17,8 @@ from pathlib import Path
 
 from kinect_agent import formats
 from kinect_agent.disk_full import is_disk_full, plain_words, write_when_space
-from kinect_agent.formats.session_file import SessionPayload
+from kinect_agent.errors import FormatError
+from kinect_agent.formats.session_file import SessionPayload, as_stored
 from kinect_agent.processing.config import PipelineConfig, config_for_device
 from kinect_agent.processing.errors import ProcessingError
 from kinect_agent.processing.pipeline import process
@@ -98,8 +99,11 @@ def make_payload(
 ) -> SessionPayload:
     """Filters the recording and returns the session (raw + filtered + the per-frame angle SDs + a small params
     summary), saying which device and patient recorded it (recorded_by). The settings default to the recording
-    device's (config_for_device)."""
+    device's (config_for_device). The raw recording filtered and stored is the one the file gives back
+    (session_file.as_stored: positions on the file's grid), so the server filtering the stored raw recording again
+    with the same settings gets the same filtered recording."""
     config = config or config_for_device(rec.meta.device)
+    rec = as_stored(rec)
     result = process(rec, config=config)
     params = pipeline_params(config, result)
     payload = SessionPayload(session_id=session_id or str(uuid.uuid4()), raw=rec, filtered=result.filtered,
@@ -138,7 +142,7 @@ def queue_session(
         say(f"{plain_words(exc)} The safety copy of this session could not be saved; its frames are kept in memory.")
     try:
         payload = make_payload(rec, session_id=raw.session_id, created_at=raw.created_at, recorded_by=recorded_by)
-    except (ValueError, ProcessingError) as exc:
+    except (ValueError, ProcessingError, FormatError) as exc:
         log.warning("filtering failed (%s: %s); queuing the raw session for the server to filter", type(exc).__name__,
                     exc)  # fmt: skip
         payload = raw

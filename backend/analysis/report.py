@@ -75,14 +75,26 @@ def _median(values: list[float]) -> float | None:
 
 def measured_peak(t: np.ndarray, angles: dict[str, np.ndarray], names: tuple[str, ...], rep: Repetition) -> float:
     """Returns the repetition's peak angle, degrees (0.1): the measured angles (angles: {name: (T,) degrees}) of
-    its side among `names` at its peak frame (t: (T,) s), averaged over both sides for "both" or "center"; the
-    counter's own peak where they are undefined. The counter reads hip flexion as the thigh's elevation: its peak
-    is reported on the measured angle, like the range of motion and the curves."""
-    k = int(np.clip(np.searchsorted(t - t[0], rep.peak_s - 1e-9), 0, t.shape[0] - 1))
+    its side among `names` at its peak frame (t: (T,) s), averaged over both sides for "both" or "center". Where
+    they are undefined at that frame, at the repetition's nearest frame where one is defined, so the peak stays a
+    value of the curves (UI-PRMD m06 s01: hip flexion undefined at two peaks, whose thigh elevation was 8° above
+    the curve's maximum); the counter's own peak only when none is defined in the repetition. The counter reads hip
+    flexion as the thigh's elevation: its peak is reported on the measured angle, like the range of motion and the
+    curves."""
+    rel = t - t[0]
+    k = int(np.clip(np.searchsorted(rel, rep.peak_s - 1e-9), 0, t.shape[0] - 1))
     suffix = {"left": "_L", "right": "_R"}.get(rep.side)
     own = [n for n in names if suffix is not None and n.endswith(suffix)] or list(names)
-    values = [float(angles[n][k]) for n in own if n in angles and np.isfinite(angles[n][k])]
-    return round(float(np.mean(values)) if values else rep.peak_deg, 1)
+    series = np.stack([angles[n] for n in own if n in angles]) if any(n in angles for n in own) else None
+    if series is None:
+        return round(rep.peak_deg, 1)
+    first, last = np.searchsorted(rel, [rep.start_s - 1e-9, rep.end_s + 1e-9])
+    frames = np.arange(min(first, k), max(last, k + 1))  # the repetition's frames, its peak among them
+    defined = frames[np.isfinite(series[:, frames]).any(axis=0)]
+    if defined.size == 0:
+        return round(rep.peak_deg, 1)
+    nearest = int(defined[np.argmin(np.abs(defined - k))])
+    return round(float(np.nanmean(series[:, nearest])), 1)
 
 
 def peak_end(rom: dict[str, float | None] | None, repetitions: list[dict[str, Any]]) -> str:

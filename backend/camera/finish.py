@@ -65,7 +65,7 @@ def session_bytes(row: CameraSet, exercise: Exercise, db_session: Session) -> by
                            fps_achieved=fps, image_size=batches[-1].image_size, images=n_frames)  # fmt: skip
     meta = Metadata(device=WEBCAM, rate_hz=fps, exercise=exercise.slug, source="browser camera",
                     extra={"webcam": header, "camera_set_id": str(row.id)})  # fmt: skip
-    raw = to_recording(batches, meta)
+    raw = session_file.as_stored(to_recording(batches, meta))  # filter what the file holds (a re-filter matches)
     config = pipeline_config()
     result = process(raw, config=config)
     params = {**pipeline_params(config, result), "device": WEBCAM, "model": model, "fps_achieved": fps}

@@ -194,6 +194,16 @@ def on_grid(positions: np.ndarray) -> np.ndarray:
     return np.rint(np.asarray(positions, dtype=np.float64) / GRID_M) * GRID_M
 
 
+def as_stored(rec: Recording) -> Recording:
+    """Returns the recording as a written file gives it back (decode of encode, without compressing): times (T,) s
+    summed from their float64 deltas, positions (T, J, 3) m on the file's grid with untracked ones NaN, states and
+    metadata as stored. A pipeline filters this, not the recording in memory, so the server filtering a stored
+    file's raw recording again with the same settings gets the file's filtered recording bit for bit. Raises
+    ValueError (encode's) for data no file can hold, SessionFileError for data no file may hold."""
+    meta = Metadata.from_dict(json.loads(json.dumps(rec.meta.to_dict(), allow_nan=False)))
+    return _build_recording("raw", rec.n_frames, list(_recording_blocks(rec)), meta, VERSION)
+
+
 def _position_deltas(positions: np.ndarray, state: np.ndarray) -> np.ndarray:
     """Returns (J, 3, T) int32 time deltas of positions in grid units; untracked positions count as 0.
 

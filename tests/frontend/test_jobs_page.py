@@ -159,6 +159,12 @@ def test_the_session_page_says_which_pipeline_filtered_each_version(browser, liv
             expect(rows.nth(0)).to_contain_text(f"{VERSION}, settings ")
             expect(rows.nth(0)).to_contain_text("(filtered again by the server: filtered by an unnamed pipeline)")
             expect(rows.nth(1)).to_contain_text("not recorded · file ")
+            # in words: the file's "filtered" recording was the simulator's truth (make_khs), 116° against the
+            # pipeline's 98° of the same raw recording (tests/backend/records/test_refilter.py)
+            why = page.locator("#versions-why")
+            expect(why).to_contain_text("Filtered again by the server with pipeline " + VERSION)
+            expect(why).to_contain_text("range of motion 116° → 98°, repetitions 3 → 3")
+            expect(why).to_contain_text("does not say which filter made its filtered recording")
             card.scroll_into_view_if_needed()
             shot(page, "session_versions_pipeline_1366")
             assert _axe_blocking(page) == []
