@@ -72,6 +72,7 @@ def test_the_116_to_98_degrees_of_a_test_file_were_the_simulators_truth_against_
     again = refiltered(payload, reason="test", earlier_sha256="0" * 64)
     after = analyze_recording(again.raw, spec, filtered=again.filtered, angle_sd=again.angle_sd)
     raw_only = analyze_recording(payload.raw, spec)
+    assert before.rom_deg is not None and after.rom_deg is not None and raw_only.rom_deg is not None
     assert before.rom_deg == exact.rom_deg and round(before.rom_deg) == 116
     assert round(after.rom_deg) == 98 and abs(after.rom_deg - raw_only.rom_deg) < 3
     assert before.repetitions == after.repetitions == 3
