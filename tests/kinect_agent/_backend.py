@@ -69,6 +69,9 @@ class LiveServer:
             self._server = None
 
 
+LOADED_S = 60.0  # s: the tests' own requests wait this long (httpx's 5 s timed out in a CI pass at load 17-20)
+
+
 @pytest.fixture
 def live_server(app) -> Iterator[LiveServer]:
     """The test app (bound to the rolled-back test session) served over real HTTP."""
@@ -84,7 +87,8 @@ def pairing_code(live_server, make_patient_with_therapist, auth_headers):
 
     def make():
         patient, therapist = make_patient_with_therapist()
-        r = httpx.post(f"{live_server.url}/api/v1/patients/{patient.id}/pairing-codes", headers=auth_headers(therapist))
+        url = f"{live_server.url}/api/v1/patients/{patient.id}/pairing-codes"
+        r = httpx.post(url, headers=auth_headers(therapist), timeout=LOADED_S)
         assert r.status_code == 201, r.text
         return patient, r.json()["code"]
 

@@ -13,7 +13,7 @@ from kinect_agent import cli
 from kinect_agent.config import AgentConfig, ConfigError, config_path, load_config, save_config
 from kinect_agent.queue import SessionQueue
 from tests.kinect_agent._backend import *  # noqa: F403  (the real server's fixtures: pytest registers those imported)
-from tests.kinect_agent._backend import free_port
+from tests.kinect_agent._backend import LOADED_S, free_port
 
 
 @pytest.fixture
@@ -87,7 +87,11 @@ def test_pair_stores_a_working_device_token(home, live_server, pairing_code, cap
     config = load_config()
     assert config.patient_id == patient.id and config.device_token.startswith("khd_")
     assert config.server_url == live_server.url and config.queue_dir == str((home / "queue").resolve())
-    me = httpx.get(f"{live_server.url}/api/v1/devices/me", headers={"Authorization": f"Bearer {config.device_token}"})
+    me = httpx.get(
+        f"{live_server.url}/api/v1/devices/me",
+        headers={"Authorization": f"Bearer {config.device_token}"},
+        timeout=LOADED_S,
+    )
     assert me.status_code == 200 and me.json()["name"] == "test kinect"
     assert stat.S_IMODE(config_path().stat().st_mode) == 0o600
 

@@ -15,7 +15,7 @@ from kinect_agent.queue import SessionQueue
 from kinect_agent.sources.simulator import simulate
 from kinect_agent.upload import RetryPolicy, Uploader, drain
 from tests.kinect_agent._backend import *  # noqa: F403  (the real server's fixtures: pytest registers those imported)
-from tests.kinect_agent._backend import LiveServer, free_port
+from tests.kinect_agent._backend import LOADED_S, LiveServer, free_port
 
 FAST = RetryPolicy(max_attempts=3, base_delay_s=0.0)
 
@@ -47,7 +47,8 @@ def session_payload():
 def paired(tmp_path, live_server, pairing_code):
     """(patient, device token) of a device paired through the API."""
     patient, code = pairing_code()
-    r = httpx.post(f"{live_server.url}/api/v1/devices/pair", json={"code": code, "name": "upload test"})
+    pair = f"{live_server.url}/api/v1/devices/pair"
+    r = httpx.post(pair, json={"code": code, "name": "upload test"}, timeout=LOADED_S)
     assert r.status_code == 201, r.text
     return patient, r.json()["token"]
 
@@ -128,7 +129,7 @@ def test_invalid_file_is_moved_to_rejected_with_the_server_error(tmp_path, live_
 def test_revoked_token_keeps_the_file(tmp_path, live_server, paired, session_payload) -> None:
     _, token = paired
     headers = {"Authorization": f"Bearer {token}"}
-    me = httpx.get(f"{live_server.url}/api/v1/devices/me", headers=headers).json()
+    me = httpx.get(f"{live_server.url}/api/v1/devices/me", headers=headers, timeout=LOADED_S).json()
     assert httpx.delete(f"{live_server.url}/api/v1/devices/{me['id']}", headers=headers).status_code == 204
     queue = SessionQueue(tmp_path / "q")
     path = queue.enqueue(session_payload)
