@@ -278,17 +278,25 @@ def _english_number(text: str, kind: Kind) -> int | float:
     return float(text[:-1]) / 100 if kind == "percent" else float(text)
 
 
-def reason_of_text(text: object) -> object:
-    """Returns a reason of schema 1 or 2 (English words) as a schema-3 Reason's JSON: the message whose pattern it
-    matches, with its numbers; a text no message matches stays a text (id None); anything else as it is."""
+def _message_of_text(text: object, patterns: tuple[tuple[Message, re.Pattern[str]], ...]) -> object:
+    """Returns English words as a message's JSON: the first of `patterns` that matches them whole, with its numbers
+    (an "angle" parameter stays a name); a text none matches stays a text (id None); anything else as it is."""
     if not isinstance(text, str):
         return text
-    for message, pattern in _ENGLISH_PATTERNS:
+    for message, pattern in patterns:
         found = pattern.fullmatch(text)
         if found is not None:
             kinds = dict(message.kinds)
-            return {"id": message.id, "params": {k: _english_number(v, kinds[k]) for k, v in found.groupdict().items()}}
+            params = {
+                k: v if kinds[k] == "angle" else _english_number(v, kinds[k]) for k, v in found.groupdict().items()
+            }
+            return {"id": message.id, "params": params}
     return {"id": None, "text": text}
+
+
+def reason_of_text(text: object) -> object:
+    """Returns a reason of schema 1 or 2 (English words) as a schema-3 Reason's JSON (_message_of_text)."""
+    return _message_of_text(text, _ENGLISH_PATTERNS)
 
 
 def _indicators_2_to_3(indicators: object) -> object:
@@ -336,20 +344,9 @@ _ENGLISH_BASES = tuple((message, re.compile(pattern)) for message, pattern in (
 
 
 def basis_of_text(text: object) -> object:
-    """Returns an indicator's basis of schema 1 to 3 (English words) as a schema-4 Basis' JSON: the message whose
-    pattern it matches, with its numbers and angle; a text no message matches stays a text (id None); anything else
-    (a schema-4 basis) as it is."""
-    if not isinstance(text, str):
-        return text
-    for message, pattern in _ENGLISH_BASES:
-        found = pattern.fullmatch(text)
-        if found is not None:
-            kinds = dict(message.kinds)
-            params = {
-                k: v if kinds[k] == "angle" else _english_number(v, kinds[k]) for k, v in found.groupdict().items()
-            }
-            return {"id": message.id, "params": params}
-    return {"id": None, "text": text}
+    """Returns an indicator's basis of schema 1 to 3 (English words) as a schema-4 Basis' JSON (_message_of_text); a
+    schema-4 basis stays as it is."""
+    return _message_of_text(text, _ENGLISH_BASES)
 
 
 INDICATOR_NAMES = ("flexibility", "endurance", "strength", "balance")
