@@ -20,15 +20,7 @@ from backend.records.models import PatientArchive
 from backend.records.retention import apply_retention
 from backend.sessions.models import ExerciseSession
 from backend.storage.check import check
-from tests.backend.khs_files import make_khs
-
-
-def _upload(client, headers, seed):
-    response = client.post("/api/v1/sessions", content=make_khs("squat", 1, seed=seed),
-                           headers={"Content-Type": "application/octet-stream", **headers},
-                           params={"exercise": "squat"})  # fmt: skip
-    assert response.status_code == 201, response.text
-    return response.json()["id"]
+from tests.backend.records.test_patient_data import _upload
 
 
 def _count(db_session, model, *where) -> int:
