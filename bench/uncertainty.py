@@ -29,6 +29,7 @@ import numpy as np
 
 from backend.analysis import intervals
 from backend.analysis.range_of_motion import range_of_motion
+from backend.exercises.library import EXERCISES as LIBRARY
 from kinect_agent.analysis import series
 from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.processing import uncertainty
@@ -107,12 +108,22 @@ def true_rom(case: Case, name: str) -> dict[str, float] | None:
     return values if len(values) == len(rom) else None
 
 
+def _defining(case: Case, name: str) -> bool:
+    """True when angle `name` is one of the case's exercise's defining angles (its intervals' short tail)."""
+    return name in LIBRARY[case.motion].defining_angles
+
+
+def _tail_pct(defining: bool) -> tuple[float, float]:
+    return intervals.DEFINING_TAIL_PCT if defining else intervals.TAIL_PCT
+
+
 def metric_errors(case: Case, name: str) -> dict[str, tuple[float, float, float, float]] | None:
     """Returns {kind: (estimate, truth, σ_frames, τ the tail)} of one angle, or None when either series is
     unusable."""
-    e = intervals.edges(case.t, case.est[name], case.sd[name])
+    defining = _defining(case, name)
+    e = intervals.edges(case.t, case.est[name], case.sd[name], _tail_pct(defining))
     true = true_rom(case, name)
-    iv = intervals.angle_intervals(case.t, case.est[name], case.sd[name], name, yaw_deg=case.yaw)
+    iv = intervals.angle_intervals(case.t, case.est[name], case.sd[name], name, yaw_deg=case.yaw, defining=defining)
     if e is None or iv is None or true is None or true["range_deg"] >= intervals.MAX_RANGE_DEG:
         return None
     return {
@@ -160,6 +171,7 @@ def needs(cases: list[Case]) -> Needs:
             if errs is None:
                 continue
             for kind, (est, true, sigma, tail) in errs.items():
+                sigma = intervals.SIGMA_GAIN * sigma  # the shipped share of the per-frame SD (chosen on a grid)
                 b2 = (_error(est, true, kind) / intervals.Z95) ** 2 - sigma**2
                 row = (f"{_pair(name)}|{kind}", f"{c.motion}@{c.view}", np.sqrt(max(b2, 0.0)), tail, c.yaw, sigma)
                 rows.append(row)
@@ -240,12 +252,12 @@ def fit_device_gain(cases: list[Case]) -> float:
     for c in cases:
         for name in ANGLE_NAMES:
             errs = metric_errors(c, name)
-            e = intervals.edges(c.t, c.est[name], c.sd[name])
+            e = intervals.edges(c.t, c.est[name], c.sd[name], _tail_pct(_defining(c, name)))
             if errs is None or e is None:
                 continue
-            b = intervals.systematic(name, e, c.yaw, "kinect2")
+            b = intervals.systematic(name, e, c.yaw, "kinect2", _defining(c, name))
             for (est, true, sigma, _), b_kind, kind in zip(errs.values(), b, KINDS, strict=True):
-                over = (_error(est, true, kind) / intervals.Z95) ** 2 - sigma**2
+                over = (_error(est, true, kind) / intervals.Z95) ** 2 - (intervals.SIGMA_GAIN * sigma) ** 2
                 need.append(0.0 if over <= 0 else (np.sqrt(over) / b_kind if b_kind > 0 else np.inf))
     return float(np.ceil(np.quantile(need, TARGET) * 20.0) / 20.0)
 
@@ -278,7 +290,8 @@ def coverage_table(cases: list[Case]) -> dict[str, dict[str, float]]:
     for c in cases:
         fam = f"{c.motion}@{c.view}"
         for name in ANGLE_NAMES:
-            iv = intervals.angle_intervals(c.t, c.est[name], c.sd[name], name, yaw_deg=c.yaw, device=c.device)
+            iv = intervals.angle_intervals(c.t, c.est[name], c.sd[name], name, yaw_deg=c.yaw, device=c.device,
+                                           defining=_defining(c, name))  # fmt: skip
             true = true_rom(c, name)
             if iv is None or true is None or true["range_deg"] >= intervals.MAX_RANGE_DEG:
                 continue

@@ -152,7 +152,7 @@ def analyze_recording(
     sd = _angle_sd(angle_sd, recording.n_frames) if source == "filtered" else None
     rom = range_of_motion(t, clinical, presmoothed=True)
     tracked = {name: quality.tracked_fraction(recording, (name,)) for name in clinical}
-    ivs = None if sd is None else rom_intervals(t, clinical, sd, smoothed, recording.meta.device, tracked)
+    ivs = None if sd is None else rom_intervals(t, clinical, sd, smoothed, recording.meta.device, tracked, names)
     moving_s, rest_s = activity.moving_time(t, smoothed)
     balance = sway(t, smoothed, clinical)
     doc = {

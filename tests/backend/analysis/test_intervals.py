@@ -47,15 +47,17 @@ def test_widths_follow_the_per_frame_sd_and_the_systematic_part(seed, yaw):
     t, x = _sine(seed)
     x = x - 60.0  # ±40°, inside the angle's domain (±90°)
     sd = np.full_like(t, 2.0)
-    name = "trunk_lateral_flexion"  # B = (6.2, 2.5, 0.0)
+    name = "trunk_lateral_flexion"  # the one angle with a B (intervals.SYSTEMATIC_DEG)
     iv = _intervals(t, x, sd, name, yaw_deg=yaw)
     b_min, b_max, b_range = _expected_b(x, name, yaw)
     lo, hi = np.percentile(x, [1, 99])
     msg = f"seed {seed}, yaw {yaw}"
+    s = intervals.SIGMA_GAIN * 2.0  # the share of the per-frame SD the intervals keep
     np.testing.assert_allclose(np.mean(iv["min_deg"]), lo, atol=0.1, err_msg=msg)
-    np.testing.assert_allclose(np.diff(iv["min_deg"])[0], 2 * 1.96 * np.hypot(2.0, b_min), atol=0.2, err_msg=msg)
-    np.testing.assert_allclose(np.diff(iv["max_deg"])[0], 2 * 1.96 * np.hypot(2.0, b_max), atol=0.2, err_msg=msg)
-    np.testing.assert_allclose(np.diff(iv["range_deg"])[0], 2 * 1.96 * np.sqrt(8.0 + b_range**2), atol=0.2, err_msg=msg)
+    np.testing.assert_allclose(np.diff(iv["min_deg"])[0], 2 * 1.96 * np.hypot(s, b_min), atol=0.2, err_msg=msg)
+    np.testing.assert_allclose(np.diff(iv["max_deg"])[0], 2 * 1.96 * np.hypot(s, b_max), atol=0.2, err_msg=msg)
+    np.testing.assert_allclose(np.diff(iv["range_deg"])[0], 2 * 1.96 * np.sqrt(2 * s**2 + b_range**2), atol=0.2,
+                               err_msg=msg)  # fmt: skip
 
 
 @pytest.mark.parametrize("seed", SEEDS)
@@ -206,3 +208,24 @@ def test_withheld_intervals_say_why():
     assert intervals.withheld_reason("shoulder_rotation_L", x, None) == Reason(id="rotation_undefined")
     shown = intervals.rom_intervals(t, {name: x}, {name: np.full_like(t, 30.0)}, np.full((t.size, 20, 3), np.nan))
     assert shown.intervals == {name: None} and shown.withheld[name].id == "too_uncertain"
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_a_defining_angle_is_not_widened_for_its_own_motion(seed):
+    """A squat-like knee (standing still 70 % of the time, five dips to 100°): P99 − P90 of it is its motion, not an
+    error. As the exercise's defining angle its peak interval takes the short tail (P99 − P97.5) and is narrower;
+    rom_intervals passes `defining` through."""
+    t = np.arange(900) / 30.0
+    rng = np.random.default_rng(seed)
+    phase = np.clip((t % 6.0) - 4.2, 0.0, None) / 1.8  # 1.8 s dip every 6 s
+    x = 5.0 + 95.0 * np.sin(np.pi * phase) ** 2 + rng.normal(0.0, 0.5, t.size)
+    sd = np.full_like(t, 4.0)
+    other = intervals.angle_intervals(t, x, sd, "knee_flexion_L", yaw_deg=0.0)
+    moving = intervals.angle_intervals(t, x, sd, "knee_flexion_L", yaw_deg=0.0, defining=True)
+    assert moving is not None and other is not None
+    assert np.diff(moving["max_deg"])[0] < 0.5 * np.diff(other["max_deg"])[0], f"seed {seed}: {moving} vs {other}"
+    assert np.diff(moving["max_deg"])[0] <= intervals.MAX_WIDTH_DEG
+    p = np.zeros((t.size, 20, 3))
+    p[:, 4, 0], p[:, 8, 0] = -0.2, 0.2  # the shoulders face the camera
+    shown = intervals.rom_intervals(t, {"knee_flexion_L": x}, {"knee_flexion_L": sd}, p, defining=("knee_flexion_L",))
+    assert shown.intervals["knee_flexion_L"] == moving
