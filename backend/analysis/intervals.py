@@ -74,6 +74,8 @@ KINDS = ("min_deg", "max_deg", "range_deg")
 # Withheld intervals (withheld_reason): wider than this says nothing a therapist can act on; an angle defined in
 # too few frames, or whose joints were tracked in too few, has no edge the data can place.
 MAX_WIDTH_DEG = 60.0
+RAW_ENVELOPE_PCT = (0.5, 99.5)  # the raw angle's envelope (beyond_raw)
+RAW_MARGIN_DEG = 10.0  # degrees the filtered range may pass that envelope before its intervals are withheld
 MIN_DEFINED_FRACTION = 0.5
 MIN_TRACKED_FRACTION = 0.8
 # The systematic part b = (1 + YAW_GAIN · sin ψ) · sqrt(B² + (TAIL_GAIN · τ)²), fitted by bench/uncertainty.py
@@ -302,6 +304,19 @@ def withheld_reason(
     return None
 
 
+def beyond_raw(rom: dict[str, float | None], raw: np.ndarray) -> float:
+    """Returns how far (degrees, ≥ 0) a range of motion {"min_deg", "max_deg", ...} of the filtered angle leaves
+    the raw angle's envelope: raw's RAW_ENVELOPE_PCT percentiles widened by RAW_MARGIN_DEG on each side. raw: (T,)
+    degrees, the angle of the raw recording (NaN where undefined). 0 when inside, or when either is unknown."""
+    raw = np.asarray(raw, dtype=np.float64)
+    raw = raw[np.isfinite(raw)]
+    lo, hi = rom.get("min_deg"), rom.get("max_deg")
+    if not raw.size or lo is None or hi is None:
+        return 0.0
+    low, high = np.percentile(raw, RAW_ENVELOPE_PCT) + np.array([-RAW_MARGIN_DEG, RAW_MARGIN_DEG])
+    return float(max(0.0, low - lo, hi - high))
+
+
 def covers(interval: list[float], true: float, kind: str) -> bool:
     """True when a 95 % interval [lo, hi] (rounded to 0.1°) of metric `kind` ("min_deg", "max_deg", "range_deg")
     holds the value `true`; the ends of a range are angles, compared modulo a turn."""
@@ -329,13 +344,15 @@ def rom_intervals(
     device: str = "kinect2",
     tracked: dict[str, float] | None = None,
     defining: tuple[str, ...] = (),
+    beyond: dict[str, float] | None = None,
 ) -> RomIntervals:
     """Returns the RomIntervals of every angle present in both angles and sd ({name: (T,) degrees}).
 
     positions: (T, J, 3) metres, camera frame, the positions the angles were measured on (for camera_yaw; a
     session without both shoulders in any frame is taken as side on, 90°, the widest intervals). device: the
     session's meta.device. tracked: {angle: fraction of its joint samples tracked} (1 when not given). defining:
-    the exercise's defining angles (angle_intervals' `defining`).
+    the exercise's defining angles (angle_intervals' `defining`). beyond: {angle: degrees its range of motion leaves
+    the raw angle's envelope (beyond_raw)}; an angle beyond it by more than 0 has its intervals withheld.
     """
     yaw = camera_yaw(positions)
     yaw = 90.0 if yaw is None else yaw
@@ -346,6 +363,9 @@ def rom_intervals(
             continue
         iv = angle_intervals(t, angles[name], sd[name], name, yaw_deg=yaw, device=device, defining=name in defining)
         reason = withheld_reason(name, angles[name], iv, (tracked or {}).get(name, 1.0))
+        off = (beyond or {}).get(name, 0.0)
+        if reason is None and off > 0.0:
+            reason = why.BEYOND_RAW.reason(by=off)
         shown[name] = None if reason else iv
         if reason:
             withheld[name] = reason

@@ -21,7 +21,7 @@ import numpy as np
 from backend.analysis import activity, quality, reasons
 from backend.analysis.balance import missing_reason, sway
 from backend.analysis.errors import AnalysisError, UnknownExercise, UnreadableRecording
-from backend.analysis.intervals import count_interval, rom_intervals
+from backend.analysis.intervals import beyond_raw, count_interval, rom_intervals
 from backend.analysis.most_moving import most_moving_joints
 from backend.analysis.range_of_motion import range_of_motion
 from backend.analysis.reachable import reachable_range
@@ -32,7 +32,7 @@ from kinect_agent.analysis.angles import counting_angles, measured_angles
 from kinect_agent.analysis.document import AnalysisReport, json_ready
 from kinect_agent.analysis.live import amplitude_floor, counting_params, counting_positions, done_repetitions
 from kinect_agent.analysis.repetitions import Repetition, RepetitionParams, count_repetitions
-from kinect_agent.body.angles import body_frame
+from kinect_agent.body.angles import body_frame, joint_angles
 from kinect_agent.errors import FormatError
 from kinect_agent.processing.params import KinematicParams
 from kinect_agent.recording import Recording
@@ -152,7 +152,11 @@ def analyze_recording(
     sd = _angle_sd(angle_sd, recording.n_frames) if source == "filtered" else None
     rom = range_of_motion(t, clinical, presmoothed=True)
     tracked = {name: quality.tracked_fraction(recording, (name,)) for name in clinical}
-    ivs = None if sd is None else rom_intervals(t, clinical, sd, smoothed, recording.meta.device, tracked, names)
+    ivs = None
+    if sd is not None:
+        raw = joint_angles(recording.positions)
+        beyond = {name: beyond_raw(rom[name], raw[name]) for name in clinical if name in raw and name in rom}
+        ivs = rom_intervals(t, clinical, sd, smoothed, recording.meta.device, tracked, names, beyond)
     moving_s, rest_s = activity.moving_time(t, smoothed)
     balance = sway(t, smoothed, clinical)
     doc = {

@@ -151,6 +151,9 @@ TOO_UNCERTAIN = Message(
     N_("the tracking is too uncertain: a 95 %% interval would span %(width)s° (at most %(most)s° is shown)"),
     (("width", "decimal0"), ("most", "decimal0")),
 )
+BEYOND_RAW = Message(
+    "beyond_raw", N_("the filtered curve reaches %(by)s° beyond what the camera measured"), (("by", "decimal0"),)
+)
 # balance.missing_reason: why balance was not measured
 RECORDING_TOO_SHORT = Message("recording_too_short", N_("the recording is too short"))
 NOT_STANDING = Message("not_standing", N_("the patient was seated or crouching: balance is measured while standing"))
@@ -163,7 +166,8 @@ NEVER_STILL = Message(
     (("seconds", "general"),),
 )
 MESSAGES = (TOO_FEW_FRAMES, TOO_SHORT, TOO_LITTLE_TRACKED, TOO_MANY_ERRORS, GAPS, ROTATION_UNDEFINED, OUT_OF_PLANE,
-            JOINTS_UNTRACKED, UNKNOWN_ANGLE, TOO_UNCERTAIN, RECORDING_TOO_SHORT, NOT_STANDING, NEVER_STILL)  # fmt: skip
+            JOINTS_UNTRACKED, UNKNOWN_ANGLE, TOO_UNCERTAIN, BEYOND_RAW, RECORDING_TOO_SHORT, NOT_STANDING,
+            NEVER_STILL)  # fmt: skip
 BY_ID = {m.id: m for m in MESSAGES}
 
 # backend.analysis.indicators: how each indicator was scored (the indicator's "basis")

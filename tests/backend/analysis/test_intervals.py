@@ -229,3 +229,21 @@ def test_a_defining_angle_is_not_widened_for_its_own_motion(seed):
     p[:, 4, 0], p[:, 8, 0] = -0.2, 0.2  # the shoulders face the camera
     shown = intervals.rom_intervals(t, {"knee_flexion_L": x}, {"knee_flexion_L": sd}, p, defining=("knee_flexion_L",))
     assert shown.intervals["knee_flexion_L"] == moving
+
+
+def test_an_angle_whose_filtered_range_leaves_the_raw_envelope_has_its_intervals_withheld():
+    raw = np.concatenate([np.linspace(20.0, 120.0, 200), [np.nan]])
+    assert intervals.beyond_raw({"min_deg": 25.0, "max_deg": 125.0}, raw) == 0.0  # within 10° of raw's envelope
+    off = intervals.beyond_raw({"min_deg": 25.0, "max_deg": 140.0}, raw)
+    assert off == pytest.approx(140.0 - (119.5 + intervals.RAW_MARGIN_DEG)), off  # raw's 99.5th percentile: 119.5
+    assert intervals.beyond_raw({"min_deg": None, "max_deg": None}, raw) == 0.0
+    t, x = _sine(1)
+    sd = np.ones_like(t)
+    p = np.zeros((t.size, 20, 3))
+    p[:, 4, 0], p[:, 8, 0] = -0.2, 0.2  # the shoulders face the camera
+    name = "knee_flexion_L"
+    shown = intervals.rom_intervals(t, {name: x}, {name: sd}, p, beyond={name: 0.0})
+    assert shown.intervals[name] is not None and name not in shown.withheld
+    held = intervals.rom_intervals(t, {name: x}, {name: sd}, p, beyond={name: 12.3})
+    assert held.intervals[name] is None
+    assert held.withheld[name] == Reason(id="beyond_raw", params={"by": 12.3})

@@ -45,7 +45,7 @@ from tests.conftest import DATA
 WINDOW_S = 12.0  # seconds of each real recording analysed
 RATE_HZ = 30.0  # mocap (120 Hz) is thinned to about this rate first
 TOL = 0.05 + 1e-6  # degrees: the documents round to 0.1°
-RAW_MARGIN_DEG = 10.0
+RAW_MARGIN_DEG = intervals.RAW_MARGIN_DEG
 ALL = os.environ.get("COACH_ALL_RECORDINGS") == "1"
 UIPRMD = {spec.uiprmd_movement: slug for slug, spec in EXERCISES.items() if spec.uiprmd_movement}
 SUBJECTS = ("s01", "s02", "s03", "s04", "s05")  # the only UI-PRMD subjects the project uses
