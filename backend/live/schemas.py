@@ -64,7 +64,9 @@ class ProgressIn(BaseModel):
 
     set_id: str = Field(pattern=SET_ID_PATTERN, examples=["3f2b8c1e-4d5a-4e6f-8a9b-0c1d2e3f4a5b"])
     exercise_slug: str = Field(pattern=r"^[a-z0-9][a-z0-9_]{0,63}$", examples=["elbow_flexion"])
-    state: Literal["recording", "ended", "failed"]
+    state: Literal["starting", "recording", "ended", "failed"] = Field(
+        description="starting: the Start was heard and the set is being readied (no count yet); recording: counting"
+    )
     count: int = Field(ge=0, le=10_000, description="repetitions so far")
     target: int | None = Field(default=None, ge=1, le=10_000)
     angle_name: str | None = Field(default=None, max_length=64)

@@ -140,6 +140,10 @@ const Live = (() => {
 
   function onProgress(data) {
     if (current && current.starting && !current.set_id) { early.push(data); return; }  // before Start's answer
+    if (data.state === "starting") {  // the home computer heard Start and readies the set: it answered
+      if (current && current.starting && current.set_id === data.set_id) clearTimeout(timer);
+      return;
+    }
     if (!current || current.set_id !== data.set_id) {
       if (data.state !== "recording") return;
       current = { set_id: data.set_id, slug: data.exercise_slug, target: data.target, count: 0 };  // page opened mid-set

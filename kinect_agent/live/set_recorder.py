@@ -2,8 +2,8 @@
 
 Each frame goes to the journal (disk) first, then through the online filter (online.live_filter: the chain's, or the
 webcam's joints filter) and the live count (kinect_agent.analysis.live.LiveCount, the server's repetition logic run
-incrementally). Every `every_s` seconds a progress message is offered to the publisher (which never blocks). The
-set ends when
+incrementally). A "starting" message answers the Start before the source is opened; then every `every_s` seconds a
+progress message is offered to the publisher (which never blocks). The set ends when
     "target"  the count reached the target and settle_s more seconds were recorded (the return to rest);
     "stop"    stop() was called (the patient pressed Stop, or the agent is shutting down);
     "still"   the defining angle did not move for still_end_s seconds (the patient walked away or gave up);
@@ -137,6 +137,9 @@ class SetRecorder:
     def run(self) -> SetResult:
         """Records until the set ends; returns the result (the journal is still on disk: discard it once queued)."""
         created_at = utc_now_iso()
+        # the Start is answered at once: opening the camera and the filter's first step can take many seconds (its
+        # compiled code is still being readied on a busy computer), and the page must not take that for silence
+        self.publish(self._message("starting", None, 0.0, time.time()), False)
         with self.source:
             meta = self.source.metadata()
             meta.exercise = self.command.exercise

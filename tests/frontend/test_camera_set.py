@@ -11,6 +11,7 @@ this machine's headless Chromium has no GPU.
 from __future__ import annotations
 
 import re
+import time
 from collections.abc import Iterator
 from contextlib import closing, contextmanager
 from pathlib import Path
@@ -45,6 +46,8 @@ SLOW_SAID_OR_FAST = (
     "() => CameraPage.state().fps >= 10 || "
     "document.getElementById('cam-note').textContent.includes('This computer is slow')"
 )
+NEXT_FRAME = "() => new Promise((done) => requestAnimationFrame(() => requestAnimationFrame(done)))"
+KEPT_BATCHES = "CameraBuffer.batches(CameraPage.state().set_id).then((b) => b.length)"
 WATCH_CSP = ("window.__csp = []; document.addEventListener('securitypolicyviolation', "
              "(e) => __csp.push([e.effectiveDirective, e.blockedURI]))")  # fmt: skip
 
@@ -61,7 +64,7 @@ def _shots(page, name: str) -> None:
     """Screenshots at 1366, 768 and 390 px (back to 1366 afterwards), each checked with axe-core."""
     for w, h in WIDTHS:
         page.set_viewport_size({"width": w, "height": h})
-        page.wait_for_timeout(150)
+        page.evaluate(NEXT_FRAME)  # laid out and painted at the new size
         shot(page, f"camera-{name}-{w}")
         _axe_clean(page)
         overflow = page.evaluate("document.documentElement.scrollWidth - document.documentElement.clientWidth")
@@ -261,9 +264,11 @@ def test_hidden_tab_network_loss_reload_and_unplugged_camera_mid_set_store_one_s
         expect(status).to_contain_text("connection to the server is lost", timeout=20_000)
         shot(page, "camera-offline")
         _axe_clean(page)
-        page.wait_for_timeout(2000)
-        waiting = page.evaluate("CameraBuffer.batches(CameraPage.state().set_id).then((b) => b.length)")
-        assert waiting >= 1, "no batch was kept while offline"
+        # a batch made while offline is kept (IndexedDB) until the network is back
+        deadline = time.monotonic() + 20
+        while (kept := page.evaluate(KEPT_BATCHES)) < 1 and time.monotonic() < deadline:
+            page.wait_for_timeout(100)  # IndexedDB is asked again (wait_for_function does not await a promise)
+        assert kept >= 1, "no batch was kept while offline"
         page.context.set_offline(False)
         expect(status).to_contain_text("The connection is back", timeout=30_000)
         # the page reloaded mid-set: the set is offered to go on, with the same id

@@ -213,6 +213,20 @@ def test_count_in_view_camera_silence_said_and_the_end_level_with_the_stored_cou
         assert not page.js_errors, page.js_errors
 
 
+# records the kind of every event the page's streams receive, in window.__heard
+HEARD = """
+window.__heard = [];
+const PageEventSource = window.EventSource;
+window.EventSource = class extends PageEventSource {
+  constructor(...args) {
+    super(...args);
+    const heard = (kind) => this.addEventListener(kind, () => window.__heard.push(kind));
+    ["live.progress", "session.stored"].forEach(heard);
+  }
+};
+"""
+
+
 def test_a_set_that_ends_before_starts_answer_still_shows_its_end(browser, live_server):
     """The agent's progress and the stored session can reach the page before the answer to its Start (a busy
     server answers late): the page keeps them and shows the end and the result, never "did not answer"."""
@@ -226,10 +240,11 @@ def test_a_set_that_ends_before_starts_answer_still_shows_its_end(browser, live_
         start = link.command()
         link.progress(start, "ended", TARGET, sid, elapsed_s=9.0, reason="target")  # a short set: its only message
         link.upload(make_khs(EXERCISE, TARGET, seed=22, session_id=sid, created_at=_now_iso()))
-        time.sleep(2)  # the events reach the page's stream meanwhile
+        # both events reach the page's stream before the answer does
+        page.wait_for_function("() => ['live.progress', 'session.stored'].every((k) => window.__heard.includes(k))")
         route.fulfill(response=answer)
 
-    with closing(link), open_page(browser, base, 1366, 900) as page:
+    with closing(link), open_page(browser, base, 1366, 900, init_script=HEARD) as page:
         login(page, email, PASSWORD)
         link.connect()
         expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
@@ -237,7 +252,7 @@ def test_a_set_that_ends_before_starts_answer_still_shows_its_end(browser, live_
         page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2")).click()
         expect(page.locator("#live-result")).to_contain_text("Saved", timeout=30_000)
         expect(page.locator("#live-ended")).to_contain_text(f"You did all {TARGET}")
-        page.wait_for_timeout(500)
+        # the progress heard before the answer ended the wait for the home computer's answer (live.js ANSWER_MS)
         assert "did not answer" not in page.locator("#live").inner_text()
         assert not page.js_errors, page.js_errors
 

@@ -54,6 +54,11 @@ def _voice(base: str, email: str, pid: int) -> dict[str, Any]:
         return c.get(f"/api/v1/patients/{pid}/voice").json()
 
 
+def _saved(pid: int):
+    """Matches the page's answer to saving the voice setting (PUT /patients/{pid}/voice)."""
+    return lambda r: r.request.method == "PUT" and r.url.endswith(f"/api/v1/patients/{pid}/voice")
+
+
 def test_the_set_is_spoken_as_shown_and_the_setting_is_kept(voice_page, live_server):
     page, base = voice_page, live_server.url
     email, pid, token = patient_with_device(base, target=GOAL)
@@ -96,9 +101,9 @@ def test_the_set_is_spoken_as_shown_and_the_setting_is_kept(voice_page, live_ser
         assert not bad, bad
 
         # volume: remembered on the server, used for the next utterance
-        page.locator("#voice-volume").fill("40")
+        with page.expect_response(_saved(pid)):  # the setting is saved 0.4 s after the last change
+            page.locator("#voice-volume").fill("40")
         expect(page.locator("#voice-volume")).to_have_value("40")
-        page.wait_for_timeout(800)  # the setting is saved 0.4 s after the last change
         assert _voice(base, email, pid)["volume"] == pytest.approx(0.4)
         page.get_by_role("button", name="Close").click()
         heard = len(_spoken(page))
@@ -111,7 +116,8 @@ def test_the_set_is_spoken_as_shown_and_the_setting_is_kept(voice_page, live_ser
         link.progress(start, "recording", 1, sid, elapsed_s=2.0)
         page.wait_for_function(f"() => window.__spoken.length > {heard + 1}")
         cancelled = page.evaluate("window.__cancelled")
-        toggle.click()
+        with page.expect_response(_saved(pid)) as saved:
+            toggle.click()
         expect(toggle).to_have_attribute("aria-pressed", "false")
         expect(toggle).to_have_text("Voice off")
         assert page.evaluate("window.__cancelled") == cancelled + 1
@@ -120,7 +126,7 @@ def test_the_set_is_spoken_as_shown_and_the_setting_is_kept(voice_page, live_ser
             link.progress(start, "recording", n, sid, elapsed_s=2.0 * n)
             expect(page.locator("#live-count .n")).to_have_text(str(n))
         assert len(_spoken(page)) == heard, _texts(page)[heard:]
-        page.wait_for_timeout(800)
+        assert saved.value.ok, saved.value.status
         assert _voice(base, email, pid)["enabled"] is False
         page.reload()
         expect(page.locator("#voice-toggle")).to_have_attribute("aria-pressed", "false", timeout=LOAD_MS)

@@ -130,6 +130,15 @@ def test_progress_reaches_the_patient_and_names_its_device(client, db_session, h
     assert ev.data["device_id"] == home["device"].id and ev.data["count"] == 3 and ev.data["hint"] == msg["hint"]
 
 
+def test_a_starting_message_reaches_the_patient(client, db_session, home, events):
+    """The agent's answer to Start before its first count (kinect_agent.live.set_recorder)."""
+    msg = {"set_id": _started(db_session, home["device"]), "exercise_slug": "squat", "state": "starting", "count": 0}
+    r = client.post("/api/v1/live/progress", json=msg, headers=home["device_hdr"])
+    assert r.status_code == 204, r.text
+    (ev,) = events
+    assert ev.kind == "live.progress" and ev.data["state"] == "starting" and ev.data["set_id"] == msg["set_id"]
+
+
 @pytest.mark.parametrize(
     ("change", "field"),
     [

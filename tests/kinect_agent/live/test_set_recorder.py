@@ -46,6 +46,9 @@ def test_a_set_ends_when_the_target_is_reached(tmp_path, seed):
     assert result.recording.n_frames < rec.n_frames  # it stopped recording before the source ended
     counts = [m["count"] for m, _ in messages]
     assert counts == sorted(counts) and counts[-1] == 3
+    first, keep = messages[0]  # the Start is answered before the first frame is counted
+    assert first["state"] == "starting" and first["count"] == 0 and first["session_id"] == result.session_id
+    assert {m["state"] for m, _ in messages[1:-1]} == {"recording"}
     last, keep = messages[-1]
     assert keep and last["state"] == "ended" and last["reason"] == "target"
     assert last["session_id"] == result.session_id and all(m["set_id"] == messages[0][0]["set_id"] for m, _ in messages)
