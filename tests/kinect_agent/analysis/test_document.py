@@ -160,6 +160,8 @@ ENGLISH = {
     "the patient was seated or crouching: balance is measured while standing": ("not_standing", {}),
     "the patient never stood still with both feet down for 2.5 s in total (steps, a raised leg or a bent trunk do not "
     "count)": ("never_still", {"seconds": 2.5}),
+    # newer than schema 3 (never stored as words), read back all the same, as every message is
+    "the filtered curve reaches 12° beyond what the camera measured": ("beyond_raw", {"by": 12.0}),
 }
 # fmt: on
 
@@ -188,7 +190,7 @@ def test_reasons_of_schema_2_in_every_place_upgrade_and_unknown_texts_stay_texts
     texts = list(ENGLISH)
     older = "an analysis of 2026-11-20 wrote this"  # matches no message (nor does a reworded one)
     stored["quality"] = stored["quality"] | {"ok": False, "reasons": [texts[2], older, texts[4]]}
-    stored["balance"], stored["balance_missing"] = None, texts[-1]
+    stored["balance"], stored["balance_missing"] = None, texts[12]
     stored["indicators"]["balance"] |= {"missing": texts[11], "score": None, "value": None}
     stored["range_of_motion_95_withheld"]["shoulder_abduction_L"] = texts[0].replace("frames", "images")
     doc = read_document(stored)
