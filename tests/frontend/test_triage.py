@@ -68,14 +68,15 @@ def test_dashboard_fits_the_width(page, live_server, width):
 
 
 def _number(x: float, digits: int, locale: str) -> str:
-    """Returns x as Intl.NumberFormat(tag, {maximumFractionDigits: digits}) writes it (half away from zero, grouped)."""
+    """Returns x as Intl.NumberFormat(tag, {maximumFractionDigits: digits}) writes it: it rounds the number's shortest
+    decimal form (JavaScript's and Python's repr: 120.85, not the double's 120.8499…) half away from zero, grouped."""
     import decimal
 
     from babel.numbers import format_decimal
 
     with decimal.localcontext() as ctx:
         ctx.rounding = decimal.ROUND_HALF_UP
-        return format_decimal(decimal.Decimal(x), format="#,##0." + "#" * digits if digits else "#,##0",
+        return format_decimal(decimal.Decimal(repr(x)), format="#,##0." + "#" * digits if digits else "#,##0",
                               locale=locale)  # fmt: skip
 
 
