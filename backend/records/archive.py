@@ -46,6 +46,9 @@ FORMAT_VERSION = "3"  # 2: metrics_earlier, settings.json, camera_sets.json, rem
 # the skeleton the .khs file already holds, for motion software, and would add 1.7-1.9 s of CPU and 2.1-2.2 MB (4 times
 # the .khs) per 4.5-minute session (bench/README.md); the session page still downloads them.
 EXPORT_FORMATS = ("csv", "fhir")
+# The zip is written to a temporary file kept in memory up to this size, on disk beyond it: a build holds one member
+# at a time (a session file, an export, a JSON list), however many sessions the archive has (bench/README.md).
+SPOOL_MAX_BYTES = 2 * 1024 * 1024
 README = """Kinect Home Coach: all data held about patient {patient_id} ({email})
 Made {made} (UTC) at the request of {who}. Archive format version {version}.
 
@@ -163,7 +166,8 @@ class _Zip:
 
 @dataclass(frozen=True)
 class Archive:
-    """A built archive: `file` (a zip positioned at 0; the caller closes it), how many sessions it holds, and those
+    """A built archive: `file` (a zip positioned at 0, on disk past SPOOL_MAX_BYTES; the caller closes it), how many
+    sessions it holds, and those
     it holds incomplete, each with what is missing and why (`incomplete`: session id -> reasons, also in README.txt
     and manifest.json)."""
 
@@ -291,7 +295,7 @@ def build_archive(
     """
     pid = patient.id
     made = _iso(made_at or dt.datetime.now(dt.UTC))
-    tmp = tempfile.SpooledTemporaryFile(max_size=64 * 1024 * 1024)
+    tmp = tempfile.SpooledTemporaryFile(max_size=SPOOL_MAX_BYTES)
     with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as z:
         out = _Zip(z)
         out.json("account.json", _row(patient, ("id", "email", "full_name", "role", "is_active", "created_at",

@@ -4,7 +4,8 @@ Building the archive (backend.records.archive) reads every session file of the p
 0.1-1 s of CPU per session, minutes for a patient with years of data (bench/README.md), beyond a reverse proxy's
 read timeout. So a request never builds it: it asks (`ask_archive`: queues the job `archive:<patient id>:<covers>`
 once, whoever asks and however often) and answers where the build is; the worker (`run`) writes the zip to the
-object store (content-addressed, sha256 checked on every read) and points the patient's one `patient_archive` row
+object store (content-addressed, sha256 checked on every read; written from a temporary file a chunk at a time, so a
+build's memory does not grow with the archive) and points the patient's one `patient_archive` row
 at it, replacing the one before (whose object is deleted after the commit). `covers` is the sha256 of the
 patient's data the archive is made from (`covers_of`): a new session, a re-analysis, a new plan, advice or reply
 makes the kept archive stale, and the next ask builds a new one. While it runs the job reports how many sessions
@@ -216,10 +217,9 @@ def run(*, db_session: Session, patient_id: int, requested_by: str, settings: Se
     built = build_archive(db_session=db_session, patient=patient, requested_by=requested_by, settings=settings,
                           progress=progress_reporter(db_session, job_id), made_at=made_at)  # fmt: skip
     try:
-        data = built.file.read()
+        obj = get_store().put_file(KIND, built.file)  # streamed from the spooled file: never all of it in memory
     finally:
         built.file.close()
-    obj = get_store().put(KIND, data)
     name = f"patient-{patient_id}-data-{made_at:%Y%m%d}.zip"
     keep_row(db_session, PatientArchive, {"patient_id": patient_id},
              {"covers": covers, "sessions": built.sessions, "incomplete": len(built.incomplete), "data_key": obj.key,

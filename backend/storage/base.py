@@ -1,22 +1,36 @@
-"""The object store interface: put bytes under their sha256, read them back checked, list and delete keys."""
+"""The object store interface: put bytes (or a file, a chunk at a time) under their sha256, read them back checked,
+list and delete keys."""
 
 from __future__ import annotations
 
 import hashlib
+import io
 import re
 from abc import ABC, abstractmethod
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import IO
 
 from backend.storage.errors import StoredObjectCorrupt
 
 KINDS = ("session", "replay", "detail", "export", "archive")
 _KEY = re.compile(r"^(session|replay|detail|export|archive)/[0-9a-f]{2}/[0-9a-f]{64}$")
+CHUNK = 1024 * 1024  # bytes read at a time from a file being stored or checked
 
 
 def sha256_hex(data: bytes) -> str:
     """Returns the SHA-256 of data as 64 lowercase hex digits."""
     return hashlib.sha256(data).hexdigest()
+
+
+def file_sha256(file: IO[bytes]) -> tuple[str, int]:
+    """Returns (SHA-256 as 64 hex digits, size in bytes) of a file read from where it is to its end, a CHUNK at a
+    time."""
+    digest, size = hashlib.sha256(), 0
+    while chunk := file.read(CHUNK):
+        digest.update(chunk)
+        size += len(chunk)
+    return digest.hexdigest(), size
 
 
 def object_key(kind: str, sha256: str) -> str:
@@ -50,8 +64,19 @@ class ObjectStore(ABC):
         """Stores data atomically (a reader sees all of it or nothing) and returns its key and hash."""
         digest = sha256_hex(data)
         key = object_key(kind, digest)
-        self._put(key, data, digest)
+        self._put_file(key, io.BytesIO(data), digest, len(data))
         return StoredObject(key=key, sha256=digest, size=len(data))
+
+    def put_file(self, kind: str, file: IO[bytes]) -> StoredObject:
+        """Stores the bytes of a seekable file, from its start, atomically as put does, reading it a CHUNK at a time
+        (once to hash it, once to write it): a file of any size costs no more memory than a chunk. Returns its key
+        and hash."""
+        file.seek(0)
+        digest, size = file_sha256(file)
+        key = object_key(kind, digest)
+        file.seek(0)
+        self._put_file(key, file, digest, size)
+        return StoredObject(key=key, sha256=digest, size=size)
 
     def get(self, key: str, sha256: str) -> bytes:
         """Returns the bytes of key; raises StoredObjectMissing, or StoredObjectCorrupt when their sha256 differs."""
@@ -76,7 +101,9 @@ class ObjectStore(ABC):
         return None
 
     @abstractmethod
-    def _put(self, key: str, data: bytes, sha256: str) -> None: ...
+    def _put_file(self, key: str, file: IO[bytes], sha256: str, size: int) -> None:
+        """Writes `size` bytes read from the file's position (their sha256 given) under key, atomically, a chunk at a
+        time; nothing when key already holds them."""
 
     @abstractmethod
     def _get(self, key: str) -> bytes:

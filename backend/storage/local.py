@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import os
+import shutil
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+from typing import IO
 
-from backend.storage.base import ObjectStore, is_object_key, sha256_hex
+from backend.storage.base import CHUNK, ObjectStore, file_sha256, is_object_key
 from backend.storage.errors import StorageError, StoredObjectMissing
 
 
@@ -24,16 +26,18 @@ class LocalStore(ObjectStore):
             raise StorageError(f"invalid object key {key!r}")
         return self.root / key
 
-    def _put(self, key: str, data: bytes, sha256: str) -> None:
+    def _put_file(self, key: str, file: IO[bytes], sha256: str, size: int) -> None:
         path = self._path(key)
         try:
-            if path.is_file() and sha256_hex(path.read_bytes()) == sha256:
-                return  # already there: content-addressed
+            if path.is_file() and path.stat().st_size == size:
+                with path.open("rb") as there:
+                    if file_sha256(there)[0] == sha256:
+                        return  # already there: content-addressed
             path.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
             try:
                 with os.fdopen(fd, "wb") as f:
-                    f.write(data)
+                    shutil.copyfileobj(file, f, CHUNK)
                     f.flush()
                     os.fsync(f.fileno())
                 os.replace(tmp, path)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import base64
 import binascii
 from collections.abc import Callable, Iterator
-from typing import Any
+from typing import IO, Any
 
 from backend.storage.base import ObjectStore, is_object_key
 from backend.storage.errors import StorageError, StoredObjectMissing
@@ -67,17 +67,19 @@ class S3Store(ObjectStore):
         except BotoCoreError as exc:
             raise StorageError(f"cannot {what} {key} in bucket {self.bucket} at {self.endpoint}: {exc}") from None
 
-    def _put(self, key: str, data: bytes, sha256: str) -> None:
+    def _put_file(self, key: str, file: IO[bytes], sha256: str, size: int) -> None:
         name = self._name(key)
         try:
             head = self._call("check", key, self.client.head_object, Key=name)
-            if head.get("Metadata", {}).get("sha256") == sha256 and head.get("ContentLength") == len(data):
+            if head.get("Metadata", {}).get("sha256") == sha256 and head.get("ContentLength") == size:
                 return  # already there: content-addressed
         except StoredObjectMissing:
             pass
         checksum = base64.b64encode(binascii.unhexlify(sha256)).decode()
-        self._call("write", key, self.client.put_object, Key=name, Body=data, ChecksumSHA256=checksum,
-                   Metadata={"sha256": sha256})  # fmt: skip
+        # one PUT, its body streamed from the file (botocore sends a file object in chunks), checked by S3 against
+        # the sha256: a reader sees the old object or the whole new one
+        self._call("write", key, self.client.put_object, Key=name, Body=file, ContentLength=size,
+                   ChecksumSHA256=checksum, Metadata={"sha256": sha256})  # fmt: skip
 
     def _get(self, key: str) -> bytes:
         body = self._call("read", key, self.client.get_object, Key=self._name(key))["Body"]

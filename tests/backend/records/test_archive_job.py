@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import datetime as dt
 import io
+import tracemalloc
 import zipfile
 
+import numpy as np
 import pytest
 import sqlalchemy as sa
 
@@ -19,8 +21,11 @@ from backend.records.archive import build_archive
 from backend.records.models import PatientArchive
 from backend.records.retention import apply_retention
 from backend.sessions.models import ExerciseSession
+from backend.storage import factory, get_store
 from backend.storage.check import check
+from tests.backend.object_stores import local_store
 from tests.backend.records.test_patient_data import _upload
+from tests.backend.session_rows import store_session
 
 
 def _count(db_session, model, *where) -> int:
@@ -212,3 +217,38 @@ def test_storage_check_reads_the_kept_archive_and_retention_deletes_it(
     db_session.commit()
     assert _archive_keys(with_store) == [] and _count(db_session, PatientArchive) == 0, "it held the removed file"
     assert client.get(f"/api/v1/patients/{patient.id}/archive/status", headers=headers).json()["state"] == "none"
+
+
+def test_the_worker_builds_and_stores_an_archive_in_bounded_memory(db_session, settings, make_user, exercise,
+                                                                    tmp_path):  # fmt: skip
+    """An archive 24 times a session file is built into a spooled temporary file and stored from it a chunk at a
+    time: the build's Python memory (tracemalloc: bytes, buffers, arrays) peaks far below the zip's size, where
+    holding the zip (and reading it back to store it) would take twice the size. The local store: moto's S3 server
+    runs in this process and keeps what it is sent in its memory (test_stores holds both to the same bytes)."""
+    before = factory._store
+    factory.use_store(local_store(tmp_path))
+    try:
+        patient = make_user("patient")
+        rng, first = np.random.default_rng(20261128), dt.datetime(2026, 10, 1, tzinfo=dt.UTC)
+        for k in range(24):  # 2 MiB of random bytes each: deflate cannot shrink them, the zip is as large
+            data = rng.bytes(2 * 2**20)
+            obj = get_store().put("session", data)
+            row = store_session(db_session, patient, exercise, first + dt.timedelta(days=k), data=b"")
+            row.file_bytes, row.file_key, row.content_hash, row.file_size = None, obj.key, obj.sha256, obj.size
+        db_session.flush()
+        tracemalloc.start()
+        try:
+            made = prepared_archive.run(db_session=db_session, patient_id=patient.id, requested_by="the patient",
+                                        settings=settings)  # fmt: skip
+            peak = tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+        kept = prepared_archive.kept_archive(db_session=db_session, patient_id=patient.id)
+        assert made["built"] and kept is not None and kept.sessions == 24
+        assert kept.size > 48 * 2**20, kept.size
+        said = f"the build peaked at {peak / 2**20:.1f} MiB for a {kept.size / 2**20:.1f} MiB zip"
+        assert peak < kept.size / 2.5, said
+        with zipfile.ZipFile(io.BytesIO(prepared_archive.read_archive(kept))) as z:
+            assert sum(n.startswith("sessions/") for n in z.namelist()) == 24 and z.testzip() is None
+    finally:
+        factory.use_store(before)

@@ -6,6 +6,7 @@ import datetime as dt
 import hashlib
 import uuid
 from collections.abc import Iterator
+from typing import IO
 
 import pytest
 import sqlalchemy as sa
@@ -81,8 +82,8 @@ class _CrashingStore(ObjectStore):
             raise OSError("killed")
         return self.store.put(kind, data)
 
-    def _put(self, key: str, data: bytes, sha256: str) -> None:
-        self.store._put(key, data, sha256)
+    def _put_file(self, key: str, file: IO[bytes], sha256: str, size: int) -> None:
+        self.store._put_file(key, file, sha256, size)
 
     def _get(self, key: str) -> bytes:
         return self.store._get(key)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import tempfile
 
 import pytest
 
@@ -19,6 +20,18 @@ def test_put_then_get_returns_the_bytes_under_their_sha256(any_store):
     assert obj.key == f"session/{digest[:2]}/{digest}"
     assert any_store.get(obj.key, digest) == data
     assert any_store.put("session", data) == obj  # the same bytes: the same key, written once
+    assert list(any_store.keys()) == [obj.key]
+
+
+def test_a_file_put_a_chunk_at_a_time_is_stored_as_its_bytes_would_be(any_store):
+    data = bytes(range(256)) * (3 * 2**12 + 7)  # 3 MiB and some: several chunks (base.CHUNK), the last one short
+    with tempfile.TemporaryFile() as file:
+        file.write(data)  # left at its end: put_file stores it from its start
+        obj = any_store.put_file("archive", file)
+        digest = hashlib.sha256(data).hexdigest()
+        assert (obj.key, obj.sha256, obj.size) == (object_key("archive", digest), digest, len(data))
+        assert any_store.get(obj.key, digest) == data
+        assert any_store.put("archive", data) == obj == any_store.put_file("archive", file), "the same object"
     assert list(any_store.keys()) == [obj.key]
 
 
