@@ -124,6 +124,12 @@ class ArchiveReplaced(AppError):
     status_code = 410
 
 
+class ArchiveNotMade(AppError):
+    """The build of a patient's archive failed for good (its job's tries are spent); the message says why."""
+
+    status_code = 500
+
+
 class MetricsUnreadable(AppError):
     """A session's stored metrics document that no schema version reads (e.g. a reason id no message has): the
     server's data fault, named rather than hidden."""

@@ -91,17 +91,32 @@ def claim(*, db_session: Session, worker: str, kinds: tuple[str, ...], now: dt.d
         if job_id is None:
             db_session.commit()
             return None
-        done = db_session.execute(
-            update(Job)
-            .where(Job.id == job_id, _claimable(now))
-            .values(status="running", locked_by=worker, locked_until=now + LEASE, attempts=Job.attempts + 1)
-        )
-        taken = cast("CursorResult[Any]", done).rowcount  # an UPDATE's result is a CursorResult
-        db_session.commit()
-        if taken:
+        if _take(db_session, Job.id == job_id, worker, now):
             return db_session.get(Job, job_id)
         now = None
     return None
+
+
+def claim_key(*, db_session: Session, key: str, worker: str, now: dt.datetime | None = None) -> Job | None:
+    """Takes the job `key` for `worker` when it is due (or its lease expired) and commits; None when it is not (no
+    such job, not due, done, failed, or another worker holds it). One UPDATE whose WHERE says claimable: of two
+    claims at once (workers, or a command that runs the job itself) exactly one takes it, as with claim."""
+    now = now or utcnow()
+    taken = _take(db_session, Job.key == key, worker, now)
+    return db_session.scalar(select(Job).where(Job.key == key)) if taken else None
+
+
+def _take(db_session: Session, which: ColumnElement[bool], worker: str, now: dt.datetime) -> bool:
+    """Marks the claimable job `which` selects running for `worker` (leased until now + LEASE) and commits; returns
+    whether it did (another worker may have taken it first)."""
+    done = db_session.execute(
+        update(Job)
+        .where(which, _claimable(now))
+        .values(status="running", locked_by=worker, locked_until=now + LEASE, attempts=Job.attempts + 1)
+    )
+    taken = cast("CursorResult[Any]", done).rowcount  # an UPDATE's result is a CursorResult
+    db_session.commit()
+    return bool(taken)
 
 
 def finish(*, db_session: Session, job: Job, result: dict[str, Any]) -> None:

@@ -18,6 +18,7 @@ import traceback
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from backend.jobs import queue
@@ -115,17 +116,46 @@ def work(
                     return ran
                 time.sleep(idle_s)
                 continue
-            try:
-                result = run_job(db_session, job, settings)
-            except Exception as exc:  # noqa: BLE001 - any failure is retried, then recorded on the job
-                db_session.rollback()
-                job = db_session.merge(job)
-                queue.fail(db_session=db_session, job=job, error=f"{type(exc).__name__}: {exc}\n"
-                           f"{traceback.format_exc(limit=3)}", final=isinstance(exc, PermanentJobError))  # fmt: skip
-            else:
-                queue.finish(db_session=db_session, job=job, result=result)  # commits the work with the job
+            run_claimed(db_session, job, settings)
             ran += 1
     return ran
+
+
+def run_claimed(db_session: Session, job: Job, settings: Settings) -> Job:
+    """Runs a job this process claimed and marks it done, committing its work with it; or, when it raises, rolls
+    its work back and marks it failed (queued again while it has tries left). Returns the job."""
+    try:
+        result = run_job(db_session, job, settings)
+    except Exception as exc:  # noqa: BLE001 - any failure is retried, then recorded on the job
+        db_session.rollback()
+        job = db_session.merge(job)
+        queue.fail(db_session=db_session, job=job, error=f"{type(exc).__name__}: {exc}\n"
+                   f"{traceback.format_exc(limit=3)}", final=isinstance(exc, PermanentJobError))  # fmt: skip
+    else:
+        queue.finish(db_session=db_session, job=job, result=result)  # commits the work with the job
+    return job
+
+
+def run_here_or_wait(
+    *, db_session: Session, key: str, settings: Settings, name: str, poll_s: float = 0.5
+) -> Job | None:
+    """Runs the queued job `key` in this process, or waits while a worker runs it, until it is done or failed for
+    good; returns it then (None when it is gone: erased meanwhile). For a command that wants a job's result now
+    without doing the work a second time: it claims the job as a worker would (queue.claim_key), so a worker and
+    the command never both run it. A job queued again after a failure (its retry delay) is waited for, then run."""
+    while True:
+        job = queue.claim_key(db_session=db_session, key=key, worker=name)
+        if job is not None:
+            job = run_claimed(db_session, job, settings)
+            if job.status != "queued":
+                return job
+            continue
+        db_session.expire_all()
+        job = db_session.scalar(select(Job).where(Job.key == key))
+        db_session.commit()  # no snapshot held while waiting
+        if job is None or job.status in ("done", "failed"):
+            return job
+        time.sleep(poll_s)
 
 
 class EmbeddedWorker:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
+import os
+import socket
 from pathlib import Path
 
 from sqlalchemy import func, select
@@ -76,12 +78,14 @@ def run(args: argparse.Namespace, db_session: Session) -> str:
 
 
 def _write_archive(db_session: Session, patient: User, requested_by: str, out: Path) -> str:
-    """Writes the patient's kept archive to `out`, built here first (and kept, as a worker keeps it) unless the kept
-    one covers today's data; returns what it did. Built in the command, not queued: an admin on the server has no
-    proxy timeout to fear and gets the file without a worker running; kept, so the next ask from the page (or from
-    here) does not build it again."""
-    made = prepared_archive.run(db_session=db_session, patient_id=patient.id, requested_by=requested_by,
-                                settings=get_settings())  # fmt: skip
+    """Writes the patient's kept archive to `out`, built first unless the kept one covers today's data; returns what
+    it did. The command asks for the build as the page does and runs that job itself (as a worker would; or waits
+    for the worker already running it: prepared_archive.build_now), so an admin on the server gets the file without
+    a worker running, the archive of the same data is built and stored once however many ask at the same moment,
+    and the next ask from the page (or from here) finds it kept. Commits (the audit row with the ask)."""
+    name = f"{socket.gethostname()}:{os.getpid()}:cli"  # as a worker is named (the job's locked_by)
+    made = prepared_archive.build_now(db_session=db_session, patient=patient, requested_by=requested_by,
+                                      settings=get_settings(), name=name)  # fmt: skip
     kept = prepared_archive.kept_archive(db_session=db_session, patient_id=patient.id)
     if kept is None:  # run keeps one for an existing patient, or raises
         raise InvalidInput(f"the archive of patient {patient.id} could not be kept")

@@ -10,8 +10,9 @@ at it, replacing the one before (whose object is deleted after the commit). `cov
 patient's data the archive is made from (`covers_of`): a new session, a re-analysis, a new plan, advice or reply
 makes the kept archive stale, and the next ask builds a new one. While it runs the job reports how many sessions
 are written (`Job.result["progress"]`) and renews its lease, so a long build is neither shown as stuck nor taken
-by a second worker. `coach-server patient-data archive` (backend.records.commands) calls `run` itself, for an admin on
-the server, and keeps what it builds the same way.
+by a second worker. `coach-server patient-data archive` (backend.records.commands) asks the same way and then runs the
+same job itself (`build_now`: claimed as a worker claims it, or waited for while a worker runs it), so an archive of
+the same data is built and stored once, whether a worker, the command or both at once are on it.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from backend.camera.models import CameraConsent, CameraSet
 from backend.config import Settings
 from backend.database import keep_row, utcnow
 from backend.devices.models import Device
+from backend.exceptions import ArchiveNotMade
 from backend.feeling.models import SessionFeeling
 from backend.i18n import ENGLISH, N_, Translator
 from backend.jobs.asking import WORDS, ask, waiting_words
@@ -68,6 +70,7 @@ class ArchiveState:
     kept: PatientArchive | None = None
     current: bool = False
     progress: tuple[int, int] | None = None
+    job: Job | None = None  # the build's job, as ask_archive found or queued it
 
 
 def _rows(db_session: Session, query: Executable) -> list[list[Any]]:
@@ -174,7 +177,7 @@ def ask_archive(*, db_session: Session, patient: User, requested_by: str, t: Tra
                 payload={"patient_id": patient.id, "requested_by": requested_by}, t=t)  # fmt: skip
     if asked.state == "failed":
         return ArchiveState("failed", _not_made(t, asked.detail), kept)
-    return ArchiveState("preparing", asked.detail, kept, progress=_progress(asked.job))
+    return ArchiveState("preparing", asked.detail, kept, progress=_progress(asked.job), job=asked.job)
 
 
 def read_archive(archive: PatientArchive) -> bytes:
@@ -220,10 +223,22 @@ def run(*, db_session: Session, patient_id: int, requested_by: str, settings: Se
         obj = get_store().put_file(KIND, built.file)  # streamed from the spooled file: never all of it in memory
     finally:
         built.file.close()
+    # The build wrote nothing: end its long read transaction before writing. On SQLite (WAL) a transaction whose
+    # snapshot predates another connection's commit cannot become a writer ("database is locked" at once, whatever
+    # the busy timeout): a request's audit row written during the build would fail it, and a second try build again.
+    db_session.commit()
     name = f"patient-{patient_id}-data-{made_at:%Y%m%d}.zip"
-    keep_row(db_session, PatientArchive, {"patient_id": patient_id},
-             {"covers": covers, "sessions": built.sessions, "incomplete": len(built.incomplete), "data_key": obj.key,
-              "data_hash": obj.sha256, "size": obj.size, "file_name": name, "made_at": made_at})  # fmt: skip
+    try:
+        keep_row(db_session, PatientArchive, {"patient_id": patient_id},
+                 {"covers": covers, "sessions": built.sessions, "incomplete": len(built.incomplete),
+                  "data_key": obj.key, "data_hash": obj.sha256, "size": obj.size, "file_name": name,
+                  "made_at": made_at})  # fmt: skip
+        db_session.flush()
+    except Exception:  # no row names the object: it goes, rather than wait in the store for `storage check`
+        db_session.rollback()
+        if unnamed_keys(db_session, {obj.key}):
+            get_store().delete(obj.key)
+        raise
     stale = {k for k in (old_key,) if k and k != obj.key}
     if kept_archive(db_session=db_session, patient_id=patient_id) is None:  # erased meanwhile: nothing may stay
         stale.add(obj.key)
@@ -235,3 +250,25 @@ def run(*, db_session: Session, patient_id: int, requested_by: str, settings: Se
         "incomplete": len(built.incomplete),
         "incomplete_sessions": list(built.incomplete),
     }
+
+
+def build_now(*, db_session: Session, patient: User, requested_by: str, settings: Settings, name: str,
+              poll_s: float = 0.5) -> dict[str, Any]:  # fmt: skip
+    """Returns the result of the patient's archive job (run's) once the kept archive covers today's data ("built":
+    whether it was built now, here or by a worker, rather than kept from before): asks as a request does
+    (ask_archive, committed), then runs the job here unless a worker holds it, and then waits for that worker
+    (backend.jobs.worker.run_here_or_wait). Commits; raises ArchiveNotMade when the build failed for good.
+    name: who runs it, as a worker is named (the job's locked_by while it runs)."""
+    from backend.jobs.worker import run_here_or_wait
+
+    asked = ask_archive(db_session=db_session, patient=patient, requested_by=requested_by)
+    db_session.commit()
+    if asked.state == "ready":
+        return {"patient_id": patient.id, "built": False}
+    if asked.state == "failed" or asked.job is None:
+        raise ArchiveNotMade(asked.detail or WORDS[KIND].not_built)
+    job = run_here_or_wait(db_session=db_session, key=asked.job.key, settings=settings, name=name, poll_s=poll_s)
+    if job is None or job.status != "done":
+        why = error_words(job.error, ENGLISH) if job is not None and job.error else None
+        raise ArchiveNotMade(why or WORDS[KIND].not_built)
+    return dict(job.result or {})
