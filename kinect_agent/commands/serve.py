@@ -2,9 +2,11 @@
 
 It opens one connection to the server (kinect_agent/live/channel.py; no port is opened at home) and waits for the
 patient to press Start on their page. Each Start records one set (live/set_recorder.py) with live feedback, then
-queues the session on disk and uploads it. At start-up it first queues the sets a crash interrupted (journal.py:
-those with at least 5 s of frames) and uploads whatever waits in the queue; it also retries the queue every
---upload-every seconds. Ctrl-C or SIGTERM ends a running set (kept) and stops.
+queues the session on disk and uploads it. At start-up it connects at once (the patient's page shows the home
+computer ready), uploads whatever waits in the queue, and meanwhile, in a thread of its own, filters and queues the
+sets a crash interrupted (journal.py: those with at least 5 s of frames; a long set takes seconds to filter) and then
+uploads them; it also retries the queue every --upload-every seconds. Ctrl-C or SIGTERM ends a running set (kept),
+lets the recovery finish, and stops.
 """
 
 from __future__ import annotations
@@ -83,11 +85,12 @@ class Uploads:
             self._wake.clear()
 
 
-def recover_interrupted(queue: SessionQueue, folder: Path, recorded_by: dict[str, int] | None = None) -> int:
+def recover_interrupted(queue: SessionQueue, folder: Path, recorded_by: dict[str, int] | None = None,
+                        interrupted: list[journal.Interrupted] | None = None) -> int:  # fmt: skip
     """Queues the sets a crash interrupted (those long enough, as recorded by the pairing recorded_by) and removes
-    their journals; returns how many."""
+    their journals; returns how many. interrupted: those journal.recover listed (default: listed now)."""
     kept = 0
-    for found in journal.recover(folder):
+    for found in journal.recover(folder) if interrupted is None else interrupted:
         if found.recording is not None:
             queue_session(queue, found.recording, created_at=found.created_at, session_id=found.session_id,
                           recorded_by=recorded_by, say=log)  # fmt: skip
@@ -176,6 +179,32 @@ class Service:
             self.thread.join(timeout=120)
 
 
+class Recovery:
+    """Filters and queues the interrupted sets in a thread of its own, then asks for an upload pass: the agent is
+    connected (and shown ready) while a long set is filtered. The sets are listed before it starts, so a set
+    recorded meanwhile (its own journal in the same folder) is never taken for an interrupted one."""
+
+    def __init__(self, service: Service, uploads: Uploads) -> None:
+        self.found = journal.recover(service.journal_dir)
+        self._args = (service.queue, service.journal_dir, service.config.recorded_by, self.found)
+        self._uploads = uploads
+        self._thread = threading.Thread(target=self._run, name="recovery", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        if not self.found:
+            return
+        try:
+            if recover_interrupted(*self._args):
+                self._uploads.now()
+        except Exception as exc:  # noqa: BLE001 - the journals stay: the next start recovers them
+            log(f"recovering the interrupted sets failed ({type(exc).__name__}: {exc}); tried again at the next start")
+
+    def join(self, timeout_s: float = 120.0) -> None:
+        """Waits for the recovery to end (at a stop: its sets queued before the last upload pass)."""
+        self._thread.join(timeout_s)
+
+
 def _warm_up() -> None:
     """Readies the live loop's compiled code (kinect_agent.live.warmup) and logs how long it took."""
     from kinect_agent.live.warmup import warm_up
@@ -196,8 +225,8 @@ def run(args: argparse.Namespace) -> int:
     config = load_config(args.home)
     service = Service(args, config)
     service.queue.recover_held(older_than_s=0.0)  # this is the only agent of this queue: nothing is in progress
-    recover_interrupted(service.queue, service.journal_dir, config.recorded_by)
     uploads = Uploads(service.queue, config, args.upload_every)
+    recovery = Recovery(service, uploads)  # in the background: the command stream below connects now
     publisher = Publisher(config.server_url, config.device_token, log=log)
     stream = CommandStream(config.server_url, config.device_token, log=log)
     stop = threading.Event()
@@ -216,6 +245,7 @@ def run(args: argparse.Namespace) -> int:
         stop.set()
         stream.close()
         service.finish()
+        recovery.join()
         publisher.close()
         uploads.close()
     return 0
