@@ -1,6 +1,6 @@
 """The patient's archive: what its request costs when it builds the zip, against asking a worker (prints numbers).
 
-    .venv/bin/python -m bench.archive_job [--sessions 50] [--reps 30] [--repeats 5] [--database-url URL]
+    .venv/bin/python -m bench.archive_job [--sessions 50] [--reps 30] [--repeats 5] [--database-url URL] [--rss 3]
 
 Migrates a new database (default: a SQLite file in a temporary folder; a PostgreSQL URL's public schema is emptied
 first), uploads --sessions simulated squat sets of --reps repetitions for one patient through the ASGI app (as the
@@ -10,13 +10,17 @@ home agent does: the server analyses and stores each), then times, in this proce
     GET, --repeats times;
   * a tree where it answers 202 (the worker builds it): the first ask (POST, queues the job), a repeated ask, GET
     .../archive/status, the worker's build of the job (backend.jobs.worker.work, --builds times, the kept archive
-    dropped before each), and the download of the kept zip.
+    dropped before each), and the download of the kept zip;
+  * with --rss N, first N builds each in a worker process of its own (this script run with --child-build: the
+    modules imported, its peak resident set reset through /proc/self/clear_refs, then one job): the process's
+    resident set before the job and its peak during it (VmRSS, VmHWM; MiB), and the growth, the build's own memory.
 Run from the tree to measure (`cd /work/main && PYTHONPATH=$PWD python /path/to/bench/archive_job.py` for main).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import tempfile
@@ -63,13 +67,82 @@ def _engine(url: str) -> sa.Engine:
     return engine
 
 
+def _status_mib(field: str) -> float:
+    """Returns one memory line of /proc/self/status (VmRSS, VmHWM) in MiB."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith(field + ":"):
+            return int(line.split()[1]) / 1024
+    raise RuntimeError(f"no {field} in /proc/self/status")
+
+
+def _child_build(url: str, storage_dir: str) -> None:
+    """Runs one archive job of the database at url, as `coach-server worker --once` would, and prints the resident
+    set before it and its peak during it (JSON, MiB)."""
+    import json
+
+    from backend.config import Settings
+    from backend.database import import_all_models, make_engine
+    from backend.jobs.worker import work
+    from backend.main import create_app  # noqa: F401 - every module a job imports, imported before the reset
+    from backend.records import archive, prepared_archive  # noqa: F401
+    from backend.storage import use_store
+    from backend.storage.local import LocalStore
+
+    import_all_models()
+    use_store(LocalStore(storage_dir))
+    settings = Settings(ENVIRONMENT="local", CHECK_MIGRATIONS=False, DATABASE_URL=url, STORAGE_DIR=storage_dir)
+    make = sessionmaker(make_engine(url), expire_on_commit=False)
+    Path("/proc/self/clear_refs").write_text("5")  # VmHWM := VmRSS now (Linux): the peak of what follows
+    before = _status_mib("VmRSS")
+    ran = work(sessionmaker=make, settings=settings, name="bench-rss", once=True, kinds=("archive",))
+    print(json.dumps({"ran": ran, "before_mib": before, "peak_mib": _status_mib("VmHWM")}))
+
+
+def _rss_builds(base: str, headers: dict[str, str], client: TestClient, make: Callable[[], Session], url: str,
+                storage_dir: str, n: int) -> None:  # fmt: skip
+    """Builds the archive n times, each in a worker process of its own; prints its memory."""
+    import json
+    import subprocess
+
+    from backend.jobs.models import Job
+    from backend.records.models import PatientArchive
+
+    rows = []
+    for _ in range(n):
+        with make() as db:  # drop the kept archive: the next ask builds it again
+            db.execute(sa.delete(PatientArchive))
+            db.execute(sa.delete(Job).where(Job.kind == "archive"))
+            db.commit()
+        assert client.post(base, headers=headers).status_code == 202
+        done = subprocess.run([sys.executable, __file__, "--child-build", url, storage_dir], capture_output=True,
+                              text=True, check=True, env=os.environ | {"PYTHONPATH": os.getcwd()})  # fmt: skip
+        got = json.loads(done.stdout.strip().splitlines()[-1])
+        assert got["ran"] == 1, got
+        rows.append((got["before_mib"], got["peak_mib"]))
+    with make() as db:  # as before: the job queued by one ask, no archive kept
+        db.execute(sa.delete(PatientArchive))
+        db.execute(sa.delete(Job).where(Job.kind == "archive"))
+        db.commit()
+    assert client.post(base, headers=headers).status_code == 202
+    grew = [peak - before for before, peak in rows]
+    print(
+        f"worker process, one build: resident before {statistics.median(r[0] for r in rows):.0f} MiB, peak "
+        f"{statistics.median(r[1] for r in rows):.0f} MiB, growth {statistics.median(grew):.0f} MiB (median of {n}; "
+        f"runs {', '.join(f'{g:.0f}' for g in grew)} MiB)"
+    )
+
+
 def main() -> None:
+    if sys.argv[1:2] == ["--child-build"]:
+        _child_build(sys.argv[2], sys.argv[3])
+        return
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sessions", type=int, default=50)
     ap.add_argument("--reps", type=int, default=30)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--builds", type=int, default=3)
     ap.add_argument("--database-url", default="")
+    ap.add_argument("--rss", type=int, default=0, help="builds in a worker process of its own, memory measured")
     args = ap.parse_args()
 
     from backend.config import Settings, get_settings
@@ -116,6 +189,8 @@ def main() -> None:
         )
         return
     assert first.status_code == 202, first.text
+    if args.rss:
+        _rss_builds(base, headers, client, make, url, str(tmp / "objects"), args.rss)
     _after(client, base, headers, make, settings, args, (wall, cpu))
 
 
