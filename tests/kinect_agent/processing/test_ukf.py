@@ -203,6 +203,25 @@ def test_compiled_random_walk_smoother_equals_numpys_bit_for_bit(seed: int, scal
     assert not np.array_equal(ref_P, Ps)  # it smoothed something
 
 
+@pytest.mark.parametrize("compiled", [True, False])
+def test_smoothing_the_means_only_gives_the_same_means_and_leaves_the_covariances_filtered(compiled: bool) -> None:
+    """covariances=False (pipeline.filter_recording): the gain needs only the filtered covariances, so the means are
+    the full smoother's bit for bit and Ps comes back as it went in."""
+    rng = np.random.default_rng(4)
+    T, n = 150, 36
+    A = 0.1 * rng.normal(size=(T, n, n))
+    Ps = A @ np.swapaxes(A, 1, 2) + 1e-3 * np.eye(n)
+    Ps = 0.5 * (Ps + np.swapaxes(Ps, 1, 2))
+    xs = rng.normal(size=(T, n))
+    Q = np.diag(rng.uniform(1e-4, 1e-2, n))
+    scale = rng.uniform(0.5, 2.0, T)
+    ref_x, ref_P = unscented_rts(xs, Ps, Q, q_scale=scale, compiled=compiled)
+    got_x, got_P = unscented_rts(xs, Ps, Q, q_scale=scale, compiled=compiled, covariances=False)
+    np.testing.assert_array_equal(got_x, ref_x)
+    np.testing.assert_array_equal(got_P, Ps)
+    assert not np.array_equal(got_x, xs) and not np.array_equal(ref_P, Ps)  # both smoothed something
+
+
 def test_unscented_rts_refuses_a_noise_scale_of_the_wrong_length() -> None:
     xs, Ps = np.zeros((5, 2)), np.broadcast_to(np.eye(2), (5, 2, 2))
     with pytest.raises(ValueError, match=r"q_scale needs Qs \(2, 2\) and shape \(5,\), got \(2, 2\) and \(4,\)"):
