@@ -73,8 +73,22 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Runs one subcommand. Bad input prints one clear line and exits with status 2; an internal fault of the
-    processing (ProcessingError) says so and exits with status 1, as does a full disk (in plain words)."""
-    argv = sys.argv[1:] if argv is None else argv
+    processing (ProcessingError) says so and exits with status 1, as does a full disk (in plain words).
+
+    Run as the program (argv None: the `kinect-agent` script), it freezes the objects left at the end (gc.freeze):
+    the process exits next, and the interpreter's final garbage collections would walk every object that numba,
+    SciPy and numpy loaded, 0.3 s CPU after `kinect-agent filter` (bench/README.md, "Speed on hard recordings").
+    The commands close their files and connections themselves (`with` blocks), not through the collector.
+    """
+    program = argv is None
+    try:
+        return _main(sys.argv[1:] if argv is None else argv)
+    finally:
+        if program:
+            gc.freeze()
+
+
+def _main(argv: list[str]) -> int:
     first = next((a for a in argv if not a.startswith("-")), None)  # the command: no top-level option takes a value
     known = {m.rpartition(".")[2] for m in COMMANDS}
     with cycle_collector_paused():  # importing the command's modules

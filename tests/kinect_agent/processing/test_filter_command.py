@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gc
 import json
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -70,6 +71,20 @@ def test_filter_without_params_writes_the_same_file_and_runs_without_the_cycle_c
     assert main(["filter", str(src), "-o", str(without), "--no-progress"]) == 0
     assert seen == [False] and gc.isenabled()
     assert without.read_bytes() == with_params.read_bytes()
+
+
+def test_the_program_freezes_its_objects_at_exit_and_a_caller_of_main_keeps_its_collector(
+    tmp_path: Path, rng: np.random.Generator, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`kinect-agent` (main() reading sys.argv) freezes what is left for the exit; main(argv) from Python does not."""
+    src, _ = _write_input(tmp_path, rng, 40)
+    frozen: list[bool] = []
+    monkeypatch.setattr(gc, "freeze", lambda: frozen.append(True))
+    assert main(["filter", str(src), "-o", str(tmp_path / "a.csv"), "--no-progress"]) == 0
+    assert frozen == []
+    monkeypatch.setattr(sys, "argv", ["kinect-agent", "filter", str(src), "-o", str(tmp_path / "b.csv")])
+    assert main() == 0
+    assert frozen == [True]
 
 
 def test_filter_online_mode(tmp_path: Path, rng: np.random.Generator) -> None:
