@@ -6,6 +6,8 @@ and either saves every result (filtered positions (T, J, 3) m, outlier probabili
 m, rotations q_root (T, 4) and q_local (T, 19, 4) wxyz, angle SDs {angle: (T,)} degrees) to --save DIR, or compares
 them with a saved run: --compare DIR prints the largest absolute difference per quantity and recording, and exits 1
 when any exceeds --tol (default 1e-9). A quantity the saved run lacks (saved by an older version) is not compared.
+Either way it checks that pipeline.filter_recording (what `kinect-agent filter` runs without --params) gives
+process()'s filtered recording byte for byte.
 Run the old code with --save (e.g. from `git archive` of the old commit), the new with --compare.
     python bench/same_results.py --save DIR | --compare DIR [--tol 1e-9] [--quick]
 """
@@ -26,7 +28,7 @@ if str(ROOT_DIR) not in sys.path:  # `python bench/same_results.py` puts bench/ 
 from bench.sessions import outlier_heavy_session  # noqa: E402
 from kinect_agent import formats  # noqa: E402
 from kinect_agent.processing.config import config_for_device  # noqa: E402
-from kinect_agent.processing.pipeline import process  # noqa: E402
+from kinect_agent.processing.pipeline import filter_recording, process  # noqa: E402
 from kinect_agent.recording import Recording  # noqa: E402
 
 DATA = Path(os.environ.get("COACH_SHARED_DIR", "/work/shared")) / "data"  # as tests/conftest.py, default this machine
@@ -46,10 +48,15 @@ def recordings(quick: bool) -> dict[str, Recording]:
 
 
 def results(rec: Recording) -> dict[str, np.ndarray]:
-    """Returns the pipeline's numeric results of one recording, flat {quantity: array}."""
-    r = process(rec, config=config_for_device(rec.meta.device))
+    """Returns the pipeline's numeric results of one recording, flat {quantity: array}. Raises RuntimeError when
+    filter_recording (`kinect-agent filter` without --params) gives another recording than process(), byte for byte."""
+    config = config_for_device(rec.meta.device)
+    r = process(rec, config=config)
     if r.params.outlier_prob is None:
         raise RuntimeError("the offline pipeline returned no outlier probabilities")
+    only = filter_recording(rec, config=config).filtered
+    if not all(getattr(only, a).tobytes() == getattr(r.filtered, a).tobytes() for a in ("t", "positions", "state")):
+        raise RuntimeError("filter_recording's recording differs from process()'s")
     out = {
         "positions": r.filtered.positions,
         "outlier_prob": r.params.outlier_prob,

@@ -5,7 +5,8 @@ Writes two 10-minute 30 Hz Skeleton CSV files into a temporary folder (bench/ses
   hard   the same with tracking loss added until about 10 % of the joint-frames are lost or wild.
 Then, per file, `kinect-agent filter FILE -o OUT.csv` in a fresh process (what the user waits for: start-up, reading,
 pipeline, writing; the compiled kernels come from numba's disk cache, warmed once before timing), and in one
-process the stages read / process / write with the pipeline's own split (outliers, passes, smoother, angle SDs).
+process the stages read / process / write with the pipeline's own split (outliers, passes, smoother), process being
+pipeline.filter_recording as in the command.
 Prints medians of --repeats runs, wall and CPU seconds (CPU time is the steadier figure on a shared machine).
     python bench/speed_hard.py [--repeats 5] [--minutes 10] [--json out.json]
 """
@@ -33,7 +34,7 @@ from kinect_agent.processing import pipeline  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
 
 TARGET_S = 5.0
-_COMMAND = "import sys; from kinect_agent.cli import main; sys.exit(main(sys.argv[1:]))"
+_COMMAND = "import sys; from kinect_agent.cli import main; sys.exit(main())"  # as the kinect-agent script
 
 
 def command_seconds(path: Path, out: Path) -> tuple[float, float]:
@@ -50,13 +51,14 @@ def command_seconds(path: Path, out: Path) -> tuple[float, float]:
 
 def stage_seconds(path: Path, out: Path) -> dict[str, float]:
     """Returns wall seconds of read, process and write in this process, and the CPU seconds of process and of its
-    parts (the pipeline's own clock)."""
+    parts (the pipeline's own clock). "process" is pipeline.filter_recording, what the command runs without
+    --params (process() adds the angle SDs, the smoothed covariances and the kinematic parameters)."""
     timings: dict[str, float] = {}
     start = time.perf_counter()
     rec = formats.read(path)
     timings["read"] = time.perf_counter() - start
     start, cpu = time.perf_counter(), time.process_time()
-    result = pipeline.process(rec, config=PipelineConfig())
+    result = pipeline.filter_recording(rec, config=PipelineConfig())
     timings["process"] = time.perf_counter() - start
     timings["process_cpu"] = time.process_time() - cpu
     timings.update({f"  {k} (CPU)": v for k, v in result.quality.get("stage_cpu_seconds", {}).items()})

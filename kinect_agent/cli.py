@@ -7,8 +7,11 @@ A command imports only its own module (`kinect-agent status` does not load the f
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 from kinect_agent import __version__
 from kinect_agent.blas_threads import one_blas_thread
@@ -30,6 +33,22 @@ COMMANDS = (
     "kinect_agent.commands.evaluate",
     "kinect_agent.commands.export",
 )
+
+
+@contextmanager
+def cycle_collector_paused() -> Iterator[None]:
+    """Pauses Python's cyclic garbage collector for the block (and restores it as it was). Loading a command's
+    modules and filtering a 10-minute recording leave ≈ 1 400 objects in reference cycles, but allocate millions of
+    objects (modules, the CSV's rows and cells, numba's kernels loaded from its cache) that the collector walked
+    340 times, ≈ 0.2 s CPU of `kinect-agent filter` (bench/README.md, "Speed on hard recordings"); the cycles are
+    collected after the block."""
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was_enabled:
+            gc.enable()
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
@@ -54,11 +73,26 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Runs one subcommand. Bad input prints one clear line and exits with status 2; an internal fault of the
-    processing (ProcessingError) says so and exits with status 1, as does a full disk (in plain words)."""
-    argv = sys.argv[1:] if argv is None else argv
+    processing (ProcessingError) says so and exits with status 1, as does a full disk (in plain words).
+
+    Run as the program (argv None: the `kinect-agent` script), it freezes the objects left at the end (gc.freeze):
+    the process exits next, and the interpreter's final garbage collections would walk every object that numba,
+    SciPy and numpy loaded, 0.3 s CPU after `kinect-agent filter` (bench/README.md, "Speed on hard recordings").
+    The commands close their files and connections themselves (`with` blocks), not through the collector.
+    """
+    program = argv is None
+    try:
+        return _main(argv if argv is not None else sys.argv[1:])
+    finally:
+        if program:
+            gc.freeze()
+
+
+def _main(argv: list[str]) -> int:
     first = next((a for a in argv if not a.startswith("-")), None)  # the command: no top-level option takes a value
     known = {m.rpartition(".")[2] for m in COMMANDS}
-    args = build_parser(first if first in known else None).parse_args(argv)
+    with cycle_collector_paused():  # importing the command's modules
+        args = build_parser(first if first in known else None).parse_args(argv)
     one_blas_thread()
     try:
         return int(args._run(args) or 0)

@@ -17,11 +17,12 @@ from pathlib import Path
 from typing import Any
 
 from kinect_agent import formats
+from kinect_agent.cli import cycle_collector_paused
 from kinect_agent.errors import AgentError
 from kinect_agent.formats import skeleton_csv
 from kinect_agent.formats._atomic import atomic_open
 from kinect_agent.processing.config import SMOOTHERS, PipelineConfig
-from kinect_agent.processing.pipeline import process
+from kinect_agent.processing.pipeline import filter_recording, process
 
 NAME = "filter"
 HELP = "Remove tracking-loss outliers and smooth a recording with the four-pass kinematic UKF."
@@ -71,6 +72,11 @@ def _progress_bar(n_frames: int, enabled: bool) -> tuple[Any, Callable[[int, int
 
 def run(args: argparse.Namespace) -> int:
     """Filters the input and writes the outputs atomically; returns 0."""
+    with cycle_collector_paused():
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     if args.output.suffix.lower() != ".csv":
         raise AgentError(f"{args.output}: the filtered recording is written as Skeleton CSV; use a .csv name")
     if args.params is not None and args.params.resolve() in (
@@ -83,16 +89,20 @@ def run(args: argparse.Namespace) -> int:
     excursions = not args.no_excursions
     config = PipelineConfig(**smoother, outlier_excursions=excursions, online_excursions=excursions)
     bar, progress = _progress_bar(rec.n_frames, not args.no_progress)
-    try:
-        result = process(rec, online=args.online, config=config, progress=progress)
+    params_text = None
+    try:  # without --params, the parameters and angle SDs nobody reads are not built (the same recording)
+        if args.params:
+            full = process(rec, online=args.online, config=config, progress=progress)
+            filtered, q = full.filtered, full.quality
+            # Serialise both outputs before writing either, so a failure leaves nothing behind.
+            params_text = json.dumps({**full.params.to_json(), "quality": q}, separators=(",", ":"))
+        else:
+            only = filter_recording(rec, online=args.online, config=config, progress=progress)
+            filtered, q = only.filtered, only.quality
     finally:
         if bar is not None:
             bar.close()
-    # Serialise both outputs before writing either, so a failure leaves nothing behind.
-    params_text = None
-    if args.params:
-        params_text = json.dumps({**result.params.to_json(), "quality": result.quality}, separators=(",", ":"))
-    formats.write(result.filtered, args.output, "csv")
+    formats.write(filtered, args.output, "csv")
     if params_text is not None:
         try:
             with atomic_open(args.params, "w", encoding="utf-8") as f:
@@ -100,7 +110,6 @@ def run(args: argparse.Namespace) -> int:
         except BaseException:
             args.output.unlink(missing_ok=True)
             raise
-    q = result.quality
     print(
         f"{args.input} -> {args.output}: {rec.n_frames} frames, {q['n_outliers']} outliers removed, "
         f"{q['frames_without_observation']} frames without observation, {q['seconds']:.1f} s",

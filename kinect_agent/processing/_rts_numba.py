@@ -25,10 +25,11 @@ AVAILABLE = numba is not None and _blas_numba.AVAILABLE and _blas_numba.NUMPY_BL
 OK, P_PRED_NOT_POSITIVE, POTRF_FAILED, POTRS_FAILED = 0, 1, 2, 3  # rts_random_walk's status
 
 
-def _rts_random_walk(xs, Ps, Q, q_scale, scaled):  # pragma: no cover - compiled
+def _rts_random_walk(xs, Ps, Q, q_scale, scaled, covariances):  # pragma: no cover - compiled
     """Smooths xs (T, n) and Ps (T, n, n) in place, as ukf._rts_random_walk: noise q_scale[k] · Q of step k
-    (scaled True) or Q. Returns (status, k, info): OK, or the failure, the step k it happened at and LAPACK's info
-    (dpotrf's > 0: P_PRED_NOT_POSITIVE, < 0: POTRF_FAILED; dpotrs's != 0: POTRS_FAILED); xs, Ps smoothed after k."""
+    (scaled True) or Q; covariances False: the means only (Ps stay the filtered ones, all the gain needs).
+    Returns (status, k, info): OK, or the failure, the step k it happened at and LAPACK's info (dpotrf's > 0:
+    P_PRED_NOT_POSITIVE, < 0: POTRF_FAILED; dpotrs's != 0: POTRS_FAILED); xs, Ps smoothed after k."""
     T, n = xs.shape
     Qk = np.empty((n, n))
     P_pred = np.empty((n, n))
@@ -73,6 +74,8 @@ def _rts_random_walk(xs, Ps, Q, q_scale, scaled):  # pragma: no cover - compiled
         _blas_numba.numpy_gemv(C, dx, Cdx)
         for i in range(n):
             x[i] = x[i] + Cdx[i]
+        if not covariances:
+            continue
         for i in range(n):
             for j in range(n):
                 M[i, j] = Ps[k + 1, i, j] - P_pred[i, j]

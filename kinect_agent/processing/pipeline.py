@@ -43,6 +43,7 @@ the smoother and process().
 
 from __future__ import annotations
 
+import mmap
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -53,6 +54,7 @@ import numpy as np
 from kinect_agent import skeleton
 from kinect_agent.blas_threads import one_blas_thread
 from kinect_agent.body.angles import joint_angles
+from kinect_agent.body.kinematics import ChainModel
 from kinect_agent.body.rotations import matrix_to_quat
 from kinect_agent.processing import noise_level, offset_model, uncertainty
 from kinect_agent.processing.chain_filter import N_LEN, N_ROOT, ChainFilter, FrameData
@@ -113,6 +115,21 @@ def observations(rec: Recording, config: PipelineConfig) -> tuple[np.ndarray, np
     return z, obs, np.repeat(sd**2, 3, axis=1)
 
 
+def small_pages(shape: tuple[int, ...]) -> np.ndarray:
+    """Returns an uninitialised float64 array of `shape`, as np.empty, on its own anonymous memory map.
+
+    numpy asks the kernel for transparent huge pages (madvise) on every large array, and where the system's THP
+    defrag setting is "madvise" (as on the machines of bench/README.md) the kernel then compacts memory to fault
+    them in. Pass 3's covariances, (T, 36, 36) = 190 MB for 10 minutes at 30 Hz, written frame by frame, cost
+    0.24-0.33 s of system time that way and 0.11 s in 4-KiB pages (bench/README.md, "Speed on hard recordings").
+    The map is released with the last array that uses it.
+    """
+    count = int(np.prod(shape))
+    if count == 0:
+        return np.empty(shape)
+    return np.frombuffer(mmap.mmap(-1, 8 * count), dtype=np.float64).reshape(shape)
+
+
 Observations = tuple[np.ndarray, np.ndarray, np.ndarray]  # z (T, 60) m, observed (T, 60) bool, R_diag (T, 60) m²
 
 
@@ -152,7 +169,7 @@ def _run_pass(
     n = kf.dim_x
     T = len(order)
     xs = np.empty((T, n)) if store else None
-    Ps = np.empty((T, n, n)) if store else None
+    Ps = small_pages((T, n, n)) if store else None
     gated = 0
     run = np.zeros(skeleton.J, dtype=np.int64)  # consecutive observed frames each joint was gated
     if kf.compiled:
@@ -305,9 +322,10 @@ def smooth(
     xs3, Ps3, g3 = _run_pass(kf3, fwd, obs, scale, fixed, True, tick, restart)
     passes_done = time.process_time()
     if config.smoother == "urts":
-        xs, Ps = unscented_rts(  # Ps3 smoothed in place (190 MB for 10 minutes); xs3 kept for `forward`
-            xs3.copy(), Ps3, kf3.Q, None, kf3.points, q_scale=np.append(scale[1:], 0.0), overwrite=True
-        )
+        xs, Ps = unscented_rts(  # Ps3 smoothed in place (190 MB for 10 minutes), or not at all; xs3 for `forward`
+            xs3.copy(), Ps3, kf3.Q, None, kf3.points, q_scale=np.append(scale[1:], 0.0), overwrite=True,
+            covariances=covariances,
+        )  # fmt: skip
         tick(T)
         g4 = 0
     else:
@@ -369,13 +387,77 @@ def process(
     Returns the filtered recording (same t), the kinematic parameters and a quality summary. Runs with one BLAS
     thread (kinect_agent.blas_threads), whatever the caller's environment says.
     """
+    started = time.perf_counter()
     with one_blas_thread():
-        return _process(rec, online=online, config=config, progress=progress)
+        filtered, quality, chain = _filter(rec, online=online, config=config, progress=progress, angle_sds=True)
+        params = _kinematic_params(rec.t, chain)
+    quality["seconds"] = round(time.perf_counter() - started, 3)
+    return PipelineResult(filtered, params, quality, chain.angle_sd)
 
 
-def _process(
-    rec: Recording, *, online: bool, config: PipelineConfig | None, progress: Progress | None
-) -> PipelineResult:
+@dataclass
+class FilterResult:
+    """filter_recording's output: filtered and quality as PipelineResult's (without the angle SDs' timings)."""
+
+    filtered: Recording
+    quality: dict[str, Any]
+
+
+def filter_recording(
+    rec: Recording,
+    *,
+    online: bool = False,
+    config: PipelineConfig | None = None,
+    progress: Progress | None = None,
+) -> FilterResult:
+    """process() for a caller that keeps only the filtered recording (`kinect-agent filter` without --params).
+
+    The filtered recording and the quality summary are process()'s, bit for bit; what nobody would read is not
+    built: the angle SDs, the smoothed covariances behind them (the RTS smooths the means only), the quaternions
+    and the joint angles of KinematicParams (≈ 0.6 s CPU of a 10-minute 30 Hz recording).
+    """
+    started = time.perf_counter()
+    with one_blas_thread():
+        filtered, quality, _ = _filter(rec, online=online, config=config, progress=progress, angle_sds=False)
+    quality["seconds"] = round(time.perf_counter() - started, 3)
+    return FilterResult(filtered, quality)
+
+
+@dataclass
+class _Chain:
+    """The estimates behind a filtered recording: model (the personalised chain), root (T, 3) m, lengths (19,) m,
+    theta (T, 33) rad, positions (T, J, 3) m (the filtered joints), outlier_prob (T, J), angle_sd as
+    PipelineResult's (None when not computed)."""
+
+    model: ChainModel
+    root: np.ndarray
+    lengths: np.ndarray
+    theta: np.ndarray
+    positions: np.ndarray
+    outlier_prob: np.ndarray
+    angle_sd: dict[str, np.ndarray] | None
+
+
+def _kinematic_params(t: np.ndarray, chain: _Chain) -> KinematicParams:
+    """Returns the kinematic parameters of the chain's estimates at times t (T,) s: rotations as quaternions, the
+    joint angles of its positions, the outlier probabilities."""
+    R_world_root, R_local = chain.model.standard_rotations(chain.theta)
+    return KinematicParams(
+        t=t.copy(),
+        segment_lengths=chain.lengths,
+        root=chain.root,
+        q_root=matrix_to_quat(R_world_root),
+        q_local=matrix_to_quat(R_local),
+        joint_angles=joint_angles(chain.positions),
+        outlier_prob=chain.outlier_prob,
+    )
+
+
+def _filter(
+    rec: Recording, *, online: bool, config: PipelineConfig | None, progress: Progress | None, angle_sds: bool
+) -> tuple[Recording, dict[str, Any], _Chain]:
+    """Returns (filtered recording, quality, the chain's estimates) of process(); angle_sds False: no angle SDs
+    (nor the smoothed covariances they come from)."""
     started, cpu_started = time.perf_counter(), time.process_time()
     config = config or PipelineConfig()
     _check_input(rec)
@@ -405,12 +487,14 @@ def _process(
             progress(T, T)
     else:
         ik = inverse_kinematics(clean.positions)
-        root, lengths, theta, info = smooth(clean, ik, config, progress, covariances=True)
+        root, lengths, theta, info = smooth(clean, ik, config, progress, covariances=angle_sds)
         model = ik.model
-        sd_started, sd_cpu = time.perf_counter(), time.process_time()
-        sd = uncertainty.angle_sd(model, lengths, theta, info.pop("covariance"))
-        info["angle_sd_seconds"] = round(time.perf_counter() - sd_started, 3)
-        stages.update(info.pop("stage_cpu_seconds"), angle_sd=round(time.process_time() - sd_cpu, 3))
+        stages.update(info.pop("stage_cpu_seconds"))
+        if angle_sds:
+            sd_started, sd_cpu = time.perf_counter(), time.process_time()
+            sd = uncertainty.angle_sd(model, lengths, theta, info.pop("covariance"))
+            info["angle_sd_seconds"] = round(time.perf_counter() - sd_started, 3)
+            stages["angle_sd"] = round(time.process_time() - sd_cpu, 3)
     positions = model.positions(root, np.broadcast_to(lengths, (T, N_LEN)), theta) if smoothed is None else smoothed
     if not np.all(np.isfinite(positions)):
         bad = np.flatnonzero(~np.isfinite(positions).all(axis=(1, 2)))
@@ -422,16 +506,6 @@ def _process(
     mode = "online forward pass" if online else config.smoother if config.offline_filter == "chain" else "joints"
     step = f"{VERSION} ({mode}; {int(outlier.sum())} outliers removed)"
     filtered = rec.replace(step=step, positions=positions, state=state)
-    R_world_root, R_local = model.standard_rotations(theta)
-    params = KinematicParams(
-        t=rec.t.copy(),
-        segment_lengths=lengths,
-        root=root,
-        q_root=matrix_to_quat(R_world_root),
-        q_local=matrix_to_quat(R_local),
-        joint_angles=joint_angles(positions),
-        outlier_prob=prob,
-    )
     present = rec.state != NOT_TRACKED
     with np.errstate(all="ignore"):
         frac = np.where(present.sum(0) > 0, outlier.sum(0) / np.maximum(present.sum(0), 1), 0.0)
@@ -458,7 +532,7 @@ def _process(
         "seconds": round(time.perf_counter() - started, 3),
         "stage_cpu_seconds": stages,
     }
-    return PipelineResult(filtered, params, quality, sd)
+    return filtered, quality, _Chain(model, root, lengths, theta, positions, prob, sd)
 
 
-__all__ = ["VERSION", "PipelineResult", "observations", "process", "smooth"]
+__all__ = ["VERSION", "FilterResult", "PipelineResult", "filter_recording", "observations", "process", "smooth"]

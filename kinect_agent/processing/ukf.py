@@ -255,6 +255,7 @@ def unscented_rts(
     q_scale: np.ndarray | None = None,
     overwrite: bool = False,
     compiled: bool = True,
+    covariances: bool = True,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Returns smoothed (xs (T, n), Ps (T, n, n)) from filtered means xs (T, n) and covariances Ps (T, n, n).
 
@@ -269,6 +270,9 @@ def unscented_rts(
     recording's Ps is 190 MB).
     compiled: for the random walk, the loop in one compiled kernel (_rts_numba) when numba and numpy's OpenBLAS are
     there: the same operations, the same results bit for bit; False: numpy's loop.
+    covariances: False smooths the means only, for the random walk (the gain C = P_k (P_k + Q_k)⁻¹ needs only the
+    filtered covariances, so the means are the same bit for bit); Ps is then returned as given, filtered. Saves two
+    (n, n) products per frame. Ignored when fx is given.
     """
     T, n = xs.shape
     if Ps.shape != (T, n, n):
@@ -282,9 +286,9 @@ def unscented_rts(
     if fx is None and Qs.ndim == 2:
         Q = np.asarray(Qs, dtype=np.float64)
         if compiled and _rts_numba.AVAILABLE:
-            _rts_random_walk_compiled(xs_s, Ps_s, Q, q_scale)
+            _rts_random_walk_compiled(xs_s, Ps_s, Q, q_scale, covariances)
         else:
-            _rts_random_walk(xs_s, Ps_s, Q, q_scale)
+            _rts_random_walk(xs_s, Ps_s, Q, q_scale, covariances)
         return xs_s, Ps_s
     for k in range(T - 2, -1, -1):
         Q = (Qs if q_scale is None else q_scale[k] * Qs) if Qs.ndim == 2 else Qs[k]
@@ -319,10 +323,13 @@ def _smoother_gain(P_pred: np.ndarray, D: np.ndarray, k: int) -> np.ndarray:
     return CT.T
 
 
-def _rts_random_walk(xs: np.ndarray, Ps: np.ndarray, Q: np.ndarray, q_scale: np.ndarray | None) -> None:
+def _rts_random_walk(
+    xs: np.ndarray, Ps: np.ndarray, Q: np.ndarray, q_scale: np.ndarray | None, covariances: bool = True
+) -> None:
     """Smooths xs (T, n) and Ps (T, n, n) in place for the random walk (F = I) with noise q_scale[k] · Q (or Q) on
     step k: unscented_rts's loop with fx None, the same operations in the same order into buffers made once (the
-    per-step temporaries and their Python cost were a third of the smoother's time)."""
+    per-step temporaries and their Python cost were a third of the smoother's time). covariances False: the means
+    only, Ps left filtered."""
     T, n = xs.shape
     Qk, P_pred, M, CM, Pk = (np.empty((n, n)) for _ in range(5))
     dx, Cdx = np.empty(n), np.empty(n)
@@ -337,6 +344,8 @@ def _rts_random_walk(xs: np.ndarray, Ps: np.ndarray, Q: np.ndarray, q_scale: np.
         np.subtract(xs[k + 1], x, out=dx)
         np.matmul(C, dx, out=Cdx)
         np.add(x, Cdx, out=x)  # xs[k]: x + C (x_{k+1} − x_pred), x_pred = x
+        if not covariances:
+            continue
         np.subtract(Ps[k + 1], P_pred, out=M)
         np.matmul(C, M, out=CM)
         np.matmul(CM, C.T, out=Pk)
@@ -345,11 +354,13 @@ def _rts_random_walk(xs: np.ndarray, Ps: np.ndarray, Q: np.ndarray, q_scale: np.
         np.multiply(0.5, M, out=P)  # Ps[k]: symmetrised
 
 
-def _rts_random_walk_compiled(xs: np.ndarray, Ps: np.ndarray, Q: np.ndarray, q_scale: np.ndarray | None) -> None:
+def _rts_random_walk_compiled(
+    xs: np.ndarray, Ps: np.ndarray, Q: np.ndarray, q_scale: np.ndarray | None, covariances: bool = True
+) -> None:
     """_rts_random_walk in _rts_numba's kernel (xs, Ps float64 and C-ordered, smoothed in place); the same errors."""
     Q = np.ascontiguousarray(Q)
     scale = np.zeros(len(xs)) if q_scale is None else np.ascontiguousarray(q_scale, dtype=np.float64)
-    status, k, info = _rts_numba.rts_random_walk(xs, Ps, Q, scale, q_scale is not None)
+    status, k, info = _rts_numba.rts_random_walk(xs, Ps, Q, scale, q_scale is not None, covariances)
     if status == _rts_numba.P_PRED_NOT_POSITIVE:
         raise NotPositiveDefinite(f"predicted covariance of frame {k + 1} in the smoother {Q.shape}")
     if status == _rts_numba.POTRF_FAILED:

@@ -2,14 +2,19 @@
 
 from __future__ import annotations
 
+import gc
 import json
+import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 from kinect_agent import formats, skeleton
 from kinect_agent.cli import main
+from kinect_agent.commands import filter as filter_command
+from kinect_agent.processing import pipeline
 from kinect_agent.processing.params import KinematicParams
 from kinect_agent.recording import Metadata, Recording
 
@@ -44,6 +49,42 @@ def test_filter_writes_complete_csv_and_params(tmp_path: Path, rng: np.random.Ge
     assert before > 5.0 and after < 0.01, "the summary reports the noisy lengths going in and constant ones out"
     err = capsys.readouterr().err
     assert "frames" in err and f"segment-length SD {before:.1f} mm -> {after:.1f} mm" in err
+
+
+def test_filter_without_params_writes_the_same_file_and_runs_without_the_cycle_collector(
+    tmp_path: Path, rng: np.random.Generator, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Without --params the command skips the parameters and angle SDs (pipeline.filter_recording): the CSV is
+    byte for byte the one written with --params; the cyclic garbage collector is off while it filters, on after."""
+    src, _ = _write_input(tmp_path, rng)
+    with_params, without = tmp_path / "with.csv", tmp_path / "without.csv"
+    assert main(["filter", str(src), "-o", str(with_params), "--params", str(tmp_path / "p.json")]) == 0
+    seen: list[bool] = []
+    real = pipeline.filter_recording
+
+    def spy(*args: Any, **kwargs: Any) -> pipeline.FilterResult:
+        seen.append(gc.isenabled())
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(filter_command, "filter_recording", spy)
+    assert gc.isenabled()
+    assert main(["filter", str(src), "-o", str(without), "--no-progress"]) == 0
+    assert seen == [False] and gc.isenabled()
+    assert without.read_bytes() == with_params.read_bytes()
+
+
+def test_the_program_freezes_its_objects_at_exit_and_a_caller_of_main_keeps_its_collector(
+    tmp_path: Path, rng: np.random.Generator, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`kinect-agent` (main() reading sys.argv) freezes what is left for the exit; main(argv) from Python does not."""
+    src, _ = _write_input(tmp_path, rng, 40)
+    frozen: list[bool] = []
+    monkeypatch.setattr(gc, "freeze", lambda: frozen.append(True))
+    assert main(["filter", str(src), "-o", str(tmp_path / "a.csv"), "--no-progress"]) == 0
+    assert frozen == []
+    monkeypatch.setattr(sys, "argv", ["kinect-agent", "filter", str(src), "-o", str(tmp_path / "b.csv")])
+    assert main() == 0
+    assert frozen == [True]
 
 
 def test_filter_online_mode(tmp_path: Path, rng: np.random.Generator) -> None:

@@ -13,7 +13,7 @@ from kinect_agent import skeleton
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.ik import inverse_kinematics
 from kinect_agent.processing.online import OnlineFilter
-from kinect_agent.processing.pipeline import process, smooth
+from kinect_agent.processing.pipeline import filter_recording, process, small_pages, smooth
 from kinect_agent.recording import Metadata, Recording
 
 from ._data import inject_outliers, smooth_motion, utkinect
@@ -138,6 +138,33 @@ def test_process_online_gives_the_same_outputs(rng: np.random.Generator) -> None
     result = process(rec, online=True)
     assert np.all(np.isfinite(result.filtered.positions)) and result.quality["online"] is True
     np.testing.assert_allclose(result.params.positions(), result.filtered.positions, atol=1e-9)
+
+
+@pytest.mark.parametrize("online", [False, True])
+def test_filter_recording_gives_process_recording_byte_for_byte(rng: np.random.Generator, online: bool) -> None:
+    """filter_recording builds neither parameters nor angle SDs (the RTS smooths the means only), and its recording
+    and quality are process()'s all the same (seconds and the angle SDs' timings aside)."""
+    rec, _, _ = _noisy(rng, 120)
+    rec.positions[40:44, 5] += 0.8  # an outlier burst, so that the outlier model removes something
+    full, only = process(rec, online=online), filter_recording(rec, online=online)
+    for name in ("t", "positions", "state"):
+        assert getattr(only.filtered, name).tobytes() == getattr(full.filtered, name).tobytes(), name
+    assert only.filtered.meta == full.filtered.meta
+    timings = {"seconds", "angle_sd_seconds", "stage_cpu_seconds"}
+    assert {k: v for k, v in only.quality.items() if k not in timings} == {
+        k: v for k, v in full.quality.items() if k not in timings
+    }
+    assert full.quality["n_outliers"] > 0 or online
+    assert ("angle_sd" in full.quality["stage_cpu_seconds"]) != online
+    assert "angle_sd" not in only.quality["stage_cpu_seconds"] and only.quality["angle_sd_seconds"] is None
+
+
+def test_small_pages_is_a_writable_float64_array() -> None:
+    a = small_pages((3, 4, 5))
+    a[...] = np.arange(60.0).reshape(3, 4, 5)
+    assert a.dtype == np.float64 and a.shape == (3, 4, 5) and a.flags.c_contiguous and a.flags.writeable
+    assert a[2, 3, 4] == 59.0
+    assert small_pages((0, 36, 36)).shape == (0, 36, 36)
 
 
 def test_process_refuses_a_recording_without_any_tracked_joint() -> None:

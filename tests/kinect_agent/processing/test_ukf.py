@@ -183,24 +183,45 @@ def test_unscented_rts_with_a_noise_scale_per_step_equals_the_stacked_noise(seed
     np.testing.assert_array_equal(got_P, ref_P)
 
 
+def _filtered_estimates(rng: np.random.Generator, T: int, n: int = 36) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Returns random means xs (T, n), symmetric positive definite covariances Ps (T, n, n) and a diagonal Q (n, n)
+    for the smoother, at the pipeline's state size by default."""
+    A = 0.1 * rng.normal(size=(T, n, n))
+    Ps = A @ np.swapaxes(A, 1, 2) + 1e-3 * np.eye(n)
+    Ps = 0.5 * (Ps + np.swapaxes(Ps, 1, 2))
+    xs = rng.normal(size=(T, n))
+    return xs, Ps, np.diag(rng.uniform(1e-4, 1e-2, n))
+
+
 @pytest.mark.skipif(not _rts_numba.AVAILABLE, reason="needs numba and numpy's OpenBLAS")
 @pytest.mark.parametrize("seed", [1, 2, 3])
 @pytest.mark.parametrize("scaled", [True, False])
 def test_compiled_random_walk_smoother_equals_numpys_bit_for_bit(seed: int, scaled: bool) -> None:
     """The compiled loop (_rts_numba) gives numpy's loop's very numbers, on the pipeline's state size (36)."""
     rng = np.random.default_rng(seed)
-    T, n = 200, 36
-    A = 0.1 * rng.normal(size=(T, n, n))
-    Ps = A @ np.swapaxes(A, 1, 2) + 1e-3 * np.eye(n)
-    Ps = 0.5 * (Ps + np.swapaxes(Ps, 1, 2))
-    xs = rng.normal(size=(T, n))
-    Q = np.diag(rng.uniform(1e-4, 1e-2, n))
+    T = 200
+    xs, Ps, Q = _filtered_estimates(rng, T)
     scale = rng.uniform(0.5, 2.0, T) if scaled else None
     ref_x, ref_P = unscented_rts(xs, Ps, Q, q_scale=scale, compiled=False)
     got_x, got_P = unscented_rts(xs, Ps, Q, q_scale=scale, compiled=True)
     np.testing.assert_array_equal(got_x, ref_x)
     np.testing.assert_array_equal(got_P, ref_P)
     assert not np.array_equal(ref_P, Ps)  # it smoothed something
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_smoothing_the_means_only_gives_the_same_means_and_leaves_the_covariances_filtered(compiled: bool) -> None:
+    """covariances=False (pipeline.filter_recording): the gain needs only the filtered covariances, so the means are
+    the full smoother's bit for bit and Ps comes back as it went in."""
+    rng = np.random.default_rng(4)
+    T = 150
+    xs, Ps, Q = _filtered_estimates(rng, T)
+    scale = rng.uniform(0.5, 2.0, T)
+    ref_x, ref_P = unscented_rts(xs, Ps, Q, q_scale=scale, compiled=compiled)
+    got_x, got_P = unscented_rts(xs, Ps, Q, q_scale=scale, compiled=compiled, covariances=False)
+    np.testing.assert_array_equal(got_x, ref_x)
+    np.testing.assert_array_equal(got_P, Ps)
+    assert not np.array_equal(got_x, xs) and not np.array_equal(ref_P, Ps)  # both smoothed something
 
 
 def test_unscented_rts_refuses_a_noise_scale_of_the_wrong_length() -> None:
