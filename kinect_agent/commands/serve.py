@@ -88,10 +88,14 @@ class Uploads:
 def recover_interrupted(queue: SessionQueue, folder: Path, recorded_by: dict[str, int] | None = None,
                         interrupted: list[journal.Interrupted] | None = None) -> int:  # fmt: skip
     """Queues the sets a crash interrupted (those long enough, as recorded by the pairing recorded_by) and removes
-    their journals; returns how many. interrupted: those journal.recover listed (default: listed now)."""
+    their journals; returns how many. interrupted: those journal.recover listed (default: listed now). A set the
+    queue already holds (pending, sent, ...) keeps that file."""
     kept = 0
     for found in journal.recover(folder) if interrupted is None else interrupted:
-        if found.recording is not None:
+        place = queue.where(found.session_id) if found.recording is not None else None
+        if place is not None:  # a stop between queuing the ended set and removing its journal: the queue has it whole
+            log(f"the interrupted set {found.session_id} is already {place}: its journal is dropped")
+        elif found.recording is not None:
             queue_session(queue, found.recording, created_at=found.created_at, session_id=found.session_id,
                           recorded_by=recorded_by, say=log)  # fmt: skip
             kept += 1

@@ -7,6 +7,7 @@ import uuid
 import numpy as np
 import pytest
 
+from kinect_agent.capture import queue_session
 from kinect_agent.commands.serve import recover_interrupted
 from kinect_agent.formats.session_file import decode
 from kinect_agent.live import journal
@@ -66,3 +67,17 @@ def test_an_unreadable_header_is_reported_and_removed(tmp_path):
     assert found.recording is None and found.reason.startswith("unreadable")
     assert recover_interrupted(SessionQueue(tmp_path / "queue"), folder) == 0
     assert list(folder.iterdir()) == []
+
+
+def test_a_set_queued_whole_before_its_journal_was_removed_stays_as_queued(tmp_path):
+    """A stop (Ctrl-C, power) between queuing an ended set and removing its journal: on the next start the queued
+    file is the set, the journal is dropped, and the agent starts (it used to stop with "already queued with
+    different content", so the home computer never came back)."""
+    rec = simulate("seated_knee_extension", 2, seed=5)[0]
+    j = _write(tmp_path / "recording", rec)
+    queue = SessionQueue(tmp_path / "queue")
+    queued = queue_session(queue, rec, session_id=j.session_id, created_at="2026-11-25T10:00:00Z")
+    before = queued.read_bytes()
+    assert recover_interrupted(queue, tmp_path / "recording") == 0
+    assert queue.pending() == [queued] and queued.read_bytes() == before
+    assert list((tmp_path / "recording").iterdir()) == []
