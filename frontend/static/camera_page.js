@@ -305,6 +305,15 @@
     await showResult(row, reason);
   }
 
+  let feelingOf = null;  // the stored set asked about under the result (feeling.js: pain and effort)
+  function drawFeeling() {
+    const block = feelingOf === null ? null : Feeling.block(feelingOf);
+    $("cam-feeling").replaceChildren(...(block ? [block] : []));
+  }
+  Feeling.listen(drawFeeling);
+  /** Asks how the stored set felt, under its result. */
+  function askFeeling(sessionId) { feelingOf = sessionId; drawFeeling(); }
+
   async function showResult(row, reason) {
     phase = "result";
     stopCamera();
@@ -326,6 +335,7 @@
       const rom = session && session.rom_deg ? T.resultRom(session.rom_deg) : "";
       $("cam-result-more").textContent = [T.ended[reason] || "", recount, rom].filter(Boolean).join(" ");
       status(T.result(reps, row.target_reps));
+      askFeeling(row.session_id);
     }
     await CameraBuffer.dropSet(pid, row.set_id);
     set = null;

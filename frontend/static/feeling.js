@@ -1,11 +1,13 @@
 /* After each set, two large questions: pain now on the 0-10 numeric rating scale and effort on the Borg CR10 scale
  * (0-10), each with "skip"; the answers are stored with the session (PUT /sessions/{id}/feeling) and the therapist
- * sees them on the session page. live.js shows Feeling.block(sessionId) under the set's result. */
+ * sees them on the session page. live.js shows Feeling.block(sessionId) under the set's result; patient.js under
+ * "Your last exercise" for a set of today not asked about there (recorded without the live panel, or closed). */
 "use strict";
 const Feeling = (() => {
   const { api, el, kindMessage } = Coach;
   const state = new Map();  // session id -> {pain, effort, saved, error, saving}
-  let redraw = () => {};
+  const listeners = [];  // redraw the places that show a block (the live panel, "Your last exercise")
+  const redraw = () => listeners.forEach((f) => f());
 
   function scale(id, label, ends, key, s) {
     const buttons = [];
@@ -46,5 +48,8 @@ const Feeling = (() => {
           onclick: () => save(sessionId, s, true) }, I18n.t("Skip"))));
   }
 
-  return { block, set onChange(f) { redraw = f; } };
+  /** Returns whether the patient answered or skipped the questions of sessionId on this page. */
+  function said(sessionId) { return Boolean(state.get(sessionId)?.saved); }
+
+  return { block, said, listen: (f) => listeners.push(f) };
 })();

@@ -11,6 +11,7 @@ const Live = (() => {
     limit: I18n.t("The set reached its time limit."),
     source: I18n.t("The recording ended."),
     error: I18n.t("The recording stopped because of an error."),
+    cut: I18n.t("The set was cut short. What you did before it stopped is saved."),
   };
   // the home computer's hints (kinect_agent/analysis/live.py HINT_*), shown in the page's language by I18n.t(hint)
   const AGENT_HINTS = [
@@ -32,9 +33,9 @@ const Live = (() => {
     pid = patientId; names = exerciseName; howTo = instructions || howTo;
     document.getElementById("live").addEventListener("click", (e) => {
       if (e.target.id === "live-stop") stop();
-      if (e.target.id === "live-close") { current = null; render(); }
+      if (e.target.id === "live-close") { current = null; render(); window.dispatchEvent(new CustomEvent("coach-live-closed")); }
     });
-    if (typeof Feeling !== "undefined") Feeling.onChange = render;
+    if (typeof Feeling !== "undefined") Feeling.listen(render);
     Connection.listen((state, was) => {
       // back from a lost connection: what was known of the home computer is old until the server is asked again
       if (state === "ok" && was === "lost") { confirm = {}; agent = "unknown"; status(); resync(); }
@@ -62,7 +63,7 @@ const Live = (() => {
         const latest = (await api(`/sessions?patient_id=${pid}&limit=5`)).items;
         const stored = latest.find((s) => c.session_id && s.client_session_id === c.session_id);
         if (stored) { c.ended = "source"; c.result = stored; }
-        else c.failed = I18n.t("We lost track of this set while the connection was gone. If it was recorded, it shows under \u201cYour last exercise\u201d.");
+        else { c.failed = I18n.t("We lost track of this set while the connection was gone. If it was recorded, it shows under \u201cYour last exercise\u201d."); c.cut = true; }
       } catch (err) { c.failed = kindMessage(err); }
       render();
     }, FRAMES_MS);
@@ -126,7 +127,7 @@ const Live = (() => {
     confirm = null; clearTimeout(confirmTimer);
     agent = data.online ? "online" : "offline";
     dropped = !data.online;
-    if (!data.online && running()) { current.lost = true; speak(I18n.t("Your home computer stopped during the set.")); }
+    if (!data.online && running()) { current.lost = true; current.cut = true; speak(I18n.t("Your home computer stopped during the set.")); }
     render();
   }
 
@@ -174,7 +175,12 @@ const Live = (() => {
       if (running()) storedEarly = data;  // its set's progress may not have been heard yet
       return;
     }
-    try { current.result = await api(`/sessions/${data.session_id}`); } catch (err) { current.result = { error: kindMessage(err) }; }
+    const c = current;
+    try { c.result = await api(`/sessions/${data.session_id}`); } catch (err) { c.result = { error: kindMessage(err) }; }
+    if (c.cut && !c.result.error) {  // the part kept of a set cut short (agent stopped, connection lost) came: it is the set's end
+      Object.assign(c, { cut: false, lost: false, failed: null, ended: c.ended || "cut" });
+    }
+    if (current !== c) return;
     render();
     speakChanges(current, current.count);
   }

@@ -59,6 +59,31 @@
       box.append(el("p", { class: "lead", id: "rom-sentence" }, words));
     }
     if (last.quality_ok === false) box.append(el("p", { class: "muted" }, I18n.t("The camera did not see you well this time, so these numbers may be a little off.")));
+    box.append(el("div", { id: "last-feeling" }));
+    lastFeeling();
+  }
+
+  let askAbout = null;  // the newest set of today that nobody asked about yet: {id, client} (its session ids)
+  /** Asks how the newest set of today felt under "Your last exercise", unless the live panel asks about it: a set
+   *  the home computer or the camera page recorded without the live panel, or one whose panel was closed. */
+  function lastFeeling() {
+    const box = document.getElementById("last-feeling");
+    if (!box) return;
+    const live = Live.current;
+    const inPanel = live && ((live.result && live.result.id === askAbout?.id) || (live.session_id && live.session_id === askAbout?.client));
+    box.replaceChildren(...(askAbout && !inPanel ? [Feeling.block(askAbout.id)].filter(Boolean) : []));
+  }
+  Feeling.listen(lastFeeling);
+  window.addEventListener("coach-live-closed", () => {
+    if (askAbout && Feeling.said(askAbout.id)) askAbout = null;  // answered in the live panel: not asked again
+    lastFeeling();
+  });
+
+  /** Returns the newest session when it is of today and how it felt is not answered (nor skipped) yet, else null. */
+  async function notAsked(last) {
+    if (!last || new Date(last.started_at).toDateString() !== new Date().toDateString()) return null;
+    const said = await api(`/sessions/${last.id}/feeling`).catch(() => ({ answered_at: "unknown" }));  // not asked then
+    return said.answered_at ? null : { id: last.id, client: last.client_session_id };
   }
 
   /** Returns today's sets of one exercise against the plan, one line each: "set 1 of 2: 6 of 10". */
@@ -242,6 +267,7 @@
       const last = latest.items[0] || null;
       Live.uploaded(last ? last.created_at : null);
       const item = last && plan ? plan.items.find((i) => i.exercise_slug === last.exercise_slug) : null;
+      askAbout = await notAsked(last);
       lastSessionBlock(last, item, lib, last ? progress.points.filter((p) => p.exercise_slug === last.exercise_slug) : []);
       [advice, replies] = [suggestions.items, answers.items];
       adviceBlock();

@@ -200,6 +200,14 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         saved = stored[0]["repetitions"]
         assert saved == shown, (saved, shown, counts)
         _says_the_recount(page, counts[-1], saved)
+        # how it felt, asked under the result as after a set of the home computer (issue 23 point 4)
+        feeling = page.locator("#cam-feeling #feeling")
+        expect(feeling).to_be_visible()
+        feeling.locator("#feeling-effort").get_by_role("button", name="5", exact=True).click()
+        feeling.locator("#feeling-save").click()
+        expect(page.locator("#cam-feeling #feeling-thanks")).to_contain_text("Thank you")
+        said = page.context.request.get(f"/api/v1/sessions/{stored[0]['id']}/feeling").json()
+        assert (said["pain"], said["effort"]) == (None, 5.0), said
         payload = session_header(base, email, stored[0]["id"])
         assert payload.raw.meta.device == "webcam", payload.raw.meta
         assert (

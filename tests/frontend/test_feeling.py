@@ -71,3 +71,29 @@ def test_the_patient_says_how_the_set_felt_and_the_therapist_sees_it(browser, li
         page.goto(f"/therapist/sessions/{stored['id']}")
         expect(page.locator("#session-feeling")).to_contain_text("pain 3 of 10", timeout=LOAD_MS)
         expect(page.locator("#session-feeling")).to_contain_text("effort 4 of 10 (Borg CR10)")
+
+
+def test_a_set_recorded_without_the_live_panel_is_asked_under_the_last_exercise(browser, live_server):
+    """A set the home computer (or the camera page) stored without the live panel open is asked about too, once:
+    under "Your last exercise", until it is answered or skipped."""
+    base = live_server.url
+    email, _, token = patient_with_device(base)
+    link = AgentLink(base, token)
+    with closing(link), open_page(browser, base, 390, 844) as page:
+        stored = link.upload(make_khs(EXERCISE, TARGET, seed=24, created_at=_now_iso()))  # no Start on the page
+        login(page, email, PASSWORD)
+        last = page.locator("#last-session")
+        expect(last.locator("#last-sentence")).to_be_visible(timeout=LOAD_MS)
+        expect(last.locator("#feeling")).to_be_visible()
+        last.locator("#feeling-pain").get_by_role("button", name="6", exact=True).click()
+        shot(page, "feeling-last-exercise-390")
+        bad = [v["id"] for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
+        assert not bad, bad
+        last.locator("#feeling-save").click()
+        expect(last.locator("#feeling-thanks")).to_contain_text("Thank you")
+        r = link.client.get(f"/api/v1/sessions/{stored['id']}/feeling")
+        assert (r.json()["pain"], r.json()["effort"]) == (6, None), r.text
+        page.reload()  # answered: not asked again
+        expect(last.locator("#last-sentence")).to_be_visible(timeout=LOAD_MS)
+        expect(page.locator("#feeling")).to_have_count(0)
+        assert not page.js_errors, page.js_errors

@@ -14,10 +14,11 @@ import datetime as dt
 import json
 import queue
 import re
+import socket
 import threading
 import time
 import uuid
-from contextlib import AbstractContextManager, closing
+from contextlib import AbstractContextManager, closing, suppress
 from typing import Any
 
 import httpx
@@ -57,6 +58,7 @@ class AgentLink:
         self.commands: queue.Queue[dict[str, Any]] = queue.Queue()
         self._thread: threading.Thread | None = None
         self._closing = threading.Event()
+        self._stream: httpx.Response | None = None
 
     def connect(self) -> AgentLink:
         """Opens the command stream in a thread (the agent is online from then on)."""
@@ -67,12 +69,13 @@ class AgentLink:
     def _listen(self) -> None:
         try:
             with self.client.stream("GET", "/api/v1/live/agent", timeout=httpx.Timeout(30, read=None)) as r:
+                self._stream = r
                 for line in r.iter_lines():
                     if line.startswith("data: "):
                         self.commands.put(json.loads(line[6:])["data"])
                     if self._closing.is_set():
                         break
-        except httpx.HTTPError:
+        except (httpx.HTTPError, httpx.StreamError, OSError):
             if not self._closing.is_set():
                 raise
 
@@ -95,7 +98,12 @@ class AgentLink:
         return r.json()
 
     def close(self) -> None:
+        """Ends the command stream at once (the server sees the agent go, as when its computer stops) and the client."""
         self._closing.set()
+        if self._stream is not None:  # the reader thread blocks in a read: the socket itself is shut
+            sock = self._stream.extensions["network_stream"].get_extra_info("socket")
+            with suppress(OSError):
+                sock.shutdown(socket.SHUT_RDWR)
         self.client.close()
 
 
@@ -210,6 +218,37 @@ def test_count_in_view_camera_silence_said_and_the_end_level_with_the_stored_cou
         assert "2 of" not in panel, panel  # never "You did 2 of 3" beside a stored 3
         expect(page.locator("#live-ended")).to_contain_text(f"You did all {TARGET}" if n >= TARGET else f"{n} of")
         shot(page, f"never-silent-ended-{width}")
+        assert not page.js_errors, page.js_errors
+
+
+def test_a_set_cut_short_by_the_home_computer_shows_its_kept_part_when_it_is_stored(browser, live_server):
+    """The home computer stops mid-set (the page says so and promises the kept part "here"); once it is back and
+    uploads that part, the panel shows it as the set's end with its stored count and asks how it felt."""
+    base = live_server.url
+    email, _, token = patient_with_device(base)
+    link = AgentLink(base, token)
+    with open_page(browser, base, 1366, 900) as page:
+        login(page, email, PASSWORD)
+        link.connect()
+        expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
+        page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2")).click()
+        start, sid = link.command(), str(uuid.uuid4())
+        link.progress(start, "recording", 2, sid, elapsed_s=6.0)
+        expect(page.locator("#live-count .n")).to_have_text("2")
+        link.close()  # the home computer stops
+        expect(page.locator("#live-lost")).to_contain_text("stopped during the set", timeout=15_000)
+        expect(page.locator("#live")).to_contain_text("It will show here")
+        link = AgentLink(base, token).connect()  # back on: it uploads what it kept
+        with closing(link):
+            expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
+            stored = link.upload(make_khs(EXERCISE, TARGET, seed=25, session_id=sid, created_at=_now_iso()))
+            expect(page.locator("#live-result")).to_contain_text("Saved", timeout=30_000)
+            expect(page.locator("#live-lost")).to_have_count(0)
+            expect(page.locator("#live-count .n")).to_have_text(str(stored["repetitions"]))
+            expect(page.locator("#live")).to_contain_text("The set was cut short")
+            expect(page.locator("#live #feeling")).to_be_visible()
+            expect(page.locator("#last-session #feeling")).to_have_count(0)  # asked once, in the panel
+            shot(page, "never-silent-cut-short-stored")
         assert not page.js_errors, page.js_errors
 
 
