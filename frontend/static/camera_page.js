@@ -333,7 +333,8 @@
       $("cam-result-text").textContent = T.result(reps, row.target_reps);
       $("cam-result-text").dataset.sessionId = row.session_id;
       const rom = session && session.rom_deg ? T.resultRom(session.rom_deg) : "";
-      $("cam-result-more").textContent = [T.ended[reason] || "", recount, rom].filter(Boolean).join(" ");
+      const missed = reason === "target" && reps !== null && reps < row.target_reps;  // the goal the live count reached, not the saved
+      $("cam-result-more").textContent = [missed ? "" : T.ended[reason] || "", recount, rom].filter(Boolean).join(" ");
       status(T.result(reps, row.target_reps));
       askFeeling(row.session_id);
     }

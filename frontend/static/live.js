@@ -233,6 +233,13 @@ const Live = (() => {
     }
   }
 
+  /** Returns why the set ended, in words; "" for a goal the live count reached but the stored count did not (the end
+   *  sentence gives the stored count: "You reached your goal" beside "You did 8 of 10" would contradict it). */
+  function whyEnded(c) {
+    if (c.ended === "target" && counted(c.result) && c.result.repetitions < c.target) return "";
+    return ENDED[c.ended] || "";
+  }
+
   function resultBlock() {
     const r = current.result;
     if (!r) return null;
@@ -258,7 +265,7 @@ const Live = (() => {
       el("span", { class: "n" }, shown), el("span", { class: "of" }, " " + I18n.t("of {goal}", { goal: c.target })));
     if (c.ended) {
       return [title, c.result && !counted(c.result) ? null : count, el("p", { class: "big-sentence", id: "live-ended", role: "status" }, endSentence(c)),
-        el("p", { class: "lead" }, ENDED[c.ended] || ""), resultBlock(),
+        el("p", { class: "lead", id: "live-why" }, whyEnded(c)), resultBlock(),
         c.result && c.result.id && typeof Feeling !== "undefined" ? Feeling.block(c.result.id) : null, c.result ? closeButton() : null];
     }
     const spoken = el("p", { class: "sr-only", "aria-live": "polite" }, I18n.t("{done} of {goal}", { done: shown, goal: c.target }));

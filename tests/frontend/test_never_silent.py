@@ -252,6 +252,27 @@ def test_a_set_cut_short_by_the_home_computer_shows_its_kept_part_when_it_is_sto
         assert not page.js_errors, page.js_errors
 
 
+def test_a_goal_reached_live_but_not_in_the_stored_count_is_not_called_reached(browser, live_server):
+    """The live count ends the set at its goal, the stored analysis counts fewer: the panel gives the stored count
+    and never says "You reached your goal" beside it."""
+    base = live_server.url
+    email, _, token = patient_with_device(base)
+    link = AgentLink(base, token)
+    with closing(link), open_page(browser, base, 1366, 900) as page:
+        login(page, email, PASSWORD)
+        link.connect()
+        expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
+        page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2")).click()
+        start, sid = link.command(), str(uuid.uuid4())
+        link.progress(start, "ended", TARGET, sid, elapsed_s=9.0, reason="target")
+        stored = link.upload(make_khs(EXERCISE, 1, seed=26, session_id=sid, created_at=_now_iso()))
+        assert stored["repetitions"] is not None and stored["repetitions"] < TARGET, stored
+        expect(page.locator("#live-result")).to_contain_text("Saved", timeout=30_000)
+        expect(page.locator("#live-ended")).to_contain_text(f"You did {stored['repetitions']} of {TARGET}")
+        expect(page.locator("#live")).not_to_contain_text("You reached your goal")
+        assert not page.js_errors, page.js_errors
+
+
 # records the kind of every event the page's streams receive, in window.__heard
 HEARD = """
 window.__heard = [];
