@@ -23,6 +23,7 @@ from typing import Any
 
 import httpx
 import pytest
+from axe_playwright_python.sync_playwright import Axe
 from playwright.sync_api import expect
 
 from backend.demo import DEMO_PASSWORD
@@ -126,6 +127,11 @@ def _in_view(page, selector: str) -> bool:
     )
 
 
+def _blocking(page) -> list[str]:
+    """Returns the serious and critical axe-core violations of the page as it is now (ids)."""
+    return [v["id"] for v in Axe().run(page).response["violations"] if v["impact"] in ("serious", "critical")]
+
+
 # records every data-state the agent status takes from now on, in window.statesSeen
 STATES_SEEN = """() => {
   const status = document.getElementById("agent-status");
@@ -155,6 +161,7 @@ def test_server_and_agent_stopped_and_restarted_under_the_page(browser, live_ser
                 expect(status).to_contain_text("check that your internet is working")
                 expect(start).to_be_disabled()
                 shot(page, "never-silent-server-lost")
+                assert not _blocking(page), _blocking(page)
             # the agent stops too while the server is away (its reconnection: tests/kinect_agent/live/test_channel.py)
             page.evaluate(STATES_SEEN)
             server = run_server(
@@ -204,6 +211,7 @@ def test_count_in_view_camera_silence_said_and_the_end_level_with_the_stored_cou
         # the camera stops sending pictures: no progress message any more
         camera = page.locator("#live-camera")
         expect(camera).to_contain_text("No pictures are coming from your camera", timeout=WITHIN_MS)
+        assert not _blocking(page), _blocking(page)
         link.progress(start, "recording", 2, sid, elapsed_s=6.0)  # the pictures are back
         expect(camera).to_be_hidden()
         expect(page.locator("#live-count .n")).to_have_text("2")
