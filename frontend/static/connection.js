@@ -27,11 +27,20 @@ const Connection = (() => {
   function banner(was) {
     const box = document.getElementById("conn-banner");
     if (!box) return;
-    if (state === "lost") { box.textContent = TEXT.lost; box.dataset.state = "lost"; box.hidden = false; }
+    if (state === "lost") { box.textContent = TEXT.lost; box.dataset.state = "lost"; box.hidden = false; uncover(box); }
     else if (was === "lost") {
       box.textContent = TEXT.back; box.dataset.state = "ok";
       setTimeout(() => { if (state === "ok") box.hidden = true; }, 4000);
     }
+  }
+
+  /** Scrolls a live set that the banner (sticky at the window's top) covers to just below it: the set's title and
+   * count stay readable while the connection is lost. */
+  function uncover(box) {
+    const live = document.getElementById("live");
+    if (!live || live.hidden) return;
+    const gap = live.getBoundingClientRect().top - box.getBoundingClientRect().bottom;
+    if (gap < 0) window.scrollBy({ top: gap - 8, behavior: "instant" });
   }
 
   /** Called on every event of the stream: the server is there. */

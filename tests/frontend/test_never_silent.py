@@ -229,6 +229,46 @@ def test_count_in_view_camera_silence_said_and_the_end_level_with_the_stored_cou
         assert not page.js_errors, page.js_errors
 
 
+def _below(page, upper: str, lower: str) -> bool:
+    """Whether the element `lower` starts below the bottom of `upper` in the window (nothing of it is covered)."""
+    return page.evaluate(
+        """([u, l]) => document.querySelector(l).getBoundingClientRect().top
+                      >= document.querySelector(u).getBoundingClientRect().bottom""",
+        [upper, lower],
+    )
+
+
+@pytest.mark.parametrize("width,height", [(768, 1024), (390, 844)])
+def test_the_lost_connection_banner_covers_nothing_of_the_live_set(browser, live_server, tmp_path, width, height):
+    """The banner is tall where its words wrap (4 lines at 768 px): it pushes the page down instead of covering the
+    live set's title, and the live count stays in view under it."""
+    server: AbstractContextManager[str] | None
+    server = run_server(live_server.database_url, tmp_path, port=free_port(), COACH_STORAGE_DIR=live_server.storage_dir)
+    base = server.__enter__()
+    try:
+        email, _, token = patient_with_device(base)
+        link = AgentLink(base, token)
+        with closing(link), open_page(browser, base, width, height) as page:
+            login(page, email, PASSWORD)
+            link.connect()
+            expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
+            page.evaluate("window.scrollTo(0, document.body.scrollHeight)")
+            page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2")).click()
+            start = link.command()
+            link.progress(start, "recording", 1, str(uuid.uuid4()), elapsed_s=2.0)
+            expect(page.locator("#live-count .n")).to_have_text("1")
+            server.__exit__(None, None, None)  # the server stops under the page
+            server = None
+            expect(page.locator("#conn-banner")).to_contain_text("lost its connection to the server", timeout=WITHIN_MS)
+            assert _below(page, "#conn-banner", "#live-h"), "the banner covers the live set's title"
+            assert _in_view(page, "#live-count"), "the live count went out of view under the banner"
+            shot(page, f"never-silent-banner-{width}")
+            assert not page.js_errors, page.js_errors
+    finally:
+        if server is not None:
+            server.__exit__(None, None, None)
+
+
 def test_a_set_cut_short_by_the_home_computer_shows_its_kept_part_when_it_is_stored(browser, live_server):
     """The home computer stops mid-set (the page says so and promises the kept part "here"); once it is back and
     uploads that part, the panel shows it as the set's end with its stored count and asks how it felt."""

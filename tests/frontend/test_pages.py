@@ -112,3 +112,21 @@ def test_login_never_follows_next_off_the_site(page, live_server, next_):
     page.fill("#password", DEMO_PASSWORD)
     page.click("#login-submit")
     page.wait_for_url(f"{live_server.url}/therapist")
+
+
+@pytest.mark.parametrize(("email", "path"), [(None, "/"), (PATIENT, "/patient"), (THERAPIST, "/therapist")])
+def test_a_page_asks_the_server_for_nothing_it_lacks(page, live_server, email, path):
+    """The browser asks for the page's icon too: every page names its own (a missing /favicon.ico was a 404 and an
+    error in the browser's console on every page)."""
+    failed: list[str] = []
+    page.on("response", lambda r: failed.append(f"{r.status} {r.url}") if r.status >= 400 else None)
+    if email is not None:
+        login(page, email)
+        page.wait_for_url(f"**{path}")
+    else:
+        page.goto(path)
+    with page.expect_response(lambda r: "favicon" in r.url) as icon:
+        page.reload()
+    assert icon.value.status == 200 and icon.value.url.endswith("/static/favicon.svg"), icon.value.url
+    page.wait_for_load_state("networkidle")
+    assert failed == []
