@@ -10,7 +10,7 @@ from typing import Any, TypeVar
 from sqlalchemy import DateTime, MetaData, create_engine, event, select
 from sqlalchemy.engine import Dialect, Engine
 from sqlalchemy.engine.interfaces import DBAPIConnection
-from sqlalchemy.exc import IntegrityError
+from sqlalchemy.exc import DBAPIError, IntegrityError
 from sqlalchemy.orm import DeclarativeBase, Session, sessionmaker
 from sqlalchemy.types import TypeDecorator
 
@@ -169,3 +169,9 @@ def import_all_models() -> None:
     import backend.suggestions.models  # noqa: F401
     import backend.users.models  # noqa: F401
     import backend.voice.models  # noqa: F401
+
+
+def is_database_busy(exc: DBAPIError) -> bool:
+    """True for lock contention a retry resolves: SQLite "database is locked", PostgreSQL serialisation/deadlock."""
+    pgcode = getattr(exc.orig, "sqlstate", None) or getattr(exc.orig, "pgcode", None)
+    return pgcode in {"40001", "40P01"} or "database is locked" in str(exc.orig)

@@ -23,7 +23,7 @@ from backend import __version__
 from backend.allowed_methods import allowed_methods, refuse_undocumented_method
 from backend.api_docs import mount as mount_api_docs
 from backend.config import Settings, get_settings
-from backend.database import get_engine
+from backend.database import get_engine, is_database_busy
 from backend.db_slots import DbAdmission, DbSlots
 from backend.deps import DbSession
 from backend.events.listener import Listener
@@ -105,12 +105,6 @@ def _page_for(app: FastAPI, request: Request, status_code: int) -> Response | No
     """Returns the HTML error page the mounted pages give a browser (app.state.error_page), or None: JSON."""
     render = getattr(app.state, "error_page", None)
     return render(request, status_code) if render is not None else None
-
-
-def is_database_busy(exc: DBAPIError) -> bool:
-    """True for lock contention a retry resolves: SQLite "database is locked", PostgreSQL serialisation/deadlock."""
-    pgcode = getattr(exc.orig, "sqlstate", None) or getattr(exc.orig, "pgcode", None)
-    return pgcode in {"40001", "40P01"} or "database is locked" in str(exc.orig)
 
 
 def _install_error_handlers(app: FastAPI) -> None:

@@ -52,6 +52,7 @@ import warnings
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -338,7 +339,7 @@ class GainSums:
 # ----------------------------------------------------------------------------------------------- targets
 
 
-def judge(m: dict[str, dict], gains: dict[str, dict]) -> dict[str, dict]:
+def judge(m: dict[str, dict[str, Any]], gains: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
     """Returns {target: {"pass": bool, "detail": str}} for one table of method metrics and its gains."""
     off = m["pipeline_offline"]
     base = {k: m[k] for k in BASELINES if k != "raw"}
@@ -373,7 +374,7 @@ def judge(m: dict[str, dict], gains: dict[str, dict]) -> dict[str, dict]:
 
 def run_setting(
     device: str, view: int, mocap: list[MocapTruth], quick: bool, config: PipelineConfig, seed: int = 0
-) -> dict:
+) -> dict[str, Any]:
     """Runs every method on every recording of one setting; returns its metrics, gains and targets."""
     cases = build_cases(device, view, mocap, quick, seed)
     sums = {name: Sums() for name in METHODS}
@@ -403,7 +404,7 @@ def run_setting(
     }  # fmt: skip
 
 
-def summarise(settings: list[dict]) -> dict:
+def summarise(settings: list[dict[str, Any]]) -> dict[str, Any]:
     """Returns the pooled metrics over all settings and the targets on them (gain: every cell must pass)."""
     pooled = {name: Sums() for name in METHODS}
     for s in settings:
@@ -427,7 +428,7 @@ def summarise(settings: list[dict]) -> dict:
     return {"methods": metrics, "targets": targets, "by_source": sources}
 
 
-def print_table(title: str, metrics: dict[str, dict]) -> None:
+def print_table(title: str, metrics: dict[str, dict[str, Any]]) -> None:
     """Prints one markdown table of the methods' metrics."""
     print(f"\n### {title}\n")
     print("| method | RMSE mm | RMSE loss mm | RMSE debiased mm | bias mm | seg SD mm | elbow/knee RMSE deg "
@@ -442,7 +443,7 @@ def print_table(title: str, metrics: dict[str, dict]) -> None:
               f"{cell(m['recall'], 3)} | {cell(m['seconds'], 2)} |")  # fmt: skip
 
 
-def print_targets(targets: dict[str, dict]) -> None:
+def print_targets(targets: dict[str, dict[str, Any]]) -> None:
     for name, t in targets.items():
         print(f"- {name}: {'PASS' if t['pass'] else 'FAIL'} — {t['detail']}")
 
@@ -568,7 +569,7 @@ class MotionSums:
         return {**self.error.rms_mm(), "angle_rmse_deg": ang}
 
 
-def judge_motion(m: dict[str, dict]) -> dict[str, dict]:
+def judge_motion(m: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
     """Returns {target: {"pass", "margin", "detail"}} of the offline pipeline on one motion, view and seed.
 
     margin: offline minus its limit (mm or degrees; negative = passes by that much)."""
@@ -585,7 +586,9 @@ def judge_motion(m: dict[str, dict]) -> dict[str, dict]:
     return out
 
 
-def run_motion(motion: Motion, view: int, seed: int, config: PipelineConfig, device: str = MOTION_DEVICE) -> dict:
+def run_motion(
+    motion: Motion, view: int, seed: int, config: PipelineConfig, device: str = MOTION_DEVICE
+) -> dict[str, Any]:
     """Runs the MOTION_METHODS on every clip of one motion at one view and seed; returns metrics and targets."""
     sums = {name: MotionSums() for name in MOTION_METHODS}
     cases = motion_cases(motion, view, seed, device)
@@ -601,10 +604,10 @@ def run_motion(motion: Motion, view: int, seed: int, config: PipelineConfig, dev
             "targets": judge_motion(metrics)}  # fmt: skip
 
 
-def median_rows(rows: list[dict]) -> list[dict]:
+def median_rows(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Returns one row per (motion, view): each metric's median over seeds, and the targets judged per seed
     ("seeds_passed" of "seeds") with the median margin."""
-    groups: dict[tuple[str, int], list[dict]] = {}
+    groups: dict[tuple[str, int], list[dict[str, Any]]] = {}
     for r in rows:
         groups.setdefault((r["motion"], r["view_deg"]), []).append(r)
     out = []
@@ -625,7 +628,7 @@ def median_rows(rows: list[dict]) -> list[dict]:
 
 def run_motions(
     seeds: tuple[int, ...], config: PipelineConfig, quick: bool = False, device: str = MOTION_DEVICE
-) -> dict:
+) -> dict[str, Any]:
     """Runs every motion at MOTION_VIEWS for every seed; returns {"device", "rows" (per seed), "medians"}."""
     rows = [run_motion(m, v, s, config, device) for m in motions(quick) for v in MOTION_VIEWS for s in seeds]
     return {"device": device, "views_deg": list(MOTION_VIEWS), "seeds": list(seeds), "rows": rows,
@@ -640,9 +643,9 @@ MOTION_COLUMNS = (  # (metric key, title, digits)
 )
 
 
-def print_motion_tables(result: dict) -> None:
+def print_motion_tables(result: dict[str, Any]) -> None:
     """Prints, per metric, one table with a row per motion and view: median over seeds (each seed in brackets)."""
-    per_seed: dict[tuple[str, int], list[dict]] = {}
+    per_seed: dict[tuple[str, int], list[dict[str, Any]]] = {}
     for r in result["rows"]:
         per_seed.setdefault((r["motion"], r["view_deg"]), []).append(r)
     seeds = "/".join(map(str, result["seeds"]))
@@ -660,7 +663,7 @@ def print_motion_tables(result: dict) -> None:
             print(f"| {row['motion']} | {row['view_deg']}° | " + " | ".join(cells) + " |")
 
 
-def print_motion_verdicts(result: dict) -> None:
+def print_motion_verdicts(result: dict[str, Any]) -> None:
     """Prints the PASS/FAIL column per motion and view and the failures with their median margins."""
     print(f"\n### Targets per motion (offline; PASS = every seed of {result['seeds']} passes)\n")
     names = list(result["medians"][0]["targets"]) if result["medians"] else []
@@ -684,7 +687,7 @@ def run(
     seeds: tuple[int, ...] = DEFAULT_SEEDS,
     parts: tuple[str, ...] = ("settings", "motions"),
     motion_device: str = MOTION_DEVICE,
-) -> dict:
+) -> dict[str, Any]:
     """Runs the benchmark; returns the JSON-ready results (settings, summary, per-motion tables, what was run).
 
     parts: "settings" (the pooled tables per device and view, on the first seed) and/or "motions" (every motion
@@ -693,7 +696,7 @@ def run(
     warm = simulate("squat", 1, seed=999)[0]
     process(warm, config=config)  # compile the numba kernels outside the timing
     process(warm, online=True, config=config)
-    out: dict = {"quick": quick, "rate_hz": RATE_HZ, "seeds": list(seeds)}
+    out: dict[str, Any] = {"quick": quick, "rate_hz": RATE_HZ, "seeds": list(seeds)}
     if "settings" in parts:
         mocap = mocap_truths(quick)
         settings_run = (("kinect2", 30),) if quick else SETTINGS
@@ -754,7 +757,7 @@ def pipeline_config(overrides: list[str]) -> PipelineConfig:
     return PipelineConfig(**changes)
 
 
-def print_settings(results: dict) -> None:
+def print_settings(results: dict[str, Any]) -> None:
     """Prints the pooled tables per device and view, per source and pooled, with their targets."""
     print(f"\n## Pooled per setting (seed {results['settings_seed']})")
     for s in results["settings"]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from typing import Any
 
 METRICS = (  # (results key, title, digits)
     ("rmse_mm", "Joint RMSE, mm (every joint-frame, 3-D)", 1),
@@ -27,7 +28,7 @@ def cell(v: float | None, digits: int = 1) -> str:
     return "—" if v is None else f"{v:.{digits}f}"
 
 
-def rows(results: dict) -> list[tuple[str, dict]]:
+def rows(results: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
     """Returns [(row label, {method: metrics})]: each setting, pooled, then pooled per source."""
     out = [(f"{s['device']} {s['view_deg']}°", s["methods"]) for s in results["settings"]]
     out.append(("**pooled**", results["summary"]["methods"]))
@@ -36,7 +37,7 @@ def rows(results: dict) -> list[tuple[str, dict]]:
     return out
 
 
-def metric_table(results: dict, key: str, digits: int) -> list[str]:
+def metric_table(results: dict[str, Any], key: str, digits: int) -> list[str]:
     """Returns the markdown lines of one metric's table."""
     table_rows = rows(results)
     methods = list(table_rows[0][1])
@@ -46,14 +47,14 @@ def metric_table(results: dict, key: str, digits: int) -> list[str]:
     return lines
 
 
-def _gain_cell(g: dict | None) -> str:
+def _gain_cell(g: dict[str, Any] | None) -> str:
     if g is None or g.get("mean_pct") is None:
         return "—"
     return (f"{g['mean_pct']:.1f} / {g['sd_pct']:.1f} ({g['oracle_mean_pct']:.1f} / {g['oracle_sd_pct']:.1f}; "
             f"{g['paper_mean_pct']:.0f} / {g['paper_sd_pct']:.0f})")  # fmt: skip
 
 
-def outlier_table(results: dict) -> list[str]:
+def outlier_table(results: dict[str, Any]) -> list[str]:
     """Returns the markdown lines of the outlier table: precision, recall and the paper's gain per setting."""
     lines = ["| setting | precision | precision incl. gross jumps | recall | gain standing mean/SD % (oracle; paper) "
              "| gain sitting mean/SD % (oracle; paper) |", "|---|---|---|---|---|---|"]  # fmt: skip

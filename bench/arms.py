@@ -26,6 +26,7 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -179,7 +180,7 @@ def clip_sums(
     return s
 
 
-def metrics(s: dict) -> dict[str, float]:
+def metrics(s: dict[str, Any]) -> dict[str, float]:
     """Returns the reported metrics of pooled sums."""
     return {
         "rmse_mm": 1e3 * np.sqrt(s["sq"] / s["n"]),
@@ -209,7 +210,7 @@ def run(
     per_seed: dict[tuple[str, int, str], list[dict[str, float]]] = {}
     for view in views:
         for seed in seeds:
-            sums: dict[tuple[str, str], dict] = {}
+            sums: dict[tuple[str, str], dict[str, Any]] = {}
             for k, truth in enumerate(clips_all):
                 measured, pos, mask = measure(truth, k, view, seed, white_m, device)
                 for method in METHODS:
@@ -241,7 +242,7 @@ COLUMNS = (  # (header, metric, methods shown, decimals)
 )
 
 
-def print_results(results: dict) -> None:
+def print_results(results: dict[tuple[str, int], dict[str, Any]]) -> None:
     """Prints one markdown table: per motion and view, the medians over seeds of COLUMNS, and the pipeline's RMSE
     per seed."""
     print("| motion | view | " + " | ".join(c[0] for c in COLUMNS) + " | pipeline RMSE per seed |")

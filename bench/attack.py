@@ -36,7 +36,7 @@ from collections import Counter
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -176,10 +176,10 @@ def _times(data: bytes, t: np.ndarray, recording: str = "raw") -> bytes:
     return khs_files.with_block(data, index, _time_block(t))
 
 
-def _header_set(path: tuple[str, ...], value: object) -> Callable[[dict], None]:
+def _header_set(path: tuple[str, ...], value: object) -> Callable[[dict[str, Any]], None]:
     """Returns a change setting header[path[0]][path[1]]... = value."""
 
-    def change(header: dict) -> None:
+    def change(header: dict[str, Any]) -> None:
         node = header
         for key in path[:-1]:
             node = node[key]
@@ -775,7 +775,7 @@ def _answer(response: httpx.Response) -> tuple[str, str]:
     return "", json.dumps(body)[:300]
 
 
-def run_case(client: TestClient, engine: Engine, case: Case, users: Users, patient_ids: list[int]) -> dict:
+def run_case(client: TestClient, engine: Engine, case: Case, users: Users, patient_ids: list[int]) -> dict[str, Any]:
     """Sends one case; returns its record (status, error, detail, elapsed_s, stored, failures, as_expected)."""
     body = case.body() if callable(case.body) else case.body
     headers = {**users[case.device][2], **case.headers}
@@ -815,7 +815,7 @@ def run_case(client: TestClient, engine: Engine, case: Case, users: Users, patie
     }
 
 
-def _valid_upload(client: TestClient, engine: Engine, users: Users, patient_ids: list[int]) -> dict:
+def _valid_upload(client: TestClient, engine: Engine, users: Users, patient_ids: list[int]) -> dict[str, Any]:
     """Uploads one valid file with device A: it must be 201 and stored (the harness can store)."""
     created_at = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(time.time() - 3600))
     data = make_khs("squat", 3, seed=12345, session_id=str(uuid.uuid4()), created_at=created_at)
@@ -835,7 +835,7 @@ def _valid_upload(client: TestClient, engine: Engine, users: Users, patient_ids:
     }
 
 
-def run_database(url: str, seeds: list[int], quick: bool, cache_dir: Path, families: str = "all") -> dict:
+def run_database(url: str, seeds: list[int], quick: bool, cache_dir: Path, families: str = "all") -> dict[str, Any]:
     """Runs every case against the real app on a fresh database at `url`; returns the database's report.
 
     families: "all", "uploads" (the 4xx families only) or "work" (family "file chooses the work" only).
@@ -869,7 +869,7 @@ def run_database(url: str, seeds: list[int], quick: bool, cache_dir: Path, famil
     return summarise(db_label(url), records, valid) | {"work": work}
 
 
-def summarise(db: str, records: list[dict], valid: dict) -> dict:
+def summarise(db: str, records: list[dict[str, Any]], valid: dict[str, Any]) -> dict[str, Any]:
     """Returns the database's report: per family counts, slowest case and statuses; the failed cases."""
     families = []
     for family in FAMILIES:
@@ -903,7 +903,7 @@ def summarise(db: str, records: list[dict], valid: dict) -> dict:
     }
 
 
-def print_report(report: dict, seeds: list[int]) -> None:
+def print_report(report: dict[str, Any], seeds: list[int]) -> None:
     """Prints the database's table, its failures and the answers that named another defect than expected."""
     print(
         f"\nMalformed and hostile uploads, POST {URL}, db {report['db']}, seeds {seeds}: "

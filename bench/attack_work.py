@@ -22,7 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import httpx
 import numpy as np
@@ -53,7 +53,7 @@ class WorkCase:
     make: Callable[[], bytes]
 
 
-def _payload(raw: Recording, filtered: Recording | None, params: dict) -> bytes:
+def _payload(raw: Recording, filtered: Recording | None, params: dict[str, Any]) -> bytes:
     return sf.encode(sf.SessionPayload(session_id=str(uuid.uuid4()), raw=raw, filtered=filtered, params=params,
                                        created_at=CREATED_AT))  # fmt: skip
 
@@ -66,7 +66,7 @@ def _tiled(rec: Recording, n: int, period_s: float) -> Recording:
     return rec.replace(t=np.arange(n) * period_s, positions=positions, state=state)
 
 
-def config_file(config: dict, reps: int = 10) -> bytes:
+def config_file(config: dict[str, Any], reps: int = 10) -> bytes:
     """Returns a simulated 30 Hz squat set of `reps` repetitions whose params["config"] is `config`."""
     measured, truth, _ = simulate("squat", reps, seed=11)
     return _payload(measured, truth, {"config": config})
@@ -179,7 +179,7 @@ READS = (("detail", "detail", "detail"), ("replay", "replay", "replay"),
 
 def run_work_case(
     client: TestClient, case: WorkCase, headers: dict[str, str], reader: dict[str, str], run_jobs: Callable[[str], int]
-) -> dict:
+) -> dict[str, Any]:
     """Uploads the case's file with a device's headers, asks for its detail, replay and BVH export with the patient's
     (reader) headers (202 while a worker prepares them, or the answer itself), then has a worker build each (run_jobs,
     one kind at a time) and reads each again (200 expected); returns the record: each request's and each build's
@@ -187,7 +187,7 @@ def run_work_case(
     data = case.make()
     payload = sf.decode(data, max_frames=10**7, max_decoded_bytes=2**31)
     duration = payload.raw.duration
-    requests: list[dict] = []
+    requests: list[dict[str, Any]] = []
     failures: list[str] = []
     record = {"family": FAMILY, "name": case.name, "file_bytes": len(data), "n_frames": payload.raw.n_frames,
               "duration_s": round(duration, 1), "requests": requests, "failures": failures}  # fmt: skip
@@ -233,7 +233,7 @@ def _built(ran: int) -> int:
     return 200
 
 
-def _request(name: str, response: object, status: int, wall: float, cpu: float, peak: int) -> dict:
+def _request(name: str, response: object, status: int, wall: float, cpu: float, peak: int) -> dict[str, Any]:
     error = ""
     if status >= 400 and isinstance(response, httpx.Response):
         try:
@@ -244,7 +244,7 @@ def _request(name: str, response: object, status: int, wall: float, cpu: float, 
             "peak_mib": round(peak / 2**20, 1), "error": error}  # fmt: skip
 
 
-def print_work(db: str, records: list[dict]) -> None:
+def print_work(db: str, records: list[dict[str, Any]]) -> None:
     """Prints the family's table for one database."""
     budgets = ", ".join(f"{k} {c:g} s, {m / 2**20:.0f} MiB" for k, (c, m) in work_budget.BUDGETS.items())
     print(f"\nFile chooses the work, db {db}: budget per started 10 min of recording: {budgets}")

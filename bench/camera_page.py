@@ -22,7 +22,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from playwright.sync_api import Browser
@@ -55,7 +55,7 @@ def squat_item(base: str) -> int:
     return next(i["id"] for p in plans for i in p["items"] if i["exercise_slug"] == "squat")
 
 
-def one_run(browser: Browser, base: str, item: int, model: str, seconds: float, count: bool) -> dict:
+def one_run(browser: Browser, base: str, item: int, model: str, seconds: float, count: bool) -> dict[str, Any]:
     context = browser.new_context(viewport={"width": 1366, "height": 900}, base_url=base)
     page = context.new_page()
     page.set_default_timeout(120_000)
@@ -121,7 +121,7 @@ def main(argv: list[str] | None = None) -> int:
                 browser = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=[
                     "--no-sandbox", "--use-fake-device-for-media-stream", "--use-fake-ui-for-media-stream",
                     f"--use-file-for-fake-video-capture={clip}"])  # fmt: skip
-                results: dict[str, list[dict]] = {m: [] for m in args.models}
+                results: dict[str, list[dict[str, Any]]] = {m: [] for m in args.models}
                 for r in range(args.runs):
                     for model in args.models:
                         res = one_run(browser, base, item, model, args.seconds, count=model == "lite")

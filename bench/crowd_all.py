@@ -32,6 +32,7 @@ import time
 from collections import Counter, defaultdict
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import httpx
 
@@ -147,7 +148,7 @@ def setup(base: str, session: bytes, long_session: bytes) -> list[Caller]:
     return callers
 
 
-async def crowd(callers: list[Caller], n: int, session: bytes) -> dict:
+async def crowd(callers: list[Caller], n: int, session: bytes) -> dict[str, Any]:
     """Sends n requests at once (the mix of every caller's requests, cycled) while OPEN_STREAMS event streams are
     open; returns the answers by status, the 5xx with their paths and per-role latencies (s)."""
     mix = [(c, c.gets[k]) for k in range(max(len(c.gets) for c in callers)) for c in callers if k < len(c.gets)]
@@ -201,7 +202,7 @@ async def crowd(callers: list[Caller], n: int, session: bytes) -> dict:
             "last_s": round(wall, 1), "per_role": per_role, "builds": built}  # fmt: skip
 
 
-async def drain(preparing: dict[tuple[str, str], Caller], t0: float) -> dict:
+async def drain(preparing: dict[tuple[str, str], Caller], t0: float) -> dict[str, Any]:
     """Asks again every 2 s for each distinct request the crowd was answered 202 (a worker prepares it) until it
     answers something else; returns how many, when each was ready (s since the crowd left: median, last) and the
     failures (not 200, or still 202 after DRAIN_S)."""
@@ -229,7 +230,7 @@ async def drain(preparing: dict[tuple[str, str], Caller], t0: float) -> dict:
             "ready_last_s": round(max(ready), 1) if ready else 0.0, "errors": errors}  # fmt: skip
 
 
-async def _run(callers: list[Caller], sizes: list[int], session: bytes) -> list[dict]:
+async def _run(callers: list[Caller], sizes: list[int], session: bytes) -> list[dict[str, Any]]:
     try:
         return [await crowd(callers, n, session) for n in sizes]
     finally:

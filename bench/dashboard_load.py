@@ -37,7 +37,7 @@ import sys
 import time
 import uuid
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from kinect_agent.analysis.document import AnalysisReport
@@ -121,7 +121,7 @@ def _pool(exercises: list[str], per_exercise: int) -> dict[str, list[tuple[bytes
     return pool
 
 
-def seed(url: str, n_patients: int, n_sessions: int, per_exercise: int) -> dict:
+def seed(url: str, n_patients: int, n_sessions: int, per_exercise: int) -> dict[str, Any]:
     """Fills the migrated database; returns {"therapists": [email, ...], "sessions": n, "file_mib": x}."""
     from backend import __version__
     from backend.analysis.indicators import indicators
@@ -371,10 +371,10 @@ def percentile(values: list[float], q: float) -> float:
     return ordered[low] + (ordered[high] - ordered[low]) * (pos - low)
 
 
-def stats(samples: list[tuple[str, float]], errors: list[str], elapsed: float) -> dict:
+def stats(samples: list[tuple[str, float]], errors: list[str], elapsed: float) -> dict[str, Any]:
     """Returns request counts, throughput and latency percentiles (ms) per endpoint and overall."""
 
-    def summary(times: list[float]) -> dict:
+    def summary(times: list[float]) -> dict[str, Any]:
         ms = [1000 * t for t in times]
         return {
             "requests": len(ms),
@@ -411,7 +411,7 @@ def main(argv: list[str] | None = None) -> int:
         args.patients, args.sessions, args.clients, args.duration, args.warmup = 20, 20, 10, 5.0, 1.0
     per_exercise = 2 if args.quick else POOL_PER_EXERCISE
 
-    setup: dict = {}
+    setup: dict[str, Any] = {}
     if args.reuse:
         setup = {"therapists": [f"therapist{t}@bench.clinic" for t in range(N_THERAPISTS)], "reused": True}
     else:

@@ -26,6 +26,7 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import Any
 from unittest.mock import patch
 
 import numpy as np
@@ -60,7 +61,7 @@ def alt_outliers(case: Case) -> np.ndarray:
     return np.where(case.mask[..., None], m.positions + shift, m.positions)
 
 
-def study_rows(args: argparse.Namespace) -> list[dict]:
+def study_rows(args: argparse.Namespace) -> list[dict[str, Any]]:
     config = PipelineConfig()
     rows = []
     print("| motion | view | seed | raw | CV+RTS | One Euro | offline | CV on clean | oracle clean | alt: raw "
@@ -95,17 +96,17 @@ def study_rows(args: argparse.Namespace) -> list[dict]:
     return rows
 
 
-def summarise(rows: list[dict]) -> None:
+def summarise(rows: list[dict[str, Any]]) -> None:
     """Prints per motion and view, each seed's margins (offline minus CV+RTS / One Euro RMSE, mm) under the simulator's
     outlier law and under "alt", and the medians over seeds of the bias differences (mm)."""
-    groups: dict[tuple[str, int], list[dict]] = {}
+    groups: dict[tuple[str, int], list[dict[str, Any]]] = {}
     for r in rows:
         groups.setdefault((r["motion"], r["view_deg"]), []).append(r)
 
-    def seeds(runs: list[dict], a: str, b: str, key: str = "rmse_mm") -> str:
+    def seeds(runs: list[dict[str, Any]], a: str, b: str, key: str = "rmse_mm") -> str:
         return "/".join(f"{r['methods'][a][key] - r['methods'][b][key]:+.1f}" for r in runs)
 
-    def med(runs: list[dict], a: str, b: str, key: str) -> float:
+    def med(runs: list[dict[str, Any]], a: str, b: str, key: str) -> float:
         return float(np.median([r["methods"][a][key] - r["methods"][b][key] for r in runs]))
 
     print("\n| motion | view | offline − CV+RTS | offline − One Euro | alt: offline − CV+RTS | alt: offline − One Euro "

@@ -49,7 +49,7 @@ import uuid
 from collections.abc import Coroutine
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 if TYPE_CHECKING:
     from multiprocessing.queues import Queue
@@ -120,7 +120,7 @@ SHOWN_LISTENER = """
 # ------------------------------------------------------------------------------------------------ setup
 
 
-def seed(url: str, n_patients: int) -> list[dict]:
+def seed(url: str, n_patients: int) -> list[dict[str, Any]]:
     """Creates n patients with a password and a paired device each, each device with a started set (as the
     patient's Start stores it: the server accepts progress only for that set); returns [{id, email, device, set_id}]."""
     from backend.database import import_all_models
@@ -214,14 +214,14 @@ class Usage:
                                 (url.database,)).fetchall()  # fmt: skip
         return [pid for (pid,) in rows if Path(f"/proc/{pid}").exists()]
 
-    def snapshot(self) -> dict:
+    def snapshot(self) -> dict[str, Any]:
         """Returns the counters now."""
         times = os.times()
         return {"t": time.monotonic(), "server": cpu_of(server_pids(self.master)), "pg": cpu_of(self._pg_pids()),
                 "bench": times.user + times.system, "machine": machine_busy()}  # fmt: skip
 
     @staticmethod
-    def between(a: dict, b: dict) -> dict:
+    def between(a: dict[str, Any], b: dict[str, Any]) -> dict[str, Any]:
         """Returns the CPU used between two snapshots: seconds and % of one core (server, PostgreSQL backends of
         this database, this benchmark process) and the machine's busy share of all its cores."""
         wall = b["t"] - a["t"]
@@ -264,7 +264,7 @@ class PostLog(httpx.HTTPTransport):
                 self.posts.append((sent_at, status, start, time.time()))
 
 
-def progress(set_id: str, session_id: str, k: int, rate: float, taken_at: float) -> dict:
+def progress(set_id: str, session_id: str, k: int, rate: float, taken_at: float) -> dict[str, Any]:
     """Returns progress message k of a set, shaped as kinect_agent.live.set_recorder writes them."""
     return {"set_id": set_id, "exercise_slug": EXERCISE, "state": "recording", "target": 10_000, "count": k % 10_000,
             "elapsed_s": round(k / rate, 2), "session_id": session_id, "sent_at": taken_at,
@@ -286,7 +286,7 @@ def hold_commands(base: str, token: str, stop: threading.Event) -> CommandStream
 
 
 def latency_agent(
-    base: str, token: str, set_id: str, n: int, rate: float, connected: Event, go: Event, out: Queue[dict]
+    base: str, token: str, set_id: str, n: int, rate: float, connected: Event, go: Event, out: Queue[dict[str, Any]]
 ) -> None:
     """The home agent of the measured patient, in a process of its own: holds the command stream, sets `connected`,
     waits for `go`, sends n progress messages at rate Hz through the Publisher and puts its records on `out`."""
@@ -358,7 +358,7 @@ class Pages:
     """Light patient pages: one cookie login and one event stream each (GET /api/v1/events?patient_id&live=true),
     reconnecting after the stream's retry delay when the server ends it, as EventSource does."""
 
-    def __init__(self, base: str, patients: list[dict]) -> None:
+    def __init__(self, base: str, patients: list[dict[str, Any]]) -> None:
         self.base, self.patients = base, patients
         self.connected = self.reconnects = self.errors = 0
         self.progress_events = self.other_events = 0
@@ -389,7 +389,7 @@ class Pages:
         start = time.monotonic()
         gate = asyncio.Semaphore(LOGIN_CONCURRENCY)
 
-        async def one(patient: dict) -> httpx.AsyncClient:
+        async def one(patient: dict[str, Any]) -> httpx.AsyncClient:
             client = httpx.AsyncClient(base_url=self.base, timeout=httpx.Timeout(30.0, read=None))
             async with gate:
                 r = await client.post("/api/v1/auth/login", json={"email": patient["email"], "password": PASSWORD})
@@ -407,7 +407,7 @@ class Pages:
             await asyncio.sleep(0.1)
         return self.connected
 
-    async def _stream(self, client: httpx.AsyncClient, patient: dict) -> None:
+    async def _stream(self, client: httpx.AsyncClient, patient: dict[str, Any]) -> None:
         params = {"patient_id": patient["id"], "live": "true"}
         retry_s, first = 3.0, True
         while True:
@@ -444,7 +444,7 @@ class Pages:
 # ------------------------------------------------------------------------------------------------ browser
 
 
-def open_patient_page(browser: Browser, base: str, patient: dict) -> Page:
+def open_patient_page(browser: Browser, base: str, patient: dict[str, Any]) -> Page:
     """Signs in as the patient through the login form at /; returns their page once its event stream is open."""
     context = browser.new_context(viewport={"width": 1280, "height": 900})
     context.add_init_script(EVENTSOURCE_PROBE)
@@ -465,7 +465,7 @@ def wait_stream_open(page: Page) -> None:
                            ".dataset.state)", timeout=30_000)  # fmt: skip
 
 
-def latency_run(page: Page, base: str, patient: dict, n: int, rate: float, usage: Usage) -> dict:
+def latency_run(page: Page, base: str, patient: dict[str, Any], n: int, rate: float, usage: Usage) -> dict[str, Any]:
     """Measures frame-to-screen latency of n messages from the patient's agent to their open page."""
     ctx = mp.get_context("spawn")
     connected, go, out = ctx.Event(), ctx.Event(), ctx.Queue()
@@ -495,7 +495,9 @@ def latency_run(page: Page, base: str, patient: dict, n: int, rate: float, usage
     return account(record, shown, es, opens_before) | {"cpu": cpu}
 
 
-def account(record: dict, shown: list[tuple[float, float, float | None]], es: dict, opens_before: int) -> dict:
+def account(
+    record: dict[str, Any], shown: list[tuple[float, float, float | None]], es: dict[str, Any], opens_before: int
+) -> dict[str, Any]:
     """Returns the fate of every message of a run and the latency statistics of those shown (ms)."""
     frames, posts = record["frames"], record["posts"]
     posted = {p[0]: p for p in posts}
@@ -560,7 +562,7 @@ def database(arg: str) -> tuple[str, bool]:
     return arg, False
 
 
-def run(args: argparse.Namespace) -> dict:
+def run(args: argparse.Namespace) -> dict[str, Any]:
     """Runs the whole benchmark; returns the results."""
     from playwright.sync_api import sync_playwright
 
@@ -581,7 +583,7 @@ def run(args: argparse.Namespace) -> dict:
     base = f"http://127.0.0.1:{port}"
     server = start_server(url, port, workers)
     usage = Usage(server.pid, url)
-    r: dict = {"database": "sqlite" if is_sqlite else "postgresql", "workers": workers,
+    r: dict[str, Any] = {"database": "sqlite" if is_sqlite else "postgresql", "workers": workers,
                "events_stream_max_s": stream_max_s, "inherited_env": inherited,
                "loadavg_before": os.getloadavg()}  # fmt: skip
     pages = Pages(base, patients[1 : args.pages + 1])
@@ -645,7 +647,7 @@ def run(args: argparse.Namespace) -> dict:
     return r
 
 
-def report(r: dict, args: argparse.Namespace) -> None:
+def report(r: dict[str, Any], args: argparse.Namespace) -> None:
     """Prints the results as tables."""
     n_pages = r["pages_connected"]
     print(f"\nlive loop on {r['database']}, {r['workers']} uvicorn worker(s), loopback, {os.cpu_count()} CPUs; "

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from typing import Any
 
 import numpy as np
 
@@ -32,7 +33,7 @@ METRICS = ("rom_deg", "range_deg", "max_deg", "repetitions")
 Z = 1.96 * np.sqrt(2.0)
 
 
-def _metrics(doc: dict, angle: str) -> dict[str, float]:
+def _metrics(doc: dict[str, Any], angle: str) -> dict[str, float]:
     rom = doc["range_of_motion"][angle]
     return {"rom_deg": doc["rom_deg"], "range_deg": rom["range_deg"], "max_deg": rom["max_deg"],
             "repetitions": float(doc["repetitions"])}  # fmt: skip
@@ -70,7 +71,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--exercises", nargs="*", default=list(SIMULATED))
     parser.add_argument("--json")
     args = parser.parse_args(argv)
-    report: dict[str, dict] = {}
+    report: dict[str, dict[str, Any]] = {}
     print(f"{'exercise':22s} {'metric':12s} {'SEM':>6s} {'MDC95':>6s} {'SEM_meas':>8s} {'MDC95_meas':>10s}")
     for exercise in args.exercises:
         shape = (args.patients, args.sessions)

@@ -42,6 +42,7 @@ import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -168,10 +169,10 @@ def per_joint(sums: JointErrorSums) -> dict[str, dict[str, float]]:
 # ----------------------------------------------------------------------------------------------- measurement
 
 
-def measure(pairs: list[Pair], use_filtered: bool) -> dict:
+def measure(pairs: list[Pair], use_filtered: bool) -> dict[str, Any]:
     """Returns per pose ("all", "standing", "bent") and joint: mean and SD over trials of the trial offsets (mm, body
     frame) and the number of trials."""
-    out: dict = {}
+    out: dict[str, Any] = {}
     for per_pose in (False, True):
         trials = []
         for p in pairs:
@@ -213,12 +214,12 @@ def cross_validate(pairs: list[Pair], per_pose: bool) -> tuple[JointErrorSums, J
     return before, after
 
 
-def _result(before: JointErrorSums, after: JointErrorSums) -> dict:
+def _result(before: JointErrorSums, after: JointErrorSums) -> dict[str, Any]:
     return {"before": {"pooled": before.pooled(), "per_joint": per_joint(before)},
             "after": {"pooled": after.pooled(), "per_joint": per_joint(after)}}  # fmt: skip
 
 
-def validate(keraal: list[Pair], ui: list[Pair]) -> dict:
+def validate(keraal: list[Pair], ui: list[Pair]) -> dict[str, Any]:
     out = {}
     for per_pose in (False, True):
         tag = "per_pose" if per_pose else "per_joint"
@@ -239,14 +240,14 @@ def _vec(v: list[float]) -> str:
     return "/".join(f"{x:+.0f}" for x in v)
 
 
-def _cell(c: dict | None) -> str:
+def _cell(c: dict[str, Any] | None) -> str:
     if not c:
         return "—"
     sd = f" ± {_vec(c['sd_mm']).replace('+', '')}" if c["trials"] > 1 else ""
     return f"{_vec(c['mean_mm'])}{sd} [{c['trials']}]"
 
 
-def print_report(res: dict) -> None:
+def print_report(res: dict[str, Any]) -> None:
     print("\n### UI-PRMD time alignment (speed cross-correlation vs lowest registration RMS)\n")
     a = res["uiprmd_alignment"]
     print(f"{a['accepted']} of {a['pairs']} episode pairs kept (lags agree within {1e3 * LAG_AGREE_S:.0f} ms, "
@@ -287,7 +288,7 @@ def print_report(res: dict) -> None:
             print(f"| {jn} | {b['rmse_mm']:.1f} ({b['bias_mm']:.1f}) | {a['rmse_mm']:.1f} ({a['bias_mm']:.1f}) |")
 
 
-def alignment_summary(ui_all: list[Pair]) -> dict:
+def alignment_summary(ui_all: list[Pair]) -> dict[str, Any]:
     kept = [p for p in ui_all if p.accepted]
     per_movement: dict[str, list[int]] = {}
     for p in ui_all:
@@ -322,7 +323,7 @@ def write_constants(model: om.OffsetModel, path: Path = CONSTANTS_PATH) -> None:
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
-def run(quick: bool = False, config: PipelineConfig | None = None) -> tuple[dict, list[Pair], list[Pair]]:
+def run(quick: bool = False, config: PipelineConfig | None = None) -> tuple[dict[str, Any], list[Pair], list[Pair]]:
     config = config or PipelineConfig()
     keraal = keraal_pairs()
     ui_all = uiprmd_pairs(range(1, 4) if quick else range(1, 11))

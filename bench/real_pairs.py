@@ -42,6 +42,7 @@ import os
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -106,7 +107,7 @@ def pair_paths() -> list[Path]:
 
 
 def evaluate_pair(kinect: Recording, vicon: Recording, methods: tuple[str, ...] = METHODS,
-                  config: PipelineConfig | None = None) -> dict:  # fmt: skip
+                  config: PipelineConfig | None = None) -> dict[str, Any]:  # fmt: skip
     """Aligns one pair and runs every method; returns alignment numbers and per-method arrays (not JSON-ready).
 
     Keys: name, alignment, good (J,) bool, truth (T, J, 3), overlap (T,) bool, est {method: (T, J, 3)},
@@ -145,7 +146,7 @@ def _stats(d: np.ndarray) -> dict[str, float | int | None]:
             "n": int(d.size)}  # fmt: skip
 
 
-def offsets(pair: dict, name: str) -> np.ndarray:
+def offsets(pair: dict[str, Any], name: str) -> np.ndarray:
     """Returns (T', J) m: the offset distance of one method on the overlapping frames of a pair."""
     return np.linalg.norm(pair["est"][name] - pair["truth"], axis=-1)[pair["overlap"]]
 
@@ -159,10 +160,12 @@ def _gain(before: np.ndarray, after: np.ndarray) -> dict[str, float | None]:
     }
 
 
-def summarise(pairs: list[dict], methods: tuple[str, ...], config: PipelineConfig | None = None) -> dict:
+def summarise(
+    pairs: list[dict[str, Any]], methods: tuple[str, ...], config: PipelineConfig | None = None
+) -> dict[str, Any]:
     """Returns JSON-ready results: per pair alignment, per method pooled and per joint metrics, angles, seg SD, gain."""
     config = config or PipelineConfig()
-    out: dict = {"pairs": [], "methods": {}, "per_joint": {}, "gain": {}}
+    out: dict[str, Any] = {"pairs": [], "methods": {}, "per_joint": {}, "gain": {}}
     for p in pairs:
         al = p["alignment"]
         k = p["kinect"]
@@ -259,7 +262,7 @@ def summarise(pairs: list[dict], methods: tuple[str, ...], config: PipelineConfi
     alla = np.concatenate([np.concatenate(after[j]) for j in skeleton.JOINTS if after[j]])
     allo = np.concatenate([np.concatenate(oracle[j]) for j in skeleton.JOINTS if oracle[j]])
 
-    def avg(gs: list[dict], key: str) -> float | None:
+    def avg(gs: list[dict[str, Any]], key: str) -> float | None:
         v = [g[key] for g in gs if g[key] is not None]
         return float(np.mean(v)) if v else None
 
@@ -277,7 +280,7 @@ def summarise(pairs: list[dict], methods: tuple[str, ...], config: PipelineConfi
 # ----------------------------------------------------------------------------------------------- report
 
 
-def print_report(res: dict) -> None:
+def print_report(res: dict[str, Any]) -> None:
     print("\n### Pairs and alignment (Kinect 30 Hz, Vicon 60 Hz assumed; lag: Vicon time = Kinect time + lag)\n")
     print(
         "| pair | frames K / V | lag s (xcorr r) | lag 1st / 2nd half s | rotation ° | reg. RMS mm | well-estimated "
@@ -324,7 +327,7 @@ def print_report(res: dict) -> None:
 
 
 def run(paths: list[Path] | None = None, methods: tuple[str, ...] = METHODS,
-        config: PipelineConfig | None = None) -> dict:  # fmt: skip
+        config: PipelineConfig | None = None) -> dict[str, Any]:  # fmt: skip
     """Runs the benchmark on the KERAAL pairs (pipeline settings `config`, default PipelineConfig()); returns
     JSON-ready results."""
     config = config or PipelineConfig()

@@ -34,6 +34,7 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -70,7 +71,7 @@ def subjects(folder: Path) -> list[str]:
     return sorted({name.split("_")[1] for name in (p.name for p in folder.rglob("m*_s*_e*_positions*"))})
 
 
-def measure(data: Path, filtered: bool, config: PipelineConfig | None = None) -> list[dict]:
+def measure(data: Path, filtered: bool, config: PipelineConfig | None = None) -> list[dict[str, Any]]:
     """Returns one row per kind, movement and subject: the raw count and (filtered=True) the count after the
     pipeline (settings `config`, default the shipped ones)."""
     rows = []
@@ -92,7 +93,7 @@ def summary(counts: list[int]) -> str:
     return f"{exact}/{len(counts)} exact, {one} off by one, {len(counts) - exact - one} off by more"
 
 
-def print_report(rows: list[dict]) -> None:
+def print_report(rows: list[dict[str, Any]]) -> None:
     """Prints the cases that are not TRUE_COUNT, then the summaries per kind, stage, movement and subject."""
     stages = [s for s in ("raw", "filtered") if rows and rows[0][s] is not None]
     print("cases not counted 10:")
@@ -148,7 +149,7 @@ def measure_simulated(
     cache: Path | None,
     exercises: list[str] | None = None,
     smooth: bool = True,
-) -> list[dict]:
+) -> list[dict[str, Any]]:
     """Returns one row per exercise, view, repetitions and seed: the true count, raw and filtered counts
     (count_simulated with `smooth`)."""
     rows = []
@@ -163,13 +164,13 @@ def measure_simulated(
     return rows
 
 
-def _tally(rows: list[dict], stage: str) -> str:
+def _tally(rows: list[dict[str, Any]], stage: str) -> str:
     """Returns "exact/n (±1 k, more m)" of the rows' counts at `stage` against their true count."""
     off = [abs(r[stage] - r["reps"]) for r in rows]
     return f"{sum(o == 0 for o in off)}/{len(off)} (±1 {sum(o == 1 for o in off)}, more {sum(o > 1 for o in off)})"
 
 
-def print_simulated(rows: list[dict]) -> None:
+def print_simulated(rows: list[dict[str, Any]]) -> None:
     """Prints the sets not counted right, then per exercise, view, stage and seed, and per stage and seed."""
     seeds = sorted({r["seed"] for r in rows})
     print("simulated sets not counted right (true count: raw, filtered):")

@@ -29,6 +29,7 @@ import json
 import sys
 from dataclasses import asdict
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -61,7 +62,7 @@ RULE_GRID: dict[str, tuple[float, ...]] = {
 RULE_BEFORE = RepetitionParams(slot_keeps_shallow=False, add_spacing_pct=50.0, add_half_width=False)
 
 
-def recordings(data: Path, filtered: bool) -> list[dict]:
+def recordings(data: Path, filtered: bool) -> list[dict[str, Any]]:
     """Returns one entry per kind, subject (s01-s05) and movement: t (T,) s and the defining angles {name: (T,)
     degrees} of the joined episodes (ten repetitions), raw or after the pipeline."""
     out = []
@@ -77,7 +78,7 @@ def recordings(data: Path, filtered: bool) -> list[dict]:
     return out
 
 
-def mixes(data: Path, n: int, filtered: bool, seed: int = 0) -> list[dict]:
+def mixes(data: Path, n: int, filtered: bool, seed: int = 0) -> list[dict[str, Any]]:
     """Returns, per subject (s01-s05) and movement, n entries like recordings()'s (kind "mixed"): 10 episodes drawn
     without replacement from the subject's 10 correct and 10 incorrect ones (seed from subject, movement and `seed`;
     seed 0 draws the mixes of 2026-11-27)."""
@@ -113,14 +114,14 @@ def _distance(p: RepetitionParams, grid: dict[str, tuple[float, ...]], reference
                for k in grid)  # fmt: skip
 
 
-def counts(recs: list[dict], params: RepetitionParams) -> np.ndarray:
+def counts(recs: list[dict[str, Any]], params: RepetitionParams) -> np.ndarray:
     """Returns the count of each recording with params: (N,) int."""
     return np.array([len(count_repetitions(r["t"], r["angles"], r["names"], params).repetitions) for r in recs])
 
 
 def loso(
-    recs: list[dict], grid: dict[str, tuple[float, ...]], reference: RepetitionParams
-) -> tuple[list[dict], dict[str, dict]]:
+    recs: list[dict[str, Any]], grid: dict[str, tuple[float, ...]], reference: RepetitionParams
+) -> tuple[list[dict[str, Any]], dict[str, dict[str, Any]]]:
     """Returns (rows: per recording its held-out count, the default count and the reference's; per subject the
     settings chosen on the other four: most exact counts there, ties to the point nearest `reference`)."""
     points = grid_points(grid)
@@ -140,7 +141,7 @@ def loso(
     return rows, chosen
 
 
-def print_report(rows: list[dict], chosen: dict[str, dict]) -> None:
+def print_report(rows: list[dict[str, Any]], chosen: dict[str, dict[str, Any]]) -> None:
     """Prints the settings per fold, the cases not counted 10, then per kind: per subject and movement."""
     print("settings chosen on the other four subjects:")
     for subject, c in chosen.items():

@@ -30,6 +30,7 @@ import sys
 import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -65,7 +66,7 @@ def _child(element: ET.Element, tag: str) -> ET.Element:
     return child
 
 
-def read_qca(path: Path) -> list[dict]:
+def read_qca(path: Path) -> list[dict[str, Any]]:
     """Returns per camera {K (3,3) px, R (3,3), t (3,) m}: world -> OpenCV camera, as Pose2Sim converts a .qca."""
     root = ET.parse(path).getroot()
     out = []
@@ -82,7 +83,7 @@ def read_qca(path: Path) -> list[dict]:
     return out
 
 
-def triangulate(cams: list[dict], pixels: np.ndarray, vis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def triangulate(cams: list[dict[str, Any]], pixels: np.ndarray, vis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Returns ((N, 33, 3) world points, m, NaN where fewer than 2 views; (N, 33) views used).
 
     pixels: (V, N, 33, 2) px; vis: (V, N, 33)."""
@@ -112,7 +113,9 @@ BOOTSTRAP = 500
 MIN_BLOCKS = 2  # a cell needs frames for this many bootstrap blocks (0.5 s) where all three angles are defined
 
 
-def angle_errors(est: dict, raw: dict, ref: dict, name: str) -> tuple[np.ndarray, np.ndarray]:
+def angle_errors(
+    est: dict[str, Any], raw: dict[str, Any], ref: dict[str, Any], name: str
+) -> tuple[np.ndarray, np.ndarray]:
     """Returns ((n,) est - ref, (n,) raw - ref) in degrees over the frames where all three angles are defined (the
     same frames for both, so that a filter that defines an angle where the raw data do not is not judged on other
     frames)."""
@@ -138,7 +141,7 @@ def rmse_change(e_est: np.ndarray, e_raw: np.ndarray, rng: np.random.Generator, 
 
 
 def views_reference(
-    cams: list[dict], pixels: np.ndarray, vis: np.ndarray, v: int, leave_out: bool, min_views: int = 2
+    cams: list[dict[str, Any]], pixels: np.ndarray, vis: np.ndarray, v: int, leave_out: bool, min_views: int = 2
 ) -> np.ndarray:
     """Returns (N, 20, 3) m, the reference joints in view v's Kinect camera frame, triangulated from all views or
     (leave_out) from the other views only; NaN where a landmark of the joint was triangulated from fewer than
@@ -178,7 +181,9 @@ def stage_variants(config: PipelineConfig) -> dict[str, Callable[[Recording], np
     }
 
 
-def evaluate(raw: list[dict], refs: list[dict], ests: list[dict], rate_hz: float, seed: int = 0) -> np.ndarray:
+def evaluate(
+    raw: list[dict[str, Any]], refs: list[dict[str, Any]], ests: list[dict[str, Any]], rate_hz: float, seed: int = 0
+) -> np.ndarray:
     """Returns (A, V, 3) per angle and view: RMSE raw, RMSE est, tolerance (rmse_change), degrees."""
     rng = np.random.default_rng(seed)
     block = int(round(BLOCK_S * rate_hz))

@@ -21,19 +21,17 @@ Error model of one metric m (degrees), measured on simulated sessions with known
                       the edge
                B      per angle and metric (min_deg, max_deg, range_deg), both sides pooled
                g_device  DEVICE_GAIN of the session's device (1 for Kinect 2 and any device not listed; Kinect 1
-                      4.05, fitted on its own training sessions, views 0° and 60°, seeds 501-505, so that 95.5 % of
-                      them cover: its errors are larger; refitted 2026-11-28 under the constants of that day)
-               YAW_GAIN, TAIL_GAIN (one per metric) and B are fitted on training sessions (every simulated
-               exercise at views 0° and 60°, seeds 101-110; refitted 2026-11-28 on the simulator of issue 24
-               with SIGMA_GAIN on the grid): the gains, on a grid, give the narrowest intervals
-               among those whose per-(motion, view) coverage deviates from 95 % (RMS) at most 10 % more than the
-               least deviation on the grid; B is one quantile (the same for every angle and metric)
-               of the B each training interval needs, set so that 95.5 % of the training intervals cover the
-               truth. Validated on views 0°, 30° and 60° with other seeds (bench/README.md,
-               tests/backend/analysis/test_intervals_calibration.py). Limits: the fitted quantile is about the
-               median, so B is 0 for all angles but trunk lateral flexion: a bias that holds still (no tail) is
-               not widened for; fitted on Kinect 2 (Kinect 1 held out: 0.949 pooled, families 0.905-1.000, with its
-               gain refitted to 4.05; its minimum covers least, 0.876, its range 1.000).
+                      larger, fitted on its own training sessions so that 95.5 % of them cover)
+               YAW_GAIN, TAIL_GAIN (one per metric) and B are fitted on simulated training sessions (bench/
+               uncertainty.py): the gains, on a grid, give the narrowest intervals among those whose
+               per-(motion, view) coverage deviates from 95 % (RMS) at most 10 % more than the least deviation on
+               the grid; B is one quantile (the same for every angle and metric) of the B each training interval
+               needs, set so that 95.5 % of the training intervals cover the truth.
+               tests/backend/analysis/test_intervals_calibration.py holds the coverage on held-out sessions; the
+               fits, their data and the measured coverage are in bench/README.md ("Uncertainty: angle SDs and
+               95 % intervals" and the sections after it). Limits: B is 0 for all angles but trunk lateral
+               flexion, so a bias that holds still (no tail) is not widened for; the constants are fitted on
+               Kinect 2, and Kinect 1's minimum covers least.
     interval   m̂ ± 1.96 · sqrt((SIGMA_GAIN · σ_frames)² + b²), then kept to what the angle can be
                (angle_intervals: inside its domain, the ends consistent, a range never below 0 nor above the
                ends allow). None for NO_INTERVAL angles and for ranges of a full turn or more; withheld, with

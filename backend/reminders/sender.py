@@ -19,7 +19,7 @@ from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import Session
 
 from backend.config import Settings
-from backend.database import utcnow
+from backend.database import is_database_busy, utcnow
 from backend.plans.models import Plan
 from backend.reminders import mail, service
 from backend.reminders.models import ReminderSent
@@ -83,8 +83,6 @@ def _write(db_session: Session, statement: Executable) -> None:
 def _busy_retried(db_session: Session, work: Callable[[], T], attempts: int = 20) -> T:
     """Returns work(), run again after a short wait while another process holds the database's write lock (SQLite
     answers "database is locked" at once when a transaction's snapshot went stale); other errors pass."""
-    from backend.main import is_database_busy
-
     for attempt in range(attempts):
         try:
             return work()

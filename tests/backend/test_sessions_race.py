@@ -16,8 +16,8 @@ from sqlalchemy import delete, func, select
 from sqlalchemy.exc import DBAPIError
 from sqlalchemy.orm import Session
 
+from backend.database import is_database_busy
 from backend.exercises.models import Exercise
-from backend.main import is_database_busy
 from backend.sessions import service
 from backend.sessions.ingest import decode_upload
 from backend.sessions.models import ExerciseSession
