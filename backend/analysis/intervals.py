@@ -352,7 +352,8 @@ def rom_intervals(
     session without both shoulders in any frame is taken as side on, 90°, the widest intervals). device: the
     session's meta.device. tracked: {angle: fraction of its joint samples tracked} (1 when not given). defining:
     the exercise's defining angles (angle_intervals' `defining`). beyond: {angle: degrees its range of motion leaves
-    the raw angle's envelope (beyond_raw)}; an angle beyond it by more than 0 has its intervals withheld.
+    the raw angle's envelope (beyond_raw)}; an angle beyond it by more than 0 has its intervals withheld for that
+    reason before any other (its range is withheld too).
     """
     yaw = camera_yaw(positions)
     yaw = 90.0 if yaw is None else yaw
@@ -362,10 +363,10 @@ def rom_intervals(
         if name not in sd:
             continue
         iv = angle_intervals(t, angles[name], sd[name], name, yaw_deg=yaw, device=device, defining=name in defining)
-        reason = withheld_reason(name, angles[name], iv, (tracked or {}).get(name, 1.0))
         off = (beyond or {}).get(name, 0.0)
-        if reason is None and off > 0.0:
-            reason = why.BEYOND_RAW.reason(by=off)
+        # a range beyond the raw data is itself withheld (report.analyze_recording): its interval says the same
+        reason = why.BEYOND_RAW.reason(by=off) if off > 0.0 else withheld_reason(
+            name, angles[name], iv, (tracked or {}).get(name, 1.0))  # fmt: skip
         shown[name] = None if reason else iv
         if reason:
             withheld[name] = reason
