@@ -140,6 +140,8 @@ def analyze_recording(
     angle_sd: {angle: (T,) degrees}, the per-frame SD of the filtered angles (the session file's angle SDs); with
     it and `filtered`, "range_of_motion_95" ({angle: {"min_deg", "max_deg", "range_deg": [lo, hi]} or None}) and
     "repetitions_95" ({"low", "high", "ambiguous"}) hold 95 % intervals (intervals.py); else both are None.
+    Measured on filtered positions (or params), an angle whose range leaves the raw angle's envelope
+    (intervals.beyond_raw) has its range None and why in "range_of_motion_withheld" ({} when none; None on raw).
     """
     if recording.n_frames < 2:
         raise AnalysisError(f"the recording has {recording.n_frames} frame(s); at least 2 are needed")
