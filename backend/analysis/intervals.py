@@ -48,6 +48,7 @@ counts and the count is ambiguous when they differ.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -317,6 +318,12 @@ def beyond_raw(rom: dict[str, float | None], raw: np.ndarray) -> float:
     return float(max(0.0, low - lo, hi - high))
 
 
+def beyond_raw_reason(off: float) -> Reason:
+    """Returns the reason beyond_raw of a range off (degrees, > 0) beyond the raw envelope, rounded up to 0.1° so
+    that it never reads 0°."""
+    return why.BEYOND_RAW.reason(by=math.ceil(round(off * 10.0, 6)) / 10.0)
+
+
 def covers(interval: list[float], true: float, kind: str) -> bool:
     """True when a 95 % interval [lo, hi] (rounded to 0.1°) of metric `kind` ("min_deg", "max_deg", "range_deg")
     holds the value `true`; the ends of a range are angles, compared modulo a turn."""
@@ -365,7 +372,7 @@ def rom_intervals(
         iv = angle_intervals(t, angles[name], sd[name], name, yaw_deg=yaw, device=device, defining=name in defining)
         off = (beyond or {}).get(name, 0.0)
         # a range beyond the raw data is itself withheld (report.analyze_recording): its interval says the same
-        reason = why.BEYOND_RAW.reason(by=off) if off > 0.0 else withheld_reason(
+        reason = beyond_raw_reason(off) if off > 0.0 else withheld_reason(
             name, angles[name], iv, (tracked or {}).get(name, 1.0))  # fmt: skip
         shown[name] = None if reason else iv
         if reason:
@@ -418,6 +425,7 @@ __all__ = [
     "Edges",
     "RomIntervals",
     "angle_intervals",
+    "beyond_raw_reason",
     "count_interval",
     "edges",
     "rom_intervals",

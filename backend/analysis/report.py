@@ -21,14 +21,13 @@ import numpy as np
 from backend.analysis import activity, quality, reasons
 from backend.analysis.balance import missing_reason, sway
 from backend.analysis.errors import AnalysisError, UnknownExercise, UnreadableRecording
-from backend.analysis.intervals import KINDS, beyond_raw, count_interval, rom_intervals
+from backend.analysis.intervals import KINDS, beyond_raw, beyond_raw_reason, count_interval, rom_intervals
 from backend.analysis.most_moving import most_moving_joints
 from backend.analysis.range_of_motion import range_of_motion
 from backend.analysis.reachable import reachable_range
 from backend.analysis.sit_to_stand import sit_to_stand
 from backend.exercises.library import EXERCISES, ExerciseSpec
 from backend.i18n import ENGLISH
-from kinect_agent.analysis import reasons as why
 from kinect_agent.analysis.angles import counting_angles, measured_angles
 from kinect_agent.analysis.document import AnalysisReport, json_ready
 from kinect_agent.analysis.live import amplitude_floor, counting_params, counting_positions, done_repetitions
@@ -108,7 +107,7 @@ def _beyond_raw(
     says why, and bench/README.md "Where the filtered range leaves the raw data")."""
     raw = joint_angles(recording.positions)
     beyond = {name: beyond_raw(rom[name], raw[name]) for name in rom if name in raw}
-    return beyond, {name: why.BEYOND_RAW.reason(by=off) for name, off in beyond.items() if off > 0.0}
+    return beyond, {name: beyond_raw_reason(off) for name, off in beyond.items() if off > 0.0}
 
 
 def peak_end(rom: dict[str, float | None] | None, repetitions: list[dict[str, Any]]) -> str:
