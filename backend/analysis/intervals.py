@@ -46,6 +46,7 @@ counts and the count is ambiguous when they differ.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -315,6 +316,12 @@ def beyond_raw(rom: dict[str, float | None], raw: np.ndarray) -> float:
     return float(max(0.0, low - lo, hi - high))
 
 
+def beyond_raw_reason(off: float) -> Reason:
+    """Returns the reason beyond_raw of a range off (degrees, > 0) beyond the raw envelope, rounded up to 0.1° so
+    that it never reads 0°."""
+    return why.BEYOND_RAW.reason(by=math.ceil(round(off * 10.0, 6)) / 10.0)
+
+
 def covers(interval: list[float], true: float, kind: str) -> bool:
     """True when a 95 % interval [lo, hi] (rounded to 0.1°) of metric `kind` ("min_deg", "max_deg", "range_deg")
     holds the value `true`; the ends of a range are angles, compared modulo a turn."""
@@ -350,7 +357,8 @@ def rom_intervals(
     session without both shoulders in any frame is taken as side on, 90°, the widest intervals). device: the
     session's meta.device. tracked: {angle: fraction of its joint samples tracked} (1 when not given). defining:
     the exercise's defining angles (angle_intervals' `defining`). beyond: {angle: degrees its range of motion leaves
-    the raw angle's envelope (beyond_raw)}; an angle beyond it by more than 0 has its intervals withheld.
+    the raw angle's envelope (beyond_raw)}; an angle beyond it by more than 0 has its intervals withheld for that
+    reason before any other (its range is withheld too).
     """
     yaw = camera_yaw(positions)
     yaw = 90.0 if yaw is None else yaw
@@ -360,10 +368,10 @@ def rom_intervals(
         if name not in sd:
             continue
         iv = angle_intervals(t, angles[name], sd[name], name, yaw_deg=yaw, device=device, defining=name in defining)
-        reason = withheld_reason(name, angles[name], iv, (tracked or {}).get(name, 1.0))
         off = (beyond or {}).get(name, 0.0)
-        if reason is None and off > 0.0:
-            reason = why.BEYOND_RAW.reason(by=off)
+        # a range beyond the raw data is itself withheld (report.analyze_recording): its interval says the same
+        reason = beyond_raw_reason(off) if off > 0.0 else withheld_reason(
+            name, angles[name], iv, (tracked or {}).get(name, 1.0))  # fmt: skip
         shown[name] = None if reason else iv
         if reason:
             withheld[name] = reason
@@ -415,6 +423,7 @@ __all__ = [
     "Edges",
     "RomIntervals",
     "angle_intervals",
+    "beyond_raw_reason",
     "count_interval",
     "edges",
     "rom_intervals",

@@ -56,10 +56,12 @@ def with_text(reason: R, t: Translator) -> R:
 
 def with_texts(doc: D, t: Translator) -> D:
     """Returns a metrics document with the text of each reason in t's language: the quality check's, the withheld
-    intervals', and why balance is missing (the document's and, in an AnalysisDocument, its balance indicator's)."""
-    withheld = doc.range_of_motion_95_withheld
+    ranges' and intervals', and why balance is missing (the document's and, in an AnalysisDocument, its balance
+    indicator's)."""
+    withheld, ranges = doc.range_of_motion_95_withheld, doc.range_of_motion_withheld
     update: dict[str, object] = {
         "quality": doc.quality.model_copy(update={"reasons": [with_text(r, t) for r in doc.quality.reasons]}),
+        "range_of_motion_withheld": None if ranges is None else {k: with_text(v, t) for k, v in ranges.items()},
         "range_of_motion_95_withheld": None if withheld is None else {k: with_text(v, t) for k, v in withheld.items()},
         "balance_missing": None if doc.balance_missing is None else with_text(doc.balance_missing, t),
     }

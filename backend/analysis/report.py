@@ -21,7 +21,7 @@ import numpy as np
 from backend.analysis import activity, quality, reasons
 from backend.analysis.balance import missing_reason, sway
 from backend.analysis.errors import AnalysisError, UnknownExercise, UnreadableRecording
-from backend.analysis.intervals import beyond_raw, count_interval, rom_intervals
+from backend.analysis.intervals import KINDS, beyond_raw, beyond_raw_reason, count_interval, rom_intervals
 from backend.analysis.most_moving import most_moving_joints
 from backend.analysis.range_of_motion import range_of_motion
 from backend.analysis.reachable import reachable_range
@@ -31,6 +31,7 @@ from backend.i18n import ENGLISH
 from kinect_agent.analysis.angles import counting_angles, measured_angles
 from kinect_agent.analysis.document import AnalysisReport, json_ready
 from kinect_agent.analysis.live import amplitude_floor, counting_params, counting_positions, done_repetitions
+from kinect_agent.analysis.reasons import Reason
 from kinect_agent.analysis.repetitions import Repetition, RepetitionParams, count_repetitions
 from kinect_agent.body.angles import body_frame, joint_angles
 from kinect_agent.errors import FormatError
@@ -97,6 +98,18 @@ def measured_peak(t: np.ndarray, angles: dict[str, np.ndarray], names: tuple[str
     return round(float(np.nanmean(series[:, nearest])), 1)
 
 
+def _beyond_raw(
+    recording: Recording, rom: dict[str, dict[str, float | None]]
+) -> tuple[dict[str, float], dict[str, Reason]]:
+    """Returns {angle: degrees its measured range leaves the raw angle's envelope (intervals.beyond_raw)} and the
+    reasons of the ranges withheld for it: {angle: beyond_raw} of those beyond by more than 0. The filter and the
+    smoothing must not take an angle where the camera never put it (issue 24.1; where they do, bench/raw_envelope.py
+    says why, and bench/README.md "Where the filtered range leaves the raw data")."""
+    raw = joint_angles(recording.positions)
+    beyond = {name: beyond_raw(rom[name], raw[name]) for name in rom if name in raw}
+    return beyond, {name: beyond_raw_reason(off) for name, off in beyond.items() if off > 0.0}
+
+
 def peak_end(rom: dict[str, float | None] | None, repetitions: list[dict[str, Any]]) -> str:
     """Returns "max" or "min": the end of the defining angle's range that its repetitions reach (the median
     repetition peak is nearer to it), so that the session's "peak angle" and the repetitions' peaks are one
@@ -126,6 +139,8 @@ def analyze_recording(
     angle_sd: {angle: (T,) degrees}, the per-frame SD of the filtered angles (the session file's angle SDs); with
     it and `filtered`, "range_of_motion_95" ({angle: {"min_deg", "max_deg", "range_deg": [lo, hi]} or None}) and
     "repetitions_95" ({"low", "high", "ambiguous"}) hold 95 % intervals (intervals.py); else both are None.
+    Measured on filtered positions (or params), an angle whose range leaves the raw angle's envelope
+    (intervals.beyond_raw) has its range None and why in "range_of_motion_withheld" ({} when none; None on raw).
     """
     if recording.n_frames < 2:
         raise AnalysisError(f"the recording has {recording.n_frames} frame(s); at least 2 are needed")
@@ -152,10 +167,10 @@ def analyze_recording(
     sd = _angle_sd(angle_sd, recording.n_frames) if source == "filtered" else None
     rom = range_of_motion(t, clinical, presmoothed=True)
     tracked = {name: quality.tracked_fraction(recording, (name,)) for name in clinical}
+    beyond, rom_withheld = _beyond_raw(recording, rom) if source != "raw" else ({}, None)
+    rom = {name: dict.fromkeys(KINDS) if rom_withheld and name in rom_withheld else r for name, r in rom.items()}
     ivs = None
     if sd is not None:
-        raw = joint_angles(recording.positions)
-        beyond = {name: beyond_raw(rom[name], raw[name]) for name in clinical if name in raw and name in rom}
         ivs = rom_intervals(t, clinical, sd, smoothed, recording.meta.device, tracked, names, beyond)
     moving_s, rest_s = activity.moving_time(t, smoothed)
     balance = sway(t, smoothed, clinical)
@@ -170,6 +185,7 @@ def analyze_recording(
         "defining_angle": reps.defining_angle,
         "peak_end": peak_end(rom.get(reps.defining_angle or ""), rep_list),
         "range_of_motion": rom,
+        "range_of_motion_withheld": rom_withheld,
         "range_of_motion_95": None if ivs is None else ivs.intervals,
         "range_of_motion_95_withheld": None if ivs is None else ivs.withheld,
         "repetitions_95": None

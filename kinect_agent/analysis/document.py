@@ -17,9 +17,12 @@ Schema versions (`schema_version`; a document without it is version 1):
     3  2026-11-27: each reason a Reason (kinect_agent.analysis.reasons): a message id and its numbers, written in
        the reader's language by the server; an English text of schema 1 or 2 that no message matches stays a text.
        The indicators' basis in English words.
-    4  today: each indicator's basis a Basis (kinect_agent.analysis.reasons.BASES): a message id, its numbers and
-       angle, written in the reader's language by the server; an English basis of schema 1 to 3 that no message
+    4  2026-11-28: each indicator's basis a Basis (kinect_agent.analysis.reasons.BASES): a message id, its numbers
+       and angle, written in the reader's language by the server; an English basis of schema 1 to 3 that no message
        matches (the wordings before 2026-11-24) stays a text.
+    5  today: range_of_motion_withheld, {angle: why its range of motion is withheld}: a range the raw data does not
+       support (intervals.beyond_raw) has its numbers None and its reason there; None in documents of schema 1-4
+       (not checked).
 Raise SCHEMA_VERSION and add one step to `upgrade` whenever a key is added, removed or changes its meaning.
 """
 
@@ -34,7 +37,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from kinect_agent.analysis import reasons
 from kinect_agent.analysis.reasons import MESSAGES, Basis, Kind, Message, Reason
 
-SCHEMA_VERSION = 4
+SCHEMA_VERSION = 5
 
 
 class _Part(BaseModel):
@@ -185,6 +188,9 @@ class AnalysisReport(_Part):
         description="the end of the defining angle's range its repetitions reach ('max' in schema 1)"
     )
     range_of_motion: dict[str, AngleRange] = Field(description="{angle: range}, degrees")
+    range_of_motion_withheld: dict[str, Reason] | None = Field(
+        description="{angle: why its range (numbers None) is withheld}; None: schema 1-4, or measured on raw positions"
+    )
     range_of_motion_95: dict[str, AngleRangeInterval | None] | None = Field(
         description="{angle: 95 % intervals or None (withheld)}; None without the agent's angle SDs"
     )
@@ -369,6 +375,11 @@ def _upgrade_3_to_4(doc: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+def _upgrade_4_to_5(doc: dict[str, Any]) -> dict[str, Any]:
+    """Returns a schema-4 document in schema 5 (module doc): range_of_motion_withheld None (not checked)."""
+    return {**doc, "range_of_motion_withheld": None, "schema_version": 5}
+
+
 def upgrade(doc: dict[str, Any]) -> dict[str, Any]:
     """Returns a stored document (JSON object) in today's schema; raises UnreadableDocument for an unknown version."""
     version = doc.get("schema_version", 1)
@@ -380,6 +391,8 @@ def upgrade(doc: dict[str, Any]) -> dict[str, Any]:
         doc = _upgrade_2_to_3(doc)
     if version <= 3:
         doc = _upgrade_3_to_4(doc)
+    if version <= 4:
+        doc = _upgrade_4_to_5(doc)
     return doc
 
 

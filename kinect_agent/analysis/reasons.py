@@ -152,7 +152,7 @@ TOO_UNCERTAIN = Message(
     (("width", "decimal0"), ("most", "decimal0")),
 )
 BEYOND_RAW = Message(
-    "beyond_raw", N_("the filtered curve reaches %(by)s° beyond what the camera measured"), (("by", "decimal0"),)
+    "beyond_raw", N_("the filtered curve reaches %(by)s° beyond what the camera measured"), (("by", "general"),)
 )
 # balance.missing_reason: why balance was not measured
 RECORDING_TOO_SHORT = Message("recording_too_short", N_("the recording is too short"))

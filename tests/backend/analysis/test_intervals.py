@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from backend.analysis import intervals
+from backend.analysis import intervals, reasons
 from backend.exercises.library import EXERCISES
+from backend.i18n import translator
 from kinect_agent.analysis import series
 from kinect_agent.analysis.angles import counting_angles
 from kinect_agent.analysis.reasons import Reason
@@ -247,3 +248,10 @@ def test_an_angle_whose_filtered_range_leaves_the_raw_envelope_has_its_intervals
     held = intervals.rom_intervals(t, {name: x}, {name: sd}, p, beyond={name: 12.3})
     assert held.intervals[name] is None
     assert held.withheld[name] == Reason(id="beyond_raw", params={"by": 12.3})
+
+
+def test_a_range_just_beyond_the_raw_data_never_reads_zero_degrees() -> None:
+    assert intervals.beyond_raw_reason(0.0686) == Reason(id="beyond_raw", params={"by": 0.1})
+    assert intervals.beyond_raw_reason(12.3) == Reason(id="beyond_raw", params={"by": 12.3})  # not 12.4 (12.3 × 10)
+    text = reasons.written(intervals.beyond_raw_reason(0.0686), translator("en"))
+    assert text == "the filtered curve reaches 0.1° beyond what the camera measured", text

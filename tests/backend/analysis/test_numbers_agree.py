@@ -11,8 +11,9 @@ then the session page's body as the server builds it). For each recording, as a 
     - the curves (raw and filtered) lie in the domain; the filtered curve is the series the range of motion is
       measured on (its extremes hold the 1st and 99th percentiles);
     - the exported angles_filtered.csv is that same series, frame by frame;
-    - the filtered angle's range stays within what the raw data and anatomy allow: inside the raw angle's
-      envelope (0.5th-99.5th percentiles) widened by RAW_MARGIN_DEG, or its interval is withheld with a reason.
+    - every range shown (its key numbers, with or without an interval) stays within what the raw data and anatomy
+      allow: inside the raw angle's envelope (0.5th-99.5th percentiles) widened by RAW_MARGIN_DEG; a range not
+      shown while the raw angle is defined says why (range_of_motion_withheld, or its interval's reason).
 """
 
 from __future__ import annotations
@@ -57,7 +58,7 @@ HDM05_EXERCISE = {
 }
 
 
-def _real_cases() -> list[tuple[str, str, str]]:
+def real_cases() -> list[tuple[str, str, str]]:
     """Returns (label, relative path or UI-PRMD key, exercise slug) of the real recordings checked."""
     if not DATA.is_dir():
         return []
@@ -80,7 +81,7 @@ def _real_cases() -> list[tuple[str, str, str]]:
     return cases
 
 
-def _thin(rec: Recording) -> Recording:
+def thin(rec: Recording) -> Recording:
     """Returns the first WINDOW_S seconds of rec, mocap thinned to about RATE_HZ."""
     step = max(1, int(round(rec.rate_hz / RATE_HZ))) if np.isfinite(rec.rate_hz) else 1
     stop = min(rec.n_frames, int(WINDOW_S * rec.rate_hz) + 1) if np.isfinite(rec.rate_hz) else rec.n_frames
@@ -88,7 +89,7 @@ def _thin(rec: Recording) -> Recording:
     return Recording(rec.t[keep], rec.positions[keep], rec.state[keep], rec.meta)
 
 
-def _read_real(key: str) -> Recording:
+def read_real(key: str) -> Recording:
     if key.startswith(("correct:", "incorrect:")):
         kind, movement, subject = key.split(":")
         folder = "Segmented Movements" if kind == "correct" else "Incorrect Segmented Movements"
@@ -125,6 +126,14 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
         r = rom[name]
         if r["min_deg"] is not None and not (lo - TOL <= r["min_deg"] <= r["max_deg"] <= hi + TOL):
             problems.append(f"{name}: range {r['min_deg']}..{r['max_deg']} leaves its domain [{lo}, {hi}]")
+        raw = raw_angles[name][np.isfinite(raw_angles[name])]
+        if raw.size and r["min_deg"] is not None:  # every range shown, with its interval or not
+            env = np.percentile(raw, [0.5, 99.5]) + np.array([-RAW_MARGIN_DEG, RAW_MARGIN_DEG])
+            if r["min_deg"] < env[0] or r["max_deg"] > env[1]:
+                problems.append(f"{name}: filtered {r['min_deg']}..{r['max_deg']} leaves the raw data's {env.round(1)}")
+        said = (doc.get("range_of_motion_withheld") or {}).get(name) or (withheld or {}).get(name)
+        if r["min_deg"] is None and raw.size and not said:
+            problems.append(f"{name}: range missing without a reason, though the raw angle is defined")
         iv = ivs.get(name)
         if iv is None:
             if name in ivs and not withheld.get(name):
@@ -137,11 +146,6 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
                 problems.append(f"{name}: {kind} {r[kind]} has the interval [{a}, {b}] (domain [{bottom}, {top}])")
             if b - a > intervals.MAX_WIDTH_DEG + TOL:
                 problems.append(f"{name}: {kind} interval [{a}, {b}] is wider than {intervals.MAX_WIDTH_DEG}°")
-        raw = raw_angles[name][np.isfinite(raw_angles[name])]
-        if raw.size and r["min_deg"] is not None:
-            env = np.percentile(raw, [0.5, 99.5]) + np.array([-RAW_MARGIN_DEG, RAW_MARGIN_DEG])
-            if r["min_deg"] < env[0] or r["max_deg"] > env[1]:
-                problems.append(f"{name}: filtered {r['min_deg']}..{r['max_deg']} leaves the raw data's {env.round(1)}")
     exported = _filtered_csv(payload)
     filtered_values: list[np.ndarray] = []
     for c in body["curves"]:
@@ -182,9 +186,9 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
     return problems
 
 
-@pytest.mark.parametrize(("label", "key", "slug"), _real_cases(), ids=[c[0] for c in _real_cases()])
+@pytest.mark.parametrize(("label", "key", "slug"), real_cases(), ids=[c[0] for c in real_cases()])
 def test_numbers_of_real_recordings_agree(data_dir: Path, label: str, key: str, slug: str) -> None:
-    rec = _thin(_read_real(key))
+    rec = thin(read_real(key))
     payload = make_payload(rec, session_id="00000000-0000-4000-8000-000000000001", created_at="2026-11-27T00:00:00Z")
     problems = disagreements(payload, slug)
     assert not problems, f"{label}: " + "; ".join(problems)

@@ -8,10 +8,14 @@ import pytest
 from pydantic import ValidationError
 
 from backend.analysis import balance, intervals, quality, reasons
+from backend.analysis.report import analyze_recording
+from backend.exercises.library import EXERCISES
 from backend.i18n import Translator, translator
 from kinect_agent.analysis import reasons as why
 from kinect_agent.analysis.document import reason_of_text
 from kinect_agent.analysis.reasons import Reason, UnknownReason
+from kinect_agent.recording import Recording
+from kinect_agent.sources.simulator import simulate_truth
 from tests.kinect_agent.analysis.test_document import ENGLISH
 
 LOCALES = ("de", "es", "fr")
@@ -101,3 +105,16 @@ def test_every_basis_is_written_in_every_language_with_the_angle_in_words(locale
     assert "hip_abduction_L" not in written[0] and "left hip abduction" in english[0], (english[0], written[0])
     assert "8,5" in written[3], written[3]
     assert "0,5 s" in written[5], written[5]
+
+
+def test_a_withheld_range_is_written_in_the_readers_language():
+    raw = simulate_truth("elbow_flexion", 3, seed=2, amplitude_deg=60.0)
+    moved = simulate_truth("elbow_flexion", 3, seed=2, amplitude_deg=100.0)
+    doc = analyze_recording(raw, EXERCISES["elbow_flexion"], filtered=Recording(raw.t, moved.positions, raw.state,
+                                                                                raw.meta))  # fmt: skip
+    english = reasons.with_texts(doc, translator("en")).range_of_motion_withheld
+    german = reasons.with_texts(doc, translator("de")).range_of_motion_withheld
+    assert english and german and set(english) == set(german) == {"elbow_flexion_L", "elbow_flexion_R"}, english
+    left_en, left_de = english["elbow_flexion_L"], german["elbow_flexion_L"]
+    assert left_en.text and "beyond what the camera measured" in left_en.text, left_en
+    assert left_de.text and left_de.text != left_en.text and left_de.id == "beyond_raw", left_de

@@ -27,7 +27,7 @@ CONTRACT_KEYS = {
     "exercise", "duration_s", "n_frames", "rate_hz", "repetitions", "repetition_list", "defining_angle",
     "range_of_motion", "rom_deg", "most_moving_joints", "reachable_range", "moving_time_s", "rest_time_s",
     "tempo_s_per_rep", "fatigue", "balance", "balance_missing", "sit_to_stand", "quality", "range_of_motion_95",
-    "repetitions_95", "range_of_motion_95_withheld", "peak_end",
+    "repetitions_95", "range_of_motion_95_withheld", "peak_end", "range_of_motion_withheld",
 }  # fmt: skip
 REP_KEYS = {"index", "start_s", "end_s", "duration_s", "amplitude_deg", "peak_deg", "side", "peak_s"}
 
@@ -47,8 +47,10 @@ def test_standing_session_fills_every_metric() -> None:
     doc = analyze_recording(
         simulate_truth("shoulder_abduction", 5, seed=2), EXERCISES["shoulder_abduction"]
     ).model_dump(mode="json")
-    # the intervals need the agent's angle SDs; balance_missing is None when balance is measured
-    no_sd = {"sit_to_stand", "range_of_motion_95", "range_of_motion_95_withheld", "repetitions_95", "balance_missing"}
+    # the intervals need the agent's angle SDs, the raw-data check filtered positions; balance_missing is None when
+    # balance is measured
+    no_sd = {"sit_to_stand", "range_of_motion_95", "range_of_motion_95_withheld", "repetitions_95", "balance_missing",
+             "range_of_motion_withheld"}  # fmt: skip
     assert all(doc[k] is not None for k in CONTRACT_KEYS - no_sd), [k for k in doc if doc[k] is None]
     assert doc["most_moving_joints"][0]["joint"] in ("HAN_L", "HAN_R")
     assert doc["moving_time_s"] + doc["rest_time_s"] == pytest.approx(doc["duration_s"], abs=0.02)
@@ -219,3 +221,19 @@ def test_intervals_need_the_filtered_recording_and_its_angle_sds() -> None:
     json.dumps(doc, allow_nan=False)
     bare = analyze_recording(measured, spec, filtered=result.filtered).model_dump(mode="json")
     assert bare["range_of_motion_95"] is None and bare["repetitions_95"] is None
+
+
+def test_a_range_beyond_the_raw_data_is_withheld_with_its_reason() -> None:
+    raw = simulate_truth("elbow_flexion", 4, seed=1, amplitude_deg=60.0)
+    moved = simulate_truth("elbow_flexion", 4, seed=1, amplitude_deg=100.0)  # the same session bent 40° further
+    assert moved.n_frames == raw.n_frames
+    filtered = Recording(raw.t, moved.positions, raw.state, raw.meta)
+    doc = analyze_recording(raw, EXERCISES["elbow_flexion"], filtered=filtered)
+    withheld = doc.range_of_motion_withheld
+    assert withheld is not None and set(withheld) == {"elbow_flexion_L", "elbow_flexion_R"}, withheld
+    assert all(r.id == "beyond_raw" and 20.0 < float(r.params["by"]) < 40.0 for r in withheld.values()), withheld
+    assert all(doc.range_of_motion[n].model_dump() == dict.fromkeys(("min_deg", "max_deg", "range_deg"))
+               for n in withheld)  # fmt: skip
+    assert doc.range_of_motion["knee_flexion_L"].max_deg is not None  # the angles the filter left alone are shown
+    same = analyze_recording(raw, EXERCISES["elbow_flexion"], filtered=raw)
+    assert same.range_of_motion_withheld == {}, same.range_of_motion_withheld

@@ -4,8 +4,8 @@ documents/ holds one stored document of each shape the server has written (backe
 schema1_2026-11-23 (01f63ce: the first metrics), schema1_2026-11-25 (c83a249: + 95 % intervals),
 schema1_2026-11-27 (b6dadc9 + d8eeccf: + balance in standing phases, analysis version), schema2 (4bb313d: the
 reasons in English words), schema3 (schema2 as the analysis of 2026-11-27 wrote it, each reason a message id and its
-numbers, the indicators' bases in English words) and schema4 (today: schema3 as today's analysis writes it, each basis
-a message id and its numbers).
+numbers, the indicators' bases in English words), schema4 (schema3 as the analysis of 2026-11-28 wrote it, each basis
+a message id and its numbers) and schema5 (today: schema4 upgraded, range_of_motion_withheld None).
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from kinect_agent.analysis.reasons import Basis, Reason
 
 DOCUMENTS = Path(__file__).parent / "documents"
 OLDER = ["schema1_2026-11-23", "schema1_2026-11-25", "schema1_2026-11-27"]
-TODAY = "schema4"
+TODAY = "schema5"
 
 
 def _stored(name: str) -> dict[str, Any]:
@@ -44,7 +44,7 @@ def _stored(name: str) -> dict[str, Any]:
 def test_todays_document_reads_back_to_the_same_json() -> None:
     stored = _stored(TODAY)
     doc = read_document(stored)
-    assert doc.schema_version == SCHEMA_VERSION == 4
+    assert doc.schema_version == SCHEMA_VERSION == 5
     assert json.dumps(doc.model_dump(mode="json")) == json.dumps(stored)  # same keys, same order, same numbers
 
 
@@ -90,6 +90,13 @@ def test_the_balance_shape_keeps_its_intervals_and_version() -> None:
     assert doc.range_of_motion_95_withheld is None  # withheld intervals came later (ff532a0)
 
 
+def test_a_document_of_schema_4_reads_with_its_ranges_unchecked() -> None:
+    stored = _stored("schema4")
+    doc = read_document(stored)
+    assert doc.schema_version == 5 and doc.range_of_motion_withheld is None  # not checked against the raw data
+    assert doc.model_dump(mode="json") == _stored(TODAY)
+
+
 def test_a_report_without_indicators_reads_as_a_report() -> None:
     stored = {k: v for k, v in _stored(TODAY).items() if k not in ("indicators", "analysis_version")}
     report = read_report(stored | {"source": "session.khs"})  # `coach-server analyze --json` adds "source"
@@ -98,8 +105,8 @@ def test_a_report_without_indicators_reads_as_a_report() -> None:
 
 
 def test_an_unknown_schema_version_is_refused_by_name() -> None:
-    with pytest.raises(UnreadableDocument, match="schema_version 5"):
-        read_document(_stored(TODAY) | {"schema_version": 5})
+    with pytest.raises(UnreadableDocument, match="schema_version 6"):
+        read_document(_stored(TODAY) | {"schema_version": 6})
 
 
 def test_a_document_missing_a_key_of_its_version_is_refused() -> None:
