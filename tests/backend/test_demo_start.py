@@ -5,6 +5,7 @@ and a set kept on an agent's disk is uploaded after the demo restarts on another
 from __future__ import annotations
 
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -139,3 +140,23 @@ def test_a_set_kept_on_disk_is_uploaded_after_the_demo_restarts_on_another_port(
     assert f"({kept[:8]}) -> uploaded (HTTP 201)" in out and "REJECTED" not in out, out
     assert HomeAgent.load(home / "rose").where(kept) == "sent"
     assert HomeAgent.load(home / "rose").config.device_token == rose.config.device_token  # not paired anew
+
+
+def test_history_ready_is_said_once_the_backdated_sessions_are_in_and_a_restart_stores_none_twice(tmp_path):
+    home = tmp_path / "agents"
+    with _server(tmp_path, _free_port(), "server.log") as base:
+        first = _agents(base, home, "--history-weeks", "1", "--max-sessions", "0")
+        again = _agents(base, home, "--history-weeks", "1", "--max-sessions", "0")  # the demo started once more
+        login = httpx.post(f"{base}/api/v1/auth/login", json={"email": "rose@demo.clinic", "password": DEMO_PASSWORD})
+    out = first.stdout + first.stderr
+    assert first.returncode == 0, out
+    planned = re.search(r"uploading (\d+) backdated sessions \(1 weeks of history\)", out)
+    assert planned is not None, out
+    n = int(planned.group(1))
+    assert n > 0 and out.count("uploaded (HTTP 201)") == n, out
+    assert re.search(rf"history ready: {n} backdated sessions uploaded in \d+ s", out), out
+    assert out.index("history ready:") > out.rindex("uploaded (HTTP 201)"), out  # said when the last one is in
+    out = again.stdout + again.stderr
+    assert again.returncode == 0, out
+    assert "history ready (uploaded in an earlier run)" in out and "HTTP 201" not in out, out
+    assert login.status_code == 200
