@@ -109,7 +109,8 @@ class ObjectStore(ABC):
         StoredObjectCorrupt after its last chunk, which a sender turns into an aborted transfer."""
         if self.verify_before_sending:
             self.verify(key, sha256)
-        return self.read_chunks(key, sha256)
+            return self.read_chunks(key, sha256)
+        return _holding_last(self.read_chunks(key, sha256))
 
     def copy_to(self, key: str, sha256: str, path: str | Path) -> int:
         """Writes the bytes of key to path a CHUNK at a time, through a temporary file beside it that replaces path
@@ -189,3 +190,14 @@ def _checked(key: str, sha256: str, stream: IO[bytes]) -> Iterator[bytes]:
             digest.update(chunk)
             yield chunk
     _require(key, digest.hexdigest(), sha256)
+
+
+def _holding_last(chunks: Iterator[bytes]) -> Iterator[bytes]:
+    """Yields chunks one behind: the last one only once the iterator ended without raising (its check passed)."""
+    held: bytes | None = None
+    for chunk in chunks:
+        if held is not None:
+            yield held
+        held = chunk
+    if held is not None:
+        yield held
