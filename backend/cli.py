@@ -259,6 +259,7 @@ def cmd_reanalyze(args: argparse.Namespace) -> int:
     import datetime as dt
     import time
 
+    from backend.audit.service import record
     from backend.database import get_sessionmaker
     from backend.exceptions import InvalidInput, PatientNotFound
     from backend.jobs.queue import progress
@@ -278,6 +279,11 @@ def cmd_reanalyze(args: argparse.Namespace) -> int:
                                               exercise=args.exercise, pipeline=args.pipeline)  # fmt: skip
         except (PatientNotFound, InvalidInput) as exc:
             raise CliError(exc.message) from None
+        # audited as POST /reanalysis is: the admin page reads a batch's scope (one patient or every one) from it
+        detail = {"patient_id": args.patient, "since": args.since, "exercise": args.exercise,
+                  "pipeline": args.pipeline, "via": "coach-server"}  # fmt: skip
+        record(db_session=session, caller=None, action="reanalysis.queue", object_type="batch", object_id=batch,
+               patient_id=args.patient, detail=detail)  # fmt: skip
         session.commit()
         what = "re-analysis with today's pipeline" if args.pipeline else "re-analysis"
         print(f"batch {batch}: {added} session(s) queued for {what} (run `coach-server worker` to do them)")

@@ -89,7 +89,7 @@ def _write_archive(db_session: Session, patient: User, requested_by: str, out: P
     kept = prepared_archive.kept_archive(db_session=db_session, patient_id=patient.id)
     if kept is None:  # run keeps one for an existing patient, or raises
         raise InvalidInput(f"the archive of patient {patient.id} could not be kept")
-    out.write_bytes(prepared_archive.read_archive(kept))
+    prepared_archive.copy_archive(kept, out)  # a chunk at a time, sha256 checked before out is replaced
     how = "made now" if made["built"] else f"the kept one of {kept.made_at:%Y-%m-%d %H:%M} UTC, still current"
     said = f"archive of patient {patient.id} ({how}) written to {out} ({kept.size} bytes)"
     if kept.incomplete:

@@ -21,8 +21,9 @@ import datetime as dt
 import hashlib
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from sqlalchemy import func, select, update
@@ -184,6 +185,18 @@ def read_archive(archive: PatientArchive) -> bytes:
     """Returns the kept archive's zip, read from the object store with its sha256 checked (raises StorageError when
     missing or corrupt)."""
     return get_store().get(archive.data_key, archive.data_hash)
+
+
+def archive_chunks(archive: PatientArchive) -> Iterator[bytes]:
+    """Returns the kept archive's zip as chunks to send (ObjectStore.stream): missing, or corrupt where the store
+    checks before sending (local), raises here; corrupt on S3 raises StoredObjectCorrupt after the last chunk."""
+    return get_store().stream(archive.data_key, archive.data_hash)
+
+
+def copy_archive(archive: PatientArchive, path: Path) -> int:
+    """Writes the kept archive's zip to path a chunk at a time; path is replaced only once the sha256 is checked
+    (raises StorageError when missing or corrupt, leaving path as it was). Returns its size in bytes."""
+    return get_store().copy_to(archive.data_key, archive.data_hash, path)
 
 
 def progress_reporter(db_session: Session, job_id: int | None) -> Callable[[int, int], None]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import datetime as dt
 import io
+import math
 from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -85,10 +86,11 @@ def _table(rows: list[list[Any]], widths: list[float] | None = None) -> Table:
     return t
 
 
-def _chart(title: str, series: dict[str, list[tuple[float, float]]], y_label: str, width: float,
+def _chart(title: str, series: dict[str, list[tuple[float, float]]], y_label: str, width: float, start: dt.date,
            y_range: tuple[float, float] | None = None) -> Drawing:  # fmt: skip
-    """Returns a line chart of {label: [(day number, value)]}, one marker and dash per series, in black; y_range:
-    the y axis's (min, max), else fitted to the data."""
+    """Returns a line chart of {label: [(day number, value)]}, day 0 = start, one marker and dash per series, in
+    black; the x axis ticks whole days, each labelled once with its date; y_range: the y axis's (min, max), else
+    fitted to the data."""
     d = Drawing(width, 60 * mm)
     plot = LinePlot()
     plot.x, plot.y, plot.width, plot.height = 12 * mm, 10 * mm, width - 16 * mm, 40 * mm
@@ -102,7 +104,12 @@ def _chart(title: str, series: dict[str, list[tuple[float, float]]], y_label: st
             line.strokeDashArray = DASHES[i % len(DASHES)]
     if y_range is not None:
         plot.yValueAxis.valueMin, plot.yValueAxis.valueMax = y_range
-    plot.xValueAxis.labelTextFormat = "day %d"
+    days = [x for pts in series.values() for x, _ in pts]
+    first, last = math.floor(min(days, default=0.0)), math.ceil(max(days, default=0.0))
+    last = max(last, first + 1)
+    plot.xValueAxis.valueMin, plot.xValueAxis.valueMax = first, last
+    plot.xValueAxis.valueStep = max(1, math.ceil((last - first) / 7))  # at most 8 ticks, whole days
+    plot.xValueAxis.labelTextFormat = lambda x: (start + dt.timedelta(days=round(x))).strftime("%d %b")
     plot.xValueAxis.labels.fontSize = plot.yValueAxis.labels.fontSize = 7
     d.add(plot)
     d.add(String(0, 55 * mm, title, fontName="Helvetica-Bold", fontSize=9))
@@ -136,7 +143,12 @@ def _feeling_section(rows: Sequence[Any], period: Period, body: Any, width: floa
     if max(len(v) for v in series.values()) >= 2:
         out.append(
             _chart(
-                "Pain and effort after each set", {k: v for k, v in series.items() if v}, "of 10", width, (0.0, 10.0)
+                "Pain and effort after each set",
+                {k: v for k, v in series.items() if v},
+                "of 10",
+                width,
+                period.start,
+                (0.0, 10.0),
             )
         )
     table = [["Date", "Exercise", "Pain (0-10)", "Effort (Borg CR10)"]]
@@ -224,7 +236,9 @@ def build_report(*, db_session: Session, patient: User, period: Period, made_by:
                 text += "; no MDC measured for this exercise)."
         block = [_p(text, body)]
         if len(roms) >= 2 or len(reps) >= 2:
-            block.append(_chart(name, {"range of motion, degrees": roms, "repetitions": reps}, "value", width))
+            block.append(
+                _chart(name, {"range of motion, degrees": roms, "repetitions": reps}, "value", width, period.start)
+            )
         table = [["Date", "Repetitions", "Range of motion", "Balance sway", "Data quality"]]
         for r in rs:
             doc = read_if_readable(r.document)

@@ -17,6 +17,7 @@ class LocalStore(ObjectStore):
     """Objects as files root/kind/ab/<sha256>; written to a temporary file, fsynced, then renamed into place."""
 
     name = "local"
+    verify_before_sending = True  # a second read of a local file is cheap: a corrupt one is refused before sending
 
     def __init__(self, root: str | Path) -> None:
         self.root = Path(root).resolve()
@@ -55,6 +56,14 @@ class LocalStore(ObjectStore):
     def _get(self, key: str) -> bytes:
         try:
             return self._path(key).read_bytes()
+        except FileNotFoundError:
+            raise StoredObjectMissing(f"stored object {key} is missing from {self.root}") from None
+        except OSError as exc:
+            raise StorageError(f"cannot read {key} under {self.root}: {exc.strerror or exc}") from None
+
+    def _open(self, key: str) -> IO[bytes]:
+        try:
+            return self._path(key).open("rb")
         except FileNotFoundError:
             raise StoredObjectMissing(f"stored object {key} is missing from {self.root}") from None
         except OSError as exc:

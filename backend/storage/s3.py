@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import base64
 import binascii
+import io
 from collections.abc import Callable, Iterator
 from typing import IO, Any
 
-from backend.storage.base import ObjectStore, is_object_key
+from backend.storage.base import CHUNK, ObjectStore, is_object_key
 from backend.storage.errors import StorageError, StoredObjectMissing
 
 _MISSING = ("NoSuchKey", "404", "NotFound")
@@ -88,6 +89,10 @@ class S3Store(ObjectStore):
         finally:
             body.close()
 
+    def _open(self, key: str) -> IO[bytes]:
+        body = self._call("read", key, self.client.get_object, Key=self._name(key))["Body"]
+        return io.BufferedReader(_Body(body, f"cannot read {key} from bucket {self.bucket} at {self.endpoint}"), CHUNK)
+
     def exists(self, key: str) -> bool:
         """Returns whether key is in the bucket."""
         try:
@@ -121,3 +126,34 @@ class S3Store(ObjectStore):
     def describe(self) -> str:
         """Returns the bucket, prefix and endpoint."""
         return f"S3 bucket {self.bucket}{'/' + self.prefix if self.prefix else ''} at {self.endpoint}"
+
+
+class _Body(io.RawIOBase):
+    """A GET's streaming body as a readable binary file whose read errors (a dropped connection, a timeout) are
+    StorageError."""
+
+    def __init__(self, body: Any, said: str) -> None:
+        super().__init__()
+        self._body, self._said = body, said
+
+    def readable(self) -> bool:
+        """Returns True: the body is read, never written."""
+        return True
+
+    def readinto(self, buffer: Any) -> int:
+        """Reads up to len(buffer) bytes into buffer; returns how many (0 at the end)."""
+        from botocore.exceptions import BotoCoreError
+        from urllib3.exceptions import HTTPError
+
+        try:
+            data = self._body.read(len(buffer))
+        except (BotoCoreError, HTTPError, OSError) as exc:
+            raise StorageError(f"{self._said}: {exc}") from None
+        buffer[: len(data)] = data
+        return len(data)
+
+    def close(self) -> None:
+        """Closes the body (its connection goes back to the pool, or is dropped when not read to its end)."""
+        if not self.closed:
+            self._body.close()
+        super().close()

@@ -6,6 +6,9 @@
   const $ = (id) => document.getElementById(id);
   const POLL_BUSY_MS = 2000, POLL_IDLE_MS = 15000;
   const STATE_WORDS = { queued: I18n.t("waiting"), running: I18n.t("running"), done: I18n.t("done"), failed: I18n.t("failed") };
+  // what a finished job of the other kinds did (the list shows every kind; only a re-analysis compares metrics)
+  const DONE_WORDS = { replay: I18n.t("3D replay built."), detail: I18n.t("Session details built."),
+    export: I18n.t("Export built."), archive: I18n.t("The patient's archive was made."), camera_end: I18n.t("Camera set finished.") };
   let shown = null;  // the batch whose jobs the lower table shows (null: the newest jobs of any batch)
   let patients = new Map();
   let timer = null;
@@ -43,7 +46,8 @@
     const session = j.session_id === null ? "—"
       : el("a", { href: url(`/therapist/sessions/${j.session_id}`) }, I18n.t("Session {id}", { id: String(j.session_id) }));
     let what = j.error || "";
-    if (j.status === "done") what = j.changed ? I18n.t("New metrics stored; the old ones are kept.") : I18n.t("Already analysed with this version: nothing changed.");
+    if (j.status === "done" && j.kind !== "reanalyze") what = DONE_WORDS[j.kind] || "";
+    else if (j.status === "done") what = j.changed ? I18n.t("New metrics stored; the old ones are kept.") : I18n.t("Already analysed with this version: nothing changed.");
     else if (j.status === "queued" && j.error) what = I18n.t("Will try again: {reason}", { reason: j.error });
     else if (j.status === "queued") what = I18n.t("Waiting for a worker.");
     else if (j.status === "running") what = I18n.t("A worker is analysing it.");

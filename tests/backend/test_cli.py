@@ -156,3 +156,28 @@ def test_patient_data_archive_keeps_what_it_builds_and_reuses_the_kept_one(cli_d
     assert cli.main([*argv, str(tmp_path / "second.zip")]) == 0
     assert "still current" in capsys.readouterr().out
     assert (tmp_path / "second.zip").read_bytes() == (tmp_path / "first.zip").read_bytes()
+
+
+def test_a_reanalysis_queued_from_the_command_line_is_listed_with_its_patient(cli_db, capsys):
+    """The admin page's batch list says whose sessions a batch re-analyses; a batch of `reanalyze --patient ID`
+    said "every patient" before the command audited it as POST /reanalysis does."""
+    import datetime as dt
+
+    import sqlalchemy as sa
+
+    from backend.exercises.models import Exercise
+    from backend.jobs.listing import list_batches
+    from backend.users.models import User
+    from tests.backend.session_rows import store_session
+
+    pid = _admin_and_patient(capsys)
+    with get_sessionmaker()() as s:
+        exercise = s.scalars(sa.select(Exercise).order_by(Exercise.id)).first()
+        store_session(s, s.get(User, pid), exercise, dt.datetime(2026, 11, 1, tzinfo=dt.UTC))
+        s.commit()
+    assert cli.main(["reanalyze", "--patient", str(pid)]) == 0
+    assert "session(s) queued for re-analysis" in capsys.readouterr().out
+    assert cli.main(["reanalyze", "--pipeline"]) == 0  # every patient (a job of its own: another key)
+    with get_sessionmaker()() as s:
+        rows = list_batches(db_session=s, kind="reanalyze", limit=10)
+    assert [r.patient_id for r in rows] == [None, pid], rows

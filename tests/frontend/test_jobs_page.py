@@ -63,6 +63,10 @@ def test_an_admin_reanalyses_one_patient_and_follows_it(browser, live_server):
             page.get_by_role("link", name="Re-analysis and jobs").click()
             page.wait_for_url("**/admin/jobs")
             expect(page.locator("#version")).not_to_have_text("…")
+            # the newest jobs of every kind: an upload's session-details job says what it did, not a re-analysis's
+            # words ("Already analysed with this version" was said of every finished job of another kind)
+            built = page.locator(f'#jobs tr[data-status="done"]:has(a[href$="/sessions/{kept["id"]}"])').first
+            expect(built).to_contain_text("Session details built.", timeout=30_000)
             page.select_option("#scope", label="Walter Young's sessions")
             page.click("#start-btn")
             expect(page.locator("#start-msg")).to_contain_text("queued for analysis version")

@@ -9,10 +9,12 @@ import subprocess
 from pathlib import Path
 
 import pytest
+from reportlab.graphics import renderPDF
 from reportlab.lib.pagesizes import A4, LETTER
 from sqlalchemy import select
 
 from backend.exercises.models import Exercise
+from backend.records.report import _chart
 from tests.backend.khs_files import make_khs
 
 SHOTS = Path(os.environ.get("COACH_SHOTS_DIR", "/tmp/shots"))
@@ -90,3 +92,12 @@ def test_a_period_nobody_chose_is_the_last_4_weeks_as_on_the_page(client, make_p
     assert f"Period {first:%d %b %Y} to {today:%d %b %Y} (4.0 weeks)" in text, text
     page = client.get(f"/therapist/patients/{patient.id}", headers=auth_headers(therapist))
     assert page.status_code == 200 and f'value="{first.isoformat()}"' in page.text, "the page's form starts there too"
+
+
+def test_a_chart_labels_its_days_with_dates_each_once(tmp_path):
+    """The x axis ticks whole days from the period's first, each labelled with its date once ("day 22" twice, or
+    22 Nov labelled "day 21", said nothing a doctor could read)."""
+    series = {"range of motion, degrees": [(21.0, 81.0), (25.0, 79.0)], "repetitions": [(21.0, 7.0), (25.0, 7.0)]}
+    drawing = _chart("Seated knee extension", series, "value", 400.0, dt.date(2026, 11, 1))
+    labels = re.findall(r"\d\d [A-Z][a-z]{2}", _pdf_text(renderPDF.drawToString(drawing), tmp_path))
+    assert labels == ["22 Nov", "23 Nov", "24 Nov", "25 Nov", "26 Nov"], labels

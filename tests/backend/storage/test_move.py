@@ -88,6 +88,9 @@ class _CrashingStore(ObjectStore):
     def _get(self, key: str) -> bytes:
         return self.store._get(key)
 
+    def _open(self, key: str) -> IO[bytes]:
+        return self.store._open(key)
+
     def exists(self, key: str) -> bool:
         return self.store.exists(key)
 
