@@ -319,12 +319,10 @@
       const reps = session ? session.repetitions : null;
       // the set's last count is the stored one; when it differs from the one shown (a flickering label can run the
       // live count ahead; a slow page sees few pictures), the page says so rather than change the number silently
-      const recount = reps !== null && reps !== count ? T.recounted(count, reps) : "";
+      $("cam-result-more").textContent = T.resultMore(reason, count, reps, row.target_reps, session && session.rom_deg);
       if (reps !== null) count = reps;
       $("cam-result-text").textContent = T.result(reps, row.target_reps);
       $("cam-result-text").dataset.sessionId = row.session_id;
-      const rom = session && session.rom_deg ? T.resultRom(session.rom_deg) : "";
-      $("cam-result-more").textContent = [T.ended[reason] || "", recount, rom].filter(Boolean).join(" ");
       status(T.result(reps, row.target_reps));
     }
     await CameraBuffer.dropSet(pid, row.set_id);

@@ -55,6 +55,15 @@ const CameraText = Object.freeze({
   ended: { target: I18n.t("You reached your goal."), stop: I18n.t("You stopped the set."),
     still: I18n.t("The set ended because you did not move for a while."), limit: I18n.t("The set reached its time limit."),
     error: I18n.t("The set stopped because of a problem.") },
+  /** The result's second line: why the set ended, the recount when the saved count differs from the last one shown,
+   *  the range moved (degrees or null). A set the live count ended at its target "reached your goal" only when the
+   *  saved count (saved: null when it could not be counted) reaches the target too; otherwise the recount says why. */
+  resultMore(reason, shown, saved, target, romDeg) {
+    const goalMissed = reason === "target" && (saved === null || saved < target);
+    const recount = saved !== null && saved !== shown ? this.recounted(shown, saved) : "";
+    const rom = romDeg ? this.resultRom(romDeg) : "";
+    return [goalMissed ? "" : this.ended[reason] || "", recount, rom].filter(Boolean).join(" ");
+  },
   /** The big count's small part ("of 10") and the count said to screen readers ("3 of 10"). */
   countOf: (target) => " " + I18n.t("of {goal}", { goal: target }),
   countSpoken: (n, target) => I18n.t("{done} of {goal}", { done: n, goal: target }),
