@@ -567,6 +567,31 @@ def test_a_camera_slower_than_10_frames_a_second_is_said_mid_set(pw, live_server
         assert not page.js_errors, page.js_errors
 
 
+def test_a_slow_computer_on_the_full_model_is_switched_to_the_lite_one_and_told(pw, live_server, tmp_path):
+    """A computer the page gives the full model (4 cores or more, no ?model=) whose pictures come at 4 a second: after
+    3 s of the placement check the page loads the lite model, says so, and goes on with the check."""
+    from tests.fake_camera import sports2d_y4m
+
+    base = live_server.url
+    email, _, item_id = new_patient(base, target=50)
+    b = camera_browser(pw, sports2d_y4m(tmp_path / "slow.y4m", fps=4, start_s=0.0, seconds=5.0))
+    with closing(b), camera_page(b, base) as page:
+        page.add_init_script("Object.defineProperty(navigator, 'hardwareConcurrency', {get: () => 8})")
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        page.goto(f"{PAGE}?item={item_id}&delegate=CPU")
+        page.click("#cam-agree")
+        wait_phase(page, "placement")
+        assert page.evaluate("CameraPose.info.model") == "full"
+        expect(page.locator("#cam-note")).to_have_text(
+            "This computer is slow, so we switched to a lighter movement tracker.", timeout=90_000
+        )
+        wait_phase(page, "placement")
+        assert page.evaluate("CameraPose.info.model") == "lite"
+        expect(page.locator("#cam-say")).not_to_be_empty(timeout=60_000)
+        assert not page.js_errors, page.js_errors
+
+
 DYING_WORKER = """import { load, detect } from "./camera_pose_core.js";
 let detections = 0;
 self.onmessage = async ({ data }) => {
