@@ -10,6 +10,10 @@ const CameraText = Object.freeze({
   busy: I18n.t("The camera is being used by another program. Please close that program (for example a video call), then press Try again."),
   cameraFailed: I18n.t("The camera could not be started. Please check that it is plugged in, then press Try again."),
   trackerFailed: I18n.t("The movement tracker could not start on this computer. Please try again, or use another computer."),
+  /** The problem card's heading: the camera did not start, it stopped mid-set, or anything else went wrong. */
+  cannotStart: I18n.t("The camera cannot start"),
+  cameraStopped: I18n.t("The camera stopped"),
+  wentWrong: I18n.t("Something went wrong"),
   unplugged: I18n.t("The camera was disconnected. Plug it back in and press Try again. What you did so far is kept."),
   notInPlan: I18n.t("This exercise is not in your plan right now. Please go back to your exercises."),
   readFirst: I18n.t("Please read this first."),

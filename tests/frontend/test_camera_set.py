@@ -289,6 +289,7 @@ def test_hidden_tab_network_loss_reload_and_unplugged_camera_mid_set_store_one_s
             "document.getElementById('cam-video').srcObject.getVideoTracks()[0].dispatchEvent(new Event('ended'))"
         )
         expect(page.locator("#cam-problem-text")).to_contain_text("camera was disconnected")
+        expect(page.locator("#cam-problem-h")).to_have_text("The camera stopped")  # it had started
         shot(page, "camera-unplugged")
         _axe_clean(page)
         page.click("#cam-problem-save")
@@ -320,6 +321,7 @@ def test_a_camera_that_cannot_start_is_said_in_plain_words(pw, live_server, flag
         page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
         page.click("#cam-agree")
         expect(page.locator("#cam-problem-text")).to_contain_text(says)
+        expect(page.locator("#cam-problem-h")).to_have_text("The camera cannot start")
         expect(page.locator("#cam-retry")).to_be_visible()
         shot(page, f"camera-problem-{'denied' if 'allow' in says else 'none'}")
         _axe_clean(page)
