@@ -30,8 +30,10 @@
   function status(text, level) { const s = $("cam-status"); s.textContent = text; s.dataset.level = level || ""; }
   function say(text, level) { const s = $("cam-say"); if (s.textContent !== text) s.textContent = text; s.dataset.level = level || ""; }
   function note(text) { $("cam-note").textContent = text || ""; }
-  function problem(text, canSave) {
-    show("cam-problem"); $("cam-problem-text").textContent = text; status(text, "bad");
+  /** Shows the problem card: its heading (title: what failed, CameraText), the sentence, "Save what I did" when a
+   *  set's frames are kept (canSave). */
+  function problem(text, canSave, title = T.wentWrong) {
+    show("cam-problem"); $("cam-problem-h").textContent = title; $("cam-problem-text").textContent = text; status(text, "bad");
     if ($("cam-main-status")) $("cam-main-status").textContent = "problem";
     $("cam-problem-save").hidden = !canSave;
   }
@@ -47,12 +49,12 @@
   }
 
   async function startCamera() {
-    if (!navigator.mediaDevices || !navigator.mediaDevices.getUserMedia) { problem(T.noCameraApi); return false; }
+    if (!navigator.mediaDevices || !navigator.mediaDevices.getUserMedia) { problem(T.noCameraApi, false, T.cannotStart); return false; }
     status(T.loading);
     try {
       stream = await navigator.mediaDevices.getUserMedia({ audio: false,
         video: { width: { ideal: 640 }, height: { ideal: 480 }, facingMode: "user" } });
-    } catch (err) { problem(cameraError(err), Boolean(set)); return false; }
+    } catch (err) { problem(cameraError(err), Boolean(set), T.cannotStart); return false; }
     for (const track of stream.getVideoTracks()) track.addEventListener("ended", unplugged);
     const video = $("cam-video");
     video.srcObject = stream;
@@ -70,7 +72,7 @@
     flush();
     stopCamera();
     phase = "problem";
-    problem(T.unplugged, Boolean(set));
+    problem(T.unplugged, Boolean(set), T.cameraStopped);
   }
 
   /** The landmarker stopped and could not be started again (camera_pose.js): said, and what was done can be saved. */
@@ -328,13 +330,10 @@
       const reps = session ? session.repetitions : null;
       // the set's last count is the stored one; when it differs from the one shown (a flickering label can run the
       // live count ahead; a slow page sees few pictures), the page says so rather than change the number silently
-      const recount = reps !== null && reps !== count ? T.recounted(count, reps) : "";
+      $("cam-result-more").textContent = T.resultMore(reason, count, reps, row.target_reps, session && session.rom_deg);
       if (reps !== null) count = reps;
       $("cam-result-text").textContent = T.result(reps, row.target_reps);
       $("cam-result-text").dataset.sessionId = row.session_id;
-      const rom = session && session.rom_deg ? T.resultRom(session.rom_deg) : "";
-      const missed = reason === "target" && reps !== null && reps < row.target_reps;  // the goal the live count reached, not the saved
-      $("cam-result-more").textContent = [missed ? "" : T.ended[reason] || "", recount, rom].filter(Boolean).join(" ");
       status(T.result(reps, row.target_reps));
       askFeeling(row.session_id);
     }

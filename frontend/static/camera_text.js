@@ -10,6 +10,10 @@ const CameraText = Object.freeze({
   busy: I18n.t("The camera is being used by another program. Please close that program (for example a video call), then press Try again."),
   cameraFailed: I18n.t("The camera could not be started. Please check that it is plugged in, then press Try again."),
   trackerFailed: I18n.t("The movement tracker could not start on this computer. Please try again, or use another computer."),
+  /** The problem card's heading: the camera did not start, it stopped mid-set, or anything else went wrong. */
+  cannotStart: I18n.t("The camera cannot start"),
+  cameraStopped: I18n.t("The camera stopped"),
+  wentWrong: I18n.t("Something went wrong"),
   unplugged: I18n.t("The camera was disconnected. Plug it back in and press Try again. What you did so far is kept."),
   notInPlan: I18n.t("This exercise is not in your plan right now. Please go back to your exercises."),
   readFirst: I18n.t("Please read this first."),
@@ -55,6 +59,15 @@ const CameraText = Object.freeze({
   ended: { target: I18n.t("You reached your goal."), stop: I18n.t("You stopped the set."),
     still: I18n.t("The set ended because you did not move for a while."), limit: I18n.t("The set reached its time limit."),
     error: I18n.t("The set stopped because of a problem.") },
+  /** The result's second line: why the set ended, the recount when the saved count differs from the last one shown,
+   *  the range moved (degrees or null). A set the live count ended at its target "reached your goal" only when the
+   *  saved count (saved: null when it could not be counted) reaches the target too; otherwise the recount says why. */
+  resultMore(reason, shown, saved, target, romDeg) {
+    const goalMissed = reason === "target" && (saved === null || saved < target);
+    const recount = saved !== null && saved !== shown ? this.recounted(shown, saved) : "";
+    const rom = romDeg ? this.resultRom(romDeg) : "";
+    return [goalMissed ? "" : this.ended[reason] || "", recount, rom].filter(Boolean).join(" ");
+  },
   /** The big count's small part ("of 10") and the count said to screen readers ("3 of 10"). */
   countOf: (target) => " " + I18n.t("of {goal}", { goal: target }),
   countSpoken: (n, target) => I18n.t("{done} of {goal}", { done: n, goal: target }),

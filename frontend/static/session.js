@@ -53,9 +53,12 @@
     const standing = I18n.t("over {seconds} s standing", { seconds: I18n.number(b.standing_s) });
     const note = iv ? I18n.t("{low}–{high} cm/s (95 %), {standing}", { low: I18n.number(100 * iv[0], 1),
       high: I18n.number(100 * iv[1], 1), standing }) : standing;
-    return stat(I18n.t("Balance (sway)"), I18n.t("{speed} cm/s", { speed: I18n.number(100 * b.sway_velocity_m_s, 1) }), note);
+    const said = metricFlagged(d, "balance") ? I18n.t("{note}; from one camera: see the limits above", { note }) : note;
+    return stat(I18n.t("Balance (sway)"), I18n.t("{speed} cm/s", { speed: I18n.number(100 * b.sway_velocity_m_s, 1) }), said);
   }
-  const romValid = (d) => !d.validity.metrics.some((m) => m.name === "rom" && !m.valid);
+  /** Returns whether the recording's device and view cannot support the metric (the limits box lists it). */
+  const metricFlagged = (d, name) => d.validity.metrics.some((m) => m.name === name && !m.valid);
+  const romValid = (d) => !metricFlagged(d, "rom");
 
   function keyNumbers(d) {
     const total = (d.moving_time_s || 0) + (d.rest_time_s || 0);

@@ -299,6 +299,7 @@ def test_hidden_tab_network_loss_reload_and_unplugged_camera_mid_set_store_one_s
             "document.getElementById('cam-video').srcObject.getVideoTracks()[0].dispatchEvent(new Event('ended'))"
         )
         expect(page.locator("#cam-problem-text")).to_contain_text("camera was disconnected")
+        expect(page.locator("#cam-problem-h")).to_have_text("The camera stopped")  # it had started
         shot(page, "camera-unplugged")
         _axe_clean(page)
         page.click("#cam-problem-save")
@@ -330,6 +331,7 @@ def test_a_camera_that_cannot_start_is_said_in_plain_words(pw, live_server, flag
         page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
         page.click("#cam-agree")
         expect(page.locator("#cam-problem-text")).to_contain_text(says)
+        expect(page.locator("#cam-problem-h")).to_have_text("The camera cannot start")
         expect(page.locator("#cam-retry")).to_be_visible()
         shot(page, f"camera-problem-{'denied' if 'allow' in says else 'none'}")
         _axe_clean(page)
@@ -382,6 +384,105 @@ def test_two_people_and_the_patient_kept_in_the_checks(cam_browser, live_server)
         )
         assert out == {"two": "two_people", "one": "ok", "nobody": "nobody", "dark": "dark", "kept": 1,
                        "onlyOther": -1, "side": "side", "front": "front"}, out  # fmt: skip
+
+
+def _placement_cases() -> dict[str, list[Any]]:
+    """Landmark frames (image, world) of one person for each instruction of the placement check: the body of
+    tests/backend/camera/landmarks.py facing the camera (front), turned sideways (side), scaled about its middle
+    (close, far: the needed landmarks' vertical span 0.94 and 0.3 of the picture, centred), shifted right (off
+    centre), its ankles below the picture and its wrists unseen."""
+    from tests.backend.camera.landmarks import body, image_of
+
+    world = body()
+    side = world[:, [2, 1, 0]]  # turned 90 degrees: the shoulders' line along the camera's axis
+    img = image_of(world)
+    legs = [0, 11, 12, 23, 24, 25, 26, 27, 28]
+    lo, hi = img[legs, 1].min(), img[legs, 1].max()
+
+    def scaled(span: float):
+        out = img.copy()
+        out[:, 1] = 0.5 + (img[:, 1] - (lo + hi) / 2) * span / (hi - lo)
+        return out
+
+    def pts(a, vis: float = 0.95, low_vis: tuple[int, ...] = ()):
+        return [{"x": x, "y": y, "z": z, "visibility": 0.1 if i in low_vis else vis} for i, (x, y, z) in enumerate(a)]
+
+    shifted, ankles_out = img.copy(), img.copy()
+    shifted[:, 0] += 0.35
+    ankles_out[[27, 28, 29, 30, 31, 32], 1] = 1.05
+    w = lambda a: [{"x": x, "y": y, "z": z} for x, y, z in a]  # noqa: E731
+    return {"front": [pts(img), w(world)], "side": [pts(img), w(side)], "close": [pts(scaled(0.94)), w(world)],
+            "far": [pts(scaled(0.3)), w(world)], "off": [pts(shifted), w(world)],
+            "ankles": [pts(ankles_out), w(world)], "wrists": [pts(img, low_vis=(15, 16)), w(world)]}  # fmt: skip
+
+
+def test_each_placement_instruction_is_given_for_its_pose(cam_browser, live_server):
+    """The placement check's instructions (the page's own CameraChecks.placement in Chromium, the patient's language
+    catalogue): whole body or upper body in view, too close, too far, side view for a squat, front view for a
+    shoulder abduction, off centre, and "hold still" once the pose is right."""
+    base = live_server.url
+    email, _, item_id = new_patient(base)
+    with camera_page(cam_browser, base) as page:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        page.goto(f"{PAGE}?item={item_id}")
+        expect(page.locator("#cam-consent")).to_be_visible()
+        out = page.evaluate(
+            """(cases) => {
+                const squat = {plane: "sagittal", defining_angles: ["knee_flexion_L", "knee_flexion_R"]};
+                const arms = {plane: "frontal", defining_angles: ["shoulder_abduction_L", "shoulder_abduction_R"]};
+                const c = (name, ex) => {
+                    const [image, world] = cases[name];
+                    const r = CameraChecks.placement({image, world, count: 1, luma: 120, ex});
+                    return [r.code, r.ok, r.say];
+                };
+                return {ankles: c("ankles", squat), wrists: c("wrists", arms), close: c("close", squat),
+                        far: c("far", squat), squat_front: c("front", squat), squat_side: c("side", squat),
+                        arms_side: c("side", arms), arms_front: c("front", arms), off: c("off", arms)};
+            }""",
+            _placement_cases(),
+        )
+        assert out == {
+            "ankles": ["out_of_view", False, "Step back until your whole body is in the picture, from head to feet."],
+            "wrists": ["out_of_view", False, "Step back until your head, arms and hips are in the picture."],
+            "close": ["too_close", False, "Step back a little."],
+            "far": ["too_far", False, "Come a little closer to the camera."],
+            "squat_front": ["view", False, "Please turn sideways to the camera, so it sees you from the side."],
+            "squat_side": ["ok", True, "Good! Hold still for a moment…"],
+            "arms_side": ["view", False, "Please face the camera."],
+            "arms_front": ["ok", True, "Good! Hold still for a moment…"],
+            "off": ["off_centre", False, "Move to the middle of the picture."],
+        }, out
+
+
+def test_the_result_says_the_goal_was_reached_only_when_the_saved_count_reaches_it(cam_browser, live_server):
+    """The result's sentence after a set the live count ended at its target (CameraText.resultMore): "You reached your
+    goal" only when the saved count reaches the target too; when the whole set's count is lower, the recount is said
+    instead (seen on this machine: "Saved: 1 of 2 repetitions" above "You reached your goal. While you exercised we
+    counted 4. Counted again over the whole set, it is 1.")."""
+    base = live_server.url
+    email, _, item_id = new_patient(base)
+    with camera_page(cam_browser, base) as page:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        page.goto(f"{PAGE}?item={item_id}")
+        expect(page.locator("#cam-consent")).to_be_visible()
+        said = page.evaluate(
+            """() => ({short: CameraText.resultMore("target", 4, 1, 2, 22.4),
+                       met: CameraText.resultMore("target", 2, 2, 2, null),
+                       more: CameraText.resultMore("target", 2, 3, 2, null),
+                       stop: CameraText.resultMore("stop", 1, 1, 2, 30),
+                       uncounted: CameraText.resultMore("target", 2, null, 2, null)})"""
+        )
+        recount = "While you exercised we counted 4. Counted again over the whole set, it is 1."
+        assert said == {
+            "short": f"{recount} You moved through 22 degrees.",
+            "met": "You reached your goal.",
+            "more": "You reached your goal. While you exercised we counted 2. Counted again over the whole set, "
+            "it is 3.",
+            "stop": "You stopped the set. You moved through 30 degrees.",
+            "uncounted": "",
+        }, said
 
 
 def test_the_camera_set_speaks_the_patient_language(pw, live_server):
@@ -475,6 +576,31 @@ def test_a_camera_slower_than_10_frames_a_second_is_said_mid_set(pw, live_server
         assert fps is not None and fps < 10.0, fps
         shot(page, "camera-slow")
         _axe_clean(page)
+        assert not page.js_errors, page.js_errors
+
+
+def test_a_slow_computer_on_the_full_model_is_switched_to_the_lite_one_and_told(pw, live_server, tmp_path):
+    """A computer the page gives the full model (4 cores or more, no ?model=) whose pictures come at 4 a second: after
+    3 s of the placement check the page loads the lite model, says so, and goes on with the check."""
+    from tests.fake_camera import sports2d_y4m
+
+    base = live_server.url
+    email, _, item_id = new_patient(base, target=50)
+    b = camera_browser(pw, sports2d_y4m(tmp_path / "slow.y4m", fps=4, start_s=0.0, seconds=5.0))
+    with closing(b), camera_page(b, base) as page:
+        page.add_init_script("Object.defineProperty(navigator, 'hardwareConcurrency', {get: () => 8})")
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        page.goto(f"{PAGE}?item={item_id}&delegate=CPU")
+        page.click("#cam-agree")
+        wait_phase(page, "placement")
+        assert page.evaluate("CameraPose.info.model") == "full"
+        expect(page.locator("#cam-note")).to_have_text(
+            "This computer is slow, so we switched to a lighter movement tracker.", timeout=90_000
+        )
+        wait_phase(page, "placement")
+        assert page.evaluate("CameraPose.info.model") == "lite"
+        expect(page.locator("#cam-say")).not_to_be_empty(timeout=60_000)
         assert not page.js_errors, page.js_errors
 
 

@@ -46,6 +46,10 @@ def test_a_webcam_session_shows_its_device_and_limits(page, webcam_front, width)
     expect(box.locator("li[data-metric=repetitions]")).to_have_count(0)
     expect(page.locator("#numbers")).to_contain_text("Recorded with")
     expect(page.locator("#numbers")).to_contain_text("not reliable from this view")
+    # the sway is in metres, which the limits box flags: its key number says so too, not only the box above
+    expect(page.locator("#numbers .stat", has_text="Balance (sway)")).to_contain_text(
+        "from one camera: see the limits above"
+    )
     shot(page, f"session_webcam_limits_{width}")
     violations = [v for v in Axe().run(page).response["violations"] if v["impact"] in BLOCKING]
     assert not violations, [(v["id"], v["help"]) for v in violations]
@@ -56,4 +60,5 @@ def test_a_webcam_session_shows_its_device_and_limits(page, webcam_front, width)
 def test_a_kinect_session_has_no_limits_box(page, kinect):
     _open(page, kinect)
     expect(page.locator("#numbers")).to_contain_text("Kinect v2")
+    expect(page.locator("#numbers")).not_to_contain_text("see the limits above")
     assert page.locator("#limits").is_hidden()
