@@ -47,6 +47,7 @@ ROUTERS = (
     "backend.exercises.router",
     "backend.plans.router",
     "backend.audit.router",
+    "backend.session_review.router",  # before sessions: POST /sessions stays first of its path, as it was
     "backend.sessions.router",
     "backend.suggestions.router",
     "backend.replay.router",

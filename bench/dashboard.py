@@ -33,7 +33,8 @@ from backend.exercises.library import EXERCISES  # noqa: E402
 from backend.exercises.models import Exercise  # noqa: E402
 from backend.exercises.service import sync_exercise_library  # noqa: E402
 from backend.migrate import upgrade  # noqa: E402
-from backend.sessions import dashboard, service  # noqa: E402
+from backend.session_review import dashboard  # noqa: E402
+from backend.sessions import service  # noqa: E402
 from backend.sessions.models import ExerciseSession, SessionMetric  # noqa: E402
 from backend.users.models import User  # noqa: E402
 from kinect_agent.sources.simulator import simulate  # noqa: E402

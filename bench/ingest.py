@@ -204,14 +204,16 @@ class StageTimer:
 
 @contextmanager
 def stage_timer() -> Iterator[StageTimer]:
-    """Yields a StageTimer hooked into the router (decode_upload) and the service (store_upload, metrics_document)."""
-    from backend.sessions import router, service
+    """Yields a StageTimer hooked into the router (decode_upload) and the services (store_upload, metrics_document)."""
+    from backend.session_review import router
+    from backend.session_review import service as review
+    from backend.sessions import service
 
     timer = StageTimer()
     restore = [
         timer.wrap(router, "decode_upload", "decode"),
         timer.wrap(service, "metrics_document", "metrics"),
-        timer.wrap(service, "store_upload", "store", minus="metrics"),
+        timer.wrap(review, "store_upload", "store", minus="metrics"),
         timer.watch_commits(),
     ]
     try:
@@ -308,7 +310,7 @@ def _profile(client: TestClient, headers: dict[str, str], data: bytes, out: Path
     import cProfile
     import pstats
 
-    from backend.sessions import router
+    from backend.session_review import router
 
     profiler, original = cProfile.Profile(), router._ingest
     router._ingest = lambda *args, **kwargs: profiler.runcall(original, *args, **kwargs)

@@ -1,6 +1,7 @@
 """The import layers of docs/architecture.md hold: every module sits in one layer and imports only what its layer
-may import (imports inside functions count too). The table is read from the document, so the drawing and the rule
-cannot drift apart."""
+may import (imports inside functions count too), and no package inside a layer imports one its second table forbids
+(e.g. backend.sessions never imports backend.suggestions). Both tables are read from the document, so the drawing
+and the rules cannot drift apart."""
 
 from __future__ import annotations
 
@@ -40,6 +41,12 @@ def read_layers(doc: Path = DOC) -> tuple[dict[str, str], dict[str, set[str]]]:
             entries[entry] = layer
         allowed[layer] = {layer} | {name.strip() for name in may_import.split(",") if name.strip()}
     return entries, allowed
+
+
+def read_forbidden(doc: Path = DOC) -> dict[str, set[str]]:
+    """Returns the package pairs of doc's second table: package -> the packages it may not import."""
+    rows = re.findall(r"^\| `([\w.]+)` \| (`.+?) ?\|$", doc.read_text(encoding="utf-8"), re.M)
+    return {package: set(re.findall(r"`([\w.]+)`", forbidden)) for package, forbidden in rows}
 
 
 def project_modules() -> dict[str, Path]:
@@ -100,6 +107,24 @@ def violations(entries: dict[str, str], allowed: dict[str, set[str]]) -> list[st
     return lines
 
 
+def _within(module: str, package: str) -> bool:
+    return module == package or module.startswith(package + ".")
+
+
+def pair_violations(forbidden: dict[str, set[str]]) -> list[str]:
+    """Returns one line per import of a package its row forbids: file:line, importer -> imported."""
+    modules = project_modules()
+    lines: list[str] = []
+    for name, path in modules.items():
+        for imp in imports_of(name, path, modules):
+            for package, others in forbidden.items():
+                for other in others:
+                    if _within(imp.importer, package) and _within(imp.imported, other):
+                        where = f"{imp.path.relative_to(ROOT)}:{imp.line}"
+                        lines.append(f"{where}: {imp.importer} -> {imp.imported} ({package} may not import {other})")
+    return lines
+
+
 def test_the_table_names_only_known_layers():
     entries, allowed = read_layers()
     assert len(allowed) >= 10, f"{DOC.name}: the layer table was not found ({sorted(allowed)})"
@@ -144,6 +169,43 @@ def test_a_bad_import_is_caught(tmp_path, monkeypatch, row, module, bad_import):
     entries, allowed = read_layers()
     found = violations(entries, allowed)
     assert len(found) == 1 and f"({row} may not import" in found[0], found
+
+
+def test_the_package_pairs_name_real_packages():
+    forbidden = read_forbidden()
+    assert forbidden.get("backend.sessions", set()) >= {"backend.suggestions", "backend.session_review"}, forbidden
+    modules = project_modules()
+    unknown = {p for package, others in forbidden.items() for p in {package, *others} if p not in modules}
+    assert not unknown, f"{DOC.name}: the package pairs name no module of the tree: {sorted(unknown)}"
+
+
+def test_no_package_imports_one_its_row_forbids():
+    found = pair_violations(read_forbidden())
+    assert not found, "imports against the package pairs of docs/architecture.md:\n" + "\n".join(found)
+
+
+@pytest.mark.parametrize(
+    ("module", "an_import", "caught"),
+    [
+        ("backend/sessions/service.py", "from backend.suggestions.service import suggest_for_session", True),
+        ("backend/sessions/router.py", "from ..suggestions import service", True),
+        ("backend/sessions/schemas.py", "import backend.session_review.schemas", True),
+        ("backend/suggestions/service.py", "from backend.session_review import dashboard", True),
+        ("backend/suggestions/service.py", "from backend.sessions.models import ExerciseSession", False),
+        ("backend/session_review/service.py", "from backend.suggestions.service import suggest_for_session", False),
+    ],
+)
+def test_a_forbidden_package_import_is_caught(tmp_path, monkeypatch, module, an_import, caught):
+    """The check itself: an import a package pair forbids is reported (absolute or relative); one along the data
+    flow (suggestions reading sessions, the review service above both) is not."""
+    monkeypatch.setattr(f"{__name__}.ROOT", tmp_path)
+    for package in (*PACKAGES, "backend/sessions", "backend/suggestions", "backend/session_review"):
+        (tmp_path / package).mkdir()
+        (tmp_path / package / "__init__.py").write_text("")
+    (tmp_path / module).write_text(an_import + "\n")
+    found = pair_violations(read_forbidden())
+    assert len(found) == int(caught), found
+    assert not caught or f"{module}:1:" in found[0], found
 
 
 def test_the_pages_register_on_the_server_without_an_import():

@@ -22,7 +22,7 @@ from backend.camera.vendor import model_info
 from backend.database import utcnow
 from backend.events.hub import Event, publish
 from backend.exercises.models import Exercise
-from backend.sessions import service as sessions_service
+from backend.session_review import service as review
 from backend.sessions.ingest import decode_upload
 from kinect_agent.formats import session_file
 from kinect_agent.formats.session_file import SessionPayload
@@ -133,7 +133,7 @@ def end_set(
         live_count.forget(row.id)
         return row
     upload = decode_upload(data, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
-    stored, created = sessions_service.store_upload(
+    stored, created = review.store_upload(
         db_session=db_session, upload=upload, patient_id=row.patient_id, exercise=exercise, device_id=None
     )
     row.status, row.session_id = "stored", stored.id

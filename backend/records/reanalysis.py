@@ -36,11 +36,11 @@ from backend.jobs.models import SessionMetricVersion
 from backend.jobs.queue import enqueue
 from backend.records.erasure import delete_after_commit, unnamed_keys
 from backend.replay.models import SessionReplay
+from backend.sessions.history import plan_targets, session_history
 from backend.sessions.metrics import ANALYSIS_VERSION, json_ready, metrics_document, scalar_columns
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.sessions.service import session_file
 from backend.storage import get_store
-from backend.suggestions.context import plan_targets, session_history
 from backend.users.models import User
 from kinect_agent.analysis.document import AnalysisDocument, read_if_readable
 from kinect_agent.formats import session_file as khs

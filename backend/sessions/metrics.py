@@ -27,7 +27,7 @@ def metrics_document(
     """Returns analyze_recording's report of the payload with its indicators and today's analysis version.
 
     history: the documents of the patient's earlier sessions of the same exercise, oldest first
-    (backend.suggestions.context.session_history, its readable ones).
+    (backend.sessions.history.session_history, its readable ones).
     Raises backend.analysis.errors.AnalysisError when the recording cannot be analysed.
     """
     from backend.analysis.indicators import indicators

@@ -1,4 +1,4 @@
-"""Session bodies: a stored session with its metrics, list items, progress series, the dashboard summary and rows."""
+"""Session bodies: list items, progress series, the dashboard summary and rows."""
 
 from __future__ import annotations
 
@@ -9,8 +9,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, JsonValue
 from pydantic.config import JsonDict
 
-from backend.suggestions.schemas import SuggestionOut
-from kinect_agent.analysis.document import AnalysisDocument, Indicators
+from kinect_agent.analysis.document import Indicators
 from kinect_agent.analysis.reasons import Reason
 
 
@@ -37,17 +36,6 @@ class SessionItemOut(BaseModel):
         default=None,
         description="when the clinic's retention period removed the recording (the metrics stay), UTC; null: kept",
     )
-
-
-class SessionOut(SessionItemOut):
-    """A stored session with its metrics document and the suggestions it produced that the caller may see."""
-
-    metrics: AnalysisDocument | None = Field(
-        description="the analysis document (kinect_agent.analysis.document) with its indicators, upgraded to today's "
-        "schema_version; each reason (Reason) and each indicator's basis (Basis) with its id and params as stored "
-        "and its text in the reader's language; null: not analysed"
-    )
-    suggestions: list[SuggestionOut]
 
 
 _INDICATORS_EXAMPLE: JsonDict = {

@@ -1,4 +1,5 @@
-"""Session queries and changes: store an upload idempotently with its metrics and suggestions, list and read them."""
+"""Session queries and changes: store an upload idempotently with its metrics, list and read them (the suggestions
+made from a stored session: backend.session_review)."""
 
 from __future__ import annotations
 
@@ -18,13 +19,11 @@ from backend.exercises.models import Exercise
 from backend.jobs.models import SessionMetricVersion
 from backend.patients.models import TherapistPatient
 from backend.patients.service import visible_patients_query
+from backend.sessions.history import plan_targets, session_history
 from backend.sessions.ingest import Upload
 from backend.sessions.metrics import json_ready, metrics_document, scalar_columns
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.storage import get_store
-from backend.suggestions.context import plan_targets, session_history
-from backend.suggestions.models import Suggestion
-from backend.suggestions.service import suggest_for_session, visible_to_patient
 from backend.users.models import User
 from kinect_agent.analysis.document import AnalysisDocument
 from kinect_agent.processing.errors import ProcessingError
@@ -83,19 +82,20 @@ def _analyse(
         raise
 
 
-def store_upload(
+def store_session(
     *, db_session: Session, upload: Upload, patient_id: int, exercise: Exercise, device_id: int | None
-) -> tuple[ExerciseSession, bool]:
-    """Stores an upload with its metrics and system suggestions; returns (session, created).
+) -> tuple[ExerciseSession, bool, AnalysisDocument | None]:
+    """Stores an upload with its metrics; returns (session, created, metrics document of a new analysed session).
 
-    The same (patient, client session id) with the same content returns the stored session (created=False), also
-    when a concurrent request stored it first; with different content raises SessionConflict. Flushes, never
-    commits: the request's transaction keeps the session, metrics and suggestions together.
+    The same (patient, client session id) with the same content returns the stored session (created=False, no
+    document), also when a concurrent request stored it first; with different content raises SessionConflict.
+    Flushes, never commits: the request's transaction keeps the session and its metrics together (and what
+    backend.session_review.service.store_upload adds from the document: the suggestions).
     """
     with db_session.no_autoflush:  # reads and analysis first; pending writes wait, so no write lock meanwhile
         stored = find_session(db_session=db_session, patient_id=patient_id, client_session_id=upload.client_session_id)
         if stored is not None:
-            return _same_or_conflict(stored, upload, db_session), False
+            return _same_or_conflict(stored, upload, db_session), False, None
         doc, error = _analyse(db_session=db_session, upload=upload, patient_id=patient_id, exercise=exercise)
     raw = upload.payload.raw
     stored_file = get_store().put("session", upload.data)  # before the row: a row never points to nothing
@@ -124,15 +124,14 @@ def store_upload(
         stored = find_session(db_session=db_session, patient_id=patient_id, client_session_id=upload.client_session_id)
         if stored is None:
             raise
-        return _same_or_conflict(stored, upload, db_session), False
+        return _same_or_conflict(stored, upload, db_session), False, None
     if doc is not None:
         stored_doc = doc.model_dump(mode="json")
         db_session.add(
             SessionMetric(session_id=row.id, document=stored_doc, created_at=utcnow(), **scalar_columns(doc))
         )
         db_session.flush()
-        suggest_for_session(db_session=db_session, session=row, doc=doc)
-    return row, True
+    return row, True, doc
 
 
 # ---------------------------------------------------------------------------------------------- reads
@@ -275,14 +274,6 @@ def removed(session_id: int, removed_at: dt.datetime | None) -> SessionFileRemov
         f"This session was removed{when} under the clinic's retention policy: its recording (curves, replay, "
         f"exports) is gone; its metrics are kept (session {session_id})"
     )
-
-
-def session_suggestions(*, db_session: Session, session_id: int, patient_view: bool) -> list[Suggestion]:
-    """Returns the suggestions about one session, oldest first; patient_view keeps only what patients may see."""
-    query = select(Suggestion).where(Suggestion.session_id == session_id)
-    if patient_view:
-        query = query.where(visible_to_patient())
-    return list(db_session.scalars(query.order_by(Suggestion.created_at, Suggestion.id)))
 
 
 def find_exercise_id(*, db_session: Session, slug: str) -> int:

@@ -1,6 +1,6 @@
 """Triage for the therapist dashboard: an attention score per patient, its reasons in words, indicator trends.
 
-Pure functions over what backend.sessions.dashboard reads (no DB, no HTTP). now is timezone-aware UTC; the week
+Pure functions over what backend.session_review.dashboard reads (no DB, no HTTP). now is timezone-aware UTC; the week
 starts Monday 00:00 UTC. The attention score is the sum of five parts, clipped to 0..100 and rounded:
 
     behind plan   A = 40 · missed / expected, where expected = per_week · elapsed / 7 days, elapsed = time since

@@ -20,6 +20,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from backend.exercises.library import EXERCISES
 from backend.i18n import ENGLISH, N_, Translator
+from backend.sessions.history import HISTORY_WINDOW_DAYS
 from kinect_agent.analysis.document import AnalysisReport
 
 # the day of a session in the advice ("on 14 November"), per locale; with " y" appended in another year
@@ -39,7 +40,7 @@ RULES = (FEWER_REPS, ROM_DROP, TOO_FAST, POOR_DATA_QUALITY, MISSED_DAYS, PAIN_HI
 
 # --- thresholds ------------------------------------------------------------------------------------------------
 ROM_DROP_FRACTION = 0.85  # fires when rom_deg < 0.85 x median rom_deg of the baseline sessions
-ROM_BASELINE_WINDOW_DAYS = 28  # baseline = earlier good-quality sessions of the last 4 weeks ...
+ROM_BASELINE_WINDOW_DAYS = HISTORY_WINDOW_DAYS  # baseline = earlier good-quality sessions of the last 4 weeks ...
 ROM_BASELINE_MIN_SPAN_DAYS = 14  # ... reaching back at least 2 weeks ...
 ROM_BASELINE_MIN_SESSIONS = 3  # ... with at least this many sessions
 MIN_TEMPO_S_PER_REP = 1.5  # fires when a repetition takes less than this, seconds
@@ -412,7 +413,7 @@ def evaluate(
     doc: the analysis document of the session (kinect_agent.analysis.document; a stored one read with
     read_report). prescribed_reps: repetitions per set of the plan, None = no plan. history: (started_at, document)
     of earlier sessions of the same patient and exercise, document None where no schema reads the stored one
-    (backend.suggestions.context.session_history). expected_per_week: sessions per week of the plan. now: when the
+    (backend.sessions.history.session_history). expected_per_week: sessions per week of the plan. now: when the
     session happened (timezone-aware). today: the day the advice is written (UTC), which decides whether the text
     names the session's weekday or its date; defaults to the day of now. t: the language of the drafts' texts
     (English by default).

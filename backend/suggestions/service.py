@@ -16,8 +16,8 @@ from backend.exceptions import SuggestionNotFound, SuggestionNotPending
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
 from backend.i18n import DEFAULT_LOCALE, Translator, asked_locale, translator
+from backend.sessions.history import plan_targets, session_history
 from backend.sessions.models import ExerciseSession
-from backend.suggestions.context import plan_targets, session_history
 from backend.suggestions.models import Suggestion
 from backend.suggestions.rules import (
     ACTIVE_DAYS_WINDOW,

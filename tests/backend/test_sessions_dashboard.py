@@ -12,7 +12,8 @@ from backend.database import utcnow
 from backend.exercises.library import EXERCISES
 from backend.i18n import Translator
 from backend.plans.models import Plan, PlanItem
-from backend.sessions import dashboard, triage
+from backend.session_review import dashboard
+from backend.sessions import triage
 from backend.suggestions.models import Suggestion
 from tests.backend.session_rows import document
 

@@ -18,6 +18,7 @@ from sqlalchemy.orm import Session
 
 from backend.database import is_database_busy
 from backend.exercises.models import Exercise
+from backend.session_review import service as review
 from backend.sessions import service
 from backend.sessions.ingest import decode_upload
 from backend.sessions.models import ExerciseSession
@@ -62,7 +63,7 @@ def test_simultaneous_first_uploads_store_one_session(engine, committed_patient,
         with Session(engine, expire_on_commit=False) as s, s.begin():
             exercise = s.scalar(select(Exercise).where(Exercise.slug == "squat"))
             assert exercise is not None
-            row, created = service.store_upload(
+            row, created = review.store_upload(
                 db_session=s, upload=upload, patient_id=committed_patient, exercise=exercise, device_id=None
             )
             return row.id, created

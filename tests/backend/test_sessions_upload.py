@@ -14,6 +14,7 @@ from backend.audit.models import AuditEvent
 from backend.config import Settings
 from backend.exercises.models import Exercise
 from backend.plans.models import Plan, PlanItem
+from backend.session_review import service as review
 from backend.sessions import service
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.suggestions.models import Suggestion
@@ -319,7 +320,7 @@ def test_a_failure_after_the_session_row_stores_nothing(post, db_session, patien
     def broken(**_kwargs):
         raise RuntimeError("suggestion store failed")
 
-    monkeypatch.setattr(service, "suggest_for_session", broken)
+    monkeypatch.setattr(review, "suggest_for_session", broken)
     response = post(khs, headers)
     assert response.status_code == 500, response.text
     assert _stored(db_session, patient.id) == (0, 0, 0)

@@ -9,8 +9,8 @@ import pytest
 from sqlalchemy import select
 
 from backend.plans.models import Plan, PlanItem
+from backend.sessions.history import plan_targets, session_history
 from backend.sessions.models import ExerciseSession, SessionMetric
-from backend.suggestions.context import plan_targets, session_history
 from backend.suggestions.models import Suggestion
 from backend.suggestions.service import suggest_for_session
 from kinect_agent.analysis.document import AnalysisReport, read_report

@@ -9,7 +9,7 @@ from typing import Any
 import pytest
 
 from backend.feeling.models import SessionFeeling
-from backend.sessions import dashboard
+from backend.session_review import dashboard
 from backend.sessions.triage import NOW_AT, SOON_AT, RecentSession, attention
 
 THURSDAY_NOON = dt.datetime(2026, 11, 26, 12, 0, tzinfo=dt.UTC)

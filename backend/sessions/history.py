@@ -1,4 +1,5 @@
-"""What the rules need to know around one session: the plan's targets and the patient's earlier sessions."""
+"""What the analysis and the suggestion rules need to know around one session: the plan's targets and the patient's
+earlier sessions."""
 
 from __future__ import annotations
 
@@ -10,8 +11,9 @@ from sqlalchemy.orm import Session
 
 from backend.plans.models import Plan, PlanItem
 from backend.sessions.models import ExerciseSession, SessionMetric
-from backend.suggestions.rules import ROM_BASELINE_WINDOW_DAYS
 from kinect_agent.analysis.document import AnalysisReport, read_if_readable
+
+HISTORY_WINDOW_DAYS = 28  # the history's look-back: the suggestion rules' longest window (their ROM baseline)
 
 
 def plan_targets(
@@ -59,10 +61,10 @@ def session_history(
     the document read from whatever schema version it was stored in, None where no schema reads it (the session
     still happened: the missed-days rule counts its day).
 
-    Covers the rules' longest window (ROM_BASELINE_WINDOW_DAYS) plus the latest session before it, so the
+    Covers HISTORY_WINDOW_DAYS (the rules' longest window) plus the latest session before it, so the
     missed-days rule can tell a returning patient from a new one.
     """
-    start = session.started_at - dt.timedelta(days=ROM_BASELINE_WINDOW_DAYS)
+    start = session.started_at - dt.timedelta(days=HISTORY_WINDOW_DAYS)
     recent = db_session.execute(_earlier(session).where(ExerciseSession.started_at >= start)).all()
     older = db_session.execute(
         _earlier(session).where(ExerciseSession.started_at < start).order_by(ExerciseSession.started_at.desc()).limit(1)

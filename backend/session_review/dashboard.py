@@ -3,6 +3,7 @@
 Summaries of many patients cost three queries (no query per patient), read the indexed scalar columns
 of session_metric and only the "indicators" part of a document, and never load the stored files. The attention
 score, its reasons and the indicator trends are computed from them by backend.sessions.triage (formula there).
+It sits above backend.sessions and backend.suggestions because the attention counts pending suggestions.
 """
 
 from __future__ import annotations
