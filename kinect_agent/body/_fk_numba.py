@@ -7,7 +7,10 @@ use and cached on disk (numba cache=True).
 
 from __future__ import annotations
 
+from typing import TypeAlias
+
 import numpy as np
+from numpy.typing import NDArray
 
 try:
     import numba
@@ -15,10 +18,13 @@ except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None
+Floats: TypeAlias = NDArray[np.float64]
+Ints: TypeAlias = NDArray[np.int64]
 
 
-def _fk_many(root, lengths, theta, rest, R_ref, rot_dof, rot_start, rot_parent, ref_index, second_axis,
-             bone_parent, bone_group, out):  # fmt: skip
+def _fk_many(root: Floats, lengths: Floats, theta: Floats, rest: Floats, R_ref: Floats, rot_dof: Ints, rot_start: Ints,
+             rot_parent: Ints, ref_index: Ints, second_axis: Ints, bone_parent: Ints, bone_group: Ints,
+             out: Floats) -> None:  # fmt: skip
     S = root.shape[0]
     n_rot = rot_dof.shape[0]
     n_bones = bone_parent.shape[0]

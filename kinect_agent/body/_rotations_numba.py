@@ -10,8 +10,10 @@ fused multiply-add). Compiled on first use and cached on disk (numba cache=True)
 from __future__ import annotations
 
 import math
+from typing import TypeAlias
 
 import numpy as np
+from numpy.typing import NDArray
 
 try:
     import numba
@@ -19,9 +21,10 @@ except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None
+Floats: TypeAlias = NDArray[np.float64]
 
 
-def _matrix_to_quat(R, out):  # pragma: no cover - compiled
+def _matrix_to_quat(R: Floats, out: Floats) -> None:  # pragma: no cover - compiled
     """out[i] = rotations.matrix_to_quat(R[i]) for R (N, 3, 3), out (N, 4) wxyz."""
     cand = np.empty((4, 4))
     diag = np.empty(4)

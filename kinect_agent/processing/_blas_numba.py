@@ -15,8 +15,10 @@ from __future__ import annotations
 
 import ctypes
 from pathlib import Path
+from typing import Protocol, TypeAlias, cast
 
 import numpy as np
+from numpy.typing import NDArray
 
 try:
     import numba
@@ -27,17 +29,68 @@ except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None
+Floats: TypeAlias = NDArray[np.float64]
+
+
+class _Pointer(Protocol):
+    """What a kernel passes for a Fortran or C pointer argument: an array's `.ctypes` (ctypes' `_as_parameter_`)."""
+
+    @property
+    def _as_parameter_(self) -> ctypes.c_void_p: ...
+
+
+# The external routines as kernels call them (numba types ExternalFunction calls by the signatures given below; these
+# protocols give mypy the same argument lists). Fortran passes every argument by pointer.
+class _Dpotrf(Protocol):
+    def __call__(self, uplo: _Pointer, n: _Pointer, a: _Pointer, lda: _Pointer, info: _Pointer, /) -> None: ...
+
+
+class _Dpotrs(Protocol):
+    def __call__(
+        self, uplo: _Pointer, n: _Pointer, nrhs: _Pointer, a: _Pointer, lda: _Pointer, b: _Pointer, ldb: _Pointer,
+        info: _Pointer, /,
+    ) -> None: ...  # fmt: skip
+
+
+class _Dtrsm(Protocol):
+    def __call__(
+        self, side: _Pointer, uplo: _Pointer, transa: _Pointer, diag: _Pointer, m: _Pointer, n: _Pointer,
+        alpha: _Pointer, a: _Pointer, lda: _Pointer, b: _Pointer, ldb: _Pointer, /,
+    ) -> None: ...  # fmt: skip
+
+
+class _Dsyrk(Protocol):
+    def __call__(
+        self, uplo: _Pointer, trans: _Pointer, n: _Pointer, k: _Pointer, alpha: _Pointer, a: _Pointer, lda: _Pointer,
+        beta: _Pointer, c: _Pointer, ldc: _Pointer, /,
+    ) -> None: ...  # fmt: skip
+
+
+class _CblasDgemm(Protocol):
+    def __call__(
+        self, order: int, transa: int, transb: int, m: int, n: int, k: int, alpha: float, a: _Pointer, lda: int,
+        b: _Pointer, ldb: int, beta: float, c: _Pointer, ldc: int, /,
+    ) -> None: ...  # fmt: skip
+
+
+class _CblasDgemv(Protocol):
+    def __call__(
+        self, order: int, trans: int, m: int, n: int, alpha: float, a: _Pointer, lda: int, x: _Pointer, incx: int,
+        beta: float, y: _Pointer, incy: int, /,
+    ) -> None: ...  # fmt: skip
+
 
 if AVAILABLE:
     _llvm.add_symbol("kinect_dpotrf", _address("scipy.linalg.cython_lapack", "dpotrf"))
     _llvm.add_symbol("kinect_dtrsm", _address("scipy.linalg.cython_blas", "dtrsm"))
     _llvm.add_symbol("kinect_dsyrk", _address("scipy.linalg.cython_blas", "dsyrk"))
     _vp = _t.voidptr
-    _dpotrf = _t.ExternalFunction("kinect_dpotrf", _t.void(_vp, _vp, _vp, _vp, _vp))
-    _dtrsm = _t.ExternalFunction("kinect_dtrsm", _t.void(*([_vp] * 11)))
-    _dsyrk = _t.ExternalFunction("kinect_dsyrk", _t.void(*([_vp] * 10)))
+    # numba's ExternalFunction is a numba type, callable only inside a kernel: each is cast once to its protocol.
+    _dpotrf = cast(_Dpotrf, _t.ExternalFunction("kinect_dpotrf", _t.void(_vp, _vp, _vp, _vp, _vp)))
+    _dtrsm = cast(_Dtrsm, _t.ExternalFunction("kinect_dtrsm", _t.void(*([_vp] * 11))))
+    _dsyrk = cast(_Dsyrk, _t.ExternalFunction("kinect_dsyrk", _t.void(*([_vp] * 10))))
     _llvm.add_symbol("kinect_dpotrs", _address("scipy.linalg.cython_lapack", "dpotrs"))
-    _dpotrs = _t.ExternalFunction("kinect_dpotrs", _t.void(*([_vp] * 8)))
+    _dpotrs = cast(_Dpotrs, _t.ExternalFunction("kinect_dpotrs", _t.void(*([_vp] * 8))))
 
 
 def _numpy_cblas() -> tuple[int, int] | None:
@@ -61,13 +114,13 @@ if NUMPY_BLAS:
     _llvm.add_symbol("kinect_numpy_dgemm", _NUMPY_CBLAS[0])  # type: ignore[index]
     _llvm.add_symbol("kinect_numpy_dgemv", _NUMPY_CBLAS[1])  # type: ignore[index]
     _i32, _i64, _f64 = _t.int32, _t.int64, _t.float64
-    _ngemm = _t.ExternalFunction("kinect_numpy_dgemm", _t.void(_i32, _i32, _i32, _i64, _i64, _i64, _f64, _vp, _i64,
-                                                               _vp, _i64, _f64, _vp, _i64))  # fmt: skip
-    _ngemv = _t.ExternalFunction("kinect_numpy_dgemv", _t.void(_i32, _i32, _i64, _i64, _f64, _vp, _i64, _vp, _i64,
-                                                               _f64, _vp, _i64))  # fmt: skip
+    _ngemm = cast(_CblasDgemm, _t.ExternalFunction("kinect_numpy_dgemm", _t.void(
+        _i32, _i32, _i32, _i64, _i64, _i64, _f64, _vp, _i64, _vp, _i64, _f64, _vp, _i64)))  # fmt: skip
+    _ngemv = cast(_CblasDgemv, _t.ExternalFunction("kinect_numpy_dgemv", _t.void(
+        _i32, _i32, _i64, _i64, _f64, _vp, _i64, _vp, _i64, _f64, _vp, _i64)))  # fmt: skip
 
     @numba.njit(cache=True, nogil=True)
-    def numpy_gemm(A, B, transpose_b, out):  # pragma: no cover - compiled
+    def numpy_gemm(A: Floats, B: Floats, transpose_b: bool, out: Floats) -> None:  # pragma: no cover - compiled
         """out ← A @ B (transpose_b False) or A @ Bᵀ (True), all (n, n) C order: numpy's matmul for C-ordered A and
         B (B.T: an F-ordered view), i.e. cblas_dgemm(RowMajor, NoTrans, NoTrans|Trans, n, n, n, 1, A, n, B, n, 0,
         out, n)."""
@@ -76,7 +129,7 @@ if NUMPY_BLAS:
                out.ctypes, n)  # fmt: skip
 
     @numba.njit(cache=True, nogil=True)
-    def numpy_gemv(A, v, out):  # pragma: no cover - compiled
+    def numpy_gemv(A: Floats, v: Floats, out: Floats) -> None:  # pragma: no cover - compiled
         """out ← A @ v for A (m, n) C order, v (n,), out (m,) contiguous: numpy's matmul of a matrix and a vector,
         cblas_dgemv(ColMajor, Trans, n, m, 1, A, n, v, 1, 0, out, 1)."""
         m, n = A.shape
@@ -88,7 +141,7 @@ else:  # pragma: no cover - numpy without its OpenBLAS wheel library
 if AVAILABLE:
 
     @numba.njit(cache=True, nogil=True)
-    def cholesky_lower(A, n):  # pragma: no cover - compiled
+    def cholesky_lower(A: Floats, n: int) -> int:  # pragma: no cover - compiled
         """Overwrites the lower triangle of A[:n, :n] (C order, leading dimension A.shape[1]) with L, L Lᵀ = A.
 
         The strict upper triangle is left as it was. Returns LAPACK's info: 0 = done, > 0 = not positive definite.
@@ -100,7 +153,7 @@ if AVAILABLE:
         return ints[2]
 
     @numba.njit(cache=True, nogil=True)
-    def solve_lower(Lm, k, B, rows, cols):  # pragma: no cover - compiled
+    def solve_lower(Lm: Floats, k: int, B: Floats, rows: int, cols: int) -> None:  # pragma: no cover - compiled
         """Overwrites B[:rows, :cols] (C order) with L⁻¹ B, L = lower triangle of Lm[:k, :k], k = rows.
 
         (Fortran: Bᵀ ← Bᵀ U⁻¹ with U = Lᵀ the upper triangle of Lmᵀ: dtrsm 'R', 'U', 'N', 'N'.)
@@ -112,7 +165,9 @@ if AVAILABLE:
                ints[1:].ctypes, one.ctypes, Lm.ctypes, ints[2:].ctypes, B.ctypes, ints[3:].ctypes)  # fmt: skip
 
     @numba.njit(cache=True, nogil=True)
-    def gram_lower(A, rows, cols, alpha, beta, C):  # pragma: no cover - compiled
+    def gram_lower(
+        A: Floats, rows: int, cols: int, alpha: float, beta: float, C: Floats
+    ) -> None:  # pragma: no cover - compiled
         """C ← alpha · Aᵀ A + beta · C on the lower triangle of C[:cols, :cols]; A is A[:rows, :cols] (C order).
 
         (Fortran: Aᵀ is cols × rows, dsyrk 'U', 'N' on Cᵀ.)
@@ -124,7 +179,9 @@ if AVAILABLE:
                ints[2:].ctypes, ab[1:].ctypes, C.ctypes, ints[3:].ctypes)  # fmt: skip
 
     @numba.njit(cache=True, nogil=True)
-    def gram_rows_lower(A, rows, cols, lda, alpha, C):  # pragma: no cover - compiled
+    def gram_rows_lower(
+        A: Floats, rows: int, cols: int, lda: int, alpha: float, C: Floats
+    ) -> None:  # pragma: no cover - compiled
         """C ← alpha · A Aᵀ on the lower triangle of C[:rows, :rows]; A is rows × cols in C order with leading
         dimension lda, starting at A[0] (a flat view, so it may start inside a larger array).
 
@@ -137,7 +194,7 @@ if AVAILABLE:
                ints[2:].ctypes, ab[1:].ctypes, C.ctypes, ints[3:].ctypes)  # fmt: skip
 
     @numba.njit(cache=True, nogil=True)
-    def potrf_lower_f(A, n):  # pragma: no cover - compiled
+    def potrf_lower_f(A: Floats, n: int) -> int:  # pragma: no cover - compiled
         """dpotrf 'L' on A[:n, :n] read as a Fortran array (leading dimension A.shape[1]): what SciPy's
         lapack.dpotrf(a, lower=1, clean=0) does with a Fortran copy of a, given Aᵀ's C-order buffer. Returns info."""
         chars = np.array([76], dtype=np.uint8)  # 'L'
@@ -146,7 +203,7 @@ if AVAILABLE:
         return ints[2]
 
     @numba.njit(cache=True, nogil=True)
-    def potrs_lower_f(Lf, n, B, nrhs):  # pragma: no cover - compiled
+    def potrs_lower_f(Lf: Floats, n: int, B: Floats, nrhs: int) -> int:  # pragma: no cover - compiled
         """dpotrs 'L' with the factor of potrf_lower_f and B[:nrhs, :n] read as a Fortran (n, nrhs) array: SciPy's
         lapack.dpotrs(c, b, lower=1) with b's Fortran copy held in B (C order: B = bᵀ). Returns info."""
         chars = np.array([76], dtype=np.uint8)  # 'L'

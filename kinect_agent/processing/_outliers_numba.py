@@ -11,8 +11,10 @@ contiguous axis of 3 runs left to right), without the temporaries: no fused mult
 from __future__ import annotations
 
 import math
+from typing import TypeAlias
 
 import numpy as np
+from numpy.typing import NDArray
 
 try:
     import numba
@@ -20,9 +22,12 @@ except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None
+Floats: TypeAlias = NDArray[np.float64]
+Ints: TypeAlias = NDArray[np.int64]
+Bools: TypeAlias = NDArray[np.bool_]
 
 
-def _insert_sorted(win, cnt, v):  # pragma: no cover - compiled
+def _insert_sorted(win: Floats, cnt: int, v: float) -> int:  # pragma: no cover - compiled
     """Inserts v into win[:cnt] (sorted ascending, ties after the equal values) and returns the new count."""
     j = cnt
     while j > 0 and win[j - 1] > v:
@@ -32,7 +37,7 @@ def _insert_sorted(win, cnt, v):  # pragma: no cover - compiled
     return cnt + 1
 
 
-def _running_median(pad, w, out):  # pragma: no cover - compiled
+def _running_median(pad: Floats, w: int, out: Floats) -> None:  # pragma: no cover - compiled
     """out[m, t] = median of the finite values of pad[m, t : t + w] (NaN when none), as outliers.running_median.
 
     pad: (M, T + w − 1) float, NaN = missing; out: (M, T). The window is kept sorted from one frame to the next.
@@ -65,7 +70,10 @@ def _running_median(pad, w, out):  # pragma: no cover - compiled
                 cnt = _insert_sorted(win, cnt, new)
 
 
-def _em_expectation(xz, ok, cls, rho, mu, sigma, norm, vol, w, rho_sum, mu_sum):  # pragma: no cover - compiled
+def _em_expectation(
+    xz: Floats, ok: Bools, cls: Ints, rho: Floats, mu: Floats, sigma: Floats, norm: Floats, vol: Floats, w: Floats,
+    rho_sum: Floats, mu_sum: Floats
+) -> tuple[Floats, Floats]:  # pragma: no cover - compiled  # fmt: skip
     """One E step of outliers.fit_mixture with the sums of its M step; returns (loglik sum (K,), Σw (K,)).
 
     xz: (N, K, D) samples (0 where absent). ok: (N, K) bool present. cls: (N, K) int class (−1: none, weight 0).
@@ -109,7 +117,7 @@ def _em_expectation(xz, ok, cls, rho, mu, sigma, norm, vol, w, rho_sum, mu_sum):
     return ll, sw
 
 
-def _em_spread(xz, ok, w, mu, var_sum):  # pragma: no cover - compiled
+def _em_spread(xz: Floats, ok: Bools, w: Floats, mu: Floats, var_sum: Floats) -> None:  # pragma: no cover - compiled
     """var_sum (K, D) = Σ_n w·(x − mu)², as outliers.fit_mixture's M step (absent samples add exact zeros)."""
     N, K, D = xz.shape
     var_sum[:] = 0.0
@@ -131,7 +139,9 @@ else:  # pragma: no cover - callers check AVAILABLE first
     running_median_kernel = em_expectation = em_spread = None  # type: ignore[assignment]
 
 
-def _window_sums(wp, yp, kern, powers, S, S2, B):  # pragma: no cover - compiled
+def _window_sums(
+    wp: Floats, yp: Floats, kern: Floats, powers: Floats, S: Floats, S2: Floats, B: Floats
+) -> None:  # pragma: no cover - compiled
     """The kernel-weighted window sums of outliers.local_quadratic, Wk = wp[t + i, j]·kern[t, i]:
     S[t, j, m] = Σ_i Wk·powers[t, i, m], S2 = Σ_i (Wk·Wk)·powers, B[t, j, m, a] = Σ_i (yp[t + i, j, a]·Wk)·powers
     (m < 3), each summed over i in order.
@@ -161,7 +171,9 @@ def _window_sums(wp, yp, kern, powers, S, S2, B):  # pragma: no cover - compiled
                     B[t, j, m, a] = b
 
 
-def _quadratic_at_centre(coef, S2, B, pred, lev):  # pragma: no cover - compiled
+def _quadratic_at_centre(
+    coef: Floats, S2: Floats, B: Floats, pred: Floats, lev: Floats
+) -> None:  # pragma: no cover - compiled
     """pred[t, j, a] = Σ_m coef[t, j, m]·B[t, j, m, a] and lev[t, j] = Σ_m Σ_n (coef_m·S2[t, j, m + n])·coef_n, each
     summed in order, as outliers.local_quadratic's einsums."""
     T, J, _ = coef.shape

@@ -12,7 +12,10 @@ is the Python around them: 12 numpy calls and two f2py calls per frame. Compiled
 
 from __future__ import annotations
 
+from typing import TypeAlias
+
 import numpy as np
+from numpy.typing import NDArray
 
 from kinect_agent.processing import _blas_numba
 
@@ -22,10 +25,13 @@ except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None and _blas_numba.AVAILABLE and _blas_numba.NUMPY_BLAS
+Floats: TypeAlias = NDArray[np.float64]
 OK, P_PRED_NOT_POSITIVE, POTRF_FAILED, POTRS_FAILED = 0, 1, 2, 3  # rts_random_walk's status
 
 
-def _rts_random_walk(xs, Ps, Q, q_scale, scaled, covariances):  # pragma: no cover - compiled
+def _rts_random_walk(
+    xs: Floats, Ps: Floats, Q: Floats, q_scale: Floats, scaled: bool, covariances: bool
+) -> tuple[int, int, int]:  # pragma: no cover - compiled
     """Smooths xs (T, n) and Ps (T, n, n) in place, as ukf._rts_random_walk: noise q_scale[k] · Q of step k
     (scaled True) or Q; covariances False: the means only (Ps stay the filtered ones, all the gain needs).
     Returns (status, k, info): OK, or the failure, the step k it happened at and LAPACK's info (dpotrf's > 0:

@@ -17,7 +17,10 @@ Only defined when numba is installed (AVAILABLE).
 
 from __future__ import annotations
 
+from typing import TypeAlias
+
 import numpy as np
+from numpy.typing import NDArray
 
 from kinect_agent.processing import _blas_numba
 
@@ -27,13 +30,21 @@ except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None and _blas_numba.AVAILABLE
+Floats: TypeAlias = NDArray[np.float64]
+Ints: TypeAlias = NDArray[np.int64]
+Bools: TypeAlias = NDArray[np.bool_]
+# run_frames' groups of arguments (see its docstring)
+Observations: TypeAlias = tuple[Floats, Bools, Floats, Bools, Ints, Bools]
+Noise: TypeAlias = tuple[Floats, Ints, Floats]
+StepKernel: TypeAlias = tuple[Floats, float, Floats, int, Floats, Floats, Ints]
+Restart: TypeAlias = tuple[Floats, int, Ints]
 
 # Rows of the packed table `tabs` (int64, (9, 33)) given to chain_step; see kinematics.STEP_TABLES.
 ROT_DOF, ROT_START, ROT_PARENT, REF_INDEX, SECOND_AXIS, BONE_PARENT, BONE_GROUP, THETA_ROT, JOINT_LAST_ROT = range(9)
 OK, P_NOT_POSITIVE, S_NOT_POSITIVE = 0, 1, 2  # chain_step's status
 
 
-def _sincos(x):  # pragma: no cover - compiled
+def _sincos(x: float) -> tuple[float, float]:  # pragma: no cover - compiled
     """Returns (sin x, cos x) to within 1 ulp of libm: Cody-Waite reduction by π/2 and fdlibm's kernels.
 
     Branch-free, so loops over sigma points vectorise (libm's sin/cos are scalar calls).
@@ -55,7 +66,8 @@ def _sincos(x):  # pragma: no cover - compiled
     return sn, cs
 
 
-def _compose(G, r, p, s, l00, l01, l02, l10, l11, l12, l20, l21, l22):  # pragma: no cover - compiled
+def _compose(G: Floats, r: int, p: int, s: int, l00: float, l01: float, l02: float, l10: float, l11: float,
+             l12: float, l20: float, l21: float, l22: float) -> None:  # pragma: no cover - compiled  # fmt: skip
     """G[r, :, :, s] = G[p, :, :, s] · L, L given by its 9 entries (p may be the identity slot: no branch here,
     so loops over s vectorise)."""
     for u in range(3):
@@ -65,7 +77,8 @@ def _compose(G, r, p, s, l00, l01, l02, l10, l11, l12, l20, l21, l22):  # pragma
         G[r, u, 2, s] = g0 * l02 + g1 * l12 + g2 * l22
 
 
-def _sigma_positions(x, Lc, scale, n_len, fixed_lengths, rest, R_ref, tabs, pos):  # pragma: no cover - compiled
+def _sigma_positions(x: Floats, Lc: Floats, scale: float, n_len: int, fixed_lengths: Floats, rest: Floats,
+                     R_ref: Floats, tabs: Ints, pos: Floats) -> None:  # pragma: no cover - compiled  # fmt: skip
     """Writes the joint positions pos (J, 3, 2n+1) m of the sigma points in the order x, x + c·L_0, x − c·L_0,
     x + c·L_1, x − c·L_1, ... (sigma point index last, so that loops over sigma points vectorise).
 
@@ -172,7 +185,9 @@ def _sigma_positions(x, Lc, scale, n_len, fixed_lengths, rest, R_ref, tabs, pos)
                 pos[c, u, s] = q
 
 
-def _chain_step(x, P, z, observed, R_diag, w, gate, fixed_lengths, n_len, rest, R_ref, tabs, used):
+def _chain_step(x: Floats, P: Floats, z: Floats, observed: Bools, R_diag: Floats, w: Floats, gate: float,
+                fixed_lengths: Floats, n_len: int, rest: Floats, R_ref: Floats, tabs: Ints,
+                used: Bools) -> int:  # fmt: skip
     """One gated UKF update of the chain state (UnscentedKalmanFilter.gated_update, hx = the chain), in place.
 
     x (n,) = root (3) m, lengths (n_len = 19, or 0 when fixed_lengths (19,) m holds them), theta (33) rad;
@@ -302,7 +317,7 @@ def _chain_step(x, P, z, observed, R_diag, w, gate, fixed_lengths, n_len, rest, 
     return OK
 
 
-def _add_capped(P, diag, q, ceiling):  # pragma: no cover - compiled
+def _add_capped(P: Floats, diag: Ints, q: Floats, ceiling: Floats) -> None:  # pragma: no cover - compiled
     """P[d, d] += min(q, max(ceiling − P[d, d], 0)) for d in diag (see chain_filter.ChainFilter.predict_random_walk)."""
     for i in range(diag.shape[0]):
         d = diag[i]
@@ -310,8 +325,9 @@ def _add_capped(P, diag, q, ceiling):  # pragma: no cover - compiled
 
 
 def _run_frames(
-    x, P, x_prior, P_prior, obs, order, q_steps, i0, i1, noise, kern, restart, run, used, xs, Ps
-):  # pragma: no cover - compiled
+    x: Floats, P: Floats, x_prior: Floats, P_prior: Floats, obs: Observations, order: Ints, q_steps: Floats, i0: int,
+    i1: int, noise: Noise, kern: StepKernel, restart: Restart, run: Ints, used: Bools, xs: Floats, Ps: Floats
+) -> tuple[int, int]:  # pragma: no cover - compiled  # fmt: skip
     """Frames order[i0:i1] of one filter pass (pipeline._run_pass), in place: per frame the capped random-walk
     predict (add_capped with q = Q·q_steps[i], none for i = 0), the re-acquisition of lost joints, chain_step, the
     gate's bookkeeping, and x, P stored when xs has rows. The same operations as the pass's Python loop.

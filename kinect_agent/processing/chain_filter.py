@@ -73,10 +73,10 @@ class FrameData:
         present = np.all(observed.reshape(len(observed), skeleton.J, 3), axis=2)
         return cls(z, observed, R_diag, present, present.sum(axis=1), np.any(observed, axis=1))
 
-    def as_tuple(self) -> tuple[np.ndarray, ...]:
+    def as_tuple(self) -> _ukf_numba.Observations:
         """Returns the arrays C-contiguous, in the order _ukf_numba.run_frames reads them."""
-        return tuple(np.ascontiguousarray(a) for a in (self.z, self.observed, self.R_diag, self.present,
-                                                        self.n_present, self.any_observed))  # fmt: skip
+        c = np.ascontiguousarray
+        return c(self.z), c(self.observed), c(self.R_diag), c(self.present), c(self.n_present), c(self.any_observed)
 
 
 class ChainFilter(UnscentedKalmanFilter):

@@ -10,6 +10,10 @@ Compiled on first use and cached on disk (numba cache=True), as kinect_agent/pro
 from __future__ import annotations
 
 import math
+from typing import TypeAlias
+
+import numpy as np
+from numpy.typing import NDArray
 
 try:
     import numba
@@ -17,9 +21,14 @@ except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None
+Floats: TypeAlias = NDArray[np.float64]
+Ints: TypeAlias = NDArray[np.int64]
 
 
-def _refine_sweeps(truth, m, radius, wanted_by_bone, parents, children, gain, sweeps):  # pragma: no cover - compiled
+def _refine_sweeps(
+    truth: Floats, m: Floats, radius: Floats, wanted_by_bone: Floats, parents: Ints, children: Ints, gain: Floats,
+    sweeps: int
+) -> None:  # pragma: no cover - compiled  # fmt: skip
     """kinect_noise.refine_offsets' sweeps in place on m (J, T, 3) m: truth (J, T, 3) m, radius (J, T) m, wanted_by_bone
     (19, T) m, parents and children (19,) int, gain (19,) float; sweeps: how many."""
     J, T = radius.shape
