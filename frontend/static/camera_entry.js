@@ -22,10 +22,13 @@ const CameraEntry = (() => {
       href: Coach.url(`/patient/camera?item=${encodeURIComponent(item.id)}`) }, LABEL);
   }
 
+  /** Shows the links when there is a camera; returns whether there is one. */
   async function reveal() {
     const yes = await check();
     for (const a of document.querySelectorAll("a.cam-start")) a.hidden = !yes;
+    return yes;
   }
 
-  return { link, reveal };
+  /** Whether the browser has reported a camera (false until it has answered). */
+  return { link, reveal, LABEL, get available() { return hasCamera === true; } };
 })();

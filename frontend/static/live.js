@@ -304,11 +304,14 @@ const Live = (() => {
       idle: lastUpload ? I18n.t("Your home computer sent your last exercise {day} at {time}. Do your exercises in front of it as usual: it sends them here by itself.",
         { day: Coach.plainDay(lastUpload), time: Coach.fmtTime(lastUpload) }) : "",
       "server-lost": I18n.t("This page cannot reach the server right now, so you cannot start an exercise from here. Please check that your internet is working. The page notices by itself when the connection is back."),
-      unpaired: I18n.t("No home computer is set up for you yet. Your therapist can help you set one up."),
+      unpaired: CameraEntry.available  // a camera-only patient: the camera links beside the exercises are the way
+        ? I18n.t("Do your exercises with this computer's camera: press “{start}” next to an exercise.", { start: CameraEntry.LABEL })
+        : I18n.t("No home computer is set up for you yet. Your therapist can help you set one up."),
       unknown: I18n.t("Checking your home computer…"),
     };
     line.textContent = words[state] || words.unknown;
     line.dataset.state = state;
+    line.toggleAttribute("data-camera", state === "unpaired" && CameraEntry.available);
     for (const b of document.querySelectorAll("button.start")) {
       b.hidden = agent !== "online";
       b.disabled = Boolean(running()) || state === "server-lost";

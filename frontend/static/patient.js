@@ -146,7 +146,7 @@
           CameraEntry.link(item, exerciseName(lib, item.exercise_slug), mineToday.length + 1 <= item.sets
             ? I18n.t("set {set} of {sets}", { set: mineToday.length + 1, sets: item.sets }) : I18n.t("extra set")))));
     }
-    CameraEntry.reveal();
+    CameraEntry.reveal().then((yes) => { if (yes) Live.render(); });  // the home computer's line names the camera
   }
 
   /** Today's next reminder of the plan, at its time in the patient's time zone (the server's reckoning). */

@@ -157,6 +157,12 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         start = page.locator("a.cam-start")
         expect(start).to_be_visible()
         expect(start).to_have_text("Start with this computer's camera")
+        status = page.locator("#agent-status")  # no home computer: the line names the camera, not a missing computer
+        expect(status).to_have_attribute("data-state", "unpaired")
+        expect(status).to_have_attribute("data-camera", "")
+        expect(status).to_have_text(
+            "Do your exercises with this computer's camera: press “Start with this computer's camera” next to an exercise."
+        )
         shot(page, "camera-patient-start")
         page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
         expect(page.locator("#cam-consent")).to_be_visible()
@@ -328,6 +334,7 @@ def test_a_camera_that_cannot_start_is_said_in_plain_words(pw, live_server, flag
         page.wait_for_url("**/patient")
         if "could not find" in says:
             expect(page.locator("a.cam-start")).to_be_hidden()  # no camera: the patient page offers none
+            expect(page.locator("#agent-status")).to_contain_text("No home computer is set up for you yet")
         page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
         page.click("#cam-agree")
         expect(page.locator("#cam-problem-text")).to_contain_text(says)
