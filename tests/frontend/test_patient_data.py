@@ -81,6 +81,7 @@ def test_the_patient_page_prints_without_buttons_and_links_the_pdf_report(page, 
     assert response.ok and response.headers["content-type"] == "application/pdf"
     page.emulate_media(media="print")
     assert not page.locator("#plan-new").is_visible() and not page.locator("header.top .btn").first.is_visible()
+    assert not page.get_by_text("Time zone of the patient's reminder times").is_visible()  # no control's label alone
     for paper in ("A4", "Letter"):
         pdf = page.pdf(format=paper, print_background=False)
         (SHOTS / f"patient-page-{paper}.pdf").write_bytes(pdf)
