@@ -28,6 +28,7 @@ from sqlalchemy import select
 from sqlalchemy.orm import Session
 
 from backend.analysis.mdc import rom_mdc95
+from backend.analysis.reasons import written
 from backend.exceptions import InvalidInput
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
@@ -240,15 +241,22 @@ def build_report(*, db_session: Session, patient: User, period: Period, made_by:
                 _chart(name, {"range of motion, degrees": roms, "repetitions": reps}, "value", width, period.start)
             )
         table = [["Date", "Repetitions", "Range of motion", "Balance sway", "Data quality"]]
+        why_no_sway: list[str] = []  # each reason once, in the order the sessions first give it
         for r in rs:
             doc = read_if_readable(r.document)
             sway = doc.balance.sway_velocity_m_s if doc is not None and doc.balance is not None else None
+            if sway is None and doc is not None and doc.balance_missing is not None:
+                why = written(doc.balance_missing, ENGLISH)
+                why_no_sway += [why] if why not in why_no_sway else []
             table.append([f"{r.started_at:%d %b %Y %H:%M}", "–" if r.repetitions is None else str(r.repetitions),
                           "–" if r.rom_deg is None else f"{r.rom_deg:.0f}°",
                           "not measured" if sway is None else f"{100 * sway:.1f} cm/s",
                           {True: "good", False: "poor", None: "–"}[r.quality_ok]])  # fmt: skip
         block.append(_table(table, [40 * mm, 26 * mm, 32 * mm, 32 * mm, 28 * mm]))
-        story += [KeepTogether(block[:2]), block[-1], Spacer(1, 3 * mm)]
+        story += [KeepTogether(block[:2]), block[-1]]
+        if why_no_sway:
+            story.append(_p("Balance not measured: " + " ".join(why_no_sway), body))
+        story.append(Spacer(1, 3 * mm))
     ok = sum(1 for r in rows if r.quality_ok)
     story += [_p("Data quality", h2),
               _p(f"{ok} of {len(rows)} session(s) had good tracking (the camera saw the body well enough for the "

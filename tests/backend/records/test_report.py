@@ -101,3 +101,20 @@ def test_a_chart_labels_its_days_with_dates_each_once(tmp_path):
     drawing = _chart("Seated knee extension", series, "value", 400.0, dt.date(2026, 11, 1))
     labels = re.findall(r"\d\d [A-Z][a-z]{2}", _pdf_text(renderPDF.drawToString(drawing), tmp_path))
     assert labels == ["22 Nov", "23 Nov", "24 Nov", "25 Nov", "26 Nov"], labels
+
+
+def test_a_balance_not_measured_says_why(client, make_patient_with_therapist, auth_headers, tmp_path):
+    patient, therapist = make_patient_with_therapist()
+    seated = make_khs("seated_knee_extension", 3, seed=93, created_at="2026-11-20T10:00:00Z")
+    r = client.post("/api/v1/sessions", content=seated,
+                    params={"exercise": "seated_knee_extension"},
+                    headers={"Content-Type": "application/octet-stream", **auth_headers(patient)})  # fmt: skip
+    assert r.status_code == 201, r.text
+    why = r.json()["metrics"]["balance_missing"]
+    assert why is not None and why["text"], r.json()["metrics"]["balance"]  # seated: no standing phase
+    today = dt.datetime.now(dt.UTC).date()
+    response = client.get(f"/api/v1/patients/{patient.id}/report.pdf", headers=auth_headers(therapist),
+                          params={"from": "2026-11-01", "to": str(today)})  # fmt: skip
+    assert response.status_code == 200, response.text
+    text = " ".join(_pdf_text(response.content, tmp_path).split())
+    assert "not measured" in text and f"Balance not measured: {why['text']}" in text, text
