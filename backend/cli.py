@@ -74,6 +74,11 @@ def cmd_serve(args: argparse.Namespace) -> int:
     return 0
 
 
+# longer than a therapist's pause between clicks and than load balancers' idle timeouts (60 s), so a client never
+# reuses a connection the server is closing
+KEEP_ALIVE_S = 75
+
+
 def serve_options(args: argparse.Namespace, settings: Settings) -> dict[str, Any]:
     """Returns uvicorn's options for `serve`: the command line's, else the settings' (COACH_HOST, COACH_PORT,
     COACH_WORKERS, COACH_FORWARDED_ALLOW_IPS)."""
@@ -85,9 +90,7 @@ def serve_options(args: argparse.Namespace, settings: Settings) -> dict[str, Any
         "port": args.port or settings.PORT,
         "proxy_headers": True,
         "forwarded_allow_ips": args.forwarded_allow_ips or settings.FORWARDED_ALLOW_IPS,
-        # longer than a therapist's pause between clicks and than load balancers' idle timeouts (60 s), so a
-        # client never reuses a connection the server is closing
-        "timeout_keep_alive": 75,
+        "timeout_keep_alive": KEEP_ALIVE_S,
         # open event streams must not hold a stop; browsers reconnect
         "timeout_graceful_shutdown": getattr(args, "shutdown_timeout", None) or 5.0,
     }

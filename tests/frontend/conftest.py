@@ -25,6 +25,7 @@ import pytest
 from playwright.sync_api import Page, expect
 from sqlalchemy.orm import Session
 
+from backend.cli import KEEP_ALIVE_S
 from backend.database import import_all_models
 from backend.demo import DEMO_PASSWORD, seed_demo
 from backend.migrate import upgrade
@@ -242,7 +243,9 @@ def run_server(
     command = [sys.executable, "-m", "uvicorn", "backend.main:create_app", "--factory", "--host", "127.0.0.1",
                "--port", str(port), "--log-level", "warning", "--proxy-headers",
                "--forwarded-allow-ips", "127.0.0.1", "--timeout-graceful-shutdown", "2",
+               "--timeout-keep-alive", str(KEEP_ALIVE_S),
                *(["--workers", str(workers)] if workers > 1 else [])]  # fmt: skip
+    # the product's keep-alive (uvicorn's own 5 s let a test's client reuse a connection the server was closing)
     proc = subprocess.Popen(command, cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT)
     base = f"http://127.0.0.1:{port}"
     try:
