@@ -10,11 +10,15 @@ write them again.
     cold        empty cache, no warm-up: the first set compiles
     cached      the cache filled by an earlier run, no warm-up: the first set loads the compiled code
     warmed      empty cache, kinect_agent.live.warmup.warm_up() done first, as `kinect-agent serve` does at start-up
+    paired      empty cache, then `kinect-agent prepare` (what `kinect-agent pair` runs after pairing) in a process
+                of its own; then the first set in a fresh process at once, no warm-up (Start the moment serve starts)
+    paired+up   the same, with serve's warm-up (now a load from the cache) done before Start
     later set   the second set in the same process as "cold"
 
 A "set" is OnlineFilter + LiveCount fed a simulated squat frame by frame as SetRecorder does (no waiting for the
 camera's 30 Hz). Printed: Start -> first frame's status (what the first message to the page waits for), Start -> 30
-frames done (one second of camera), and the warm-up's own time. Median of --runs runs.
+frames done (one second of camera), the warm-up's own time with an empty and with a prepared cache, and
+`kinect-agent prepare`'s. Median of --runs runs.
 
     .venv/bin/python bench/first_count.py --runs 3
 """
@@ -26,6 +30,7 @@ import json
 import statistics
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import TypedDict
 
@@ -81,12 +86,22 @@ def run(warm: bool) -> ChildRun:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+def prepare() -> float:
+    """Runs `kinect-agent prepare` in a process of its own (the environment as it is); returns its wall seconds."""
+    started = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "kinect_agent.cli", "prepare"], cwd=ROOT, capture_output=True, check=True)
+    return time.perf_counter() - started
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=3)
     args = parser.parse_args()
-    rows: dict[str, list[tuple[float, ...]]] = {"cold": [], "cached": [], "warmed": [], "later set": []}
+    rows: dict[str, list[tuple[float, ...]]] = {
+        "cold": [], "cached": [], "warmed": [], "paired": [], "paired+up": [], "later set": []}  # fmt: skip
     warm_ups: list[float] = []
+    loads: list[float] = []
+    prepares: list[float] = []
     for _ in range(args.runs):
         empty_cache()
         cold = run(warm=False)
@@ -100,12 +115,20 @@ def main() -> None:
         if warm_up_s is None:
             raise RuntimeError("the warmed run reports no warm-up")
         warm_ups.append(warm_up_s)
+        empty_cache()
+        prepares.append(prepare())
+        rows["paired"].append(tuple(run(warm=False)["first"]))
+        paired_up = run(warm=True)
+        rows["paired+up"].append(tuple(paired_up["first"]))
+        loads.append(paired_up["warm_up_s"] or 0.0)
     print(f"{'scenario':<10} {'Start -> first frame':>22} {'Start -> 30 frames':>20}   (median of {args.runs})")
     for name, values in rows.items():
         first = statistics.median(v[0] for v in values)
         thirty = statistics.median(v[1] for v in values)
         print(f"{name:<10} {first * 1000:>19.0f} ms {thirty * 1000:>17.0f} ms")
     print(f"warm-up itself (empty cache, at serve's start-up): {statistics.median(warm_ups):.1f} s")
+    print(f"warm-up itself (cache filled by prepare, at serve's start-up): {statistics.median(loads):.2f} s")
+    print(f"kinect-agent prepare (empty cache, its own process): {statistics.median(prepares):.1f} s")
 
 
 if __name__ == "__main__":

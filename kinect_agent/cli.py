@@ -26,6 +26,7 @@ COMMANDS = (
     "kinect_agent.commands.filter",
     "kinect_agent.commands.capture",
     "kinect_agent.commands.pair",
+    "kinect_agent.commands.prepare",
     "kinect_agent.commands.upload",
     "kinect_agent.commands.status",
     "kinect_agent.commands.run",

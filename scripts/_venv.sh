@@ -19,7 +19,7 @@ if [ ! -f "$STAMP" ]; then
   "$VENV/bin/python" -m pip install --quiet --require-hashes -r "$LOCK"
   "$VENV/bin/python" -m pip install --quiet --no-deps -e "$ROOT"
   # the home agent's compiled filter code into numba's on-disk cache, so its first set counts as fast as later ones
-  "$VENV/bin/python" -m kinect_agent.live.warmup
+  "$VENV/bin/kinect-agent" prepare
   touch "$STAMP"
 fi
 export PATH="$VENV/bin:$PATH"

@@ -211,10 +211,15 @@ class Recovery:
 
 def _warm_up() -> None:
     """Readies the live loop's compiled code (kinect_agent.live.warmup) and logs how long it took."""
-    from kinect_agent.live.warmup import warm_up
+    from kinect_agent.live.warmup import kernel_counts, warm_up
 
     try:
-        log(f"live filter ready in {warm_up():.1f} s")
+        seconds = warm_up()
+        compiled = kernel_counts()["cache_misses"]
+        hint = (
+            f"; {compiled} kernels compiled (`kinect-agent prepare` does it once after an install)" if compiled else ""
+        )
+        log(f"live filter ready in {seconds:.1f} s{hint}")
     except Exception as exc:  # noqa: BLE001 - the first set then compiles what it needs itself
         log(f"live filter warm-up failed: {type(exc).__name__}: {exc}")
 

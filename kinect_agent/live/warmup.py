@@ -2,12 +2,21 @@
 after an install: about half a minute) or loaded from numba's on-disk cache (later runs: about a second), and SciPy's
 lazily imported parts are loaded, so that the first set's first count comes as fast as any later set's.
 
-`kinect-agent serve` calls warm_up() in a background thread at start-up (bench/first_count.py measures the effect).
+`kinect-agent serve` calls warm_up() in a background thread at start-up; `kinect-agent pair` and `kinect-agent prepare`
+call prepare(), which fills numba's on-disk cache for the live loop and the offline filter, so that serve's warm-up
+only loads it (bench/first_count.py measures both).
+
+Where the cache is: numba's own choice for `cache=True`, for the user who runs the command: `__pycache__` beside the
+installed modules when that user can write there (a venv the user made), else that user's cache folder
+(`~/.cache/numba` on Linux, `%LOCALAPPDATA%\\numba\\numba\\Cache` on Windows), or $NUMBA_CACHE_DIR when set. The
+product sets none of these; prepare() names the folder it filled.
 """
 
 from __future__ import annotations
 
+import sys
 import time
+from typing import Any
 
 import numpy as np
 
@@ -46,6 +55,41 @@ def warm_up_offline() -> float:
     return time.perf_counter() - started
 
 
+def cache_folders() -> list[str]:
+    """Returns the folders numba's on-disk cache of the agent's loaded kernels is in (sorted; empty without numba)."""
+    return sorted({stats.cache_path for stats in _kernel_stats() if stats.cache_path})
+
+
+def _kernel_stats() -> list[Any]:
+    """Returns the compile statistics (numba's dispatcher stats: cache_path, cache_hits, cache_misses by signature)
+    of every numba kernel the loaded kinect_agent modules define."""
+    try:
+        from numba.core.registry import CPUDispatcher
+    except ImportError:  # the server's install: no numba, nothing to cache
+        return []
+    kernels = {id(obj): obj for name, module in list(sys.modules.items()) if name.startswith("kinect_agent")
+               for obj in vars(module).values() if isinstance(obj, CPUDispatcher)}  # fmt: skip
+    return [kernel.stats for kernel in kernels.values()]
+
+
+def kernel_counts() -> dict[str, int]:
+    """Returns how many of the loaded kernels' signatures numba loaded from its on-disk cache ("cache_hits") and how
+    many it compiled ("cache_misses") in this process so far."""
+    stats = _kernel_stats()
+    return {"cache_hits": sum(sum(s.cache_hits.values()) for s in stats),
+            "cache_misses": sum(sum(s.cache_misses.values()) for s in stats)}  # fmt: skip
+
+
+def prepare() -> str:
+    """Readies the live loop and the offline filter (warm_up, warm_up_offline), which fills numba's on-disk cache
+    the first time; returns one line for the user: the seconds each took, how many kernels were compiled or loaded,
+    and the cache's folder."""
+    live_s, offline_s = warm_up(), warm_up_offline()
+    counts, folders = kernel_counts(), cache_folders()
+    where = ", ".join(folders) if folders else "no cache (numba is not installed)"
+    return (f"filter ready: live {live_s:.1f} s, offline {offline_s:.1f} s; {counts['cache_misses']} kernels compiled, "
+            f"{counts['cache_hits']} loaded from numba's cache in {where}")  # fmt: skip
+
+
 if __name__ == "__main__":  # at install (scripts/_venv.sh): numba's on-disk cache is filled before the first start
-    print(f"live filter compiled in {warm_up():.1f} s")
-    print(f"offline filter compiled in {warm_up_offline():.1f} s")
+    print(prepare())
