@@ -160,9 +160,9 @@ def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, 
         status = page.locator("#agent-status")  # no home computer: the line names the camera, not a missing computer
         expect(status).to_have_attribute("data-state", "unpaired")
         expect(status).to_have_attribute("data-camera", "")
-        expect(status).to_have_text(
-            "Do your exercises with this computer's camera: press “Start with this computer's camera” next to an exercise."
-        )
+        label = "Start with this computer's camera"
+        words = f"Do your exercises with this computer's camera: press “{label}” next to an exercise."
+        expect(status).to_have_text(words)
         shot(page, "camera-patient-start")
         page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
         expect(page.locator("#cam-consent")).to_be_visible()
