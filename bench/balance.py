@@ -14,8 +14,8 @@ import argparse
 
 import numpy as np
 
-from backend.analysis.balance import sway
 from kinect_agent.analysis import series
+from kinect_agent.analysis.balance import sway
 from kinect_agent.body.angles import joint_angles
 from kinect_agent.processing.pipeline import process
 from kinect_agent.recording import Recording
@@ -25,7 +25,7 @@ EXERCISES = ("shoulder_abduction", "shoulder_flexion", "elbow_flexion", "squat",
 
 
 def _measure(rec: Recording) -> dict[str, object] | None:
-    """Returns backend.analysis.balance.sway of the recording's smoothed positions (None: no standing phase)."""
+    """Returns kinect_agent.analysis.balance.sway of the recording's smoothed positions (None: no standing phase)."""
     smoothed = series.smooth_positions(rec.t, rec.positions)
     return sway(rec.t, smoothed, joint_angles(smoothed))
 

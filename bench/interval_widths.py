@@ -3,7 +3,7 @@
     .venv/bin/python bench/interval_widths.py [--subjects s01 s03]
 
 Real Kinect v2 (UI-PRMD correct executions, m01-m10 of each subject, episodes joined) through the home agent's
-pipeline, then the server's intervals (backend.analysis.intervals.rom_intervals) from its angle SDs. There is no
+pipeline, then the server's intervals (kinect_agent.analysis.intervals.rom_intervals) from its angle SDs. There is no
 truth here, so only the widths: the median and the 90th percentile of the half-widths of every angle's min_deg,
 max_deg (peak) and range_deg, in degrees. Coverage is measured on simulated sessions (bench/uncertainty.py); this
 shows what a therapist sees on real sessions, whose repetitions vary more than the simulator's.
@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from backend.analysis.intervals import rom_intervals  # noqa: E402
 from kinect_agent.analysis import series  # noqa: E402
+from kinect_agent.analysis.intervals import rom_intervals  # noqa: E402
 from kinect_agent.body.angles import joint_angles  # noqa: E402
 from kinect_agent.formats import ui_prmd  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402

@@ -41,11 +41,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from backend.analysis.intervals import RAW_ENVELOPE_PCT, RAW_MARGIN_DEG  # noqa: E402
-from backend.analysis.range_of_motion import range_of_motion  # noqa: E402
 from backend.analysis.report import analyze_recording  # noqa: E402
 from backend.exercises.library import EXERCISES  # noqa: E402
 from kinect_agent.analysis.angles import measured_angles  # noqa: E402
+from kinect_agent.analysis.intervals import RAW_ENVELOPE_PCT, RAW_MARGIN_DEG  # noqa: E402
+from kinect_agent.analysis.range_of_motion import range_of_motion  # noqa: E402
 from kinect_agent.body.angles import ANGLE_NAMES, body_frame, joint_angles  # noqa: E402
 from kinect_agent.capture import capture, make_payload  # noqa: E402
 from kinect_agent.formats import session_file  # noqa: E402

@@ -12,7 +12,7 @@ on how it moves). Prints
      yaw gain and the tail gain of each kind (min, peak, range) on a grid, the narrowest intervals among those
      whose per-family coverage deviates from 0.95 (RMS) at most 10 % more than the least; B per angle and kind
      one quantile (the same for all) of the B each training interval needs, set so that 95.5 % of them cover the
-     truth (YAW_GAIN, TAIL_GAIN and SYSTEMATIC_DEG of backend.analysis.intervals);
+     truth (YAW_GAIN, TAIL_GAIN and SYSTEMATIC_DEG of kinect_agent.analysis.intervals);
   3. the coverage of the shipped intervals on every set, per (motion, view) family, per seed and pooled;
   4. the cost of the per-frame SDs on 10 minutes at 30 Hz.
 """
@@ -27,10 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from backend.analysis import intervals
-from backend.analysis.range_of_motion import range_of_motion
 from backend.exercises.library import EXERCISES as LIBRARY
-from kinect_agent.analysis import series
+from kinect_agent.analysis import intervals, series
+from kinect_agent.analysis.range_of_motion import range_of_motion
 from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.processing import uncertainty
 from kinect_agent.processing.pipeline import process

@@ -72,6 +72,26 @@ def test_the_agent_runs_without_the_server_packages(tmp_path: Path) -> None:
     assert (tmp_path / "f.csv").exists()
 
 
+def test_the_session_analysis_runs_without_the_server(tmp_path: Path) -> None:
+    """Every module of kinect_agent.analysis (the one home of the metrics) imports and computes with the server's
+    packages and `backend` itself blocked: the agent deployable ships only kinect_agent."""
+    out = _run(SERVER_ONLY + NEVER + ("backend",), """
+        import importlib, pkgutil
+        import kinect_agent.analysis as home
+        names = sorted(m.name for m in pkgutil.iter_modules(home.__path__))
+        for name in names:
+            importlib.import_module("kinect_agent.analysis." + name)
+        from kinect_agent.analysis import quality
+        from kinect_agent.sources.simulator import simulate_truth
+        assert quality.assess(simulate_truth("squat", 2, seed=1), None)["reasons"] == []
+        print("modules:", len(names))
+        loaded = sorted(m for m in sys.modules if m.split(".")[0] in BLOCKED)
+        print("loaded:", loaded)
+    """, tmp_path)  # fmt: skip
+    assert "loaded: []" in out
+    assert "modules: 18" in out
+
+
 def test_the_server_ingests_analyses_and_replays_without_numba(tmp_path: Path) -> None:
     out = _run(AGENT_ONLY + NEVER, """
         import os

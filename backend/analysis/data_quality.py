@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from backend.analysis.quality import angle_joints
 from backend.i18n import N_, Translator
+from kinect_agent.analysis.quality import angle_joints
 from kinect_agent.processing.combined_outliers import outlier_probabilities_combined
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.recording import Recording

@@ -18,21 +18,22 @@ from typing import Any
 
 import numpy as np
 
-from backend.analysis import activity, quality, reasons
-from backend.analysis.balance import missing_reason, sway
-from backend.analysis.errors import AnalysisError, UnknownExercise, UnreadableRecording
-from backend.analysis.intervals import KINDS, beyond_raw, beyond_raw_reason, count_interval, rom_intervals
-from backend.analysis.most_moving import most_moving_joints
-from backend.analysis.range_of_motion import range_of_motion
-from backend.analysis.reachable import reachable_range
-from backend.analysis.sit_to_stand import sit_to_stand
+from backend.analysis import reasons
 from backend.exercises.library import EXERCISES, ExerciseSpec
 from backend.i18n import ENGLISH
+from kinect_agent.analysis import activity, quality
 from kinect_agent.analysis.angles import counting_angles, measured_angles
+from kinect_agent.analysis.balance import missing_reason, sway
 from kinect_agent.analysis.document import AnalysisReport, json_ready
+from kinect_agent.analysis.errors import AnalysisError, UnknownExercise, UnreadableRecording
+from kinect_agent.analysis.intervals import KINDS, beyond_raw, beyond_raw_reason, count_interval, rom_intervals
 from kinect_agent.analysis.live import amplitude_floor, counting_params, counting_positions, done_repetitions
+from kinect_agent.analysis.most_moving import most_moving_joints
+from kinect_agent.analysis.range_of_motion import range_of_motion
+from kinect_agent.analysis.reachable import reachable_range
 from kinect_agent.analysis.reasons import Reason
 from kinect_agent.analysis.repetitions import Repetition, RepetitionParams, count_repetitions
+from kinect_agent.analysis.sit_to_stand import sit_to_stand
 from kinect_agent.body.angles import body_frame, joint_angles
 from kinect_agent.errors import FormatError
 from kinect_agent.processing.params import KinematicParams

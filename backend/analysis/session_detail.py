@@ -25,11 +25,11 @@ from typing import Any
 
 import numpy as np
 
-from backend.analysis.reachable import hand_path
 from backend.i18n import ENGLISH, N_, Translator
 from kinect_agent.analysis import angles as analysis_angles
 from kinect_agent.analysis import series
 from kinect_agent.analysis.document import RepetitionItem
+from kinect_agent.analysis.reachable import hand_path
 from kinect_agent.body.angles import body_frame, joint_angles
 
 MAX_CURVE_POINTS = 1500

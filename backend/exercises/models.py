@@ -29,7 +29,7 @@ class Exercise(Base):
 
     @property
     def mdc95_rom_deg(self) -> float | None:
-        """The minimal detectable change of rom_deg, degrees (backend.analysis.mdc), or None when not measured."""
-        from backend.analysis.mdc import rom_mdc95
+        """The minimal detectable change of rom_deg, degrees (kinect_agent.analysis.mdc), or None when not measured."""
+        from kinect_agent.analysis.mdc import rom_mdc95
 
         return rom_mdc95(self.slug)

@@ -27,7 +27,6 @@ from reportlab.platypus import KeepTogether, Paragraph, SimpleDocTemplate, Space
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from backend.analysis.mdc import rom_mdc95
 from backend.analysis.reasons import written
 from backend.exceptions import InvalidInput
 from backend.exercises.models import Exercise
@@ -39,6 +38,7 @@ from backend.suggestions import service as suggestions
 from backend.suggestions.models import Suggestion
 from backend.users.models import User
 from kinect_agent.analysis.document import read_if_readable
+from kinect_agent.analysis.mdc import rom_mdc95
 
 PAPERS = {"a4": A4, "letter": LETTER}
 DEFAULT_DAYS = 28  # a period nobody chose: the last 4 weeks, its last day included (API, CLI and the page's form)

@@ -14,7 +14,6 @@ from pydantic import ValidationError
 
 from backend.analysis import data_quality, reasons, work_budget
 from backend.analysis.camera_advice import advice_text, camera_advice
-from backend.analysis.errors import AnalysisError
 from backend.analysis.session_detail import (
     angle_curves,
     angular_speeds,
@@ -30,6 +29,7 @@ from backend.i18n import ENGLISH, N_, Translator
 from backend.jobs.listing import error_words
 from backend.sessions.models import ExerciseSession
 from kinect_agent.analysis.document import AnalysisReport, RepetitionItem, UnreadableDocument, read_report
+from kinect_agent.analysis.errors import AnalysisError
 from kinect_agent.analysis.reasons import Reason
 from kinect_agent.analysis.validity import recorded_with, session_validity
 from kinect_agent.formats import session_file

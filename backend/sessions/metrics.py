@@ -28,7 +28,7 @@ def metrics_document(
 
     history: the documents of the patient's earlier sessions of the same exercise, oldest first
     (backend.sessions.history.session_history, its readable ones).
-    Raises backend.analysis.errors.AnalysisError when the recording cannot be analysed.
+    Raises kinect_agent.analysis.errors.AnalysisError when the recording cannot be analysed.
     """
     from backend.analysis.indicators import indicators
     from backend.analysis.report import analyze_recording

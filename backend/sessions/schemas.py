@@ -260,7 +260,7 @@ class DashboardRowOut(SummaryOut):
 
 
 class BalanceOut(BaseModel):
-    """Sway of the trunk-and-hips centre of mass while standing (backend.analysis.balance)."""
+    """Sway of the trunk-and-hips centre of mass while standing (kinect_agent.analysis.balance)."""
 
     sway_velocity_m_s: float = Field(description="path of the centre of mass on the floor per second standing, m/s")
     sway_velocity_95: list[float] | None = Field(description="95 % interval [low, high] of the velocity, m/s")
@@ -304,7 +304,7 @@ class JointPathOut(BaseModel):
 
 
 class HandWorkspaceOut(BaseModel):
-    """The reachable workspace of one arm (backend.analysis.reachable) and the hand's path, in arm lengths."""
+    """The reachable workspace of one arm (kinect_agent.analysis.reachable) and the hand's path, in arm lengths."""
 
     arm_length_m: float | None
     area_ratio: float | None = Field(description="reached fraction of the frontal hemisphere's surface, 0..1")
@@ -388,7 +388,8 @@ class ProcessingOut(BaseModel):
 
 
 class AngleUncertaintyOut(BaseModel):
-    """One angle's range of motion (1st / 99th percentiles, degrees) with 95 % intervals (analysis/intervals.py)."""
+    """One angle's range of motion (1st / 99th percentiles, degrees) with 95 % intervals
+    (kinect_agent/analysis/intervals.py)."""
 
     min_deg: float | None = Field(description="1st percentile of the angle, degrees")
     max_deg: float | None = Field(description="99th percentile: the peak angle, degrees", examples=[131.2])

@@ -12,7 +12,6 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from backend import __version__
-from backend.analysis.errors import AnalysisError
 from backend.database import utcnow
 from backend.exceptions import ExerciseNotFound, SessionConflict, SessionFileRemoved, SessionNotFound
 from backend.exercises.models import Exercise
@@ -26,6 +25,7 @@ from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.storage import get_store
 from backend.users.models import User
 from kinect_agent.analysis.document import AnalysisDocument
+from kinect_agent.analysis.errors import AnalysisError
 from kinect_agent.processing.errors import ProcessingError
 
 if TYPE_CHECKING:

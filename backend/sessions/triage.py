@@ -48,9 +48,9 @@ from statistics import median
 from typing import Any
 
 from backend.analysis import reasons
-from backend.analysis.balance import MIN_STANDING_S
 from backend.exercises.library import EXERCISES
 from backend.i18n import N_, Translator
+from kinect_agent.analysis.balance import MIN_STANDING_S
 from kinect_agent.analysis.document import Indicators
 
 INDICATORS = ("flexibility", "endurance", "strength", "balance")

@@ -1,6 +1,6 @@
-"""The analysis' reasons: why a session's quality check failed (backend.analysis.quality.assess), why an angle's
-95 % interval is withheld (backend.analysis.intervals.withheld_reason) and why balance was not measured
-(backend.analysis.balance.missing_reason); and the indicators' bases: how each indicator was scored
+"""The analysis' reasons: why a session's quality check failed (kinect_agent.analysis.quality.assess), why an angle's
+95 % interval is withheld (kinect_agent.analysis.intervals.withheld_reason) and why balance was not measured
+(kinect_agent.analysis.balance.missing_reason); and the indicators' bases: how each indicator was scored
 (backend.analysis.indicators, BASES, stored as a `Basis` from schema 4 on).
 
 The analysis document (schema 3, kinect_agent.analysis.document) stores a reason as a `Reason`: the id of one of

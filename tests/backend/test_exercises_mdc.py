@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from backend.analysis.mdc import MDC95_ROM_DEG
+from kinect_agent.analysis.mdc import MDC95_ROM_DEG
 
 
 def test_every_measured_exercise_reports_its_mdc_and_the_others_null(client, make_user, auth_headers):

@@ -1,14 +1,14 @@
-"""The interval arithmetic of backend.analysis.intervals on simple series, and the repetition count's interval."""
+"""The interval arithmetic of kinect_agent.analysis.intervals on simple series, and the repetition count's interval."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from backend.analysis import intervals, reasons
+from backend.analysis import reasons
 from backend.exercises.library import EXERCISES
 from backend.i18n import translator
-from kinect_agent.analysis import series
+from kinect_agent.analysis import intervals, series
 from kinect_agent.analysis.angles import counting_angles
 from kinect_agent.analysis.reasons import Reason
 from kinect_agent.body.angles import joint_angles

@@ -1,6 +1,6 @@
 """Calibration of the 95 % intervals of range of motion and peak angle on simulated sessions with known truth.
 
-Held-out cases: the constants of backend.analysis.intervals and kinect_agent.processing.uncertainty were fitted on
+Held-out cases: the constants of kinect_agent.analysis.intervals and kinect_agent.processing.uncertainty were fitted on
 views 0° and 60°, seeds 101-110 (bench/uncertainty.py); these use view 30° beside 0° and seeds 201-203, every
 simulated exercise they were fitted on.
 """
@@ -10,10 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from backend.analysis import intervals
-from backend.analysis.range_of_motion import range_of_motion
 from backend.exercises.library import EXERCISES as LIBRARY
-from kinect_agent.analysis import series
+from kinect_agent.analysis import intervals, series
+from kinect_agent.analysis.range_of_motion import range_of_motion
 from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.processing.pipeline import process
 from kinect_agent.sources.simulator import EXERCISES, simulate

@@ -7,10 +7,11 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
-from backend.analysis import balance, intervals, quality, reasons
+from backend.analysis import reasons
 from backend.analysis.report import analyze_recording
 from backend.exercises.library import EXERCISES
 from backend.i18n import Translator, translator
+from kinect_agent.analysis import balance, intervals, quality
 from kinect_agent.analysis import reasons as why
 from kinect_agent.analysis.document import reason_of_text
 from kinect_agent.analysis.reasons import Reason, UnknownReason

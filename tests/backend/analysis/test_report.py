@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from backend import cli
-from backend.analysis.errors import UnknownExercise, UnreadableRecording
-from backend.analysis.quality import MIN_TRACKED
 from backend.analysis.report import analyze_file, analyze_recording
 from backend.exercises.library import EXERCISES
 from kinect_agent import formats
+from kinect_agent.analysis.errors import UnknownExercise, UnreadableRecording
+from kinect_agent.analysis.quality import MIN_TRACKED
 from kinect_agent.formats.session_file import SessionPayload, write_payload
 from kinect_agent.processing.pipeline import process
 from kinect_agent.recording import Recording

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from backend.analysis.reachable import reachable_range
+from kinect_agent.analysis.reachable import reachable_range
 from kinect_agent.body.angles import body_frame
 from kinect_agent.skeleton import INDEX
 from kinect_agent.sources.simulator import simulate_truth

@@ -52,10 +52,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from backend.analysis.range_of_motion import HIGH_PCT, LOW_PCT
 from kinect_agent import skeleton
 from kinect_agent.analysis import reasons as why
 from kinect_agent.analysis import series
+from kinect_agent.analysis.range_of_motion import HIGH_PCT, LOW_PCT
 from kinect_agent.analysis.reasons import Reason
 from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
 from kinect_agent.body.angles import DOMAIN_DEG

@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.analysis import activity
-from kinect_agent.analysis import series
+from kinect_agent.analysis import activity, series
 from kinect_agent.analysis.repetitions import Repetition
 from kinect_agent.skeleton import INDEX, J
 from kinect_agent.sources.simulator import simulate_truth

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.analysis.quality import angle_joints, assess
+from kinect_agent.analysis.quality import angle_joints, assess
 from kinect_agent.recording import Recording
 from kinect_agent.skeleton import INDEX
 from kinect_agent.sources.simulator import simulate_truth

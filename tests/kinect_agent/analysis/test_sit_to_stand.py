@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.analysis.sit_to_stand import rise_times, sit_to_stand
+from kinect_agent.analysis.sit_to_stand import rise_times, sit_to_stand
 from kinect_agent.sources.simulator import simulate_truth
 
 

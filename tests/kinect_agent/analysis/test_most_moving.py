@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.analysis.most_moving import most_moving_joints, path_lengths
 from kinect_agent.analysis import series
+from kinect_agent.analysis.most_moving import most_moving_joints, path_lengths
 from kinect_agent.skeleton import INDEX, J
 from kinect_agent.sources.simulator import simulate_truth
 

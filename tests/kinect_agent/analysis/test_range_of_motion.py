@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from backend.analysis.range_of_motion import range_of_motion
+from kinect_agent.analysis.range_of_motion import range_of_motion
 from kinect_agent.body.angles import joint_angles
 from kinect_agent.skeleton import INDEX
 

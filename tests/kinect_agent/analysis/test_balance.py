@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from backend.analysis.balance import CHI2_95_2DOF, COM_JOINTS, missing_reason, sway
 from kinect_agent.analysis import series
+from kinect_agent.analysis.balance import CHI2_95_2DOF, COM_JOINTS, missing_reason, sway
 from kinect_agent.body.angles import joint_angles
 from kinect_agent.processing.pipeline import process
 from kinect_agent.skeleton import INDEX
