@@ -61,6 +61,8 @@ SIDE_TESTS = {
         "tests/kinect_agent/live/test_journal.py",  # a live set's frames on disk
         "tests/kinect_agent/test_queue.py",  # the disk queue, then the upload command's held sessions
         "tests/kinect_agent/test_held_sessions.py",
+        "tests/kinect_agent/analysis/test_quality.py",  # the session metrics' one home ships with the agent
+        "tests/kinect_agent/analysis/test_range_of_motion.py",
     ),
     "server": (
         "tests/installed_alone.py::test_the_server_alone",
