@@ -26,7 +26,7 @@ from kinect_agent.clock import utc_now_iso
 from kinect_agent.live.journal import Journal
 from kinect_agent.processing.config import config_for_device
 from kinect_agent.processing.online import live_filter
-from kinect_agent.recording import Recording
+from kinect_agent.recording import Metadata, Recording
 from kinect_agent.sources.base import Source
 
 
@@ -122,6 +122,13 @@ class SetRecorder:
                     "hint": status.hint}  # fmt: skip
         return msg | extra
 
+    def _metadata(self) -> Metadata:
+        """Returns the source's metadata now, with the commanded exercise and the live set's id."""
+        meta = self.source.metadata()
+        meta.exercise = self.command.exercise
+        meta.extra["live_set_id"] = self.command.set_id
+        return meta
+
     def _end_reason(self, status: LiveStatus, elapsed: float, target_since: float | None) -> str | None:
         lim = self.limits
         if self._stop.is_set():
@@ -141,9 +148,7 @@ class SetRecorder:
         # compiled code is still being readied on a busy computer), and the page must not take that for silence
         self.publish(self._message("starting", None, 0.0, time.time()), False)
         with self.source:
-            meta = self.source.metadata()
-            meta.exercise = self.command.exercise
-            meta.extra["live_set_id"] = self.command.set_id
+            meta = self._metadata()
             journal = Journal(self.journal_dir, self.session_id, meta, created_at)
             online, counter = (
                 live_filter(config_for_device(meta.device)),
@@ -165,6 +170,9 @@ class SetRecorder:
                 if time.monotonic() - last_sent >= self.limits.every_s:
                     self.publish(self._message("recording", status, elapsed, taken_at), False)
                     last_sent = time.monotonic()
+            # the header as the set ended: a webcam's frame rate achieved, image size and images analysed are known
+            # only now (the journal's header on disk keeps the opening one, enough for a set a crash interrupts)
+            journal.meta = self._metadata()
         recording = journal.finish()
         count = counter.final() if recording is not None else 0
         elapsed = recording.duration if recording is not None else 0.0

@@ -16,6 +16,7 @@ from collections.abc import Iterator
 import pytest
 import uvicorn
 
+from backend.config import Settings
 from tests.backend.conftest import (  # noqa: F401  (fixtures re-exported for the agent tests)
     app,
     auth_headers,
@@ -70,6 +71,22 @@ class LiveServer:
 
 
 LOADED_S = 60.0  # s: the tests' own requests wait this long (httpx's 5 s timed out in a CI pass at load 17-20)
+
+
+def held_open_settings() -> Settings:
+    """The test server's settings with the agent's command stream held open (EVENTS_STREAM_MAX_S), as deployed: for
+    the tests where a real `kinect-agent serve` process stays connected."""
+    return Settings(ENVIRONMENT="local", CHECK_MIGRATIONS=False, DATABASE_URL="sqlite://", EVENTS_STREAM_MAX_S=600.0,
+                    LIVE_OFFLINE_GRACE_S=0.0, LIVE_WARM_UP=False)  # fmt: skip
+
+
+def live_state(server: LiveServer, headers: dict[str, str]) -> str:
+    """Returns the patient's home agent state as their page reads it (GET /api/v1/live/status): online, ..."""
+    import httpx
+
+    r = httpx.get(f"{server.url}/api/v1/live/status", headers=headers, timeout=LOADED_S)
+    assert r.status_code == 200, r.text
+    return r.json()["state"]
 
 
 @pytest.fixture

@@ -30,6 +30,8 @@ from tests.kinect_agent._backend import (  # noqa: F401  (the real server's fixt
     db_connection,
     db_session,
     engine,
+    held_open_settings,
+    live_state,
     make_patient_with_therapist,
     make_user,
     pairing_code,
@@ -55,9 +57,8 @@ class CountingUploads:
 
 @pytest.fixture
 def settings() -> Settings:
-    """The test server's settings with the agent's command stream held open (EVENTS_STREAM_MAX_S), as deployed."""
-    return Settings(ENVIRONMENT="local", CHECK_MIGRATIONS=False, DATABASE_URL="sqlite://", EVENTS_STREAM_MAX_S=600.0,
-                    LIVE_OFFLINE_GRACE_S=0.0, LIVE_WARM_UP=False)  # fmt: skip
+    """The test server's settings with the agent's command stream held open."""
+    return held_open_settings()
 
 
 @pytest.fixture
@@ -85,12 +86,6 @@ def _interrupted_set(queue_dir: Path) -> str:
     return session_id
 
 
-def _state(server: LiveServer, headers: dict[str, str]) -> str:
-    r = httpx.get(f"{server.url}/api/v1/live/status", headers=headers, timeout=LOADED_S)
-    assert r.status_code == 200, r.text
-    return r.json()["state"]
-
-
 def test_a_restarted_agent_is_online_while_it_filters_the_interrupted_set(
     tmp_path, live_server, pairing_code, auth_headers, counted
 ):
@@ -101,14 +96,14 @@ def test_a_restarted_agent_is_online_while_it_filters_the_interrupted_set(
     queue_dir = Path(agent.config.queue_dir)
     session_id = _interrupted_set(queue_dir)
     journal = queue_dir / "recording" / f"{session_id}.json"
-    assert _state(live_server, headers) == "offline"
+    assert live_state(live_server, headers) == "offline"
     env = os.environ | {"KINECT_AGENT_HOME": str(home), "PYTHONPATH": str(ROOT)}
     with open(tmp_path / "agent.log", "w+") as log:
         proc = subprocess.Popen([sys.executable, "-m", "kinect_agent.cli", "serve", "--source", "simulator"],
                                 env=env, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT)  # fmt: skip
         try:
             started = time.monotonic()
-            while _state(live_server, headers) != "online":
+            while live_state(live_server, headers) != "online":
                 assert proc.poll() is None and time.monotonic() - started < AGENT_START_S, log.read()
                 time.sleep(0.1)
             online_s = time.monotonic() - started
@@ -119,7 +114,7 @@ def test_a_restarted_agent_is_online_while_it_filters_the_interrupted_set(
             while agent.where(session_id) != "sent":
                 assert proc.poll() is None and time.monotonic() - started < UPLOADED_S, log.read()
                 time.sleep(0.2)
-            assert _state(live_server, headers) == "online", "still online after the recovery"
+            assert live_state(live_server, headers) == "online", "still online after the recovery"
         finally:
             proc.send_signal(signal.SIGTERM)
             try:
