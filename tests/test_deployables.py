@@ -42,6 +42,11 @@ AGENT_ONLY = {"numba", "llvmlite"}  # (tqdm comes with viser too)
 # the agent's services, its CLI and the accuracy study: kinect_agent's modules the server's wheel must not hold
 AGENT_SIDE = ("cli", "commands", "config", "capture", "home", "live", "pairing", "queue", "upload", "evaluation")
 SIDES = ("agent", "server")
+# the capture sources the server never imports (the device adapters above all): its wheel must not hold them, the
+# agent's must (issue 26); any other kinect_agent.sources module the server does not import fails the same check
+SERVER_NEVER_SHIPS = ("kinect_agent/sources/kinect_v2.py", "kinect_agent/sources/azure_kinect.py",
+                      "kinect_agent/sources/webcam/source.py", "kinect_agent/sources/replay.py",
+                      "kinect_agent/sources/body_choice.py", "kinect_agent/sources/mocap_truth.py")  # fmt: skip
 # Each side's tests that run in its own environment: those that import nothing of the other side, chosen to reach each
 # layer of the side's code for little time (the time it takes: README, "Installing each side").
 # tests/installed_alone.py checks that the run imports the installed distribution and cannot import the other side.
@@ -228,12 +233,37 @@ def deployables(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Deployabl
     return {side: Deployable(side, wheels[side], venvs[side]) for side in SIDES}
 
 
+def _capture_sources_in(wheel_files: set[str]) -> list[str]:
+    """Returns the kinect_agent.sources modules in a wheel's files that the server does not import (a package's
+    __init__ counts as imported with any module of it)."""
+    modules = _modules_the_server_imports()
+    packages = {m.rsplit(".", i)[0] for m in modules for i in range(1, m.count(".") + 1)}
+    imported = set().union(*(_files_of(m) for m in modules | packages))
+    return sorted(f for f in wheel_files if f.startswith("kinect_agent/sources/") and f.endswith(".py")
+                  and f not in imported)  # fmt: skip
+
+
+def test_the_servers_wheel_holds_no_capture_source(tmp_path: Path) -> None:
+    """Builds the server's wheel alone (no install: seconds) and reads its file list."""
+    src = _source_copy(tmp_path)
+    _uv_run(["build", "--quiet", "--wheel", "-o", str(tmp_path / "dist"), str(src / "packages" / "server")], src)
+    (wheel,) = (tmp_path / "dist").glob("kinect_home_coach_server-*.whl")
+    files = set(zipfile.ZipFile(wheel).namelist())
+    assert _capture_sources_in(files) == [], "the server's wheel holds capture sources it never imports"
+    assert not files & set(SERVER_NEVER_SHIPS)
+    assert {"kinect_agent/sources/simulator.py", "kinect_agent/sources/webcam/landmarks.py",
+            "kinect_agent/sources/calibration/joint_offset_standing_mm.csv"} <= files  # fmt: skip
+
+
 def test_each_wheel_ships_its_own_side(deployables: dict[str, Deployable]) -> None:
     server_files = set(zipfile.ZipFile(deployables["server"].wheel).namelist())
     missing = sorted(m for m in _modules_the_server_imports() if not _files_of(m) & server_files)
     assert not missing, f"the server imports modules its wheel lacks: {missing}"
     agent_side = sorted(f for f in server_files if f.split("/")[0] == "kinect_agent" and _agent_side(f))
     assert not agent_side, f"the server's wheel holds the agent's own modules: {agent_side[:5]}"
+    assert _capture_sources_in(server_files) == [], "the server's wheel holds capture sources it never imports"
+    agent_files = set(zipfile.ZipFile(deployables["agent"].wheel).namelist())
+    assert set(SERVER_NEVER_SHIPS) <= agent_files, "the agent's wheel lacks a capture source"
     agent_tops = {f.split("/")[0] for f in zipfile.ZipFile(deployables["agent"].wheel).namelist()} - {"kinect_agent"}
     assert [top.endswith(".dist-info") for top in agent_tops] == [True], f"the agent's wheel holds {agent_tops}"
 

@@ -14,7 +14,7 @@ import sqlalchemy as sa
 from backend.migrate import downgrade, upgrade
 from backend.storage.base import ObjectStore, StoredObject
 from backend.storage.check import check
-from backend.storage.move import move_out
+from backend.storage.move import move_in, move_out
 
 NOW = dt.datetime(2026, 11, 20, tzinfo=dt.UTC)
 USER = sa.table("user", *(sa.column(c) for c in ("id", "email", "full_name", "role", "is_active", "created_at")))
@@ -137,3 +137,83 @@ def test_check_names_a_missing_and_a_corrupt_object(fresh_engine, with_store):
     assert report.missing == [f"session 2: {rows[2][0]}"]
     assert report.corrupt == [f"session 3: {rows[3][0]}"]
     assert len(report.orphans) == 1 and report.orphans[0].startswith("replay/") and not report.ok
+
+
+def _at_head_with_a_shared_object(engine) -> dict[int, tuple[str | None, bytes | None]]:
+    """Fills the database at 0010, moves everything out, and adds session 6 with the bytes of session 1 (the same
+    object); returns the rows."""
+    _fill_at_0010(engine)
+    with engine.begin() as conn:
+        upgrade(conn, "head")
+        key = _rows(conn)[1][0]
+        conn.execute(sa.insert(SESSION).values(id=6, client_session_id=uuid.uuid4(), patient_id=1, started_at=NOW,
+                                               duration_s=1.0, n_frames=30, file_size=len(FILES[1]),
+                                               content_hash=hashlib.sha256(FILES[1]).hexdigest(),
+                                               processing_version="", status="processed", created_at=NOW,
+                                               processing_params={}))  # fmt: skip
+        conn.execute(sa.text("UPDATE exercise_session SET file_key = :k WHERE id = 6"), {"k": key})
+        return _rows(conn)
+
+
+def test_move_in_deletes_each_object_once_no_row_points_to_it(fresh_engine, with_store):
+    rows = _at_head_with_a_shared_object(fresh_engine)
+    assert len(list(with_store.keys())) == 6, "5 session files and a replay"
+    deleted_while_referenced: list[str] = []
+
+    class Watching(_CrashingStore):
+        def delete(self, key: str) -> None:
+            with fresh_engine.connect() as other:
+                if key in {k for k, _ in _rows(other).values()}:
+                    deleted_while_referenced.append(key)
+            super().delete(key)
+
+    with fresh_engine.connect() as conn:
+        report = move_in(conn, Watching(with_store, fail_at=0), batch=1, commit=True)
+    assert (report.sessions, report.replays, report.deleted, report.kept) == (6, 1, 6, 0)
+    assert deleted_while_referenced == [], "an object goes only once no committed row points to it"
+    assert "6 object(s) deleted from the store" in report.text()
+    with fresh_engine.connect() as conn:
+        blobs = {sid: blob for sid, (key, blob) in _rows(conn).items() if key is None}
+        after = check(conn, with_store)
+        assert conn.scalar(sa.text("SELECT data FROM session_replay")) == b"viser scene"
+    assert blobs == {**FILES, 6: FILES[1]} and rows[6][0] == rows[1][0]
+    assert list(with_store.keys()) == [] and after.orphans == [] and after.ok
+
+
+def test_move_in_after_a_crash_deletes_what_the_crashed_run_left(fresh_engine, with_store):
+    _at_head_with_a_shared_object(fresh_engine)
+
+    class DyingOnDelete(_CrashingStore):
+        def delete(self, key: str) -> None:
+            self.puts += 1
+            if self.puts == self.fail_at:
+                raise OSError("killed")
+            super().delete(key)
+
+    with fresh_engine.connect() as conn, pytest.raises(OSError, match="killed"):
+        move_in(conn, DyingOnDelete(with_store, fail_at=3), batch=2, commit=True)
+    with fresh_engine.connect() as conn:
+        left = check(conn, with_store).orphans
+        # a replay moved back by a run from before data_hash was kept: its bytes are hashed to find its object
+        conn.execute(sa.text("UPDATE session_replay SET data = :d, data_key = NULL, data_hash = NULL"),
+                     {"d": b"viser scene"})  # fmt: skip
+        conn.commit()
+    digest = hashlib.sha256(FILES[4]).hexdigest()
+    assert left == [f"session/{digest[:2]}/{digest}"], "killed at the 3rd delete: session 4's object"
+    with fresh_engine.connect() as conn:
+        report = move_in(conn, with_store, batch=2, commit=True)
+        after = check(conn, with_store)
+    assert (report.sessions, report.replays, report.deleted) == (2, 0, 4), "4's and the replay's, then 5's and 1's"
+    assert list(with_store.keys()) == [] and after.orphans == [] and after.ok
+    with fresh_engine.connect() as conn:
+        assert {sid: blob for sid, (_, blob) in _rows(conn).items()} == {**FILES, 6: FILES[1]}
+
+
+def test_the_downgrade_migration_keeps_the_objects_it_cannot_delete_safely(fresh_engine, with_store):
+    _fill_at_0010(fresh_engine)
+    with fresh_engine.begin() as conn:
+        upgrade(conn, "head")
+    with fresh_engine.begin() as conn:
+        report = move_in(conn, with_store)
+    assert (report.sessions, report.deleted, report.kept) == (5, 0, 6)
+    assert len(list(with_store.keys())) == 6, "a rollback of the migration must find every object still there"
