@@ -56,7 +56,8 @@ def test_the_patient_sees_the_replay_and_its_player_in_their_language(browser, l
             for node, words in zip(("/floor", "/raw", "/filtered"), NODES[locale], strict=True):
                 expect(viewer.locator(f'[data-scene-node="{node}"]')).to_contain_text(words)
             viewer.locator('[data-scene-node="/raw"] .tabler-icon-eye').hover()  # the row's eye, and the node's label
-            expect(viewer.get_by_role("tooltip")).to_have_text(VISIBILITY[locale])
+            # the scene tree button's tooltip may still be closing beside it (it was clicked just before)
+            expect(viewer.get_by_role("tooltip").filter(has_text=VISIBILITY[locale])).to_have_text(VISIBILITY[locale])
             expect(viewer.get_by_text("/" + NODES[locale][1], exact=True).first).to_be_visible()
             pause_button.click()
             expect(viewer.locator("button:has(.tabler-icon-player-play-filled)")).to_have_attribute("aria-label", play)
