@@ -137,6 +137,19 @@ def camera_page(browser, base: str) -> Iterator[CheckedPage]:
         yield page
 
 
+@contextmanager
+def on_the_consent(browser, base: str) -> Iterator[CheckedPage]:
+    """A new patient of new_patient() signed in, on the camera page's consent (its scripts loaded, nothing asked of
+    the camera yet): for calling the page's own code."""
+    email, _, item_id = new_patient(base)
+    with camera_page(browser, base) as page:
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        page.goto(f"{PAGE}?item={item_id}")
+        expect(page.locator("#cam-consent")).to_be_visible()
+        yield page
+
+
 def phase(page) -> str:
     return page.locator("#cam-main-status").inner_text()
 
@@ -364,17 +377,11 @@ def test_two_people_and_the_patient_kept_in_the_checks(cam_browser, live_server)
     """The placement and tracking rules on landmarks of two people (the page's own functions in Chromium)."""
     from tests.backend.camera.landmarks import body, image_of
 
-    base = live_server.url
-    email, _, item_id = new_patient(base)
     world = body()
     me = [{"x": x, "y": y, "z": z, "visibility": 0.95} for x, y, z in image_of(world)]
     other = [dict(p, x=p["x"] + 0.4) for p in me]
     w = [{"x": x, "y": y, "z": z} for x, y, z in world]
-    with camera_page(cam_browser, base) as page:
-        login(page, email, PASSWORD)
-        page.wait_for_url("**/patient")
-        page.goto(f"{PAGE}?item={item_id}")
-        expect(page.locator("#cam-consent")).to_be_visible()
+    with on_the_consent(cam_browser, live_server.url) as page:
         out = page.evaluate(
             """([me, other, w]) => {
                 const ex = {plane: "frontal", defining_angles: ["shoulder_abduction_L"]};
@@ -427,13 +434,7 @@ def test_each_placement_instruction_is_given_for_its_pose(cam_browser, live_serv
     """The placement check's instructions (the page's own CameraChecks.placement in Chromium, the patient's language
     catalogue): whole body or upper body in view, too close, too far, side view for a squat, front view for a
     shoulder abduction, off centre, and "hold still" once the pose is right."""
-    base = live_server.url
-    email, _, item_id = new_patient(base)
-    with camera_page(cam_browser, base) as page:
-        login(page, email, PASSWORD)
-        page.wait_for_url("**/patient")
-        page.goto(f"{PAGE}?item={item_id}")
-        expect(page.locator("#cam-consent")).to_be_visible()
+    with on_the_consent(cam_browser, live_server.url) as page:
         out = page.evaluate(
             """(cases) => {
                 const squat = {plane: "sagittal", defining_angles: ["knee_flexion_L", "knee_flexion_R"]};
@@ -467,13 +468,7 @@ def test_the_result_says_the_goal_was_reached_only_when_the_saved_count_reaches_
     goal" only when the saved count reaches the target too; when the whole set's count is lower, the recount is said
     instead (seen on this machine: "Saved: 1 of 2 repetitions" above "You reached your goal. While you exercised we
     counted 4. Counted again over the whole set, it is 1.")."""
-    base = live_server.url
-    email, _, item_id = new_patient(base)
-    with camera_page(cam_browser, base) as page:
-        login(page, email, PASSWORD)
-        page.wait_for_url("**/patient")
-        page.goto(f"{PAGE}?item={item_id}")
-        expect(page.locator("#cam-consent")).to_be_visible()
+    with on_the_consent(cam_browser, live_server.url) as page:
         said = page.evaluate(
             """() => ({short: CameraText.resultMore("target", 4, 1, 2, 22.4),
                        met: CameraText.resultMore("target", 2, 2, 2, null),

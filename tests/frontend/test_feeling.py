@@ -3,7 +3,6 @@ with Skip; the answer is stored with the session and the therapist reads it on t
 
 from __future__ import annotations
 
-import re
 import uuid
 from contextlib import closing
 
@@ -13,7 +12,7 @@ from playwright.sync_api import expect
 
 from tests.backend.khs_files import make_khs
 from tests.frontend.conftest import THERAPIST, api_client, login, open_page, shot
-from tests.frontend.test_live_set import NAME, PASSWORD
+from tests.frontend.test_live_set import PASSWORD
 from tests.frontend.test_never_silent import (
     EXERCISE,
     LOAD_MS,
@@ -21,6 +20,7 @@ from tests.frontend.test_never_silent import (
     AgentLink,
     _now_iso,
     patient_with_device,
+    press_start,
 )
 
 pytestmark = pytest.mark.browser
@@ -44,11 +44,7 @@ def test_the_patient_says_how_the_set_felt_and_the_therapist_sees_it(browser, li
     _assign_to_tara(base, pid)
     link = AgentLink(base, token)
     with closing(link), open_page(browser, base, width, height) as page:
-        login(page, email, PASSWORD)
-        link.connect()
-        expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
-        page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2")).click()
-        start, sid = link.command(), str(uuid.uuid4())
+        start, sid = press_start(page, link, email), str(uuid.uuid4())
         link.progress(start, "ended", TARGET, sid, elapsed_s=9.0, reason="target")
         stored = link.upload(make_khs(EXERCISE, TARGET, seed=21, session_id=sid, created_at=_now_iso()))
         feeling = page.locator("#feeling")

@@ -119,6 +119,18 @@ def patient_with_device(base: str, target: int = TARGET) -> tuple[str, int, str]
     return email, pid, r.json()["token"]
 
 
+def press_start(page, link: AgentLink, email: str, set_no: int = 1, *, scroll: bool = False) -> dict[str, Any]:
+    """Signs the patient in, brings the home computer online (link), presses Start of set `set_no` of 2 (from the
+    bottom of the page with scroll) and returns the start command the home computer heard."""
+    login(page, email, PASSWORD)
+    link.connect()
+    expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
+    if scroll:
+        page.evaluate("window.scrollTo(0, document.body.scrollHeight)")
+    page.get_by_role("button", name=re.compile(f"^Start {NAME}, set {set_no} of 2")).click()
+    return link.command()
+
+
 def _in_view(page, selector: str) -> bool:
     return page.evaluate(
         """(sel) => { const r = document.querySelector(sel).getBoundingClientRect();
@@ -195,12 +207,7 @@ def test_count_in_view_camera_silence_said_and_the_end_level_with_the_stored_cou
     link = AgentLink(base, token)
     link.upload(make_khs(EXERCISE, TARGET, seed=3, created_at=_now_iso()))  # a first set: the page has a chart
     with closing(link), open_page(browser, base, width, height) as page:
-        login(page, email, PASSWORD)
-        link.connect()
-        expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
-        page.evaluate("window.scrollTo(0, document.body.scrollHeight)")
-        page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 2 of 2")).click()
-        start = link.command()
+        start = press_start(page, link, email, 2, scroll=True)
         assert start["action"] == "start", start
         sid = str(uuid.uuid4())
         link.progress(start, "recording", 1, sid, elapsed_s=2.0)
@@ -249,12 +256,7 @@ def test_the_lost_connection_banner_covers_nothing_of_the_live_set(browser, live
         email, _, token = patient_with_device(base)
         link = AgentLink(base, token)
         with closing(link), open_page(browser, base, width, height) as page:
-            login(page, email, PASSWORD)
-            link.connect()
-            expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
-            page.evaluate("window.scrollTo(0, document.body.scrollHeight)")
-            page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2")).click()
-            start = link.command()
+            start = press_start(page, link, email, scroll=True)
             link.progress(start, "recording", 1, str(uuid.uuid4()), elapsed_s=2.0)
             expect(page.locator("#live-count .n")).to_have_text("1")
             server.__exit__(None, None, None)  # the server stops under the page
@@ -276,11 +278,7 @@ def test_a_set_cut_short_by_the_home_computer_shows_its_kept_part_when_it_is_sto
     email, _, token = patient_with_device(base)
     link = AgentLink(base, token)
     with open_page(browser, base, 1366, 900) as page:
-        login(page, email, PASSWORD)
-        link.connect()
-        expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
-        page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2")).click()
-        start, sid = link.command(), str(uuid.uuid4())
+        start, sid = press_start(page, link, email), str(uuid.uuid4())
         link.progress(start, "recording", 2, sid, elapsed_s=6.0)
         expect(page.locator("#live-count .n")).to_have_text("2")
         link.close()  # the home computer stops
@@ -307,11 +305,7 @@ def test_a_goal_reached_live_but_not_in_the_stored_count_is_not_called_reached(b
     email, _, token = patient_with_device(base)
     link = AgentLink(base, token)
     with closing(link), open_page(browser, base, 1366, 900) as page:
-        login(page, email, PASSWORD)
-        link.connect()
-        expect(page.locator("#agent-status")).to_have_attribute("data-state", "online", timeout=LOAD_MS)
-        page.get_by_role("button", name=re.compile(f"^Start {NAME}, set 1 of 2")).click()
-        start, sid = link.command(), str(uuid.uuid4())
+        start, sid = press_start(page, link, email), str(uuid.uuid4())
         link.progress(start, "ended", TARGET, sid, elapsed_s=9.0, reason="target")
         stored = link.upload(make_khs(EXERCISE, 1, seed=26, session_id=sid, created_at=_now_iso()))
         assert stored["repetitions"] is not None and stored["repetitions"] < TARGET, stored
