@@ -45,6 +45,7 @@ raw's) with a PASS/FAIL column and the failures' margins.
 from __future__ import annotations
 
 import argparse
+import ast
 import json
 import sys
 import time
@@ -737,9 +738,11 @@ def pipeline_config(overrides: list[str]) -> PipelineConfig:
         if not sep or name not in PipelineConfig.model_fields:
             raise ValueError(f"--set {item!r}: expected NAME=VALUE with NAME a PipelineConfig setting")
         current = getattr(default, name)
-        value: bool | int | float | str | None
+        value: bool | int | float | str | dict[str, float] | None
         if text == "None":
             value = None
+        elif text.startswith("{"):  # a table, e.g. length_bias={'ARM_UP_L': 1.1}
+            value = ast.literal_eval(text)
         elif isinstance(current, bool):
             if text.lower() not in ("1", "true", "yes", "0", "false", "no"):
                 raise ValueError(f"--set {item!r}: {text!r} is not true/false (or 1/0, yes/no)")

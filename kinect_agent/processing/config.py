@@ -11,6 +11,8 @@ from typing import Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
 
+from kinect_agent.skeleton import SEGMENT_NAMES
+
 Smoother = Literal["four_pass", "urts"]
 OfflineFilter = Literal["chain", "joints"]
 SMOOTHERS: tuple[str, ...] = get_args(Smoother)  # "urts" measured best; "four_pass" is the paper's
@@ -110,6 +112,12 @@ class PipelineConfig(BaseModel):
     offset_model: bool = Field(
         False, description="subtract Kinect's per-joint body-frame offset (offset_model.py) from the offline output"
     )
+    length_bias: dict[str, float] | None = Field(
+        None,
+        description="scale the estimated segment lengths by these factors (skeleton.SEGMENTS name -> truth / "
+        "estimate; length_bias.py) before they are fixed, offline and online; None: off. Per device "
+        "(length_bias.RATIOS)",
+    )
     offline_filter: OfflineFilter = Field(
         "chain",
         description='offline: "chain", the four-pass kinematic UKF; "joints", each coordinate smoothed on its own '
@@ -121,6 +129,18 @@ class PipelineConfig(BaseModel):
     joint_split_at_swaps: bool = Field(
         True, description="joints filter: restart at left/right label swaps and at jumps to another body"
     )
+
+    @field_validator("length_bias")
+    @classmethod
+    def _segment_ratios(cls, value: dict[str, float] | None) -> dict[str, float] | None:
+        if value is None:
+            return value
+        unknown = set(value) - set(SEGMENT_NAMES)
+        if unknown:
+            raise ValueError(f"not segments: {sorted(unknown)}")
+        if not all(0.5 < v < 2.0 for v in value.values()):
+            raise ValueError("each factor must lie in (0.5, 2)")
+        return value
 
     @field_validator("excursion_max_len_s")
     @classmethod

@@ -49,7 +49,8 @@ def is_rigid(noise_m: float | None, config: PipelineConfig) -> bool:
 def rigid_settings(config: PipelineConfig) -> PipelineConfig:
     """Returns the offline settings for an exact input: the measurement SD of the chain's own misfit
     (rigid_input_sigma_m), the innovation at the mean state's joints in every pass (no unscented-mean stretch), and an
-    outlier that must also break its bones (outlier_segment "and": a clean recording's fastest frames are no outliers).
+    outlier that must also break its bones (outlier_segment "and": a clean recording's fastest frames are no outliers),
+    and no device length bias (an exact input's bones are the body's).
     """
     ratio = config.rigid_input_sigma_m / config.sigma_tracked_m  # inferred joints keep their ratio to tracked ones
     return config.model_copy(
@@ -59,6 +60,7 @@ def rigid_settings(config: PipelineConfig) -> PipelineConfig:
             "innovation_at_mean": True,
             "fixed_innovation_at_mean": True,
             "outlier_segment": "and",
+            "length_bias": None,
         }
     )
 

@@ -15,6 +15,7 @@ import numpy as np
 from kinect_agent import skeleton
 from kinect_agent.body import kinematics as km
 from kinect_agent.body.rotations import matrix_to_rotvec
+from kinect_agent.processing import length_bias
 from kinect_agent.processing.chain_filter import N_LEN, N_ROOT, N_TH, ChainFilter
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.errors import ProcessingError
@@ -102,7 +103,8 @@ class OnlineFilter:
         Nothing to do before the filter has started."""
         kf = self.kf
         if kf is not None and kf.lengths is None:
-            self.kf = kf.with_lengths_fixed(kf.x[N_ROOT : N_ROOT + N_LEN].copy(), self.config)
+            lengths = length_bias.apply(kf.x[N_ROOT : N_ROOT + N_LEN], self.config.length_bias)
+            self.kf = kf.with_lengths_fixed(lengths, self.config)
 
     def step(self, t: float, positions: np.ndarray, state: np.ndarray) -> np.ndarray:
         """Returns the filtered joint positions (J, 3) m for one frame.

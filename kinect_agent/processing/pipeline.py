@@ -56,7 +56,7 @@ from kinect_agent.blas_threads import one_blas_thread
 from kinect_agent.body.angles import joint_angles
 from kinect_agent.body.kinematics import ChainModel
 from kinect_agent.body.rotations import matrix_to_quat
-from kinect_agent.processing import noise_level, offset_model, uncertainty
+from kinect_agent.processing import length_bias, noise_level, offset_model, uncertainty
 from kinect_agent.processing.chain_filter import N_LEN, N_ROOT, ChainFilter, FrameData
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
 from kinect_agent.processing.config import PipelineConfig
@@ -315,6 +315,7 @@ def smooth(
     # A bone seen too rarely can wander (even below zero); keep the measured median length there.
     implausible = ~((lengths > 0.5 * ik.lengths) & (lengths < 2.0 * ik.lengths))
     lengths[implausible] = ik.lengths[implausible]
+    lengths = length_bias.apply(lengths, config.length_bias)  # the device's bias, its own step (None: unchanged)
     length_sd = np.sqrt(np.diag(kf.P)[N_ROOT : N_ROOT + N_LEN])
     # Passes 3 and 4: lengths fixed (removed from the state: zero covariance and process noise).
     fixed = _fixed_length_config(config)
