@@ -43,8 +43,11 @@ def fallback_folders() -> list[Path]:
 def _numba_finds_a_folder(module_file: str) -> bool:
     """Tells whether one of numba's cache locators (its order, as numba.core.caching.CacheImpl tries them) has a
     writable folder for the kernels of module_file."""
+    import numba
     from numba.core.caching import CacheImpl
 
+    if cast(Any, numba.config).CACHE_LOCATOR_CLASSES:  # $NUMBA_CACHE_LOCATOR_CLASSES: the user chose numba's places
+        return True
     locators: list[Any] = list(CacheImpl._locator_classes)
     return any(cls.from_function(cache_for, module_file) is not None for cls in locators)
 
