@@ -9,6 +9,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from backend import __version__
+from kinect_agent.processing.errors import ProcessingError
 
 if TYPE_CHECKING:
     from types import FrameType
@@ -392,7 +393,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Runs coach-server; returns the exit status."""
+    """Runs coach-server; returns the exit status: 2 after a one-line error of the user's (CliError), 1 after an
+    internal fault of the signal processing (ProcessingError), said as such."""
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv[:1] == ["demo"]:  # its own parser: argparse's REMAINDER cannot start with an option
         from backend.demo import main as demo_main
@@ -407,6 +409,10 @@ def main(argv: list[str] | None = None) -> int:
     except CliError as exc:
         print(f"coach-server: error: {exc}", file=sys.stderr)
         return 2
+    except ProcessingError as exc:  # the signal processing failed on input it accepted (e.g. `analyze` of a raw file)
+        print(f"coach-server {args.command}: internal fault ({type(exc).__name__}): {exc}. The input was accepted; "
+              "this is a fault of the program, please report it with the input file.", file=sys.stderr)  # fmt: skip
+        return 1
     except KeyboardInterrupt:
         return 130
 

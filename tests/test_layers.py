@@ -208,6 +208,48 @@ def test_a_forbidden_package_import_is_caught(tmp_path, monkeypatch, module, an_
     assert not caught or f"{module}:1:" in found[0], found
 
 
+def router_violations() -> list[str]:
+    """Returns one line per import of a routes module (a module named `router`) by another module: file:line,
+    importer -> imported. backend.main mounts the routers by name (importlib), so no import is needed."""
+    modules = project_modules()
+    lines: list[str] = []
+    for name, path in modules.items():
+        for imp in imports_of(name, path, modules):
+            if imp.imported.rpartition(".")[2] == "router" and imp.imported in modules and imp.importer != imp.imported:
+                line = f"{imp.path.relative_to(ROOT)}:{imp.line}: {imp.importer} -> {imp.imported}"
+                lines += [] if line in lines else [line]
+    return lines
+
+
+def test_no_module_imports_a_router():
+    found = router_violations()
+    assert not found, "routes modules imported (docs/architecture.md, 'Package pairs inside the server'):\n" + (
+        "\n".join(found)
+    )
+
+
+@pytest.mark.parametrize(
+    ("module", "an_import", "caught"),
+    [
+        ("backend/session_review/router.py", "from backend.sessions.router import audit", True),
+        ("backend/live/router.py", "from ..events.router import RETRY_MS", True),
+        ("backend/live/service.py", "import backend.events.router", True),
+        ("backend/live/router.py", "from backend.events.hub import RETRY_MS", False),
+    ],
+)
+def test_an_import_of_a_router_is_caught(tmp_path, monkeypatch, module, an_import, caught):
+    monkeypatch.setattr(f"{__name__}.ROOT", tmp_path)
+    for package in (*PACKAGES, "backend/sessions", "backend/session_review", "backend/live", "backend/events"):
+        (tmp_path / package).mkdir()
+        (tmp_path / package / "__init__.py").write_text("")
+    for routes in ("backend/sessions/router.py", "backend/events/router.py", "backend/events/hub.py"):
+        (tmp_path / routes).write_text("")
+    (tmp_path / module).write_text(an_import + "\n")
+    found = router_violations()
+    assert len(found) == int(caught), found
+    assert not caught or f"{module}:1:" in found[0], found
+
+
 def test_the_pages_register_on_the_server_without_an_import():
     """backend.main mounts the pages through the entry-point group, so the server app serves them."""
     from backend.main import registered_mounts

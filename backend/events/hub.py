@@ -35,6 +35,9 @@ KINDS = DATA_KINDS + LIVE_KINDS
 ACCESS_ENDED = "access.ended"
 # the server is stopping (Ctrl-C, SIGTERM): every open stream ends at once, so the stop waits for none of them
 SERVER_STOPPING = "server.stopping"
+RETRY_MS = (
+    3000  # every event stream (backend.events.router, backend.live.router): how long the browser waits to reconnect
+)
 
 
 @dataclass(frozen=True)

@@ -45,8 +45,8 @@ from backend.session_review import dashboard
 from backend.session_review import service as review
 from backend.session_review.schemas import SessionOut
 from backend.sessions import prepared, service
+from backend.sessions.common import SlugQuery, audit, audit_patients, aware, item_fields, stored_metrics
 from backend.sessions.ingest import check_declared_length, check_owner, decode_upload, read_limited
-from backend.sessions.router import SlugQuery, audit, audit_patients, aware, item_fields, stored_metrics
 from backend.sessions.schemas import DashboardRowOut, ProgressOut, ProgressPoint, SummaryOut
 from backend.suggestions import service as suggestions_service
 

@@ -12,12 +12,15 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import NDArray
 
+from kinect_agent.numba_cache import cache_for
+
 try:
     import numba
 except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None
+CACHE = AVAILABLE and cache_for(__file__)  # numba's on-disk cache, or none (kinect_agent.numba_cache)
 Floats: TypeAlias = NDArray[np.float64]
 Ints: TypeAlias = NDArray[np.int64]
 
@@ -92,6 +95,6 @@ def _fk_many(root: Floats, lengths: Floats, theta: Floats, rest: Floats, R_ref: 
 
 
 if AVAILABLE:
-    fk_many = numba.njit(cache=True, fastmath=False, nogil=True)(_fk_many)
+    fk_many = numba.njit(cache=CACHE, fastmath=False, nogil=True)(_fk_many)
 else:  # pragma: no cover - callers check AVAILABLE first
     fk_many = None  # type: ignore[assignment]

@@ -15,12 +15,15 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import NDArray
 
+from kinect_agent.numba_cache import cache_for
+
 try:
     import numba
 except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None
+CACHE = AVAILABLE and cache_for(__file__)  # numba's on-disk cache, or none (kinect_agent.numba_cache)
 Floats: TypeAlias = NDArray[np.float64]
 
 
@@ -51,6 +54,6 @@ def _matrix_to_quat(R: Floats, out: Floats) -> None:  # pragma: no cover - compi
 
 
 if AVAILABLE:
-    matrix_to_quat = numba.njit(cache=True, fastmath=False, nogil=True, error_model="numpy")(_matrix_to_quat)
+    matrix_to_quat = numba.njit(cache=CACHE, fastmath=False, nogil=True, error_model="numpy")(_matrix_to_quat)
 else:  # pragma: no cover - callers check AVAILABLE first
     matrix_to_quat = None  # type: ignore[assignment]

@@ -211,15 +211,14 @@ class Recovery:
 
 def _warm_up() -> None:
     """Readies the live loop's compiled code (kinect_agent.live.warmup) and logs how long it took."""
-    from kinect_agent.live.warmup import kernel_counts, warm_up
+    from kinect_agent.live.warmup import cache_folders, kernel_counts, warm_up, where_cached
 
     try:
         seconds = warm_up()
-        compiled = kernel_counts()["cache_misses"]
-        hint = (
-            f"; {compiled} kernels compiled (`kinect-agent prepare` does it once after an install)" if compiled else ""
-        )
-        log(f"live filter ready in {seconds:.1f} s{hint}")
+        counts = kernel_counts()
+        compiled = f"{counts['cache_misses']} kernels compiled (`kinect-agent prepare` does it once after an install), "
+        log(f"live filter ready in {seconds:.1f} s; {compiled if counts['cache_misses'] else ''}"
+            f"{counts['cache_hits']} loaded from numba's cache in {where_cached(cache_folders())}")  # fmt: skip
     except Exception as exc:  # noqa: BLE001 - the first set then compiles what it needs itself
         log(f"live filter warm-up failed: {type(exc).__name__}: {exc}")
 

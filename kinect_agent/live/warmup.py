@@ -6,22 +6,26 @@ lazily imported parts are loaded, so that the first set's first count comes as f
 call prepare(), which fills numba's on-disk cache for the live loop and the offline filter, so that serve's warm-up
 only loads it (bench/first_count.py measures both).
 
-Where the cache is: numba's own choice for `cache=True`, for the user who runs the command: `__pycache__` beside the
+Where the cache is, for the user who runs the command: $NUMBA_CACHE_DIR when set, else `__pycache__` beside the
 installed modules when that user can write there (a venv the user made), else that user's cache folder
-(`~/.cache/numba` on Linux, `%LOCALAPPDATA%\\numba\\numba\\Cache` on Windows), or $NUMBA_CACHE_DIR when set. The
-product sets none of these; prepare() names the folder it filled.
+(`~/.cache/numba` on Linux, `%LOCALAPPDATA%\\numba\\numba\\Cache` on Windows), as numba chooses; when none of those
+is writable (a read-only install run by a user without a home folder), $KINECT_AGENT_HOME/numba or a temporary folder
+(kinect_agent.numba_cache). prepare() and serve's warm-up name the folder.
 """
 
 from __future__ import annotations
 
 import sys
+import tempfile
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from kinect_agent.analysis.live import LiveCount
 from kinect_agent.body.rotations import COMPILED_MIN_MATRICES, matrix_to_quat
+from kinect_agent.numba_cache import ENV_HOME, TEMPORARY_PREFIX
 from kinect_agent.processing.online import OnlineFilter
 from kinect_agent.processing.pipeline import process
 from kinect_agent.sources.simulator import simulate
@@ -86,9 +90,20 @@ def prepare() -> str:
     and the cache's folder."""
     live_s, offline_s = warm_up(), warm_up_offline()
     counts, folders = kernel_counts(), cache_folders()
-    where = ", ".join(folders) if folders else "no cache (numba is not installed)"
     return (f"filter ready: live {live_s:.1f} s, offline {offline_s:.1f} s; {counts['cache_misses']} kernels compiled, "
-            f"{counts['cache_hits']} loaded from numba's cache in {where}")  # fmt: skip
+            f"{counts['cache_hits']} loaded from numba's cache in {where_cached(folders)}")  # fmt: skip
+
+
+def where_cached(folders: list[str]) -> str:
+    """Returns the cache folders (cache_folders()) for the user, with what to do when they are temporary (emptied when
+    the computer restarts: the first set after it compiles again)."""
+    if not folders:
+        return "no cache (numba is not installed, or no folder is writable)"
+    temporary = str(Path(tempfile.gettempdir()) / TEMPORARY_PREFIX)
+    if any(folder.startswith(temporary) for folder in folders):
+        return (f"{', '.join(folders)}, a temporary folder (the install and the home folder are not writable): set "
+                f"{ENV_HOME} or NUMBA_CACHE_DIR to a folder this user keeps")  # fmt: skip
+    return ", ".join(folders)
 
 
 if __name__ == "__main__":  # at install (scripts/_venv.sh): numba's on-disk cache is filled before the first start

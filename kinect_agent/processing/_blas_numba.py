@@ -20,6 +20,8 @@ from typing import Protocol, TypeAlias, cast
 import numpy as np
 from numpy.typing import NDArray
 
+from kinect_agent.numba_cache import cache_for
+
 try:
     import numba
     from llvmlite import binding as _llvm
@@ -29,6 +31,7 @@ except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None
+CACHE = AVAILABLE and cache_for(__file__)  # numba's on-disk cache, or none (kinect_agent.numba_cache)
 Floats: TypeAlias = NDArray[np.float64]
 
 
@@ -119,7 +122,7 @@ if NUMPY_BLAS:
     _ngemv = cast(_CblasDgemv, _t.ExternalFunction("kinect_numpy_dgemv", _t.void(
         _i32, _i32, _i64, _i64, _f64, _vp, _i64, _vp, _i64, _f64, _vp, _i64)))  # fmt: skip
 
-    @numba.njit(cache=True, nogil=True)
+    @numba.njit(cache=CACHE, nogil=True)
     def numpy_gemm(A: Floats, B: Floats, transpose_b: bool, out: Floats) -> None:  # pragma: no cover - compiled
         """out ← A @ B (transpose_b False) or A @ Bᵀ (True), all (n, n) C order: numpy's matmul for C-ordered A and
         B (B.T: an F-ordered view), i.e. cblas_dgemm(RowMajor, NoTrans, NoTrans|Trans, n, n, n, 1, A, n, B, n, 0,
@@ -128,7 +131,7 @@ if NUMPY_BLAS:
         _ngemm(ROW_MAJOR, NO_TRANS, TRANS if transpose_b else NO_TRANS, n, n, n, 1.0, A.ctypes, n, B.ctypes, n, 0.0,
                out.ctypes, n)  # fmt: skip
 
-    @numba.njit(cache=True, nogil=True)
+    @numba.njit(cache=CACHE, nogil=True)
     def numpy_gemv(A: Floats, v: Floats, out: Floats) -> None:  # pragma: no cover - compiled
         """out ← A @ v for A (m, n) C order, v (n,), out (m,) contiguous: numpy's matmul of a matrix and a vector,
         cblas_dgemv(ColMajor, Trans, n, m, 1, A, n, v, 1, 0, out, 1)."""
@@ -140,7 +143,7 @@ else:  # pragma: no cover - numpy without its OpenBLAS wheel library
 
 if AVAILABLE:
 
-    @numba.njit(cache=True, nogil=True)
+    @numba.njit(cache=CACHE, nogil=True)
     def cholesky_lower(A: Floats, n: int) -> int:  # pragma: no cover - compiled
         """Overwrites the lower triangle of A[:n, :n] (C order, leading dimension A.shape[1]) with L, L Lᵀ = A.
 
@@ -152,7 +155,7 @@ if AVAILABLE:
         _dpotrf(chars.ctypes, ints[0:].ctypes, A.ctypes, ints[1:].ctypes, ints[2:].ctypes)
         return ints[2]
 
-    @numba.njit(cache=True, nogil=True)
+    @numba.njit(cache=CACHE, nogil=True)
     def solve_lower(Lm: Floats, k: int, B: Floats, rows: int, cols: int) -> None:  # pragma: no cover - compiled
         """Overwrites B[:rows, :cols] (C order) with L⁻¹ B, L = lower triangle of Lm[:k, :k], k = rows.
 
@@ -164,7 +167,7 @@ if AVAILABLE:
         _dtrsm(chars[0:].ctypes, chars[1:].ctypes, chars[2:].ctypes, chars[3:].ctypes, ints[0:].ctypes,
                ints[1:].ctypes, one.ctypes, Lm.ctypes, ints[2:].ctypes, B.ctypes, ints[3:].ctypes)  # fmt: skip
 
-    @numba.njit(cache=True, nogil=True)
+    @numba.njit(cache=CACHE, nogil=True)
     def gram_lower(
         A: Floats, rows: int, cols: int, alpha: float, beta: float, C: Floats
     ) -> None:  # pragma: no cover - compiled
@@ -178,7 +181,7 @@ if AVAILABLE:
         _dsyrk(chars[0:].ctypes, chars[1:].ctypes, ints[0:].ctypes, ints[1:].ctypes, ab[0:].ctypes, A.ctypes,
                ints[2:].ctypes, ab[1:].ctypes, C.ctypes, ints[3:].ctypes)  # fmt: skip
 
-    @numba.njit(cache=True, nogil=True)
+    @numba.njit(cache=CACHE, nogil=True)
     def gram_rows_lower(
         A: Floats, rows: int, cols: int, lda: int, alpha: float, C: Floats
     ) -> None:  # pragma: no cover - compiled
@@ -193,7 +196,7 @@ if AVAILABLE:
         _dsyrk(chars[0:].ctypes, chars[1:].ctypes, ints[0:].ctypes, ints[1:].ctypes, ab[0:].ctypes, A.ctypes,
                ints[2:].ctypes, ab[1:].ctypes, C.ctypes, ints[3:].ctypes)  # fmt: skip
 
-    @numba.njit(cache=True, nogil=True)
+    @numba.njit(cache=CACHE, nogil=True)
     def potrf_lower_f(A: Floats, n: int) -> int:  # pragma: no cover - compiled
         """dpotrf 'L' on A[:n, :n] read as a Fortran array (leading dimension A.shape[1]): what SciPy's
         lapack.dpotrf(a, lower=1, clean=0) does with a Fortran copy of a, given Aᵀ's C-order buffer. Returns info."""
@@ -202,7 +205,7 @@ if AVAILABLE:
         _dpotrf(chars.ctypes, ints[0:].ctypes, A.ctypes, ints[1:].ctypes, ints[2:].ctypes)
         return ints[2]
 
-    @numba.njit(cache=True, nogil=True)
+    @numba.njit(cache=CACHE, nogil=True)
     def potrs_lower_f(Lf: Floats, n: int, B: Floats, nrhs: int) -> int:  # pragma: no cover - compiled
         """dpotrs 'L' with the factor of potrf_lower_f and B[:nrhs, :n] read as a Fortran (n, nrhs) array: SciPy's
         lapack.dpotrs(c, b, lower=1) with b's Fortran copy held in B (C order: B = bᵀ). Returns info."""

@@ -16,12 +16,15 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import NDArray
 
+from kinect_agent.numba_cache import cache_for
+
 try:
     import numba
 except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None
+CACHE = AVAILABLE and cache_for(__file__)  # numba's on-disk cache, or none (kinect_agent.numba_cache)
 Floats: TypeAlias = NDArray[np.float64]
 Ints: TypeAlias = NDArray[np.int64]
 Bools: TypeAlias = NDArray[np.bool_]
@@ -130,7 +133,7 @@ def _em_spread(xz: Floats, ok: Bools, w: Floats, mu: Floats, var_sum: Floats) ->
 
 
 if AVAILABLE:
-    _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+    _jit = numba.njit(cache=CACHE, nogil=True, error_model="numpy")
     _insert_sorted = _jit(_insert_sorted)  # called by _running_median: compiled before it
     running_median_kernel = _jit(_running_median)
     em_expectation = _jit(_em_expectation)

@@ -17,6 +17,7 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import NDArray
 
+from kinect_agent.numba_cache import cache_for
 from kinect_agent.processing import _blas_numba
 
 try:
@@ -25,6 +26,7 @@ except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None and _blas_numba.AVAILABLE and _blas_numba.NUMPY_BLAS
+CACHE = AVAILABLE and cache_for(__file__)  # numba's on-disk cache, or none (kinect_agent.numba_cache)
 Floats: TypeAlias = NDArray[np.float64]
 OK, P_PRED_NOT_POSITIVE, POTRF_FAILED, POTRS_FAILED = 0, 1, 2, 3  # rts_random_walk's status
 
@@ -100,6 +102,6 @@ def _rts_random_walk(
 
 
 if AVAILABLE:
-    rts_random_walk = numba.njit(cache=True, nogil=True, error_model="numpy")(_rts_random_walk)
+    rts_random_walk = numba.njit(cache=CACHE, nogil=True, error_model="numpy")(_rts_random_walk)
 else:  # pragma: no cover - callers check AVAILABLE first
     rts_random_walk = None  # type: ignore[assignment]

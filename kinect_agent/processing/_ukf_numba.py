@@ -22,6 +22,7 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import NDArray
 
+from kinect_agent.numba_cache import cache_for
 from kinect_agent.processing import _blas_numba
 
 try:
@@ -30,6 +31,7 @@ except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None and _blas_numba.AVAILABLE
+CACHE = AVAILABLE and cache_for(__file__)  # numba's on-disk cache, or none (kinect_agent.numba_cache)
 Floats: TypeAlias = NDArray[np.float64]
 Ints: TypeAlias = NDArray[np.int64]
 Bools: TypeAlias = NDArray[np.bool_]
@@ -407,14 +409,14 @@ def _run_frames(
 
 if AVAILABLE:
     # error_model="numpy": no zero-division checks (loops stay vectorisable); "contract": fused multiply-adds.
-    _jit = numba.njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"})
-    _inline = numba.njit(cache=True, nogil=True, error_model="numpy", fastmath={"contract"}, inline="always")
+    _jit = numba.njit(cache=CACHE, nogil=True, error_model="numpy", fastmath={"contract"})
+    _inline = numba.njit(cache=CACHE, nogil=True, error_model="numpy", fastmath={"contract"}, inline="always")
     _sincos_c = _inline(_sincos)
     _compose_c = _inline(_compose)
     _sigma_positions_c = _jit(_sigma_positions)
     chain_step = _chain_step_c = _jit(_chain_step)
     add_capped = _jit(_add_capped)
     # The pass loop: no fastmath (the predict's product and sums as numpy does them); chain_step keeps its flags.
-    run_frames = numba.njit(cache=True, nogil=True, error_model="numpy")(_run_frames)
+    run_frames = numba.njit(cache=CACHE, nogil=True, error_model="numpy")(_run_frames)
 else:  # pragma: no cover - callers check AVAILABLE first
     chain_step = add_capped = run_frames = None  # type: ignore[assignment]

@@ -15,12 +15,15 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import NDArray
 
+from kinect_agent.numba_cache import cache_for
+
 try:
     import numba
 except ImportError:  # pragma: no cover - exercised only where numba is absent
     numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None
+CACHE = AVAILABLE and cache_for(__file__)  # numba's on-disk cache, or none (kinect_agent.numba_cache)
 Floats: TypeAlias = NDArray[np.float64]
 Ints: TypeAlias = NDArray[np.int64]
 
@@ -60,4 +63,4 @@ def _refine_sweeps(
 
 
 if AVAILABLE:
-    refine_sweeps = numba.njit(cache=True, nogil=True, error_model="numpy")(_refine_sweeps)
+    refine_sweeps = numba.njit(cache=CACHE, nogil=True, error_model="numpy")(_refine_sweeps)

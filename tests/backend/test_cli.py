@@ -181,3 +181,19 @@ def test_a_reanalysis_queued_from_the_command_line_is_listed_with_its_patient(cl
     with get_sessionmaker()() as s:
         rows = list_batches(db_session=s, kind="reanalyze", limit=10)
     assert [r.patient_id for r in rows] == [None, pid], rows
+
+
+def test_analyze_reports_a_diverged_filter_as_an_internal_fault(tmp_path, monkeypatch, capsys):
+    # a raw recording (no filtered part): `analyze` runs the agent's pipeline, whose filter diverges here
+    from kinect_agent import formats
+    from kinect_agent.processing import pipeline
+    from kinect_agent.sources.simulator import simulate
+    from tests.kinect_agent.processing.test_processing_errors import diverging
+
+    src = tmp_path / "raw.csv"
+    formats.write(simulate("squat", 2, seed=0)[0], src)
+    monkeypatch.setattr(pipeline, "smooth", diverging(pipeline.smooth))
+    assert cli.main(["analyze", str(src), "--exercise", "squat"]) == 1
+    err = capsys.readouterr().err
+    assert "internal fault (FilterDiverged)" in err and "first: frame 10" in err, err
+    assert "error:" not in err, "an internal fault is not the user's error"

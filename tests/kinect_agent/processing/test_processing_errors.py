@@ -12,7 +12,7 @@ import pytest
 from kinect_agent import formats
 from kinect_agent.cli import main
 from kinect_agent.processing.config import PipelineConfig
-from kinect_agent.processing.errors import NotPositiveDefinite, ProcessingError
+from kinect_agent.processing.errors import FilterDiverged, NotPositiveDefinite, ProcessingError
 from kinect_agent.processing.pipeline import process
 from kinect_agent.recording import Metadata, Recording
 from kinect_agent.sources.simulator import simulate
@@ -53,3 +53,30 @@ def test_processing_errors_are_not_value_errors() -> None:
     assert issubclass(NotPositiveDefinite, ProcessingError)
     assert not issubclass(ProcessingError, ValueError)
     assert np.isfinite(PipelineConfig(**DEGENERATE).sigma_tracked_m), "the settings themselves are valid"
+
+
+def diverging(smooth):
+    """Returns pipeline.smooth whose joint angles are not finite in frames 10-12: a filter that diverged there."""
+
+    def smooth_then_diverge(*args, **kwargs):
+        root, lengths, theta, info = smooth(*args, **kwargs)
+        theta = theta.copy()
+        theta[10:13] = np.nan
+        return root, lengths, theta, info
+
+    return smooth_then_diverge
+
+
+def test_a_diverged_filter_is_an_internal_fault_not_bad_input(tmp_path: Path, monkeypatch, capsys) -> None:
+    from kinect_agent.processing import pipeline
+
+    monkeypatch.setattr(pipeline, "smooth", diverging(pipeline.smooth))
+    rec = simulate("squat", 2, seed=0)[0]
+    with pytest.raises(FilterDiverged, match=r"not finite in 3 of \d+ frames \(first: frame 10\)"):
+        process(rec)
+    src, out = tmp_path / "in.csv", tmp_path / "out.csv"
+    formats.write(rec, src)
+    assert main(["filter", str(src), "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert "internal fault (FilterDiverged)" in err and "first: frame 10" in err, err
+    assert "error:" not in err and not out.exists()
