@@ -48,7 +48,8 @@ from typing import Any
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
 
 from backend.analysis.report import analyze_recording  # noqa: E402
 from backend.exercises.library import EXERCISES as LIBRARY  # noqa: E402
@@ -96,6 +97,7 @@ VIDEO_SETS = (
              "standing, hands by the sides, 1000-1230; 25 fps"),
 )  # fmt: skip
 HOLD_S = (20.0, 12.0)  # the browser's fake camera: the first picture before the set, the last after it (s)
+PAGES = REPO / "var" / "bench-cache" / "webcam" / "pages"  # the page's landmarks of each set (--browser)
 LEAD_S = 3.0  # "Start anyway" this long before the set's first picture moves (later: when the page is ready)
 Y4M = {"width": 480, "height": 360, "fps": 15}  # 4:3 like the clip; 15 fps: above the page's landmarker rate
 
@@ -155,7 +157,8 @@ def page_set(browser: Any, base: str, item: int, model: str, seconds: float, vs_
     clip has played `seconds` (the video element's time since the camera opened). Returns the live count on the page
     before Stop, the saved session's count, the page's landmarker rate (images/s), the clip's time at "Start anyway"
     (s; the set's first HOLD_S[0] s are the first picture held), and the server's path run again here on the
-    landmarks the page sent (recount: shown, live at the end, stored; as live_and_stored)."""
+    landmarks the page sent (recount: shown, live at the end, stored; as live_and_stored), which are kept in
+    var/bench-cache/webcam/pages/."""
     from bench.camera_page import to_placement
     from bench.webcam_live_clip import live_and_stored
 
@@ -180,7 +183,12 @@ def page_set(browser: Any, base: str, item: int, model: str, seconds: float, vs_
         page.wait_for_function(f"() => ['stored', 'failed'].includes(({status})())")
         stored = page.evaluate("CameraPage.state().count") if page.locator("#cam-main-status").inner_text() == (
             "stored") else -1  # fmt: skip
-        recount = live_and_stored(page_batch(sent), vs_exercise)
+        batch = page_batch(sent)
+        keep = PAGES / f"{vs_exercise}-{model}-{time.strftime('%H%M%S')}.npz"
+        keep.parent.mkdir(parents=True, exist_ok=True)  # the page's landmarks, to look at a set again
+        np.savez(keep, t=batch.t, world=batch.world, image=batch.image, visibility=batch.visibility,
+                 size=np.array(batch.image_size))  # fmt: skip
+        recount = live_and_stored(batch, vs_exercise)
         return {"page live": int(live["count"]), "page stored": int(stored), "page fps": float(live["fps"] or 0.0),
                 "started at s": started, "recount shown": recount.shown, "recount live": recount.final,
                 "recount stored": recount.stored}  # fmt: skip
