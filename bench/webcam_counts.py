@@ -3,6 +3,7 @@ the filtered recording) with the webcam's filter, with the former chain filter, 
 
     nice -n 10 .venv/bin/python bench/webcam_counts.py [--reps 5] [--seeds 0 1] [--cases full shallow]
     nice -n 10 .venv/bin/python bench/webcam_counts.py --cases videos [--models lite full] [--browser [--runs 3]]
+        [--thin 2 3 4 5 6 8 10 12]
 
 Input: every simulated exercise the server knows (kinect_agent.sources.simulator.simulate_truth, the exact motion),
 made webcam-like by tests/webcam_like.py (as the webcam filter's tests do):
@@ -34,6 +35,7 @@ its live count as kinect_agent.live.set_recorder counts, its stored count) and t
 HOLD_S[1] s after; "Start anyway" LEAD_S before the set, as a patient presses Start and then begins): the live count
 on the page when Stop is pressed, the saved session's count, and the server's path run again on the landmarks the page
 sent. A set whose page was ready only after the clip's set had begun is left out of the tally (it missed the start).
+--thin N ...: the server's path on every N-th image of the Python runtime's landmarks, each phase (a slower page).
 """
 
 from __future__ import annotations
@@ -127,6 +129,22 @@ def python_counts(vs: VideoSet, model: str) -> dict[str, int]:
     return {"agent live": live_count(raw, tuple(spec.defining_angles)),
             "agent stored": int(analyze_recording(as_stored(raw), spec).repetitions),
             "server shown": server.shown, "server live": server.final, "server stored": server.stored}  # fmt: skip
+
+
+def thinned_counts(vs: VideoSet, model: str, step: int) -> list[tuple[int, int]]:
+    """Returns the server path's (live at the end, stored) counts of the set's Python-runtime landmarks keeping every
+    `step`-th image, one pair per phase (the first image kept 0 .. step-1): a slower page sees fewer images."""
+    from bench.webcam_clips import landmarks
+    from bench.webcam_live_clip import live_and_stored
+
+    part = set_part(landmarks(vs.clip, model)[0], vs.start_s, vs.end_s)
+    out = []
+    for phase in range(step):
+        k = np.arange(phase, part.n_frames, step)
+        counts = live_and_stored(LandmarkBatch(part.t[k], part.world[k], part.image[k], part.visibility[k],
+                                               part.image_size), vs.exercise)  # fmt: skip
+        out.append((counts.final, counts.stored))
+    return out
 
 
 def camera_plan_item(base: str, exercise: str, sets: int) -> int:
@@ -240,8 +258,11 @@ def browser_counts(vs: VideoSet, models: list[str], runs: int, port: int) -> dic
     return out
 
 
-def videos(models: list[str], browser: bool, runs: int, port: int) -> None:
-    """Prints, per real-video set and model, each path's counts against the count by eye (the page's: each run)."""
+def videos(models: list[str], browser: bool, runs: int, port: int, thin: list[int]) -> None:
+    """Prints, per real-video set and model, each path's counts against the count by eye (the page's: each run), and
+    with `thin` the counts of every n-th image (thinned_counts)."""
+    from bench.webcam_clips import RATES
+
     for vs in VIDEO_SETS:
         print(f"{vs.clip} {vs.start_s:g}-{vs.end_s:g} s as {vs.exercise}: {vs.true} by eye ({vs.by_eye})")
         for model in models:
@@ -249,6 +270,12 @@ def videos(models: list[str], browser: bool, runs: int, port: int) -> None:
             off = [k for k, v in counts.items() if v != vs.true]
             print(f"  {model}: " + ", ".join(f"{k} {v}" for k, v in counts.items()) +
                   f"; off the count by eye: {', '.join(off) or 'none'}", flush=True)  # fmt: skip
+            for step in thin:
+                pairs = thinned_counts(vs, model, step)
+                exact = sum(live == stored == vs.true for live, stored in pairs)
+                print(f"    every {step}th image ({RATES[vs.clip] / step:.1f}/s), each phase, live/stored: "
+                      f"{' '.join(f'{a}/{b}' for a, b in pairs)}; both exact in {exact} of {step}",
+                      flush=True)  # fmt: skip
         if not browser:
             continue
         pages = browser_counts(vs, models, runs, port)
@@ -307,6 +334,7 @@ def main() -> None:
                         help="--cases videos: the pose models")  # fmt: skip
     parser.add_argument("--browser", action="store_true", help="--cases videos: the camera page in Chromium too")
     parser.add_argument("--runs", type=int, default=3, help="--cases videos --browser: sets per model on the page")
+    parser.add_argument("--thin", type=int, nargs="*", default=[], help="--cases videos: every n-th image only")
     parser.add_argument("--port", type=int, default=8103, help="--cases videos --browser: the app's port")
     parser.add_argument("--quick", action="store_true", help="live and stored only (stored without the offline filter)")
     parser.add_argument("--no-live", action="store_true", help="with --quick: the stored count only (seconds a set)")
@@ -315,7 +343,7 @@ def main() -> None:
         shallow(args.seeds)
         return
     if args.cases == "videos":
-        videos(args.models, args.browser, args.runs, args.port)
+        videos(args.models, args.browser, args.runs, args.port, args.thin)
         return
     webcam = config_for_device("webcam")
     chain = webcam.model_copy(update={"offline_filter": "chain", "remove_outliers": True})
