@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from playwright.sync_api import Browser
+    from playwright.sync_api import Browser, Page
 
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
@@ -55,22 +55,28 @@ def squat_item(base: str) -> int:
     return next(i["id"] for p in plans for i in p["items"] if i["exercise_slug"] == "squat")
 
 
+def to_placement(page: Page, item: int, model: str) -> None:
+    """Signs in as the demo's camera patient and opens the camera page of plan item `item` with `model` on the CPU
+    delegate, consenting if asked; returns once its placement check runs (the camera is open)."""
+    page.goto("/")
+    page.fill("#email", CAMERA_PATIENT[0])
+    page.fill("#password", DEMO_PASSWORD)
+    page.click("#login-submit")
+    page.wait_for_url("**/patient")
+    page.goto(f"/patient/camera?item={item}&model={model}&delegate=CPU")
+    page.wait_for_function("() => ['consent', 'placement'].includes(document.getElementById('cam-main-status')"
+                           "?.textContent)")  # fmt: skip
+    if page.locator("#cam-main-status").inner_text() == "consent":
+        page.click("#cam-agree")
+    page.wait_for_function("() => document.getElementById('cam-main-status').textContent === 'placement'")
+
+
 def one_run(browser: Browser, base: str, item: int, model: str, seconds: float, count: bool) -> dict[str, Any]:
     context = browser.new_context(viewport={"width": 1366, "height": 900}, base_url=base)
     page = context.new_page()
     page.set_default_timeout(120_000)
     try:
-        page.goto("/")
-        page.fill("#email", CAMERA_PATIENT[0])
-        page.fill("#password", DEMO_PASSWORD)
-        page.click("#login-submit")
-        page.wait_for_url("**/patient")
-        page.goto(f"/patient/camera?item={item}&model={model}&delegate=CPU")
-        page.wait_for_function("() => ['consent', 'placement'].includes(document.getElementById('cam-main-status')"
-                               "?.textContent)")  # fmt: skip
-        if page.locator("#cam-main-status").inner_text() == "consent":
-            page.click("#cam-agree")
-        page.wait_for_function("() => document.getElementById('cam-main-status').textContent === 'placement'")
+        to_placement(page, item, model)
         page.wait_for_timeout(4000)  # warm-up: the first frames compile and allocate
         rates = []
         end = time.monotonic() + seconds

@@ -1,9 +1,10 @@
 """Landmarks of the public demo clips used by the webcam benchmarks, computed once and cached.
 
-Clips (fetched and hash-checked by tests/media.py, BSD-3-Clause, perfanalytics): Sports2D's demo (one person, side
-view, 30 fps) and the four calibrated views of Pose2Sim's single-person demo (60 fps). Each clip is run through the
-agent's WebcamSource (MediaPipe's Python runtime, the pinned lite or full .task) and its LandmarkBatch kept in
-var/bench-cache/webcam/<clip>-<model>.npz, so the benchmarks after the first run cost seconds.
+Clips (fetched and hash-checked by tests/media.py; BSD-3-Clause, perfanalytics): Sports2D's demo (one person, side
+view, 30 fps) and the four calibrated views of Pose2Sim's single-person demo (60 fps); GPL-3.0-or-later, University
+of Oslo: the Musical Gestures Toolbox's dancer (front view, 25 fps, bench/webcam_counts.py --cases videos). Each
+clip is run through the agent's WebcamSource (MediaPipe's Python runtime, the pinned lite or full .task) and its
+LandmarkBatch kept in var/bench-cache/webcam/<clip>-<model>.npz, so the benchmarks after the first run cost seconds.
 """
 
 from __future__ import annotations
@@ -20,15 +21,17 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from kinect_agent.sources.webcam.landmarks import LandmarkBatch  # noqa: E402
-from tests.media import pose2sim_multi_view, pose2sim_view, sports2d_demo  # noqa: E402
+from tests.media import mgt_dancer, pose2sim_multi_view, pose2sim_view, sports2d_demo  # noqa: E402
 
 CACHE = REPO / "var" / "bench-cache" / "webcam"
 CLIPS: dict[str, Callable[[], Path]] = {
     "sports2d": sports2d_demo,
     **{f"pose2sim_cam{c}": partial(pose2sim_view, c) for c in (1, 2, 3, 4)},
     **{f"pose2sim_multi_cam{c}": partial(pose2sim_multi_view, c) for c in (1, 2, 3, 4)},
+    "mgt_dancer": mgt_dancer,
 }
 RATES = {"sports2d": 30.0, **{f"pose2sim{m}_cam{c}": 60.0 for m in ("", "_multi") for c in (1, 2, 3, 4)}}
+RATES["mgt_dancer"] = 25.0
 
 
 def landmarks(clip: str, model: str = "lite") -> tuple[LandmarkBatch, float]:

@@ -90,9 +90,9 @@ class ClipCounts:
     delays: list[float | None]
 
 
-def live_and_stored(batch: LandmarkBatch) -> ClipCounts:
+def live_and_stored(batch: LandmarkBatch, exercise: str = EXERCISE) -> ClipCounts:
     """Returns the set's shown, final and stored counts and the delay (s) of each stored repetition's display."""
-    spec = EXERCISES[EXERCISE]
+    spec = EXERCISES[exercise]
     positions, tracking = camera_frames(batch)
     positions = on_grid(positions)
     filt, counter = live_filter(config_for_device("webcam")), LiveCount(tuple(spec.defining_angles), device="webcam")
@@ -101,7 +101,7 @@ def live_and_stored(batch: LandmarkBatch) -> ClipCounts:
         t = float(batch.t[k])
         shown[k] = counter.add(t, positions[k], tracking[k], filt.step(t, positions[k], tracking[k])).count
     final = counter.final()
-    meta = Metadata(device="webcam", rate_hz=float(1 / np.median(np.diff(batch.t))), exercise=EXERCISE)
+    meta = Metadata(device="webcam", rate_hz=float(1 / np.median(np.diff(batch.t))), exercise=exercise)
     report = analyze_recording(to_recording([batch], meta), spec)
     ends = [float(batch.t[0]) + r.end_s for r in report.repetition_list]
     delays: list[float | None] = []

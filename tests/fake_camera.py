@@ -28,9 +28,12 @@ def write_y4m(
     fps: int = 30,
     start_s: float = 0.0,
     seconds: float | None = None,
+    hold_s: tuple[float, float] = (0.0, 0.0),
 ) -> Path:
     """Writes frames of the video `source` from start_s on (all, or `seconds` of them) to `out` as .y4m at `fps`
-    (frames are dropped or repeated to reach it); returns out. width and height must be even."""
+    (frames are dropped or repeated to reach it), the first picture shown hold_s[0] seconds before them and the last
+    hold_s[1] seconds after (a patient standing still before and after the set); returns out. width and height must
+    be even."""
     import cv2
 
     if width % 2 or height % 2:
@@ -55,6 +58,8 @@ def write_y4m(
         raise RuntimeError(f"{source}: no frame after {start_s} s")
     n_out = int(len(frames) / src_fps * fps) if seconds is None else int(round(seconds * fps))
     picks = np.minimum((np.arange(n_out) * src_fps / fps).astype(int), len(frames) - 1)
+    before, after = (int(round(h * fps)) for h in hold_s)
+    picks = np.concatenate([np.zeros(before, dtype=int), picks, np.full(after, picks[-1])])
     out.parent.mkdir(parents=True, exist_ok=True)
     with open(out, "wb") as f:
         f.write(f"YUV4MPEG2 W{width} H{height} F{fps}:1 Ip A1:1 C420jpeg\n".encode())

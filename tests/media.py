@@ -5,7 +5,11 @@
 - Pose2Sim 0.10.49 (PyPI `pose2sim`, BSD-3-Clause, (c) 2022 perfanalytics): Pose2Sim/Demo_SinglePerson, four
   calibrated views (Calib.qca.txt) of one person walking, 1080x1920, 60 fps, 100 frames, with a second person in
   the background of cam01;
-- the same wheel's Pose2Sim/Demo_MultiPerson: two people walking, filmed by the same four calibrated cameras.
+- the same wheel's Pose2Sim/Demo_MultiPerson: two people walking, filmed by the same four calibrated cameras;
+- Musical Gestures Toolbox 1.32.0 (PyPI `musicalgestures`, GPL-3.0-or-later, (c) University of Oslo, fourMs Lab):
+  musicalgestures/examples/dancer.avi, one real dancer filmed from the front before a blue screen, 518x496, 25 fps,
+  1571 frames (62.8 s), who raises both arms out to the side four times in the first 40 s (bench/webcam_counts.py
+  --cases videos; the count by eye in bench/README.md, "Counts on real videos of known counts").
 
 Each wheel is fetched once with `pip download --no-deps` into var/test-media/ (git-ignored), checked against its
 pinned SHA-256, and only the named members are unpacked.
@@ -39,6 +43,8 @@ SPORTS2D = Wheel("sports2d", "0.8.34", "733b6db70742636ae9c35d870c22bd416582f579
                  "sports2d-0.8.34-py3-none-any.whl")  # fmt: skip
 POSE2SIM = Wheel("pose2sim", "0.10.49", "403e0dc4065898ba6a595e72a8970950310979253d60e24c2e00b16b36bf21e1",
                  "pose2sim-0.10.49-py3-none-any.whl")  # fmt: skip
+MUSICALGESTURES = Wheel("musicalgestures", "1.32.0", "642dedf4f2562e2cb06c282785f48ce5a71e7288572e36a137a1fe842cb47d38",
+                        "musicalgestures-1.32.0-py3-none-any.whl")  # fmt: skip
 POSE2SIM_DEMO = "Pose2Sim/Demo_SinglePerson"
 POSE2SIM_MULTI = "Pose2Sim/Demo_MultiPerson"
 
@@ -91,3 +97,8 @@ def pose2sim_multi_view(camera: int) -> Path:
 def pose2sim_calibration() -> Path:
     """Returns the Qualisys calibration of Pose2Sim's single-person demo (Calib.qca.txt, 4 cameras)."""
     return member(POSE2SIM, f"{POSE2SIM_DEMO}/calibration/Calib.qca.txt")
+
+
+def mgt_dancer() -> Path:
+    """Returns the Musical Gestures Toolbox's dancer (one person, front view, 25 fps, arm raises out to the side)."""
+    return member(MUSICALGESTURES, "musicalgestures/examples/dancer.avi")

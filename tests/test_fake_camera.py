@@ -57,3 +57,18 @@ def test_frames_read_back_are_the_pictures_written(tmp_path) -> None:
     assert np.abs(grey.astype(float) - 100).max() <= 2
     with pytest.raises(ValueError, match="no frame 21"):
         read_y4m(path, [21])
+
+
+def test_the_first_and_last_pictures_are_held_before_and_after_the_clip(tmp_path) -> None:
+    import numpy as np
+
+    path = sports2d_y4m(tmp_path / "camera.y4m", width=320, height=180, fps=10, start_s=2.0, seconds=1.0,
+                        hold_s=(0.5, 0.3))  # fmt: skip
+    plain = sports2d_y4m(tmp_path / "plain.y4m", width=320, height=180, fps=10, start_s=2.0, seconds=1.0)
+    assert y4m_frame_count(path) == 5 + 10 + 3
+    held = read_y4m(path, list(range(18)))
+    clip = read_y4m(plain, list(range(10)))
+    assert all(np.array_equal(held[k], clip[0]) for k in range(6))  # 5 held, then the clip's first picture itself
+    assert all(np.array_equal(held[5 + k], clip[k]) for k in range(10))
+    assert all(np.array_equal(held[k], clip[-1]) for k in range(14, 18))
+    assert not np.array_equal(clip[0], clip[-1]), "the clip moves, so holding is seen"
