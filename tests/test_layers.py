@@ -152,6 +152,7 @@ def test_no_import_runs_against_the_layers():
         ("server", "backend/x.py", "import kinect_agent.commands.run"),
         ("demo", "backend/demo_agents.py", "from kinect_agent.commands import pair"),
         ("processing", "kinect_agent/processing/x.py", "from ..sources import simulator"),
+        ("analysis", "kinect_agent/analysis/x.py", "from backend.exercises.library import LIBRARY"),
     ],
 )
 def test_a_bad_import_is_caught(tmp_path, monkeypatch, row, module, bad_import):
@@ -162,13 +163,74 @@ def test_a_bad_import_is_caught(tmp_path, monkeypatch, row, module, bad_import):
     for package in PACKAGES:
         (tmp_path / package).mkdir()
         (tmp_path / package / "__init__.py").write_text("")
-    for name in ("processing", "sources", "formats", "commands"):
+    for name in ("processing", "sources", "formats", "commands", "analysis"):
         (tmp_path / "kinect_agent" / name).mkdir()
         (tmp_path / "kinect_agent" / name / "__init__.py").write_text("")
     (tmp_path / module).write_text(bad_import + "\n")
     entries, allowed = read_layers()
     found = violations(entries, allowed)
     assert len(found) == 1 and f"({row} may not import" in found[0], found
+
+
+def agent_imports_of_the_server() -> list[str]:
+    """Returns one line per import of backend, frontend or migrations by a module of kinect_agent: file:line."""
+    modules = project_modules()
+    return [
+        f"{imp.path.relative_to(ROOT)}:{imp.line}: {imp.importer} -> {imp.imported}"
+        for name, path in modules.items()
+        if _within(name, "kinect_agent")
+        for imp in imports_of(name, path, modules)
+        if not _within(imp.imported, "kinect_agent")
+    ]
+
+
+def test_the_agent_never_imports_the_server():
+    """Whatever the table says: the agent (its analysis above all, the one home of a session's analysis) ships alone,
+    so none of its modules imports the server or the pages."""
+    found = agent_imports_of_the_server()
+    assert not found, "the agent imports the server:\n" + "\n".join(found)
+
+
+def router_imports() -> list[str]:
+    """Returns one line per import of a router module (`router`, `*_router`) by another router: file:line."""
+    modules = project_modules()
+    routers = {name for name in modules if name.rpartition(".")[2].endswith("router")}
+    return [
+        f"{imp.path.relative_to(ROOT)}:{imp.line}: {imp.importer} -> {imp.imported}"
+        for name in sorted(routers)
+        for imp in imports_of(name, modules[name], modules)
+        if imp.imported in routers and imp.imported != name
+    ]
+
+
+def test_no_router_imports_another_router():
+    """What two routers share lives in a module beside them (deps, service), never in one of the routers."""
+    found = router_imports()
+    assert not found, "routers importing routers:\n" + "\n".join(found)
+
+
+@pytest.mark.parametrize(
+    ("module", "an_import", "caught"),
+    [
+        ("backend/session_review/router.py", "from backend.sessions.router import audit", True),
+        ("backend/session_review/router.py", "from ..sessions import router", True),
+        ("backend/exercises/demo_router.py", "from backend.exercises.router import router", True),
+        ("backend/session_review/router.py", "from backend.sessions.service import audit", False),
+        ("backend/main.py", "from backend.sessions import router", False),
+    ],
+)
+def test_a_router_importing_a_router_is_caught(tmp_path, monkeypatch, module, an_import, caught):
+    """The check itself: a router importing another (absolute or relative) is reported; one importing a service,
+    or the app importing routers, is not."""
+    monkeypatch.setattr(f"{__name__}.ROOT", tmp_path)
+    for package in (*PACKAGES, "backend/sessions", "backend/session_review", "backend/exercises"):
+        (tmp_path / package).mkdir()
+        (tmp_path / package / "__init__.py").write_text("")
+    for existing in ("backend/sessions/router.py", "backend/sessions/service.py", "backend/exercises/router.py"):
+        (tmp_path / existing).write_text("")
+    (tmp_path / module).write_text(an_import + "\n")
+    found = router_imports()
+    assert len(found) == int(caught), found
 
 
 def test_the_package_pairs_name_real_packages():

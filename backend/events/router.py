@@ -15,14 +15,22 @@ from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
 from backend.deps import Caller, DbSession, current_caller, optional_caller, require_patient_access
-from backend.events.hub import ACCESS_ENDED, DATA_KINDS, HUB, KINDS, SERVER_STOPPING, Subscriber, TooManyStreams
+from backend.events.hub import (
+    ACCESS_ENDED,
+    DATA_KINDS,
+    HUB,
+    KINDS,
+    RETRY_MS,
+    SERVER_STOPPING,
+    Subscriber,
+    TooManyStreams,
+)
 from backend.exceptions import AUTH_ERRORS, PatientNotFound, error_responses
 from backend.patients.models import TherapistPatient
 from backend.schemas import IdQuery
 
 router = APIRouter(prefix="/api/v1", tags=["events"])
 KEEPALIVE_S = 15.0  # a comment line this often keeps proxies from closing an idle stream
-RETRY_MS = 3000  # how long the browser waits before reconnecting
 PING_S = 2.0  # live streams: an event this often, so a page notices a silently lost connection within seconds
 
 

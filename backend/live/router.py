@@ -16,8 +16,7 @@ from starlette.concurrency import run_in_threadpool
 from backend.audit.service import record
 from backend.config import Settings
 from backend.deps import Caller, CurrentCaller, CurrentDevice, DbSession, UserCaller, require_patient_access
-from backend.events.hub import HUB, SERVER_STOPPING, Event, Subscriber, publish
-from backend.events.router import RETRY_MS
+from backend.events.hub import HUB, RETRY_MS, SERVER_STOPPING, Event, Subscriber, publish
 from backend.exceptions import (
     AUTH_ERRORS,
     AgentOffline,
