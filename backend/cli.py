@@ -195,10 +195,10 @@ def cmd_seed_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_analyze(args: argparse.Namespace) -> int:
-    """Prints the analysis report of one recording file (backend.analysis.report)."""
-    from backend.analysis import report
+    """Prints the analysis report of one recording file (backend.session_texts.summary)."""
+    from backend.session_texts import summary
 
-    return report.run(args)
+    return summary.run(args)
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
@@ -345,7 +345,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("demo", help="the demo clinic on embedded SQLite: migrate, seed, serve (`demo --help`)")
     p.set_defaults(_run=cmd_demo)
 
-    from backend.analysis.report import add_arguments as analyze_arguments
+    from backend.session_texts.summary import add_arguments as analyze_arguments
 
     p = sub.add_parser(
         "analyze", help="the server's metrics of one recording file (any format the agent reads), as text or JSON"

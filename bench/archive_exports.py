@@ -17,8 +17,8 @@ import zlib
 from collections.abc import Callable
 from typing import Any
 
-from backend.exercises.library import EXERCISES
 from backend.sessions.detail import analysis_document, decode_stored
+from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.export.files import ExportFile, export
 from kinect_agent.formats.session_file import SessionPayload
 from tests.backend.khs_files import make_khs

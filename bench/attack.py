@@ -9,7 +9,7 @@ stored something is a failure and its rows are deleted so the next case starts c
 is uploaded: it must be 201 and stored, which shows that the harness can store. Then the family "file chooses the
 work" (bench/attack_work.py): accepted files whose params["config"], frame rate or duration would set the server's
 work; each request (upload, detail, replay) is measured against the CPU and memory budget of
-backend.analysis.work_budget and fails above it or on a 5xx.
+backend.session_texts.work_budget and fails above it or on a 5xx.
 
     python bench/attack.py [--quick] [--json OUT] [--db URL ...] [--seeds N] [--first-seed S] [--families F]
 

@@ -7,7 +7,7 @@ sent once each (a worker prepares them: the answer is 202, or the export itself 
 real worker (backend.jobs.worker.work, in this process) builds what each queued, one kind of job at a time, and
 each is read again (200 expected). For every request and build the CPU time of the process (time.process_time:
 the app, the test client and the worker run in it, nothing else) and its peak resident memory above its start
-(/proc/self/statm sampled every 2 ms) are measured and compared with the budget of backend.analysis.work_budget:
+(/proc/self/statm sampled every 2 ms) are measured and compared with the budget of backend.session_texts.work_budget:
 BUDGETS[request] per started 10 minutes of recording (a stored read with the upload's). A case fails when a
 request answers 5xx, stays 202 after its build, or exceeds its budget; a file the server refuses at upload (4xx)
 passes, its refusal is the bound.
@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 import httpx
 import numpy as np
 
-from backend.analysis import work_budget
+from backend.session_texts import work_budget
 from kinect_agent.formats import session_file as sf
 from kinect_agent.recording import Recording
 from kinect_agent.sources.simulator import simulate

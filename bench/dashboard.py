@@ -26,10 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from sqlalchemy import Engine, create_engine, insert, text  # noqa: E402
 from sqlalchemy.orm import Session  # noqa: E402
 
-from backend.analysis.indicators import indicators  # noqa: E402
-from backend.analysis.report import analyze_recording  # noqa: E402
 from backend.database import import_all_models, make_engine, utcnow  # noqa: E402
-from backend.exercises.library import EXERCISES  # noqa: E402
 from backend.exercises.models import Exercise  # noqa: E402
 from backend.exercises.service import sync_exercise_library  # noqa: E402
 from backend.migrate import upgrade  # noqa: E402
@@ -37,6 +34,9 @@ from backend.session_review import dashboard  # noqa: E402
 from backend.sessions import service  # noqa: E402
 from backend.sessions.models import ExerciseSession, SessionMetric  # noqa: E402
 from backend.users.models import User  # noqa: E402
+from kinect_agent.analysis.exercise import EXERCISES  # noqa: E402
+from kinect_agent.analysis.indicators import indicators  # noqa: E402
+from kinect_agent.analysis.report import analyze_recording  # noqa: E402
 from kinect_agent.sources.simulator import simulate  # noqa: E402
 
 FILE_BYTES = 200_000

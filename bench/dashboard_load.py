@@ -98,8 +98,8 @@ def migrate(url: str) -> None:
 
 def _pool(exercises: list[str], per_exercise: int) -> dict[str, list[tuple[bytes, SessionPayload, AnalysisReport]]]:
     """Returns per exercise a list of (.khs bytes, decoded payload, analysis document) of simulated sets."""
-    from backend.analysis.report import analyze_recording
-    from backend.exercises.library import EXERCISES
+    from kinect_agent.analysis.exercise import EXERCISES
+    from kinect_agent.analysis.report import analyze_recording
     from kinect_agent.formats import session_file as sf
     from kinect_agent.sources.simulator import simulate
 
@@ -124,9 +124,7 @@ def _pool(exercises: list[str], per_exercise: int) -> dict[str, list[tuple[bytes
 def seed(url: str, n_patients: int, n_sessions: int, per_exercise: int) -> dict[str, Any]:
     """Fills the migrated database; returns {"therapists": [email, ...], "sessions": n, "file_mib": x}."""
     from backend import __version__
-    from backend.analysis.indicators import indicators
     from backend.database import import_all_models, utcnow
-    from backend.exercises.library import EXERCISES
     from backend.exercises.models import Exercise
     from backend.patients.models import TherapistPatient
     from backend.plans.models import Plan, PlanItem
@@ -136,6 +134,8 @@ def seed(url: str, n_patients: int, n_sessions: int, per_exercise: int) -> dict[
     from backend.suggestions.models import Suggestion
     from backend.users.models import User
     from kinect_agent.analysis.document import read_document
+    from kinect_agent.analysis.exercise import EXERCISES
+    from kinect_agent.analysis.indicators import indicators
 
     import_all_models()
     slugs = sorted({s for pair in EXERCISE_PAIRS for s in pair})

@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from backend.analysis.report import analyze_recording
-from backend.exercises.library import EXERCISES
+from kinect_agent.analysis.exercise import EXERCISES
+from kinect_agent.analysis.report import analyze_recording
 from kinect_agent.processing.pipeline import process
 from kinect_agent.sources import motions
 from kinect_agent.sources.kinect_noise import add_kinect_noise

@@ -1,6 +1,6 @@
 """Where the filtered range of motion leaves the raw data's envelope (issue 24.1), and why.
 
-For every case of the property test (tests/backend/analysis/test_numbers_agree.py: the real recordings' sample, the
+For every case of the property test (tests/backend/session_texts/test_numbers_agree.py: the real recordings' sample, the
 simulator's exercises at views 0° and 60°, the demo's sessions) this runs the agent's path (make_payload: filter,
 angle SDs; then the session file as the server stores it) and measures, per angle of
 kinect_agent.body.angles.ANGLE_NAMES, as the session page does:
@@ -41,11 +41,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from backend.analysis.report import analyze_recording  # noqa: E402
-from backend.exercises.library import EXERCISES  # noqa: E402
 from kinect_agent.analysis.angles import measured_angles  # noqa: E402
+from kinect_agent.analysis.exercise import EXERCISES  # noqa: E402
 from kinect_agent.analysis.intervals import RAW_ENVELOPE_PCT, RAW_MARGIN_DEG  # noqa: E402
 from kinect_agent.analysis.range_of_motion import range_of_motion  # noqa: E402
+from kinect_agent.analysis.report import analyze_recording  # noqa: E402
 from kinect_agent.body.angles import ANGLE_NAMES, body_frame, joint_angles  # noqa: E402
 from kinect_agent.capture import capture, make_payload  # noqa: E402
 from kinect_agent.formats import session_file  # noqa: E402
@@ -54,7 +54,7 @@ from kinect_agent.recording import Recording  # noqa: E402
 from kinect_agent.skeleton import INDEX  # noqa: E402
 from kinect_agent.sources.simulator import EXERCISES as SIMULATED  # noqa: E402
 from kinect_agent.sources.simulator import simulate  # noqa: E402
-from tests.backend.analysis.test_numbers_agree import DEMO, read_real, real_cases, thin  # noqa: E402
+from tests.backend.session_texts.test_numbers_agree import DEMO, read_real, real_cases, thin  # noqa: E402
 
 # angle prefix -> (proximal, distal) joint of the limb it measures, and the plane it lies in (its normal's name)
 LIMBS = {

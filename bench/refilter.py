@@ -4,7 +4,7 @@
     .venv/bin/python -m bench.refilter --ui-prmd m01 m07 ... [--subject s01]   (real Kinect v2, ../shared/data)
 
 Per simulated set (kinect_agent.sources.simulator.simulate, as the demo's agents record them): repetitions and range
-of motion (backend.analysis.report.analyze_recording, the server's analysis) of
+of motion (kinect_agent.analysis.report.analyze_recording, the server's analysis) of
   truth     the simulator's exact recording;
   raw       the stored raw recording analysed without a filtered one (what the simulated Kinect measured);
   before    the file as agents wrote it before session_file.as_stored: the pipeline filtered the recording in
@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from backend.exercises.library import ExerciseSpec
+    from kinect_agent.analysis.exercise import ExerciseSpec
     from kinect_agent.recording import Recording
 
 DEFAULT_EXERCISES = ("elbow_flexion", "shoulder_abduction", "squat", "seated_knee_extension")
@@ -36,7 +36,7 @@ def _reps_rom(
     rec: Recording, spec: ExerciseSpec, filtered: Recording | None = None, angle_sd: dict[str, np.ndarray] | None = None
 ) -> list[float | None]:
     """Returns [repetitions, ROM degrees rounded to 0.1 (None: not measured)] of the server's analysis."""
-    from backend.analysis.report import analyze_recording
+    from kinect_agent.analysis.report import analyze_recording
 
     r = analyze_recording(rec, spec, filtered=filtered, angle_sd=angle_sd)
     return [r.repetitions, round(r.rom_deg, 1) if r.rom_deg is not None else None]
@@ -45,7 +45,7 @@ def _reps_rom(
 def one_set(exercise: str, seed: int, reps: int) -> dict[str, object]:
     """Returns {exercise, seed, truth/raw/before/refilter/stale: [repetitions, ROM degrees], max_diff_mm,
     seconds}."""
-    from backend.exercises.library import EXERCISES
+    from kinect_agent.analysis.exercise import EXERCISES
     from kinect_agent.formats import session_file as sf
     from kinect_agent.processing.config import PipelineConfig, config_for_device
     from kinect_agent.processing.pipeline import process
@@ -85,7 +85,7 @@ def real_set(movement: str, subject: str) -> dict[str, object]:
     """Returns one_set's fields (no truth) for the 10 episodes of a UI-PRMD movement m01-m10 of a subject."""
     from pathlib import Path
 
-    from backend.exercises.library import EXERCISES
+    from kinect_agent.analysis.exercise import EXERCISES
     from kinect_agent.formats import session_file as sf
     from kinect_agent.formats import ui_prmd
     from kinect_agent.processing.config import config_for_device

@@ -42,9 +42,9 @@ ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/repetitions.py` puts bench/ first, not the repository
     sys.path.insert(0, str(ROOT_DIR))
 
-from backend.exercises.library import EXERCISES  # noqa: E402
 from kinect_agent.analysis import series  # noqa: E402
 from kinect_agent.analysis.angles import counting_angles  # noqa: E402
+from kinect_agent.analysis.exercise import EXERCISES  # noqa: E402
 from kinect_agent.analysis.repetitions import count_repetitions  # noqa: E402
 from kinect_agent.formats import ui_prmd  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig  # noqa: E402
@@ -117,7 +117,7 @@ def print_report(rows: list[dict[str, Any]]) -> None:
 
 def count_simulated(t: np.ndarray, positions: np.ndarray, slug: str, smooth: bool = True) -> int:
     """Returns the count of positions: (T, J, 3) metres at t: (T,) s for the library exercise `slug`: as the server
-    counts (backend.analysis.report.analyze_recording: positions smoothed by series.smooth_positions, counting
+    counts (kinect_agent.analysis.report.analyze_recording: positions smoothed by series.smooth_positions, counting
     angles, count_repetitions), or with smooth=False on the angles of the positions as they are (as count() above
     and the UI-PRMD test)."""
     names = EXERCISES[slug].defining_angles

@@ -37,9 +37,9 @@ ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:
     sys.path.insert(0, str(ROOT_DIR))
 
-from backend.exercises.library import EXERCISES  # noqa: E402
 from bench.repetitions import DEVELOPED_ON, KINDS, MOVEMENTS, TRUE_COUNT, subjects, summary  # noqa: E402
 from kinect_agent.analysis.angles import counting_angles  # noqa: E402
+from kinect_agent.analysis.exercise import EXERCISES  # noqa: E402
 from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions  # noqa: E402
 from kinect_agent.formats import ui_prmd  # noqa: E402
 from kinect_agent.processing.pipeline import process  # noqa: E402

@@ -25,12 +25,12 @@ ROOT_DIR = Path(__file__).resolve().parents[1]
 if str(ROOT_DIR) not in sys.path:  # `python bench/session_detail.py` puts bench/ first, not the repository
     sys.path.insert(0, str(ROOT_DIR))
 
-from backend.exercises.library import EXERCISES  # noqa: E402
 from backend.sessions import detail, prepared  # noqa: E402
 from backend.sessions.metrics import json_ready  # noqa: E402
 from backend.sessions.models import ExerciseSession  # noqa: E402
 from backend.sessions.schemas import SessionDetailOut  # noqa: E402
 from bench.ingest import session_file  # noqa: E402
+from kinect_agent.analysis.exercise import EXERCISES  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -27,8 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from backend.exercises.library import EXERCISES as LIBRARY
 from kinect_agent.analysis import intervals, series
+from kinect_agent.analysis.exercise import EXERCISES as LIBRARY
 from kinect_agent.analysis.range_of_motion import range_of_motion
 from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.processing import uncertainty

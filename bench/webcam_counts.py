@@ -1,4 +1,4 @@
-"""Repetition counts of webcam-like sets: the stored session's count (backend.analysis.report.analyze_recording on
+"""Repetition counts of webcam-like sets: the stored session's count (kinect_agent.analysis.report.analyze_recording on
 the filtered recording) with the webcam's filter, with the former chain filter, and on the unfiltered landmarks.
 
     nice -n 10 .venv/bin/python bench/webcam_counts.py [--reps 5] [--seeds 0 1] [--cases full shallow]
@@ -53,9 +53,9 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from backend.analysis.report import analyze_recording  # noqa: E402
-from backend.exercises.library import EXERCISES as LIBRARY  # noqa: E402
+from kinect_agent.analysis.exercise import EXERCISES as LIBRARY  # noqa: E402
 from kinect_agent.analysis.live import LiveCount  # noqa: E402
+from kinect_agent.analysis.report import analyze_recording  # noqa: E402
 from kinect_agent.formats.session_file import on_grid  # noqa: E402
 from kinect_agent.processing.config import PipelineConfig, config_for_device  # noqa: E402
 from kinect_agent.processing.online import live_filter  # noqa: E402

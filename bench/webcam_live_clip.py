@@ -27,10 +27,10 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from backend.analysis.report import analyze_recording  # noqa: E402
 from backend.camera.skeleton import camera_frames, to_recording  # noqa: E402
-from backend.exercises.library import EXERCISES  # noqa: E402
+from kinect_agent.analysis.exercise import EXERCISES  # noqa: E402
 from kinect_agent.analysis.live import LiveCount  # noqa: E402
+from kinect_agent.analysis.report import analyze_recording  # noqa: E402
 from kinect_agent.formats.session_file import on_grid  # noqa: E402
 from kinect_agent.processing.config import config_for_device  # noqa: E402
 from kinect_agent.processing.online import live_filter  # noqa: E402

@@ -21,7 +21,7 @@ endpoint is requested once, as Maria, or as her therapist where only staff may a
 skeleton, both) and their reads. For each request the CPU time of the process that does the work (the server;
 the worker for a build, from the upload's answer or the first ask until the answer is ready) is read from
 /proc/<pid>/stat, and its peak resident memory above the request's start from /proc/<pid>/status (VmHWM, reset
-through /proc/<pid>/clear_refs before each request). Budgets (backend.analysis.work_budget, docs/deployment.md):
+through /proc/<pid>/clear_refs before each request). Budgets (backend.session_texts.work_budget, docs/deployment.md):
 upload, replay and export builds their own, every other read of the session the session page's ("detail"), per
 started 10 minutes of recording. Exit status 1 when a request fails (4xx, 5xx) or exceeds its budget.
 """
@@ -45,10 +45,10 @@ import httpx
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from backend.analysis import work_budget  # noqa: E402
 from backend.config import Settings  # noqa: E402
 from backend.demo import DEMO_PASSWORD  # noqa: E402
 from backend.jobs.worker import KINDS  # noqa: E402
+from backend.session_texts import work_budget  # noqa: E402
 from backend.sessions import prepared_export  # noqa: E402
 from bench.crowd import demo_clinic  # noqa: E402
 from bench.dashboard_load import ROOT, free_port, start_server, stop_server  # noqa: E402

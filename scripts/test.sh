@@ -52,7 +52,7 @@ LOGS="$(mktemp -d)"
 trap 'rm -rf "$LOGS"' EXIT
 NO_DATABASE=(tests/kinect_agent/body tests/kinect_agent/evaluation tests/kinect_agent/export tests/kinect_agent/formats
   tests/kinect_agent/live tests/kinect_agent/processing tests/kinect_agent/sources tests/kinect_agent/vendor tests/bench)
-ANALYSIS=(tests/kinect_agent/analysis tests/backend/analysis)  # no database either: in the PostgreSQL pass only
+ANALYSIS=(tests/kinect_agent/analysis tests/backend/session_texts)  # no database either: in the PostgreSQL pass only
 # The browser pass gets a database of its own beside PG_URL's (NAME_browser): its servers' LISTEN/NOTIFY events must
 # not reach the other pass's listeners, and two schemas of one database would share them.
 BROWSER_PG_URL="$(python - "$PG_URL" <<'PY'

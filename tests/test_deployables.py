@@ -68,6 +68,7 @@ SIDE_TESTS = {
         "tests/kinect_agent/test_held_sessions.py",
         "tests/kinect_agent/analysis/test_quality.py",  # the session metrics' one home ships with the agent
         "tests/kinect_agent/analysis/test_range_of_motion.py",
+        "tests/kinect_agent/analysis/test_indicators.py",  # the document and its indicators, from the exercise spec
     ),
     "server": (
         "tests/installed_alone.py::test_the_server_alone",

@@ -152,6 +152,7 @@ def test_no_import_runs_against_the_layers():
         ("server", "backend/x.py", "import kinect_agent.commands.run"),
         ("demo", "backend/demo_agents.py", "from kinect_agent.commands import pair"),
         ("processing", "kinect_agent/processing/x.py", "from ..sources import simulator"),
+        ("analysis", "kinect_agent/analysis/x.py", "from backend.exercises.library import LIBRARY"),
     ],
 )
 def test_a_bad_import_is_caught(tmp_path, monkeypatch, row, module, bad_import):
@@ -162,13 +163,32 @@ def test_a_bad_import_is_caught(tmp_path, monkeypatch, row, module, bad_import):
     for package in PACKAGES:
         (tmp_path / package).mkdir()
         (tmp_path / package / "__init__.py").write_text("")
-    for name in ("processing", "sources", "formats", "commands"):
+    for name in ("processing", "sources", "formats", "commands", "analysis"):
         (tmp_path / "kinect_agent" / name).mkdir()
         (tmp_path / "kinect_agent" / name / "__init__.py").write_text("")
     (tmp_path / module).write_text(bad_import + "\n")
     entries, allowed = read_layers()
     found = violations(entries, allowed)
     assert len(found) == 1 and f"({row} may not import" in found[0], found
+
+
+def agent_imports_of_the_server() -> list[str]:
+    """Returns one line per import of backend, frontend or migrations by a module of kinect_agent: file:line."""
+    modules = project_modules()
+    return [
+        f"{imp.path.relative_to(ROOT)}:{imp.line}: {imp.importer} -> {imp.imported}"
+        for name, path in modules.items()
+        if _within(name, "kinect_agent")
+        for imp in imports_of(name, path, modules)
+        if not _within(imp.imported, "kinect_agent")
+    ]
+
+
+def test_the_agent_never_imports_the_server():
+    """Whatever the table says: the agent (its analysis above all, the one home of a session's analysis) ships alone,
+    so none of its modules imports the server or the pages."""
+    found = agent_imports_of_the_server()
+    assert not found, "the agent imports the server:\n" + "\n".join(found)
 
 
 def test_the_package_pairs_name_real_packages():

@@ -107,6 +107,7 @@ class Subscriber:
             self.queue.put_nowait(ev)
 
 
+RETRY_MS = 3000  # how long a page's stream waits before reconnecting (both streams' "retry:" line)
 MAX_STREAMS_PER_USER = 50  # open event streams of one user per server process (a closed page may linger 15 s)
 
 

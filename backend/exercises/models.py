@@ -1,4 +1,4 @@
-"""The built-in exercise library as a table (seeded from backend.exercises.library.EXERCISES)."""
+"""The built-in exercise library as a table (seeded from backend.exercises.library.LIBRARY)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Exercise library queries, and syncing the table from backend.exercises.library.EXERCISES."""
+"""Exercise library queries, and syncing the table from backend.exercises.library.LIBRARY."""
 
 from __future__ import annotations
 
@@ -11,14 +11,15 @@ from backend.exercises.models import Exercise
 
 
 def sync_exercise_library(*, db_session: Session) -> int:
-    """Inserts or updates one row per entry of backend.exercises.library.EXERCISES; returns the number synced."""
-    from backend.exercises.library import EXERCISES
+    """Inserts or updates one row per entry of backend.exercises.library.LIBRARY; returns the number synced."""
+    from backend.exercises.library import LIBRARY
 
     existing = {e.slug: e for e in db_session.scalars(select(Exercise))}
-    for slug, spec in EXERCISES.items():
+    for slug, entry in LIBRARY.items():
         row = existing.get(slug) or Exercise(slug=slug, created_at=utcnow())
-        row.name = spec.name
-        row.instructions = spec.instructions
+        spec = entry.spec
+        row.name = entry.name
+        row.instructions = entry.instructions
         row.defining_angles = list(spec.defining_angles)
         row.plane = spec.plane
         row.normal_range_min_deg = float(spec.normal_range_deg[0])
@@ -27,7 +28,7 @@ def sync_exercise_library(*, db_session: Session) -> int:
         row.uiprmd_movement = spec.uiprmd_movement
         db_session.add(row)
     db_session.flush()
-    return len(EXERCISES)
+    return len(LIBRARY)
 
 
 def list_exercises(*, db_session: Session, limit: int, offset: int) -> tuple[list[Exercise], int]:

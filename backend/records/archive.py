@@ -14,7 +14,6 @@ from typing import IO, Any
 from sqlalchemy import or_, select
 from sqlalchemy.orm import Session
 
-from backend.analysis import reasons
 from backend.audit.models import AuditEvent
 from backend.camera.models import CameraConsent, CameraSet
 from backend.config import Settings
@@ -29,6 +28,7 @@ from backend.patients.models import TherapistPatient
 from backend.plans.models import Plan, PlanItem
 from backend.reminders.models import ReminderSent
 from backend.replies.models import AdviceReply
+from backend.session_texts import reasons
 from backend.sessions import prepared_export
 from backend.sessions import service as sessions
 from backend.sessions.export import SessionExports, export_context, session_exports
@@ -214,7 +214,7 @@ def _sessions(
     db_session: Session, pid: int, out: _Zip, settings: Settings, reader: Translator, progress: Progress
 ) -> tuple[list[dict[str, Any]], dict[int, list[str]]]:
     """Writes every session's file and exports; returns sessions.json's entries (the metrics' reasons in the
-    reader's language: backend.analysis.reasons) and the incomplete sessions."""
+    reader's language: backend.session_texts.reasons) and the incomplete sessions."""
     earlier: dict[int, list[dict[str, Any]]] = {}
     for v, current in db_session.execute(
         select(SessionMetricVersion, ExerciseSession.content_hash)

@@ -29,7 +29,6 @@ from sqlalchemy.orm import Session
 from backend import __version__
 from backend.database import utcnow
 from backend.exceptions import InvalidInput, PatientNotFound
-from backend.exercises.library import EXERCISES, ExerciseSpec
 from backend.exercises.models import Exercise
 from backend.jobs.errors import PermanentJobError
 from backend.jobs.models import SessionMetricVersion
@@ -43,6 +42,7 @@ from backend.sessions.service import session_file
 from backend.storage import get_store
 from backend.users.models import User
 from kinect_agent.analysis.document import AnalysisDocument, read_if_readable
+from kinect_agent.analysis.exercise import EXERCISES, ExerciseSpec
 from kinect_agent.formats import session_file as khs
 from kinect_agent.processing import provenance
 from kinect_agent.processing.config import config_for_device

@@ -27,12 +27,12 @@ from reportlab.platypus import KeepTogether, Paragraph, SimpleDocTemplate, Space
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from backend.analysis.reasons import written
 from backend.exceptions import InvalidInput
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
 from backend.i18n import ENGLISH
 from backend.plans.models import Plan, PlanItem
+from backend.session_texts.reasons import written
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.suggestions import service as suggestions
 from backend.suggestions.models import Suggestion

@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from backend.analysis import data_quality, work_budget
 from backend.replay import socketless
+from backend.session_texts import data_quality, work_budget
 from kinect_agent import skeleton
 from kinect_agent.formats.session_file import SessionPayload
 from kinect_agent.processing.config import PipelineConfig

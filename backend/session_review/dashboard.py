@@ -15,12 +15,12 @@ from typing import Any
 from sqlalchemy import ScalarSelect, func, or_, select
 from sqlalchemy.orm import Session, aliased
 
-from backend.analysis import reasons
 from backend.exercises.models import Exercise
 from backend.feeling.models import SessionFeeling
 from backend.i18n import Translator
 from backend.plans.models import Plan, PlanItem
 from backend.replies.models import AdviceReply
+from backend.session_texts import reasons
 from backend.sessions import triage
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.sessions.triage import week_start

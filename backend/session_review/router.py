@@ -9,7 +9,6 @@ from fastapi import APIRouter, Depends, Query, Request, Response, status
 from sqlalchemy.orm import Session
 from starlette.concurrency import run_in_threadpool
 
-from backend.analysis import reasons
 from backend.config import Settings
 from backend.database import utcnow
 from backend.db_slots import lease_of
@@ -44,10 +43,12 @@ from backend.schemas import DateTimeQuery, IdPath, IdQuery, Page, PageParams, pa
 from backend.session_review import dashboard
 from backend.session_review import service as review
 from backend.session_review.schemas import SessionOut
+from backend.session_texts import reasons
 from backend.sessions import prepared, service
-from backend.sessions.common import SlugQuery, audit, audit_patients, aware, item_fields, stored_metrics
+from backend.sessions.deps import SlugQuery
 from backend.sessions.ingest import check_declared_length, check_owner, decode_upload, read_limited
 from backend.sessions.schemas import DashboardRowOut, ProgressOut, ProgressPoint, SummaryOut
+from backend.sessions.service import audit, audit_patients, aware, item_fields, stored_metrics
 from backend.suggestions import service as suggestions_service
 
 router = APIRouter(prefix="/api/v1", tags=["sessions"])

@@ -1,5 +1,5 @@
 """The therapist's session page: a stored session's file decoded and measured again for the evidence behind its
-numbers (backend.analysis.session_detail, data_quality, camera_advice).
+numbers (backend.session_texts.session_detail, data_quality, camera_advice).
 
 It costs seconds on a long recording (the outlier model), so a job-queue worker computes it once and keeps it in
 the object store (backend.sessions.prepared); requests read that.
@@ -12,9 +12,13 @@ from typing import Any
 import numpy as np
 from pydantic import ValidationError
 
-from backend.analysis import data_quality, reasons, work_budget
-from backend.analysis.camera_advice import advice_text, camera_advice
-from backend.analysis.session_detail import (
+from backend.exceptions import InvalidSessionFile
+from backend.exercises.library import LIBRARY
+from backend.i18n import ENGLISH, N_, Translator
+from backend.jobs.listing import error_words
+from backend.session_texts import data_quality, reasons, work_budget
+from backend.session_texts.camera_advice import advice_text, camera_advice
+from backend.session_texts.session_detail import (
     angle_curves,
     angular_speeds,
     curve_words,
@@ -23,13 +27,10 @@ from backend.analysis.session_detail import (
     measured_angles,
     peak_speeds,
 )
-from backend.exceptions import InvalidSessionFile
-from backend.exercises.library import EXERCISES, ExerciseSpec
-from backend.i18n import ENGLISH, N_, Translator
-from backend.jobs.listing import error_words
 from backend.sessions.models import ExerciseSession
 from kinect_agent.analysis.document import AnalysisReport, RepetitionItem, UnreadableDocument, read_report
 from kinect_agent.analysis.errors import AnalysisError
+from kinect_agent.analysis.exercise import ExerciseSpec
 from kinect_agent.analysis.reasons import Reason
 from kinect_agent.analysis.validity import recorded_with, session_validity
 from kinect_agent.formats import session_file
@@ -91,7 +92,7 @@ def analysis_document(
 ) -> tuple[AnalysisReport | None, str]:
     """Returns (document, "stored" or "recomputed"): the stored one (any schema version), else analyze_recording's
     (None on failure)."""
-    from backend.analysis.report import analyze_recording
+    from kinect_agent.analysis.report import analyze_recording
 
     if stored is not None:
         try:
@@ -166,7 +167,8 @@ def detail_body(
 ) -> dict[str, Any]:
     """Returns the detail body of a session row, its exercise slug, stored metrics document and file bytes."""
     payload = decode_stored(data, session_id=session.id, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
-    spec = EXERCISES.get(slug) if slug else None
+    entry = LIBRARY.get(slug) if slug else None
+    spec = entry.spec if entry is not None else None
     analysed = work_budget.thinned(payload)  # the work is bounded by the duration, whatever the frame rate
     doc, source = analysis_document(analysed, spec, stored)
     reps = doc.repetition_list if doc is not None else []
@@ -178,7 +180,7 @@ def detail_body(
         "session_id": session.id,
         "patient_id": session.patient_id,
         "exercise_slug": slug,
-        "exercise_name": spec.name if spec is not None else None,
+        "exercise_name": entry.name if entry is not None else None,
         "started_at": session.started_at,
         "status": session.status,
         "error": session.error,
@@ -224,7 +226,7 @@ def in_language(body: dict[str, Any], t: Translator) -> dict[str, Any]:
     """Returns a detail body (keys: SessionDetailOut, as stored in English) with its texts in t's language: why the
     session failed (the program's own words for a clinic's reader only), the curves' labels, the data-quality
     labels, the camera advice (from its code and params; advice stored before params keeps its text), the analysis'
-    reasons (backend.analysis.reasons), the uncertainty note, why balance was not measured, and the device's
+    reasons (backend.session_texts.reasons), the uncertainty note, why balance was not measured, and the device's
     limits."""
     curves = [c | curve_words(c["angle"], c["kind"], t) for c in body.get("curves", [])]
     said: dict[str, Any] = {"curves": curves, "error": error_words(body.get("error"), t)}  # for every reader

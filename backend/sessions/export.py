@@ -8,13 +8,13 @@ from typing import Any
 
 from sqlalchemy.orm import Session
 
-from backend.analysis import reasons
 from backend.exceptions import ExportUnavailable
-from backend.exercises.library import EXERCISES
 from backend.feeling.service import get_feeling
 from backend.i18n import ENGLISH
+from backend.session_texts import reasons
 from backend.sessions import service
 from backend.sessions.detail import analysis_document, decode_stored
+from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.export.fhir import Feeling, SessionContext
 from kinect_agent.export.files import ExportError, ExportFile, export
 

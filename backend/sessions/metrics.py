@@ -5,13 +5,13 @@ from __future__ import annotations
 
 from typing import Any
 
-from backend.exercises.library import ExerciseSpec
 from kinect_agent.analysis.document import (
     AnalysisDocument,
     AnalysisReport,
     Indicators,
     json_ready,
 )
+from kinect_agent.analysis.exercise import ExerciseSpec
 from kinect_agent.formats.session_file import SessionPayload
 
 __all__ = ["ANALYSIS_VERSION", "indicator_scores", "json_ready", "metrics_document", "scalar_columns"]
@@ -30,8 +30,8 @@ def metrics_document(
     (backend.sessions.history.session_history, its readable ones).
     Raises kinect_agent.analysis.errors.AnalysisError when the recording cannot be analysed.
     """
-    from backend.analysis.indicators import indicators
-    from backend.analysis.report import analyze_recording
+    from kinect_agent.analysis.indicators import indicators
+    from kinect_agent.analysis.report import analyze_recording
 
     report = analyze_recording(payload.raw, spec, filtered=payload.filtered, angle_sd=payload.angle_sd)
     found = indicators(report, exercise=spec, target_reps=target_reps, history=history)

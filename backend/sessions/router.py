@@ -27,7 +27,7 @@ from backend.exceptions import (
 )
 from backend.schemas import DateTimeQuery, IdPath, IdQuery, Page, PageParams, page_params
 from backend.sessions import prepared, prepared_export, service
-from backend.sessions.common import SlugQuery, audit, audit_patients, aware, item_fields
+from backend.sessions.deps import SlugQuery
 from backend.sessions.encoding import accepts_gzip
 from backend.sessions.export import session_export
 from backend.sessions.schemas import (
@@ -35,6 +35,7 @@ from backend.sessions.schemas import (
     SessionDetailOut,
     SessionItemOut,
 )
+from backend.sessions.service import audit, audit_patients, aware, item_fields
 from kinect_agent.export.files import ExportFormat as ExportFormatName
 
 router = APIRouter(prefix="/api/v1", tags=["sessions"])

@@ -269,7 +269,7 @@ class BalanceOut(BaseModel):
 
 
 class CurveOut(BaseModel):
-    """One joint-angle curve of a session, thinned by min/max decimation (backend.analysis.session_detail)."""
+    """One joint-angle curve of a session, thinned by min/max decimation (backend.session_texts.session_detail)."""
 
     angle: str = Field(description="clinical angle name (kinect_agent.body.angles)", examples=["knee_flexion_R"])
     kind: str = Field(description="'raw', 'filtered', or 'smoothed' (raw smoothed: the file had no filtered one)")
@@ -323,7 +323,7 @@ class WorkspaceOut(BaseModel):
 
 
 class QualityPartOut(BaseModel):
-    """One part of the data-quality score (backend.analysis.data_quality)."""
+    """One part of the data-quality score (backend.session_texts.data_quality)."""
 
     name: str = Field(description="'tracked_fraction', 'outlier_fraction' or 'segment_spread_mm'")
     label: str = Field(description="the part in words, in the reader's language")
@@ -333,7 +333,7 @@ class QualityPartOut(BaseModel):
 
 
 class AdviceOut(BaseModel):
-    """One piece of camera advice in plain words (backend.analysis.camera_advice)."""
+    """One piece of camera advice in plain words (backend.session_texts.camera_advice)."""
 
     code: str = Field(
         description="too_close, too_far, off_centre, hand_out_of_view, foot_out_of_view or feet_cut_off: stable, "

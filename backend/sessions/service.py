@@ -5,16 +5,27 @@ from __future__ import annotations
 
 import datetime as dt
 import uuid
+from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
+from pydantic import ValidationError
 from sqlalchemy import ColumnElement, Select, func, select
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from backend import __version__
+from backend.audit.service import record, record_patients
 from backend.database import utcnow
-from backend.exceptions import ExerciseNotFound, SessionConflict, SessionFileRemoved, SessionNotFound
+from backend.exceptions import (
+    ExerciseNotFound,
+    MetricsUnreadable,
+    SessionConflict,
+    SessionFileRemoved,
+    SessionNotFound,
+)
 from backend.exercises.models import Exercise
+from backend.i18n import ENGLISH, Translator
+from backend.jobs.listing import error_words
 from backend.jobs.models import SessionMetricVersion
 from backend.patients.models import TherapistPatient
 from backend.patients.service import visible_patients_query
@@ -24,7 +35,7 @@ from backend.sessions.metrics import json_ready, metrics_document, scalar_column
 from backend.sessions.models import ExerciseSession, SessionMetric
 from backend.storage import get_store
 from backend.users.models import User
-from kinect_agent.analysis.document import AnalysisDocument
+from kinect_agent.analysis.document import AnalysisDocument, UnreadableDocument, read_document
 from kinect_agent.analysis.errors import AnalysisError
 from kinect_agent.processing.errors import ProcessingError
 
@@ -64,7 +75,7 @@ def _analyse(
     *, db_session: Session, upload: Upload, patient_id: int, exercise: Exercise
 ) -> tuple[AnalysisDocument | None, str | None]:
     """Returns (metrics document, None), or (None, reason) when the analysis cannot use the recording."""
-    from backend.exercises.library import EXERCISES
+    from kinect_agent.analysis.exercise import EXERCISES
 
     spec = EXERCISES.get(exercise.slug)
     if spec is None:
@@ -282,3 +293,89 @@ def find_exercise_id(*, db_session: Session, slug: str) -> int:
     if exercise_id is None:
         raise ExerciseNotFound(f"exercise '{slug}' does not exist")
     return exercise_id
+
+
+# ---------------------------------------------------------------------------------------------- what the routers share
+
+
+def audit(
+    db_session: Session,
+    caller: Caller,
+    action: str,
+    session_id: int | None,
+    patient_id: int,
+    detail: dict[str, Any] | None = None,
+) -> None:
+    record(
+        db_session=db_session,
+        caller=caller,
+        action=action,
+        object_type="exercise_session",
+        object_id=session_id,
+        patient_id=patient_id,
+        detail=detail,
+    )
+
+
+def audit_patients(
+    db_session: Session, caller: Caller, action: str, patient_ids: Iterable[int], detail: dict[str, Any] | None = None
+) -> None:
+    """Adds what audit adds once per patient, in one flush."""
+    record_patients(
+        db_session=db_session,
+        caller=caller,
+        action=action,
+        object_type="exercise_session",
+        patient_ids=patient_ids,
+        detail=detail,
+    )
+
+
+def aware(when: dt.datetime | None) -> dt.datetime | None:
+    """Returns when with UTC assumed if it carries no time zone."""
+    return when.replace(tzinfo=dt.UTC) if when is not None and when.tzinfo is None else when
+
+
+def stored_metrics(session_id: int, document: dict[str, Any]) -> AnalysisDocument:
+    """Returns a session's stored metrics document as today's model; raises MetricsUnreadable naming what no
+    schema version reads."""
+    try:
+        return read_document(document)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        where = ".".join(str(p) for p in first["loc"])
+        raise MetricsUnreadable(
+            f"the stored metrics document of session {session_id} cannot be read: {where}: {first['msg']}"
+        ) from None
+    except UnreadableDocument as exc:
+        raise MetricsUnreadable(f"the stored metrics document of session {session_id} cannot be read: {exc}") from None
+
+
+def item_fields(
+    session: ExerciseSession,
+    slug: str | None,
+    reps: int | None,
+    rom: float | None,
+    quality: bool | None,
+    t: Translator = ENGLISH,
+) -> dict[str, Any]:
+    """Returns the fields of a session's list item; its failure in t's words (jobs.listing.error_words)."""
+    return {
+        "id": session.id,
+        "client_session_id": session.client_session_id,
+        "patient_id": session.patient_id,
+        "device_id": session.device_id,
+        "exercise_slug": slug,
+        "started_at": session.started_at,
+        "duration_s": session.duration_s,
+        "n_frames": session.n_frames,
+        "file_size": session.file_size,
+        "content_hash": session.content_hash,
+        "status": session.status,
+        "error": error_words(session.error, t),
+        "repetitions": reps,
+        "rom_deg": rom,
+        "quality_ok": quality,
+        "created_at": session.created_at,
+        "file_removed_at": session.file_removed_at,
+    }

@@ -47,9 +47,9 @@ from dataclasses import dataclass, field
 from statistics import median
 from typing import Any
 
-from backend.analysis import reasons
-from backend.exercises.library import EXERCISES
+from backend.exercises.library import LIBRARY
 from backend.i18n import N_, Translator
+from backend.session_texts import reasons
 from kinect_agent.analysis.balance import MIN_STANDING_S
 from kinect_agent.analysis.document import Indicators
 
@@ -113,7 +113,7 @@ def window_start(now: dt.datetime) -> dt.datetime:
 
 def _name(slug: str, t: Translator = ENGLISH) -> str:
     """Returns the exercise's name as the library and the pages write it ("squat" -> "Mini squat")."""
-    spec = EXERCISES.get(slug)
+    spec = LIBRARY.get(slug)
     return t.gettext(spec.name) if spec is not None else slug.replace("_", " ")
 
 
@@ -372,7 +372,7 @@ def balance_missing(
     latest_indicators: Indicators | None, exercise_slug: str | None, t: Translator = ENGLISH
 ) -> str | None:
     """Returns why the latest indicators have no balance score, in words (t's language, the analysis' own reason
-    too: backend.analysis.reasons), or None when they have one."""
+    too: backend.session_texts.reasons), or None when they have one."""
     if latest_indicators is None:
         return t.gettext("Not measured: no analysed session yet")
     if latest_indicators.balance.score is not None:

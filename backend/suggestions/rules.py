@@ -18,7 +18,7 @@ from typing import Any, Literal, TypeVar
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from backend.exercises.library import EXERCISES
+from backend.exercises.library import LIBRARY
 from backend.i18n import ENGLISH, N_, Translator
 from backend.sessions.history import HISTORY_WINDOW_DAYS
 from kinect_agent.analysis.document import AnalysisReport
@@ -120,7 +120,7 @@ def exercise_plural(slug: object, t: Translator = ENGLISH) -> str:
     """Returns how the patient counts repetitions of an exercise: 'sit-to-stands', 'mini squats'; 'repetitions'
     for an unknown exercise. In the other languages: the exercise's translated name, which their sentences use as
     a label."""
-    spec = EXERCISES.get(slug) if isinstance(slug, str) else None
+    spec = LIBRARY.get(slug) if isinstance(slug, str) else None
     if t.locale != ENGLISH.locale:
         return t.gettext(spec.name) if spec is not None else t.gettext("repetitions")
     if spec is None:
@@ -265,7 +265,7 @@ def advice_text(rule: str, metric: str, params: AdviceParams, t: Translator = EN
         )  # fmt: skip
     if rule == MISSED_DAYS:
         active = _need(params.active_days, "active_days", rule)
-        known = params.exercise in EXERCISES
+        known = params.exercise in LIBRARY
         return t.ngettext(
             "In the 7 days up to %(date)s you did %(what)s on %(num)d day. Your plan asks for %(expected)s days a "
             "week. Try to choose a fixed time of day for your exercises.",

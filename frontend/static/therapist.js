@@ -35,7 +35,7 @@
       sparkline(t.weekly_median), el("span", { class: "arrow" }, ARROWS[t.direction]));
   }
 
-  /** Returns an indicator's measured number in the page's language with its unit (backend/analysis/indicators.py):
+  /** Returns an indicator's measured number in the page's language with its unit (kinect_agent/analysis/indicators.py):
    *  flexibility degrees, endurance repetitions, strength s (sit-to-stand rise time) or °/s, balance m/s said in cm/s. */
   function measured(name, ind, v) {
     if (v === null || v === undefined) return "—";

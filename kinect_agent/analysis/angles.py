@@ -12,7 +12,7 @@ splitting or hiding repetitions. The elevation is the 3-D angle between the thig
 direction (−up of angles.body_frame), in [0, 180] degrees and continuous; it equals |hip flexion| (|hip abduction|)
 while the thigh moves in the sagittal (frontal) plane. Its sign is the sign of the measured angle's median over the
 frames where the thigh is raised more than 20°. The counter's signal only: the repetitions' peaks are reported on the
-measured angles (backend.analysis.report.measured_peak). The shoulder angles stay planar: there the elevation would
+measured angles (kinect_agent.analysis.report.measured_peak). The shoulder angles stay planar: there the elevation would
 count the idle arm's sideways drift (UI-PRMD shoulder extension), the plane does not; they are counted also where the
 arm is out of their plane (joint_angles(mask_off_plane=False)), where the measured angle is undefined (why:
 bench/README.md, "Clinical angles: why each convention").

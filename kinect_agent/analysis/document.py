@@ -1,9 +1,10 @@
 """The analysis document of one session as pydantic models (versioned), and reading stored documents of any version.
 
-The server's analysis (backend.analysis.report.analyze_recording) builds an AnalysisReport; at ingest the server
-adds the four indicators and the analysis version (backend.sessions.metrics) and stores the AnalysisDocument as
-`model_dump(mode="json")`. Storage, the API, the pages and the exports read it through `read_document` (or
-`read_report`, `read_if_readable`, `read_indicators`), which upgrade an older stored shape first (`upgrade`).
+The analysis (kinect_agent.analysis.report.analyze_recording) builds an AnalysisReport; at ingest the server adds
+the four indicators (kinect_agent.analysis.indicators) and the analysis version (backend.sessions.metrics) and
+stores the AnalysisDocument as `model_dump(mode="json")`. Storage, the API, the pages and the exports read it
+through `read_document` (or `read_report`, `read_if_readable`, `read_indicators`), which upgrade an older stored
+shape first (`upgrade`).
 The models live beside the agent's analysis because the agent's exports (kinect_agent.export) read the same
 document.
 
@@ -144,7 +145,7 @@ class Quality(_Part):
 
 
 class Indicator(_Part):
-    """One of the four indicators (backend.analysis.indicators)."""
+    """One of the four indicators (kinect_agent.analysis.indicators)."""
 
     score: float | None = Field(description="0..100; None when it cannot be scored")
     value: int | float | None = Field(description="the measured number it scores (unit in basis); None: missing")
@@ -329,7 +330,7 @@ def _upgrade_2_to_3(doc: dict[str, Any]) -> dict[str, Any]:
 
 
 # Schema 3 to 4: each English basis read back as its message. The patterns are those of the English words
-# backend.analysis.indicators wrote from 2026-11-24 to schema 3 (not the messages' words, which are new)
+# kinect_agent.analysis.indicators wrote from 2026-11-24 to schema 3 (not the messages' words, which are new)
 _NUMBER = r"-?\d+(?:\.\d+)?(?:e[-+]?\d+)?"
 _RANGE = rf"against the normal range (?P<low>{_NUMBER})\.\.(?P<high>{_NUMBER}) deg"
 _ENGLISH_BASES = tuple((message, re.compile(pattern)) for message, pattern in (

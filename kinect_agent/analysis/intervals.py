@@ -27,7 +27,7 @@ Error model of one metric m (degrees), measured on simulated sessions with known
                per-(motion, view) coverage deviates from 95 % (RMS) at most 10 % more than the least deviation on
                the grid; B is one quantile (the same for every angle and metric) of the B each training interval
                needs, set so that 95.5 % of the training intervals cover the truth.
-               tests/backend/analysis/test_intervals_calibration.py holds the coverage on held-out sessions; the
+               tests/kinect_agent/analysis/test_intervals_calibration.py holds the coverage on held-out sessions; the
                fits, their data and the measured coverage are in bench/README.md ("Uncertainty: angle SDs and
                95 % intervals" and the sections after it). Limits: B is 0 for all angles but trunk lateral
                flexion, so a bias that holds still (no tail) is not widened for; the constants are fitted on

@@ -1,7 +1,7 @@
 """Live feedback while a patient does a set: the repetition count, the defining angle now, and a hint in plain words
 when the camera sees the patient badly. Frames arrive one by one (about 30 Hz) from the online filter.
 
-Count. The same logic as the server's analysis of a stored session (backend/analysis/report.py): the filtered
+Count. The same logic as the server's analysis of a stored session (kinect_agent/analysis/report.py): the filtered
 positions are smoothed (series.smooth_positions), turned into counting angles (angles.counting_angles) and
 counted (repetitions.count_repetitions, with the rest level where the set starts). It runs every `every_s`
 seconds of recording on a window of recent frames, not at every frame. The window starts CONTEXT_S before the
@@ -20,14 +20,14 @@ Otherwise (the evaluations agree) a new repetition is shown at once. final() sho
 (a repetition the counter recognises late is never lost).
 Floor. A device with a NoiseFloor (the webcam) drops excursions smaller than its floor, measured once on the set's
 first START_S seconds (amplitude_floor, from the frames of those seconds only), as soon as they are over; until
-then its bound. The stored count measures it on the same frames (backend/analysis/report.py): one floor.
+then its bound. The stored count measures it on the same frames (kinect_agent/analysis/report.py): one floor.
 Still. still_s counts the seconds since the dominant defining angle last moved: its range over the last
 MOVE_WINDOW_S seconds reached MOVE_DEG.
 Hints. From the raw frames of the last HINT_S seconds, in this order: the trunk (ROOT, SPINE) seen in less than
 half of them; the trunk closer than NEAR_M or farther than FAR_M; the trunk off-centre by more than
 OFF_CENTRE_FRAC of half the horizontal field of view; the limbs of the defining angles not tracked in more than
 LIMB_MISSING of them. The thresholds are those of the server's camera advice after a session
-(backend/analysis/camera_advice.py); the agent does not import the server, so they are repeated here.
+(backend/session_texts/camera_advice.py); the agent does not import the server, so they are repeated here.
 """
 
 from __future__ import annotations

@@ -79,7 +79,7 @@ def assess(raw: Recording, measured: np.ndarray | None, angle_names: tuple[str, 
         dist = series.norm3(raw.positions[:, joints] - sub)
         far = present & (np.nan_to_num(dist, nan=np.inf) > OUTLIER_M)
         outliers = float(far.sum() / present.sum()) if present.any() else 0.0
-    reasons = []  # ids and numbers, as the document stores them (backend.analysis.reasons writes them for a reader)
+    reasons = []  # ids and numbers, as the document stores them (backend.session_texts.reasons writes them out)
     if raw.n_frames < MIN_FRAMES:
         reasons.append(why.TOO_FEW_FRAMES.reason(frames=raw.n_frames, needed=MIN_FRAMES))
     if raw.duration < MIN_DURATION_S:

@@ -1,10 +1,10 @@
 """The analysis' reasons: why a session's quality check failed (kinect_agent.analysis.quality.assess), why an angle's
 95 % interval is withheld (kinect_agent.analysis.intervals.withheld_reason) and why balance was not measured
 (kinect_agent.analysis.balance.missing_reason); and the indicators' bases: how each indicator was scored
-(backend.analysis.indicators, BASES, stored as a `Basis` from schema 4 on).
+(kinect_agent.analysis.indicators, BASES, stored as a `Basis` from schema 4 on).
 
 The analysis document (schema 3, kinect_agent.analysis.document) stores a reason as a `Reason`: the id of one of
-MESSAGES and its numbers; the server writes it in the reader's language from them (backend.analysis.reasons). Each
+MESSAGES and its numbers; the server writes it in the reader's language from them (backend.session_texts.reasons). Each
 message is a catalogue msgid of the `messages` domain (backend.i18n.catalogues extracts the N_ marks of this file:
 this layer cannot import the server's). A reason an older analysis stored as a text no message matches is kept as
 that text (id None).
@@ -170,7 +170,7 @@ MESSAGES = (TOO_FEW_FRAMES, TOO_SHORT, TOO_LITTLE_TRACKED, TOO_MANY_ERRORS, GAPS
             NEVER_STILL)  # fmt: skip
 BY_ID = {m.id: m for m in MESSAGES}
 
-# backend.analysis.indicators: how each indicator was scored (the indicator's "basis")
+# kinect_agent.analysis.indicators: how each indicator was scored (the indicator's "basis")
 BASIS_FLEXIBILITY = Message(
     "flexibility_normal_range",
     N_("median amplitude of the %(angle)s over the repetitions, against its normal range of %(low)s to %(high)s°"),

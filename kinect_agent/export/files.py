@@ -85,7 +85,7 @@ def export(
 ) -> ExportFile:
     """Returns `payload` exported as `fmt` (one of FORMATS); raises ExportError for an unknown format or missing input.
 
-    document: the session's analysis document (backend.analysis.report plus "indicators"); needed by fhir.
+    document: the session's analysis document (kinect_agent.analysis.report plus "indicators"); needed by fhir.
     context: ids for fhir (default: the file's session id and created_at, no patient or device), and how the set felt
     (fhir and csv). stem: file name stem.
     """

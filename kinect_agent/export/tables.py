@@ -11,7 +11,7 @@ Every table is comma-separated UTF-8 with a header row, numbers with a dot, empt
                       an angle is undefined.
     feeling.csv       (server exports of a session the patient answered for) pain_nrs (0-10 numeric rating
                       scale), effort_borg_cr10 (0-10 in halves), answered_at (ISO 8601 UTC); empty = skipped.
-The metrics and repetitions come from the server's analysis document (backend.analysis.report.analyze_recording
+The metrics and repetitions come from the server's analysis document (kinect_agent.analysis.report.analyze_recording
 plus "indicators"); the angles from the session file itself.
 """
 

@@ -10,10 +10,10 @@ from typing import Any
 import pytest
 
 import backend.i18n as i18n
-from backend.analysis import data_quality
-from backend.analysis.camera_advice import advice_text
 from backend.i18n import Translator, translator
 from backend.i18n.catalogues import marks_in_template_literals
+from backend.session_texts import data_quality
+from backend.session_texts.camera_advice import advice_text
 from backend.sessions import detail
 from kinect_agent.analysis.validity import REASONS
 from tests.backend.khs_files import make_khs_at_distance, make_processed_khs
@@ -146,7 +146,7 @@ def test_a_patient_reads_the_curves_labels_in_their_language(
 
 @pytest.mark.parametrize("locale", ["de", "es", "fr"])
 def test_every_angle_has_words_in_every_language(locale):
-    from backend.analysis.session_detail import ANGLE_WORDS, angle_label
+    from backend.session_texts.session_detail import ANGLE_WORDS, angle_label
     from kinect_agent.body.angles import ANGLE_NAMES
 
     assert set(ANGLE_WORDS) == set(ANGLE_NAMES), "an angle without words"
@@ -373,12 +373,12 @@ def test_an_english_basis_stored_before_ids_is_read_in_the_readers_language(clie
 
 
 def detail_angles() -> set[str]:
-    from backend.analysis.session_detail import ANGLE_WORDS
+    from backend.session_texts.session_detail import ANGLE_WORDS
 
     return set(ANGLE_WORDS)
 
 
 def angle_words(angle: str, locale: str) -> str:
-    from backend.analysis.session_detail import angle_label
+    from backend.session_texts.session_detail import angle_label
 
     return angle_label(angle, translator(locale))

@@ -9,7 +9,7 @@ import pytest
 from sqlalchemy import event
 
 from backend.database import utcnow
-from backend.exercises.library import EXERCISES
+from backend.exercises.library import LIBRARY
 from backend.i18n import Translator
 from backend.plans.models import Plan, PlanItem
 from backend.session_review import dashboard
@@ -255,7 +255,7 @@ def test_a_falling_range_of_motion_scores_higher_with_the_reason_in_words(
     _plan(db_session, patient, therapist, exercise, THURSDAY_NOON.date() - dt.timedelta(days=40))
     _on_plan_history(store, patient, exercise, recent_rom=60.0)
     row = _summary(db_session, patient)
-    name = EXERCISES[exercise.slug].name  # the library's name, as the pages show it
+    name = LIBRARY[exercise.slug].name  # the library's name, as the pages show it
     expected = round(35 * ((90 - 60) / 90 - 0.10) / 0.30)
     assert row["attention_score"] == expected and row["attention_level"] == "soon", row
     assert row["attention_reasons"] == [
@@ -273,7 +273,7 @@ def test_falling_repetitions_are_a_reason_and_poor_quality_sessions_do_not_count
     _on_plan_history(store, patient, exercise, recent_reps=5)
     store(patient, exercise, THURSDAY_NOON - dt.timedelta(hours=1), rom=20.0, reps=1, quality_ok=False)
     row = _summary(db_session, patient)
-    name = EXERCISES[exercise.slug].name
+    name = LIBRARY[exercise.slug].name
     assert row["attention_reasons"] == [
         f"Repetitions of {name} fell from 10 to 5 (median of the last 7 days against the 4 weeks before)",
         "1 of the last 5 sessions recorded with poor tracking quality",
@@ -317,7 +317,7 @@ def test_missing_balance_is_explained_in_words(db_session, make_user, exercise, 
     patient = make_user("patient")
     store(patient, exercise, THURSDAY_NOON - dt.timedelta(days=1))
     row = _summary(db_session, patient)
-    name = EXERCISES[exercise.slug].name
+    name = LIBRARY[exercise.slug].name
     assert row["balance_missing"] == (f"Not measured: no still standing of 2 s or more in the last session ({name})")
     doc = document(reps=5, rom=50.0, quality_ok=True, exercise=exercise.slug)
     doc["indicators"]["balance"]["score"] = 80.0

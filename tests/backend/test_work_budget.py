@@ -1,5 +1,5 @@
 """A session file cannot choose the server's work: its params["config"] is recorded, not obeyed, and the frames
-analysed are bounded by the recording's duration (backend.analysis.work_budget)."""
+analysed are bounded by the recording's duration (backend.session_texts.work_budget)."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from backend.analysis import work_budget
 from backend.replay import scene
+from backend.session_texts import work_budget
 from backend.sessions.detail import detail_body
 from backend.sessions.models import ExerciseSession
 from kinect_agent.formats import session_file as sf

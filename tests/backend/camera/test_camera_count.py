@@ -16,10 +16,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-from backend.analysis.report import analyze_recording
 from backend.camera import live_count
-from backend.exercises.library import EXERCISES
+from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.analysis.live import LiveCount
+from kinect_agent.analysis.report import analyze_recording
 from kinect_agent.formats.session_file import on_grid
 from kinect_agent.processing.config import config_for_device
 from kinect_agent.processing.online import live_filter

@@ -11,16 +11,16 @@ import dataclasses
 
 import numpy as np
 
-from backend.analysis.report import analyze_recording
-from backend.exercises.library import EXERCISES
 from backend.records.reanalysis import refiltered
+from kinect_agent.analysis.exercise import EXERCISES
+from kinect_agent.analysis.report import analyze_recording
 from kinect_agent.capture import make_payload
 from kinect_agent.formats import session_file as sf
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.recording import Recording
 from kinect_agent.sources.simulator import simulate
-from tests.backend.analysis._data import uiprmd
 from tests.backend.khs_files import make_khs
+from tests.kinect_agent.analysis._data import uiprmd
 
 WHEN = "2026-11-20T10:00:00Z"
 

@@ -10,8 +10,8 @@ from kinect_agent import skeleton
 from kinect_agent.formats.session_file import SessionPayload
 from kinect_agent.recording import Recording
 from kinect_agent.sources.simulator import simulate
-from tests.backend.analysis._data import uiprmd
 from tests.backend.replay.viser_file import node_points, read_viser
+from tests.kinect_agent.analysis._data import uiprmd
 
 SEEDS = (1, 2, 3)
 

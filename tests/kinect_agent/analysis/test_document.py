@@ -1,6 +1,6 @@
 """The analysis document's models: today's documents read back unchanged, every older stored shape still reads.
 
-documents/ holds one stored document of each shape the server has written (backend/analysis/report.py's history):
+documents/ holds one stored document of each shape the server has written (kinect_agent/analysis/report.py's history):
 schema1_2026-11-23 (01f63ce: the first metrics), schema1_2026-11-25 (c83a249: + 95 % intervals),
 schema1_2026-11-27 (b6dadc9 + d8eeccf: + balance in standing phases, analysis version), schema2 (4bb313d: the
 reasons in English words), schema3 (schema2 as the analysis of 2026-11-27 wrote it, each reason a message id and its
@@ -145,7 +145,7 @@ def test_the_openapi_schema_describes_every_field() -> None:
     assert schema["$defs"]["Balance"]["properties"]["sway_velocity_m_s"]["description"].endswith("m/s")
 
 
-# one English text per reason as schema 1 and 2 stored it (backend/analysis before 83dc753 wrote the same words),
+# one English text per reason as schema 1 and 2 stored it (backend/session_texts before 83dc753 wrote the same words),
 # with the id and numbers schema 3 reads it as
 # fmt: off
 ENGLISH = {
@@ -237,8 +237,8 @@ def test_an_unknown_reason_id_or_wrong_numbers_are_refused_by_name() -> None:
     assert read_if_readable(stored) is None
 
 
-# one English basis per message as schema 1 to 3 stored it (backend/analysis/indicators.py from 2026-11-24 to schema 3
-# wrote these words), with the id and values schema 4 reads it as
+# one English basis per message as schema 1 to 3 stored it (the indicators, then backend/analysis/indicators.py, from
+# 2026-11-24 to schema 3 wrote these words), with the id and values schema 4 reads it as
 ENGLISH_BASES = {
     "median amplitude of knee_flexion_R against the normal range 0..135 deg": (
         "flexibility_normal_range", {"angle": "knee_flexion_R", "low": 0, "high": 135}),

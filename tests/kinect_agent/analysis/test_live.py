@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from backend.exercises.library import EXERCISES
 from kinect_agent.analysis import live, series
 from kinect_agent.analysis.angles import counting_angles
+from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.analysis.live import LiveCount, hint, limb_joints
 from kinect_agent.analysis.repetitions import count_repetitions
 from kinect_agent.body.angles import body_frame, joint_angles

@@ -11,11 +11,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from backend.analysis.report import analyze_recording
-from backend.exercises.library import EXERCISES
 from kinect_agent.analysis import live
+from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.analysis.live import CONFIRM_S, UNSETTLED_S, LiveCount
 from kinect_agent.analysis.repetitions import Repetition, RepetitionResult
+from kinect_agent.analysis.report import analyze_recording
 from kinect_agent.formats.session_file import on_grid
 from kinect_agent.processing.config import config_for_device
 from kinect_agent.processing.online import live_filter

@@ -11,10 +11,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from backend.analysis.report import analyze_recording
-from backend.exercises.library import EXERCISES
+from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.analysis.live import DEVICE_NOISE_FLOOR, LiveCount, amplitude_floor, counting_params
 from kinect_agent.analysis.repetitions import START_S
+from kinect_agent.analysis.report import analyze_recording
 from kinect_agent.formats.session_file import on_grid
 from kinect_agent.processing.config import config_for_device
 from kinect_agent.processing.joint_smoother import forward_joints

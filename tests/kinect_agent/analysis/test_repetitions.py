@@ -5,15 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from backend.exercises.library import EXERCISES
 from kinect_agent.analysis import series
 from kinect_agent.analysis.angles import counting_angles
+from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
 from kinect_agent.body.angles import joint_angles
 from kinect_agent.processing.pipeline import process
 from kinect_agent.sources.simulator import EXERCISES as SIMULATED
 from kinect_agent.sources.simulator import simulate, simulate_truth
-from tests.backend.analysis._data import noisy, uiprmd
+from tests.kinect_agent.analysis._data import noisy, uiprmd
 
 
 def _count(rec, slug: str):

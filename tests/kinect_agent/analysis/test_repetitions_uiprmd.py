@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from backend.exercises.library import EXERCISES
 from kinect_agent.analysis.angles import counting_angles
+from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.analysis.repetitions import count_repetitions
 from kinect_agent.formats import ui_prmd
 from kinect_agent.processing.pipeline import process

@@ -7,7 +7,7 @@ import pytest
 from scipy.ndimage import gaussian_filter1d
 
 from kinect_agent.analysis import series
-from tests.backend.analysis._data import noisy
+from tests.kinect_agent.analysis._data import noisy
 
 
 def _reference(t: np.ndarray, positions: np.ndarray) -> np.ndarray:

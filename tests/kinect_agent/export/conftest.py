@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from backend.analysis.report import get_exercise
 from backend.sessions.metrics import metrics_document
 from kinect_agent.analysis.document import AnalysisDocument, AnalysisReport
+from kinect_agent.analysis.exercise import get_exercise
 from kinect_agent.formats import session_file as sf
 from kinect_agent.sources.simulator import simulate
 

@@ -8,8 +8,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from backend.exercises.library import EXERCISES
 from kinect_agent import formats
+from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.live.set_recorder import SetCommand, SetLimits, SetRecorder
 from kinect_agent.recording import Recording
 from kinect_agent.sources.replay import ReplaySource

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import pytest
 
-from backend.analysis.report import analyze_recording
-from backend.exercises.library import EXERCISES
+from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.analysis.live import LiveCount
+from kinect_agent.analysis.report import analyze_recording
 from kinect_agent.formats.session_file import as_stored
 from kinect_agent.processing.config import config_for_device
 from kinect_agent.processing.online import live_filter

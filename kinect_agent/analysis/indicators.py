@@ -2,7 +2,7 @@
 
 Each indicator (kinect_agent.analysis.document.Indicator) is {"score": 0..100 or None, "value": the measured
 number or None, "basis": how it was scored (a Basis: a message of kinect_agent.analysis.reasons.BASES and its
-numbers, written in the reader's language by backend.analysis.reasons), "quality_ok": the document's quality ok and
+numbers, written in the reader's language by backend.session_texts.reasons), "quality_ok": the document's quality ok and
 the value present, "previous": median value of the history or None}.
 history = earlier documents of the same patient and exercise, oldest first (their own values are re-read, so a
 change of definition applies to the whole history).
@@ -28,9 +28,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from backend.exercises.library import ExerciseSpec
 from kinect_agent.analysis import reasons as why
 from kinect_agent.analysis.document import AnalysisReport, BalanceIndicator, Indicator, Indicators
+from kinect_agent.analysis.exercise import ExerciseSpec
 from kinect_agent.analysis.reasons import Basis
 
 FAST_RISE_S, SLOW_RISE_S = 0.5, 2.0

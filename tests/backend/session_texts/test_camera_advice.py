@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from backend.analysis.camera_advice import camera_advice, out_of_view_fractions
+from backend.session_texts.camera_advice import camera_advice, out_of_view_fractions
 from kinect_agent.skeleton import INDEX, INFERRED, NOT_TRACKED
-from tests.backend.analysis._data import noisy, uiprmd
+from tests.kinect_agent.analysis._data import noisy, uiprmd
 
 SEEDS = (1, 2, 3)
 

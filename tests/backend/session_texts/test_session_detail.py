@@ -7,8 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from backend.analysis.report import analyze_recording
-from backend.analysis.session_detail import (
+from backend.session_texts.session_detail import (
     MAX_CURVE_POINTS,
     angle_curves,
     angle_label,
@@ -20,10 +19,11 @@ from backend.analysis.session_detail import (
     minmax_indices,
     peak_speeds,
 )
-from backend.exercises.library import EXERCISES
 from kinect_agent.analysis.document import RepetitionItem
+from kinect_agent.analysis.exercise import EXERCISES
+from kinect_agent.analysis.report import analyze_recording
 from kinect_agent.body.angles import DOMAIN_DEG
-from tests.backend.analysis._data import noisy, uiprmd
+from tests.kinect_agent.analysis._data import noisy, uiprmd
 
 SEEDS = (1, 2, 3)
 

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from backend.analysis import data_quality
-from backend.analysis.data_quality import (
+from backend.session_texts import data_quality
+from backend.session_texts.data_quality import (
     LOW_SCORE,
     assess,
     outlier_probabilities,
@@ -17,9 +17,9 @@ from backend.analysis.data_quality import (
     quality_score,
     segment_spread_mm,
 )
-from backend.exercises.library import EXERCISES
+from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.skeleton import INDEX, NOT_TRACKED
-from tests.backend.analysis._data import noisy, uiprmd
+from tests.kinect_agent.analysis._data import noisy, uiprmd
 
 SEEDS = (1, 2, 3)
 KNEES = EXERCISES["squat"].defining_angles

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 from typing import TypeVar
 
-from backend.analysis.session_detail import angle_label
 from backend.i18n import Translator
+from backend.session_texts.session_detail import angle_label
 from kinect_agent.analysis.document import INDICATOR_NAMES, AnalysisDocument, AnalysisReport, Indicators
 from kinect_agent.analysis.reasons import MESSAGES, Kind, Reason, UnknownReason, message_of
 

@@ -1,5 +1,6 @@
-"""The analysis' reasons (backend.analysis.reasons): stored as a message id and its numbers, written in the reader's
-language from them with the locale's numbers; a text an older analysis stored (matching no message) stays as stored."""
+"""The analysis' reasons (backend.session_texts.reasons): stored as a message id and its numbers, written in the
+reader's language from them with the locale's numbers; a text an older analysis stored (matching no message) stays as
+stored."""
 
 from __future__ import annotations
 
@@ -7,14 +8,14 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
-from backend.analysis import reasons
-from backend.analysis.report import analyze_recording
-from backend.exercises.library import EXERCISES
 from backend.i18n import Translator, translator
+from backend.session_texts import reasons
 from kinect_agent.analysis import balance, intervals, quality
 from kinect_agent.analysis import reasons as why
 from kinect_agent.analysis.document import reason_of_text
+from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.analysis.reasons import Reason, UnknownReason
+from kinect_agent.analysis.report import analyze_recording
 from kinect_agent.recording import Recording
 from kinect_agent.sources.simulator import simulate_truth
 from tests.kinect_agent.analysis.test_document import ENGLISH
@@ -89,7 +90,7 @@ def test_a_reason_refuses_missing_or_extra_numbers():
         why.GAPS.reason(frames=3)
 
 
-# one basis per message, with values as backend.analysis.indicators writes them
+# one basis per message, with values as kinect_agent.analysis.indicators writes them
 BASES = [why.BASIS_FLEXIBILITY.basis(angle="hip_abduction_L", low=0, high=45),
          why.BASIS_FLEXIBILITY_NO_ANGLE.basis(low=0, high=45), why.BASIS_ENDURANCE_TARGET.basis(target=12),
          why.BASIS_ENDURANCE_USUAL.basis(usual=8.5), why.BASIS_ENDURANCE_NONE.basis(),

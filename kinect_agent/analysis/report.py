@@ -1,4 +1,5 @@
-"""The analysis document of one session, and `coach-server analyze FILE --exercise NAME [--json]`.
+"""The analysis document of one session, the one home of the session analysis: the server stores it with each
+upload, `coach-server analyze FILE --exercise NAME` prints it (backend.session_texts.summary).
 
 analyze_recording measures a recording that has already been through the agent's pipeline (or is clean, like
 simulated truth); analyze_file reads any format kinect_agent.formats knows, takes the filtered recording of a
@@ -9,23 +10,18 @@ The document's shape is kinect_agent.analysis.document.AnalysisReport (versioned
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
-import json
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from backend.analysis import reasons
-from backend.exercises.library import EXERCISES, ExerciseSpec
-from backend.i18n import ENGLISH
 from kinect_agent.analysis import activity, quality
 from kinect_agent.analysis.angles import counting_angles, measured_angles
 from kinect_agent.analysis.balance import missing_reason, sway
 from kinect_agent.analysis.document import AnalysisReport, json_ready
-from kinect_agent.analysis.errors import AnalysisError, UnknownExercise, UnreadableRecording
+from kinect_agent.analysis.errors import AnalysisError, UnreadableRecording
+from kinect_agent.analysis.exercise import ExerciseSpec, get_exercise
 from kinect_agent.analysis.intervals import KINDS, beyond_raw, beyond_raw_reason, count_interval, rom_intervals
 from kinect_agent.analysis.live import amplitude_floor, counting_params, counting_positions, done_repetitions
 from kinect_agent.analysis.most_moving import most_moving_joints
@@ -38,13 +34,6 @@ from kinect_agent.body.angles import body_frame, joint_angles
 from kinect_agent.errors import FormatError
 from kinect_agent.processing.params import KinematicParams
 from kinect_agent.recording import Recording
-
-
-def get_exercise(slug: str) -> ExerciseSpec:
-    """Returns the library exercise `slug`; raises UnknownExercise listing the known slugs."""
-    if slug not in EXERCISES:
-        raise UnknownExercise(f"unknown exercise {slug!r}; known exercises: {', '.join(sorted(EXERCISES))}")
-    return EXERCISES[slug]
 
 
 def _measured_positions(
@@ -246,72 +235,3 @@ def analyze_file(path: str | Path, exercise_slug: str) -> AnalysisReport:
     exercise = get_exercise(exercise_slug)
     raw, filtered, angle_sd = load(path)
     return analyze_recording(raw, exercise, filtered=filtered, angle_sd=angle_sd)
-
-
-def _balance_line(doc: AnalysisReport) -> str:
-    """Returns the balance in one line: sway velocity with its 95 % interval, or why it was not measured."""
-    b = doc.balance
-    if b is None:
-        missing = "" if doc.balance_missing is None else reasons.written(doc.balance_missing, ENGLISH)
-        return f"balance: not measured: {missing}"
-    interval = "" if b.sway_velocity_95 is None else (
-        f" (95 % {100 * b.sway_velocity_95[0]:.2f}-{100 * b.sway_velocity_95[1]:.2f})"
-    )  # fmt: skip
-    return f"balance: sway {100 * b.sway_velocity_m_s:.2f} cm/s{interval} over {b.standing_s:.1f} s standing"
-
-
-def _summary(doc: AnalysisReport) -> str:
-    q = doc.quality
-    lines = [
-        f"{doc.exercise}: {doc.repetitions} repetitions in {doc.duration_s:.1f} s "
-        f"({doc.n_frames} frames at {doc.rate_hz:.1f} Hz)",
-        f"defining angle {doc.defining_angle}, median amplitude {doc.rom_deg} deg",
-        f"quality: {'ok' if q.ok else 'NOT ok'} (tracked {q.tracked_fraction:.0%}, "
-        f"outliers {q.outlier_fraction:.1%}){''.join('; ' + reasons.written(r, ENGLISH) for r in q.reasons)}",
-        _balance_line(doc),
-    ]
-    lines += [
-        f"  #{r.index + 1}: {r.start_s:.2f}-{r.end_s:.2f} s, amplitude {r.amplitude_deg} deg, "
-        f"peak {r.peak_deg} deg, {r.side}"
-        for r in doc.repetition_list
-    ]
-    return "\n".join(lines)
-
-
-def build_parser() -> argparse.ArgumentParser:
-    """Returns the parser of `coach-server analyze`."""
-    parser = argparse.ArgumentParser(prog="coach-server analyze", description="Analyse one recording file.")
-    add_arguments(parser)
-    return parser
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Declares FILE, --exercise and --json on parser."""
-    parser.add_argument("file", help="a recording in any format the agent reads (.khs, .csv, UI-PRMD, ...)")
-    parser.add_argument("--exercise", required=True, help=f"exercise slug ({', '.join(sorted(EXERCISES))})")
-    parser.add_argument("--json", action="store_true", help="print the full JSON document instead of a summary")
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Runs `coach-server analyze`; prints the report; returns 0, or 2 after a one-line error on stderr."""
-    try:
-        args = build_parser().parse_args(sys.argv[1:] if argv is None else list(argv))
-    except SystemExit as exc:  # --help (0) or a usage error (2, already printed by argparse)
-        return int(exc.code or 0)
-    return run(args)
-
-
-def run(args: argparse.Namespace) -> int:
-    """Analyses args.file as args.exercise; prints the report; returns 0, or 2 after a one-line error."""
-    try:
-        doc = analyze_file(args.file, args.exercise)
-    except AnalysisError as exc:
-        print(f"coach-server analyze: error: {exc}", file=sys.stderr)
-        return 2
-    document = reasons.with_texts(doc, ENGLISH).model_dump(mode="json") | {"source": str(args.file)}
-    print(json.dumps(document, indent=2, allow_nan=False) if args.json else _summary(doc))
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

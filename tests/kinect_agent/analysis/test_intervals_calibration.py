@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from backend.exercises.library import EXERCISES as LIBRARY
 from kinect_agent.analysis import intervals, series
+from kinect_agent.analysis.exercise import EXERCISES as LIBRARY
 from kinect_agent.analysis.range_of_motion import range_of_motion
 from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.processing.pipeline import process

@@ -6,10 +6,10 @@ from typing import Any
 
 import pytest
 
-from backend.analysis import indicators as indicators_module
-from backend.analysis.report import analyze_recording
-from backend.exercises.library import EXERCISES
+from kinect_agent.analysis import indicators as indicators_module
 from kinect_agent.analysis.document import AnalysisReport, read_report
+from kinect_agent.analysis.exercise import EXERCISES
+from kinect_agent.analysis.report import analyze_recording
 from kinect_agent.sources.simulator import simulate_truth
 
 KEYS = {"score", "value", "basis", "quality_ok", "previous"}

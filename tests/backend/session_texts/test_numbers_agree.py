@@ -27,13 +27,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from backend.analysis.report import analyze_recording
 from backend.demo import PATIENTS
-from backend.exercises.library import EXERCISES
 from backend.sessions.detail import detail_body
 from backend.sessions.models import ExerciseSession
 from kinect_agent import formats
 from kinect_agent.analysis import intervals
+from kinect_agent.analysis.exercise import EXERCISES
+from kinect_agent.analysis.report import analyze_recording
 from kinect_agent.body.angles import ANGLE_NAMES, DOMAIN_DEG, joint_angles
 from kinect_agent.capture import capture, make_payload
 from kinect_agent.export import tables

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import pytest
 
-from backend.analysis.report import analyze_recording
-from backend.exercises.library import EXERCISES
+from kinect_agent.analysis.exercise import EXERCISES
+from kinect_agent.analysis.report import analyze_recording
 from kinect_agent.processing.pipeline import process
 
 from ._data import uiprmd

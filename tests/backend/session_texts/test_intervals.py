@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from backend.analysis import reasons
-from backend.exercises.library import EXERCISES
 from backend.i18n import translator
+from backend.session_texts import reasons
 from kinect_agent.analysis import intervals, series
 from kinect_agent.analysis.angles import counting_angles
+from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.analysis.reasons import Reason
 from kinect_agent.body.angles import joint_angles
 from kinect_agent.processing.pipeline import process
