@@ -9,16 +9,21 @@ recordings are counted with them. Prints per held-out subject and movement exact
 thresholds each fold chose, and beside them the shipped defaults on the same recordings. Counted as
 bench/repetitions.py counts (the raw recording's defining angles; --filtered: after the home agent's pipeline).
 
+--add-rules: the grid is ADD_GRID (the two tests of an added shallow repetition: its rise, add_rise_ratio × M, and
+how far apart the rest levels on its two sides may be, add_levels_frac × M), ties to ADD_BEFORE.
 --rules: the grid is RULE_GRID instead (the rules of issue 24 point 4 on or off: a shallow excursion kept for a
 cadence slot of its own, the spacing percentile of the added shallow repetitions, an added one timed by its width at
 half its own rise), ties going to the rules as they were before (RULE_BEFORE). --mixes N adds, per subject and movement,
 N recordings of 10 episodes drawn without replacement from that subject's 10 correct and 10 incorrect ones (seeded;
 --mix-seed K draws another N): new sessions of the same people, with correct and incorrect repetitions mixed as a
 patient mixes them, each exactly 10 repetitions; they are reported apart (kind "mixed") and count in the choice on
-the four subjects.
+the four subjects. --join chain joins the same drawn episodes as a chain_order (each next one the episode that
+begins nearest where the one before ends, from where the subject's takes begin) instead of in the order drawn: the
+real recordings' consecutive episodes continue each other (junction jumps p50 1.0°, p90 4.1°), episodes of two takes
+joined at random do not (p50 3.7°, p90 16.8°); both are printed.
 
-    python bench/repetitions_loso.py [--data ../shared/data] [--filtered] [--rules] [--mixes 20] [--mix-seed 0]
-                                     [--json OUT]
+    python bench/repetitions_loso.py [--data ../shared/data] [--filtered] [--rules | --add-rules] [--mixes 20]
+                                     [--mix-seed 0] [--join shuffled|chain] [--json OUT]
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ import argparse
 import itertools
 import json
 import sys
+import warnings
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -58,8 +64,16 @@ RULE_GRID: dict[str, tuple[float, ...]] = {
     "add_spacing_pct": (50.0, 33.0, 25.0),
     "add_half_width": (False, True),
 }
+# --add-rules: the two tests of _add_shallow (the rise, the one rest level), the other rules as shipped
+ADD_GRID: dict[str, tuple[float, ...]] = {
+    "add_rise_ratio": (0.2, 0.15, 0.1),
+    "add_levels_frac": (0.1, 0.2, 0.3),
+}
+END_FRAMES = 5  # frames at each end of an episode whose median is its first / last value (_ends)
 # the counter before those rules
 RULE_BEFORE = RepetitionParams(slot_keeps_shallow=False, add_spacing_pct=50.0, add_half_width=False)
+# the added repetition's tests as they were before ADD_GRID
+ADD_BEFORE = RepetitionParams(add_rise_ratio=0.2, add_levels_frac=0.1)
 
 
 def recordings(data: Path, filtered: bool) -> list[dict[str, Any]]:
@@ -78,10 +92,41 @@ def recordings(data: Path, filtered: bool) -> list[dict[str, Any]]:
     return out
 
 
-def mixes(data: Path, n: int, filtered: bool, seed: int = 0) -> list[dict[str, Any]]:
+def _ends(rec: Recording, names: tuple[str, ...]) -> np.ndarray:
+    """Returns (2, A) degrees: the median of the first and of the last END_FRAMES frames of each defining angle."""
+    angles = counting_angles(rec.positions, names)
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # an angle untracked at an end: NaN, ignored by _jump
+        return np.array([[np.nanmedian(angles[n][sl]) for n in names]
+                         for sl in (slice(0, END_FRAMES), slice(-END_FRAMES, None))])  # fmt: skip
+
+
+def _jump(before: np.ndarray, after: np.ndarray) -> float:
+    """Returns the largest |after − before| over the angles (A,) degrees where both are known, 0.0 where none is."""
+    d = np.abs(np.asarray(after) - np.asarray(before))
+    return float(np.nanmax(d)) if np.isfinite(d).any() else 0.0
+
+
+def chain_order(drawn: list[int], ends: list[np.ndarray], start: np.ndarray) -> list[int]:
+    """Returns the drawn episodes (indices into ends: (2, A) first and last values each) as a nearest-end chain: from
+    the posture the subject's takes begin in (start: (A,) degrees), each next episode the one whose first values are
+    nearest the last values of the one before (largest angle difference; ties to the order drawn)."""
+    left, order, here = list(drawn), [], start
+    while left:
+        nxt = min(left, key=lambda k: _jump(here, ends[k][0]))
+        order.append(nxt)
+        left.remove(nxt)
+        here = ends[nxt][1]
+    return order
+
+
+def mixes(data: Path, n: int, filtered: bool, seed: int = 0, join: str = "shuffled") -> list[dict[str, Any]]:
     """Returns, per subject (s01-s05) and movement, n entries like recordings()'s (kind "mixed"): 10 episodes drawn
     without replacement from the subject's 10 correct and 10 incorrect ones (seed from subject, movement and `seed`;
-    seed 0 draws the mixes of 2026-11-27)."""
+    seed 0 draws the mixes of 2026-11-27), joined in the order drawn (join "shuffled", as on 2026-11-27) or as a
+    chain_order (join "chain": the same episodes, each next one beginning where the one before ends, as consecutive
+    episodes of a real take do). Each entry also has "jumps": the largest defining-angle jump at each junction
+    (degrees, _jump of the last and first END_FRAMES frames' medians)."""
     out = []
     for subject in sorted(DEVELOPED_ON):
         for movement in MOVEMENTS:
@@ -91,11 +136,34 @@ def mixes(data: Path, n: int, filtered: bool, seed: int = 0) -> list[dict[str, A
                 parts += [ui_prmd.read_episode(path) for path in sorted(files)]
             rng = np.random.default_rng(1000 * int(subject[1:]) + int(movement[1:]) + 100_000 * seed)
             names = next(s for s in EXERCISES.values() if s.uiprmd_movement == movement).defining_angles
+            ends = [_ends(part, names) for part in parts]
+            # where the subject's two takes begin: the first values of each take's first episode, averaged
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)  # an angle untracked at both: NaN, ignored by _jump
+                start = np.nanmean([ends[0][0], ends[len(parts) // 2][0]], axis=0)
             for _ in range(n):
-                rec = Recording.concatenate([parts[k] for k in rng.choice(len(parts), TRUE_COUNT, replace=False)])
+                order = [int(k) for k in rng.choice(len(parts), TRUE_COUNT, replace=False)]
+                order = chain_order(order, ends, start) if join == "chain" else order
+                rec = Recording.concatenate([parts[k] for k in order])
                 rec = process(rec).filtered if filtered else rec
+                jumps = [_jump(ends[a][1], ends[b][0]) for a, b in itertools.pairwise(order)]
                 out.append({"kind": "mixed", "subject": subject, "movement": movement, "t": rec.t, "names": names,
-                            "angles": counting_angles(rec.positions, names)})  # fmt: skip
+                            "angles": counting_angles(rec.positions, names), "jumps": jumps})  # fmt: skip
+    return out
+
+
+def real_jumps(data: Path) -> list[float]:
+    """Returns the largest defining-angle jump (degrees) at every junction of the real recordings: each kind's
+    consecutive episodes e01-e10 of s01-s05, as recordings() joins them."""
+    out = []
+    for folder in KINDS.values():
+        kinect = data / "ui-prmd" / folder / "Kinect"
+        for subject in sorted(DEVELOPED_ON):
+            for movement in MOVEMENTS:
+                names = next(s for s in EXERCISES.values() if s.uiprmd_movement == movement).defining_angles
+                files = sorted(kinect.rglob(f"{movement}_{subject}_e*_positions*"))
+                ends = [_ends(ui_prmd.read_episode(path), names) for path in files]
+                out += [_jump(a[1], b[0]) for a, b in itertools.pairwise(ends)]
     return out
 
 
@@ -171,12 +239,25 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rules", action="store_true", help="choose among RULE_GRID instead of GRID")
     parser.add_argument("--mixes", type=int, default=0, help="episode mixes per subject and movement (0: none)")
     parser.add_argument("--mix-seed", type=int, default=0, help="which draw of the mixes (0: those of 2026-11-27)")
+    parser.add_argument(
+        "--join",
+        choices=("shuffled", "chain"),
+        default="shuffled",
+        help="mixes joined in the order drawn, or each episode next to the one it continues best",
+    )
+    parser.add_argument("--add-rules", action="store_true", help="choose among ADD_GRID (the shipped rules otherwise)")
     parser.add_argument("--json", type=Path, help="also write the rows and the chosen thresholds to this file")
     args = parser.parse_args(argv)
     grid, reference = (RULE_GRID, RULE_BEFORE) if args.rules else (GRID, RepetitionParams())
-    recs = recordings(args.data, args.filtered) + mixes(args.data, args.mixes, args.filtered, args.mix_seed)
-    rows, chosen = loso(recs, grid, reference)
+    grid, reference = (ADD_GRID, ADD_BEFORE) if args.add_rules else (grid, reference)
+    mixed = mixes(args.data, args.mixes, args.filtered, args.mix_seed, args.join)
+    rows, chosen = loso(recordings(args.data, args.filtered) + mixed, grid, reference)
     print_report(rows, chosen)
+    if mixed:
+        real, joined = real_jumps(args.data), [j for r in mixed for j in r["jumps"]]
+        print("\nlargest defining-angle jump at each junction, degrees, p50 / p90 / p99 / max:")
+        for label, jumps in (("real recordings (consecutive episodes)", real), (f"mixes ({args.join})", joined)):
+            print(f"  {label}: " + " / ".join(f"{v:.1f}" for v in np.percentile(jumps, [50, 90, 99, 100])))
     if args.json:
         args.json.write_text(json.dumps({"rows": rows, "chosen": chosen, "grid": grid,
                                          "defaults": asdict(RepetitionParams())}, indent=2))  # fmt: skip

@@ -31,7 +31,8 @@ counted; each rule's exact form is the docstring of the function named:
     - below min_ratio × M is a bump, unless it reaches shallow_ratio × M and lasts shallow_duration × D (_drop_bumps);
     - a brief excursion that peaks close to a larger one is a rebound (_drop_rebounds); a shallow one with no slot of
       the cadence of its own is dropped (_drop_off_cadence); a shallow repetition the hysteresis missed is added where
-      the cadence has room for one and it lasts a repetition's time, measured at half its own rise
+      the cadence has room for one, it rises add_rise_ratio × M above both sides, the rest levels of its two sides
+      are within add_levels_frac × M and it lasts a repetition's time, measured at half its own rise
       (_add_shallow, add_half_width);
     - last, with min_amplitude_deg > 0 (a device's floor, kinect_agent.analysis.live.amplitude_floor), an excursion
       with a smaller amplitude is dropped.
@@ -71,6 +72,10 @@ class RepetitionParams:
     slot_keeps_shallow: bool = False  # a brief shallow excursion with a cadence slot of its own counts (_own_slot)
     add_spacing_pct: float = 33.0  # percentile of the peak-to-peak spacings that sets the room _add_shallow searches
     add_half_width: bool = True  # _add_shallow: a missed shallow one's width at half its rise against the cores
+    # _add_shallow's rise above both sides and how far apart its two sides' rest levels may be, × the counted ones'
+    # median amplitude M (levels: 0.1 until 2026-11-28, chosen leave one subject out; bench/README.md)
+    add_rise_ratio: float = 0.2
+    add_levels_frac: float = 0.3
     rest: str = "auto"  # "auto": step 3 of the module doc; "start": where the recording starts (a set counted live)
 
 
@@ -536,10 +541,11 @@ def _add_shallow(
     In each stretch between counted repetitions (and before the first, after the last) at least shallow_duration ×
     their median duration long, the highest point of e = |y − rest end| at least shallow_spacing × the
     add_spacing_pct percentile of their peak-to-peak spacings from every counted peak is a repetition when e falls
-    by shallow_ratio × their median amplitude M on both sides of it, to minima (the stretch's before and after it)
-    within onset_frac × M of each other, and its width at half its rise (frames) is at least shallow_duration × the
-    median core of the counted ones (without add_half_width: its onset and return, the last frame before and the
-    first after within onset_frac × M of those minima, are at least shallow_duration × the median duration apart).
+    by add_rise_ratio × their median amplitude M on both sides of it, to minima (the stretch's before and after it)
+    within add_levels_frac × M of each other (the rest may drift between repetitions), and its width at half its
+    rise (frames) is at least shallow_duration × the median core of the counted ones (without add_half_width: its
+    onset and return, the last frame before and the first after within onset_frac × M of those minima, are at least
+    shallow_duration × the median duration apart).
     Half heights, not a level common to all: the bar and the candidate are then timed alike whatever their heights,
     and half a shallow rise stands clear of the noise at rest, which a tenth of it does not. Only the stretches and
     frames that can hold one are searched, as array operations (no second pass of the detector: 0.1 ms on a
@@ -551,7 +557,8 @@ def _add_shallow(
     room = params.shallow_spacing * float(np.percentile(np.diff(peaks), params.add_spacing_pct))
     amplitude = float(np.median([ev.amplitude for ev in merged]))
     duration = params.shallow_duration * float(np.median([ev.end - ev.start for ev in merged]))
-    near = params.onset_frac * amplitude  # degrees: onset and return; and the two sides' rest levels differ by less
+    near = params.onset_frac * amplitude  # degrees: onset and return
+    levels = params.add_levels_frac * amplitude  # degrees: the two sides' rest levels differ by at most this
     core = params.shallow_duration * float(np.median([ev.core[1] - ev.core[0] for ev in merged]))  # frames
     spans = np.array([(ev.start, ev.end) for ev in merged])  # (n, 2) frames, inclusive
     depth = np.zeros(y.shape[0] + 3, dtype=np.int64)  # counted repetitions over each frame, padded by one each side
@@ -572,7 +579,7 @@ def _add_shallow(
         e = y[a:start] - rest.rest_deg if rest.rest_low else rest.rest_deg - y[a:start]
         p = f0 - a + int(np.argmax(e[f0 - a : f1 - a + 1]))
         base0, base1 = float(e[: p + 1].min()), float(e[p:].min())
-        if e[p] - max(base0, base1) < params.shallow_ratio * amplitude or abs(base0 - base1) > near:
+        if e[p] - max(base0, base1) < params.add_rise_ratio * amplitude or abs(base0 - base1) > levels:
             continue
         rise = float(e[p] - 0.5 * (base0 + base1))
         onset = int(np.flatnonzero(e[: p + 1] <= base0 + near)[-1])
