@@ -7,9 +7,9 @@
  * tracks fewer people than it looks for, so looking for two people when the patient is alone halves the frame rate.
  * `one` (numPoses 1: it tracks the patient from frame to frame) runs on every frame while the patient is alone;
  * `two` (numPoses 2) looks on the same frame once every CHECK_MS, and on every frame (`one` on none) from when it
- * finds two people until it has found at most one for ALONE_MS (it looks with a lower detection threshold,
- * TWO_DETECTION, for a second person the detector scores low): with two people in view the page gets both poses from
- * a landmarker looking for two on every frame, as before the watch (camera_checks.js keeps the patient, says so).
+ * finds two people until it has found at most one for ALONE_MS: with two people in view the page gets both poses
+ * from a landmarker looking for two on every frame, as before the watch (camera_checks.js keeps the patient and says
+ * so). A second person the detector scores low is noticed some seconds later than before (one look a second).
  *
  * load({base, model: "lite"|"full", delegates: ["GPU", "CPU"] | ["CPU"], mode?, poses?})
  *     -> {type: "loaded", model, delegate} | {type: "failed", error}
@@ -22,7 +22,7 @@
  *       frame. */
 export const CHECK_MS = 1000;  // alone: `two` looks for a second person at most this long apart (ms)
 export const ALONE_MS = 1000;  // in company: back to `one` after this long without a second person (ms)
-export const TWO_DETECTION = 0.3;  // `two`'s person detection threshold (`one`'s: MediaPipe's default 0.5): company.py
+export const TWO_DETECTION = 0.5;  // `two`'s person detection threshold, as `one`'s (MediaPipe's default)
 
 let vision = null, fileset = null, plain = null, image = false;
 let watch = null;  // {one, two, company, checkedMs, twoSeenMs}

@@ -12,13 +12,14 @@ lite 16.9 against 8.2 images/s in the Python runtime). So two landmarkers of the
   before the watch, and their rules (the patient is the one nearest to where the patient was; "someone else is in
   the picture") work as they did.
 
-`two` looks with a lower person-detection threshold (TWO_DETECTION_CONFIDENCE; `one` keeps MediaPipe's default 0.5,
-and the landmark model's presence threshold, 0.5, still decides who is a person): BlazePose's detector scores a
-second, smaller person near its threshold, so one look at 0.5 finds them in few images (Pose2Sim's two-person demo
-as tests/fake_camera.py plays it: 0-5 of 50 images per view) where 0.3 finds them in 6-17 of 50, with no more false
-second people on one person alone (Sports2D's walker: 1 of 115 images at 0.5 and at 0.3; 14 at 0.2). A looking
-landmarker on every image had 15 tries a second; the watch has one, so a second person the detector scores low is
-noticed a few seconds after they came into view (bench/README.md, "One person tracked, a look for a second").
+A landmarker looking for two on every image had 15 tries a second at finding a second person; the watch has one.
+BlazePose's detector scores a second, smaller person near its threshold (0.5): one look finds them in few images
+(Pose2Sim's two-person demo as tests/fake_camera.py plays it: 0-5 of 50 images per view), so such a person is noticed
+some seconds after they came into view (the patient is kept meanwhile: `one` follows one person, and the callers keep
+the one nearest to where the patient was). A lower threshold for `two` (0.3) found them in 6-17 of 50 images with no
+more false second people on one person alone, but then kept the watch in company on most images of the camera tests'
+clip, where a second person stands on a hut: slower than looking for two on every image (6.0 against 8.5 frames/s):
+not kept (TWO_DETECTION_CONFIDENCE; bench/README.md, "One person tracked, a look for a second").
 
 The browser page runs the same logic (frontend/static/camera_pose_core.js); tests/kinect_agent/sources/webcam/
 test_company.py holds the two to the same constants.
@@ -30,7 +31,7 @@ from typing import Any, Protocol
 
 CHECK_S = 1.0  # alone: the look for a second person, at most this long apart (s of the images' time stamps)
 ALONE_S = 1.0  # in company: back to the single tracker after this long without a second person (s)
-TWO_DETECTION_CONFIDENCE = 0.3  # `two`'s min_pose_detection_confidence (MediaPipe's default, `one`'s: 0.5)
+TWO_DETECTION_CONFIDENCE = 0.5  # `two`'s min_pose_detection_confidence: MediaPipe's default, as `one`'s
 
 
 class VideoLandmarker(Protocol):
