@@ -25,7 +25,7 @@ export const ALONE_MS = 1000;  // in company: back to `one` after this long with
 export const TWO_DETECTION = 0.5;  // `two`'s person detection threshold, as `one`'s (MediaPipe's default)
 
 let vision = null, fileset = null, plain = null, image = false;
-let watch = null;  // {one, two, company, checkedMs, twoSeenMs}
+let watch = null;  // {one, two (null while it loads), company, checkedMs, twoSeenMs}
 
 function closeAll() {
   for (const l of [plain, watch && watch.one, watch && watch.two]) if (l) l.close();
@@ -65,10 +65,14 @@ export async function load({ base, model, delegates, mode, poses }) {
         plain = await create(model, delegate, base, poses || 2, image ? "IMAGE" : "VIDEO");
       } else {
         const one = await create(model, delegate, base, 1, "VIDEO");
-        let two;
-        try { two = await create(model, delegate, base, 2, "VIDEO", TWO_DETECTION); } catch (err) { one.close(); throw err; }
         image = false;
-        watch = { one, two, company: false, checkedMs: null, twoSeenMs: 0 };
+        // `two` loads after `one` answers: the first frames (and, after a worker died mid-set, the page's) do not wait
+        // for a second WebAssembly instance; until it is there, `one` answers alone
+        const mine = { one, two: null, company: false, checkedMs: null, twoSeenMs: 0 };
+        watch = mine;
+        create(model, delegate, base, 2, "VIDEO", TWO_DETECTION)
+          .then((two) => { if (watch === mine) mine.two = two; else two.close(); })
+          .catch((err) => console.error(err));  // i18n: not shown (the console); `one` goes on alone
       }
       return { type: "loaded", model, delegate };
     } catch (err) { last = err; }
@@ -86,6 +90,7 @@ function looked(frame, ms) {
 
 /** Returns [MediaPipe's result, "one" | "two"] for the frame: see the module's comment. */
 function watched(frame, ms) {
+  if (!watch.two) return [watch.one.detectForVideo(frame, ms), "one"];
   if (watch.company) {
     const r = looked(frame, ms);
     if (r.landmarks.length < 2 && ms - watch.twoSeenMs >= ALONE_MS) watch.company = false;
