@@ -1,11 +1,13 @@
 """Frames per second of the pose landmarker in MediaPipe's Python runtime (the agent's webcam source), lite and full.
 
-    .venv/bin/python bench/webcam_fps.py [--frames 90] [--runs 3] [--size 640x360] [--people 1 2]
+    .venv/bin/python bench/webcam_fps.py [--frames 90] [--runs 3] [--size 640x360] [--people 1 2 watch]
 
 Frames: Sports2D's demo (tests/media.py, BSD-3-Clause) scaled to --size, decoded once beforehand (the decoding is
 not timed); each run creates the landmarker (VIDEO mode, XNNPACK on the CPU) and times detect_for_video over the
 frames. Prints the median of the runs and the per-frame p95, for the lite and full models and each number of
-people searched (the agent searches 2 to keep the patient when another person is in view; the browser page 1).
+people searched, and for the agent's company watch ("watch": kinect_agent.sources.webcam.company, one person tracked
+and a look for a second one once a second, as the agent and the browser page run it). The runs of the schemes
+alternate, so each sees the same machine load.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import statistics
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -40,20 +43,33 @@ def frames(size: tuple[int, int], n: int) -> list[np.ndarray]:
     return out
 
 
-def run(model: str, people: int, images: list[np.ndarray]) -> tuple[float, float]:
-    """Returns (images per second, p95 ms per image) of one pass over the images."""
+def run(model: str, people: str, images: list[np.ndarray]) -> tuple[float, float]:
+    """Returns (images per second, p95 ms per image) of one pass over the images; people: "1", "2" or "watch"."""
     import mediapipe as mp
-    from mediapipe.tasks.python import BaseOptions, vision
+    from mediapipe.tasks.python import vision
 
-    options = vision.PoseLandmarkerOptions(base_options=BaseOptions(model_asset_path=str(task_path(model))),
-                                           running_mode=vision.RunningMode.VIDEO, num_poses=people)  # fmt: skip
-    with vision.PoseLandmarker.create_from_options(options) as landmarker:
+    from kinect_agent.sources.webcam.company import TWO_DETECTION_CONFIDENCE, CompanyWatch
+    from kinect_agent.sources.webcam.source import landmarker_options
+
+    path = task_path(model)
+    if people == "watch":
+        made = [vision.PoseLandmarker.create_from_options(landmarker_options(mp, vision, path, people=1)),
+                vision.PoseLandmarker.create_from_options(landmarker_options(
+                    mp, vision, path, people=2, detection=TWO_DETECTION_CONFIDENCE))]  # fmt: skip
+        landmarker: Any = CompanyWatch(*made)
+    else:
+        made = [vision.PoseLandmarker.create_from_options(landmarker_options(mp, vision, path, people=int(people)))]
+        landmarker = made[0]
+    try:
         times = []
         for i, rgb in enumerate(images):
             image = mp.Image(image_format=mp.ImageFormat.SRGB, data=rgb)
             began = time.perf_counter()
             landmarker.detect_for_video(image, i * 33)
             times.append(time.perf_counter() - began)
+    finally:
+        for m in made:
+            m.close()
     return len(times) / sum(times), float(np.percentile(times, 95) * 1000)
 
 
@@ -62,17 +78,22 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=90)
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--size", default="640x360")
-    parser.add_argument("--people", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--people", nargs="+", default=["1", "2", "watch"], choices=["1", "2", "watch"])
     args = parser.parse_args()
     width, height = (int(v) for v in args.size.split("x"))
     images = frames((width, height), args.frames)
     print(f"MediaPipe Python runtime, {args.frames} frames of {args.size}, median of {args.runs} runs")
     for model in ("lite", "full"):
-        for people in args.people:
-            results = [run(model, people, images) for _ in range(args.runs)]
-            fps = statistics.median(r[0] for r in results)
-            p95 = statistics.median(r[1] for r in results)
-            print(f"  {model:4s} num_poses={people}: {fps:5.1f} images/s, p95 {p95:5.1f} ms per image", flush=True)
+        results: dict[str, list[tuple[float, float]]] = {p: [] for p in args.people}
+        for _ in range(args.runs):
+            for people in args.people:
+                results[people].append(run(model, people, images))
+        for people, res in results.items():
+            fps = statistics.median(r[0] for r in res)
+            p95 = statistics.median(r[1] for r in res)
+            what = "company watch" if people == "watch" else f"num_poses={people}"
+            print(f"  {model:4s} {what:13s}: {fps:5.1f} images/s (runs {', '.join(f'{r[0]:.1f}' for r in res)}), "
+                  f"p95 {p95:5.1f} ms per image", flush=True)  # fmt: skip
 
 
 if __name__ == "__main__":

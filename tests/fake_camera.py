@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tests.media import sports2d_demo
+from tests.media import pose2sim_multi_view, sports2d_demo
 
 
 def write_y4m(
@@ -29,11 +29,13 @@ def write_y4m(
     start_s: float = 0.0,
     seconds: float | None = None,
     hold_s: tuple[float, float] = (0.0, 0.0),
+    crop: tuple[float, float, float, float] | None = None,
 ) -> Path:
     """Writes frames of the video `source` from start_s on (all, or `seconds` of them) to `out` as .y4m at `fps`
     (frames are dropped or repeated to reach it), the first picture shown hold_s[0] seconds before them and the last
     hold_s[1] seconds after (a patient standing still before and after the set); returns out. width and height must
-    be even."""
+    be even. crop: (x0, y0, x1, y1), the part of the source's picture kept, as fractions of its width and height
+    (None: all of it)."""
     import cv2
 
     if width % 2 or height % 2:
@@ -52,6 +54,9 @@ def write_y4m(
         ok, frame = cap.read()
         if not ok:
             break
+        if crop is not None:
+            h, w = frame.shape[:2]
+            frame = frame[int(crop[1] * h) : int(crop[3] * h), int(crop[0] * w) : int(crop[2] * w)]
         frames.append(frame)
     cap.release()
     if not frames:
@@ -132,3 +137,13 @@ def read_y4m(path: Path, indices: list[int]) -> list[np.ndarray]:
             yuv = np.frombuffer(data[6:], dtype=np.uint8).reshape(height * 3 // 2, width)
             out.append(cv2.cvtColor(yuv, cv2.COLOR_YUV2RGB_I420))
     return out
+
+
+# Pose2Sim's two-person demo, camera 2 (portrait 1080 x 1920): the band where both people are, whole (heads to feet)
+TWO_PEOPLE_CROP = (0.0, 0.25, 1.0, 0.85)
+
+
+def two_people_y4m(out: Path, **kwargs) -> Path:
+    """Writes Pose2Sim's two-person demo (camera 2, BSD-3-Clause, tests/media.py; 1.7 s, two people walking about a
+    room, both in view throughout), cropped to TWO_PEOPLE_CROP, as a fake-camera clip; see write_y4m."""
+    return write_y4m(pose2sim_multi_view(2), out, crop=TWO_PEOPLE_CROP, **kwargs)

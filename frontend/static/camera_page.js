@@ -21,6 +21,7 @@
   let item = null, ex = null, name = "exercise", stream = null, phase = "loading";
   let set = null, pending = [], lastFlush = 0, lastT = -1, count = 0, target = 0;
   let okSince = null, lastSeen = 0, prevCentre = null, luma = null, lumaAt = 0, targetAt = null;
+  const by = { one: 0, two: 0 };  // frames answered by each landmarker of the watch (camera_pose_core.js)
   let stamps = [], placementSince = 0, slowSaid = false, lastVideoTime = -1, skipEvery = 1, frameNo = 0, detecting = false;
   const lumCanvas = document.createElement("canvas");
 
@@ -128,6 +129,7 @@
 
   function onResult(video, result, taken, now) {
     const rate = fps(now);
+    if (result.by in by) by[result.by]++;
     if (now - lumaAt > 1000) { luma = CameraChecks.luminance(video, lumCanvas); lumaAt = now; }
     const idx = CameraChecks.pick(result, phase === "counting" ? prevCentre : null);
     const image = idx >= 0 ? result.landmarks[idx] : null;
@@ -440,5 +442,5 @@
 
   init();
   window.CameraPage = { state: () => ({ phase, count, target, set_id: set && set.set_id, next_seq: set && set.next_seq,
-    model: CameraPose.info, fps: stamps.length > 1 ? (stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000) : null }) };
+    model: CameraPose.info, by: { ...by }, fps: stamps.length > 1 ? (stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000) : null }) };
 })();

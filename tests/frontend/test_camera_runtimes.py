@@ -9,8 +9,9 @@ perfanalytics; made into the fake camera's .y4m by tests/fake_camera.py and deco
 in two ways: IMAGE mode, 16 stills spread over the clip, each analysed on its own (so the two results belong to
 exactly the same image whatever came before), and VIDEO mode, what the page and the agent run, over 30 consecutive
 images with the same time stamps on both sides (tracking from image to image and the landmark smoothing then see the
-same history). Both look for two people (a second person stands on a box in the clip); people are paired by their
-hips. The page's GPU delegate is not compared: this machine's headless Chromium has no GPU.
+same history). Both look for two people (a second person stands on a box in the clip): one plain landmarker each
+(`poses: 2`), what the page's and the agent's company watch run as `two` (and, looking for one person, as `one`);
+people are paired by their hips. The page's GPU delegate is not compared: this machine's headless Chromium has no GPU.
 
 Compared per landmark: image x and y (normalised), world x, y, z (m, as a 3-D distance) and visibility. The bounds
 come from the measurement in docs/webcam.md ("Browser and Python runtimes"): the largest difference seen, times a
@@ -56,7 +57,7 @@ LOAD_JS = """async ({ model, mode }) => {
   return await new Promise((resolve) => {
     worker.onmessage = ({ data }) => resolve(data);
     worker.onerror = (err) => resolve({ type: "failed", error: String(err.message || err) });
-    worker.postMessage({ type: "load", base, model, delegates: ["CPU"], mode });
+    worker.postMessage({ type: "load", base, model, delegates: ["CPU"], mode, poses: 2 });
   });
 }"""
 

@@ -662,3 +662,43 @@ def test_the_landmarker_runs_on_the_page_when_its_worker_cannot_start_or_dies(ca
         assert live
         _says_the_recount(page, live[-1], stored[0]["repetitions"])
         assert not page.js_errors, page.js_errors
+
+
+WATCH_CODES = ("window.__codes = new Set(); new MutationObserver(() => __codes.add(document.getElementById('cam-say')"
+               ".dataset.code)).observe(document, {subtree: true, attributes: true, "
+               "attributeFilter: ['data-code']})")  # fmt: skip
+
+
+@pytest.mark.parametrize("scene", ["two-people", "alone"])
+def test_a_second_person_is_seen_and_one_person_alone_is_tracked_cheaply(pw, live_server, tmp_path, scene):
+    """The landmarker's company watch (camera_pose_core.js): with two people in view (Pose2Sim's two-person demo,
+    tests/fake_camera.py two_people_y4m) the placement check says "someone else is in the picture" and the landmarker
+    that looks for two people answers; with one person in view (Sports2D's walker below the hut, cropped) the single
+    tracker answers most frames (it does not run the person detector on every frame: bench/README.md). Looking for
+    a second person only on the single tracker's frames, or never, fails the first case."""
+    from tests.fake_camera import sports2d_y4m, two_people_y4m
+
+    base = live_server.url
+    email, _, item_id = new_patient(base, target=50)
+    if scene == "two-people":
+        video = two_people_y4m(tmp_path / "two.y4m")
+    else:  # the walker's strip below the hut's roof: one person in view, then nobody
+        video = sports2d_y4m(tmp_path / "alone.y4m", crop=(0.0, 0.47, 1.0, 1.0))
+    b = camera_browser(pw, video)
+    with closing(b), camera_page(b, base) as page:
+        page.add_init_script(WATCH_CODES)
+        login(page, email, PASSWORD)
+        page.wait_for_url("**/patient")
+        page.goto(f"{PAGE}?item={item_id}&model=lite&delegate=CPU")
+        page.click("#cam-agree")
+        wait_phase(page, "placement")
+        if scene == "two-people":
+            page.wait_for_function("() => window.__codes.has('two_people')", timeout=90_000)
+            expect(page.locator("#cam-say")).to_be_visible()
+            by = page.evaluate("CameraPage.state().by")
+            assert by["two"] > 0, by
+        else:
+            page.wait_for_function("() => CameraPage.state().by.one + CameraPage.state().by.two >= 60", timeout=90_000)
+            by = page.evaluate("CameraPage.state().by")
+            assert by["one"] >= 0.7 * (by["one"] + by["two"]), by
+        assert not page.js_errors, page.js_errors

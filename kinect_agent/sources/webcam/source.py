@@ -5,7 +5,9 @@ kinect_agent.sources.webcam.mapping turns its landmarks into the 20 joints in th
 `mediapipe` and OpenCV (the `webcam` extra) are imported inside open(), so this module loads everywhere and open()
 raises DeviceUnavailable with one line saying what is missing: the packages, the model files, the camera, the video.
 When the model sees more than one person, the patient is the one whose hips are nearest to where the patient's were
-(image coordinates), the largest one at the start, so a person walking past is not recorded instead.
+(image coordinates), the largest one at the start, so a person walking past is not recorded instead. The landmarker is
+a company watch (kinect_agent.sources.webcam.company): it tracks one person on every image and looks for a second one
+once a second, or on every image while one is in view.
 """
 
 from __future__ import annotations
@@ -23,13 +25,14 @@ import numpy as np
 from kinect_agent.errors import DeviceUnavailable
 from kinect_agent.recording import Metadata
 from kinect_agent.sources.base import Frame, Pacer, SourceBase
+from kinect_agent.sources.webcam.company import TWO_DETECTION_CONFIDENCE, CompanyWatch
 from kinect_agent.sources.webcam.header import webcam_header
 from kinect_agent.sources.webcam.landmarks import N_LANDMARKS, LandmarkBatch, check_arrays
 from kinect_agent.sources.webcam.mapping import DEFAULT_FOV_DEG, to_skeletons
 from kinect_agent.vendor import VendorError, model_info, task_path
 
 INSTALL_HINT = "webcam capture needs the 'webcam' extra: pip install '.[agent,webcam]' (MediaPipe and OpenCV)"
-MAX_PEOPLE = 2  # the landmarker looks for this many, so the patient can be told from a second person
+MAX_PEOPLE = 2  # the watch's second landmarker looks for this many, so the patient can be told from a second person
 FIRST_FRAME_TIMEOUT_S = 5.0
 
 
@@ -45,14 +48,17 @@ def import_runtime() -> tuple[Any, Any, Any]:
     return cv2, mediapipe, vision
 
 
-def landmarker_options(mp: Any, vision: Any, model_path: Path, *, image_mode: bool = False) -> Any:
-    """Returns the PoseLandmarkerOptions the agent runs (the page's worker, camera_pose_worker.js, sets the same):
-    VIDEO mode (tracking from image to image, smoothed) unless image_mode, MAX_PEOPLE people, MediaPipe's default
-    confidences (0.5)."""
+def landmarker_options(mp: Any, vision: Any, model_path: Path, *, image_mode: bool = False,
+                       people: int = MAX_PEOPLE, detection: float = 0.5) -> Any:  # fmt: skip
+    """Returns the PoseLandmarkerOptions of the agent's landmarkers (the page's worker, camera_pose_core.js, sets the
+    same): VIDEO mode (tracking from image to image, smoothed) unless image_mode, looking for `people` people (the
+    watch's `one` 1, its `two` MAX_PEOPLE), person detection threshold `detection` (MediaPipe's default 0.5; the
+    watch's `two` TWO_DETECTION_CONFIDENCE), MediaPipe's default presence and tracking thresholds (0.5)."""
     return vision.PoseLandmarkerOptions(
         base_options=mp.tasks.BaseOptions(model_asset_path=str(model_path)),
         running_mode=vision.RunningMode.IMAGE if image_mode else vision.RunningMode.VIDEO,
-        num_poses=MAX_PEOPLE,
+        num_poses=people,
+        min_pose_detection_confidence=detection,
     )
 
 
@@ -125,7 +131,8 @@ class WebcamSource(SourceBase):
         self._cv2: Any = None
         self._mp: Any = None
         self._capture: Any = None
-        self._landmarker: Any = None
+        self._landmarkers: list[Any] = []  # MediaPipe's: looking for 1 person, for MAX_PEOPLE
+        self._landmarker: CompanyWatch | None = None
         self._image_size: tuple[int, int] | None = None
         self._video_fps: float | None = None
         self._wall_s = 0.0  # seconds spent reading and analysing images
@@ -157,13 +164,19 @@ class WebcamSource(SourceBase):
         if self.video is not None and self._video_fps is None:
             capture.release()
             raise DeviceUnavailable(f"{what} has no usable frame rate ({fps})")
-        options = landmarker_options(mp, vision, model_path)
+        made: list[Any] = []
         try:
             with _native_stderr_silenced():
-                self._landmarker = vision.PoseLandmarker.create_from_options(options)
+                for people, detection in ((1, 0.5), (MAX_PEOPLE, TWO_DETECTION_CONFIDENCE)):
+                    options = landmarker_options(mp, vision, model_path, people=people, detection=detection)
+                    made.append(vision.PoseLandmarker.create_from_options(options))
         except (RuntimeError, ValueError) as exc:
+            for landmarker in made:
+                landmarker.close()
             capture.release()
             raise DeviceUnavailable(f"the pose model {model_path.name} did not load: {exc}") from exc
+        self._landmarkers = made
+        self._landmarker = CompanyWatch(*made)
         self._cv2, self._mp, self._capture = cv2, mp, capture
 
     def frames(self) -> Iterator[Frame]:
@@ -191,6 +204,7 @@ class WebcamSource(SourceBase):
             height, width = bgr.shape[:2]
             self._image_size = (int(width), int(height))
             image = mp.Image(image_format=mp.ImageFormat.SRGB, data=cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB))
+            assert self._landmarker is not None
             result = self._landmarker.detect_for_video(image, ms)
             self._images += 1
             self._wall_s += time.monotonic() - began
@@ -238,9 +252,9 @@ class WebcamSource(SourceBase):
 
     def close(self) -> None:
         """Releases the camera and the landmarker; safe to call twice."""
-        if self._landmarker is not None:
-            self._landmarker.close()
-            self._landmarker = None
+        for landmarker in self._landmarkers:
+            landmarker.close()
+        self._landmarkers, self._landmarker = [], None
         if self._capture is not None:
             self._capture.release()
             self._capture = None
