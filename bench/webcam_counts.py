@@ -101,7 +101,7 @@ VIDEO_SETS = (
 HOLD_S = (20.0, 12.0)  # the browser's fake camera: the first picture before the set, the last after it (s)
 PAGES = REPO / "var" / "bench-cache" / "webcam" / "pages"  # the page's landmarks of each set (--browser)
 LEAD_S = 3.0  # "Start anyway" this long before the set's first picture moves (later: when the page is ready)
-Y4M = {"width": 480, "height": 360, "fps": 15}  # 4:3 like the clip; 15 fps: above the page's landmarker rate
+Y4M_SIZE, Y4M_FPS = (480, 360), 15  # 4:3 like the clip; 15 fps: above the page's landmarker rate
 
 
 def set_part(batch: LandmarkBatch, start_s: float, end_s: float) -> LandmarkBatch:
@@ -235,7 +235,7 @@ def browser_counts(vs: VideoSet, models: list[str], runs: int, port: int) -> dic
     out: dict[str, list[dict[str, float]]] = {m: [] for m in models}
     with tempfile.TemporaryDirectory() as tmp:
         clip = write_y4m(CLIPS[vs.clip](), Path(tmp) / "set.y4m", start_s=vs.start_s, seconds=vs.end_s - vs.start_s,
-                         hold_s=HOLD_S, **Y4M)  # fmt: skip
+                         hold_s=HOLD_S, width=Y4M_SIZE[0], height=Y4M_SIZE[1], fps=Y4M_FPS)  # fmt: skip
         db_url = f"sqlite:///{tmp}/bench.db"
         prepare(db_url)
         server = start_server(db_url, port, 1)
