@@ -38,6 +38,9 @@ from bench.dashboard_load import percentile, start_server, stop_server  # noqa: 
 
 CHROMIUM = "/usr/bin/chromium"
 # what the page reports per answer (camera_page.js onAnswer): the whole, then its parts for the newest frame
+# the page's timing of each frame (camera_page.js cost()): the landmarker idle before it, the grab, the round trip to
+# the worker, the detection in the worker, the page's handling of the answer
+COST_PARTS = ("idle_ms", "grab_ms", "trip_ms", "detect_ms", "page_ms")
 PARTS = ("newest_ms", "oldest_ms", "landmarker_ms", "buffer_ms", "server_ms", "draw_ms")
 
 
@@ -86,7 +89,7 @@ def one_run(browser: Browser, base: str, item: int, model: str, seconds: float, 
             if fps:
                 rates.append(fps)
         out = {"fps": statistics.median(rates) if rates else float("nan"), "delegate": page.evaluate(
-            "CameraPage.state().model.delegate")}  # fmt: skip
+            "CameraPage.state().model.delegate"), "costs": page.evaluate("CameraPage.state().costs")}  # fmt: skip
         if count:
             page.evaluate("window.__lat = []; addEventListener('coach-camera-count', (e) => __lat.push(e.detail))")
             page.click("#cam-anyway")
@@ -144,6 +147,13 @@ def main(argv: list[str] | None = None) -> int:
         fps = [r["fps"] for r in runs]
         print(f"  {model}: landmarker {statistics.median(fps):.1f} fps median of {len(fps)} runs "
               f"({', '.join(f'{v:.1f}' for v in fps)})")  # fmt: skip
+    for model, runs in results.items():  # where each frame's time went during the placement check
+        rows = [c for r in runs for c in r["costs"]]
+        if rows:
+            parts = ", ".join(f"{k[:-3]} {statistics.median(c[k] or 0 for c in rows):.1f}" for k in COST_PARTS)
+            looks = [c["look_ms"] for c in rows if c.get("look_ms")]
+            spike = f"; `two`'s looks {len(looks)}, p50 {statistics.median(looks):.0f} ms" if looks else ""
+            print(f"  {model} per frame, median ms over {len(rows)} frames: {parts}{spike}")
     lite = results.get("lite", [])
     for key in PARTS:
         values = [v for r in lite for v in r.get(key, [])]

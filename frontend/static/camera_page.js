@@ -22,6 +22,8 @@
   let set = null, pending = [], lastFlush = 0, lastT = -1, count = 0, target = 0;
   let okSince = null, lastSeen = 0, prevCentre = null, luma = null, lumaAt = 0, targetAt = null;
   const by = { one: 0, two: 0 };  // frames answered by each landmarker of the watch (camera_pose_core.js)
+  const costs = [], COSTS = 300;  // the last frames' timing (cost())
+  let answeredAt = null;  // when the landmarker's last answer came back (performance.now(), ms)
   let stamps = [], placementSince = 0, slowSaid = false, lastVideoTime = -1, skipEvery = 1, frameNo = 0, detecting = false;
   const lumCanvas = document.createElement("canvas");
 
@@ -117,15 +119,25 @@
     const now = performance.now();
     if (!detecting && video.readyState >= 2 && video.currentTime !== lastVideoTime && !document.hidden && (frameNo++ % skipEvery === 0)) {
       lastVideoTime = video.currentTime;
-      const taken = Date.now(), grabbedIn = phase;
+      const taken = Date.now(), grabbedIn = phase, idle = answeredAt === null ? null : now - answeredAt;
       detecting = true;
       CameraPose.detect(video, now)  // a frame of the placement is not counted (it is older than the set's clock)
-        .then((result) => { if (result && phase === grabbedIn) onResult(video, result, taken, now); })
+        .then((result) => {
+          if (!result || phase !== grabbedIn) return;
+          const began = performance.now();
+          onResult(video, result, taken, now);
+          cost({ ...result.took, idle_ms: idle, page_ms: performance.now() - began });
+        })
         .catch((err) => { console.error(err); trackerLost(); })
-        .finally(() => { detecting = false; });
+        .finally(() => { detecting = false; answeredAt = performance.now(); });
     }
     schedule();
   }
+
+  /** Keeps the last COSTS frames' timing (ms, for bench/camera_page.py): idle (the landmarker waited for this frame
+   *  since the answer before), grab (the frame copied), trip (sent to answered), detect (the worker's detection), look_ms
+   *  (`two`'s look in it), page (the answer's handling and drawing). */
+  function cost(row) { costs.push(row); if (costs.length > COSTS) costs.shift(); }
 
   function onResult(video, result, taken, now) {
     const rate = fps(now);
@@ -442,5 +454,5 @@
 
   init();
   window.CameraPage = { state: () => ({ phase, count, target, set_id: set && set.set_id, next_seq: set && set.next_seq,
-    model: CameraPose.info, by: { ...by }, fps: stamps.length > 1 ? (stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000) : null }) };
+    model: CameraPose.info, by: { ...by }, costs: costs.slice(), fps: stamps.length > 1 ? (stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000) : null }) };
 })();

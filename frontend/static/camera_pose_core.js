@@ -17,15 +17,17 @@
  *   people (2 by default) in that mode (VIDEO by default), not the watch: tests/frontend/test_camera_runtimes.py holds
  *   it equal to the agent's Python runtime.
  * detect({id, frame: ImageBitmap (closed here), ms: timestamp in ms, increasing})
- *   -> {type: "result", id, result: {landmarks, worldLandmarks, by: "one"|"two"|"plain", company: bool} | null
+ *   -> {type: "result", id, result: {landmarks, worldLandmarks, by: "one"|"two"|"plain", company: bool, took} | null
  *       (no landmarker yet, or it failed)}; by: the landmarker whose poses these are; company: `two` runs on the next
- *       frame. */
+ *       frame; took: {detect_ms: the whole detection here, look_ms: `two`'s look on a frame `one` answered, or 0} (ms, for
+ *       bench/camera_page.py and bench/camera_frame_costs.py). */
 export const CHECK_MS = 1000;  // alone: `two` looks for a second person at most this long apart (ms)
 export const ALONE_MS = 1000;  // in company: back to `one` after this long without a second person (ms)
 export const TWO_DETECTION = 0.5;  // `two`'s person detection threshold, as `one`'s (MediaPipe's default)
 
 let vision = null, fileset = null, plain = null, image = false;
 let watch = null;  // {one, two (null while it loads), company, checkedMs, twoSeenMs}
+let lookMs = 0;  // the time `two` took on the frame being detected (ms; 0 when it did not look)
 
 function closeAll() {
   for (const l of [plain, watch && watch.one, watch && watch.two]) if (l) l.close();
@@ -82,7 +84,9 @@ export async function load({ base, model, delegates, mode, poses }) {
 
 /** `two` on the frame: notes when it looked and whether it found two people (then the watch is in company). */
 function looked(frame, ms) {
+  const began = performance.now();
   const r = watch.two.detectForVideo(frame, ms);
+  lookMs = performance.now() - began;
   watch.checkedMs = ms;
   if (r.landmarks.length >= 2) { watch.company = true; watch.twoSeenMs = ms; }
   return r;
@@ -106,6 +110,8 @@ function watched(frame, ms) {
 
 export function detect({ id, frame, ms }) {
   let result = null;
+  const began = performance.now();
+  lookMs = 0;
   try {
     if (watch) {
       const [r, by] = watched(frame, ms);
@@ -116,5 +122,6 @@ export function detect({ id, frame, ms }) {
     }
   } catch (err) { console.error(err); }
   frame.close();
+  if (result) result.took = { detect_ms: performance.now() - began, look_ms: lookMs };
   return { type: "result", id, result };
 }
