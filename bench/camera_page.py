@@ -150,10 +150,11 @@ def main(argv: list[str] | None = None) -> int:
     for model, runs in results.items():  # where each frame's time went during the placement check
         rows = [c for r in runs for c in r["costs"]]
         if rows:
-            parts = ", ".join(f"{k[:-3]} {statistics.median(c[k] or 0 for c in rows):.1f}" for k in COST_PARTS)
+            parts = ", ".join(f"{k[:-3]} {statistics.median(c[k] or 0 for c in rows):.1f} / "
+                              f"{statistics.fmean(c[k] or 0 for c in rows):.1f}" for k in COST_PARTS)  # fmt: skip
             looks = [c["look_ms"] for c in rows if c.get("look_ms")]
             spike = f"; `two`'s looks {len(looks)}, p50 {statistics.median(looks):.0f} ms" if looks else ""
-            print(f"  {model} per frame, median ms over {len(rows)} frames: {parts}{spike}")
+            print(f"  {model} per frame, median / mean ms over {len(rows)} frames: {parts}{spike}")
     lite = results.get("lite", [])
     for key in PARTS:
         values = [v for r in lite for v in r.get(key, [])]

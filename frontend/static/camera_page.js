@@ -24,6 +24,7 @@
   const by = { one: 0, two: 0 };  // frames answered by each landmarker of the watch (camera_pose_core.js)
   const costs = [], COSTS = 300;  // the last frames' timing (cost())
   let answeredAt = null;  // when the landmarker's last answer came back (performance.now(), ms)
+  let shown = null, grabbedShown = null;  // the camera frames shown so far (video frame callback), at the last grab
   let stamps = [], placementSince = 0, slowSaid = false, lastVideoTime = -1, skipEvery = 1, frameNo = 0, detecting = false;
   const lumCanvas = document.createElement("canvas");
 
@@ -111,32 +112,44 @@
 
   function looking() { return phase === "placement" || phase === "counting"; }
 
-  /** Sends the newest video frame to the landmarker (in its worker) when it is not busy with the one before; the
-   *  result is handled when it comes back, and the main thread is free meanwhile (answers, count, drawing). */
-  function loop() {
+  /** Called on each new camera frame (video frame callback; else each animation frame): sends the frame to the
+   *  landmarker when it is free (grab()). */
+  function loop(_now, meta) {
     if (!looking()) return;
+    if (meta) shown = meta.presentedFrames;
+    grab();
+    schedule();
+  }
+
+  /** Sends the newest video frame to the landmarker (in its worker) when it is not busy with the one before and the
+   *  frame is one it has not seen; the result is handled when it comes back, and the main thread is free meanwhile
+   *  (answers, count, drawing). When the answer comes back the next frame is sent at once if the camera has given
+   *  one meanwhile: the landmarker then waits for no camera frame (it waited 21 ms of a 63 ms frame at the median,
+   *  bench/README.md "Where a camera frame's time goes"). */
+  function grab() {
     const video = $("cam-video");
     const now = performance.now();
-    if (!detecting && video.readyState >= 2 && video.currentTime !== lastVideoTime && !document.hidden && (frameNo++ % skipEvery === 0)) {
-      lastVideoTime = video.currentTime;
+    const fresh = shown !== null ? shown !== grabbedShown : video.currentTime !== lastVideoTime;
+    if (!detecting && video.readyState >= 2 && fresh && !document.hidden && (frameNo++ % skipEvery === 0)) {
+      lastVideoTime = video.currentTime; grabbedShown = shown;
       const taken = Date.now(), grabbedIn = phase, idle = answeredAt === null ? null : now - answeredAt;
       detecting = true;
       CameraPose.detect(video, now)  // a frame of the placement is not counted (it is older than the set's clock)
         .then((result) => {
+          answeredAt = performance.now();
           if (!result || phase !== grabbedIn) return;
-          const began = performance.now();
           onResult(video, result, taken, now);
-          cost({ ...result.took, idle_ms: idle, page_ms: performance.now() - began });
+          cost({ ...result.took, idle_ms: idle, page_ms: performance.now() - answeredAt });
         })
         .catch((err) => { console.error(err); trackerLost(); })
-        .finally(() => { detecting = false; answeredAt = performance.now(); });
+        .finally(() => { detecting = false; if (looking()) grab(); });
     }
-    schedule();
   }
 
-  /** Keeps the last COSTS frames' timing (ms, for bench/camera_page.py): idle (the landmarker waited for this frame
-   *  since the answer before), grab (the frame copied), trip (sent to answered), detect (the worker's detection), look_ms
-   *  (`two`'s look in it), page (the answer's handling and drawing). */
+  /** Keeps the last COSTS frames' timing (ms, for bench/camera_page.py): idle (from the answer before to this
+   *  frame's grab: the page's handling of that answer, then the wait for a camera frame), grab (the frame copied),
+   *  trip (sent to answered), detect_ms and look_ms (the worker's detection, `two`'s look in it), page (the
+   *  answer's handling and drawing). */
   function cost(row) { costs.push(row); if (costs.length > COSTS) costs.shift(); }
 
   function onResult(video, result, taken, now) {
