@@ -95,7 +95,7 @@ const CameraPose = (() => {
       if (result) result.took = { ...result.took, grab_ms: sent - grabbed, trip_ms: performance.now() - sent };
       return result;
     };
-    if (onPage && info.where === "page") return timed(onPage.detect({ id, frame, ms: nowMs }).result);
+    if (onPage && info.where === "page") return timed((await onPage.detect({ id, frame, ms: nowMs })).result);
     const timer = setTimeout(() => lose(`the landmarker's worker gave no answer in ${SILENT_MS} ms`), SILENT_MS);  // i18n: not shown
     return new Promise((resolve) => {
       waiting.set(id, (result) => { clearTimeout(timer); resolve(timed(result)); });

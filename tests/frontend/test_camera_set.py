@@ -611,7 +611,7 @@ let detections = 0;
 self.onmessage = async ({ data }) => {
   if (data.type === "load") self.postMessage(await load(data));
   else if (++detections > 30) self.close();  // gone without a word, as a worker the browser killed
-  else self.postMessage(detect(data));
+  else self.postMessage(await detect(data));
 };"""
 
 
