@@ -219,7 +219,8 @@ def part_a(page: Any, args: argparse.Namespace, n_frames: int, w: int, h: int) -
         by_one = sum(x[3] == "one" for x in r) / len(r)
         dists = [d for x, y in zip(ref, r, strict=True) if (d := px_distance(x[5], y[5], w, h)) is not None]
         found = sum(x[4] > 0 for x in r)
-        line = (f"  {name}: in the worker p50 {statistics.median(took):.1f} ms, p95 {percentile(took, 95):.1f} ms; "
+        line = (f"  {name}: in the worker min {min(took):.1f}, p50 {statistics.median(took):.1f}, mean "
+                f"{statistics.fmean(took):.1f}, p95 {percentile(took, 95):.1f} ms; "
                 f"trip p50 {statistics.median(trip):.1f} ms ({1000 * len(trip) / sum(trip):.1f} frames/s back to "
                 f"back); copy p50 {statistics.median(x[6] for x in r):.1f} ms; a person in {found}/{len(r)}"
                 )  # fmt: skip

@@ -21,8 +21,10 @@ more false second people on one person alone, but then kept the watch in company
 clip, where a second person stands on a hut: slower than looking for two on every image (6.0 against 8.5 frames/s):
 not kept (TWO_DETECTION_CONFIDENCE; bench/README.md, "One person tracked, a look for a second").
 
-The browser page runs the same logic (frontend/static/camera_pose_core.js); tests/kinect_agent/sources/webcam/
-test_company.py holds the two to the same constants.
+The browser page runs the same logic (frontend/static/camera_pose_core.js) with one difference: in its worker,
+`two`'s look runs in a second worker beside `one`'s tracking (it took 2-3 times a tracking image's time, one image a
+second held up), so what a look finds takes effect from the first image after its answer, not on the image it looked
+at. tests/kinect_agent/sources/webcam/test_company.py holds the two to the same constants.
 """
 
 from __future__ import annotations
