@@ -176,6 +176,7 @@ def stage_variants(config: PipelineConfig) -> dict[str, Callable[[Recording], np
         "outlier removal only": outliers_only,
         "chain fit per frame only (IK)": ik_only,
         "joints, no swap restarts": run(config.model_copy(update={"joint_split_at_swaps": False})),
+        "joints, whole-body swaps only": run(config.model_copy(update={"joint_arm_swaps": False})),
         "joints, with outlier removal": run(config.model_copy(update={"remove_outliers": True})),
         "joints (shipped)": run(config),
     }
