@@ -176,6 +176,7 @@ def stage_variants(config: PipelineConfig) -> dict[str, Callable[[Recording], np
         "outlier removal only": outliers_only,
         "chain fit per frame only (IK)": ik_only,
         "joints, no swap restarts": run(config.model_copy(update={"joint_split_at_swaps": False})),
+        "joints, whole-body swaps only": run(config.model_copy(update={"joint_arm_swaps": False})),
         "joints, with outlier removal": run(config.model_copy(update={"remove_outliers": True})),
         "joints (shipped)": run(config),
     }
@@ -216,6 +217,9 @@ def synchronised(batches: list[LandmarkBatch], rate_hz: float) -> list[LandmarkB
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--model", default="lite", choices=("lite", "full"))
+    parser.add_argument("--landmarker", default="watch", choices=("watch", "two"),
+                        help="the agent's company watch (shipped), or one landmarker looking for two people on every "
+                             "image (before 2026-11-28)")  # fmt: skip
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="pipeline setting")
     parser.add_argument("--json", type=Path)
     parser.add_argument("--true-fov", action="store_true", help="place the hips with each camera's calibrated FOV")
@@ -233,7 +237,7 @@ def main() -> None:
         config = type(config)(**config.model_dump())  # validated
     cams = read_qca(pose2sim_calibration())
     prefix = "pose2sim_cam" if args.clip == "single" else "pose2sim_multi_cam"
-    batches = [landmarks(f"{prefix}{v}", args.model)[0] for v in VIEWS]
+    batches = [landmarks(f"{prefix}{v}", args.model, args.landmarker)[0] for v in VIEWS]
     batches = synchronised(batches, RATE_HZ)
     n = batches[0].n_frames
     pixels = np.stack([b.image[:n, :, :2] * np.array(b.image_size) for b in batches])
@@ -257,7 +261,7 @@ def main() -> None:
     left_out = ", each view left out of its own" if args.leave_out else ""
     restarts = ", ".join(f"{c['name']} {r.quality['joint_restarts']}" for c, r in zip(cams, results, strict=True))
     print(
-        f"clip {args.clip} ({n} frames in every view), model {args.model}; reference: "
+        f"clip {args.clip} ({n} frames in every view), model {args.model}, landmarker {args.landmarker}; reference: "
         f"{np.isfinite(world[..., 0]).mean():.0%} of landmarks triangulated, median {np.median(used[used > 0]):.0f} "
         f"views (at least {args.min_views}){left_out}; pipeline {args.set or 'config_for_device(webcam)'}; "
         f"restarts at label swaps and body jumps: {restarts}"

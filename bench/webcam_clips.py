@@ -5,6 +5,9 @@ view, 30 fps) and the four calibrated views of Pose2Sim's single-person demo (60
 of Oslo: the Musical Gestures Toolbox's dancer (front view, 25 fps, bench/webcam_counts.py --cases videos). Each
 clip is run through the agent's WebcamSource (MediaPipe's Python runtime, the pinned lite or full .task) and its
 LandmarkBatch kept in var/bench-cache/webcam/<clip>-<model>.npz, so the benchmarks after the first run cost seconds.
+landmarker "two": the source before its company watch (one landmarker looking for two people on every image, as
+until 2026-11-28), cached as <clip>-<model>-two.npz. The runtime gives the same landmarks on every run (checked on
+the Pose2Sim views, 2026-11-28), so one run is the median of any number.
 """
 
 from __future__ import annotations
@@ -34,9 +37,12 @@ RATES = {"sports2d": 30.0, **{f"pose2sim{m}_cam{c}": 60.0 for m in ("", "_multi"
 RATES["mgt_dancer"] = 25.0
 
 
-def landmarks(clip: str, model: str = "lite") -> tuple[LandmarkBatch, float]:
-    """Returns (the clip's landmark batch, images analysed per second when it was computed)."""
-    path = CACHE / f"{clip}-{model}.npz"
+def landmarks(clip: str, model: str = "lite", landmarker: str = "watch") -> tuple[LandmarkBatch, float]:
+    """Returns (the clip's landmark batch, images analysed per second when it was computed); landmarker "watch" (the
+    agent's source as shipped) or "two" (module docstring)."""
+    if landmarker not in ("watch", "two"):
+        raise ValueError(f"landmarker must be 'watch' or 'two', got {landmarker!r}")
+    path = CACHE / f"{clip}-{model}{'' if landmarker == 'watch' else '-two'}.npz"
     if path.is_file():
         z = np.load(path)
         width, height = (int(v) for v in z["size"])
@@ -44,7 +50,7 @@ def landmarks(clip: str, model: str = "lite") -> tuple[LandmarkBatch, float]:
         return batch, float(z["fps"])
     from kinect_agent.sources.webcam.source import WebcamSource
 
-    source = WebcamSource(video=CLIPS[clip](), model=model, realtime=False)
+    source = WebcamSource(video=CLIPS[clip](), model=model, realtime=False, watch=landmarker == "watch")
     source.open()
     try:
         began = time.perf_counter()

@@ -1,19 +1,20 @@
 """Simulated webcam sets: the simulator's exact motion with the errors measured on a monocular landmarker
 (bench/README.md, "Webcam"): jitter 10 mm across the image and 25 mm in depth per joint, the fitted hip distance
 jittering 30 mm for the whole body, and, with swaps, a sixth of the set where the labels of left and right flicker
-(the side view's swaps). With wobble_m > 0, also a slow wobble of every joint (Gaussian noise smoothed over WOBBLE_S,
-SD wobble_m across the image and 2.5 x in depth): the landmarker's angles drifting on a person standing still
-(a small or far person: bench/README.md, "Webcam counts"). Used by the webcam filter's tests and
-bench/webcam_counts.py."""
+(the side view's swaps; with arms_only, the arms' labels alone, the legs keeping theirs). With wobble_m > 0, also a
+slow wobble of every joint (Gaussian noise smoothed over WOBBLE_S, SD wobble_m across the image and 2.5 x in depth):
+the landmarker's angles drifting on a person standing still (a small or far person: bench/README.md, "Webcam
+counts"). Used by the webcam filter's tests and bench/webcam_counts.py."""
 
 from __future__ import annotations
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from kinect_agent.processing.label_swaps import MIRROR
+from kinect_agent.processing.label_swaps import ARM_PAIRS, MIRROR
 from kinect_agent.recording import Metadata, Recording
 
+ARMS = np.array([j for pair in ARM_PAIRS for j in pair])  # the arms' joints, whose labels alone flicker with arms_only
 WOBBLE_S = 0.25  # s, the SD of the Gaussian that makes the wobble slow (its excursions last about a second)
 
 
@@ -27,7 +28,9 @@ def wobble(t: np.ndarray, shape: tuple[int, ...], sd_m: float, seed: int) -> np.
     return w * sd_m * np.array([1.0, 1.0, 2.5])
 
 
-def webcam_like(truth: Recording, seed: int, swaps: bool = True, wobble_m: float = 0.0) -> Recording:
+def webcam_like(
+    truth: Recording, seed: int, swaps: bool = True, wobble_m: float = 0.0, arms_only: bool = False
+) -> Recording:
     """Returns the truth (device webcam, the truth's exercise) with the webcam's measured errors (module docstring)."""
     rng = np.random.default_rng(seed)
     T = truth.n_frames
@@ -38,6 +41,9 @@ def webcam_like(truth: Recording, seed: int, swaps: bool = True, wobble_m: float
     if swaps:
         stretch = np.arange(T // 3, T // 3 + T // 6)
         flicker = stretch[rng.random(stretch.size) < 0.5]
-        pos[flicker] = pos[flicker][:, MIRROR]
+        joints = ARMS if arms_only else np.arange(pos.shape[1])
+        swapped = pos[flicker]
+        swapped[:, joints] = swapped[:, MIRROR[joints]]
+        pos[flicker] = swapped
     meta = Metadata(device="webcam", rate_hz=truth.meta.rate_hz, exercise=truth.meta.exercise)
     return Recording(truth.t.copy(), pos, truth.state.copy(), meta)

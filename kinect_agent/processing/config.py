@@ -129,6 +129,9 @@ class PipelineConfig(BaseModel):
     joint_split_at_swaps: bool = Field(
         True, description="joints filter: restart at left/right label swaps and at jumps to another body"
     )
+    joint_arm_swaps: bool = Field(
+        True, description="joints filter, with joint_split_at_swaps: also restart where the arms alone swap labels"
+    )
 
     @field_validator("length_bias")
     @classmethod

@@ -6,8 +6,9 @@ labelling; on Pose2Sim's four views it made 26 of 56 angle x view cells worse th
 up to 34 degrees, mostly where it smoothed across swaps (bench/README.md, "Webcam angles: why the pipeline made them
 worse"). This filter assumes only what the data show: each coordinate moves smoothly (constant velocity between
 frames, perturbed by white acceleration), is measured with the webcam's measured jitter, and the labelling is
-continuous only between two flips (label_swaps.labelling_flips) and the body is the same one only between two jumps
-of the hips faster than a body moves (label_swaps.body_jumps: another person taken for the patient).
+continuous only between two flips (label_swaps.labelling_flips: the whole body; with joint_arm_swaps also
+label_swaps.pair_swaps: the arms alone) and the body is the same one only between two jumps of the hips faster than
+a body moves (label_swaps.body_jumps: another person taken for the patient).
 
 Per coordinate c of joint j, state (position m, velocity m/s), the discrete white-noise-acceleration model
 (Bar-Shalom, Li & Kirubarajan 2001, §6.3.2):
@@ -28,7 +29,7 @@ import numpy as np
 from kinect_agent import skeleton
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.ik import fill_gaps
-from kinect_agent.processing.label_swaps import body_jumps, labelling_flips
+from kinect_agent.processing.label_swaps import body_jumps, labelling_flips, pair_swaps
 from kinect_agent.recording import Recording
 
 INFERRED_FACTOR = 2.0  # an inferred joint's measurement SD relative to a tracked one's (as sigma_inferred_m)
@@ -129,13 +130,16 @@ def _measurements(positions: np.ndarray, state: np.ndarray, config: PipelineConf
 
 
 def restarts_between(z_prev: np.ndarray, z: np.ndarray, t_prev: float, t: float, config: PipelineConfig) -> bool:
-    """Returns whether the joints filter restarts at a frame z: (J, 3) m after z_prev: (J, 3) (a label swap or a body
-    jump between them; label_swaps), the rule both passes apply."""
+    """Returns whether the joints filter restarts at a frame z: (J, 3) m after z_prev: (J, 3) (a label swap of the
+    whole body or, with joint_arm_swaps, of the arms alone, or a body jump between them; label_swaps), the rule both
+    passes apply."""
     if not config.joint_split_at_swaps:
         return False
     pair, times = np.stack([z_prev, z]), np.array([t_prev, t])
+    if labelling_flips(pair)[1] or (config.joint_arm_swaps and pair_swaps(pair)[1]):
+        return True
     noise = JUMP_NOISE_SD * np.sqrt(2.0) * config.joint_sigma_image_m
-    return bool(labelling_flips(pair)[1] or body_jumps(pair, times, ROOT_SPEED_LIMIT_M_S, noise)[1])
+    return bool(body_jumps(pair, times, ROOT_SPEED_LIMIT_M_S, noise)[1])
 
 
 class JointFilter:

@@ -15,6 +15,14 @@ fitted distance does not count),
 
 No margin: a frame where both labellings fit about as well (the legs crossing in a side view) may count as a flip,
 which only costs the smoother a restart, never a wrong label.
+
+The landmarker also swaps the arms alone, the legs keeping their labels (cam02 of the same demo: frames 79-84 swap
+the shoulders back and forth while the legs, which dominate the sum above, do not). A filter run across such swaps
+averages the left shoulder with the right one, the shoulder line it smooths shrinks to a few centimetres, and the
+trunk's left and forward axes (kinect_agent.body.angles.body_frame) turn by tens of degrees: shoulder flexion 38
+degrees off in one frame. pair_swaps finds them, one mirrored pair at a time:
+
+    |p_k[R] - p_{k-1}[L]|^2 + |p_k[L] - p_{k-1}[R]|^2  <  |p_k[L] - p_{k-1}[L]|^2 + |p_k[R] - p_{k-1}[R]|^2
 """
 
 from __future__ import annotations
@@ -53,6 +61,31 @@ def labelling_flips(positions: np.ndarray) -> np.ndarray:
     return np.concatenate(([False], flip & both.any(axis=(1, 2))))
 
 
+ARM_PAIRS: tuple[tuple[int, int], ...] = tuple(
+    (skeleton.INDEX[f"{name}_L"], skeleton.INDEX[f"{name}_R"]) for name in ("SHO", "ELB", "WRI", "HAN")
+)  # the arms' mirrored pairs, (left, right) joint indices
+
+
+def pair_swaps(positions: np.ndarray, pairs: tuple[tuple[int, int], ...] = ARM_PAIRS) -> np.ndarray:
+    """Returns (T,) bool: True at frames where at least one mirrored pair of joints (pairs: (left, right) indices)
+    fits the previous frame better swapped (module docstring), with the root subtracted; frame 0, and a pair missing
+    a joint in either frame, never.
+
+    positions: (T, J, 3) float, metres, any frame; NaN = untracked.
+    """
+    if positions.ndim != 3 or positions.shape[1:] != (skeleton.J, 3):
+        raise ValueError(f"positions must have shape (T, {skeleton.J}, 3), got {positions.shape}")
+    rel = positions - positions[:, :1]
+    now, before = rel[1:], rel[:-1]
+    out = np.zeros(len(positions), dtype=bool)
+    for left, right in pairs:
+        same = ((now[:, left] - before[:, left]) ** 2).sum(-1) + ((now[:, right] - before[:, right]) ** 2).sum(-1)
+        swapped = ((now[:, right] - before[:, left]) ** 2).sum(-1) + ((now[:, left] - before[:, right]) ** 2).sum(-1)
+        with np.errstate(invalid="ignore"):  # NaN compares False: a pair missing a joint is no swap
+            out[1:] |= swapped < same
+    return out
+
+
 def body_jumps(positions: np.ndarray, t: np.ndarray, speed_m_s: float, noise_m: float) -> np.ndarray:
     """Returns (T,) bool: True at frames where ROOT moved across the image (x, y) farther from the previous frame than
     a body moves (speed_m_s times the interval, plus noise_m): another person taken for the patient, or the
@@ -67,4 +100,4 @@ def body_jumps(positions: np.ndarray, t: np.ndarray, speed_m_s: float, noise_m: 
         return np.concatenate(([False], step > limit))
 
 
-__all__ = ["MIRROR", "body_jumps", "labelling_flips"]
+__all__ = ["ARM_PAIRS", "MIRROR", "body_jumps", "labelling_flips", "pair_swaps"]

@@ -25,7 +25,7 @@ import numpy as np
 from kinect_agent.errors import DeviceUnavailable
 from kinect_agent.recording import Metadata
 from kinect_agent.sources.base import Frame, Pacer, SourceBase
-from kinect_agent.sources.webcam.company import TWO_DETECTION_CONFIDENCE, CompanyWatch
+from kinect_agent.sources.webcam.company import TWO_DETECTION_CONFIDENCE, CompanyWatch, VideoLandmarker
 from kinect_agent.sources.webcam.header import webcam_header
 from kinect_agent.sources.webcam.landmarks import N_LANDMARKS, LandmarkBatch, check_arrays
 from kinect_agent.sources.webcam.mapping import DEFAULT_FOV_DEG, to_skeletons
@@ -107,7 +107,9 @@ def choose_person(people: list[np.ndarray], previous_hips: np.ndarray | None) ->
 class WebcamSource(SourceBase):
     """Yields the patient's skeleton for every image the landmarker finds them in (images without them yield no
     frame). camera: device index; video: a file played instead of a camera (timed by its frame rate, paced in real
-    time when realtime); model: "lite" or "full"; fov_deg: the camera's assumed horizontal field of view."""
+    time when realtime); model: "lite" or "full"; fov_deg: the camera's assumed horizontal field of view; watch: the
+    company watch (True), or one landmarker looking for MAX_PEOPLE on every image (False: the source before
+    2026-11-28, kept for benchmarks that compare the two)."""
 
     name = "webcam"
     device = "webcam"
@@ -120,19 +122,21 @@ class WebcamSource(SourceBase):
         model: str = "lite",
         fov_deg: float = DEFAULT_FOV_DEG,
         realtime: bool = True,
+        watch: bool = True,
     ) -> None:
         self.camera = camera
         self.video = Path(video) if video is not None else None
         self.model = model
         self.fov_deg = fov_deg
         self.realtime = realtime
+        self.watch = watch
         self.info = model_info(model)
         self.landmark_frames: list[LandmarkFrame] = []  # what the model gave for the frames yielded, in order
         self._cv2: Any = None
         self._mp: Any = None
         self._capture: Any = None
         self._landmarkers: list[Any] = []  # MediaPipe's: looking for 1 person, for MAX_PEOPLE
-        self._landmarker: CompanyWatch | None = None
+        self._landmarker: VideoLandmarker | None = None  # the watch, or (watch=False) one landmarker
         self._image_size: tuple[int, int] | None = None
         self._video_fps: float | None = None
         self._wall_s = 0.0  # seconds spent reading and analysing images
@@ -167,7 +171,8 @@ class WebcamSource(SourceBase):
         made: list[Any] = []
         try:
             with _native_stderr_silenced():
-                for people, detection in ((1, 0.5), (MAX_PEOPLE, TWO_DETECTION_CONFIDENCE)):
+                kinds = ((1, 0.5), (MAX_PEOPLE, TWO_DETECTION_CONFIDENCE)) if self.watch else ((MAX_PEOPLE, 0.5),)
+                for people, detection in kinds:
                     options = landmarker_options(mp, vision, model_path, people=people, detection=detection)
                     made.append(vision.PoseLandmarker.create_from_options(options))
         except (RuntimeError, ValueError) as exc:
@@ -176,7 +181,7 @@ class WebcamSource(SourceBase):
             capture.release()
             raise DeviceUnavailable(f"the pose model {model_path.name} did not load: {exc}") from exc
         self._landmarkers = made
-        self._landmarker = CompanyWatch(*made)
+        self._landmarker = CompanyWatch(*made) if self.watch else made[0]
         self._cv2, self._mp, self._capture = cv2, mp, capture
 
     def frames(self) -> Iterator[Frame]:
@@ -239,6 +244,11 @@ class WebcamSource(SourceBase):
         return check_arrays(np.array([f.t for f in fr]), np.stack([f.world for f in fr]),
                             np.stack([f.image for f in fr]), np.stack([f.visibility for f in fr]),
                             self._image_size)  # fmt: skip
+
+    @property
+    def company_watch(self) -> CompanyWatch | None:
+        """The company watch while open (None before open(), after close(), or with watch=False)."""
+        return self._landmarker if isinstance(self._landmarker, CompanyWatch) else None
 
     @property
     def images(self) -> int:

@@ -17,10 +17,11 @@ from kinect_agent import skeleton
 from kinect_agent.body.angles import joint_angles
 from kinect_agent.processing.config import config_for_device
 from kinect_agent.processing.joint_smoother import INFERRED_FACTOR, JointFilter, constant_velocity_rts, smooth_joints
-from kinect_agent.processing.label_swaps import MIRROR, body_jumps, labelling_flips
+from kinect_agent.processing.label_swaps import MIRROR, body_jumps, labelling_flips, pair_swaps
 from kinect_agent.processing.pipeline import process
+from kinect_agent.recording import Recording
 from kinect_agent.sources.simulator import simulate_truth
-from tests.webcam_like import webcam_like
+from tests.webcam_like import ARMS, webcam_like
 
 TOL_DEG = 0.1  # the exact truth has no reference noise: only rounding-level losses are allowed
 
@@ -116,6 +117,25 @@ def test_flips_are_found_where_the_labels_swap_and_nowhere_else() -> None:
     assert not labelling_flips(truth.positions).any()
 
 
+def _split_stance(rec: Recording) -> Recording:
+    """Returns rec with the left foot 0.3 m back and the right one 0.3 m forward (knee, ankle, foot; along the
+    camera's axis): legs that fit the previous frame far worse mirrored than a swap of the arms does, as in the side
+    view's frames where the landmarker swapped the arms alone (label_swaps' docstring)."""
+    pos = rec.positions.copy()
+    for side, dz in (("L", 0.3), ("R", -0.3)):
+        pos[:, [skeleton.INDEX[f"{n}_{side}"] for n in ("KNE", "ANK", "FOO")], 2] += dz
+    return rec.replace(positions=pos)
+
+
+def test_arm_swaps_are_found_where_the_arms_alone_swap_and_nowhere_else() -> None:
+    truth = _split_stance(simulate_truth("elbow_flexion", 2, seed=0))
+    pos = truth.positions.copy()
+    pos[40:46, ARMS] = pos[40:46][:, MIRROR[ARMS]]
+    assert not labelling_flips(pos).any(), "the whole body's test does not see them: the legs outweigh the arms"
+    assert np.flatnonzero(pair_swaps(pos)).tolist() == [40, 46]
+    assert not pair_swaps(truth.positions).any()
+
+
 def test_another_body_is_a_jump_and_walking_is_not() -> None:
     truth = simulate_truth("side_step", 2, seed=0)
     pos = truth.positions.copy()
@@ -155,3 +175,23 @@ def test_smoothing_across_the_swaps_would_make_angles_worse() -> None:
     filtered, _ = smooth_joints(raw, config)
     change = _angle_rmse_change(filtered, raw.positions, truth.positions)
     assert max(change.values()) > 1.0, change
+
+
+@pytest.mark.parametrize(("exercise", "seed"), [("elbow_flexion", 0), ("squat", 1), ("elbow_flexion", 2)])
+def test_no_angle_is_made_worse_where_the_arms_alone_swap(exercise: str, seed: int) -> None:
+    truth = _split_stance(simulate_truth(exercise, 2, seed=seed))
+    raw = webcam_like(truth, seed, arms_only=True)
+    filtered = process(raw, config=config_for_device("webcam")).filtered.positions
+    change = _angle_rmse_change(filtered, raw.positions, truth.positions)
+    worse = {k: round(v, 2) for k, v in change.items() if v > TOL_DEG}
+    assert not worse, f"angles worse after the pipeline (deg): {worse}"
+
+
+def test_smoothing_across_the_arm_swaps_would_make_angles_worse() -> None:
+    """Without the restarts at the arms' swaps the same input breaks the property: the smoothed shoulders' line
+    shrinks, the trunk's axes turn, and the hip's abduction (measured against them) moves."""
+    truth = _split_stance(simulate_truth("elbow_flexion", 2, seed=2))
+    raw = webcam_like(truth, 2, arms_only=True)
+    config = config_for_device("webcam").model_copy(update={"joint_arm_swaps": False})
+    change = _angle_rmse_change(smooth_joints(raw, config)[0], raw.positions, truth.positions)
+    assert max(change.values()) > 0.5, change

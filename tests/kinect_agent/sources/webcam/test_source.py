@@ -49,9 +49,15 @@ def test_the_session_header_names_the_device_the_model_and_the_rates(sports2d_ta
     np.testing.assert_allclose(batch.t[: rec.n_frames] - batch.t[0], rec.t, atol=1e-12)
 
 
-def test_the_patient_is_kept_when_a_second_person_is_in_view() -> None:
+@pytest.mark.parametrize("watch", [True, False])
+def test_the_patient_is_kept_when_a_second_person_is_in_view(watch: bool) -> None:
+    """With the company watch (shipped) and with one landmarker looking for two on every image (watch=False, the
+    benchmarks' "before")."""
     # Pose2Sim's cam01: the subject walks in front; a second person stands at the back on the left
-    source = WebcamSource(video=pose2sim_view(1), realtime=False)
+    source = WebcamSource(video=pose2sim_view(1), realtime=False, watch=watch)
+    source.open()
+    assert (source.company_watch is not None) == watch
+    source.close()
     rec = record(source, 0.5)
     hips = np.array([f.image[[23, 24], :2].mean(axis=0) for f in source.landmark_frames])
     assert rec.n_frames >= 25
