@@ -174,3 +174,78 @@ def test_rows_are_byte_for_byte_those_of_per_value_formatting(seed: int) -> None
     rec = Recording(rec.t + rng.uniform(0, 1e5), positions, np.where(np.isfinite(positions).all(-1), rec.state, 0),
                     rec.meta)  # fmt: skip
     assert skeleton_csv._rows(rec) == _rows_per_value(rec)
+
+
+def _variants(plain: list[str]) -> dict[str, tuple[list[str], bool]]:
+    """Returns {name: (lines, plain)}: a written file's lines and variants, and whether the all-at-once reading
+    (_parse_plain) takes them (True) or leaves them to the row-by-row reading (False)."""
+    header, rows = plain[0], plain[1:]
+    cells = rows[5].split(",")
+
+    def row5(i: int, value: str) -> list[str]:
+        changed = cells.copy()
+        changed[i] = value
+        return [header, *rows[:5], ",".join(changed), *rows[6:]]
+
+    state = len(cells) - 3  # a state column
+    return {
+        "as written": (plain, True),
+        "first coordinate empty": (row5(1, ""), True),
+        "padded number": (row5(4, f" {cells[4]} "), True),
+        "nan written out": (row5(4, "nan"), True),
+        "empty state": (row5(state, ""), True),
+        "blank cell": (row5(4, " "), False),
+        "underscore in a number": (row5(4, "1_0"), False),
+        "infinite": (row5(4, "-inf"), False),
+        "state padded": (row5(state, " 2"), False),
+        "state with a leading zero": (row5(state, "02"), False),
+        "state out of range": (row5(state, "3"), False),
+        "time empty": (row5(0, ""), False),
+        "trailing comma": ([header, *(r + "," for r in rows)], False),
+        "repeated row": ([header, *rows[:5], rows[4], *rows[5:]], False),
+        "comment between rows": ([header, *rows[:5], "# note", *rows[5:]], False),
+        "blank line between rows": ([header, *rows[:5], "", *rows[5:]], False),
+        "short row": ([header, *rows[:5], rows[5].rsplit(",", 1)[0], *rows[6:]], False),
+        "non-ASCII comment after the rows": ([header, *rows, "# é"], False),
+    }
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_plain_path_reads_what_row_by_row_reads(tmp_path: Path, seed: int, monkeypatch) -> None:
+    """Every variant read with and without the all-at-once path (_parse_plain, np.loadtxt): the same arrays and
+    metadata, or the same FormatError (message and line); the path takes the plain files and declines the others."""
+    rec = _recording(np.random.default_rng(seed), frames=40)
+    written = tmp_path / "written.csv"
+    skeleton_csv.write(rec, written)
+    real = skeleton_csv._parse_plain
+    taken: list[bool] = []
+
+    def spy(*args: object) -> object:
+        out = real(*args)
+        taken.append(out is not None)
+        return out
+
+    for k, (name, (lines, plain)) in enumerate(_variants(written.read_text().splitlines()).items()):
+        path = tmp_path / f"{k}.csv"
+        path.write_text("\n".join(lines) + "\n")
+        taken.clear()
+        monkeypatch.setattr(skeleton_csv, "_parse_plain", spy)
+        outcomes: list[object] = []
+        for declined in (False, True):
+            if declined:
+                monkeypatch.setattr(skeleton_csv, "_parse_plain", lambda *a: None)
+            try:
+                outcomes.append(formats.read(path, "csv"))
+            except FormatError as exc:
+                outcomes.append((str(exc), exc.line))
+        monkeypatch.undo()
+        assert taken == [plain], name
+        fast, slow = outcomes
+        if isinstance(slow, tuple):
+            assert fast == slow, name
+            continue
+        assert isinstance(fast, Recording) and isinstance(slow, Recording), name
+        for field in ("t", "positions", "state"):
+            a, b = getattr(fast, field), getattr(slow, field)
+            assert a.dtype == b.dtype and a.tobytes() == b.tobytes(), f"{name}: {field}"
+        assert fast.meta.to_dict() == slow.meta.to_dict(), name
