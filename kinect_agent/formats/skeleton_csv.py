@@ -131,16 +131,37 @@ def write(rec: Recording, path: Path) -> None:
 _ROW = "%.6f," + ",".join(["%.5f"] * (3 * skeleton.J)) + "," + ",".join(["%d"] * skeleton.J) + "\n"
 
 
-def _rows(rec: Recording) -> list[str]:
+COMPILED_MIN_ROWS = 4096  # _rows of at least this many rows runs compiled (numba's import is lazy)
+_DECIMALS = np.array([6] + [5] * (3 * skeleton.J) + [0] * skeleton.J)  # _ROW's, per column (0: %d)
+
+
+def _rows(rec: Recording, compiled: bool = True) -> list[str]:
     """Returns the data lines of rec: time (6 decimals, s), x, y, z of every joint (5 decimals, m; empty when not
-    finite), the states. One %-format per row (the numbers Python's % gives, as np.char.mod did, 3× faster)."""
+    finite), the states. One %-format per row (the numbers Python's % gives, as np.char.mod did, 3× faster).
+
+    compiled: for COMPILED_MIN_ROWS rows or more, by _csv_numba's kernel when numba is installed (the same text byte
+    for byte; the rows it leaves, a value within rounding of a half, are %-formatted); False: % for every row."""
     coords = rec.positions.reshape(rec.n_frames, -1)
     coords = np.where(np.isfinite(coords), coords, np.nan)  # every missing value prints "nan", emptied below
-    values = np.concatenate([rec.t[:, None], coords, rec.state.astype(np.float64)], axis=1).tolist()
-    lines = [_ROW % tuple(row) for row in values]
+    table = np.concatenate([rec.t[:, None], coords, rec.state.astype(np.float64)], axis=1)
+    if compiled and rec.n_frames >= COMPILED_MIN_ROWS:
+        from kinect_agent.formats import _csv_numba
+
+        if _csv_numba.AVAILABLE:
+            lines, left = _csv_numba.rows_text(table, _DECIMALS)
+            for i in np.flatnonzero(left | ~np.isfinite(rec.t)):  # a time of NaN prints "nan" unless emptied
+                lines[i] = _row(table[i])
+            return lines
+    lines = [_ROW % tuple(row) for row in table.tolist()]
     for i in np.flatnonzero(np.isnan(coords).any(axis=1)):
         lines[i] = lines[i].replace("nan", "")
     return lines
+
+
+def _row(values: np.ndarray) -> str:
+    """Returns one data line of _rows: values (1 + 4J,) time, coordinates (NaN: empty), states (as _rows' own)."""
+    line = _ROW % tuple(values.tolist())
+    return line.replace("nan", "") if np.isnan(values[1 : 1 + 3 * skeleton.J]).any() else line
 
 
 def _read_sidecar(path: Path) -> Metadata:

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 from kinect_agent import formats, skeleton
 from kinect_agent.errors import FormatError
-from kinect_agent.formats import skeleton_csv
+from kinect_agent.formats import _csv_numba, skeleton_csv
 from kinect_agent.recording import Metadata, Recording
 
 
@@ -220,8 +221,8 @@ def test_the_plain_path_reads_what_row_by_row_reads(tmp_path: Path, seed: int, m
     real = skeleton_csv._parse_plain
     taken: list[bool] = []
 
-    def spy(*args: object) -> object:
-        out = real(*args)
+    def spy(lines: list[str], columns: dict[str, Any]) -> object:
+        out = real(lines, columns)
         taken.append(out is not None)
         return out
 
@@ -249,3 +250,36 @@ def test_the_plain_path_reads_what_row_by_row_reads(tmp_path: Path, seed: int, m
             a, b = getattr(fast, field), getattr(slow, field)
             assert a.dtype == b.dtype and a.tobytes() == b.tobytes(), f"{name}: {field}"
         assert fast.meta.to_dict() == slow.meta.to_dict(), name
+
+
+def test_compiled_rows_are_byte_for_byte_those_of_the_percent_format() -> None:
+    """Long recordings' rows by _csv_numba's kernel: the same text as % per row on values made to be hard: exact
+    halves of the last decimal (k/64 m), values a rounding away from a half, -0.0, tiny negatives, whole metres, large
+    coordinates and times, NaN, infinities (emptied), a time of NaN."""
+    rng = np.random.default_rng(7)
+    frames = skeleton_csv.COMPILED_MIN_ROWS + 100
+    rec = _recording(rng, frames=frames)
+    positions = rec.positions.reshape(frames, -1).copy()
+    kinds = rng.integers(0, 200, positions.shape)  # each hard kind in 0.5 % of the cells
+    halves = rng.integers(-256, 256, positions.shape) / 64.0
+    near = (rng.integers(-(10**6), 10**6, positions.shape) + 0.5) / 1e5
+    near = near + rng.choice([-1, 0, 1], positions.shape) * np.spacing(near)
+    tiny = -rng.uniform(0, 5e-6, positions.shape)
+    large = rng.uniform(-1e9, 1e9, positions.shape)
+    for k, values in enumerate((halves, near, tiny, large, np.round(positions), np.zeros_like(positions) * -1.0)):
+        positions = np.where(kinds == k, values, positions)
+    positions[rng.random(positions.shape) < 0.02] = np.nan
+    positions[3, 4], positions[5, 6] = np.inf, -np.inf
+    t = rec.t * 1e3 + rng.uniform(0, 1e6)
+    t[9] = np.nan
+    joints = positions.reshape(frames, skeleton.J, 3)
+    state = np.where(np.isfinite(joints).all(-1), rec.state, 0)
+    odd = Recording.__new__(Recording)  # times and values a recording would refuse: the writer still writes them
+    odd.__dict__.update(rec.__dict__, t=t, positions=joints, state=state)
+    compiled = skeleton_csv._rows(odd)
+    assert compiled == skeleton_csv._rows(odd, compiled=False)
+    assert compiled[:9] + compiled[10:] == (per_value := _rows_per_value(odd))[:9] + per_value[10:]
+    finite = np.where(np.isfinite(positions), positions, np.nan)
+    table = np.concatenate([t[:, None], finite, state.astype(float)], axis=1)
+    _, left = _csv_numba.rows_text(table, skeleton_csv._DECIMALS)
+    assert 0.1 < left.mean() < 0.5  # the kernel wrote most rows, and left the ones with a half to %
