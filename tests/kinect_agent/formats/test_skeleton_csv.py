@@ -192,7 +192,8 @@ def _variants(plain: list[str]) -> dict[str, tuple[list[str], bool]]:
     return {
         "as written": (plain, True),
         "first coordinate empty": (row5(1, ""), True),
-        "padded number": (row5(4, f" {cells[4]} "), True),
+        "padded number": (row5(4, f" {cells[4]} "), False),
+        "plus sign": (row5(4, f"+{cells[4].lstrip('-')}"), False),
         "nan written out": (row5(4, "nan"), True),
         "empty state": (row5(state, ""), True),
         "blank cell": (row5(4, " "), False),
