@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 import math
 import re
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from itertools import chain
 from operator import itemgetter
 from pathlib import Path
@@ -25,6 +25,7 @@ import numpy as np
 from kinect_agent import skeleton
 from kinect_agent.errors import FormatError
 from kinect_agent.formats._atomic import atomic_open
+from kinect_agent.formats._plain_table import plain_table
 from kinect_agent.formats._text import read_lines
 from kinect_agent.recording import Metadata, Recording
 
@@ -61,11 +62,16 @@ def read(path: Path) -> Recording:
     A row repeating the row before exactly (a frame written twice) is dropped (meta.extra["dropped_duplicate_rows"]);
     a repeated time with other values is refused."""
     meta = _read_sidecar(Path(path))
-    lines = _numbered_lines(read_lines(path), path, meta)
+    all_lines = read_lines(path)
+    lines = _numbered_lines(all_lines, path, meta)
     first = next(lines, None)
     if first is None:
         raise FormatError(path, "empty file: expected a header line starting with 'time'")
     columns = _parse_header(path, *first)
+    plain = _parse_plain(all_lines[first[0] :], columns)
+    if plain is not None:  # every row plain: no row needs a look of its own
+        t, coords, states = plain
+        return _recording(path, t, coords, states, range(first[0] + 1, first[0] + 1 + len(t)), meta)
     kept: list[list[str]] = []
     line_numbers: list[int] = []
     dropped, previous = 0, None
@@ -87,7 +93,16 @@ def read(path: Path) -> Recording:
     if not kept:
         raise FormatError(path, "no frames after the header")
     t, coords, states = _parse_rows(path, line_numbers, kept, columns)
-    positions = coords.reshape(len(kept), skeleton.J, 3)
+    return _recording(path, t, coords, states, line_numbers, meta)
+
+
+def _recording(
+    path: Path, t: np.ndarray, coords: np.ndarray, states: np.ndarray | None, line_numbers: Sequence[int],
+    meta: Metadata,
+) -> Recording:  # fmt: skip
+    """Returns the recording of parsed rows: t (N,) s, coords (N, 3J) m (NaN: missing), states (N, J) int8 or None;
+    FormatError when the times do not increase (line_numbers: each row's line in the file)."""
+    positions = coords.reshape(len(t), skeleton.J, 3)
     _check_times(path, t, line_numbers)
     finite = np.all(np.isfinite(positions), axis=-1)
     if states is not None:
@@ -116,16 +131,37 @@ def write(rec: Recording, path: Path) -> None:
 _ROW = "%.6f," + ",".join(["%.5f"] * (3 * skeleton.J)) + "," + ",".join(["%d"] * skeleton.J) + "\n"
 
 
-def _rows(rec: Recording) -> list[str]:
+COMPILED_MIN_ROWS = 4096  # _rows of at least this many rows runs compiled (numba's import is lazy)
+_DECIMALS = np.array([6] + [5] * (3 * skeleton.J) + [0] * skeleton.J)  # _ROW's, per column (0: %d)
+
+
+def _rows(rec: Recording, compiled: bool = True) -> list[str]:
     """Returns the data lines of rec: time (6 decimals, s), x, y, z of every joint (5 decimals, m; empty when not
-    finite), the states. One %-format per row (the numbers Python's % gives, as np.char.mod did, 3× faster)."""
+    finite), the states. One %-format per row (the numbers Python's % gives, as np.char.mod did, 3× faster).
+
+    compiled: for COMPILED_MIN_ROWS rows or more, by _csv_numba's kernel when numba is installed (the same text byte
+    for byte; the rows it leaves, a value within rounding of a half, are %-formatted); False: % for every row."""
     coords = rec.positions.reshape(rec.n_frames, -1)
     coords = np.where(np.isfinite(coords), coords, np.nan)  # every missing value prints "nan", emptied below
-    values = np.concatenate([rec.t[:, None], coords, rec.state.astype(np.float64)], axis=1).tolist()
-    lines = [_ROW % tuple(row) for row in values]
+    table = np.concatenate([rec.t[:, None], coords, rec.state.astype(np.float64)], axis=1)
+    if compiled and rec.n_frames >= COMPILED_MIN_ROWS:
+        from kinect_agent.formats import _csv_numba
+
+        if _csv_numba.AVAILABLE:
+            lines, left = _csv_numba.rows_text(table, _DECIMALS)
+            for i in np.flatnonzero(left | ~np.isfinite(rec.t)):  # a time of NaN prints "nan" unless emptied
+                lines[i] = _row(table[i])
+            return lines
+    lines = [_ROW % tuple(row) for row in table.tolist()]
     for i in np.flatnonzero(np.isnan(coords).any(axis=1)):
         lines[i] = lines[i].replace("nan", "")
     return lines
+
+
+def _row(values: np.ndarray) -> str:
+    """Returns one data line of _rows: values (1 + 4J,) time, coordinates (NaN: empty), states (as _rows' own)."""
+    line = _ROW % tuple(values.tolist())
+    return line.replace("nan", "") if np.isnan(values[1 : 1 + 3 * skeleton.J]).any() else line
 
 
 def _read_sidecar(path: Path) -> Metadata:
@@ -197,6 +233,31 @@ def _fit_width(path: Path, line_no: int, cells: list[str], n: int, rest: Iterato
         hint = " (file truncated?)" if len(cells) < n and next(rest, None) is None else ""
         raise FormatError(path, f"expected {n} columns as in the header, found {len(cells)}{hint}", line_no)
     return cells
+
+
+def _parse_plain(lines: list[str], columns: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray | None] | None:
+    """Returns _parse_rows' (t, coords, states) of the data lines when every one is plain (_plain_table: no comment,
+    blank, quoted, short, long or repeated line; every cell a number or empty, a state 0, 1, 2 or empty, times
+    finite, no infinite coordinate); None otherwise, and the rows are read one by one as before."""
+    coords, state = list(columns["coords"]), columns["state"]
+    states_at = [] if state is None else list(state)
+    table = plain_table(
+        lines, columns["n"], [0, *coords, *states_at], list(range(1 + len(coords), 1 + len(coords) + len(states_at)))
+    )
+    if table is None:
+        return None
+    t = table[:, 0].copy()
+    xyz = np.ascontiguousarray(table[:, 1 : 1 + len(coords)])
+    if not np.all(np.isfinite(t)) or np.any(np.isinf(xyz)):
+        return None  # _parse_rows names the cell
+    xyz[np.isnan(xyz)] = math.nan  # one NaN for every missing value, as _parse_rows
+    if state is None:
+        return t, xyz, None
+    s = table[:, 1 + len(coords) :]
+    empty = np.isnan(s)
+    if not np.all(empty | (s == 0.0) | (s == 1.0) | (s == 2.0)):
+        return None
+    return t, xyz, np.where(empty, 0.0, s).astype(np.int8)
 
 
 def _parse_rows(
@@ -272,7 +333,7 @@ def _number(path: Path, line_no: int, col: int, cell: str, what: str, allow_empt
     raise FormatError(path, f"column {col}: {what} must be finite, found {cell.strip()!r}", line_no)
 
 
-def _check_times(path: Path, t: np.ndarray, line_numbers: list[int]) -> None:
+def _check_times(path: Path, t: np.ndarray, line_numbers: Sequence[int]) -> None:
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:
         i = int(bad[0]) + 1

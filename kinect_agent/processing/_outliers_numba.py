@@ -150,28 +150,45 @@ def _window_sums(
     (m < 3), each summed over i in order.
 
     wp: (T + w − 1, J) weights, yp: (T + w − 1, J, 3) m (0 where absent), kern: (T, w), powers: (T, w, 5).
+    Each sum runs from 0 over i = 0, 1, ..., w − 1 as before; the joints are the innermost loop (J independent sums
+    side by side in contiguous accumulators), so that it vectorises without reordering any sum.
     """
     T, J, M = S.shape
     w = kern.shape[1]
-    wk = np.empty(w)
+    yt = np.empty((yp.shape[0], 3, J))  # yp with the joints last (contiguous)
+    for r in range(yp.shape[0]):
+        for a in range(3):
+            for j in range(J):
+                yt[r, a, j] = yp[r, j, a]
+    wk = np.empty(J)
+    s = np.empty((M, J))
+    s2 = np.empty((M, J))
+    b = np.empty((3, 3, J))
     for t in range(T):
-        for j in range(J):
-            for i in range(w):
-                wk[i] = wp[t + i, j] * kern[t, i]
+        s[:, :] = 0.0
+        s2[:, :] = 0.0
+        b[:, :, :] = 0.0
+        for i in range(w):
+            kt = kern[t, i]
+            for j in range(J):
+                wk[j] = wp[t + i, j] * kt
             for m in range(M):
-                s = 0.0
-                s2 = 0.0
-                for i in range(w):
-                    s += wk[i] * powers[t, i, m]
-                    s2 += (wk[i] * wk[i]) * powers[t, i, m]
-                S[t, j, m] = s
-                S2[t, j, m] = s2
+                p = powers[t, i, m]
+                for j in range(J):
+                    s[m, j] += wk[j] * p
+                    s2[m, j] += (wk[j] * wk[j]) * p
+            for m in range(3):
+                p = powers[t, i, m]
+                for a in range(3):
+                    for j in range(J):
+                        b[m, a, j] += (yt[t + i, a, j] * wk[j]) * p
+        for j in range(J):
+            for m in range(M):
+                S[t, j, m] = s[m, j]
+                S2[t, j, m] = s2[m, j]
             for m in range(3):
                 for a in range(3):
-                    b = 0.0
-                    for i in range(w):
-                        b += (yp[t + i, j, a] * wk[i]) * powers[t, i, m]
-                    B[t, j, m, a] = b
+                    B[t, j, m, a] = b[m, a, j]
 
 
 def _quadratic_at_centre(

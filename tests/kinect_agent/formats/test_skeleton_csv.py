@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 from kinect_agent import formats, skeleton
 from kinect_agent.errors import FormatError
-from kinect_agent.formats import skeleton_csv
+from kinect_agent.formats import _csv_numba, skeleton_csv
 from kinect_agent.recording import Metadata, Recording
 
 
@@ -174,3 +175,112 @@ def test_rows_are_byte_for_byte_those_of_per_value_formatting(seed: int) -> None
     rec = Recording(rec.t + rng.uniform(0, 1e5), positions, np.where(np.isfinite(positions).all(-1), rec.state, 0),
                     rec.meta)  # fmt: skip
     assert skeleton_csv._rows(rec) == _rows_per_value(rec)
+
+
+def _variants(plain: list[str]) -> dict[str, tuple[list[str], bool]]:
+    """Returns {name: (lines, plain)}: a written file's lines and variants, and whether the all-at-once reading
+    (_parse_plain) takes them (True) or leaves them to the row-by-row reading (False)."""
+    header, rows = plain[0], plain[1:]
+    cells = rows[5].split(",")
+
+    def row5(i: int, value: str) -> list[str]:
+        changed = cells.copy()
+        changed[i] = value
+        return [header, *rows[:5], ",".join(changed), *rows[6:]]
+
+    state = len(cells) - 3  # a state column
+    return {
+        "as written": (plain, True),
+        "first coordinate empty": (row5(1, ""), True),
+        "padded number": (row5(4, f" {cells[4]} "), False),
+        "plus sign": (row5(4, f"+{cells[4].lstrip('-')}"), False),
+        "nan written out": (row5(4, "nan"), True),
+        "empty state": (row5(state, ""), True),
+        "blank cell": (row5(4, " "), False),
+        "underscore in a number": (row5(4, "1_0"), False),
+        "infinite": (row5(4, "-inf"), False),
+        "state padded": (row5(state, " 2"), False),
+        "state with a leading zero": (row5(state, "02"), False),
+        "state out of range": (row5(state, "3"), False),
+        "time empty": (row5(0, ""), False),
+        "trailing comma": ([header, *(r + "," for r in rows)], False),
+        "repeated row": ([header, *rows[:5], rows[4], *rows[5:]], False),
+        "comment between rows": ([header, *rows[:5], "# note", *rows[5:]], False),
+        "blank line between rows": ([header, *rows[:5], "", *rows[5:]], False),
+        "short row": ([header, *rows[:5], rows[5].rsplit(",", 1)[0], *rows[6:]], False),
+        "non-ASCII comment after the rows": ([header, *rows, "# é"], False),
+    }
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_plain_path_reads_what_row_by_row_reads(tmp_path: Path, seed: int, monkeypatch) -> None:
+    """Every variant read with and without the all-at-once path (_parse_plain, np.loadtxt): the same arrays and
+    metadata, or the same FormatError (message and line); the path takes the plain files and declines the others."""
+    rec = _recording(np.random.default_rng(seed), frames=40)
+    written = tmp_path / "written.csv"
+    skeleton_csv.write(rec, written)
+    real = skeleton_csv._parse_plain
+    taken: list[bool] = []
+
+    def spy(lines: list[str], columns: dict[str, Any]) -> object:
+        out = real(lines, columns)
+        taken.append(out is not None)
+        return out
+
+    for k, (name, (lines, plain)) in enumerate(_variants(written.read_text().splitlines()).items()):
+        path = tmp_path / f"{k}.csv"
+        path.write_text("\n".join(lines) + "\n")
+        taken.clear()
+        monkeypatch.setattr(skeleton_csv, "_parse_plain", spy)
+        outcomes: list[object] = []
+        for declined in (False, True):
+            if declined:
+                monkeypatch.setattr(skeleton_csv, "_parse_plain", lambda *a: None)
+            try:
+                outcomes.append(formats.read(path, "csv"))
+            except FormatError as exc:
+                outcomes.append((str(exc), exc.line))
+        monkeypatch.undo()
+        assert taken == [plain], name
+        fast, slow = outcomes
+        if isinstance(slow, tuple):
+            assert fast == slow, name
+            continue
+        assert isinstance(fast, Recording) and isinstance(slow, Recording), name
+        for field in ("t", "positions", "state"):
+            a, b = getattr(fast, field), getattr(slow, field)
+            assert a.dtype == b.dtype and a.tobytes() == b.tobytes(), f"{name}: {field}"
+        assert fast.meta.to_dict() == slow.meta.to_dict(), name
+
+
+def test_compiled_rows_are_byte_for_byte_those_of_the_percent_format() -> None:
+    """Long recordings' rows by _csv_numba's kernel: the same text as % per row on values made to be hard: exact
+    halves of the last decimal (k/64 m), values a rounding away from a half, -0.0, tiny negatives, whole metres, large
+    coordinates and times, NaN, infinities (emptied), a time of NaN."""
+    rng = np.random.default_rng(7)
+    frames = skeleton_csv.COMPILED_MIN_ROWS + 100
+    rec = _recording(rng, frames=frames)
+    positions = rec.positions.reshape(frames, -1).copy()
+    kinds = rng.integers(0, 200, positions.shape)  # each hard kind in 0.5 % of the cells
+    halves = rng.integers(-256, 256, positions.shape) / 64.0
+    near = (rng.integers(-(10**6), 10**6, positions.shape) + 0.5) / 1e5
+    near = near + rng.choice([-1, 0, 1], positions.shape) * np.spacing(near)
+    tiny = -rng.uniform(0, 5e-6, positions.shape)
+    large = rng.uniform(-1e9, 1e9, positions.shape)
+    for k, values in enumerate((halves, near, tiny, large, np.round(positions), np.zeros_like(positions) * -1.0)):
+        positions = np.where(kinds == k, values, positions)
+    positions[rng.random(positions.shape) < 0.02] = np.nan
+    positions[3, 4], positions[5, 6] = np.inf, -np.inf
+    t = rec.t * 1e3 + rng.uniform(0, 1e6)
+    t[9] = np.nan
+    joints = positions.reshape(frames, skeleton.J, 3)
+    state = np.where(np.isfinite(joints).all(-1), rec.state, 0)
+    odd = Recording.__new__(Recording)  # times and values a recording would refuse: the writer still writes them
+    odd.__dict__.update(rec.__dict__, t=t, positions=joints, state=state)
+    compiled = skeleton_csv._rows(odd)
+    assert compiled == skeleton_csv._rows(odd, compiled=False)
+    assert compiled[:9] + compiled[10:] == (per_value := _rows_per_value(odd))[:9] + per_value[10:]
+    finite = np.where(np.isfinite(positions), positions, np.nan)
+    table = np.concatenate([t[:, None], finite, state.astype(float)], axis=1)
+    _, left = _csv_numba.rows_text(table, skeleton_csv._DECIMALS)
+    assert 0.1 < left.mean() < 0.5  # the kernel wrote most rows, and left the ones with a half to %
