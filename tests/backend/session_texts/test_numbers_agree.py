@@ -5,7 +5,8 @@ each folder, cut to WINDOW_S seconds, so the test runs in minutes; COACH_ALL_REC
 simulator's exercises at two views, and the demo's sessions (the demo agent's path: capture, filter, session file,
 then the session page's body as the server builds it). For each recording, as a therapist would see it:
     - every range of motion (key numbers) and every shown 95 % interval lies in its angle's domain, an interval
-      holds its estimate and is at most intervals.MAX_WIDTH_DEG wide; a withheld one says why;
+      holds its estimate and is at most intervals.MAX_WIDTH_DEG wide; a withheld one says why; no knee or elbow
+      flexion shown passes what the joint bends (intervals.FLEXION_LIMIT_DEG);
     - the session's peak angle is the end of the range its repetitions reach, and every repetition's peak is a
       value of the filtered curve;
     - the curves (raw and filtered) lie in the domain; the filtered curve is the series the range of motion is
@@ -126,6 +127,9 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
         r = rom[name]
         if r["min_deg"] is not None and not (lo - TOL <= r["min_deg"] <= r["max_deg"] <= hi + TOL):
             problems.append(f"{name}: range {r['min_deg']}..{r['max_deg']} leaves its domain [{lo}, {hi}]")
+        limit = intervals.FLEXION_LIMIT_DEG.get(name)
+        if limit is not None and r["max_deg"] is not None and r["max_deg"] > limit + TOL:
+            problems.append(f"{name}: range {r['min_deg']}..{r['max_deg']} bends past what the joint can ({limit})")
         raw = raw_angles[name][np.isfinite(raw_angles[name])]
         if raw.size and r["min_deg"] is not None:  # every range shown, with its interval or not
             env = np.percentile(raw, [0.5, 99.5]) + np.array([-RAW_MARGIN_DEG, RAW_MARGIN_DEG])
