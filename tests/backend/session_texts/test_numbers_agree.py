@@ -157,7 +157,10 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
         lo, hi = DOMAIN_DEG[name]
         if np.any((deg < lo - TOL) | (deg > hi + TOL)):
             problems.append(f"{c['label']}: curve leaves [{lo}, {hi}]: {np.nanmin(deg)}..{np.nanmax(deg)}")
-        if c["kind"] == "raw" or rom[name]["min_deg"] is None:
+        if c["kind"] == "raw":
+            continue
+        filtered_values.append(deg)  # the repetitions' peaks lie on it, its range shown or withheld
+        if rom[name]["min_deg"] is None:
             continue
         # both are rounded to 0.1° on their own: the percentile may round past the curve's extreme by 0.1°
         if not (np.nanmin(deg) - 2 * TOL <= rom[name]["min_deg"] and rom[name]["max_deg"] <= np.nanmax(deg) + 2 * TOL):
@@ -172,7 +175,6 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
         peaks = [r["peak_deg"] for r in body["repetitions"] if r["side"] == side]
         if peaks and not (np.nanmin(deg) - TOL <= min(peaks) and max(peaks) <= np.nanmax(deg) + TOL):
             problems.append(f"{name}: repetition peaks {min(peaks)}..{max(peaks)} are not on the filtered curve")
-        filtered_values.append(deg)
     # a repetition of both sides (or of a centre angle) peaks at the mean of the sides' curves at its peak
     shared = [r["peak_deg"] for r in body["repetitions"] if r["side"] in ("both", "center")]
     if shared and filtered_values:
