@@ -75,9 +75,10 @@ KINDS = ("min_deg", "max_deg", "range_deg")
 MAX_WIDTH_DEG = 60.0
 RAW_ENVELOPE_PCT = (0.5, 99.5)  # the raw angle's envelope (beyond_raw)
 RAW_MARGIN_DEG = 10.0  # degrees the filtered range may pass that envelope before its intervals are withheld
-# Flexion no knee or elbow reaches (passive end range 140-160°): a range past it is the camera losing the limb (the
-# UI-PRMD Kinect reads seated knees at 170-178° where its Vicon reads 93-96°), withheld (beyond_anatomy)
-FLEXION_LIMIT_DEG = {f"{joint}_flexion_{side}": 160.0 for joint in ("knee", "elbow") for side in ("L", "R")}
+# Flexion of the joint centres no knee or elbow passes (HDM05's full squats, heels down, reach 166° of knee flexion):
+# a range past it is the camera losing the limb (the UI-PRMD Kinect reads seated knees at 173-178° where its Vicon
+# reads 93-96°), withheld (beyond_anatomy)
+FLEXION_LIMIT_DEG = {f"{joint}_flexion_{side}": 170.0 for joint in ("knee", "elbow") for side in ("L", "R")}
 MIN_DEFINED_FRACTION = 0.5
 MIN_TRACKED_FRACTION = 0.8
 # The systematic part b = (1 + YAW_GAIN · sin ψ) · sqrt(B² + (TAIL_GAIN · τ)²), fitted by bench/uncertainty.py
