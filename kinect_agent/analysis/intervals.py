@@ -75,6 +75,10 @@ KINDS = ("min_deg", "max_deg", "range_deg")
 MAX_WIDTH_DEG = 60.0
 RAW_ENVELOPE_PCT = (0.5, 99.5)  # the raw angle's envelope (beyond_raw)
 RAW_MARGIN_DEG = 10.0  # degrees the filtered range may pass that envelope before its intervals are withheld
+# Flexion of the joint centres no knee or elbow passes (HDM05's full squats, heels down, reach 166° of knee flexion):
+# a range past it is the camera losing the limb (the UI-PRMD Kinect reads seated knees at 173-178° where its Vicon
+# reads 93-96°), withheld (beyond_anatomy)
+FLEXION_LIMIT_DEG = {f"{joint}_flexion_{side}": 170.0 for joint in ("knee", "elbow") for side in ("L", "R")}
 MIN_DEFINED_FRACTION = 0.5
 MIN_TRACKED_FRACTION = 0.8
 # The systematic part b = (1 + YAW_GAIN · sin ψ) · sqrt(B² + (TAIL_GAIN · τ)²), fitted by bench/uncertainty.py
@@ -316,6 +320,15 @@ def beyond_raw(rom: dict[str, float | None], raw: np.ndarray) -> float:
     return float(max(0.0, low - lo, hi - high))
 
 
+def beyond_anatomy(name: str, rom: dict[str, float | None]) -> Reason | None:
+    """Returns the reason beyond_anatomy when the range of motion {"max_deg", ...} of angle `name` passes its
+    FLEXION_LIMIT_DEG, else None (also for an angle without a limit or an unknown range)."""
+    limit, top = FLEXION_LIMIT_DEG.get(name), rom.get("max_deg")
+    if limit is None or top is None or top <= limit:
+        return None
+    return why.BEYOND_ANATOMY.reason(reached=round(top), limit=round(limit))
+
+
 def beyond_raw_reason(off: float) -> Reason:
     """Returns the reason beyond_raw of a range off (degrees, > 0) beyond the raw envelope, rounded up to 0.1° so
     that it never reads 0°."""
@@ -350,6 +363,7 @@ def rom_intervals(
     tracked: dict[str, float] | None = None,
     defining: tuple[str, ...] = (),
     beyond: dict[str, float] | None = None,
+    anatomy: dict[str, Reason] | None = None,
 ) -> RomIntervals:
     """Returns the RomIntervals of every angle present in both angles and sd ({name: (T,) degrees}).
 
@@ -358,7 +372,8 @@ def rom_intervals(
     session's meta.device. tracked: {angle: fraction of its joint samples tracked} (1 when not given). defining:
     the exercise's defining angles (angle_intervals' `defining`). beyond: {angle: degrees its range of motion leaves
     the raw angle's envelope (beyond_raw)}; an angle beyond it by more than 0 has its intervals withheld for that
-    reason before any other (its range is withheld too).
+    reason before any other (its range is withheld too). anatomy: {angle: beyond_anatomy reason} of ranges past
+    what the joint bends, withheld for that reason first.
     """
     yaw = camera_yaw(positions)
     yaw = 90.0 if yaw is None else yaw
@@ -370,8 +385,8 @@ def rom_intervals(
         iv = angle_intervals(t, angles[name], sd[name], name, yaw_deg=yaw, device=device, defining=name in defining)
         off = (beyond or {}).get(name, 0.0)
         # a range beyond the raw data is itself withheld (report.analyze_recording): its interval says the same
-        reason = beyond_raw_reason(off) if off > 0.0 else withheld_reason(
-            name, angles[name], iv, (tracked or {}).get(name, 1.0))  # fmt: skip
+        reason = (anatomy or {}).get(name) or (beyond_raw_reason(off) if off > 0.0 else withheld_reason(
+            name, angles[name], iv, (tracked or {}).get(name, 1.0)))  # fmt: skip
         shown[name] = None if reason else iv
         if reason:
             withheld[name] = reason
@@ -423,6 +438,7 @@ __all__ = [
     "Edges",
     "RomIntervals",
     "angle_intervals",
+    "beyond_anatomy",
     "beyond_raw_reason",
     "count_interval",
     "edges",

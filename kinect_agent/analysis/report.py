@@ -22,7 +22,14 @@ from kinect_agent.analysis.balance import missing_reason, sway
 from kinect_agent.analysis.document import AnalysisReport, json_ready
 from kinect_agent.analysis.errors import AnalysisError, UnreadableRecording
 from kinect_agent.analysis.exercise import ExerciseSpec, get_exercise
-from kinect_agent.analysis.intervals import KINDS, beyond_raw, beyond_raw_reason, count_interval, rom_intervals
+from kinect_agent.analysis.intervals import (
+    KINDS,
+    beyond_anatomy,
+    beyond_raw,
+    beyond_raw_reason,
+    count_interval,
+    rom_intervals,
+)
 from kinect_agent.analysis.live import amplitude_floor, counting_params, counting_positions, done_repetitions
 from kinect_agent.analysis.most_moving import most_moving_joints
 from kinect_agent.analysis.range_of_motion import range_of_motion
@@ -130,7 +137,8 @@ def analyze_recording(
     it and `filtered`, "range_of_motion_95" ({angle: {"min_deg", "max_deg", "range_deg": [lo, hi]} or None}) and
     "repetitions_95" ({"low", "high", "ambiguous"}) hold 95 % intervals (intervals.py); else both are None.
     Measured on filtered positions (or params), an angle whose range leaves the raw angle's envelope
-    (intervals.beyond_raw) has its range None and why in "range_of_motion_withheld" ({} when none; None on raw).
+    (intervals.beyond_raw), or whose flexion passes what the joint bends (intervals.beyond_anatomy), has its range
+    None and why in "range_of_motion_withheld" ({} when none; None on raw).
     """
     if recording.n_frames < 2:
         raise AnalysisError(f"the recording has {recording.n_frames} frame(s); at least 2 are needed")
@@ -158,10 +166,14 @@ def analyze_recording(
     rom = range_of_motion(t, clinical, presmoothed=True)
     tracked = {name: quality.tracked_fraction(recording, (name,)) for name in clinical}
     beyond, rom_withheld = _beyond_raw(recording, rom) if source != "raw" else ({}, None)
+    # a flexion past what the joint bends is the camera losing the limb, whatever the raw data say (issue 24.1)
+    anatomy = {name: why for name, r in rom.items() if (why := beyond_anatomy(name, r)) is not None}
+    if rom_withheld is not None:
+        rom_withheld = {**rom_withheld, **anatomy}
     rom = {name: dict.fromkeys(KINDS) if rom_withheld and name in rom_withheld else r for name, r in rom.items()}
     ivs = None
     if sd is not None:
-        ivs = rom_intervals(t, clinical, sd, smoothed, recording.meta.device, tracked, names, beyond)
+        ivs = rom_intervals(t, clinical, sd, smoothed, recording.meta.device, tracked, names, beyond, anatomy)
     moving_s, rest_s = activity.moving_time(t, smoothed)
     balance = sway(t, smoothed, clinical)
     doc = {

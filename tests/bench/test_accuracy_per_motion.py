@@ -82,3 +82,38 @@ def test_offline_elbow_knee_rmse_is_below_the_baseline(rows: Rows, motion: str, 
         m = rows[motion, view, seed]["methods"]
         off, base = m["pipeline_offline"]["angle_rmse_deg"], m[baseline]["angle_rmse_deg"]
         assert off < base, f"{motion} {view}° seed {seed}: offline elbow/knee {off:.2f}° vs {baseline} {base:.2f}°"
+
+
+# Issue 24's restated targets, judged per seed by bench/accuracy.py (ISSUE24_TARGETS): the random part within 5 mm
+# of the ideal 2 Hz low-pass of the clean error, the elbow/knee RMSE within 1° of perfect outlier removal. On these
+# short clips they miss in the rows below, measured 2026-11-28 (bench/README.md "Issue 24's restated targets per
+# motion, view and seed"), with the most each may miss by (measured margin, rounded up, + 0.5): CMU's 12 s at both
+# views on every seed (the fast arm and leg swings the random walk of the angles rounds off), and the 1.2-1.9 s HDM05
+# and UI-PRMD clips on some seeds. Any other miss, or a known one grown, fails.
+KNOWN_MISSES = {
+    "random<=oracle_lowpass_2hz+5": {
+        ("cmu_13_29", 0, 1): 2.4, ("cmu_13_29", 0, 2): 2.9, ("cmu_13_29", 0, 3): 2.2, ("cmu_13_29", 60, 1): 2.2,
+        ("cmu_13_29", 60, 2): 4.1, ("cmu_13_29", 60, 3): 2.3, ("hdm05_squat1Reps", 0, 1): 0.7,
+        ("hdm05_squat1Reps", 0, 3): 4.0, ("hdm05_squat1Reps", 60, 2): 6.2, ("ui_prmd_m01", 0, 2): 2.1,
+        ("ui_prmd_m01", 60, 1): 3.5, ("ui_prmd_m01", 60, 2): 2.6, ("ui_prmd_m01", 60, 3): 8.8,
+    },
+    "angle<=oracle_clean+1": {
+        ("cmu_13_29", 0, 1): 2.1, ("cmu_13_29", 0, 2): 2.7, ("cmu_13_29", 0, 3): 1.7, ("cmu_13_29", 60, 1): 1.2,
+        ("cmu_13_29", 60, 2): 0.6, ("cmu_13_29", 60, 3): 2.6, ("hdm05_squat1Reps", 0, 3): 1.5,
+        ("ui_prmd_m01", 0, 3): 1.0, ("ui_prmd_m01", 60, 3): 0.8,
+    },
+}  # fmt: skip
+
+
+@pytest.mark.shared_data
+@pytest.mark.parametrize("target", sorted(KNOWN_MISSES))
+def test_issue24_targets_miss_only_where_measured(rows: Rows, target: str) -> None:
+    known = KNOWN_MISSES[target]
+    misses = {}
+    for key, row in rows.items():
+        t = row["targets"][target]
+        if not t["pass"]:
+            misses[key] = t["margin"]
+    unknown = {k: f"+{v:.2f}" for k, v in misses.items() if k not in known}
+    grown = {k: f"+{v:.2f} > {known[k]}" for k, v in misses.items() if k in known and v > known[k]}
+    assert not unknown and not grown, (unknown, grown)

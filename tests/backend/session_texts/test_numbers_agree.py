@@ -5,7 +5,8 @@ each folder, cut to WINDOW_S seconds, so the test runs in minutes; COACH_ALL_REC
 simulator's exercises at two views, and the demo's sessions (the demo agent's path: capture, filter, session file,
 then the session page's body as the server builds it). For each recording, as a therapist would see it:
     - every range of motion (key numbers) and every shown 95 % interval lies in its angle's domain, an interval
-      holds its estimate and is at most intervals.MAX_WIDTH_DEG wide; a withheld one says why;
+      holds its estimate and is at most intervals.MAX_WIDTH_DEG wide; a withheld one says why; no knee or elbow
+      flexion shown passes what the joint bends (intervals.FLEXION_LIMIT_DEG);
     - the session's peak angle is the end of the range its repetitions reach, and every repetition's peak is a
       value of the filtered curve;
     - the curves (raw and filtered) lie in the domain; the filtered curve is the series the range of motion is
@@ -126,6 +127,9 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
         r = rom[name]
         if r["min_deg"] is not None and not (lo - TOL <= r["min_deg"] <= r["max_deg"] <= hi + TOL):
             problems.append(f"{name}: range {r['min_deg']}..{r['max_deg']} leaves its domain [{lo}, {hi}]")
+        limit = intervals.FLEXION_LIMIT_DEG.get(name)
+        if limit is not None and r["max_deg"] is not None and r["max_deg"] > limit + TOL:
+            problems.append(f"{name}: range {r['min_deg']}..{r['max_deg']} bends past what the joint can ({limit})")
         raw = raw_angles[name][np.isfinite(raw_angles[name])]
         if raw.size and r["min_deg"] is not None:  # every range shown, with its interval or not
             env = np.percentile(raw, [0.5, 99.5]) + np.array([-RAW_MARGIN_DEG, RAW_MARGIN_DEG])
@@ -153,7 +157,10 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
         lo, hi = DOMAIN_DEG[name]
         if np.any((deg < lo - TOL) | (deg > hi + TOL)):
             problems.append(f"{c['label']}: curve leaves [{lo}, {hi}]: {np.nanmin(deg)}..{np.nanmax(deg)}")
-        if c["kind"] == "raw" or rom[name]["min_deg"] is None:
+        if c["kind"] == "raw":
+            continue
+        filtered_values.append(deg)  # the repetitions' peaks lie on it, its range shown or withheld
+        if rom[name]["min_deg"] is None:
             continue
         # both are rounded to 0.1° on their own: the percentile may round past the curve's extreme by 0.1°
         if not (np.nanmin(deg) - 2 * TOL <= rom[name]["min_deg"] and rom[name]["max_deg"] <= np.nanmax(deg) + 2 * TOL):
@@ -168,7 +175,6 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
         peaks = [r["peak_deg"] for r in body["repetitions"] if r["side"] == side]
         if peaks and not (np.nanmin(deg) - TOL <= min(peaks) and max(peaks) <= np.nanmax(deg) + TOL):
             problems.append(f"{name}: repetition peaks {min(peaks)}..{max(peaks)} are not on the filtered curve")
-        filtered_values.append(deg)
     # a repetition of both sides (or of a centre angle) peaks at the mean of the sides' curves at its peak
     shared = [r["peak_deg"] for r in body["repetitions"] if r["side"] in ("both", "center")]
     if shared and filtered_values:

@@ -169,6 +169,8 @@ ENGLISH = {
     "count)": ("never_still", {"seconds": 2.5}),
     # newer than schema 3 (never stored as words), read back all the same, as every message is
     "the filtered curve reaches 12° beyond what the camera measured": ("beyond_raw", {"by": 12.0}),
+    "the curve reaches 175°, more than the joint can bend (170°): the camera lost the limb":
+        ("beyond_anatomy", {"reached": 175.0, "limit": 170.0}),
 }
 # fmt: on
 

@@ -184,3 +184,20 @@ def test_a_range_beyond_the_raw_data_is_withheld_with_its_reason() -> None:
     assert doc.range_of_motion["knee_flexion_L"].max_deg is not None  # the angles the filter left alone are shown
     same = analyze_recording(raw, EXERCISES["elbow_flexion"], filtered=raw)
     assert same.range_of_motion_withheld == {}, same.range_of_motion_withheld
+
+
+def test_a_knee_bent_past_what_a_knee_bends_is_withheld(data_dir: Path) -> None:
+    """UI-PRMD s01's sit to stand: its Vicon reads the knees at most 93-96°, the Kinect 173-178° (the seated legs
+    lost); the session does not show that flexion as a knee's, it says why (bench/README.md, issue 24 audit)."""
+    raw = uiprmd(data_dir, "m05", "s01")
+    result = process(raw)
+    doc = analyze_recording(raw, EXERCISES["sit_to_stand"], filtered=result.filtered, angle_sd=result.angle_sd)
+    withheld = doc.range_of_motion_withheld or {}
+    for name in ("knee_flexion_L", "knee_flexion_R"):
+        why = withheld.get(name)
+        assert why is not None and why.id == "beyond_anatomy", (name, withheld)
+        assert float(why.params["reached"]) > 170.0 and why.params["limit"] == 170, why
+        assert doc.range_of_motion[name].max_deg is None, doc.range_of_motion[name]
+        assert doc.range_of_motion_95 is not None and doc.range_of_motion_95[name] is None
+        assert doc.range_of_motion_95_withheld is not None and doc.range_of_motion_95_withheld[name] == why
+    assert doc.range_of_motion["hip_flexion_L"].max_deg is not None  # the angles a body reaches are shown

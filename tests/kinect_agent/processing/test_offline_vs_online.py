@@ -1,6 +1,7 @@
 """The offline smoother against the causal passes it builds on, per joint (issue 24, point 2).
 
-Short clips of every source with a truth (an HDM05 kick, CMU 13_29 arm circles, a simulated side step), measured by
+Short clips of every source with a truth (an HDM05 kick, CMU 13_29 arm circles, a UI-PRMD deep squat driven by its
+Vicon episode, a simulated side step), measured by
 white noise (20 mm per axis) and by the project's Kinect 2 model, each at two (view, seed) pairs. Per joint RMSE
 against the truth, mm. bench/offline_vs_online.py measures the same over every motion, view and seed
 (bench/README.md, "Offline smoother against its own online filter, per joint").
@@ -17,7 +18,7 @@ import pytest
 
 from kinect_agent import skeleton
 from kinect_agent.blas_threads import one_blas_thread
-from kinect_agent.formats import amc, bvh
+from kinect_agent.formats import amc, bvh, ui_prmd_vicon
 from kinect_agent.processing.combined_outliers import remove_outliers_combined
 from kinect_agent.processing.config import PipelineConfig
 from kinect_agent.processing.ik import inverse_kinematics
@@ -49,8 +50,12 @@ class Clip:
 
 def _mocap(data_dir: Path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Returns {source: (t (T,) s, positions (T, J, 3) m, mocap frame)} at 30 Hz: one HDM05 kick (actor bd, one
-    repetition) and the first 3 s of CMU 13_29's arm circles (mocap6 labels)."""
+    repetition), the first 3 s of CMU 13_29's arm circles (mocap6 labels) and UI-PRMD s01's first deep squat (Vicon
+    joint positions, the truth bench/accuracy.py drives its UI-PRMD rows with)."""
     out = {}
+    squat = data_dir / "ui-prmd" / "Segmented Movements" / "Vicon" / "Positions" / "m01_s01_e01_positions.txt.gz"
+    if squat.is_file():
+        out["ui-prmd deep squat"] = resample(ui_prmd_vicon.read(squat), RATE_HZ)
     kick = data_dir / "hdm05" / "kickLFront1Reps" / "HDM_bd_kickLFront1Reps_001_120.amc"
     if kick.is_file():
         out["hdm05 kick"] = resample(amc.read(kick), RATE_HZ)
@@ -94,7 +99,8 @@ def clips() -> list[Clip]:
     if not DATA.is_dir() and os.environ.get("CI"):
         pytest.fail(f"{DATA} is missing; CI must have ../shared beside the repository")
     mocap = _mocap(DATA) if DATA.is_dir() else {}
-    assert not DATA.is_dir() or set(mocap) == {"hdm05 kick", "cmu arm circles"}, f"mocap clips missing in {DATA}"
+    expected = {"hdm05 kick", "cmu arm circles", "ui-prmd deep squat"}
+    assert not DATA.is_dir() or set(mocap) == expected, f"mocap clips missing in {DATA}"
     out = []
     for white in (True, False):
         noise = "white 20 mm" if white else "Kinect 2 model"
