@@ -41,7 +41,7 @@ python -m pytest -q -p no:cacheprovider tests/test_layers.py
 #     run once, on the production database (one of their own, below);
 #   - PostgreSQL, every other test that opens the suite's database (marker "database", which tests/conftest.py sets
 #     from the fixtures a test uses), and the tests below tests/conftest.py's ONCE_ON_POSTGRESQL (marker
-#     "once_on_postgresql": the analysis tests, which never open the database);
+#     "once_on_postgresql": the analysis, capture source and evaluation tests, which never open the database);
 #   - SQLite, every test but the browser tests and those: the database tests again, and every other test that never
 #     opens the suite's database (the signal code, readers, benchmarks' helpers, the demo's and the lean installs'
 #     own SQLite files, pure functions of the server), once.

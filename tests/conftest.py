@@ -19,8 +19,10 @@ REFERENCE = SHARED / "reference"
 DATABASE_FIXTURES = frozenset({"test_database_url", "live_server"})
 DATABASE_VARIABLE = "COACH_TEST_DATABASE_URL"
 # The tests that never open the database run once (scripts/test.sh): those below these folders in the PostgreSQL
-# pass, the others in the SQLite pass, so that the two passes end together.
-ONCE_ON_POSTGRESQL = ("tests/kinect_agent/analysis/", "tests/backend/session_texts/")
+# pass, the others in the SQLite pass, so that the two passes end together (CPU s of each folder: bench/README.md,
+# "CI time").
+ONCE_ON_POSTGRESQL = ("tests/kinect_agent/analysis/", "tests/backend/session_texts/", "tests/kinect_agent/sources/",
+                      "tests/kinect_agent/evaluation/")  # fmt: skip
 
 
 @pytest.hookimpl(tryfirst=True)  # before -m selects on the markers
