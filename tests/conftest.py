@@ -37,7 +37,7 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
             reads_variable[module] = DATABASE_VARIABLE in module.read_text(encoding="utf-8")
         if reads_variable[module] or DATABASE_FIXTURES & set(getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.database)
-        elif module.relative_to(REPO).as_posix().startswith(ONCE_ON_POSTGRESQL):
+        elif module.is_relative_to(REPO) and module.relative_to(REPO).as_posix().startswith(ONCE_ON_POSTGRESQL):
             item.add_marker(pytest.mark.once_on_postgresql)
 
 
