@@ -66,12 +66,16 @@ admin.dispose()
 print(url.set(database=name).render_as_string(hide_password=False))
 PY
 )"
-COACH_TEST_DATABASE_URL="$BROWSER_PG_URL" python -m pytest -m browser "$@" >"$LOGS/browser" 2>&1 &
+# Each log ends with its pass's wall time and CPU time (its pytest and every process that pytest waited for: servers,
+# Chromium, command-line runs): a pass whose CPU is well under its wall time waits, one near it computes.
+TIMEFORMAT="pass time: %R s wall, %U s user, %S s sys"
+{ time COACH_TEST_DATABASE_URL="$BROWSER_PG_URL" python -m pytest -m browser "$@"; } >"$LOGS/browser" 2>&1 &
 browser_pid=$!
-COACH_TEST_DATABASE_URL="$PG_URL" python -m pytest -m "not browser and (database or once_on_postgresql)" "$@" \
-  >"$LOGS/postgresql" 2>&1 &
+{ time COACH_TEST_DATABASE_URL="$PG_URL" python -m pytest -m "not browser and (database or once_on_postgresql)" "$@"
+} >"$LOGS/postgresql" 2>&1 &
 pg_pid=$!
-COACH_TEST_DATABASE_URL="" python -m pytest -m "not browser and not once_on_postgresql" "$@" >"$LOGS/sqlite" 2>&1 &
+{ time COACH_TEST_DATABASE_URL="" python -m pytest -m "not browser and not once_on_postgresql" "$@"; } \
+  >"$LOGS/sqlite" 2>&1 &
 sqlite_pid=$!
 browser_rc=0 pg_rc=0 sqlite_rc=0
 wait "$browser_pid" || browser_rc=$?
