@@ -39,20 +39,18 @@ python -m pytest -q -p no:cacheprovider tests/test_layers.py
 # servers and Chromium much of the time):
 #   - PostgreSQL, the browser tests (marker "browser"): slow, and they exercise the pages, not the database, so they
 #     run once, on the production database (one of their own, below);
-#   - PostgreSQL, every other test that opens the suite's database;
-#   - SQLite, every test but the browser tests: the database tests again, and those that never open the suite's
-#     database (the signal code, readers, benchmarks' helpers; marker "own_database": the demo's and the lean
-#     installs' own SQLite files), which run in this pass only.
-# The analysis tests never open the database either; they run once, in the PostgreSQL pass, so that the two passes
-# end together (whole runs, 2026-11-27: with them SQLite 26:42 and PostgreSQL 18:53; without them and the
-# own_database tests SQLite 18:24 and PostgreSQL 21:52).
+#   - PostgreSQL, every other test that opens the suite's database (marker "database", which tests/conftest.py sets
+#     from the fixtures a test uses), and the tests below tests/conftest.py's ONCE_ON_POSTGRESQL (marker
+#     "once_on_postgresql": the analysis, capture source and evaluation tests, which never open the database);
+#   - SQLite, every test but the browser tests and those: the database tests again, and every other test that never
+#     opens the suite's database (the signal code, readers, benchmarks' helpers, the demo's and the lean installs'
+#     own SQLite files, pure functions of the server), once.
+# Before, the tests that never open the database but sat beside database tests ran in both passes (404 tests, 56 CPU
+# s on a busy machine, 2026-11-28).
 # Each pass's output is printed whole when all have ended.
 echo "=== tests: PostgreSQL ($PG_URL: the browser tests, and the rest) and SQLite, side by side ===" >&2
 LOGS="$(mktemp -d)"
 trap 'rm -rf "$LOGS"' EXIT
-NO_DATABASE=(tests/kinect_agent/body tests/kinect_agent/evaluation tests/kinect_agent/export tests/kinect_agent/formats
-  tests/kinect_agent/live tests/kinect_agent/processing tests/kinect_agent/sources tests/kinect_agent/vendor tests/bench)
-ANALYSIS=(tests/kinect_agent/analysis tests/backend/session_texts)  # no database either: in the PostgreSQL pass only
 # The browser pass gets a database of its own beside PG_URL's (NAME_browser): its servers' LISTEN/NOTIFY events must
 # not reach the other pass's listeners, and two schemas of one database would share them.
 BROWSER_PG_URL="$(python - "$PG_URL" <<'PY'
@@ -68,12 +66,16 @@ admin.dispose()
 print(url.set(database=name).render_as_string(hide_password=False))
 PY
 )"
-COACH_TEST_DATABASE_URL="$BROWSER_PG_URL" python -m pytest -m browser "$@" >"$LOGS/browser" 2>&1 &
+# Each log ends with its pass's wall time and CPU time (its pytest and every process that pytest waited for: servers,
+# Chromium, command-line runs): a pass whose CPU is well under its wall time waits, one near it computes.
+TIMEFORMAT="pass time: %R s wall, %U s user, %S s sys"
+{ time COACH_TEST_DATABASE_URL="$BROWSER_PG_URL" python -m pytest -m browser "$@"; } >"$LOGS/browser" 2>&1 &
 browser_pid=$!
-COACH_TEST_DATABASE_URL="$PG_URL" python -m pytest -m "not browser and not own_database" \
-  "${NO_DATABASE[@]/#/--ignore=}" "$@" >"$LOGS/postgresql" 2>&1 &
+{ time COACH_TEST_DATABASE_URL="$PG_URL" python -m pytest -m "not browser and (database or once_on_postgresql)" "$@"
+} >"$LOGS/postgresql" 2>&1 &
 pg_pid=$!
-COACH_TEST_DATABASE_URL="" python -m pytest -m "not browser" "${ANALYSIS[@]/#/--ignore=}" "$@" >"$LOGS/sqlite" 2>&1 &
+{ time COACH_TEST_DATABASE_URL="" python -m pytest -m "not browser and not once_on_postgresql" "$@"; } \
+  >"$LOGS/sqlite" 2>&1 &
 sqlite_pid=$!
 browser_rc=0 pg_rc=0 sqlite_rc=0
 wait "$browser_pid" || browser_rc=$?

@@ -14,6 +14,31 @@ REPO = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("COACH_SHARED_DIR", REPO.parent / "shared"))
 DATA = SHARED / "data"
 REFERENCE = SHARED / "reference"
+# What reaches the suite's database (COACH_TEST_DATABASE_URL): the fixture that names it (tests/backend/conftest.py;
+# engine, db_session, client, fresh_engine ... build on it) and the browser tests' server (tests/frontend/conftest.py).
+DATABASE_FIXTURES = frozenset({"test_database_url", "live_server"})
+DATABASE_VARIABLE = "COACH_TEST_DATABASE_URL"
+# The tests that never open the database run once (scripts/test.sh): those below these folders in the PostgreSQL
+# pass, the others in the SQLite pass, so that the two passes end together (CPU s of each folder: bench/README.md,
+# "CI time").
+ONCE_ON_POSTGRESQL = ("tests/kinect_agent/analysis/", "tests/backend/session_texts/", "tests/kinect_agent/sources/",
+                      "tests/kinect_agent/evaluation/")  # fmt: skip
+
+
+@pytest.hookimpl(tryfirst=True)  # before -m selects on the markers
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Marks "database" each test that opens the suite's database: one that uses a fixture of DATABASE_FIXTURES,
+    and every test of a module that reads DATABASE_VARIABLE itself; marks "once_on_postgresql" each other test below
+    ONCE_ON_POSTGRESQL."""
+    reads_variable: dict[Path, bool] = {}
+    for item in items:
+        module = item.path
+        if module not in reads_variable:
+            reads_variable[module] = DATABASE_VARIABLE in module.read_text(encoding="utf-8")
+        if reads_variable[module] or DATABASE_FIXTURES & set(getattr(item, "fixturenames", ())):
+            item.add_marker(pytest.mark.database)
+        elif module.is_relative_to(REPO) and module.relative_to(REPO).as_posix().startswith(ONCE_ON_POSTGRESQL):
+            item.add_marker(pytest.mark.once_on_postgresql)
 
 
 @pytest.fixture(scope="session", autouse=True)
