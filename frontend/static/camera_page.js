@@ -22,6 +22,7 @@
   let set = null, pending = [], lastFlush = 0, lastT = -1, count = 0, target = 0;
   let okSince = null, lastSeen = 0, prevCentre = null, luma = null, lumaAt = 0, targetAt = null;
   const by = { one: 0, two: 0 };  // frames answered by each landmarker of the watch (camera_pose_core.js)
+  let sent = 0, received = 0;  // frames this page handed to the sender; the set's frames the server holds (its answer)
   let stamps = [], placementSince = 0, slowSaid = false, lastVideoTime = -1, skipEvery = 1, frameNo = 0, detecting = false;
   const lumCanvas = document.createElement("canvas");
 
@@ -202,6 +203,7 @@
     const taken = pending.map((f) => f._taken);
     const frames = pending.map(({ _taken, ...f }) => f);
     pending = [];
+    sent += frames.length;
     const seq = set.next_seq++;
     const rate = stamps.length > 1 ? +((stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000)).toFixed(1) : null;
     const video = $("cam-video");
@@ -220,6 +222,7 @@
 
   function onAnswer(out, body, timing) {
     if (out.count > count) { count = out.count; renderCount(); }
+    received = Math.max(received, out.n_frames);
     const shown = Date.now();
     set.hint = out.hint;
     const taken = set.taken && set.taken[body.seq];
@@ -442,5 +445,5 @@
 
   init();
   window.CameraPage = { state: () => ({ phase, count, target, set_id: set && set.set_id, next_seq: set && set.next_seq,
-    model: CameraPose.info, by: { ...by }, fps: stamps.length > 1 ? (stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000) : null }) };
+    frames: sent, received, model: CameraPose.info, by: { ...by }, fps: stamps.length > 1 ? (stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000) : null }) };
 })();
