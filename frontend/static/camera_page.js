@@ -25,6 +25,7 @@
   const costs = [], COSTS = 300;  // the last frames' timing (cost())
   let answeredAt = null;  // when the landmarker's last answer came back (performance.now(), ms)
   let shown = null, grabbedShown = null;  // the camera frames shown so far (video frame callback), at the last grab
+  let sent = 0, received = 0;  // frames this page handed to the sender; the set's frames the server holds (its answer)
   let stamps = [], placementSince = 0, slowSaid = false, lastVideoTime = -1, skipEvery = 1, frameNo = 0, detecting = false;
   const lumCanvas = document.createElement("canvas");
 
@@ -227,6 +228,7 @@
     const taken = pending.map((f) => f._taken);
     const frames = pending.map(({ _taken, ...f }) => f);
     pending = [];
+    sent += frames.length;
     const seq = set.next_seq++;
     const rate = stamps.length > 1 ? +((stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000)).toFixed(1) : null;
     const video = $("cam-video");
@@ -245,6 +247,7 @@
 
   function onAnswer(out, body, timing) {
     if (out.count > count) { count = out.count; renderCount(); }
+    received = Math.max(received, out.n_frames);
     const shown = Date.now();
     set.hint = out.hint;
     const taken = set.taken && set.taken[body.seq];
@@ -467,5 +470,5 @@
 
   init();
   window.CameraPage = { state: () => ({ phase, count, target, set_id: set && set.set_id, next_seq: set && set.next_seq,
-    model: CameraPose.info, by: { ...by }, costs: costs.slice(), fps: stamps.length > 1 ? (stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000) : null }) };
+    frames: sent, received, model: CameraPose.info, by: { ...by }, costs: costs.slice(), fps: stamps.length > 1 ? (stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000) : null }) };
 })();

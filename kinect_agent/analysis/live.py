@@ -22,7 +22,9 @@ Floor. A device with a NoiseFloor (the webcam) drops excursions smaller than its
 first START_S seconds (amplitude_floor, from the frames of those seconds only), as soon as they are over; until
 then its bound. The stored count measures it on the same frames (kinect_agent/analysis/report.py): one floor.
 Still. still_s counts the seconds since the dominant defining angle last moved: its range over the last
-MOVE_WINDOW_S seconds reached MOVE_DEG.
+MOVE_WINDOW_S seconds reached MOVE_DEG. A gap of more than GAP_S between two frames (a browser's page hidden or
+reloaded, its landmarker restarting, nobody followed) is not counted: nobody saw whether the patient moved then, so
+a set does not end as still as soon as its pictures come back.
 Hints. From the raw frames of the last HINT_S seconds, in this order: the trunk (ROOT, SPINE) seen in less than
 half of them; the trunk closer than NEAR_M or farther than FAR_M; the trunk off-centre by more than
 OFF_CENTRE_FRAC of half the horizontal field of view; the limbs of the defining angles not tracked in more than
@@ -60,6 +62,7 @@ CONFIRM_S = 1.0  # s: while unsettled, a count is shown once every evaluation of
 UNSETTLED_S = 5.0  # s after an evaluation that re-decided (module doc, "Confirmed")
 MOVE_WINDOW_S = 2.0
 MOVE_DEG = 10.0
+GAP_S = 5.0  # s between two frames: longer, the time between them is not counted as still (module doc, "Still")
 HINT_S = 1.0
 NEAR_M, FAR_M = 1.5, 3.8  # as camera_advice.NEAR_M, FAR_M
 OFF_CENTRE_FRAC = 0.5  # as camera_advice.OFF_CENTRE_FRAC
@@ -239,6 +242,8 @@ class LiveCount:
         t: s, increasing. raw_positions: (J, 3) m camera frame, NaN = untracked; raw_state: (J,) 0/1/2;
         filtered: (J, 3) m, the online filter's output for the frame.
         """
+        if self._t and t - self._t[-1] > GAP_S:
+            self._last_moving += t - self._t[-1]
         self._t.append(float(t))
         self._filtered.append(np.asarray(filtered, dtype=np.float64))
         self._raw.append(np.asarray(raw_positions, dtype=np.float64))

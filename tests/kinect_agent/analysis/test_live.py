@@ -74,6 +74,18 @@ def test_still_seconds_grow_when_nothing_moves():
     assert status.count == 0 and 9.0 <= status.still_s <= 10.0, status
 
 
+def test_a_gap_without_frames_is_not_counted_as_still():
+    """A browser's pictures stopping mid-set (its landmarker restarting on the page after its worker died: 46 s on a
+    loaded CI machine) and coming back: still_s counts the seconds seen (5 s before the gap, 1 s after), not the gap,
+    so the set does not end as still (20 s, camera_page.js) on its first picture back."""
+    frame = simulate("squat", 1, seed=0)[0]
+    counter = LiveCount(EXERCISES["squat"].defining_angles)
+    pos, state = frame.positions[0], frame.state[0]
+    for t in [k / 30 for k in range(150)] + [45.0 + k / 30 for k in range(31)]:
+        status = counter.add(t, pos, state, pos)
+    assert 5.5 <= status.still_s <= 6.0 + 1e-9, status
+
+
 def _frames(shift=(0.0, 0.0, 0.0), untracked=(), n=30):
     rec = simulate("elbow_flexion", 1, seed=1)[0]
     pos = rec.positions[:n] + np.asarray(shift)
