@@ -18,7 +18,7 @@ __all__ = ["ANALYSIS_VERSION", "indicator_scores", "json_ready", "metrics_docume
 
 # the version of the analysis a document was made by (doc["analysis_version"]); raise it when a metric's
 # definition changes, so `coach-server reanalyze` knows which stored documents are older
-ANALYSIS_VERSION = "2026.11.28-rest-levels"  # a missed shallow repetition may sit between rest levels 0.3 × M apart
+ANALYSIS_VERSION = "2026.11.28-abduction-folded"  # shoulder abduction counted folded, without the planar seam
 
 
 def metrics_document(
