@@ -6,16 +6,22 @@ definition behind every number of a session: range of motion and its intervals, 
 the session page and the exported angle tables.
 
 Counting angles (counting_angles): the measured angles, except the hip angles, which the counter reads as the thigh's
-elevation (signed). On real Kinect data the legs are mistracked at the top of a high knee lift (UI-PRMD hurdle step
-and leg raise: the thigh reads as pointing up and backwards for a few frames) and the sagittal projection then jumps,
-splitting or hiding repetitions. The elevation is the 3-D angle between the thigh HIP→KNE and the trunk's down
-direction (−up of angles.body_frame), in [0, 180] degrees and continuous; it equals |hip flexion| (|hip abduction|)
-while the thigh moves in the sagittal (frontal) plane. Its sign is the sign of the measured angle's median over the
-frames where the thigh is raised more than 20°. The counter's signal only: the repetitions' peaks are reported on the
-measured angles (kinect_agent.analysis.report.measured_peak). The shoulder angles stay planar: there the elevation would
-count the idle arm's sideways drift (UI-PRMD shoulder extension), the plane does not; they are counted also where the
-arm is out of their plane (joint_angles(mask_off_plane=False)), where the measured angle is undefined (why:
-bench/README.md, "Clinical angles: why each convention").
+elevation (signed), and the shoulder abduction, which it reads folded (folded_abduction). On real Kinect data the legs
+are mistracked at the top of a high knee lift (UI-PRMD hurdle step and leg raise: the thigh reads as pointing up and
+backwards for a few frames) and the sagittal projection then jumps, splitting or hiding repetitions. The elevation is
+the 3-D angle between the thigh HIP→KNE and the trunk's down direction (−up of angles.body_frame), in [0, 180] degrees
+and continuous; it equals |hip flexion| (|hip abduction|) while the thigh moves in the sagittal (frontal) plane. Its
+sign is the sign of the measured angle's median over the frames where the thigh is raised more than 20°. The counter's
+signal only: the repetitions' peaks are reported on the measured angles (kinect_agent.analysis.report.measured_peak).
+On the webcam an arm raised out to the side may come down in front of the body (the musicalgestures dancer's left arm
+on the full pose model): its projection on the frontal plane shrinks and turns through the inner side, the
+frontal-plane angle crosses its seam (−120/240 degrees: 225 to −118 on that clip) and the raises merge; the folded
+abduction equals |shoulder abduction| while the arm moves in the frontal plane and stays continuous where it points
+forward or back (its forward part read at FORWARD_WEIGHT; the elevation, weight 1, would count the hanging arm's
+forward sway: the webcam's still-standing sets). The shoulder flexion stays planar: there the elevation would count
+the idle arm's sideways drift (UI-PRMD shoulder extension), the plane does not; it is counted also where the arm is
+out of its plane (joint_angles(mask_off_plane=False)), where the measured angle is undefined (why: bench/README.md,
+"Clinical angles: why each convention"; the folded abduction: "The dancer's left shoulder across the planar seam").
 """
 
 from __future__ import annotations
@@ -34,7 +40,8 @@ _PLANAR_LIMBS = {
     "hip_abduction": ("HIP", "KNE"),
 }
 RAISED_DEG = 20.0
-_CONTINUOUS = ("shoulder_flexion", "shoulder_abduction")  # counted on their planar angle, unmasked
+FORWARD_WEIGHT = 0.25  # the share of the arm's forward/backward part the counted shoulder abduction reads
+_CONTINUOUS = ("shoulder_flexion",)  # counted on its planar angle, unmasked
 
 
 @dataclass(frozen=True)
@@ -69,13 +76,32 @@ def elevation(positions: np.ndarray, proximal: str, distal: str, up: np.ndarray 
     return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
+def folded_abduction(positions: np.ndarray, side: str) -> np.ndarray:
+    """Returns (T,) degrees in [0, 180]: the upper arm SHO→ELB of side "L" or "R" as the counter reads its abduction,
+    atan2(hypot(out, FORWARD_WEIGHT * fwd), down) with out, fwd, down its parts along the trunk's outward, forward
+    and down directions (angles.body_frame).
+
+    It equals the frontal-plane abduction (0 hanging, 90 out to the side, 180 overhead) while the arm moves in that
+    plane on the outward side, and its mirror (−abduction) across the body; it is continuous wherever the arm points
+    (FORWARD_WEIGHT > 0: defined where the arm points forward or back, where the planar angle turns through its
+    seam); FORWARD_WEIGHT = 1 would be the arm's elevation, which also reads the arm's forward sway at rest.
+    positions: (T, J, 3) float, metres, camera frame, NaN = untracked (gives NaN).
+    """
+    up, left, forward = body_frame(positions)
+    outward = left if side == "L" else -left
+    arm = positions[:, INDEX[f"ELB_{side}"]] - positions[:, INDEX[f"SHO_{side}"]]
+    along = np.hypot(series.dot3(arm, outward), FORWARD_WEIGHT * series.dot3(arm, forward))
+    return np.degrees(np.arctan2(along, -series.dot3(arm, up)))
+
+
 def counting_angles(
     positions: np.ndarray,
     names: tuple[str, ...],
     clinical: dict[str, np.ndarray] | None = None,
     up: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
-    """Returns {name: (T,) degrees} for the angles `names`: hip angles as signed thigh elevation, others as is.
+    """Returns {name: (T,) degrees} for the angles `names`: hip angles as signed thigh elevation, shoulder abduction
+    folded (folded_abduction), shoulder flexion unmasked, others as is.
 
     positions: (T, J, 3) float, metres, camera frame, NaN = untracked. clinical: joint_angles(positions) when
     already computed; up: (T, 3) the trunk's up direction likewise. Raises ValueError on another shape or an
@@ -93,6 +119,9 @@ def counting_angles(
     out: dict[str, np.ndarray] = {}
     for name in names:
         prefix, side = name[:-2], name[-1]
+        if prefix == "shoulder_abduction":
+            out[name] = folded_abduction(positions, side)
+            continue
         if prefix not in _PLANAR_LIMBS:
             out[name] = continuous.get(name, clinical[name])
             continue

@@ -2,9 +2,14 @@
 Toolbox's dancer (PyPI `musicalgestures` 1.32.0, GPL-3.0-or-later, University of Oslo fourMs Lab; tests/media.py),
 filmed from the front, raises both arms out to the side four times in the clip's first 49.2 s and then stands still
 (counted by eye, frame by frame: bench/README.md, "Counts on real videos of known counts"). The agent's webcam source
-(`kinect-agent run --source webcam VIDEO`, MediaPipe's Python runtime, the pinned lite model) records the set as a
-shoulder abduction; its live count (the online filter and LiveCount, as kinect_agent.live.set_recorder runs them) and
-the saved session's count (the server's analysis of the stored raw recording) are both 4."""
+(`kinect-agent run --source webcam VIDEO`, MediaPipe's Python runtime, the pinned lite model and the full one) records
+the set as a shoulder abduction; its live count (the online filter and LiveCount, as kinect_agent.live.set_recorder runs
+them) and the saved session's count (the server's analysis of the stored raw recording) are both 4, with either model.
+
+Before (the shoulder abduction counted on its frontal-plane angle, unmasked, wrapped at -120/240 degrees): the full
+model's stored count was 2: the left arm comes down in front of the body after the first raise, its angle crossed the
+seam (225 to -118 degrees) and the first three raises merged (bench/README.md, "The dancer's left shoulder across the
+planar seam")."""
 
 from __future__ import annotations
 
@@ -26,10 +31,11 @@ SET_S = 49.2  # the four arm raises (frames 72-944 at 25 fps) and the stillness 
 TRUE_COUNT = 4  # counted by eye
 
 
-@pytest.fixture(scope="module")
-def dancer_set():
-    """The dancer's first SET_S seconds through the agent's webcam source, as a shoulder abduction set."""
-    rec = record(WebcamSource(video=mgt_dancer(), realtime=False), SET_S)
+@pytest.fixture(scope="module", params=["lite", "full"])
+def dancer_set(request):
+    """The dancer's first SET_S seconds through the agent's webcam source with the pose model `lite` or `full`, as a
+    shoulder abduction set."""
+    rec = record(WebcamSource(video=mgt_dancer(), realtime=False, model=request.param), SET_S)
     rec.meta.exercise = "shoulder_abduction"
     return rec
 
