@@ -710,7 +710,8 @@ def test_a_second_person_is_seen_and_one_person_alone_is_tracked_cheaply(pw, liv
         else:
             # over 150 frames, not fewer: a look that takes something for a second person hands about a second of
             # frames to `two` (ALONE_MS), which at 16 frames a second was 23 of the first 60 frames once
-            page.wait_for_function("() => CameraPage.state().by.one + CameraPage.state().by.two >= 150", timeout=180_000)
+            frames = "() => CameraPage.state().by.one + CameraPage.state().by.two >= 150"
+            page.wait_for_function(frames, timeout=180_000)
             by = page.evaluate("CameraPage.state().by")
             assert by["one"] >= 0.7 * (by["one"] + by["two"]), by
         assert not page.js_errors, page.js_errors
