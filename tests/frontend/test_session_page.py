@@ -12,6 +12,8 @@ import pytest
 import sqlalchemy as sa
 from playwright.sync_api import expect
 
+from backend.jobs.models import Job
+from backend.sessions import prepared
 from backend.sessions.models import SessionDetail
 from tests.frontend.conftest import PATIENT, THERAPIST, login, open_page, shot, upload_session
 
@@ -87,12 +89,29 @@ def _detail_when_ready(page, sid: int) -> dict[str, Any]:
         page.wait_for_timeout(250)
 
 
+def _until_no_detail_build_waits(engine: sa.Engine) -> None:
+    """Waits (at most 60 s) until no detail build is queued or running on the server (its embedded worker)."""
+    busy = (
+        sa.select(sa.func.count())
+        .select_from(Job)
+        .where(Job.kind == prepared.KIND, Job.status.in_(("queued", "running")))
+    )
+    deadline = time.monotonic() + 60
+    while True:
+        with engine.connect() as conn:
+            if conn.execute(busy).scalar() == 0:
+                return
+        assert time.monotonic() < deadline, "a detail build still waits after 60 s"
+        time.sleep(0.25)
+
+
 def test_the_page_says_the_detail_is_being_prepared_then_shows_it(page, live_server, arm_session):
     login(page, PAUL)
     page.wait_for_url("**/therapist")
     _detail_when_ready(page, arm_session)  # the build the upload queued is done
     engine = sa.create_engine(live_server.database_url)
     try:
+        _until_no_detail_build_waits(engine)  # a later build (new inputs) would store the detail again after delete
         with engine.begin() as conn:  # as after a new detail version: the stored one is gone, a worker builds it
             conn.execute(sa.delete(SessionDetail).where(SessionDetail.session_id == arm_session))
     finally:
