@@ -708,10 +708,12 @@ def test_a_second_person_is_seen_and_one_person_alone_is_tracked_cheaply(pw, liv
             by = page.evaluate("CameraPage.state().by")
             assert by["two"] > 0, by
         else:
-            # over 150 frames, not fewer: a look that takes something for a second person hands about a second of
-            # frames to `two` (ALONE_MS), which at 16 frames a second was 23 of the first 60 frames once
+            # most of 150 frames, not of fewer: a look that takes something for a second person hands about a second
+            # of frames to `two` (ALONE_MS), 23 of the first 60 once at 16 frames a second; over 150 frames `one`
+            # answered 85 % idle and 67 % (101 of 151) in a whole run's load. A landmarker looking for two on every
+            # frame (no watch) answers none by `one`.
             frames = "() => CameraPage.state().by.one + CameraPage.state().by.two >= 150"
             page.wait_for_function(frames, timeout=180_000)
             by = page.evaluate("CameraPage.state().by")
-            assert by["one"] >= 0.7 * (by["one"] + by["two"]), by
+            assert by["one"] > by["two"], by
         assert not page.js_errors, page.js_errors
