@@ -34,25 +34,11 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from bench.camera_landmarker import ADD_FRAME_JS, FRAME_MS, clip_frames  # noqa: E402
+from bench.camera_landmarker import ADD_FRAME_JS, FRAME_MS, LOAD_JS, clip_frames  # noqa: E402
 from bench.dashboard_load import percentile, start_server, stop_server  # noqa: E402
 
 CHROMIUM = "/usr/bin/chromium"
 SEEN = 0.5  # a landmark counts in the accuracy comparison when the reference gives it this visibility
-
-LOAD_JS = """async ({ name, model, mode, poses }) => {
-  const worker = new Worker("/static/camera_pose_worker.js", { type: "module" });
-  window.__workers = window.__workers || {};
-  window.__workers[name] = { worker, next: 0, ms: 0 };
-  const base = new URL("/static/vendor/mediapipe", location.href).href;
-  const message = { type: "load", base, model, delegates: ["CPU"] };
-  if (poses) message.poses = poses;
-  if (mode) message.mode = mode;
-  return await new Promise((resolve) => {
-    worker.onmessage = ({ data }) => resolve(data);
-    worker.postMessage(message);
-  });
-}"""
 
 # per frame: [trip ms, took ms (in the worker), look ms, by, people, first person's [x, y, visibility] x 33 or null,
 # the copy's ms]

@@ -44,13 +44,14 @@ ADD_FRAME_JS = """async ({ rgba, width, height }) => {
   return window.__frames.length;
 }"""
 
-LOAD_JS = """async ({ name, model, poses }) => {
+LOAD_JS = """async ({ name, model, mode, poses }) => {
   const worker = new Worker("/static/camera_pose_worker.js", { type: "module" });
   window.__workers = window.__workers || {};
   window.__workers[name] = { worker, next: 0, ms: 0 };
   const base = new URL("/static/vendor/mediapipe", location.href).href;
   const message = { type: "load", base, model, delegates: ["CPU"] };
   if (poses) message.poses = poses;
+  if (mode) message.mode = mode;
   return await new Promise((resolve) => {
     worker.onmessage = ({ data }) => resolve(data);
     worker.postMessage(message);
