@@ -56,10 +56,14 @@ def with_text(reason: R, t: Translator) -> R:
 
 def with_texts(doc: D, t: Translator) -> D:
     """Returns a metrics document with the text of each reason in t's language: the quality check's, the withheld
-    ranges' and intervals', and why balance is missing (the document's and, in an AnalysisDocument, its balance
-    indicator's)."""
+    ranges', intervals', repetitions' and median amplitude's, and why balance is missing (the document's and, in an
+    AnalysisDocument, its balance indicator's)."""
     withheld, ranges = doc.range_of_motion_95_withheld, doc.range_of_motion_withheld
+    reps = [r if r.withheld is None else r.model_copy(update={"withheld": with_text(r.withheld, t)})
+            for r in doc.repetition_list]  # fmt: skip
     update: dict[str, object] = {
+        "repetition_list": reps,
+        "rom_deg_withheld": None if doc.rom_deg_withheld is None else with_text(doc.rom_deg_withheld, t),
         "quality": doc.quality.model_copy(update={"reasons": [with_text(r, t) for r in doc.quality.reasons]}),
         "range_of_motion_withheld": None if ranges is None else {k: with_text(v, t) for k, v in ranges.items()},
         "range_of_motion_95_withheld": None if withheld is None else {k: with_text(v, t) for k, v in withheld.items()},

@@ -13,6 +13,7 @@ from backend.session_texts import reasons
 from kinect_agent.analysis.document import AnalysisReport
 from kinect_agent.analysis.errors import AnalysisError
 from kinect_agent.analysis.exercise import EXERCISES
+from kinect_agent.analysis.reasons import Reason
 from kinect_agent.analysis.report import analyze_file
 
 
@@ -33,17 +34,26 @@ def _summary(doc: AnalysisReport) -> str:
     lines = [
         f"{doc.exercise}: {doc.repetitions} repetitions in {doc.duration_s:.1f} s "
         f"({doc.n_frames} frames at {doc.rate_hz:.1f} Hz)",
-        f"defining angle {doc.defining_angle}, median amplitude {doc.rom_deg} deg",
+        f"defining angle {doc.defining_angle}, median amplitude {_degrees(doc.rom_deg, doc.rom_deg_withheld)}",
         f"quality: {'ok' if q.ok else 'NOT ok'} (tracked {q.tracked_fraction:.0%}, "
         f"outliers {q.outlier_fraction:.1%}){''.join('; ' + reasons.written(r, ENGLISH) for r in q.reasons)}",
         _balance_line(doc),
     ]
     lines += [
-        f"  #{r.index + 1}: {r.start_s:.2f}-{r.end_s:.2f} s, amplitude {r.amplitude_deg} deg, "
-        f"peak {r.peak_deg} deg, {r.side}"
+        f"  #{r.index + 1}: {r.start_s:.2f}-{r.end_s:.2f} s, "
+        + (f"amplitude {r.amplitude_deg} deg, peak {r.peak_deg} deg" if r.withheld is None
+           else f"amplitude and peak withheld: {reasons.written(r.withheld, ENGLISH)}")
+        + f", {r.side}"
         for r in doc.repetition_list
-    ]
+    ]  # fmt: skip
     return "\n".join(lines)
+
+
+def _degrees(value: float | None, withheld: Reason | None) -> str:
+    """Returns "12.5 deg", or why a number is withheld ("withheld: ..."), or "None"."""
+    if withheld is not None:
+        return f"withheld: {reasons.written(withheld, ENGLISH)}"
+    return f"{value} deg" if value is not None else "None"
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -36,7 +36,7 @@ from kinect_agent.analysis.validity import recorded_with, session_validity
 from kinect_agent.formats import session_file
 from kinect_agent.formats.session_file import SessionFileError, SessionPayload
 
-DETAIL_VERSION = 4  # part of a stored detail's inputs (backend.sessions.prepared): bump when the output changes
+DETAIL_VERSION = 5  # part of a stored detail's inputs (backend.sessions.prepared): bump when the output changes
 # the texts of the therapist's session page (catalogue `therapist`): stored in English, written in the reader's
 # language when read (in_language)
 UNCERTAINTY_NOTE = N_(
@@ -149,11 +149,20 @@ def _workspace(doc: AnalysisReport | None, paths: dict[str, Any] | None) -> dict
 
 
 def _rep_rows(reps: list[RepetitionItem], speeds: list[float | None]) -> list[dict[str, Any]]:
+    """Returns the repetition table's rows (keys: RepetitionDetailOut); a withheld amplitude and peak are None, and
+    so is the peak speed measured on the same lost curve, with why in English words (in_language writes them for a
+    reader) and as a reason."""
     return [
         r.model_dump(include={"index", "start_s", "end_s", "duration_s", "peak_deg", "side"})
-        | {"rom_deg": r.amplitude_deg, "peak_speed_deg_s": s}
+        | {"rom_deg": r.amplitude_deg, "peak_speed_deg_s": s if r.withheld is None else None}
+        | {"withheld": _words(r.withheld), "withheld_reason": _reason_json(r.withheld)}
         for r, s in zip(reps, speeds, strict=True)
     ]
+
+
+def _words(reason: Reason | None) -> str | None:
+    """Returns a reason in English words (in_language writes it for a reader); None without one."""
+    return None if reason is None else reasons.written(reason, ENGLISH)
 
 
 def detail_body(
@@ -190,6 +199,8 @@ def detail_body(
         "measured_on": doc.measured_on if doc is not None else ("filtered" if filtered is not None else "raw"),
         "repetition_count": len(reps),
         "rom_deg": doc.rom_deg if doc is not None else None,
+        "rom_deg_withheld": _words(doc.rom_deg_withheld if doc is not None else None),
+        "rom_deg_withheld_reason": _reason_json(doc.rom_deg_withheld if doc is not None else None),
         "defining_angle": doc.defining_angle if doc is not None else None,
         "moving_time_s": doc.moving_time_s if doc is not None else None,
         "rest_time_s": doc.rest_time_s if doc is not None else None,
@@ -262,7 +273,8 @@ def _written(stored: object, t: Translator) -> Reason | None:
 
 def _reasons_in(body: dict[str, Any], t: Translator) -> dict[str, Any]:
     """Returns the detail's reasons written in t's language from their ids and numbers: the analysis' quality
-    check (quality.analysis_reasons and its items), why balance was not measured, why an interval is withheld."""
+    check (quality.analysis_reasons and its items), why balance was not measured, why an interval is withheld, why
+    a repetition's numbers and the median amplitude are withheld."""
     quality = dict(body["quality"])
     items = [_written(r, t) for r in quality.get("analysis_reason_items", [])]
     quality["analysis_reason_items"] = [r.model_dump(mode="json") for r in items if r is not None]
@@ -271,6 +283,10 @@ def _reasons_in(body: dict[str, Any], t: Translator) -> dict[str, Any]:
     missing = _written(body.get("balance_missing_reason"), t)
     if missing is not None:
         out |= {"balance_missing": missing.text, "balance_missing_reason": missing.model_dump(mode="json")}
+    rom = _written(body.get("rom_deg_withheld_reason"), t)
+    if rom is not None:
+        out |= {"rom_deg_withheld": rom.text, "rom_deg_withheld_reason": rom.model_dump(mode="json")}
+    out["repetitions"] = [_withheld_in(r, t) for r in body.get("repetitions", [])]
     uncertainty = body.get("uncertainty")
     if isinstance(uncertainty, dict) and isinstance(uncertainty.get("angles"), dict):
         angles = {}
@@ -283,6 +299,12 @@ def _reasons_in(body: dict[str, Any], t: Translator) -> dict[str, Any]:
             )
         out["uncertainty"] = uncertainty | {"angles": angles}
     return out
+
+
+def _withheld_in(row: dict[str, Any], t: Translator) -> dict[str, Any]:
+    """Returns a repetition row with why its numbers are withheld in t's language (as it is when they are shown)."""
+    why = _written(row.get("withheld_reason"), t)
+    return row if why is None else row | {"withheld": why.text, "withheld_reason": why.model_dump(mode="json")}
 
 
 def _validity_reason(reason: str | None, t: Translator) -> str | None:

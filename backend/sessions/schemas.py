@@ -290,10 +290,24 @@ class RepetitionDetailOut(BaseModel):
     start_s: float = Field(description="seconds from the session's first frame")
     end_s: float
     duration_s: float
-    rom_deg: float = Field(description="range of motion (amplitude) of the defining angle, degrees")
-    peak_deg: float = Field(description="the defining angle at the repetition's peak, degrees")
-    peak_speed_deg_s: float | None = Field(description="largest angular speed of the defining angle, deg/s")
+    rom_deg: float | None = Field(
+        description="range of motion (amplitude) of the defining angle, degrees; null: withheld (why in withheld)"
+    )
+    peak_deg: float | None = Field(
+        description="the defining angle at the repetition's peak, degrees; null: withheld (why in withheld)"
+    )
+    peak_speed_deg_s: float | None = Field(
+        description="largest angular speed of the defining angle, deg/s; null: unknown, or withheld with rom_deg"
+    )
     side: str = Field(description="'left', 'right', 'both' or 'center'")
+    withheld: str | None = Field(
+        default=None,
+        description="why rom_deg, peak_deg and peak_speed_deg_s are null, in the reader's language: the curve "
+        "passed what the joint bends (the camera lost the limb); null when they are shown",
+    )
+    withheld_reason: Reason | None = Field(
+        default=None, description="withheld for machines: the analysis' message id and numbers, with its text"
+    )
 
 
 class JointPathOut(BaseModel):
@@ -486,6 +500,8 @@ class SessionDetailOut(BaseModel):
                     "measured_on": "filtered",
                     "repetition_count": 1,
                     "rom_deg": 62.4,
+                    "rom_deg_withheld": None,
+                    "rom_deg_withheld_reason": None,
                     "defining_angle": "knee_flexion_R",
                     "moving_time_s": 40.2,
                     "rest_time_s": 11.4,
@@ -528,6 +544,8 @@ class SessionDetailOut(BaseModel):
                             "peak_deg": 64.8,
                             "peak_speed_deg_s": 71.5,
                             "side": "both",
+                            "withheld": None,
+                            "withheld_reason": None,
                         }
                     ],
                     "most_moving_joints": [{"joint": "KNE_R", "path_m": 3.412}],
@@ -609,7 +627,17 @@ class SessionDetailOut(BaseModel):
     rate_hz: float | None
     measured_on: str = Field(description="what the metrics measured: 'filtered' or 'raw'")
     repetition_count: int
-    rom_deg: float | None = Field(description="median range of motion over the repetitions, degrees")
+    rom_deg: float | None = Field(
+        description="median range of motion over the repetitions, degrees; null: no repetition, or withheld"
+    )
+    rom_deg_withheld: str | None = Field(
+        default=None,
+        description="why rom_deg is null though repetitions were counted, in the reader's language: some were "
+        "measured past what the joint bends; null when shown",
+    )
+    rom_deg_withheld_reason: Reason | None = Field(
+        default=None, description="rom_deg_withheld for machines: the analysis' message id and numbers, with its text"
+    )
     defining_angle: str | None
     moving_time_s: float | None
     rest_time_s: float | None

@@ -67,8 +67,8 @@
     const repNote = reps && reps.ambiguous ? I18n.t("uncertain: {low}–{high}", { low: reps.low, high: reps.high }) : null;
     document.getElementById("numbers").replaceChildren(
       ...stat(I18n.t("Repetitions"), d.repetition_count === null ? "—" : I18n.number(d.repetition_count), repNote),
-      ...stat(I18n.t("Range of motion"), deg(d.rom_deg), romValid(d) ? I18n.t("median of the repetitions")
-        : I18n.t("median of the repetitions; not reliable from this view: see the limits above")),
+      ...stat(I18n.t("Range of motion"), deg(d.rom_deg), d.rom_deg_withheld || (romValid(d) ? I18n.t("median of the repetitions")
+        : I18n.t("median of the repetitions; not reliable from this view: see the limits above"))),
       ...intervalStats(d),
       ...stat(I18n.t("Duration"), wholeSecs(d.duration_s), I18n.nt("{n} frame", "{n} frames", d.n_frames, { n: I18n.number(d.n_frames) })),
       ...stat(I18n.t("Moving"), moving, total ? I18n.t("{percent} of the time", { percent: I18n.percent(d.moving_time_s / total) }) : null),
@@ -100,7 +100,7 @@
       fillcolor: "rgba(11, 79, 156, 0.08)", line: { color: "rgba(11, 79, 156, 0.55)", width: 1, dash: "dot" }, layer: "below" }));
     // labels on two staggered rows, so that neighbours do not overlap on a phone (zoom in to separate more)
     const annotations = reps.map((r, i) => ({ x: (r.start_s + r.end_s) / 2, y: 1, xref: "x", yref: "paper", yanchor: "bottom",
-      yshift: i % 2 ? 18 : 0, text: `${I18n.number(r.rom_deg)}°`, showarrow: false, font: { size: 14, color: "#0b3a72" } }));
+      yshift: i % 2 ? 18 : 0, text: r.rom_deg === null ? "—" : `${I18n.number(r.rom_deg)}°`, showarrow: false, font: { size: 14, color: "#0b3a72" } }));
     return Plots.figure({
       title: `${name[0].toUpperCase()}${name.slice(1)} (°)`,
       traces: [
@@ -124,11 +124,14 @@
     for (const angle of d.angles) box.append(curveFigure(d, angle));
   }
 
+  /** Returns a repetition's peak cell: the angle, or "—" and why it is withheld (as the key numbers say it). */
+  const peakCell = (r) => el("td", {}, deg(r.peak_deg), r.withheld ? el("span", { class: "reasons" }, r.withheld) : null);
+
   function repTable(d) {
     const body = document.querySelector("#reps tbody");
-    body.replaceChildren(...d.repetitions.map((r) => el("tr", {},
+    body.replaceChildren(...d.repetitions.map((r) => el("tr", r.withheld ? { class: "withheld" } : {},
       el("td", {}, String(r.index + 1)), el("td", {}, sideWord(r.side)), el("td", {}, secs(r.start_s)), el("td", {}, secs(r.end_s)),
-      el("td", {}, secs(r.duration_s)), el("td", {}, deg(r.rom_deg)), el("td", {}, deg(r.peak_deg)),
+      el("td", {}, secs(r.duration_s)), el("td", {}, deg(r.rom_deg)), peakCell(r),
       el("td", {}, r.peak_speed_deg_s === null ? "—" : `${I18n.number(r.peak_speed_deg_s)}°/s`))));
     if (!d.repetitions.length) body.append(el("tr", {}, el("td", { colspan: 8, class: "muted" }, I18n.t("No repetition was found in this session."))));
   }

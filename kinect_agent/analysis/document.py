@@ -21,9 +21,14 @@ Schema versions (`schema_version`; a document without it is version 1):
     4  2026-11-28: each indicator's basis a Basis (kinect_agent.analysis.reasons.BASES): a message id, its numbers
        and angle, written in the reader's language by the server; an English basis of schema 1 to 3 that no message
        matches (the wordings before 2026-11-24) stays a text.
-    5  today: range_of_motion_withheld, {angle: why its range of motion is withheld}: a range the raw data does not
-       support (intervals.beyond_raw) has its numbers None and its reason there; None in documents of schema 1-4
-       (not checked).
+    5  2026-11-28: range_of_motion_withheld, {angle: why its range of motion is withheld}: a range the raw data
+       does not support (intervals.beyond_raw) has its numbers None and its reason there; None in documents of
+       schema 1-4 (not checked).
+    6  today: a repetition measured on a knee or elbow flexion past what the joint bends (kinect_agent.analysis.
+       anatomy) has amplitude_deg and peak_deg None and why in its "withheld" (beyond_anatomy); rom_deg is then None
+       too, why in "rom_deg_withheld" (repetitions_beyond_anatomy), and fatigue's amplitude trend None. A document
+       of schema 1-5 is checked on read on what it holds, the peaks alone (the curves are not in it): a peak past
+       its defining angle's limit is withheld so, and rom_deg with it.
 Raise SCHEMA_VERSION and add one step to `upgrade` whenever a key is added, removed or changes its meaning.
 """
 
@@ -36,9 +41,10 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from kinect_agent.analysis import reasons
+from kinect_agent.analysis.anatomy import limit_reason, rom_beyond_anatomy
 from kinect_agent.analysis.reasons import MESSAGES, Basis, Kind, Message, Reason
 
-SCHEMA_VERSION = 5
+SCHEMA_VERSION = 6
 
 
 class _Part(BaseModel):
@@ -54,10 +60,18 @@ class RepetitionItem(_Part):
     start_s: float = Field(description="start, s from the recording's first frame (1 ms)")
     end_s: float = Field(description="end, s from the recording's first frame (1 ms)")
     duration_s: float = Field(description="end_s − start_s, s (1 ms)")
-    amplitude_deg: float = Field(description="excursion of the counting angle, degrees (0.1)")
-    peak_deg: float = Field(description="the measured defining angle at the peak, degrees (0.1)")
+    amplitude_deg: float | None = Field(
+        description="excursion of the counting angle, degrees (0.1); None: withheld (why in withheld)"
+    )
+    peak_deg: float | None = Field(
+        description="the measured defining angle at the peak, degrees (0.1); None: withheld (why in withheld)"
+    )
     side: str = Field(description="'left', 'right', 'both' or 'center'")
     peak_s: float | None = Field(description="time of the peak, s from the first frame (1 ms); None: schema 1")
+    withheld: Reason | None = Field(
+        description="why amplitude_deg and peak_deg are None: the curve passed what the joint bends "
+        "(beyond_anatomy); None when they are shown"
+    )
 
 
 class AngleRange(_Part):
@@ -112,7 +126,9 @@ class ReachableRange(_Part):
 class Fatigue(_Part):
     """Trends over the repetitions; None with fewer than 3 repetitions."""
 
-    amplitude_slope_pct_per_rep: float | None = Field(description="amplitude trend, % of the mean per repetition")
+    amplitude_slope_pct_per_rep: float | None = Field(
+        description="amplitude trend, % of the mean per repetition; None also when rom_deg is withheld"
+    )
     duration_slope_pct_per_rep: float | None = Field(description="duration trend, % of the mean per repetition")
 
 
@@ -199,7 +215,13 @@ class AnalysisReport(_Part):
         description="{angle: why its interval is withheld}; None without the agent's angle SDs"
     )
     repetitions_95: CountInterval | None = Field(description="None without the agent's angle SDs")
-    rom_deg: float | None = Field(description="median repetition amplitude, degrees (0.1); None: no repetition")
+    rom_deg: float | None = Field(
+        description="median repetition amplitude, degrees (0.1); None: no repetition, or withheld (rom_deg_withheld)"
+    )
+    rom_deg_withheld: Reason | None = Field(
+        description="why rom_deg is None though repetitions were counted: some were measured past what the joint "
+        "bends (repetitions_beyond_anatomy); None when shown or without repetitions"
+    )
     most_moving_joints: list[MovingJoint] = Field(description="joints by path length, longest first")
     reachable_range: ReachableRange
     moving_time_s: float = Field(description="time moving, s (10 ms)")
@@ -381,6 +403,36 @@ def _upgrade_4_to_5(doc: dict[str, Any]) -> dict[str, Any]:
     return {**doc, "range_of_motion_withheld": None, "schema_version": 5}
 
 
+def _checked_repetition(rep: object, defining: object) -> object:
+    """Returns a schema-5 repetition in schema 6: withheld None, or, when its peak passes the flexion limit of the
+    defining angle (anatomy.limit_reason), its peak and amplitude None and that reason."""
+    if not isinstance(rep, dict):
+        return rep
+    peak, why = rep.get("peak_deg"), None
+    if isinstance(peak, int | float) and not isinstance(peak, bool) and isinstance(defining, str):
+        why = limit_reason(defining, float(peak))
+    if why is None:
+        return {**rep, "withheld": None}
+    return {**rep, "peak_deg": None, "amplitude_deg": None, "withheld": why.model_dump(mode="json")}
+
+
+def _upgrade_5_to_6(doc: dict[str, Any]) -> dict[str, Any]:
+    """Returns a schema-5 document in schema 6 (module doc): its peaks checked against what the joint bends."""
+    reps = doc.get("repetition_list")
+    if not isinstance(reps, list):
+        return {**doc, "rom_deg_withheld": None, "schema_version": 6}
+    checked = [_checked_repetition(r, doc.get("defining_angle")) for r in reps]
+    found = [Reason.model_validate(r["withheld"]) if isinstance(r, dict) and r.get("withheld") else None
+             for r in checked]  # fmt: skip
+    rom_why = rom_beyond_anatomy(found)
+    out = {**doc, "repetition_list": checked, "rom_deg_withheld": None, "schema_version": 6}
+    if rom_why is not None:
+        out["rom_deg"], out["rom_deg_withheld"] = None, rom_why.model_dump(mode="json")
+        if isinstance(out.get("fatigue"), dict):
+            out["fatigue"] = {**out["fatigue"], "amplitude_slope_pct_per_rep": None}
+    return out
+
+
 def upgrade(doc: dict[str, Any]) -> dict[str, Any]:
     """Returns a stored document (JSON object) in today's schema; raises UnreadableDocument for an unknown version."""
     version = doc.get("schema_version", 1)
@@ -394,6 +446,8 @@ def upgrade(doc: dict[str, Any]) -> dict[str, Any]:
         doc = _upgrade_3_to_4(doc)
     if version <= 4:
         doc = _upgrade_4_to_5(doc)
+    if version <= 5:
+        doc = _upgrade_5_to_6(doc)
     return doc
 
 

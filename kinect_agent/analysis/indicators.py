@@ -6,15 +6,15 @@ numbers, written in the reader's language by backend.session_texts.reasons), "qu
 the value present, "previous": median value of the history or None}.
 history = earlier documents of the same patient and exercise, oldest first (their own values are re-read, so a
 change of definition applies to the whole history).
-    flexibility  value = rom_deg (median repetition amplitude of the defining angle, degrees);
+    flexibility  value = rom_deg (median repetition amplitude of the defining angle, degrees; None when withheld);
                  score = 100 · value / span of the exercise's normal range (ExerciseSpec.normal_range_deg), ≤ 100.
     endurance    value = repetitions; score = 100 · value / target_reps (the plan's prescription), ≤ 100; without a
                  target, 100 · value / median of the history's repetitions, ≤ 100; None without either.
     strength     sit-to-stand exercise: value = sit_to_stand.mean_s (20-80 % rise time, s);
                  score = 100 · clip((SLOW_RISE_S − value) / (SLOW_RISE_S − FAST_RISE_S), 0, 1), i.e. 100 at ≤ 0.5 s,
                  0 at ≥ 2 s. Other exercises: value = median over repetitions of amplitude / duration (deg/s, how fast
-                 the patient moves through the range); score = 100 · value / the best of the history, ≤ 100, None
-                 without history.
+                 the patient moves through the range; the repetitions whose amplitude is withheld left out); score =
+                 100 · value / the best of the history, ≤ 100, None without history.
     balance      value = balance.sway_velocity_m_s (trunk-and-hips sway while standing, m/s);
                  score = 100 · clip((POOR_SWAY − value) / (POOR_SWAY − GOOD_SWAY), 0, 1): 100 at ≤ 1 cm/s (quiet
                  standing of healthy adults), 0 at ≥ 6 cm/s; None when the patient did not stand still ≥ 2 s.
@@ -74,7 +74,8 @@ def _rise(doc: AnalysisReport) -> float | None:
 
 
 def _speed(doc: AnalysisReport) -> float | None:
-    rates = [r.amplitude_deg / r.duration_s for r in doc.repetition_list if r.duration_s > 0]
+    rates = [r.amplitude_deg / r.duration_s for r in doc.repetition_list
+             if r.amplitude_deg is not None and r.duration_s > 0]  # fmt: skip
     return round(float(np.median(rates)), 2) if rates else None
 
 

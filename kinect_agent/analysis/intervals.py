@@ -55,6 +55,7 @@ from scipy.ndimage import gaussian_filter1d
 from kinect_agent import skeleton
 from kinect_agent.analysis import reasons as why
 from kinect_agent.analysis import series
+from kinect_agent.analysis.anatomy import limit_reason
 from kinect_agent.analysis.range_of_motion import HIGH_PCT, LOW_PCT
 from kinect_agent.analysis.reasons import Reason
 from kinect_agent.analysis.repetitions import RepetitionParams, count_repetitions
@@ -75,10 +76,6 @@ KINDS = ("min_deg", "max_deg", "range_deg")
 MAX_WIDTH_DEG = 60.0
 RAW_ENVELOPE_PCT = (0.5, 99.5)  # the raw angle's envelope (beyond_raw)
 RAW_MARGIN_DEG = 10.0  # degrees the filtered range may pass that envelope before its intervals are withheld
-# Flexion of the joint centres no knee or elbow passes (HDM05's full squats, heels down, reach 166° of knee flexion):
-# a range past it is the camera losing the limb (the UI-PRMD Kinect reads seated knees at 173-178° where its Vicon
-# reads 93-96°), withheld (beyond_anatomy)
-FLEXION_LIMIT_DEG = {f"{joint}_flexion_{side}": 170.0 for joint in ("knee", "elbow") for side in ("L", "R")}
 MIN_DEFINED_FRACTION = 0.5
 MIN_TRACKED_FRACTION = 0.8
 # The systematic part b = (1 + YAW_GAIN · sin ψ) · sqrt(B² + (TAIL_GAIN · τ)²), fitted by bench/uncertainty.py
@@ -322,11 +319,8 @@ def beyond_raw(rom: dict[str, float | None], raw: np.ndarray) -> float:
 
 def beyond_anatomy(name: str, rom: dict[str, float | None]) -> Reason | None:
     """Returns the reason beyond_anatomy when the range of motion {"max_deg", ...} of angle `name` passes its
-    FLEXION_LIMIT_DEG, else None (also for an angle without a limit or an unknown range)."""
-    limit, top = FLEXION_LIMIT_DEG.get(name), rom.get("max_deg")
-    if limit is None or top is None or top <= limit:
-        return None
-    return why.BEYOND_ANATOMY.reason(reached=round(top), limit=round(limit))
+    anatomy.FLEXION_LIMIT_DEG, else None (also for an angle without a limit or an unknown range)."""
+    return limit_reason(name, rom.get("max_deg"))
 
 
 def beyond_raw_reason(off: float) -> Reason:

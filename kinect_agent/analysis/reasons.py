@@ -159,6 +159,13 @@ BEYOND_ANATOMY = Message(
     N_("the curve reaches %(reached)s°, more than the joint can bend (%(limit)s°): the camera lost the limb"),
     (("reached", "decimal0"), ("limit", "decimal0")),
 )
+# anatomy.rom_beyond_anatomy: why the session's range of motion (median repetition amplitude) is withheld
+REPETITIONS_BEYOND_ANATOMY = Message(
+    "repetitions_beyond_anatomy",
+    N_("in %(withheld)s of %(count)s repetitions the curve reaches up to %(reached)s°, more than the joint can bend "
+       "(%(limit)s°): the camera lost the limb"),
+    (("withheld", "int"), ("count", "int"), ("reached", "decimal0"), ("limit", "decimal0")),
+)  # fmt: skip
 # balance.missing_reason: why balance was not measured
 RECORDING_TOO_SHORT = Message("recording_too_short", N_("the recording is too short"))
 NOT_STANDING = Message("not_standing", N_("the patient was seated or crouching: balance is measured while standing"))
@@ -171,8 +178,8 @@ NEVER_STILL = Message(
     (("seconds", "general"),),
 )
 MESSAGES = (TOO_FEW_FRAMES, TOO_SHORT, TOO_LITTLE_TRACKED, TOO_MANY_ERRORS, GAPS, ROTATION_UNDEFINED, OUT_OF_PLANE,
-            JOINTS_UNTRACKED, UNKNOWN_ANGLE, TOO_UNCERTAIN, BEYOND_RAW, BEYOND_ANATOMY, RECORDING_TOO_SHORT,
-            NOT_STANDING, NEVER_STILL)  # fmt: skip
+            JOINTS_UNTRACKED, UNKNOWN_ANGLE, TOO_UNCERTAIN, BEYOND_RAW, BEYOND_ANATOMY, REPETITIONS_BEYOND_ANATOMY,
+            RECORDING_TOO_SHORT, NOT_STANDING, NEVER_STILL)  # fmt: skip
 BY_ID = {m.id: m for m in MESSAGES}
 
 # kinect_agent.analysis.indicators: how each indicator was scored (the indicator's "basis")

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from kinect_agent.analysis import activity, quality
+from kinect_agent.analysis.anatomy import own_angles, repetition_beyond_anatomy, repetition_frames, rom_beyond_anatomy
 from kinect_agent.analysis.angles import counting_angles, measured_angles
 from kinect_agent.analysis.balance import missing_reason, sway
 from kinect_agent.analysis.document import AnalysisReport, json_ready
@@ -79,20 +80,33 @@ def measured_peak(t: np.ndarray, angles: dict[str, np.ndarray], names: tuple[str
     the curve's maximum); the counter's own peak only when none is defined in the repetition. The counter reads hip
     flexion as the thigh's elevation: its peak is reported on the measured angle, like the range of motion and the
     curves."""
-    rel = t - t[0]
-    k = int(np.clip(np.searchsorted(rel, rep.peak_s - 1e-9), 0, t.shape[0] - 1))
-    suffix = {"left": "_L", "right": "_R"}.get(rep.side)
-    own = [n for n in names if suffix is not None and n.endswith(suffix)] or list(names)
+    k = int(np.clip(np.searchsorted(t - t[0], rep.peak_s - 1e-9), 0, t.shape[0] - 1))
+    own = own_angles(names, rep.side)
     series = np.stack([angles[n] for n in own if n in angles]) if any(n in angles for n in own) else None
     if series is None:
         return round(rep.peak_deg, 1)
-    first, last = np.searchsorted(rel, [rep.start_s - 1e-9, rep.end_s + 1e-9])
-    frames = np.arange(min(first, k), max(last, k + 1))  # the repetition's frames, its peak among them
+    frames = repetition_frames(t, rep)  # the repetition's frames, its peak among them
     defined = frames[np.isfinite(series[:, frames]).any(axis=0)]
     if defined.size == 0:
         return round(rep.peak_deg, 1)
     nearest = int(defined[np.argmin(np.abs(defined - k))])
     return round(float(np.nanmean(series[:, nearest])), 1)
+
+
+def _repetition_list(
+    t: np.ndarray, angles: dict[str, np.ndarray], names: tuple[str, ...], reps: list[Repetition]
+) -> list[dict[str, Any]]:
+    """Returns the document's repetition_list: each repetition's keys with its peak on the measured angles
+    (angles: {name: (T,) degrees}; measured_peak) and "withheld" None; a repetition measured on a curve past what the
+    joint bends (anatomy.repetition_beyond_anatomy) has its peak_deg and amplitude_deg None and that reason."""
+    out = []
+    for rep in reps:
+        why = repetition_beyond_anatomy(t, angles, names, rep)
+        if why is None:
+            out.append(rep.to_dict() | {"peak_deg": measured_peak(t, angles, names, rep), "withheld": None})
+        else:
+            out.append(rep.to_dict() | {"peak_deg": None, "amplitude_deg": None, "withheld": why})
+    return out
 
 
 def _beyond_raw(
@@ -138,7 +152,9 @@ def analyze_recording(
     "repetitions_95" ({"low", "high", "ambiguous"}) hold 95 % intervals (intervals.py); else both are None.
     Measured on filtered positions (or params), an angle whose range leaves the raw angle's envelope
     (intervals.beyond_raw), or whose flexion passes what the joint bends (intervals.beyond_anatomy), has its range
-    None and why in "range_of_motion_withheld" ({} when none; None on raw).
+    None and why in "range_of_motion_withheld" ({} when none; None on raw). A repetition measured on a knee or
+    elbow flexion past what the joint bends (anatomy) has its peak and amplitude None and why in its "withheld";
+    then the median amplitude "rom_deg" (and the fatigue's amplitude trend) is None too, why in "rom_deg_withheld".
     """
     if recording.n_frames < 2:
         raise AnalysisError(f"the recording has {recording.n_frames} frame(s); at least 2 are needed")
@@ -161,7 +177,7 @@ def analyze_recording(
     reps = count_repetitions(t, counted, names, repetition_params)
     if causal is not None:  # and, as live, only the repetitions back at rest before the set's last frame
         reps = dataclasses.replace(reps, repetitions=done_repetitions(reps, t))
-    rep_list = [r.to_dict() | {"peak_deg": measured_peak(t, clinical, names, r)} for r in reps.repetitions]
+    rep_list = _repetition_list(t, clinical, names, reps.repetitions)
     sd = _angle_sd(angle_sd, recording.n_frames) if source == "filtered" else None
     rom = range_of_motion(t, clinical, presmoothed=True)
     tracked = {name: quality.tracked_fraction(recording, (name,)) for name in clinical}
@@ -174,6 +190,7 @@ def analyze_recording(
     ivs = None
     if sd is not None:
         ivs = rom_intervals(t, clinical, sd, smoothed, recording.meta.device, tracked, names, beyond, anatomy)
+    rom_why = rom_beyond_anatomy([r["withheld"] for r in rep_list])
     moving_s, rest_s = activity.moving_time(t, smoothed)
     balance = sway(t, smoothed, clinical)
     doc = {
@@ -193,13 +210,14 @@ def analyze_recording(
         "repetitions_95": None
         if sd is None
         else count_interval(t, counted, sd, names, repetition_params, count=len(rep_list)).to_dict(),
-        "rom_deg": _median([r.amplitude_deg for r in reps.repetitions]),
+        "rom_deg": None if rom_why is not None else _median([r.amplitude_deg for r in reps.repetitions]),
+        "rom_deg_withheld": rom_why,
         "most_moving_joints": most_moving_joints(smoothed),
         "reachable_range": reachable_range(smoothed, frame),
         "moving_time_s": moving_s,
         "rest_time_s": rest_s,
         "tempo_s_per_rep": activity.tempo(reps.repetitions),
-        "fatigue": activity.fatigue(reps.repetitions),
+        "fatigue": activity.fatigue(reps.repetitions) | ({"amplitude_slope_pct_per_rep": None} if rom_why else {}),
         "balance": balance,
         "balance_missing": None if balance is not None else missing_reason(t, smoothed, clinical),
         "sit_to_stand": sit_to_stand(t, positions) if exercise.slug == "sit_to_stand" else None,

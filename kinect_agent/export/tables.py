@@ -1,9 +1,11 @@
 """CSV tables of a session, for a spreadsheet: metrics, repetitions, joint angles over time (raw and filtered).
 
 Every table is comma-separated UTF-8 with a header row, numbers with a dot, empty cells for unknown values.
-    metrics.csv       metric, value, unit: duration, frames, rate, repetitions, median repetition amplitude, the
-                      range of motion of every angle (min, max, range) and the four indicators (score, value).
-    repetitions.csv   one row per repetition of the analysis document's repetition_list (its keys as columns).
+    metrics.csv       metric, value, unit: duration, frames, rate, repetitions, median repetition amplitude (and
+                      why it is withheld, empty when shown), the range of motion of every angle (min, max, range)
+                      and the four indicators (score, value).
+    repetitions.csv   one row per repetition of the analysis document's repetition_list (its keys as columns; a
+                      withheld amplitude and peak empty, `withheld` why).
     angles_raw.csv, angles_filtered.csv   time_s then every clinical angle (body.angles.ANGLE_NAMES) in
                       degrees, one row per frame: of the raw recording frame by frame (the session page's raw
                       curves), and of the filtered recording as the analysis measures it (analysis.angles.
@@ -25,6 +27,7 @@ import numpy as np
 
 from kinect_agent.analysis.angles import measured_angles
 from kinect_agent.analysis.document import AnalysisDocument, AnalysisReport, RepetitionItem
+from kinect_agent.analysis.reasons import Reason
 from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.recording import Recording
 
@@ -59,6 +62,7 @@ def metric_rows(document: AnalysisReport) -> list[tuple[str, Any, str]]:
         ("repetitions", document.repetitions, ""),
         ("defining_angle", document.defining_angle, ""),
         ("repetition_amplitude_median", document.rom_deg, "deg"),
+        ("repetition_amplitude_median.withheld", _reason_cell(document.rom_deg_withheld), ""),
         ("moving_time", document.moving_time_s, "s"),
         ("rest_time", document.rest_time_s, "s"),
     ]
@@ -89,9 +93,16 @@ def recording_csv(recorded: dict[str, Any], rate_hz: float | None) -> str:
     return _text([*rows, ["rate_hz", rate_hz]])
 
 
+def _reason_cell(reason: Reason | None) -> str | None:
+    """Returns a reason as one cell: its text when written (the server's exports write them in English), else its
+    message id; None when there is none."""
+    return None if reason is None else reason.text or reason.id
+
+
 def repetitions_csv(document: AnalysisReport) -> str:
-    """Returns repetitions.csv: a 1-based `repetition` column then the keys of each repetition_list entry."""
-    reps = [r.model_dump(mode="json") for r in document.repetition_list]
+    """Returns repetitions.csv: a 1-based `repetition` column then the keys of each repetition_list entry; a
+    withheld amplitude and peak are empty cells, and `withheld` says why."""
+    reps = [r.model_dump(mode="json") | {"withheld": _reason_cell(r.withheld)} for r in document.repetition_list]
     keys = list(RepetitionItem.model_fields) if reps else []
     return _text([["repetition", *keys], *[[i + 1, *[rep.get(k) for k in keys]] for i, rep in enumerate(reps)]])
 

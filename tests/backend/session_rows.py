@@ -56,7 +56,7 @@ def store_session(
     return row
 
 
-TODAY = Path(__file__).parents[1] / "kinect_agent" / "analysis" / "documents" / "schema4.json"
+TODAY = Path(__file__).parents[1] / "kinect_agent" / "analysis" / "documents" / "schema6.json"
 
 
 def document(*, reps: int, rom: float | None, quality_ok: bool, exercise: str = "shoulder_abduction") -> dict[str, Any]:

@@ -218,3 +218,33 @@ def test_seated_session_says_why_balance_is_missing(client, upload, auth_headers
     body = _detail(client, session_id, auth_headers(patient)).json()
     assert body["balance"] is None
     assert body["balance_missing"] == "the patient was seated or crouching: balance is measured while standing"
+
+
+def _khs_bent_past_anatomy() -> bytes:
+    """A seated elbow flexion bent 165° from its rest (about 8°): the curve passes what an elbow bends (170°)."""
+    from kinect_agent.sources.simulator import simulate_truth
+
+    truth = simulate_truth("elbow_flexion", 3, seed=2, amplitude_deg=165.0)
+    payload = sf.SessionPayload(session_id=str(uuid.uuid4()), raw=truth, filtered=truth,
+                                created_at="2026-11-20T10:00:00Z")  # fmt: skip
+    return sf.encode(payload)
+
+
+def test_repetitions_past_what_the_joint_bends_are_withheld_with_the_reason(client, upload, auth_headers):
+    session_id, patient, therapist = upload(_khs_bent_past_anatomy(), "elbow_flexion")
+    english = _detail(client, session_id, auth_headers(therapist)).json()  # the therapist pages are in English
+    assert "more than the joint can bend (170°)" in english["repetitions"][0]["withheld"], english["repetitions"]
+    body = _detail(client, session_id, auth_headers(patient) | {"Accept-Language": "de"}).json()
+    assert body["repetition_count"] == 3 and body["rom_deg"] is None, body["rom_deg"]
+    assert body["rom_deg_withheld_reason"]["id"] == "repetitions_beyond_anatomy", body["rom_deg_withheld_reason"]
+    assert body["rom_deg_withheld"].startswith("in 3 von 3 Wiederholungen"), body["rom_deg_withheld"]
+    for row in body["repetitions"]:
+        assert row["peak_deg"] is None and row["rom_deg"] is None and row["peak_speed_deg_s"] is None, row
+        assert row["withheld_reason"]["id"] == "beyond_anatomy" and row["withheld_reason"]["params"]["limit"] == 170
+        assert "mehr als das Gelenk beugen kann (170°)" in row["withheld"], row["withheld"]
+    stored = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient)).json()
+    assert stored["rom_deg"] is None and stored["metrics"]["rom_deg"] is None, stored["rom_deg"]
+    reps = stored["metrics"]["repetition_list"]
+    assert all(r["peak_deg"] is None and "more than the joint can bend" in r["withheld"]["text"] for r in reps), reps
+    flexibility = stored["metrics"]["indicators"]["flexibility"]
+    assert flexibility["value"] is None and flexibility["score"] is None, flexibility  # not scored from a lost limb

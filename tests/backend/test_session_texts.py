@@ -15,6 +15,7 @@ from backend.i18n.catalogues import marks_in_template_literals
 from backend.session_texts import data_quality
 from backend.session_texts.camera_advice import advice_text
 from backend.sessions import detail
+from kinect_agent.analysis.document import SCHEMA_VERSION
 from kinect_agent.analysis.validity import REASONS
 from tests.backend.khs_files import make_khs_at_distance, make_processed_khs
 from tests.catalogue_copies import copy_with_therapist_catalogues
@@ -185,7 +186,7 @@ def test_a_new_document_stores_its_reasons_as_ids_and_numbers_and_the_detail_wri
     khs = make_processed_khs("seated_knee_extension", 3, seed=3)
     session_id, patient, _ = upload(khs, "seated_knee_extension")
     stored = db_session.scalar(select(SessionMetric.document).where(SessionMetric.session_id == session_id))
-    assert stored["schema_version"] == 5
+    assert stored["schema_version"] == SCHEMA_VERSION == 6
     not_standing: dict[str, Any] = {"id": "not_standing", "params": {}, "text": None}
     assert stored["balance_missing"] == stored["indicators"]["balance"]["missing"] == not_standing
     found = [*stored["quality"]["reasons"], *(stored["range_of_motion_95_withheld"] or {}).values()]
@@ -211,7 +212,7 @@ def test_a_patient_reads_the_analysis_reasons_of_an_older_english_document_in_th
     patient.locale = "de"
     db_session.flush()
     german = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient)).json()["metrics"]
-    assert german["schema_version"] == 5, "upgraded when read"
+    assert german["schema_version"] == SCHEMA_VERSION, "upgraded when read"
     assert german["quality"]["reasons"] == [
         {"id": "too_little_tracked", "params": {"tracked": 0.46, "needed": 0.6},
          "text": "der Körper wurde in 46\u00a0% der Messungen erfasst (mindestens 60\u00a0% nötig)"},
@@ -318,7 +319,7 @@ def test_a_patient_reads_how_each_indicator_was_scored_in_their_language(client,
 
     session_id, patient, _ = upload(make_processed_khs("seated_knee_extension", 3, seed=3), "seated_knee_extension")
     stored = db_session.scalar(select(SessionMetric.document).where(SessionMetric.session_id == session_id))
-    assert stored["schema_version"] == 5
+    assert stored["schema_version"] == SCHEMA_VERSION == 6
     assert all(i["basis"]["id"] and i["basis"]["text"] is None for i in stored["indicators"].values()), "ids stored"
     english = client.get(f"/api/v1/sessions/{session_id}", headers=auth_headers(patient)).json()["metrics"]
     patient.locale = "de"

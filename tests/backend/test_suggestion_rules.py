@@ -121,6 +121,16 @@ def test_rom_drop_ignores_sessions_older_than_four_weeks_and_poor_quality():
     assert rules.ROM_DROP not in _eval(_doc(rom_deg=68.0), history=history)
 
 
+def test_rom_drop_is_not_written_from_a_withheld_range_of_motion():
+    """A range of motion withheld (repetitions measured past what the joint bends: the camera lost the limb) is no
+    number to compare: no rom_drop is written of it, and it is no baseline either."""
+    why = {"id": "repetitions_beyond_anatomy", "params": {"withheld": 2, "count": 10, "reached": 177, "limit": 170}}
+    assert rules.ROM_DROP not in _eval(_doc(rom_deg=None, rom_deg_withheld=why), history=_rom_history(80.0))
+    withheld = [_past(d, rom_deg=None, rom_deg_withheld=why) for d in (20, 15, 6)]
+    assert rules.ROM_DROP not in _eval(_doc(rom_deg=10.0), history=withheld)
+    assert rules.ROM_DROP in _eval(_doc(rom_deg=10.0), history=_rom_history(80.0))  # the same with numbers fires
+
+
 def test_rom_drop_ignores_other_exercises():
     history = [_past(d, rom_deg=80.0, exercise="shoulder_flexion") for d in (20, 15, 6)]
     assert rules.ROM_DROP not in _eval(_doc(rom_deg=10.0), history=history)

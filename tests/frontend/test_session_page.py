@@ -331,3 +331,40 @@ def test_therapist_downloads_every_export_from_the_session_page(page, live_serve
         assert path is not None and open(path, "rb").read(len(start)) == start, fmt
     shot(page, "session_downloads")
     assert not page.js_errors
+
+
+def test_repetitions_past_what_a_knee_bends_show_why_instead_of_their_numbers(page, live_server, data_dir):
+    """UI-PRMD s02's incorrect sit to stand through the agent's path (the session page the issue 24 audit looked
+    at): the Kinect loses the seated legs and the knee curves reach 177-178° in some rises. Those rows of the
+    repetition table show "—" for the range, the peak and the peak speed, with the reason, as the key numbers do, and
+    so does the range of motion (the median of the repetitions); the other rows keep their numbers, within what a
+    knee bends."""
+    from kinect_agent.capture import make_payload
+    from kinect_agent.formats import session_file, ui_prmd
+
+    raw = ui_prmd.read_episodes(data_dir / "ui-prmd" / "Incorrect Segmented Movements" / "Kinect", movement="m05",
+                                subject="s02")  # fmt: skip
+    data = session_file.encode(make_payload(raw, created_at="2026-11-21T09:30:00Z"))
+    sid = upload_session(live_server.url, GEORGE, "sit_to_stand", 10, seed=0, data=data)["id"]
+    login(page, PAUL)
+    page.wait_for_url("**/therapist")
+    body = _detail_when_ready(page, sid)
+    withheld = [r for r in body["repetitions"] if r["withheld"]]
+    assert withheld and body["rom_deg"] is None and body["rom_deg_withheld"], body["rom_deg_withheld"]
+    page.goto(f"/therapist/sessions/{sid}")
+    rows = page.locator("#reps tbody tr")
+    expect(rows).to_have_count(len(body["repetitions"]))
+    for r in body["repetitions"]:
+        cells = rows.nth(r["index"]).locator("td")
+        rom, peak = cells.nth(5).inner_text(), cells.nth(6).inner_text()
+        if r["withheld"]:
+            assert rom == "—" and peak.startswith("—") and r["withheld"] in peak, (r["index"], rom, peak)
+            assert "more than the joint can bend (170°)" in peak and cells.nth(7).inner_text() == "—", peak
+        else:
+            assert float(peak.rstrip("°").replace(",", "")) <= 170.0, (r["index"], peak)
+    stat = page.locator("#numbers .stat").filter(has_text="Range of motion").inner_text()
+    assert "—" in stat and body["rom_deg_withheld"] in stat and "median of the repetitions" not in stat, stat
+    marks = [a for p in _plots(page, "#curves") for a in p["annotations"]]
+    assert marks.count("—") >= len(withheld), marks  # the charts' range marks of those repetitions too
+    shot(page, "session_knee_past_anatomy_1366")
+    assert not page.js_errors

@@ -9,6 +9,9 @@ then the session page's body as the server builds it). For each recording, as a 
       flexion shown passes what the joint bends (intervals.FLEXION_LIMIT_DEG);
     - the session's peak angle is the end of the range its repetitions reach, and every repetition's peak is a
       value of the filtered curve;
+    - no repetition shows a peak or an amplitude measured on a knee or elbow flexion that passes what the joint
+      bends (anatomy.FLEXION_LIMIT_DEG) within the repetition, as the page's curves show it; a withheld one says
+      why, and so does the median amplitude (the key number "Range of motion") it withholds;
     - the curves (raw and filtered) lie in the domain; the filtered curve is the series the range of motion is
       measured on (its extremes hold the 1st and 99th percentiles);
     - the exported angles_filtered.csv is that same series, frame by frame;
@@ -24,6 +27,7 @@ import datetime as dt
 import io
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -33,6 +37,7 @@ from backend.sessions.detail import detail_body
 from backend.sessions.models import ExerciseSession
 from kinect_agent import formats
 from kinect_agent.analysis import intervals
+from kinect_agent.analysis.anatomy import FLEXION_LIMIT_DEG, own_angles
 from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.analysis.report import analyze_recording
 from kinect_agent.body.angles import ANGLE_NAMES, DOMAIN_DEG, joint_angles
@@ -127,7 +132,7 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
         r = rom[name]
         if r["min_deg"] is not None and not (lo - TOL <= r["min_deg"] <= r["max_deg"] <= hi + TOL):
             problems.append(f"{name}: range {r['min_deg']}..{r['max_deg']} leaves its domain [{lo}, {hi}]")
-        limit = intervals.FLEXION_LIMIT_DEG.get(name)
+        limit = FLEXION_LIMIT_DEG.get(name)
         if limit is not None and r["max_deg"] is not None and r["max_deg"] > limit + TOL:
             problems.append(f"{name}: range {r['min_deg']}..{r['max_deg']} bends past what the joint can ({limit})")
         raw = raw_angles[name][np.isfinite(raw_angles[name])]
@@ -172,23 +177,55 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
         if abs(p1 - rom[name]["min_deg"]) > 0.1 or abs(p99 - rom[name]["max_deg"]) > 0.1:
             problems.append(f"{name}: the exported series has {p1:.2f}..{p99:.2f}, the range {rom[name]}")
         side = {"_L": "left", "_R": "right"}.get(name[-2:])
-        peaks = [r["peak_deg"] for r in body["repetitions"] if r["side"] == side]
+        peaks = [r["peak_deg"] for r in body["repetitions"] if r["side"] == side and r["peak_deg"] is not None]
         if peaks and not (np.nanmin(deg) - TOL <= min(peaks) and max(peaks) <= np.nanmax(deg) + TOL):
             problems.append(f"{name}: repetition peaks {min(peaks)}..{max(peaks)} are not on the filtered curve")
     # a repetition of both sides (or of a centre angle) peaks at the mean of the sides' curves at its peak
-    shared = [r["peak_deg"] for r in body["repetitions"] if r["side"] in ("both", "center")]
+    shown = [r for r in body["repetitions"] if r["peak_deg"] is not None]  # withheld: repetitions_beyond_anatomy
+    shared = [r["peak_deg"] for r in shown if r["side"] in ("both", "center")]
     if shared and filtered_values:
         every = np.concatenate(filtered_values)
         if not (np.nanmin(every) - TOL <= min(shared) and max(shared) <= np.nanmax(every) + TOL):
             problems.append(f"repetition peaks {min(shared)}..{max(shared)} are not on the filtered curves")
+    problems += repetitions_beyond_anatomy(body, slug)
     defining = doc["defining_angle"]
-    peaks = [r["peak_deg"] for r in doc["repetition_list"]]
+    peaks = [r["peak_deg"] for r in doc["repetition_list"] if r["peak_deg"] is not None]
     if peaks and defining and rom[defining]["min_deg"] is not None:
         end = body["uncertainty"]["peak_end"] if body["uncertainty"] else doc["peak_end"]
         key, other = (rom[defining]["max_deg"], rom[defining]["min_deg"])[:: 1 if end == "max" else -1]
         mid = float(np.median(peaks))
         if abs(key - mid) > abs(other - mid) + 2 * TOL:  # a tie (peaks half way) may go either way
             problems.append(f"{defining}: peak angle {key} is the far end from the repetitions' peaks (median {mid})")
+    return problems
+
+
+def repetitions_beyond_anatomy(body: dict[str, Any], slug: str) -> list[str]:
+    """Returns every repetition of the page that shows numbers measured past what the joint bends, or hides them
+    without saying why, and a median amplitude shown from (or withheld without) such repetitions (module doc)."""
+    problems: list[str] = []
+    names = tuple(EXERCISES[slug].defining_angles)
+    filtered = {c["angle"]: c for c in body["curves"] if c["kind"] != "raw"}
+    for r in body["repetitions"]:
+        hidden = r["peak_deg"] is None or r["rom_deg"] is None
+        if hidden and not (r["withheld"] and r["withheld_reason"]):
+            problems.append(f"repetition {r['index'] + 1}: peak or amplitude missing without a reason")
+        if hidden:
+            continue
+        for name in own_angles(names, r["side"]):
+            limit, curve = FLEXION_LIMIT_DEG.get(name), filtered.get(name)
+            if limit is None or curve is None:
+                continue
+            t, deg = np.array(curve["t_s"]), np.array(curve["deg"], dtype=float)
+            inside = deg[(t >= r["start_s"] - 1e-6) & (t <= r["end_s"] + 1e-6)]
+            top = np.nanmax(inside) if np.isfinite(inside).any() else -np.inf
+            if top > limit + TOL or r["peak_deg"] > limit + TOL:
+                problems.append(f"repetition {r['index'] + 1}: peak {r['peak_deg']} shown, {name} reaches {top:.1f} "
+                                f"(more than the joint bends, {limit})")  # fmt: skip
+    withheld = [r for r in body["repetitions"] if r["withheld"]]
+    if withheld and body["rom_deg"] is not None:
+        problems.append(f"range of motion {body['rom_deg']} shown from {len(withheld)} withheld repetitions")
+    if body["repetitions"] and body["rom_deg"] is None and not body["rom_deg_withheld"]:
+        problems.append("range of motion missing without a reason, though repetitions were counted")
     return problems
 
 

@@ -120,3 +120,17 @@ def test_a_withheld_range_is_written_in_the_readers_language():
     left_en, left_de = english["elbow_flexion_L"], german["elbow_flexion_L"]
     assert left_en.text and "beyond what the camera measured" in left_en.text, left_en
     assert left_de.text and left_de.text != left_en.text and left_de.id == "beyond_raw", left_de
+
+
+def test_withheld_repetitions_and_their_median_are_written_in_the_readers_language():
+    """An elbow bent 165° from its rest of 8° passes what an elbow bends (170°): the repetitions' numbers and the
+    median amplitude are withheld, and why is written in the reader's words."""
+    doc = analyze_recording(simulate_truth("elbow_flexion", 3, seed=2, amplitude_deg=165.0), EXERCISES["elbow_flexion"])
+    assert doc.rom_deg is None and all(r.peak_deg is None for r in doc.repetition_list), doc.repetition_list
+    english, german = reasons.with_texts(doc, translator("en")), reasons.with_texts(doc, translator("de"))
+    first_en, first_de = english.repetition_list[0].withheld, german.repetition_list[0].withheld
+    assert first_en and first_en.text and "more than the joint can bend (170°)" in first_en.text, first_en
+    assert first_de and first_de.text and "mehr als das Gelenk beugen kann" in first_de.text, first_de
+    rom_en, rom_de = english.rom_deg_withheld, german.rom_deg_withheld
+    assert rom_en and rom_en.text and rom_en.text.startswith("in 3 of 3 repetitions the curve reaches"), rom_en
+    assert rom_de and rom_de.text and rom_de.text.startswith("in 3 von 3 Wiederholungen"), rom_de

@@ -97,7 +97,7 @@ def test_filtered_curve_follows_the_truth_and_raw_one_is_noisier(seed: int) -> N
 def _rep(start_s: float, end_s: float, side: str) -> RepetitionItem:
     """A repetition as the analysis lists it; only its times and side matter to the peak speed."""
     return RepetitionItem(index=0, start_s=start_s, end_s=end_s, duration_s=end_s - start_s, amplitude_deg=0.0,
-                          peak_deg=0.0, side=side, peak_s=None)  # fmt: skip
+                          peak_deg=0.0, side=side, peak_s=None, withheld=None)  # fmt: skip
 
 
 def _known(speeds: list[float | None]) -> list[float]:

@@ -5,7 +5,8 @@ schema1_2026-11-23 (01f63ce: the first metrics), schema1_2026-11-25 (c83a249: + 
 schema1_2026-11-27 (b6dadc9 + d8eeccf: + balance in standing phases, analysis version), schema2 (4bb313d: the
 reasons in English words), schema3 (schema2 as the analysis of 2026-11-27 wrote it, each reason a message id and its
 numbers, the indicators' bases in English words), schema4 (schema3 as the analysis of 2026-11-28 wrote it, each basis
-a message id and its numbers) and schema5 (today: schema4 upgraded, range_of_motion_withheld None).
+a message id and its numbers), schema5 (schema4 upgraded, range_of_motion_withheld None) and schema6 (today: schema5
+upgraded, its repetitions' and rom_deg's withheld None).
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from kinect_agent.analysis.reasons import Basis, Reason
 
 DOCUMENTS = Path(__file__).parent / "documents"
 OLDER = ["schema1_2026-11-23", "schema1_2026-11-25", "schema1_2026-11-27"]
-TODAY = "schema5"
+TODAY = "schema6"
 
 
 def _stored(name: str) -> dict[str, Any]:
@@ -44,7 +45,7 @@ def _stored(name: str) -> dict[str, Any]:
 def test_todays_document_reads_back_to_the_same_json() -> None:
     stored = _stored(TODAY)
     doc = read_document(stored)
-    assert doc.schema_version == SCHEMA_VERSION == 5
+    assert doc.schema_version == SCHEMA_VERSION == 6
     assert json.dumps(doc.model_dump(mode="json")) == json.dumps(stored)  # same keys, same order, same numbers
 
 
@@ -93,8 +94,34 @@ def test_the_balance_shape_keeps_its_intervals_and_version() -> None:
 def test_a_document_of_schema_4_reads_with_its_ranges_unchecked() -> None:
     stored = _stored("schema4")
     doc = read_document(stored)
-    assert doc.schema_version == 5 and doc.range_of_motion_withheld is None  # not checked against the raw data
+    assert doc.schema_version == 6 and doc.range_of_motion_withheld is None  # not checked against the raw data
     assert doc.model_dump(mode="json") == _stored(TODAY)
+
+
+def test_a_document_of_schema_5_reads_with_its_peaks_checked() -> None:
+    stored = _stored("schema5")
+    doc = read_document(stored)
+    assert doc.model_dump(mode="json") == _stored(TODAY)  # no peak past a limit: only the new keys, None
+    assert all(r.withheld is None for r in doc.repetition_list) and doc.rom_deg_withheld is None
+
+
+def test_a_stored_knee_peak_past_what_a_knee_bends_is_withheld_on_read() -> None:
+    """A document of schema 5 holds the peaks, not the curves: a knee peak past 170° (UI-PRMD's Kinect on a
+    sit to stand read 175-179°) is withheld with its reason, and the median amplitude with it."""
+    stored = _stored("schema5")
+    stored["defining_angle"] = "knee_flexion_L"
+    peaks = [176.4, 150.2, 169.9]
+    stored["repetition_list"] = [r | {"peak_deg": p} for r, p in zip(stored["repetition_list"], peaks, strict=True)]
+    doc = read_document(stored)
+    first, *others = doc.repetition_list
+    assert (first.peak_deg, first.amplitude_deg) == (None, None)
+    assert first.withheld == Reason(id="beyond_anatomy", params={"reached": 176, "limit": 170})
+    assert [r.peak_deg for r in others] == peaks[1:] and all(r.withheld is None for r in others)
+    assert doc.rom_deg is None and doc.fatigue.amplitude_slope_pct_per_rep is None
+    assert doc.rom_deg_withheld == Reason(
+        id="repetitions_beyond_anatomy", params={"withheld": 1, "count": 3, "reached": 176, "limit": 170}
+    )
+    assert read_document(doc.model_dump(mode="json")) == doc  # today's shape reads back the same
 
 
 def test_a_report_without_indicators_reads_as_a_report() -> None:
@@ -105,8 +132,8 @@ def test_a_report_without_indicators_reads_as_a_report() -> None:
 
 
 def test_an_unknown_schema_version_is_refused_by_name() -> None:
-    with pytest.raises(UnreadableDocument, match="schema_version 6"):
-        read_document(_stored(TODAY) | {"schema_version": 6})
+    with pytest.raises(UnreadableDocument, match="schema_version 7"):
+        read_document(_stored(TODAY) | {"schema_version": 7})
 
 
 def test_a_document_missing_a_key_of_its_version_is_refused() -> None:
@@ -171,6 +198,8 @@ ENGLISH = {
     "the filtered curve reaches 12° beyond what the camera measured": ("beyond_raw", {"by": 12.0}),
     "the curve reaches 175°, more than the joint can bend (170°): the camera lost the limb":
         ("beyond_anatomy", {"reached": 175.0, "limit": 170.0}),
+    "in 3 of 8 repetitions the curve reaches up to 178°, more than the joint can bend (170°): the camera lost the "
+    "limb": ("repetitions_beyond_anatomy", {"withheld": 3, "count": 8, "reached": 178.0, "limit": 170.0}),
 }
 # fmt: on
 

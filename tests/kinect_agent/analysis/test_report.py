@@ -14,6 +14,7 @@ from kinect_agent.analysis.errors import UnknownExercise, UnreadableRecording
 from kinect_agent.analysis.exercise import EXERCISES
 from kinect_agent.analysis.quality import MIN_TRACKED
 from kinect_agent.analysis.report import analyze_file, analyze_recording
+from kinect_agent.formats import ui_prmd
 from kinect_agent.formats.session_file import SessionPayload, write_payload
 from kinect_agent.processing.pipeline import process
 from kinect_agent.recording import Recording
@@ -25,9 +26,9 @@ CONTRACT_KEYS = {
     "exercise", "duration_s", "n_frames", "rate_hz", "repetitions", "repetition_list", "defining_angle",
     "range_of_motion", "rom_deg", "most_moving_joints", "reachable_range", "moving_time_s", "rest_time_s",
     "tempo_s_per_rep", "fatigue", "balance", "balance_missing", "sit_to_stand", "quality", "range_of_motion_95",
-    "repetitions_95", "range_of_motion_95_withheld", "peak_end", "range_of_motion_withheld",
+    "repetitions_95", "range_of_motion_95_withheld", "peak_end", "range_of_motion_withheld", "rom_deg_withheld",
 }  # fmt: skip
-REP_KEYS = {"index", "start_s", "end_s", "duration_s", "amplitude_deg", "peak_deg", "side", "peak_s"}
+REP_KEYS = {"index", "start_s", "end_s", "duration_s", "amplitude_deg", "peak_deg", "side", "peak_s", "withheld"}
 
 
 def test_document_has_every_contract_key_and_is_json() -> None:
@@ -48,7 +49,7 @@ def test_standing_session_fills_every_metric() -> None:
     # the intervals need the agent's angle SDs, the raw-data check filtered positions; balance_missing is None when
     # balance is measured
     no_sd = {"sit_to_stand", "range_of_motion_95", "range_of_motion_95_withheld", "repetitions_95", "balance_missing",
-             "range_of_motion_withheld"}  # fmt: skip
+             "range_of_motion_withheld", "rom_deg_withheld"}  # fmt: skip
     assert all(doc[k] is not None for k in CONTRACT_KEYS - no_sd), [k for k in doc if doc[k] is None]
     assert doc["most_moving_joints"][0]["joint"] in ("HAN_L", "HAN_R")
     assert doc["moving_time_s"] + doc["rest_time_s"] == pytest.approx(doc["duration_s"], abs=0.02)
@@ -201,3 +202,34 @@ def test_a_knee_bent_past_what_a_knee_bends_is_withheld(data_dir: Path) -> None:
         assert doc.range_of_motion_95 is not None and doc.range_of_motion_95[name] is None
         assert doc.range_of_motion_95_withheld is not None and doc.range_of_motion_95_withheld[name] == why
     assert doc.range_of_motion["hip_flexion_L"].max_deg is not None  # the angles a body reaches are shown
+
+
+def test_repetitions_of_a_knee_bent_past_what_a_knee_bends_have_their_numbers_withheld(data_dir: Path) -> None:
+    """UI-PRMD s02's incorrect sit to stand (the session page the issue 24 audit looked at): the Kinect loses the
+    seated legs, the knee curves reach 177-178° in 4 of the 10 rises, whose peaks and amplitudes the repetition
+    table showed (and the median amplitude, 118.2°, true about 90°). Those repetitions say why instead, and so does
+    the range of motion; the others keep their numbers, within what a knee bends."""
+    raw = ui_prmd.read_episodes(data_dir / "ui-prmd" / "Incorrect Segmented Movements" / "Kinect", movement="m05",
+                                subject="s02")  # fmt: skip
+    result = process(raw)
+    doc = analyze_recording(raw, EXERCISES["sit_to_stand"], filtered=result.filtered, angle_sd=result.angle_sd)
+    withheld = [r for r in doc.repetition_list if r.withheld is not None]
+    shown = [r for r in doc.repetition_list if r.withheld is None]
+    assert doc.repetitions == 10 and 2 <= len(withheld) <= 8, [r.peak_deg for r in doc.repetition_list]
+    for r in withheld:
+        assert r.peak_deg is None and r.amplitude_deg is None, r
+        assert r.withheld is not None and r.withheld.id == "beyond_anatomy" and r.withheld.params["limit"] == 170
+        assert float(r.withheld.params["reached"]) > 170.0, r.withheld
+    assert all(r.peak_deg is not None and r.peak_deg <= 170.0 and r.amplitude_deg is not None for r in shown), shown
+    why = doc.rom_deg_withheld
+    assert doc.rom_deg is None and why is not None and why.id == "repetitions_beyond_anatomy", (doc.rom_deg, why)
+    assert why.params["withheld"] == len(withheld) and why.params["count"] == 10, why
+    top = max(float(r.withheld.params["reached"]) for r in withheld if r.withheld is not None)
+    assert why.params["reached"] == top, why
+    assert doc.fatigue.amplitude_slope_pct_per_rep is None  # a trend of the withheld amplitudes
+
+
+def test_repetitions_within_what_the_joint_bends_keep_their_numbers() -> None:
+    doc = analyze_recording(simulate_truth("squat", 4, seed=3), EXERCISES["squat"])
+    assert doc.repetitions == 4 and all(r.withheld is None and r.peak_deg is not None for r in doc.repetition_list)
+    assert doc.rom_deg is not None and doc.rom_deg_withheld is None

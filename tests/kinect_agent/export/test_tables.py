@@ -8,6 +8,7 @@ import zipfile
 
 import numpy as np
 
+from kinect_agent.analysis import reasons
 from kinect_agent.analysis.angles import measured_angles
 from kinect_agent.body.angles import ANGLE_NAMES, joint_angles
 from kinect_agent.export.files import export
@@ -62,3 +63,24 @@ def test_without_a_document_only_the_angle_tables_and_the_device_are_written(squ
 def test_the_same_session_gives_the_same_bytes(squat_session):
     payload, doc = squat_session
     assert export("csv", payload, document=doc).data == export("csv", payload, document=doc).data
+
+
+def test_a_withheld_peak_is_an_empty_cell_with_its_reason(squat_session):
+    """A repetition measured past what the knee bends (kinect_agent.analysis.anatomy) exports no amplitude nor peak,
+    and says why; so does the median amplitude it withholds."""
+    payload, doc = squat_session
+    why = reasons.BEYOND_ANATOMY.reason(reached=176, limit=170)
+    first, *others = doc.repetition_list
+    lost = first.model_copy(update={"peak_deg": None, "amplitude_deg": None, "withheld": why})
+    rom_why = reasons.REPETITIONS_BEYOND_ANATOMY.reason(withheld=1, count=3, reached=176, limit=170)
+    withheld = doc.model_copy(update={"repetition_list": [lost, *others], "rom_deg": None, "rom_deg_withheld": rom_why})
+    tables = _tables(export("csv", payload, document=withheld).data)
+    reps = tables["repetitions.csv"]
+    assert (reps[0]["peak_deg"], reps[0]["amplitude_deg"], reps[0]["withheld"]) == ("", "", "beyond_anatomy")
+    assert all(r["peak_deg"] and r["withheld"] == "" for r in reps[1:]), reps
+    metrics = {r["metric"]: r["value"] for r in tables["metrics.csv"]}
+    assert metrics["repetition_amplitude_median"] == ""
+    assert metrics["repetition_amplitude_median.withheld"] == "repetitions_beyond_anatomy"
+    shown = {r["metric"]: r["value"] for r in _tables(export("csv", payload, document=doc).data)["metrics.csv"]}
+    assert float(shown["repetition_amplitude_median"]) == doc.rom_deg
+    assert shown["repetition_amplitude_median.withheld"] == ""
