@@ -301,7 +301,7 @@
       : I18n.t("This session was removed under the clinic's retention policy.");
     document.getElementById("removed-numbers").replaceChildren(
       ...stat(I18n.t("Repetitions"), s.repetitions === null ? "—" : I18n.number(s.repetitions)),
-      ...stat(I18n.t("Range of motion"), deg(s.rom_deg)),
+      ...stat(I18n.t("Range of motion"), deg(s.rom_deg), s.metrics && s.metrics.rom_deg_withheld ? s.metrics.rom_deg_withheld.text : null),
       ...stat(I18n.t("Duration"), wholeSecs(s.duration_s), I18n.nt("{n} frame", "{n} frames", s.n_frames, { n: I18n.number(s.n_frames) })),
       ...stat(I18n.t("Data quality"), s.quality_ok === null ? "—" : s.quality_ok ? I18n.t("good") : I18n.t("low")));
     document.getElementById("removed").hidden = false;
