@@ -27,9 +27,11 @@ Conventions (0 = anatomical neutral, standing with arms hanging and legs straigh
                            arcsin of NECK-ROOT (unit) along the HIP_R->HIP_L direction
 
 Domains (DOMAIN_DEG): every angle lies in the interval its definition allows; the planar angles (atan2) are wrapped
-into [PLANAR_SEAM_DEG, PLANAR_SEAM_DEG + 360) with the seam at −120° (a limb pointing backwards 30° above the
-horizontal, a direction no shoulder or hip reaches), so an arm overhead reads 180° ± its sway. Nothing downstream
-unwraps (series), so a smoothed or percentile value stays in the domain too. A planar angle is NaN in a frame where
+into [seam, seam + 360): the sagittal ones (shoulder and hip flexion) at SAGITTAL_SEAM_DEG, −100° (the limb pointing
+backwards 10° above the horizontal, in the trunk's frame), the shoulder abduction at PLANAR_SEAM_DEG, −120°; so an arm
+overhead reads 180° ± its sway, and an arm overhead while the trunk leans forward (a deep squat: 200-250° on the
+Kinect) or a thigh mistracked over the top stays on one side of the seam. Nothing downstream unwraps (series), so a
+smoothed or percentile value stays in the domain too. A planar angle is NaN in a frame where
 its limb lies more than 60° out of the angle's plane (the in-plane part below PLANE_MIN_FRACTION of the limb's
 length). Why each rule: bench/README.md, "Clinical angles: why each convention".
 """
@@ -49,14 +51,17 @@ ANGLE_NAMES: tuple[str, ...] = (
 )  # fmt: skip
 
 
-PLANAR_SEAM_DEG = -120.0
+PLANAR_SEAM_DEG = -120.0  # the shoulder abduction's seam: the arm across the body, 30° above the horizontal
+SAGITTAL_SEAM_DEG = -100.0  # the shoulder and hip flexion's seam: the limb backwards, 10° above the horizontal
 ROTATION_MIN_ELEVATION_DEG = 30.0  # shoulder rotation is undefined below this elevation of the upper arm
 PLANE_MIN_FRACTION = 0.5  # a planar angle needs this much of its limb in its plane (within 60° of it)
 _PLANAR = (PLANAR_SEAM_DEG, PLANAR_SEAM_DEG + 360.0)
+_SAGITTAL = (SAGITTAL_SEAM_DEG, SAGITTAL_SEAM_DEG + 360.0)
 # (low, high) degrees each angle can take by its definition (high excluded for the planar angles).
 DOMAIN_DEG: dict[str, tuple[float, float]] = {
     **{f"{n}_{s}": (0.0, 180.0) for n in ("elbow_flexion", "knee_flexion") for s in "LR"},
-    **{f"{n}_{s}": _PLANAR for n in ("shoulder_flexion", "shoulder_abduction", "hip_flexion") for s in "LR"},
+    **{f"{n}_{s}": _SAGITTAL for n in ("shoulder_flexion", "hip_flexion") for s in "LR"},
+    **{f"shoulder_abduction_{s}": _PLANAR for s in "LR"},
     **{f"shoulder_rotation_{s}": (-180.0, 180.0) for s in "LR"},
     **{f"hip_abduction_{s}": (-90.0, 90.0) for s in "LR"},
     "trunk_flexion": (0.0, 180.0),
@@ -104,14 +109,13 @@ def _inner_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
-def _plane_angle(v: np.ndarray, up: np.ndarray, axis: np.ndarray, mask: bool = True) -> np.ndarray:
+def _plane_angle(v: np.ndarray, up: np.ndarray, axis: np.ndarray, seam: float, mask: bool = True) -> np.ndarray:
     """Angle in degrees of v projected on the plane (−up, axis): 0 along −up, +90 along axis, wrapped into
-    [PLANAR_SEAM_DEG, PLANAR_SEAM_DEG + 360); with mask, NaN where less than PLANE_MIN_FRACTION of v lies in that
-    plane."""
+    [seam, seam + 360); with mask, NaN where less than PLANE_MIN_FRACTION of v lies in that plane."""
     down = -_dot(v, up) + 0.0  # + 0.0 turns -0.0 into 0.0 so atan2(0, 0) reads 0, not 180
     along = _dot(v, axis)
     deg = np.degrees(np.arctan2(along, down))
-    deg = PLANAR_SEAM_DEG + np.mod(deg - PLANAR_SEAM_DEG, 360.0)
+    deg = seam + np.mod(deg - seam, 360.0)
     if not mask:
         return deg
     with np.errstate(invalid="ignore"):
@@ -140,13 +144,13 @@ def joint_angles(positions: np.ndarray, *, mask_off_plane: bool = True) -> dict[
         upper, fore, thigh = elb - sho, wri - elb, kne - hip
         out[f"elbow_flexion_{side}"] = 180.0 - _inner_angle(sho - elb, wri - elb)
         out[f"knee_flexion_{side}"] = 180.0 - _inner_angle(hip - kne, ank - kne)
-        out[f"shoulder_flexion_{side}"] = _plane_angle(upper, up, forward, m)
-        out[f"shoulder_abduction_{side}"] = _plane_angle(upper, up, outward, m)
+        out[f"shoulder_flexion_{side}"] = _plane_angle(upper, up, forward, SAGITTAL_SEAM_DEG, m)
+        out[f"shoulder_abduction_{side}"] = _plane_angle(upper, up, outward, PLANAR_SEAM_DEG, m)
         rotation = _rotation_about(upper, fore, forward, up)
         with np.errstate(invalid="ignore"):
             hanging = -_dot(_unit(upper), up) > np.cos(np.radians(ROTATION_MIN_ELEVATION_DEG))
         out[f"shoulder_rotation_{side}"] = np.where(hanging, np.nan, rotation)
-        out[f"hip_flexion_{side}"] = _plane_angle(thigh, up, forward, m)
+        out[f"hip_flexion_{side}"] = _plane_angle(thigh, up, forward, SAGITTAL_SEAM_DEG, m)
         out[f"hip_abduction_{side}"] = _out_of_plane(thigh, outward)
     trunk = _unit(_joint(p, "NECK") - _joint(p, "ROOT"))
     vertical = np.array([0.0, 1.0, 0.0])
