@@ -17,9 +17,11 @@ import numpy as np
 from backend.camera import limits
 from backend.camera.schemas import BatchIn
 from backend.exceptions import InvalidInput
+from kinect_agent.formats import session_file
 from kinect_agent.sources.webcam.landmarks import LandmarkBatch, LandmarkError, check_arrays
 
 L = limits.N_LANDMARKS
+MIN_STEP_S = session_file.MIN_FRAME_INTERVAL_S  # the closest two frames of a set may be (s), as in a session file
 
 
 def _first_bad(mask: np.ndarray) -> tuple[int, ...]:
@@ -46,11 +48,17 @@ def _refuse_outside(field: str, values: np.ndarray, low: float, high: float, uni
         raise InvalidInput(f"body.{where}: {float(values[index]):.6g} is outside {low:g}..{high:g}{unit}")
 
 
+def follows(later: np.ndarray, earlier: np.ndarray) -> np.ndarray:
+    """Returns (N,) whether each time of later (N,) s comes at least MIN_STEP_S after that of earlier (N,) s: the
+    frames a session file may hold (two frames 1 ms apart on the page's millisecond clock do)."""
+    return later - earlier >= MIN_STEP_S - session_file.TIME_ROUNDING_S
+
+
 def check_batch(body: BatchIn, *, after_t: float | None = None) -> LandmarkBatch:
     """Returns the body's frames as a LandmarkBatch; raises InvalidInput naming the first implausible value: NaN or
     infinite, a world landmark farther than MAX_WORLD_M, an image landmark far outside the picture, a visibility
-    outside 0..1, a time outside 0..MAX_SET_S, not increasing within the batch or not after after_t (s, the last
-    frame received before)."""
+    outside 0..1, a time outside 0..MAX_SET_S, or less than MIN_STEP_S after the frame before in the batch or after
+    after_t (s, the last frame received before)."""
     t = np.array([f.t for f in body.frames], dtype=np.float64)
     world = np.array([f.world for f in body.frames], dtype=np.float64)
     image = np.array([f.image for f in body.frames], dtype=np.float64)
@@ -59,12 +67,14 @@ def check_batch(body: BatchIn, *, after_t: float | None = None) -> LandmarkBatch
     if bad_t.any():
         i = int(np.argmax(bad_t))
         raise InvalidInput(f"body.frames[{i}].t: {t[i]} is not a time in 0..{limits.MAX_SET_S:g} s of the set")
-    back = np.flatnonzero(np.diff(t) <= 0)
+    back = np.flatnonzero(~follows(t[1:], t[:-1]))
     if back.size:
         i = int(back[0]) + 1
-        raise InvalidInput(f"body.frames[{i}].t: {t[i]} s does not come after the frame before ({t[i - 1]} s)")
-    if after_t is not None and t[0] <= after_t:
-        raise InvalidInput(f"body.frames[0].t: {t[0]} s goes back to or before the last frame received ({after_t} s)")
+        raise InvalidInput(f"body.frames[{i}].t: {t[i]} s does not come {MIN_STEP_S:g} s or more after the frame "
+                           f"before ({t[i - 1]} s)")  # fmt: skip
+    if after_t is not None and not follows(t[:1], np.array([after_t]))[0]:
+        raise InvalidInput(f"body.frames[0].t: {t[0]} s does not come {MIN_STEP_S:g} s or more after the last frame "
+                           f"received ({after_t} s)")  # fmt: skip
     w = limits.MAX_WORLD_M
     _refuse_outside("world", world, -w, w, " m")
     lo, hi = limits.IMAGE_XY_RANGE

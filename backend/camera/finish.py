@@ -21,11 +21,13 @@ from backend.camera.skeleton import WEBCAM, pipeline_config, to_recording
 from backend.camera.vendor import model_info
 from backend.database import utcnow
 from backend.events.hub import Event, publish
+from backend.exceptions import InvalidSessionFile
 from backend.exercises.models import Exercise
+from backend.i18n import N_
 from backend.session_review import service as review
 from backend.sessions.ingest import decode_upload
 from kinect_agent.formats import session_file
-from kinect_agent.formats.session_file import SessionPayload
+from kinect_agent.formats.session_file import SessionFileError, SessionPayload
 from kinect_agent.processing.pipeline import process
 from kinect_agent.processing.provenance import pipeline_params
 from kinect_agent.recording import Metadata
@@ -96,12 +98,22 @@ def _ended_message(row: CameraSet, exercise: Exercise, count: int, hint: str | N
     }
 
 
+def _fail(db_session: Session, row: CameraSet, exercise: Exercise, count: int | None, error: str, said: str) -> None:
+    """Marks the set failed with error (for its API view), says `said` (a catalogue message: the live view shows it in
+    its reader's language) on the live channel, deletes its batches."""
+    row.status, row.error = "failed", error
+    publish(db_session, Event("live.progress", row.patient_id, _ended_message(row, exercise, count or 0, said)))
+    service.drop_batches(db_session=db_session, set_id=row.id)
+    db_session.flush()
+    live_count.forget(row.id)
+
+
 def end_set(
     *, db_session: Session, row: CameraSet, last_seq: int, reason: str, max_frames: int, max_decoded_bytes: int
 ) -> CameraSet:
     """Ends the set row (locked by the caller) and returns it: status stored with session_id, or failed with the
-    reason in error (too few frames); either way its landmark batches are deleted. A set that ended already is
-    returned as it is. Raises BatchOutOfOrder when
+    reason in error (too few frames, or frames no session file may hold); either way its landmark batches are
+    deleted. A set that ended already is returned as it is. Raises BatchOutOfOrder when
     the page sent batches the server has not received (last_seq > row.last_seq): it sends them, then ends again.
     max_frames, max_decoded_bytes: the limits of an uploaded session file (Settings.SESSION_MAX_*)."""
     if row.status != "recording":
@@ -112,27 +124,23 @@ def end_set(
         )
     exercise = db_session.get(Exercise, row.exercise_id)
     assert exercise is not None
-    data = session_bytes(row, exercise, db_session)
     row.ended_at, row.end_reason = utcnow(), reason
     count = live_count.final_count(row.id)
-    if data is None:
-        row.status = "failed"
-        row.error = (
+    try:
+        data = session_bytes(row, exercise, db_session)
+        upload = (
+            None if data is None else decode_upload(data, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
+        )
+    except (SessionFileError, InvalidSessionFile) as exc:  # the same frames fail the same way again: said, not retried
+        error = f"the set's {row.n_frames} frames could not be stored as a session: {exc}"
+        _fail(db_session, row, exercise, count, error, N_("The set could not be saved."))
+        return row
+    if upload is None:
+        error = (
             f"only {row.n_frames} frames were received; at least {limits.MIN_END_FRAMES} are needed to analyse a set"
         )
-        publish(
-            db_session,
-            Event(
-                "live.progress",
-                row.patient_id,
-                _ended_message(row, exercise, count or 0, "The set was too short to save."),
-            ),
-        )
-        service.drop_batches(db_session=db_session, set_id=row.id)
-        db_session.flush()
-        live_count.forget(row.id)
+        _fail(db_session, row, exercise, count, error, N_("The set was too short to save."))
         return row
-    upload = decode_upload(data, max_frames=max_frames, max_decoded_bytes=max_decoded_bytes)
     stored, created = review.store_upload(
         db_session=db_session, upload=upload, patient_id=row.patient_id, exercise=exercise, device_id=None
     )

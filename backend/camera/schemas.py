@@ -55,6 +55,10 @@ class CameraSetOut(BaseModel):
     last_seq: int = Field(description="the newest batch received (-1: none)", examples=[-1])
     session_id: int | None = Field(default=None, description="the stored session once the set ended")
     error: str | None = None
+    failure: Literal["too_short", "not_storable"] | None = Field(
+        default=None,
+        description="why a failed set stored nothing: too few frames to analyse, or frames no session file may hold",
+    )
 
 
 class FrameIn(BaseModel):

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import datetime as dt
 import uuid
-from typing import Any, cast
+from typing import Any, Literal, cast
 
 import numpy as np
 from sqlalchemy import delete, func, select
@@ -17,7 +17,7 @@ from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session
 
 from backend.camera import limits
-from backend.camera.batch import check_batch, content_hash, pack, unpack
+from backend.camera.batch import MIN_STEP_S, check_batch, content_hash, follows, pack, unpack
 from backend.camera.errors import (
     BatchConflict,
     BatchOutOfOrder,
@@ -85,6 +85,13 @@ def withdraw_consent(*, db_session: Session, patient_id: int) -> ConsentOut:
 # ---------------------------------------------------------------------------------------------- sets
 
 
+def _failure(row: CameraSet) -> Literal["too_short", "not_storable"] | None:
+    """Returns why a failed set stored nothing (None for a set that did not fail)."""
+    if row.status != "failed":
+        return None
+    return "too_short" if row.n_frames < limits.MIN_END_FRAMES else "not_storable"
+
+
 def set_out(db_session: Session, row: CameraSet) -> CameraSetOut:
     """Returns the API view of a set."""
     exercise = db_session.get(Exercise, row.exercise_id)
@@ -102,6 +109,11 @@ def set_out(db_session: Session, row: CameraSet) -> CameraSetOut:
         last_seq=row.last_seq,
         session_id=row.session_id,
         error=row.error,
+        failure=None
+        if row.status != "failed"
+        else "too_short"
+        if row.n_frames < limits.MIN_END_FRAMES
+        else "not_storable",
     )
 
 
@@ -187,9 +199,9 @@ def add_batch(*, db_session: Session, row: CameraSet, body: BatchIn) -> tuple[La
         raise CameraSetEnded(f"set {row.id} ended ({row.status}); it takes no more batches")
     if body.seq != row.last_seq + 1:
         raise BatchOutOfOrder(f"body.seq: batch {body.seq} came before batch {row.last_seq + 1}; send them in order")
-    if row.last_t is not None and batch.t[0] <= row.last_t:
+    if row.last_t is not None and not follows(batch.t[:1], np.array([row.last_t]))[0]:
         raise InvalidInput(
-            f"body.frames[0].t: {batch.t[0]} s goes back to or before the last frame received "
+            f"body.frames[0].t: {batch.t[0]} s does not come {MIN_STEP_S:g} s or more after the last frame received "
             f"({row.last_t} s, batch {row.last_seq})"
         )
     _check_rates(row, batch, utcnow())

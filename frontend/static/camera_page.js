@@ -19,6 +19,8 @@
   const LIMIT = { world: 2.99, imageLo: -0.99, imageHi: 1.99, z: 9.99 };  // inside the server's limits
 
   let item = null, ex = null, name = "exercise", stream = null, phase = "loading";
+  let endSteps = [], endFrom = 0;  // the set's end: [step, s after Stop] (CameraPage.state(): for tests and benchmarks)
+  const endStep = (step) => endSteps.push([step, +((performance.now() - endFrom) / 1000).toFixed(2)]);
   let set = null, pending = [], lastFlush = 0, lastT = -1, count = 0, target = 0;
   let okSince = null, lastSeen = 0, prevCentre = null, luma = null, lumaAt = 0, targetAt = null;
   const by = { one: 0, two: 0 };  // frames answered by each landmarker of the watch (camera_pose_core.js)
@@ -312,6 +314,7 @@
     $("cam-main-status").textContent = "ending";
     flush();
     set.ended = reason;
+    endFrom = performance.now(); endSteps = []; endStep("buffer");
     await CameraBuffer.putSet(pid, set);
     stopCamera();
     $("cam-stop").hidden = true;
@@ -321,10 +324,13 @@
     let row = null;
     for (let attempt = 0; ; attempt++) {
       try {
+        endStep(`drain ${attempt}`);
         await CameraSender.drain();
+        endStep(`end ${attempt}`);
         row = await api(`/camera/sets/${set.set_id}/end`, { method: "POST", body: { last_seq: set.next_seq - 1, reason } });
         break;
       } catch (err) {
+        endStep(`failed ${attempt}: ${err.status} ${err.error || err} ${err.detail || err.message || ""}`);
         if (err.status === 0 || err.status >= 500 || (err.error === "BatchOutOfOrder" && attempt < 5)) {
           status(err.status === 0 ? T.savingOffline : T.saving, "warn");
           await new Promise((r) => setTimeout(r, 2000));
@@ -334,6 +340,7 @@
         return;
       }
     }
+    endStep("result");
     await showResult(row, reason);
   }
 
@@ -352,8 +359,9 @@
     show("cam-result");
     $("cam-main-status").textContent = row.status;
     if (row.status !== "stored") {
-      $("cam-result-text").textContent = T.tooShort; $("cam-result-more").textContent = "";
-      status(T.tooShort, "warn");
+      const why = row.failure === "too_short" ? T.tooShort : T.notSaved;
+      $("cam-result-text").textContent = why; $("cam-result-more").textContent = "";
+      status(why, "warn");
     } else {
       let session = null;
       try { session = await api(`/sessions/${row.session_id}`); } catch (err) { session = null; }
@@ -470,5 +478,5 @@
 
   init();
   window.CameraPage = { state: () => ({ phase, count, target, set_id: set && set.set_id, next_seq: set && set.next_seq,
-    frames: sent, received, model: CameraPose.info, by: { ...by }, costs: costs.slice(), fps: stamps.length > 1 ? (stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000) : null }) };
+    frames: sent, received, model: CameraPose.info, by: { ...by }, end: endSteps.slice(), sender: CameraSender.state(), costs: costs.slice(), fps: stamps.length > 1 ? (stamps.length - 1) / ((stamps[stamps.length - 1] - stamps[0]) / 1000) : null }) };
 })();

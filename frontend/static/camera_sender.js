@@ -108,5 +108,11 @@ const CameraSender = (() => {
 
   window.addEventListener("online", () => pump());
   window.addEventListener("offline", () => say(true));
-  return { init, add, pump, drain, isOffline: () => offline, idle: () => !running };
+  /** What the sender holds (for CameraPage.state(): tests and benchmarks). */
+  function state() {
+    return { queued: queue.map((b) => b.seq), running, loaded, writes: writes.size, offline, failures,
+      stopped: stopped ? String(stopped.error || stopped) : null };
+  }
+
+  return { init, add, pump, drain, state, isOffline: () => offline, idle: () => !running };
 })();

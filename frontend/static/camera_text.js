@@ -45,6 +45,7 @@ const CameraText = Object.freeze({
   saving: I18n.t("Saving your set…"),
   savingOffline: I18n.t("Your set is kept on this computer. It will be saved as soon as the connection is back."),
   tooShort: I18n.t("The set was too short to save. Please try again and do at least one repetition."),
+  notSaved: I18n.t("This set could not be saved. Please try again; if it happens again, please tell your therapist."),
   saveFailed: I18n.t("Your set could not be saved. It is kept on this computer; please reload the page to try again."),
   /** The interrupted set: seconds kept so far and the exercise's name (lower case in English sentences only). */
   resumeText: (n, name) => I18n.t("We kept {seconds} seconds of your set ({exercise}). You can go on with the set, or save what you did.",

@@ -70,6 +70,9 @@ ERROR_CODES = frozenset(
     }
 )
 MIN_FRAME_INTERVAL_S = 1e-3  # frames closer than this (over 1000 Hz) are no camera or mocap recording
+# a file's times are sums of float64 steps, so two times 1 ms apart on a millisecond clock (a browser's: 5.123 ->
+# 5.124 s) read back 0.000999999999999 s apart in half the cases: such frames are MIN_FRAME_INTERVAL_S apart
+TIME_ROUNDING_S = 1e-9
 MAX_MEDIAN_INTERVAL_S = 1.0  # nor frames usually further apart than this (under 1 Hz)
 ANGLE_SD_STEP_DEG = 0.1  # quantum of the stored angle SDs, degrees (0.01: 1.8x the bytes, 213 vs 118 kB on 10 min)
 ANGLE_SD_MISSING = 65535  # stored code of an undefined SD; larger SDs are stored as the largest finite code
@@ -511,7 +514,7 @@ def _check_timing(name: str, t: np.ndarray) -> None:
         return
     dt = np.diff(t)
     closest, median = float(dt.min()), float(np.median(dt))
-    if closest < MIN_FRAME_INTERVAL_S:
+    if closest < MIN_FRAME_INTERVAL_S - TIME_ROUNDING_S:
         raise SessionFileError("implausible_timing", f"recording {name!r}: frames {closest:.3g} s apart; a camera "
                                f"or motion capture gives at least {MIN_FRAME_INTERVAL_S:g} s (1000 Hz)")  # fmt: skip
     if median > MAX_MEDIAN_INTERVAL_S:

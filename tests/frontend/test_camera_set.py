@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import httpx
 import pytest
 from axe_playwright_python.sync_playwright import Axe
+from playwright.sync_api import TimeoutError as PlaywrightTimeoutError
 from playwright.sync_api import expect
 
 from backend.camera import limits
@@ -156,8 +157,14 @@ def phase(page) -> str:
 
 
 def wait_phase(page, *names: str, timeout: float = 60_000) -> None:
+    """Waits until the page's phase is one of names; on a timeout, fails with where the page is (its phase, its set's
+    end step and its sender's queue: CameraPage.state())."""
     script = "(names) => names.includes((document.getElementById('cam-main-status') || {}).textContent)"
-    page.wait_for_function(script, arg=list(names), timeout=timeout)
+    try:
+        page.wait_for_function(script, arg=list(names), timeout=timeout)
+    except PlaywrightTimeoutError:
+        where = page.evaluate("window.CameraPage ? (({ costs, ...s }) => s)(CameraPage.state()) : null")
+        raise AssertionError(f"the page is not {' or '.join(names)} after {timeout / 1000:.0f} s: {where}") from None
 
 
 def test_consent_placement_live_count_and_the_saved_webcam_session(cam_browser, live_server):

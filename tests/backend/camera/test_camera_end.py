@@ -133,3 +133,21 @@ def test_a_set_with_minutes_out_of_the_picture_is_stored_at_the_camera_rate(clie
     assert payload.raw.meta.rate_hz == 10.0 and payload.params["fps_achieved"] == 10.0, payload.raw.meta
     assert payload.raw.n_frames == len(frames)
     assert _sessions(db_session, camera_home["patient"].id) == 1
+
+
+def test_frames_a_millisecond_apart_are_stored(client, db_session, camera_home, started):
+    """The page stamps frames on a millisecond clock (times rounded to 0.001 s), so two frames may be 0.001 s apart;
+    a file's times are sums of float64 steps, which make half of such steps 0.000999... s. The set is stored, with
+    every frame (a whole run lost a set to this: "frames 0.001 s apart; a camera gives at least 0.001 s")."""
+    set_id, h = started(seconds_ago=120), camera_home["headers"]
+    frames = [{**f, "t": round(f["t"], 3)} for f in squats(2)]  # as the page stamps them
+    for k in range(5, len(frames) - 1, 7):  # the next frame 1 ms after this one, at times 5.123 -> 5.124 etc.
+        frames[k + 1] = {**frames[k + 1], "t": round(frames[k]["t"] + 0.001, 3)}
+    steps = [round(b["t"] - a["t"], 6) for a, b in zip(frames, frames[1:], strict=False)]
+    assert min(steps) == 0.001 and any(b["t"] - a["t"] < 0.001 for a, b in zip(frames, frames[1:], strict=False))
+    answers = _send_all(client, set_id, frames, h)
+    r = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": len(answers) - 1, "reason": "stop"},
+                    headers=h)  # fmt: skip
+    assert r.status_code == 200 and r.json()["status"] == "stored", r.text
+    payload = session_file.decode(stored_file(db_session=db_session, session_id=r.json()["session_id"]))
+    assert payload.raw.n_frames == len(frames)

@@ -138,6 +138,21 @@ def test_time_going_back_across_batches_is_refused(client, camera_home, started,
     assert _batches(db_session, set_id) == 1
 
 
+def test_frames_under_a_millisecond_apart_are_refused_as_a_session_file_would_refuse_them(client, camera_home, started,
+                                                                                           db_session):  # fmt: skip
+    """No session file holds frames closer than 1 ms (over 1000 Hz), so no batch does: a set of such frames could
+    never be stored. Frames 1 ms apart (the page's clock rounds to 1 ms) are taken, within and across batches."""
+    set_id, h = started(), camera_home["headers"]
+    close = batch(0, [frame(1.0), frame(1.0004), frame(1.1)])
+    r = _post(client, set_id, close, h)
+    assert r.status_code == 422 and "body.frames[1].t: 1.0004 s does not come 0.001 s" in r.json()["detail"], r.text
+    assert _post(client, set_id, batch(0, [frame(1.123), frame(1.124), frame(1.2)]), h).status_code == 201
+    r = _post(client, set_id, batch(1, [frame(1.2005), frame(1.3)]), h)
+    assert r.status_code == 422 and "body.frames[0].t: 1.2005 s" in r.json()["detail"], r.text
+    assert _post(client, set_id, batch(1, [frame(1.201), frame(1.3)]), h).status_code == 201
+    assert _batches(db_session, set_id) == 2
+
+
 def test_a_repeated_batch_is_stored_once_and_a_different_one_with_its_number_conflicts(client, camera_home, started,
                                                                                        db_session):  # fmt: skip
     set_id, h = started(), camera_home["headers"]
