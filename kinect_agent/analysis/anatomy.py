@@ -1,11 +1,16 @@
 """What a joint can bend: the flexion past which a curve is the camera losing the limb, not the body (issue 24.1).
 
-A knee or elbow flexion of the joint centres past FLEXION_LIMIT_DEG is withheld with the reason beyond_anatomy
-(kinect_agent.analysis.reasons): an angle's range of motion (intervals.beyond_anatomy) and, here, the numbers of a
-repetition measured on such a curve (its peak and amplitude, repetition_beyond_anatomy) and the session's range of
-motion, the median of those amplitudes (rom_beyond_anatomy). The UI-PRMD Kinect reads seated knees at 173-178°
-where its Vicon reads 93-96°; HDM05's full squats (mocap, heels down) reach 163-166° (bench/README.md, issue 24
-audit).
+A flexion past its joint's FLEXION_LIMIT_DEG is withheld with the reason beyond_anatomy
+(kinect_agent.analysis.reasons), which names that limit: an angle's range of motion (intervals.beyond_anatomy) and,
+here, the numbers of a repetition measured on such a curve (its peak and amplitude, repetition_beyond_anatomy) and the
+session's range of motion, the median of those amplitudes (rom_beyond_anatomy). Limits, in the angles' own
+definitions (kinect_agent.body.angles), on mocap truth (bench/README.md):
+    knee, elbow flexion of the joint centres  170°: the UI-PRMD Kinect reads seated knees at 173-178° where its Vicon
+        reads 93-96°; HDM05's full squats (mocap, heels down) reach 163-166° (issue 24 audit).
+    hip flexion (the thigh in the trunk's sagittal plane, 180 = along the trunk towards the neck)  190°: no frame of
+        mocap passes 181.1° (UI-PRMD Vicon s01 deep squat, incorrect; HDM05 bd/bk 120.3°, CMU 13_29 166.8°, KERAAL
+        Vicon 95.0°); the Kinect's thighs mistracked in sit-to-stands, hurdle steps and leg raises read 200-260°
+        (bench/flexion_limit.py, "Hip flexion's anatomical limit").
 """
 
 from __future__ import annotations
@@ -17,8 +22,13 @@ import numpy as np
 from kinect_agent.analysis import reasons as why
 from kinect_agent.analysis.reasons import Reason
 
-# Flexion of the joint centres no knee or elbow passes, degrees
-FLEXION_LIMIT_DEG = {f"{joint}_flexion_{side}": 170.0 for joint in ("knee", "elbow") for side in ("L", "R")}
+KNEE_ELBOW_LIMIT_DEG = 170.0  # flexion of the joint centres no knee or elbow passes
+HIP_LIMIT_DEG = 190.0  # the thigh 10° past the trunk's axis: no hip on mocap passes 181.1°
+# {angle: the flexion no joint passes, degrees} (module doc)
+FLEXION_LIMIT_DEG = {
+    **{f"{joint}_flexion_{side}": KNEE_ELBOW_LIMIT_DEG for joint in ("knee", "elbow") for side in ("L", "R")},
+    **{f"hip_flexion_{side}": HIP_LIMIT_DEG for side in ("L", "R")},
+}
 SIDE_SUFFIX = {"left": "_L", "right": "_R"}
 
 

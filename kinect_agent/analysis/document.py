@@ -24,9 +24,10 @@ Schema versions (`schema_version`; a document without it is version 1):
     5  2026-11-28: range_of_motion_withheld, {angle: why its range of motion is withheld}: a range the raw data
        does not support (intervals.beyond_raw) has its numbers None and its reason there; None in documents of
        schema 1-4 (not checked).
-    6  today: a repetition measured on a knee or elbow flexion past what the joint bends (kinect_agent.analysis.
-       anatomy) has amplitude_deg and peak_deg None and why in its "withheld" (beyond_anatomy); rom_deg is then None
-       too, why in "rom_deg_withheld" (repetitions_beyond_anatomy), and fatigue's amplitude trend None. A document
+    6  today: a repetition measured on a flexion past what the joint bends (kinect_agent.analysis.anatomy: knee
+       and elbow; hip too since ANALYSIS_VERSION 2026.11.28-hip-limit, same keys) has amplitude_deg and peak_deg
+       None and why in its "withheld" (beyond_anatomy); rom_deg is then None too, why in "rom_deg_withheld"
+       (repetitions_beyond_anatomy), and fatigue's amplitude trend None. A document
        of schema 1-5 is checked on read on what it holds, the peaks alone (the curves are not in it): a peak past
        its defining angle's limit is withheld so, and rom_deg with it.
 Raise SCHEMA_VERSION and add one step to `upgrade` whenever a key is added, removed or changes its meaning.

@@ -152,8 +152,8 @@ def analyze_recording(
     "repetitions_95" ({"low", "high", "ambiguous"}) hold 95 % intervals (intervals.py); else both are None.
     Measured on filtered positions (or params), an angle whose range leaves the raw angle's envelope
     (intervals.beyond_raw), or whose flexion passes what the joint bends (intervals.beyond_anatomy), has its range
-    None and why in "range_of_motion_withheld" ({} when none; None on raw). A repetition measured on a knee or
-    elbow flexion past what the joint bends (anatomy) has its peak and amplitude None and why in its "withheld";
+    None and why in "range_of_motion_withheld" ({} when none; None on raw). A repetition measured on a knee,
+    elbow or hip flexion past what the joint bends (anatomy) has its peak and amplitude None and why in its "withheld";
     then the median amplitude "rom_deg" (and the fatigue's amplitude trend) is None too, why in "rom_deg_withheld".
     """
     if recording.n_frames < 2:

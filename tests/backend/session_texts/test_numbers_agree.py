@@ -5,19 +5,21 @@ each folder, cut to WINDOW_S seconds, so the test runs in minutes; COACH_ALL_REC
 simulator's exercises at two views, and the demo's sessions (the demo agent's path: capture, filter, session file,
 then the session page's body as the server builds it). For each recording, as a therapist would see it:
     - every range of motion (key numbers) and every shown 95 % interval lies in its angle's domain, an interval
-      holds its estimate and is at most intervals.MAX_WIDTH_DEG wide; a withheld one says why; no knee or elbow
-      flexion shown passes what the joint bends (intervals.FLEXION_LIMIT_DEG);
+      holds its estimate and is at most intervals.MAX_WIDTH_DEG wide; a withheld one says why; no knee, elbow or
+      hip flexion shown passes what the joint bends (anatomy.FLEXION_LIMIT_DEG), and one withheld for it names
+      that joint's limit;
     - the session's peak angle is the end of the range its repetitions reach, and every repetition's peak is a
       value of the filtered curve;
-    - no repetition shows a peak or an amplitude measured on a knee or elbow flexion that passes what the joint
-      bends (anatomy.FLEXION_LIMIT_DEG) within the repetition, as the page's curves show it; a withheld one says
+    - no repetition shows a peak or an amplitude measured on a flexion that passes what the joint bends
+      (anatomy.FLEXION_LIMIT_DEG) within the repetition, as the page's curves show it; a withheld one says
       why, and so does the median amplitude (the key number "Range of motion") it withholds;
     - the curves (raw and filtered) lie in the domain; the filtered curve is the series the range of motion is
       measured on (its extremes hold the 1st and 99th percentiles);
     - the exported angles_filtered.csv is that same series, frame by frame;
     - every range shown (its key numbers, with or without an interval) stays within what the raw data and anatomy
       allow: inside the raw angle's envelope (0.5th-99.5th percentiles) widened by RAW_MARGIN_DEG; a range not
-      shown while the raw angle is defined says why (range_of_motion_withheld, or its interval's reason).
+      shown while the raw angle is defined says why (range_of_motion_withheld, or its interval's reason);
+    - on mocap (HDM05, CMU, UI-PRMD Vicon: real bodies, tracked truly) nothing is withheld as beyond anatomy.
 """
 
 from __future__ import annotations
@@ -43,7 +45,7 @@ from kinect_agent.analysis.report import analyze_recording
 from kinect_agent.body.angles import ANGLE_NAMES, DOMAIN_DEG, joint_angles
 from kinect_agent.capture import capture, make_payload
 from kinect_agent.export import tables
-from kinect_agent.formats import session_file, ui_prmd
+from kinect_agent.formats import session_file, ui_prmd, ui_prmd_vicon
 from kinect_agent.recording import Recording
 from kinect_agent.sources.simulator import EXERCISES as SIMULATED
 from kinect_agent.sources.simulator import simulate
@@ -56,6 +58,11 @@ RAW_MARGIN_DEG = intervals.RAW_MARGIN_DEG
 ALL = os.environ.get("COACH_ALL_RECORDINGS") == "1"
 UIPRMD = {spec.uiprmd_movement: slug for slug, spec in EXERCISES.items() if spec.uiprmd_movement}
 SUBJECTS = ("s01", "s02", "s03", "s04", "s05")  # the only UI-PRMD subjects the project uses
+# UI-PRMD Vicon s01 (movement, kind) in the sample: the deepest hips (deep squat, 181° incorrect) and the hips'
+# own exercises (bench/README.md, "Hip flexion's anatomical limit")
+VICON_SAMPLE = (("m01", "correct"), ("m01", "incorrect"), ("m02", "incorrect"), ("m05", "incorrect"),
+                ("m06", "incorrect"))  # fmt: skip
+MOCAP = ("hdm05", "cmu", "ui-prmd vicon")  # labels of the real recordings that are truth (mocap)
 HDM05_EXERCISE = {
     "squat": "squat",
     "kick": "hurdle_step",
@@ -74,6 +81,8 @@ def real_cases() -> list[tuple[str, str, str]]:
         for subject in subjects:
             for kind in ("correct", "incorrect"):
                 cases.append((f"ui-prmd {movement} {subject} {kind}", f"{kind}:{movement}:{subject}", slug))
+    vicon = [(m, k) for m in sorted(UIPRMD) for k in ("correct", "incorrect")] if ALL else VICON_SAMPLE
+    cases += [(f"ui-prmd vicon {m} s01 {k}", f"vicon:{k}:{m}", UIPRMD[m]) for m, k in vicon]
     ut = sorted(p.relative_to(DATA).as_posix() for p in (DATA / "utkinect").glob("joints_s0*_e0*.txt"))
     cases += [(f"utkinect {Path(p).stem}", p, "shoulder_flexion") for p in (ut if ALL else ut[::3])]
     keraal = sorted(p.relative_to(DATA).as_posix() for p in (DATA / "keraal").rglob("*.txt") if "Kinect" in p.name
@@ -96,6 +105,13 @@ def thin(rec: Recording) -> Recording:
 
 
 def read_real(key: str) -> Recording:
+    if key.startswith("vicon:"):  # s01's episodes, one after the other
+        _, kind, movement = key.split(":")
+        vicon = DATA / "ui-prmd" / ("Segmented Movements" if kind == "correct" else "Incorrect Segmented Movements")
+        episodes = [ui_prmd_vicon.read(p) for p in sorted((vicon / "Vicon" / "Positions").glob(f"{movement}_s01_e*"))]
+        positions = np.concatenate([r.positions for r in episodes])
+        t = np.arange(len(positions)) / episodes[0].rate_hz
+        return Recording.from_positions(t, positions, episodes[0].meta)
     if key.startswith(("correct:", "incorrect:")):
         kind, movement, subject = key.split(":")
         folder = "Segmented Movements" if kind == "correct" else "Incorrect Segmented Movements"
@@ -115,8 +131,9 @@ def _filtered_csv(payload: session_file.SessionPayload) -> dict[str, np.ndarray]
     return {name[: -len("_deg")]: body[:, k] for k, name in enumerate(rows[0]) if name != "time_s"}
 
 
-def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
-    """Returns every way the numbers of one session disagree with each other or leave their domain (module doc)."""
+def disagreements(payload: session_file.SessionPayload, slug: str, *, truth: bool = False) -> list[str]:
+    """Returns every way the numbers of one session disagree with each other or leave their domain (module doc);
+    truth: the recording is mocap, where nothing is beyond anatomy."""
     data = session_file.encode(payload)
     body = detail_body(_session(slug, payload.raw.n_frames), slug, None, data, max_frames=10**7,
                        max_decoded_bytes=2**31)  # fmt: skip
@@ -141,6 +158,8 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
             if r["min_deg"] < env[0] or r["max_deg"] > env[1]:
                 problems.append(f"{name}: filtered {r['min_deg']}..{r['max_deg']} leaves the raw data's {env.round(1)}")
         said = (doc.get("range_of_motion_withheld") or {}).get(name) or (withheld or {}).get(name)
+        if said and said["id"] == "beyond_anatomy" and (truth or said["params"]["limit"] != round(limit or -1)):
+            problems.append(f"{name}: withheld as beyond anatomy ({said['params']}; limit {limit}, mocap {truth})")
         if r["min_deg"] is None and raw.size and not said:
             problems.append(f"{name}: range missing without a reason, though the raw angle is defined")
         iv = ivs.get(name)
@@ -188,6 +207,8 @@ def disagreements(payload: session_file.SessionPayload, slug: str) -> list[str]:
         if not (np.nanmin(every) - TOL <= min(shared) and max(shared) <= np.nanmax(every) + TOL):
             problems.append(f"repetition peaks {min(shared)}..{max(shared)} are not on the filtered curves")
     problems += repetitions_beyond_anatomy(body, slug)
+    if truth and (body["rom_deg_withheld"] or any(r["withheld"] for r in body["repetitions"])):
+        problems.append("mocap: a repetition withheld as beyond anatomy")
     defining = doc["defining_angle"]
     peaks = [r["peak_deg"] for r in doc["repetition_list"] if r["peak_deg"] is not None]
     if peaks and defining and rom[defining]["min_deg"] is not None:
@@ -233,7 +254,7 @@ def repetitions_beyond_anatomy(body: dict[str, Any], slug: str) -> list[str]:
 def test_numbers_of_real_recordings_agree(data_dir: Path, label: str, key: str, slug: str) -> None:
     rec = thin(read_real(key))
     payload = make_payload(rec, session_id="00000000-0000-4000-8000-000000000001", created_at="2026-11-27T00:00:00Z")
-    problems = disagreements(payload, slug)
+    problems = disagreements(payload, slug, truth=label.startswith(MOCAP))
     assert not problems, f"{label}: " + "; ".join(problems)
 
 
