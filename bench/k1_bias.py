@@ -6,10 +6,11 @@ rows (default): per motion, view and seed, RMSE and its bias/random parts (body 
     raw, CV Kalman + RTS, One Euro, the offline pipeline, CV Kalman + RTS run on the pipeline's outlier-removed input
     ("CV on clean"), and oracle clean (bench/error_floor.py: truth + the Kinect's error with every tracking-loss
     outlier replaced by the interpolated clean error). Then the same methods on a counterfactual of the simulator's
-    tracking-loss law: kinect_noise draws each outlier around the *truth* (truth + random direction × distance), so
-    outliers that a method keeps pull its mean error toward zero; "alt" moves each outlier by the Kinect's clean
-    error at that frame (interpolated from the clean neighbours, as oracle clean), i.e. draws it around the
-    Kinect's biased position instead, and nothing else.
+    tracking-loss law: kinect_noise draws each outlier around the Kinect's *biased* estimate (truth + clean offset +
+    random jump; since issue 24 decision 4, 2026-11-28); "alt" moves each outlier back by the Kinect's clean error
+    at that frame (interpolated from the clean neighbours, as oracle clean), i.e. draws the same jump around the
+    *truth*, as the simulator did before, so outliers that a method keeps pull its mean error toward zero. (Before
+    decision 4 "alt" went the other way: from the truth to the biased position.)
 joints: per joint, the bias/RMSE (mm) of raw, CV, oracle clean and offline variants whose fixed segment lengths
     (passes 3-4) are replaced by the truth's median bone lengths ("truth lengths") or the median measured lengths
     ("measured lengths"), and the least-squares re-fit of the bone vectors given the smoothed rotations
@@ -55,10 +56,11 @@ ROW_METHODS = ("raw", "cv_kalman_rts", "one_euro", "pipeline_offline")
 
 
 def alt_outliers(case: Case) -> np.ndarray:
-    """Returns (T, J, 3) m: the measured positions with every tracking-loss outlier moved by the clean error there."""
+    """Returns (T, J, 3) m: the measured positions with every tracking-loss outlier moved back by the clean error
+    there (its jump drawn around the truth instead of the Kinect's biased estimate)."""
     m = case.measured
     shift = clean_error(m.positions, m.state, case.truth, case.mask)
-    return np.where(case.mask[..., None], m.positions + shift, m.positions)
+    return np.where(case.mask[..., None], m.positions - shift, m.positions)
 
 
 def study_rows(args: argparse.Namespace) -> list[dict[str, Any]]:
@@ -82,7 +84,7 @@ def study_rows(args: argparse.Namespace) -> list[dict[str, Any]]:
                     clean, _ = remove_outliers_combined(m, config)
                     add("cv_on_clean", case, hold_last(cv_kalman_rts(m.t, clean.positions)))
                     add("oracle_clean", case, oracle_estimate(m.positions, m.state, case.truth, case.mask, RATE_HZ))
-                    alt = m.replace(step="outliers around the biased position", positions=alt_outliers(case))
+                    alt = m.replace(step="outliers around the truth", positions=alt_outliers(case))
                     for name in ROW_METHODS:
                         add(f"alt_{name}", case, run_method(name, alt, config)[0])
                 metrics = {k: s.metrics() for k, s in sums.items()}
@@ -131,7 +133,7 @@ def summarise(rows: list[dict[str, Any]]) -> None:
         print(f"| {name} | {view}° | " + " | ".join(cells) + " |")
     n = len(groups)
     print(f"\nrows failing on at least one seed, of {n}: RMSE < CV+RTS {fails['now'][0]}, < One Euro "
-          f"{fails['now'][1]}; with outliers drawn around the biased position (alt): {fails['alt'][0]} and "
+          f"{fails['now'][1]}; with the outliers' jumps drawn around the truth (alt): {fails['alt'][0]} and "
           f"{fails['alt'][1]}")  # fmt: skip
 
 

@@ -21,7 +21,10 @@ SEEDS = (1, 2, 3)  # never one seed: a gain that holds on one draw only is no ga
 # "Counts on new sessions of the same people, the live deep squat, the idle knee"), seed 2 of the short HDM05 squat
 # at 60° loses to CV Kalman + RTS by 1.8 mm (134.0 vs 132.2; it won by 0.16 mm before) and UI-PRMD m01 at 0° ties
 # it (105.7 mm both). Issue 24's white-noise and bias work is where they are to be won back; any other loss fails.
-KNOWN_LOSSES = {("hdm05_squat1Reps", 60, 2, "cv_kalman_rts"): 2.0, ("ui_prmd_m01", 0, 2, "cv_kalman_rts"): 0.2}
+# Since the simulator's tracking-loss jumps start at the Kinect's own estimate (issue 24 decision 4, 2026-11-28) that
+# squat seed loses by 3.7 mm (137.6 vs 133.9): on its 35 frames the shorter jumps are flagged with recall 0.77 instead
+# of 1.00 (the whole motion, 24 clips, still wins by 6.8 mm on that seed; bench/README.md, decision 4).
+KNOWN_LOSSES = {("hdm05_squat1Reps", 60, 2, "cv_kalman_rts"): 4.2, ("ui_prmd_m01", 0, 2, "cv_kalman_rts"): 0.2}
 
 
 Rows = dict[tuple[str, int, int], dict[str, Any]]
@@ -89,17 +92,21 @@ def test_offline_elbow_knee_rmse_is_below_the_baseline(rows: Rows, motion: str, 
 # short clips they miss in the rows below, measured 2026-11-28 (bench/README.md "Issue 24's restated targets per
 # motion, view and seed"), with the most each may miss by (measured margin, rounded up, + 0.5): CMU's 12 s at both
 # views on every seed (the fast arm and leg swings the random walk of the angles rounds off), and the 1.2-1.9 s HDM05
-# and UI-PRMD clips on some seeds. Any other miss, or a known one grown, fails.
+# and UI-PRMD clips on some seeds. Any other miss, or a known one grown, fails. Re-measured on 2026-11-28 after the
+# simulator's outliers moved to the Kinect's biased estimate (decision 4): the HDM05 squat clip misses the random-part
+# target by more (0° seed 1 +1.16, 60° seed 1 +0.16, new; 60° seed 2 +7.52: the short jumps it flags less often) and
+# CMU 60° the angle target (seed 2 +1.16, seed 3 +3.12); the others as before.
 KNOWN_MISSES = {
     "random<=oracle_lowpass_2hz+5": {
         ("cmu_13_29", 0, 1): 2.4, ("cmu_13_29", 0, 2): 2.9, ("cmu_13_29", 0, 3): 2.2, ("cmu_13_29", 60, 1): 2.2,
-        ("cmu_13_29", 60, 2): 4.1, ("cmu_13_29", 60, 3): 2.3, ("hdm05_squat1Reps", 0, 1): 0.7,
-        ("hdm05_squat1Reps", 0, 3): 4.0, ("hdm05_squat1Reps", 60, 2): 6.2, ("ui_prmd_m01", 0, 2): 2.1,
-        ("ui_prmd_m01", 60, 1): 3.5, ("ui_prmd_m01", 60, 2): 2.6, ("ui_prmd_m01", 60, 3): 8.8,
+        ("cmu_13_29", 60, 2): 4.1, ("cmu_13_29", 60, 3): 2.3, ("hdm05_squat1Reps", 0, 1): 1.7,
+        ("hdm05_squat1Reps", 0, 3): 4.0, ("hdm05_squat1Reps", 60, 1): 0.7, ("hdm05_squat1Reps", 60, 2): 8.1,
+        ("ui_prmd_m01", 0, 2): 2.1, ("ui_prmd_m01", 60, 1): 3.5, ("ui_prmd_m01", 60, 2): 2.6,
+        ("ui_prmd_m01", 60, 3): 8.8,
     },
     "angle<=oracle_clean+1": {
         ("cmu_13_29", 0, 1): 2.1, ("cmu_13_29", 0, 2): 2.7, ("cmu_13_29", 0, 3): 1.7, ("cmu_13_29", 60, 1): 1.2,
-        ("cmu_13_29", 60, 2): 0.6, ("cmu_13_29", 60, 3): 2.6, ("hdm05_squat1Reps", 0, 3): 1.5,
+        ("cmu_13_29", 60, 2): 1.7, ("cmu_13_29", 60, 3): 3.7, ("hdm05_squat1Reps", 0, 3): 1.5,
         ("ui_prmd_m01", 0, 3): 1.0, ("ui_prmd_m01", 60, 3): 0.8,
     },
 }  # fmt: skip

@@ -63,7 +63,8 @@ def test_a_file_filtered_with_older_settings_filtered_again_is_todays_agent_file
 def test_the_116_to_98_degrees_of_a_test_file_were_the_simulators_truth_against_todays_pipeline():
     """The browser test's session (make_khs: its 'filtered' recording is the simulator's exact one, params name no
     pipeline) showed an elbow ROM of 116° that became 98° after reanalyze --pipeline: 116° is the truth, 98° what
-    the pipeline measures of the simulated Kinect's raw recording (the raw alone: about 100°)."""
+    the pipeline measures of the simulated Kinect's raw recording (the raw alone: 103° since the simulator's outliers
+    jump from the Kinect's biased estimate, issue 24 decision 4; about 100° before)."""
     spec = EXERCISES["elbow_flexion"]
     payload = sf.decode(make_khs("elbow_flexion", 3, seed=304, created_at="2026-11-23T09:00:00Z"))
     _, truth, _ = simulate("elbow_flexion", 3, seed=304)
@@ -74,5 +75,5 @@ def test_the_116_to_98_degrees_of_a_test_file_were_the_simulators_truth_against_
     raw_only = analyze_recording(payload.raw, spec)
     assert before.rom_deg is not None and after.rom_deg is not None and raw_only.rom_deg is not None
     assert before.rom_deg == exact.rom_deg and round(before.rom_deg) == 116
-    assert round(after.rom_deg) == 98 and abs(after.rom_deg - raw_only.rom_deg) < 3
+    assert round(after.rom_deg) == 98 and round(raw_only.rom_deg) == 103
     assert before.repetitions == after.repetitions == 3

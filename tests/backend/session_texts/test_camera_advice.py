@@ -58,12 +58,14 @@ def test_a_hand_out_of_view_is_named(seed: int) -> None:
 def test_a_hand_inferred_alone_is_not_out_of_view() -> None:
     measured, _ = noisy("shoulder_abduction", 3, 1)
     state = measured.state.copy()
-    state[:, INDEX["HAN_L"]] = INFERRED  # UI-PRMD: no hand joint, always inferred, wrist tracked
+    present = state != NOT_TRACKED  # a lost joint-frame (NaN) stays lost
+    hand, wrist = INDEX["HAN_L"], INDEX["WRI_L"]
+    state[present[:, hand], hand] = INFERRED  # UI-PRMD: no hand joint, always inferred, wrist tracked
     assert (
         out_of_view_fractions(measured.replace(step="t", positions=measured.positions, state=state))[("hand", "left")]
         < 0.05
     )
-    state[:, INDEX["WRI_L"]] = INFERRED  # the sensor infers both when the arm leaves the picture
+    state[present[:, wrist], wrist] = INFERRED  # the sensor infers both when the arm leaves the picture
     assert (
         out_of_view_fractions(measured.replace(step="t", positions=measured.positions, state=state))[("hand", "left")]
         == 1.0

@@ -72,16 +72,22 @@ def test_shapes_are_checked():
 def test_every_fifth_frame_interpolated_is_close_to_every_frame(seed):
     measured, _, _ = simulate("squat", 2, seed=seed)
     ik = inverse_kinematics(measured.positions)
-    _, lengths, theta, info = smooth(measured, ik, PipelineConfig(), covariances=True)  # the smoother's own covariances
+    root, lengths, theta, info = smooth(measured, ik, PipelineConfig(), covariances=True)  # the smoother's own
     every = uncertainty.model_angle_sd(ik.model, lengths, theta, info["covariance"], stride=1)
     fifth = uncertainty.model_angle_sd(ik.model, lengths, theta, info["covariance"], stride=5)
     # A hinge angle's SD is not smooth where the joint is nearly straight (the end of its domain, 0°): a standing knee
     # there (the simulated Kinect's standing knee reads 4-9° bent, as real ones do) is left out of the comparison.
-    measured_deg = joint_angles(measured.positions)
+    # "Nearly straight" is judged on the smoothed state whose covariance is propagated, not on the raw angle: the raw
+    # elbow of a squat reads 16-25° where the smoothed one is under 15° (jitter, and since issue 24's decision 4
+    # tracking-loss jumps that start at the Kinect's own estimate). Frames where model_angle_sd reads NaN (an angle
+    # undefined in a sigma point, as documented; seed 1's hip flexion once) have no SD to compare.
+    smoothed = ik.model.positions(root, np.broadcast_to(lengths, (len(theta), len(lengths))), theta)
+    smoothed_deg = joint_angles(smoothed)
     for a, name in enumerate(ANGLE_NAMES):
         if name in WELL_DEFINED:
-            bent = ~(measured_deg[name] < STRAIGHT_DEG) if name.startswith(("knee", "elbow")) else slice(None)
-            rel = (np.abs(fifth[:, a] - every[:, a]) / every[:, a])[bent]
+            bent = ~(smoothed_deg[name] < STRAIGHT_DEG) if name.startswith(("knee", "elbow")) else True
+            rel = np.abs(fifth[:, a] - every[:, a]) / every[:, a]
+            rel = rel[bent & np.isfinite(rel)]
             assert np.median(rel) < 0.03 and np.percentile(rel, 95) < 0.2, f"{name}, seed {seed}"
 
 
