@@ -18,7 +18,7 @@ __all__ = ["ANALYSIS_VERSION", "indicator_scores", "json_ready", "metrics_docume
 
 # the version of the analysis a document was made by (doc["analysis_version"]); raise it when a metric's
 # definition changes, so `coach-server reanalyze` knows which stored documents are older
-ANALYSIS_VERSION = "2026.11.28-anatomy-abduction"  # past 170° withheld; shoulder abduction counted folded, no seam
+ANALYSIS_VERSION = "2026.11.28-balance-gaps"  # standing runs end at a frame gap over 1 s; no empty sway window
 
 
 def metrics_document(
