@@ -18,7 +18,7 @@ __all__ = ["ANALYSIS_VERSION", "indicator_scores", "json_ready", "metrics_docume
 
 # the version of the analysis a document was made by (doc["analysis_version"]); raise it when a metric's
 # definition changes, so `coach-server reanalyze` knows which stored documents are older
-ANALYSIS_VERSION = "2026.11.28-hip-limit"  # hip flexion past 190° withheld as knees and elbows past 170°
+ANALYSIS_VERSION = "2026.11.28-hip-limit-balance"  # hip flexion past 190° withheld; sway runs end at frame gaps
 
 
 def metrics_document(

@@ -14,14 +14,17 @@ who validated Kinect trunk/pelvis sway against a force plate in quiet standing):
                       (not bent forward, no leg raised in front), both ankles within FOOT_LIFT_M (5 cm) of the same
                       height (no foot lifted), both ankles (smoothed with SD FEET_SMOOTH_S, 0.5 s) slower than
                       FEET_STILL_M_S (0.1 m/s) and the centre of mass slower than STILL_M_S (0.1 m/s) (no step, no
-                      shift of weight); only runs of at least MIN_RUN_S (1 s) count, each measured on its own;
+                      shift of weight); a run ends where two frames lie more than MAX_STEP_S (1 s) apart (the
+                      patient out of the picture, a hidden page, a slow camera page: time without frames is not
+                      time seen standing); only runs of at least MIN_RUN_S (1 s) count, each measured on its own;
     sway_path_m     = Σ over standing runs of the horizontal distance the centre of mass travels, m;
     sway_area_m2    = area of the 95 % confidence ellipse of the horizontal positions, each run about its own
                       mean, pooled: π · χ²₂(0.95) · √(λ₁λ₂) with λ the covariance eigenvalues, m²;
     sway_velocity_m_s = sway_path_m / standing_s; standing_s = total standing time, s;
     sway_velocity_95  = [low, high] m/s: 95 % percentile interval of sway_velocity_m_s over BOOTSTRAP (1000)
-                      resamples (fixed seed) of the standing time cut into WINDOW_S (2 s) windows, weighted by
-                      their length (the window-to-window variability of the patient's sway and of the sensor; it
+                      resamples (fixed seed) of the standing time cut into WINDOW_S (2 s) windows (at most one per
+                      frame step: a run seen at a few frames a second has no empty window), weighted by their length
+                      (the window-to-window variability of the patient's sway and of the sensor; it
                       does not contain the sensor's bias, see Limits);
     n_windows       = number of windows the interval rests on.
 None when the patient stood less than MIN_STANDING_S (2 s) in total; missing_reason() says why in words.
@@ -50,6 +53,7 @@ FEET_SMOOTH_S = 0.5
 STILL_M_S = 0.1
 SWAY_SMOOTH_S = 0.3
 MIN_RUN_S = 1.0
+MAX_STEP_S = 1.0
 MIN_STANDING_S = 2.0
 WINDOW_S = 2.0
 BOOTSTRAP = 1000
@@ -97,9 +101,18 @@ def standing_frames(t: np.ndarray, smoothed: np.ndarray, angles: dict[str, np.nd
         return pelvis_up & hips & feet_down & feet_still & com_still
 
 
-def _runs(mask: np.ndarray) -> np.ndarray:
+def _runs(t: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Returns (R, 2) [start, end) frame indices of the runs of mask (T,) bool, cut where frames of t (T,) s lie more
+    than MAX_STEP_S apart."""
+    cut = np.concatenate((np.diff(t) > MAX_STEP_S, [False]))  # (T,) True on a run's last frame before a gap
     edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
-    return edges.reshape(-1, 2)
+    runs = edges.reshape(-1, 2)
+    out = []
+    for a, b in runs:
+        ends = np.flatnonzero(cut[a : b - 1]) + a + 1  # (k,) first frames after a gap inside the run
+        bounds = np.concatenate(([a], ends, [b]))
+        out.extend(zip(bounds[:-1], bounds[1:], strict=True))
+    return np.asarray(out, dtype=np.int64).reshape(-1, 2)
 
 
 def _interval(windows: list[tuple[float, float]]) -> list[float]:
@@ -121,7 +134,7 @@ def sway(t: np.ndarray, smoothed: np.ndarray, angles: dict[str, np.ndarray]) -> 
     centre = centre_of_mass(p)[:, [0, 2]]  # (T, 2) floor x, z
     stand = standing_frames(t, smoothed, angles) & np.all(np.isfinite(centre), axis=1)
     path, standing_s, pooled, windows = 0.0, 0.0, [], []
-    for a, b in _runs(stand):
+    for a, b in _runs(t, stand):
         if b - a < 2 or t[b - 1] - t[a] < MIN_RUN_S:
             continue
         c = centre[a:b]
@@ -130,7 +143,7 @@ def sway(t: np.ndarray, smoothed: np.ndarray, angles: dict[str, np.ndarray]) -> 
         path += float(step.sum())
         standing_s += float(dt.sum())
         pooled.append(c - c.mean(axis=0))
-        n_win = max(1, int(round(dt.sum() / WINDOW_S)))
+        n_win = min(step.size, max(1, int(round(dt.sum() / WINDOW_S))))
         for part_step, part_dt in zip(np.array_split(step, n_win), np.array_split(dt, n_win), strict=True):
             windows.append((float(part_step.sum()), float(part_dt.sum())))
     if standing_s < MIN_STANDING_S:

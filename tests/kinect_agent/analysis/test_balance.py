@@ -68,3 +68,21 @@ def test_standing_arm_exercise_through_the_pipeline_is_measured(exercise: str, s
     assert b["standing_s"] > 0.8 * truth.duration, b
     # the sensor's residual jitter adds to the true sway (module doc, Limits); never more than 3 cm/s here
     assert b_true["sway_velocity_m_s"] <= b["sway_velocity_m_s"] < b_true["sway_velocity_m_s"] + 0.03, (b, b_true)
+
+
+def test_a_standing_patient_seen_a_few_times_a_second_and_then_not_at_all_for_half_a_minute() -> None:
+    """A camera page on a slow computer sees 2 pictures a second, and the patient leaves the picture for 30 s: the
+    sway is measured over the time seen standing (the gap is not standing time), and its interval is a number (it
+    was [NaN, NaN], from 2-s windows without a frame step, which made the analysis document invalid and the set's end
+    a 500 the page retried for ever)."""
+    t = np.concatenate([np.arange(0, 10, 0.5), 40 + np.arange(0, 10, 0.5)])  # (40,) s
+    p = _still_body(t.size)
+    r = 0.01  # the centre of mass circles with a 1 cm radius every 10 s, as in test_circular_sway_path_and_area
+    shift = np.stack([r * np.cos(2 * np.pi * t / 10), np.zeros_like(t), r * np.sin(2 * np.pi * t / 10)], axis=1)
+    p[:, [INDEX[j] for j in COM_JOINTS]] += shift[:, None, :]
+    b = sway(t, p, joint_angles(p))
+    assert b is not None
+    assert b["standing_s"] == pytest.approx(19.0, abs=0.01), b  # two runs of 9.5 s, not 49.5 s
+    lo, hi = b["sway_velocity_95"]
+    assert np.isfinite([lo, hi]).all() and lo <= b["sway_velocity_m_s"] <= hi, b
+    assert b["sway_velocity_m_s"] == pytest.approx(2 * np.pi * r / 10, rel=0.15), b  # 6.3 mm/s, chords of the circle
