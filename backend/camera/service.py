@@ -109,11 +109,7 @@ def set_out(db_session: Session, row: CameraSet) -> CameraSetOut:
         last_seq=row.last_seq,
         session_id=row.session_id,
         error=row.error,
-        failure=None
-        if row.status != "failed"
-        else "too_short"
-        if row.n_frames < limits.MIN_END_FRAMES
-        else "not_storable",
+        failure=_failure(row),
     )
 
 

@@ -105,8 +105,27 @@ def test_the_end_waits_for_batches_the_page_sent_and_a_too_short_set_stores_noth
     assert r.status_code == 409 and "batches 1..3" in r.json()["detail"], r.text
     r = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": 0}, headers=h)
     assert r.status_code == 200 and r.json()["status"] == "failed" and "frames" in r.json()["error"], r.text
+    assert r.json()["failure"] == "too_short", r.text
     assert _sessions(db_session, camera_home["patient"].id) == 0
     assert _batches(db_session, set_id) == 0
+
+
+def test_a_set_whose_frames_make_no_storable_session_ends_failed(client, db_session, camera_home, started, settings,
+                                                                  monkeypatch):  # fmt: skip
+    """Frames no session file may hold (here more than the server's frame limit) end the set failed, with the reason,
+    once: the same frames would fail the same way on every retry (it was an error the page retried for ever)."""
+    set_id, h = started(seconds_ago=120), camera_home["headers"]
+    answers = _send_all(client, set_id, squats(3), h)
+    monkeypatch.setattr(settings, "SESSION_MAX_FRAMES", 50)
+    r = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": len(answers) - 1, "reason": "stop"},
+                    headers=h)  # fmt: skip
+    out = r.json()
+    assert r.status_code == 200 and (out["status"], out["failure"]) == ("failed", "not_storable"), r.text
+    assert "could not be stored" in out["error"] and "the limit is 50" in out["error"], out["error"]
+    assert _sessions(db_session, camera_home["patient"].id) == 0 and _batches(db_session, set_id) == 0
+    r = client.post(f"/api/v1/camera/sets/{set_id}/end", json={"last_seq": len(answers) - 1, "reason": "stop"},
+                    headers=h)  # fmt: skip
+    assert r.status_code == 200 and r.json() == out, r.text
 
 
 def test_a_failing_live_count_does_not_lose_the_batch(client, db_session, camera_home, started, monkeypatch):
