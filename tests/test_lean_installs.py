@@ -89,7 +89,7 @@ def test_the_session_analysis_runs_without_the_server(tmp_path: Path) -> None:
         print("loaded:", loaded)
     """, tmp_path)  # fmt: skip
     assert "loaded: []" in out
-    assert "modules: 21" in out  # exercise, report and indicators among them (moved from the server)
+    assert "modules: 22" in out  # exercise, report and indicators among them (moved from the server); anatomy
 
 
 def test_the_server_ingests_analyses_and_replays_without_numba(tmp_path: Path) -> None:
