@@ -38,6 +38,7 @@ def test_a_file_being_prepared_is_said_then_downloads_by_itself(page, live_serve
 
     page.route("**/api/v1/sessions/*/export?format=bvh", first_preparing)
     page.goto(f"/therapist/sessions/{squat_session}")
+    expect(page.locator("#session-feeling")).not_to_be_empty()  # the last line above the downloads, filled
     state = page.locator("#download-state")
     with page.expect_download(timeout=30_000) as download:
         page.click("#downloads >> text=Motion (BVH)")
@@ -64,6 +65,7 @@ def test_a_file_that_could_not_be_prepared_is_said_in_words(page, live_server, s
 
     page.route("**/api/v1/sessions/*/export?format=trc", failed)
     page.goto(f"/therapist/sessions/{squat_session}")
+    expect(page.locator("#session-feeling")).not_to_be_empty()  # the last line above the downloads, filled
     downloads = []
     page.on("download", lambda d: downloads.append(d))
     page.click("#downloads >> text=Markers for OpenSim (TRC)")
