@@ -107,11 +107,11 @@ def _runs(t: np.ndarray, mask: np.ndarray) -> np.ndarray:
     cut = np.concatenate((np.diff(t) > MAX_STEP_S, [False]))  # (T,) True on a run's last frame before a gap
     edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
     runs = edges.reshape(-1, 2)
-    out = []
+    out: list[tuple[int, int]] = []
     for a, b in runs:
         ends = np.flatnonzero(cut[a : b - 1]) + a + 1  # (k,) first frames after a gap inside the run
         bounds = np.concatenate(([a], ends, [b]))
-        out.extend(zip(bounds[:-1], bounds[1:], strict=True))
+        out.extend((int(lo), int(hi)) for lo, hi in zip(bounds[:-1], bounds[1:], strict=True))
     return np.asarray(out, dtype=np.int64).reshape(-1, 2)
 
 
