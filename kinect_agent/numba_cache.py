@@ -19,6 +19,11 @@ import tempfile
 from pathlib import Path
 from typing import Any, cast
 
+try:
+    import numba as numba  # the kernels' compiler, for every kernel module (None where it is not installed)
+except ImportError:  # pragma: no cover - exercised only where numba is absent
+    numba = None  # type: ignore[assignment]
+
 ENV_HOME = "KINECT_AGENT_HOME"  # the agent's home folder (kinect_agent.config.ENV_HOME)
 TEMPORARY_PREFIX = "kinect-agent-numba-"
 
@@ -43,7 +48,6 @@ def fallback_folders() -> list[Path]:
 def _numba_finds_a_folder(module_file: str) -> bool:
     """Tells whether one of numba's cache locators (its order, as numba.core.caching.CacheImpl tries them) has a
     writable folder for the kernels of module_file."""
-    import numba
     from numba.core.caching import CacheImpl
 
     if cast(Any, numba.config).CACHE_LOCATOR_CLASSES:  # $NUMBA_CACHE_LOCATOR_CLASSES: the user chose numba's places
@@ -56,8 +60,6 @@ def _numba_finds_a_folder(module_file: str) -> bool:
 def _use_fallback() -> bool:
     """Points numba's cache at the first of fallback_folders that is this user's own and writable; returns whether
     one was (said once per process on stderr when none was)."""
-    import numba
-
     for folder in fallback_folders():
         if _own_writable_folder(folder):
             cast(Any, numba.config).CACHE_DIR = str(folder)  # read when a kernel's cache is located

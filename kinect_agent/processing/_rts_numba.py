@@ -17,13 +17,8 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import NDArray
 
-from kinect_agent.numba_cache import cache_for
+from kinect_agent.numba_cache import cache_for, numba
 from kinect_agent.processing import _blas_numba
-
-try:
-    import numba
-except ImportError:  # pragma: no cover - exercised only where numba is absent
-    numba = None  # type: ignore[assignment]
 
 AVAILABLE = numba is not None and _blas_numba.AVAILABLE and _blas_numba.NUMPY_BLAS
 CACHE = AVAILABLE and cache_for(__file__)  # numba's on-disk cache, or none (kinect_agent.numba_cache)
