@@ -54,11 +54,11 @@ def follows(later: np.ndarray, earlier: np.ndarray) -> np.ndarray:
     return later - earlier >= MIN_STEP_S - session_file.TIME_ROUNDING_S
 
 
-def check_batch(body: BatchIn, *, after_t: float | None = None) -> LandmarkBatch:
+def check_batch(body: BatchIn) -> LandmarkBatch:
     """Returns the body's frames as a LandmarkBatch; raises InvalidInput naming the first implausible value: NaN or
     infinite, a world landmark farther than MAX_WORLD_M, an image landmark far outside the picture, a visibility
-    outside 0..1, a time outside 0..MAX_SET_S, or less than MIN_STEP_S after the frame before in the batch or after
-    after_t (s, the last frame received before)."""
+    outside 0..1, a time outside 0..MAX_SET_S, or less than MIN_STEP_S after the frame before (the set's last frame
+    received before is checked by service.add_batch, once it knows the batch is not a repeat)."""
     t = np.array([f.t for f in body.frames], dtype=np.float64)
     world = np.array([f.world for f in body.frames], dtype=np.float64)
     image = np.array([f.image for f in body.frames], dtype=np.float64)
@@ -72,9 +72,6 @@ def check_batch(body: BatchIn, *, after_t: float | None = None) -> LandmarkBatch
         i = int(back[0]) + 1
         raise InvalidInput(f"body.frames[{i}].t: {t[i]} s does not come {MIN_STEP_S:g} s or more after the frame "
                            f"before ({t[i - 1]} s)")  # fmt: skip
-    if after_t is not None and not follows(t[:1], np.array([after_t]))[0]:
-        raise InvalidInput(f"body.frames[0].t: {t[0]} s does not come {MIN_STEP_S:g} s or more after the last frame "
-                           f"received ({after_t} s)")  # fmt: skip
     w = limits.MAX_WORLD_M
     _refuse_outside("world", world, -w, w, " m")
     lo, hi = limits.IMAGE_XY_RANGE
@@ -82,7 +79,7 @@ def check_batch(body: BatchIn, *, after_t: float | None = None) -> LandmarkBatch
     _refuse_outside("image", image[..., 2:], -limits.MAX_IMAGE_Z, limits.MAX_IMAGE_Z, "", offset=2)
     _refuse_outside("visibility", visibility, 0.0, 1.0, "")
     try:
-        return check_arrays(t, world, image, visibility, (body.image_size[0], body.image_size[1]), after_t=after_t)
+        return check_arrays(t, world, image, visibility, (body.image_size[0], body.image_size[1]))
     except LandmarkError as exc:
         raise InvalidInput(f"body.{exc}") from None
 
